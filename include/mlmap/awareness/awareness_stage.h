@@ -1,0 +1,84 @@
+#pragma once
+/// @file
+/// The awareness stage (paper Algorithm 2): turns one frame into the awareness map update and the
+/// occupied / free measurements for the local map.
+
+#include "mlmap/awareness/awareness_map.h"
+#include "mlmap/awareness/cone_carver.h"
+#include "mlmap/core/measurement_batch.h"
+#include "mlmap/core/config.h"
+
+#include <cstdint>
+#include <random>
+#include <vector>
+
+namespace mlmap {
+
+/// What happened to the points of frames (summed over frames by the engine).
+struct PointCounters {
+  std::uint64_t points_in = 0;           ///< points received
+  std::uint64_t rejected_non_finite = 0; ///< NaN / Inf coordinates
+  std::uint64_t rejected_too_close = 0;  ///< closer than awareness.min_range_m (incl. zero range)
+  std::uint64_t beyond_max_range = 0;    ///< cut at max_range_m: clear their ray, are no hit
+  std::uint64_t sampled_out = 0;         ///< left out by sample_count
+  std::uint64_t hit_voxels = 0;          ///< occupied measurements (unique voxels)
+  std::uint64_t free_voxels = 0;         ///< free measurements (unique voxels)
+
+  PointCounters& operator+=(const PointCounters& o);
+};
+
+/// Runs the awareness map and produces measurement batches. Not thread-safe: one owner thread.
+class AwarenessStage {
+ public:
+  /// `config` must be valid (MapConfig::validate() empty).
+  explicit AwarenessStage(const MapConfig& config);
+
+  /// Processes a frame whose poses were validated. Fills `batch` (reusing its memory).
+  void process(const PointCloudFrame& frame, MeasurementBatch* batch, PointCounters* counters);
+
+  /// The awareness map after the last frame.
+  [[nodiscard]] const AwarenessMap& map() const { return map_; }
+  /// Bytes held by the stage (awareness grid and per-frame scratch).
+  [[nodiscard]] std::size_t memoryBytes() const;
+
+ private:
+  /// A voxel where rays end in this frame: the box of its points and the first point.
+  struct End {
+    Eigen::Vector3i voxel = Eigen::Vector3i::Zero();  // box-relative
+    VoxelSpaceBox points{};       // bounding box of the frame's points in it (voxel units)
+    Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  // first point
+    bool cut = false;             // rays cut at max_range_m (free end) rather than hits
+    std::uint32_t bin = 0;        // direction bin
+    double near = 0.0;            // distance from the sensor to `points` (voxel units)
+  };
+  /// Rays bundled by direction: the shared part of their cones, up to the nearest member.
+  struct Bin {
+    std::uint32_t stamp = 0;
+    double near = 0.0;            // nearest member distance (voxel units)
+    VoxelSpaceBox box{};          // hull of the members' boxes scaled to `near`
+  };
+  std::uint32_t findOrAddEnd(std::uint32_t key, bool cut, const Eigen::Vector3i& voxel);
+  [[nodiscard]] std::uint32_t directionBin(const Eigen::Vector3d& d) const;
+  void carve(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch, std::size_t* freed);
+
+  MapConfig config_;
+  AwarenessMap map_;
+  VoxelBitset hit_bits_;
+  std::vector<End> ends_;           // inside the scratch box, one per voxel
+  std::vector<End> outside_;        // beyond the box (the local map cannot hold them), per point
+  // Open-addressing table: linear box index (+ cut flag) -> index in ends_, valid when stamped.
+  struct Slot {
+    std::uint32_t stamp = 0;
+    std::uint32_t key = 0;
+    std::uint32_t end = 0;
+  };
+  std::vector<Slot> table_;
+  std::uint32_t stamp_ = 0;
+  std::vector<Bin> bins_;
+  std::vector<std::uint32_t> touched_bins_;
+  int bins_per_face_side_ = 0;
+  std::vector<std::uint32_t> sample_indices_;
+  std::mt19937 rng_;
+};
+
+}  // namespace mlmap

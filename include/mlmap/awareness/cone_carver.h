@@ -1,0 +1,35 @@
+#pragma once
+/// @file
+/// Complete free-space carving on the voxel grid.
+///
+/// Every ray from the sensor origin o to a point of a box B lies in the cone conv(o, B), whose
+/// section at parameter s is the box o + s (B - o). The cone is rasterised slab by slab along its
+/// dominant axis, where its extent along the two other axes is linear in s; each slab marks the
+/// voxels of the section's bounding rectangle. So every voxel that any ray into B passes through
+/// is marked, plus at most the rectangles' corners.
+///
+/// All coordinates are box-relative voxel units of a VoxelBitset: voxel (i, j, k) spans
+/// [i, i + 1) x [j, j + 1) x [k, k + 1).
+
+#include "mlmap/core/voxel_bitset.h"
+
+namespace mlmap {
+
+/// An axis-aligned box in box-relative voxel units.
+struct VoxelSpaceBox {
+  Eigen::Vector3f min;
+  Eigen::Vector3f max;
+};
+
+/// Marks in `free` every voxel that the part s in [s_min, 1] of the cone from `origin` to `box`
+/// overlaps, except voxels set in `hits` and, when `skip_end` is set, the voxel `end`.
+/// Returns how many bits it newly set.
+std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
+                      const VoxelBitset& hits, VoxelBitset* free, bool skip_end = false,
+                      const Eigen::Vector3i& end = Eigen::Vector3i::Zero());
+
+/// The cone to a whole voxel (for a ray whose end is only known to lie in `end`).
+std::size_t carveCone(const Eigen::Vector3d& origin, const Eigen::Vector3i& end, bool include_end,
+                      const VoxelBitset& hits, VoxelBitset* free);
+
+}  // namespace mlmap

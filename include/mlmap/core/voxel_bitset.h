@@ -1,0 +1,99 @@
+#pragma once
+/// @file
+/// A dense bit per voxel over a box of the world grid, used per frame to keep each voxel to at
+/// most one measurement. Rows along z are padded to whole 64-bit words so iteration needs no
+/// division.
+
+#include "mlmap/core/types.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace mlmap {
+
+/// One bit per voxel of the box [origin, origin + dims). Indices (i, j, k) are box-relative.
+class VoxelBitset {
+ public:
+  /// Resizes to the box and clears every bit; memory is reused between frames.
+  void reset(const VoxelIndex& origin, const Eigen::Vector3i& dims) {
+    origin_ = origin;
+    dims_ = dims;
+    words_per_row_ = static_cast<std::size_t>((dims.z() + 63) / 64);
+    const std::size_t words =
+        static_cast<std::size_t>(dims.x()) * static_cast<std::size_t>(dims.y()) * words_per_row_;
+    bits_.assign(words, 0);
+  }
+
+  /// First voxel of the box (world index).
+  [[nodiscard]] const VoxelIndex& origin() const { return origin_; }
+  /// Box size in voxels.
+  [[nodiscard]] const Eigen::Vector3i& dims() const { return dims_; }
+  /// True when the box-relative index lies inside the box.
+  [[nodiscard]] bool contains(int i, int j, int k) const {
+    return static_cast<unsigned>(i) < static_cast<unsigned>(dims_.x()) &&
+           static_cast<unsigned>(j) < static_cast<unsigned>(dims_.y()) &&
+           static_cast<unsigned>(k) < static_cast<unsigned>(dims_.z());
+  }
+  /// Bit of a box-relative voxel (must be inside).
+  [[nodiscard]] bool test(int i, int j, int k) const {
+    return (bits_[word(i, j, k)] >> (k & 63)) & 1u;
+  }
+  /// Sets a bit (must be inside); returns its previous value.
+  bool testAndSet(int i, int j, int k) {
+    std::uint64_t& w = bits_[word(i, j, k)];
+    const std::uint64_t mask = std::uint64_t{1} << (k & 63);
+    const bool was = (w & mask) != 0;
+    w |= mask;
+    return was;
+  }
+  /// Word holding the start of row (i, j); bit k of the row is bit (k & 63) of word row + k / 64.
+  [[nodiscard]] std::size_t rowWord(int i, int j) const {
+    return (static_cast<std::size_t>(i) * static_cast<std::size_t>(dims_.y()) +
+            static_cast<std::size_t>(j)) *
+           words_per_row_;
+  }
+  /// 64-bit words per (i, j) row.
+  [[nodiscard]] std::size_t wordsPerRow() const { return words_per_row_; }
+  /// Raw words (for fast row-wise access).
+  std::uint64_t* data() { return bits_.data(); }
+  [[nodiscard]] const std::uint64_t* data() const { return bits_.data(); }
+
+  /// Calls f(i, j, k) for every set bit, in (i, j, k) order.
+  template <typename F>
+  void forEach(F&& f) const {
+    for (int i = 0; i < dims_.x(); ++i) {
+      for (int j = 0; j < dims_.y(); ++j) {
+        const std::uint64_t* row = bits_.data() + rowWord(i, j);
+        for (std::size_t w = 0; w < words_per_row_; ++w) {
+          std::uint64_t bits = row[w];
+          while (bits != 0) {
+            const int k = static_cast<int>(w * 64) + __builtin_ctzll(bits);
+            f(i, j, k);
+            bits &= bits - 1;
+          }
+        }
+      }
+    }
+  }
+
+  /// Number of set bits.
+  [[nodiscard]] std::size_t count() const {
+    std::size_t n = 0;
+    for (std::uint64_t w : bits_) n += static_cast<std::size_t>(__builtin_popcountll(w));
+    return n;
+  }
+  /// Bytes held.
+  [[nodiscard]] std::size_t memoryBytes() const { return bits_.capacity() * sizeof(std::uint64_t); }
+
+ private:
+  [[nodiscard]] std::size_t word(int i, int j, int k) const {
+    return rowWord(i, j) + static_cast<std::size_t>(k >> 6);
+  }
+
+  VoxelIndex origin_ = VoxelIndex::Zero();
+  Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
+  std::size_t words_per_row_ = 0;
+  std::vector<std::uint64_t> bits_;
+};
+
+}  // namespace mlmap

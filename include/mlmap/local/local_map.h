@@ -1,0 +1,113 @@
+#pragma once
+/// @file
+/// The local map (paper IV-B, IV-C): probabilistic voxels of the active area around the body,
+/// cut into 5 x 5 x 5 submaps that slide with the vehicle.
+///
+/// Storage is a torus: world voxel g lives at (g mod N) on each axis, N = 5 submaps. Submap m
+/// therefore always occupies the same slot (m mod 5), so sliding by one submap touches only the
+/// 25 slots that change owner: their old submap is retired to the global map and the slot is
+/// reset to unknown, then filled from the global map if the new submap was mapped before. No
+/// voxel is copied on a shift and a recycled slot never shows old values at new positions.
+
+#include "mlmap/core/measurement_batch.h"
+#include "mlmap/core/config.h"
+#include "mlmap/core/log_odds.h"
+#include "mlmap/global/global_map.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace mlmap {
+
+/// Counters of the local map's updates.
+struct LocalMapCounters {
+  std::uint64_t hits_applied = 0;         ///< occupied updates inside the window
+  std::uint64_t misses_applied = 0;       ///< free updates inside the window
+  std::uint64_t outside_window = 0;       ///< measurements outside the window (dropped)
+  std::uint64_t shifts = 0;               ///< one-submap re-centrings
+  std::uint64_t resets = 0;               ///< jumps too far for a shift: whole window retired
+  std::uint64_t submaps_retired = 0;      ///< submaps handed to the global map
+  std::uint64_t submaps_restored = 0;     ///< submaps taken back from the global map
+};
+
+/// Dense sliding voxel window. Not thread-safe: owned by the local-global stage.
+class LocalMap {
+ public:
+  LocalMap(const LocalMapConfig& config, const LogOddsConfig& log_odds);
+
+  /// Re-centres on the body (paper Algorithm 3 line 1-3): while the body is outside the centre
+  /// submap, move the centre to the one of its 26 neighbours whose centre is closest to the body.
+  /// A jump of more than two submaps retires the whole window instead. The first call places the
+  /// window. Retired submaps go to `global`; entering ones are restored from it.
+  void recenter(const Eigen::Vector3d& body_W, GlobalMap* global);
+
+  /// Applies a frame's measurements: +hit for occupied voxels, +miss for free ones (Eq. 8-9),
+  /// each voxel once. Measurements outside the window are counted and dropped.
+  void integrate(const MeasurementBatch& batch);
+
+  /// Retires every submap to `global` (e.g. before saving a complete map); the window stays.
+  void retireAll(GlobalMap* global);
+
+  /// True when the window has been placed and holds `index`.
+  [[nodiscard]] bool contains(const VoxelIndex& index) const;
+  /// State of a voxel; unknown outside the window.
+  [[nodiscard]] Occupancy state(const VoxelIndex& index) const;
+  /// Log-odds of a voxel; false when unknown or outside the window.
+  [[nodiscard]] bool logOdds(const VoxelIndex& index, double* log_odds) const;
+
+  /// Calls f(world voxel index, log-odds) for every occupied voxel of the window.
+  template <typename F>
+  void forEachOccupied(F&& f) const {
+    if (!placed_) return;
+    for (int x = 0; x < size_.x(); ++x) {
+      for (int y = 0; y < size_.y(); ++y) {
+        for (int z = 0; z < size_.z(); ++z) {
+          const VoxelIndex g = min_index_ + VoxelIndex(x, y, z);
+          const LogOddsQ v = cells_[slot(g)];
+          if (model_.isOccupied(v)) f(g, dequantizeLogOdds(v));
+        }
+      }
+    }
+  }
+
+  /// First voxel of the window (inclusive) and one past the last.
+  [[nodiscard]] const VoxelIndex& minIndex() const { return min_index_; }
+  [[nodiscard]] VoxelIndex maxIndex() const { return min_index_ + size_; }
+  [[nodiscard]] const SubmapIndex& centerSubmap() const { return center_; }
+  [[nodiscard]] SubmapIndex submapOf(const VoxelIndex& index) const;
+  [[nodiscard]] bool placed() const { return placed_; }
+  [[nodiscard]] const LocalMapConfig& config() const { return config_; }
+  [[nodiscard]] const LocalMapCounters& counters() const { return counters_; }
+  /// Bytes held by the voxel storage (2 bytes per voxel).
+  [[nodiscard]] std::size_t memoryBytes() const { return cells_.capacity() * sizeof(LogOddsQ); }
+  /// Bytes per voxel of the active area.
+  static constexpr std::size_t kBytesPerVoxel = sizeof(LogOddsQ);
+
+ private:
+  [[nodiscard]] static int floorMod(int v, int n) {
+    const int r = v % n;
+    return r < 0 ? r + n : r;
+  }
+  [[nodiscard]] std::size_t slot(const VoxelIndex& g) const {
+    return (static_cast<std::size_t>(floorMod(g.x(), size_.x())) * static_cast<std::size_t>(size_.y()) +
+            static_cast<std::size_t>(floorMod(g.y(), size_.y()))) *
+               static_cast<std::size_t>(size_.z()) +
+           static_cast<std::size_t>(floorMod(g.z(), size_.z()));
+  }
+  void moveCenter(const SubmapIndex& new_center, GlobalMap* global);
+  void retireSubmap(const SubmapIndex& m, GlobalMap* global);
+  void restoreSubmap(const SubmapIndex& m, GlobalMap* global);
+
+  LocalMapConfig config_;
+  LogOddsModel model_;
+  Eigen::Vector3i size_;
+  Eigen::Vector3i submap_;
+  std::vector<LogOddsQ> cells_;
+  bool placed_ = false;
+  SubmapIndex center_ = SubmapIndex::Zero();
+  VoxelIndex min_index_ = VoxelIndex::Zero();
+  LocalMapCounters counters_;
+  std::vector<VoxelRecord> scratch_;
+};
+
+}  // namespace mlmap

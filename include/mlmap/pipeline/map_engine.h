@@ -1,0 +1,155 @@
+#pragma once
+/// @file
+/// The mapping engine (paper V-A, Figure 5): input validation, the awareness stage and the
+/// local-global stage, either synchronously on the caller's thread (deterministic; tests,
+/// benchmarks, replay) or on two threads joined by bounded queues.
+
+#include "mlmap/awareness/awareness_stage.h"
+#include "mlmap/core/config.h"
+#include "mlmap/global/global_map.h"
+#include "mlmap/local/local_map.h"
+
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <variant>
+#include <vector>
+
+namespace mlmap {
+
+/// Why a frame was not mapped.
+enum class FrameStatus {
+  kAccepted,         ///< mapped (synchronous) or queued (threaded)
+  kInvalidPose,      ///< T_W_B or T_B_S not finite or not a rotation, or absurdly far away
+  kOutOfOrder,       ///< stamp not newer than the last accepted frame, or not finite
+  kEmpty,            ///< no points / no valid pixels
+  kBadImage,         ///< depth image size disagrees with its intrinsics
+  kStopped,          ///< engine shutting down
+};
+const char* toString(FrameStatus status);
+
+/// Median, 99th percentile, mean and maximum of the recent samples of a stage, in ms.
+struct TimingSummary {
+  double median_ms = 0.0;
+  double p99_ms = 0.0;
+  double mean_ms = 0.0;
+  double max_ms = 0.0;
+  std::size_t samples = 0;
+};
+
+/// Memory in bytes by layer.
+struct MemoryUsage {
+  std::size_t awareness_bytes = 0;  ///< cylindrical grid, per-frame scratch and batch
+  std::size_t local_bytes = 0;      ///< active-area voxels
+  std::size_t global_bytes = 0;     ///< retired submaps' occupied voxels
+  [[nodiscard]] std::size_t total() const { return awareness_bytes + local_bytes + global_bytes; }
+};
+
+/// Everything the engine counts. Frames: in = accepted + rejected_*; dropped counts accepted
+/// frames that were discarded because the input queue was full (threaded mode only).
+struct EngineStats {
+  std::uint64_t frames_in = 0;
+  std::uint64_t frames_mapped = 0;
+  std::uint64_t frames_dropped = 0;
+  std::uint64_t rejected_invalid_pose = 0;
+  std::uint64_t rejected_out_of_order = 0;
+  std::uint64_t rejected_empty = 0;
+  std::uint64_t rejected_bad_image = 0;
+  PointCounters points;
+  LocalMapCounters local;
+  TimingSummary awareness;     ///< points -> awareness map + measurements
+  TimingSummary local_global;  ///< re-centring + log-odds updates
+  TimingSummary total;         ///< both stages of one frame
+  MemoryUsage memory;
+  std::size_t global_voxels = 0;
+  std::size_t global_submaps = 0;
+};
+
+/// Severity of an engine log message.
+enum class LogLevel { kInfo, kWarning, kError };
+/// Receives rate-limited log lines (default: none). Called from the thread that saw the problem.
+using LogSink = std::function<void(LogLevel, const std::string&)>;
+
+/// Owns the three layers. Submit frames from one thread; read the layers after flush().
+class MapEngine {
+ public:
+  /// Throws std::invalid_argument listing every problem when `config` is not valid.
+  explicit MapEngine(const MapConfig& config, LogSink log = {});
+  ~MapEngine();
+  MapEngine(const MapEngine&) = delete;
+  MapEngine& operator=(const MapEngine&) = delete;
+
+  /// Validates and maps (synchronous) or queues (threaded) a point cloud in the sensor frame.
+  FrameStatus submit(PointCloudFrame frame);
+  /// The same for a depth image; it is back-projected on the awareness stage.
+  FrameStatus submit(DepthFrame frame);
+  /// Waits until every queued frame is mapped (no-op in synchronous mode).
+  void flush();
+
+  [[nodiscard]] EngineStats stats() const;
+  [[nodiscard]] const MapConfig& config() const { return config_; }
+
+  /// Layers, valid to read after flush() while no frame is being submitted.
+  [[nodiscard]] const AwarenessMap& awareness() const { return awareness_.map(); }
+  [[nodiscard]] const LocalMap& localMap() const { return local_; }
+  [[nodiscard]] const GlobalMap& globalMap() const { return global_; }
+  /// State of a world voxel: the local map inside the window, the global map outside it
+  /// (occupied if stored there, unknown otherwise).
+  [[nodiscard]] Occupancy state(const VoxelIndex& index) const;
+  /// Every occupied voxel, local and global, with its log-odds (after flush()).
+  [[nodiscard]] std::vector<VoxelIndex> occupiedVoxels() const;
+
+ private:
+  using Input = std::variant<PointCloudFrame, DepthFrame>;
+  FrameStatus admit(double stamp_s, const Transform& T_W_B, const Transform& T_B_S);
+  void process(Input& input, MeasurementBatch* batch);
+  void awarenessStep(Input& input, MeasurementBatch* batch);
+  void localStep(const MeasurementBatch& batch);
+  void awarenessLoop();
+  void localLoop();
+  void log(LogLevel level, int reason, const std::string& message);
+  FrameStatus enqueue(Input input);
+
+  MapConfig config_;
+  LogSink log_sink_;
+  AwarenessStage awareness_;
+  LocalMap local_;
+  GlobalMap global_;
+
+  // Statistics, guarded by stats_mutex_.
+  mutable std::mutex stats_mutex_;
+  EngineStats stats_;
+  struct Samples {
+    std::vector<double> values;
+    std::size_t next = 0;
+    void add(double v);
+    [[nodiscard]] TimingSummary summary() const;
+  };
+  Samples awareness_ms_, local_ms_, total_ms_;
+  double last_stamp_s_ = -1e300;
+  bool have_stamp_ = false;
+  struct RateLimit {
+    double last_s = -1e300;
+    std::uint64_t suppressed = 0;
+  };
+  std::vector<RateLimit> log_limits_;
+
+  // Threaded mode.
+  std::mutex queue_mutex_;
+  std::condition_variable queue_cv_;
+  std::deque<Input> inputs_;
+  std::deque<std::unique_ptr<MeasurementBatch>> batches_;
+  std::vector<std::unique_ptr<MeasurementBatch>> batch_pool_;
+  std::size_t in_flight_ = 0;  // frames taken from the input queue, not yet mapped
+  bool stopping_ = false;
+  std::thread awareness_thread_;
+  std::thread local_thread_;
+  MeasurementBatch sync_batch_;
+  std::vector<Eigen::Vector3f> depth_points_;
+};
+
+}  // namespace mlmap

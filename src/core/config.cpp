@@ -1,0 +1,119 @@
+#include "mlmap/core/config.h"
+
+#include <cmath>
+#include <sstream>
+
+namespace mlmap {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+template <typename T>
+void require(bool ok, const std::string& key, const std::string& what, const T& value,
+             std::vector<std::string>* errors) {
+  if (ok) return;
+  std::ostringstream message;
+  message << key << ": " << what << " (got " << value << ")";
+  errors->push_back(message.str());
+}
+
+bool finitePositive(double v) { return std::isfinite(v) && v > 0.0; }
+
+}  // namespace
+
+double AwarenessConfig::phi_cell_rad() const { return 2.0 * kPi / phi_cells; }
+
+void AwarenessConfig::validate(std::vector<std::string>* errors) const {
+  require(finitePositive(rho_cell_m) && rho_cell_m <= 10.0, "awareness.rho_cell_m",
+          "must be in (0, 10] m", rho_cell_m, errors);
+  require(rho_cells >= 1 && rho_cells <= 4096, "awareness.rho_cells", "must be in [1, 4096]",
+          rho_cells, errors);
+  require(phi_cells >= 4 && phi_cells <= 4096, "awareness.phi_cells", "must be in [4, 4096]",
+          phi_cells, errors);
+  require(finitePositive(z_cell_m) && z_cell_m <= 10.0, "awareness.z_cell_m",
+          "must be in (0, 10] m", z_cell_m, errors);
+  require(z_cells >= 1 && z_cells <= 4096, "awareness.z_cells", "must be in [1, 4096]", z_cells,
+          errors);
+  require(z_cells_below >= 0 && z_cells_below <= z_cells, "awareness.z_cells_below",
+          "must be in [0, z_cells]", z_cells_below, errors);
+  require(std::isfinite(min_range_m) && min_range_m >= 0.0, "awareness.min_range_m",
+          "must be >= 0 m", min_range_m, errors);
+  require(finitePositive(max_range_m) && max_range_m > min_range_m, "awareness.max_range_m",
+          "must be > min_range_m", max_range_m, errors);
+  require(sample_count >= 0, "awareness.sample_count", "must be >= 0 (0 = all points)",
+          sample_count, errors);
+}
+
+void LogOddsConfig::validate(std::vector<std::string>* errors) const {
+  require(std::isfinite(hit) && hit > 0.0 && hit <= 10.0, "log_odds.hit", "must be in (0, 10]",
+          hit, errors);
+  require(std::isfinite(miss) && miss < 0.0 && miss >= -10.0, "log_odds.miss",
+          "must be in [-10, 0)", miss, errors);
+  require(std::isfinite(clamp_min) && clamp_min < 0.0 && clamp_min >= -30.0,
+          "log_odds.clamp_min", "must be in [-30, 0)", clamp_min, errors);
+  require(std::isfinite(clamp_max) && clamp_max > 0.0 && clamp_max <= 30.0, "log_odds.clamp_max",
+          "must be in (0, 30]", clamp_max, errors);
+  require(std::isfinite(occupied_threshold) && occupied_threshold >= clamp_min &&
+              occupied_threshold < clamp_max,
+          "log_odds.occupied_threshold", "must be in [clamp_min, clamp_max)", occupied_threshold,
+          errors);
+}
+
+void LocalMapConfig::validate(std::vector<std::string>* errors) const {
+  require(finitePositive(resolution_m) && resolution_m >= 0.01 && resolution_m <= 5.0,
+          "local_map.resolution_m", "must be in [0.01, 5] m", resolution_m, errors);
+  static const char* kAxis[3] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a) {
+    const int n = size_cells[a];
+    require(n >= kSubmapsPerAxis && n % kSubmapsPerAxis == 0 && n <= 2000,
+            std::string("local_map.size_cells.") + kAxis[a],
+            "must be a multiple of 5 (5 submaps per axis) in [5, 2000]", n, errors);
+  }
+  const double cells = static_cast<double>(size_cells.x()) * size_cells.y() * size_cells.z();
+  require(cells <= 2.0e8, "local_map.size_cells", "more than 2e8 voxels (400 MB) in the active area",
+          cells, errors);
+}
+
+void SensorConfig::validate(std::vector<std::string>* errors) const {
+  require(translation_B_m.allFinite() && translation_B_m.norm() <= 10.0,
+          "sensor.translation_B_m", "must be finite and within 10 m of the body",
+          translation_B_m.transpose(), errors);
+  require(rotation_rpy_deg.allFinite(), "sensor.rotation_rpy_deg", "must be finite",
+          rotation_rpy_deg.transpose(), errors);
+}
+
+Eigen::Isometry3d SensorConfig::T_B_S() const {
+  const Eigen::Vector3d rad = rotation_rpy_deg * (kPi / 180.0);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = (Eigen::AngleAxisd(rad.z(), Eigen::Vector3d::UnitZ()) *
+                Eigen::AngleAxisd(rad.y(), Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(rad.x(), Eigen::Vector3d::UnitX()))
+                   .toRotationMatrix();
+  T.translation() = translation_B_m;
+  return T;
+}
+
+void PipelineConfig::validate(std::vector<std::string>* errors) const {
+  require(input_queue_capacity >= 1 && input_queue_capacity <= 1000,
+          "pipeline.input_queue_capacity", "must be in [1, 1000]", input_queue_capacity, errors);
+  require(batch_queue_capacity >= 1 && batch_queue_capacity <= 1000,
+          "pipeline.batch_queue_capacity", "must be in [1, 1000]", batch_queue_capacity, errors);
+}
+
+std::vector<std::string> MapConfig::validate() const {
+  std::vector<std::string> errors;
+  awareness.validate(&errors);
+  log_odds.validate(&errors);
+  local_map.validate(&errors);
+  sensor.validate(&errors);
+  pipeline.validate(&errors);
+  if (errors.empty() && awareness.max_range_m > awareness.radius_m() + 1e-9) {
+    std::ostringstream message;
+    message << "awareness.max_range_m: must not exceed the awareness radius rho_cells * rho_cell_m = "
+            << awareness.radius_m() << " m (got " << awareness.max_range_m << ")";
+    errors.push_back(message.str());
+  }
+  return errors;
+}
+
+}  // namespace mlmap

@@ -1,0 +1,74 @@
+#include "mlmap/global/global_map.h"
+
+namespace mlmap {
+namespace {
+constexpr int kBits = 21;
+constexpr std::int64_t kBias = std::int64_t{1} << (kBits - 1);
+constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
+}  // namespace
+
+GlobalMap::GlobalMap(const Eigen::Vector3i& submap_cells, double resolution_m)
+    : submap_cells_(submap_cells),
+      plane_(static_cast<std::uint32_t>(submap_cells.y() * submap_cells.z())),
+      resolution_m_(resolution_m) {}
+
+std::uint64_t GlobalMap::pack(const SubmapIndex& m) {
+  std::uint64_t key = 0;
+  for (int a = 0; a < 3; ++a) {
+    key = (key << kBits) | (static_cast<std::uint64_t>(m[a] + kBias) & kMask);
+  }
+  return key;
+}
+
+SubmapIndex GlobalMap::unpack(std::uint64_t key) {
+  SubmapIndex m;
+  for (int a = 2; a >= 0; --a) {
+    m[a] = static_cast<int>(static_cast<std::int64_t>(key & kMask) - kBias);
+    key >>= kBits;
+  }
+  return m;
+}
+
+void GlobalMap::store(const SubmapIndex& submap, std::vector<VoxelRecord>&& records) {
+  const std::uint64_t key = pack(submap);
+  auto it = submaps_.find(key);
+  if (it != submaps_.end()) {
+    voxel_count_ -= it->second.size();
+    if (records.empty()) {
+      submaps_.erase(it);
+      return;
+    }
+    it->second = std::move(records);
+    voxel_count_ += it->second.size();
+    return;
+  }
+  if (records.empty()) return;
+  records.shrink_to_fit();
+  voxel_count_ += records.size();
+  submaps_.emplace(key, std::move(records));
+}
+
+bool GlobalMap::take(const SubmapIndex& submap, std::vector<VoxelRecord>* records) {
+  auto it = submaps_.find(pack(submap));
+  if (it == submaps_.end()) return false;
+  voxel_count_ -= it->second.size();
+  *records = std::move(it->second);
+  submaps_.erase(it);
+  return true;
+}
+
+const std::vector<VoxelRecord>* GlobalMap::find(const SubmapIndex& submap) const {
+  auto it = submaps_.find(pack(submap));
+  return it == submaps_.end() ? nullptr : &it->second;
+}
+
+std::size_t GlobalMap::memoryBytes() const {
+  // Node: key + vector header + next pointer + cached hash; plus one pointer per bucket.
+  constexpr std::size_t kNodeBytes =
+      sizeof(std::uint64_t) + sizeof(std::vector<VoxelRecord>) + 2 * sizeof(void*);
+  std::size_t bytes = submaps_.bucket_count() * sizeof(void*) + submaps_.size() * kNodeBytes;
+  for (const auto& entry : submaps_) bytes += entry.second.capacity() * sizeof(VoxelRecord);
+  return bytes;
+}
+
+}  // namespace mlmap

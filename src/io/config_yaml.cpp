@@ -1,0 +1,210 @@
+#include "mlmap/io/config_yaml.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace mlmap::io {
+namespace {
+
+/// Reads the keys of one YAML mapping into typed fields, remembering every problem.
+class Section {
+ public:
+  Section(const YAML::Node& node, std::string path, std::vector<std::string>* errors)
+      : node_(node), path_(std::move(path)), errors_(errors) {
+    if (node_ && !node_.IsMap() && !node_.IsNull()) {
+      errors_->push_back(path_ + ": must be a mapping of keys to values");
+      node_ = YAML::Node();
+    }
+  }
+  ~Section() {
+    if (!node_ || !node_.IsMap()) return;
+    for (const auto& kv : node_) {
+      const std::string key = kv.first.as<std::string>();
+      if (known_.count(key) == 0) {
+        std::string allowed;
+        for (const std::string& k : known_) allowed += (allowed.empty() ? "" : ", ") + k;
+        errors_->push_back(path_ + "." + key + ": unknown key (known keys: " + allowed + ")");
+      }
+    }
+  }
+  Section(const Section&) = delete;
+  Section& operator=(const Section&) = delete;
+
+  template <typename T>
+  void read(const std::string& key, T* value) {
+    known_.insert(key);
+    if (!node_ || !node_.IsMap() || !node_[key]) return;
+    try {
+      *value = node_[key].template as<T>();
+    } catch (const YAML::Exception&) {
+      errors_->push_back(path_ + "." + key + ": cannot read '" + YAML::Dump(node_[key]) +
+                         "' as " + typeName(value));
+    }
+  }
+  template <typename Vec>
+  void readVector(const std::string& key, Vec* value) {
+    known_.insert(key);
+    if (!node_ || !node_.IsMap() || !node_[key]) return;
+    const YAML::Node v = node_[key];
+    if (!v.IsSequence() || static_cast<int>(v.size()) != value->size()) {
+      errors_->push_back(path_ + "." + key + ": must be a list of " +
+                         std::to_string(value->size()) + " numbers");
+      return;
+    }
+    try {
+      for (int i = 0; i < value->size(); ++i) {
+        (*value)[i] = v[static_cast<std::size_t>(i)].template as<typename Vec::Scalar>();
+      }
+    } catch (const YAML::Exception&) {
+      errors_->push_back(path_ + "." + key + ": cannot read '" + YAML::Dump(v) + "' as numbers");
+    }
+  }
+  YAML::Node child(const std::string& key) {
+    known_.insert(key);
+    return (node_ && node_.IsMap()) ? node_[key] : YAML::Node();
+  }
+  [[nodiscard]] const std::string& path() const { return path_; }
+
+ private:
+  static const char* typeName(const double*) { return "a number"; }
+  static const char* typeName(const int*) { return "an integer"; }
+  static const char* typeName(const std::uint32_t*) { return "a non-negative integer"; }
+  static const char* typeName(const bool*) { return "true or false"; }
+
+  YAML::Node node_;
+  std::string path_;
+  std::vector<std::string>* errors_;
+  std::set<std::string> known_;
+};
+
+std::string joined(const std::string& source, const std::vector<std::string>& errors) {
+  std::ostringstream out;
+  out << source << ": invalid mlmap configuration:";
+  for (const std::string& e : errors) out << "\n  " << e;
+  return out.str();
+}
+
+}  // namespace
+
+MapConfig parseConfigYaml(const std::string& text, const std::string& source_name) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(source_name + ": not valid YAML: " + e.what());
+  }
+  MapConfig c;
+  std::vector<std::string> errors;
+  {
+    Section top(root, "", &errors);
+    {
+      Section s(top.child("awareness"), "awareness", &errors);
+      AwarenessConfig& a = c.awareness;
+      s.read("rho_cell_m", &a.rho_cell_m);
+      s.read("rho_cells", &a.rho_cells);
+      s.read("phi_cells", &a.phi_cells);
+      s.read("z_cell_m", &a.z_cell_m);
+      s.read("z_cells", &a.z_cells);
+      s.read("z_cells_below", &a.z_cells_below);
+      s.read("min_range_m", &a.min_range_m);
+      s.read("max_range_m", &a.max_range_m);
+      s.read("sample_count", &a.sample_count);
+      s.read("sample_seed", &a.sample_seed);
+    }
+    {
+      Section s(top.child("log_odds"), "log_odds", &errors);
+      LogOddsConfig& l = c.log_odds;
+      s.read("hit", &l.hit);
+      s.read("miss", &l.miss);
+      s.read("clamp_min", &l.clamp_min);
+      s.read("clamp_max", &l.clamp_max);
+      s.read("occupied_threshold", &l.occupied_threshold);
+    }
+    {
+      Section s(top.child("local_map"), "local_map", &errors);
+      s.read("resolution_m", &c.local_map.resolution_m);
+      s.readVector("size_cells", &c.local_map.size_cells);
+    }
+    {
+      Section s(top.child("sensor"), "sensor", &errors);
+      s.readVector("translation_B_m", &c.sensor.translation_B_m);
+      s.readVector("rotation_rpy_deg", &c.sensor.rotation_rpy_deg);
+    }
+    {
+      Section s(top.child("pipeline"), "pipeline", &errors);
+      PipelineConfig& p = c.pipeline;
+      s.read("threaded", &p.threaded);
+      s.read("input_queue_capacity", &p.input_queue_capacity);
+      s.read("batch_queue_capacity", &p.batch_queue_capacity);
+      s.read("reject_out_of_order", &p.reject_out_of_order);
+    }
+  }
+  for (std::string& e : errors) {
+    if (!e.empty() && e[0] == '.') e.erase(0, 1);  // top-level keys have no section prefix
+  }
+  if (errors.empty()) errors = c.validate();
+  if (!errors.empty()) throw std::runtime_error(joined(source_name, errors));
+  return c;
+}
+
+MapConfig loadConfigYaml(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open the configuration file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return parseConfigYaml(buffer.str(), path);
+}
+
+std::string toYaml(const MapConfig& c) {
+  YAML::Emitter out;
+  auto vec = [&](const auto& v) {
+    out << YAML::Flow << YAML::BeginSeq;
+    for (int i = 0; i < v.size(); ++i) out << v[i];
+    out << YAML::EndSeq;
+  };
+  out << YAML::BeginMap;
+  out << YAML::Key << "awareness" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "rho_cell_m" << YAML::Value << c.awareness.rho_cell_m;
+  out << YAML::Key << "rho_cells" << YAML::Value << c.awareness.rho_cells;
+  out << YAML::Key << "phi_cells" << YAML::Value << c.awareness.phi_cells;
+  out << YAML::Key << "z_cell_m" << YAML::Value << c.awareness.z_cell_m;
+  out << YAML::Key << "z_cells" << YAML::Value << c.awareness.z_cells;
+  out << YAML::Key << "z_cells_below" << YAML::Value << c.awareness.z_cells_below;
+  out << YAML::Key << "min_range_m" << YAML::Value << c.awareness.min_range_m;
+  out << YAML::Key << "max_range_m" << YAML::Value << c.awareness.max_range_m;
+  out << YAML::Key << "sample_count" << YAML::Value << c.awareness.sample_count;
+  out << YAML::Key << "sample_seed" << YAML::Value << c.awareness.sample_seed;
+  out << YAML::EndMap;
+  out << YAML::Key << "log_odds" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "hit" << YAML::Value << c.log_odds.hit;
+  out << YAML::Key << "miss" << YAML::Value << c.log_odds.miss;
+  out << YAML::Key << "clamp_min" << YAML::Value << c.log_odds.clamp_min;
+  out << YAML::Key << "clamp_max" << YAML::Value << c.log_odds.clamp_max;
+  out << YAML::Key << "occupied_threshold" << YAML::Value << c.log_odds.occupied_threshold;
+  out << YAML::EndMap;
+  out << YAML::Key << "local_map" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "resolution_m" << YAML::Value << c.local_map.resolution_m;
+  out << YAML::Key << "size_cells" << YAML::Value;
+  vec(c.local_map.size_cells);
+  out << YAML::EndMap;
+  out << YAML::Key << "sensor" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "translation_B_m" << YAML::Value;
+  vec(c.sensor.translation_B_m);
+  out << YAML::Key << "rotation_rpy_deg" << YAML::Value;
+  vec(c.sensor.rotation_rpy_deg);
+  out << YAML::EndMap;
+  out << YAML::Key << "pipeline" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "threaded" << YAML::Value << c.pipeline.threaded;
+  out << YAML::Key << "input_queue_capacity" << YAML::Value << c.pipeline.input_queue_capacity;
+  out << YAML::Key << "batch_queue_capacity" << YAML::Value << c.pipeline.batch_queue_capacity;
+  out << YAML::Key << "reject_out_of_order" << YAML::Value << c.pipeline.reject_out_of_order;
+  out << YAML::EndMap;
+  out << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+}  // namespace mlmap::io

@@ -1,0 +1,233 @@
+#include "mlmap/local/local_map.h"
+
+#include <algorithm>
+#include <limits>
+
+namespace mlmap {
+namespace {
+constexpr int kHalfWindow = LocalMapConfig::kSubmapsPerAxis / 2;  // 2 submaps on each side
+constexpr int kMaxShiftsPerCall = 8;
+}  // namespace
+
+LocalMap::LocalMap(const LocalMapConfig& config, const LogOddsConfig& log_odds)
+    : config_(config),
+      model_(log_odds),
+      size_(config.size_cells),
+      submap_(config.submap_cells()),
+      cells_(static_cast<std::size_t>(size_.x()) * static_cast<std::size_t>(size_.y()) *
+                 static_cast<std::size_t>(size_.z()),
+             kUnknownLogOdds) {}
+
+SubmapIndex LocalMap::submapOf(const VoxelIndex& index) const {
+  SubmapIndex m;
+  for (int a = 0; a < 3; ++a) {
+    const int q = index[a] / submap_[a];
+    m[a] = (index[a] % submap_[a] < 0) ? q - 1 : q;
+  }
+  return m;
+}
+
+bool LocalMap::contains(const VoxelIndex& index) const {
+  if (!placed_) return false;
+  const VoxelIndex d = index - min_index_;
+  return static_cast<unsigned>(d.x()) < static_cast<unsigned>(size_.x()) &&
+         static_cast<unsigned>(d.y()) < static_cast<unsigned>(size_.y()) &&
+         static_cast<unsigned>(d.z()) < static_cast<unsigned>(size_.z());
+}
+
+Occupancy LocalMap::state(const VoxelIndex& index) const {
+  return contains(index) ? model_.state(cells_[slot(index)]) : Occupancy::kUnknown;
+}
+
+bool LocalMap::logOdds(const VoxelIndex& index, double* log_odds) const {
+  if (!contains(index)) return false;
+  const LogOddsQ v = cells_[slot(index)];
+  if (v == kUnknownLogOdds) return false;
+  *log_odds = dequantizeLogOdds(v);
+  return true;
+}
+
+void LocalMap::retireSubmap(const SubmapIndex& m, GlobalMap* global) {
+  scratch_.clear();
+  const int n = LocalMapConfig::kSubmapsPerAxis;
+  const Eigen::Vector3i t0(floorMod(m.x(), n) * submap_.x(), floorMod(m.y(), n) * submap_.y(),
+                           floorMod(m.z(), n) * submap_.z());
+  std::uint32_t offset = 0;
+  for (int x = 0; x < submap_.x(); ++x) {
+    for (int y = 0; y < submap_.y(); ++y) {
+      LogOddsQ* row = cells_.data() +
+                      (static_cast<std::size_t>(t0.x() + x) * static_cast<std::size_t>(size_.y()) +
+                       static_cast<std::size_t>(t0.y() + y)) *
+                          static_cast<std::size_t>(size_.z()) +
+                      static_cast<std::size_t>(t0.z());
+      for (int z = 0; z < submap_.z(); ++z, ++offset) {
+        if (model_.isOccupied(row[z])) scratch_.push_back({offset, row[z]});
+        row[z] = kUnknownLogOdds;
+      }
+    }
+  }
+  global->store(m, std::vector<VoxelRecord>(scratch_.begin(), scratch_.end()));
+  ++counters_.submaps_retired;
+}
+
+void LocalMap::restoreSubmap(const SubmapIndex& m, GlobalMap* global) {
+  if (!global->take(m, &scratch_)) return;
+  const int n = LocalMapConfig::kSubmapsPerAxis;
+  const Eigen::Vector3i t0(floorMod(m.x(), n) * submap_.x(), floorMod(m.y(), n) * submap_.y(),
+                           floorMod(m.z(), n) * submap_.z());
+  const std::uint32_t plane = static_cast<std::uint32_t>(submap_.y() * submap_.z());
+  for (const VoxelRecord& r : scratch_) {
+    const int x = static_cast<int>(r.offset / plane);
+    const int y = static_cast<int>((r.offset % plane) / static_cast<std::uint32_t>(submap_.z()));
+    const int z = static_cast<int>(r.offset % static_cast<std::uint32_t>(submap_.z()));
+    cells_[(static_cast<std::size_t>(t0.x() + x) * static_cast<std::size_t>(size_.y()) +
+            static_cast<std::size_t>(t0.y() + y)) *
+               static_cast<std::size_t>(size_.z()) +
+           static_cast<std::size_t>(t0.z() + z)] = r.log_odds;
+  }
+  ++counters_.submaps_restored;
+}
+
+void LocalMap::moveCenter(const SubmapIndex& new_center, GlobalMap* global) {
+  const SubmapIndex delta = new_center - center_;
+  const int n = LocalMapConfig::kSubmapsPerAxis;
+  for (int x = -kHalfWindow; x <= kHalfWindow; ++x) {
+    for (int y = -kHalfWindow; y <= kHalfWindow; ++y) {
+      for (int z = -kHalfWindow; z <= kHalfWindow; ++z) {
+        const SubmapIndex entering = new_center + SubmapIndex(x, y, z);
+        SubmapIndex leaving = entering;
+        bool changes = false;
+        for (int a = 0; a < 3; ++a) {
+          if (std::abs(entering[a] - center_[a]) > kHalfWindow) {
+            leaving[a] -= n * delta[a];
+            changes = true;
+          }
+        }
+        if (!changes) continue;
+        retireSubmap(leaving, global);
+        restoreSubmap(entering, global);
+      }
+    }
+  }
+  center_ = new_center;
+  min_index_ = (center_ - SubmapIndex::Constant(kHalfWindow)).cwiseProduct(submap_);
+  ++counters_.shifts;
+}
+
+void LocalMap::retireAll(GlobalMap* global) {
+  if (!placed_) return;
+  for (int x = -kHalfWindow; x <= kHalfWindow; ++x) {
+    for (int y = -kHalfWindow; y <= kHalfWindow; ++y) {
+      for (int z = -kHalfWindow; z <= kHalfWindow; ++z) {
+        retireSubmap(center_ + SubmapIndex(x, y, z), global);
+      }
+    }
+  }
+}
+
+void LocalMap::recenter(const Eigen::Vector3d& body_W, GlobalMap* global) {
+  const SubmapIndex body_submap = submapOf(voxelIndexOf(body_W, config_.resolution_m));
+  auto place = [&](const SubmapIndex& center) {
+    center_ = center;
+    min_index_ = (center_ - SubmapIndex::Constant(kHalfWindow)).cwiseProduct(submap_);
+    placed_ = true;
+    for (int x = -kHalfWindow; x <= kHalfWindow; ++x) {
+      for (int y = -kHalfWindow; y <= kHalfWindow; ++y) {
+        for (int z = -kHalfWindow; z <= kHalfWindow; ++z) {
+          restoreSubmap(center_ + SubmapIndex(x, y, z), global);
+        }
+      }
+    }
+  };
+  if (!placed_) {
+    place(body_submap);
+    return;
+  }
+  const Eigen::Vector3d submap_size_m = submap_.cast<double>() * config_.resolution_m;
+  for (int iteration = 0; body_submap != center_; ++iteration) {
+    const SubmapIndex diff = body_submap - center_;
+    if (diff.cwiseAbs().maxCoeff() > kHalfWindow || iteration >= kMaxShiftsPerCall) {
+      retireAll(global);
+      place(body_submap);
+      ++counters_.resets;
+      return;
+    }
+    // The neighbour (26 directions) whose centre is closest to the body.
+    SubmapIndex best = center_;
+    double best_d2 = std::numeric_limits<double>::infinity();
+    for (int x = -1; x <= 1; ++x) {
+      for (int y = -1; y <= 1; ++y) {
+        for (int z = -1; z <= 1; ++z) {
+          if (x == 0 && y == 0 && z == 0) continue;
+          const SubmapIndex candidate = center_ + SubmapIndex(x, y, z);
+          const Eigen::Vector3d centre_W =
+              (candidate.cast<double>().array() + 0.5).matrix().cwiseProduct(submap_size_m);
+          const double d2 = (centre_W - body_W).squaredNorm();
+          if (d2 < best_d2) {
+            best_d2 = d2;
+            best = candidate;
+          }
+        }
+      }
+    }
+    moveCenter(best, global);
+  }
+}
+
+void LocalMap::integrate(const MeasurementBatch& batch) {
+  if (!placed_) {
+    counters_.outside_window += batch.hits.size() + batch.free_count;
+    return;
+  }
+  for (const HitMeasurement& h : batch.hits) {
+    if (contains(h.index)) {
+      model_.hit(cells_[slot(h.index)]);
+      ++counters_.hits_applied;
+    } else {
+      ++counters_.outside_window;
+    }
+  }
+  // Free set: walk the bitset row by row; the torus index along z advances with the bit index.
+  const VoxelBitset& free = batch.free;
+  const VoxelIndex& origin = free.origin();
+  const Eigen::Vector3i& dims = free.dims();
+  const std::size_t words_per_row = free.wordsPerRow();
+  const int z_first = std::max(0, min_index_.z() - origin.z());              // box-relative
+  const int z_end = std::min(dims.z(), min_index_.z() + size_.z() - origin.z());
+  std::uint64_t applied = 0;
+  for (int i = 0; i < dims.x(); ++i) {
+    const int gx = origin.x() + i;
+    const bool x_in = gx >= min_index_.x() && gx < min_index_.x() + size_.x();
+    for (int j = 0; j < dims.y(); ++j) {
+      const std::uint64_t* row = free.data() + free.rowWord(i, j);
+      const int gy = origin.y() + j;
+      const bool inside = x_in && gy >= min_index_.y() && gy < min_index_.y() + size_.y();
+      if (!inside) {
+        for (std::size_t w = 0; w < words_per_row; ++w) {
+          counters_.outside_window += static_cast<std::uint64_t>(__builtin_popcountll(row[w]));
+        }
+        continue;
+      }
+      LogOddsQ* column = cells_.data() + (static_cast<std::size_t>(floorMod(gx, size_.x())) *
+                                              static_cast<std::size_t>(size_.y()) +
+                                          static_cast<std::size_t>(floorMod(gy, size_.y()))) *
+                                             static_cast<std::size_t>(size_.z());
+      for (std::size_t w = 0; w < words_per_row; ++w) {
+        std::uint64_t bits = row[w];
+        while (bits != 0) {
+          const int k = static_cast<int>(w * 64) + __builtin_ctzll(bits);
+          bits &= bits - 1;
+          if (k < z_first || k >= z_end) {
+            ++counters_.outside_window;
+            continue;
+          }
+          model_.miss(column[floorMod(origin.z() + k, size_.z())]);
+          ++applied;
+        }
+      }
+    }
+  }
+  counters_.misses_applied += applied;
+}
+
+}  // namespace mlmap

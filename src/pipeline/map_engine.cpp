@@ -1,0 +1,356 @@
+#include "mlmap/pipeline/map_engine.h"
+
+#include <algorithm>
+#include <chrono>
+#include <sstream>
+#include <stdexcept>
+
+namespace mlmap {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr std::size_t kTimingWindow = 2000;   // frames kept for median / p99
+constexpr double kLogIntervalS = 1.0;         // at most one line per reason and second
+constexpr double kMaxAbsCoordinate_m = 1e6;   // keeps voxel indices far from int overflow
+
+double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+double nowSeconds() {
+  return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
+}
+
+std::string joinErrors(const std::vector<std::string>& errors) {
+  std::ostringstream out;
+  out << "invalid mlmap configuration:";
+  for (const std::string& e : errors) out << "\n  " << e;
+  return out.str();
+}
+
+const MapConfig& validated(const MapConfig& config) {
+  const std::vector<std::string> errors = config.validate();
+  if (!errors.empty()) throw std::invalid_argument(joinErrors(errors));
+  return config;
+}
+
+}  // namespace
+
+const char* toString(FrameStatus status) {
+  switch (status) {
+    case FrameStatus::kAccepted:
+      return "accepted";
+    case FrameStatus::kInvalidPose:
+      return "invalid pose";
+    case FrameStatus::kOutOfOrder:
+      return "out-of-order stamp";
+    case FrameStatus::kEmpty:
+      return "empty frame";
+    case FrameStatus::kBadImage:
+      return "bad depth image";
+    case FrameStatus::kStopped:
+      return "engine stopped";
+  }
+  return "invalid";
+}
+
+void MapEngine::Samples::add(double v) {
+  if (values.size() < kTimingWindow) {
+    values.push_back(v);
+  } else {
+    values[next] = v;
+  }
+  next = (next + 1) % kTimingWindow;
+}
+
+TimingSummary MapEngine::Samples::summary() const {
+  TimingSummary s;
+  s.samples = values.size();
+  if (values.empty()) return s;
+  std::vector<double> sorted = values;
+  std::sort(sorted.begin(), sorted.end());
+  auto at = [&](double q) {
+    const std::size_t i = static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1) + 0.5);
+    return sorted[std::min(i, sorted.size() - 1)];
+  };
+  s.median_ms = at(0.5);
+  s.p99_ms = at(0.99);
+  s.max_ms = sorted.back();
+  double sum = 0.0;
+  for (double v : sorted) sum += v;
+  s.mean_ms = sum / static_cast<double>(sorted.size());
+  return s;
+}
+
+MapEngine::MapEngine(const MapConfig& config, LogSink log)
+    : config_(validated(config)),
+      log_sink_(std::move(log)),
+      awareness_(config_),
+      local_(config_.local_map, config_.log_odds),
+      global_(config_.local_map.submap_cells(), config_.local_map.resolution_m),
+      log_limits_(8) {
+  if (config_.pipeline.threaded) {
+    for (int i = 0; i < config_.pipeline.batch_queue_capacity + 1; ++i) {
+      batch_pool_.push_back(std::make_unique<MeasurementBatch>());
+    }
+    awareness_thread_ = std::thread([this] { awarenessLoop(); });
+    local_thread_ = std::thread([this] { localLoop(); });
+  }
+}
+
+MapEngine::~MapEngine() {
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    stopping_ = true;
+  }
+  queue_cv_.notify_all();
+  if (awareness_thread_.joinable()) awareness_thread_.join();
+  if (local_thread_.joinable()) local_thread_.join();
+}
+
+void MapEngine::log(LogLevel level, int reason, const std::string& message) {
+  if (!log_sink_) return;
+  std::uint64_t suppressed = 0;
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    RateLimit& limit = log_limits_[static_cast<std::size_t>(reason) % log_limits_.size()];
+    const double now = nowSeconds();
+    if (now - limit.last_s < kLogIntervalS) {
+      ++limit.suppressed;
+      return;
+    }
+    limit.last_s = now;
+    suppressed = limit.suppressed;
+    limit.suppressed = 0;
+  }
+  if (suppressed > 0) {
+    log_sink_(level, message + " (" + std::to_string(suppressed) + " similar since the last report)");
+  } else {
+    log_sink_(level, message);
+  }
+}
+
+FrameStatus MapEngine::admit(double stamp_s, const Transform& T_W_B, const Transform& T_B_S) {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  ++stats_.frames_in;
+  const bool pose_ok = isValidPose(T_W_B) && isValidPose(T_B_S) &&
+                       T_W_B.translation().cwiseAbs().maxCoeff() < kMaxAbsCoordinate_m &&
+                       T_B_S.translation().norm() < 100.0;
+  if (!pose_ok) {
+    ++stats_.rejected_invalid_pose;
+    return FrameStatus::kInvalidPose;
+  }
+  if (!std::isfinite(stamp_s) ||
+      (config_.pipeline.reject_out_of_order && have_stamp_ && !(stamp_s > last_stamp_s_))) {
+    ++stats_.rejected_out_of_order;
+    return FrameStatus::kOutOfOrder;
+  }
+  last_stamp_s_ = stamp_s;
+  have_stamp_ = true;
+  return FrameStatus::kAccepted;
+}
+
+FrameStatus MapEngine::submit(PointCloudFrame frame) {
+  FrameStatus status = admit(frame.stamp_s, frame.T_W_B, frame.T_B_S);
+  if (status == FrameStatus::kAccepted && frame.points_S.empty()) {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.rejected_empty;
+    status = FrameStatus::kEmpty;
+  }
+  if (status != FrameStatus::kAccepted) {
+    std::ostringstream m;
+    m << "rejected point cloud at t=" << frame.stamp_s << " s: " << toString(status);
+    log(LogLevel::kWarning, static_cast<int>(status), m.str());
+    return status;
+  }
+  return enqueue(std::move(frame));
+}
+
+FrameStatus MapEngine::submit(DepthFrame frame) {
+  FrameStatus status = admit(frame.stamp_s, frame.T_W_B, frame.T_B_S);
+  if (status == FrameStatus::kAccepted) {
+    const PinholeIntrinsics& K = frame.intrinsics;
+    const std::size_t n = static_cast<std::size_t>(std::max(K.width, 0)) *
+                          static_cast<std::size_t>(std::max(K.height, 0));
+    const std::size_t have = frame.encoding == DepthEncoding::kUint16Millimetres
+                                 ? frame.depth_mm.size()
+                                 : frame.depth_m.size();
+    if (n == 0 || have != n || !(K.fx > 0.0) || !(K.fy > 0.0) || !std::isfinite(K.cx) ||
+        !std::isfinite(K.cy)) {
+      std::lock_guard<std::mutex> lock(stats_mutex_);
+      ++stats_.rejected_bad_image;
+      status = FrameStatus::kBadImage;
+    }
+  }
+  if (status != FrameStatus::kAccepted) {
+    std::ostringstream m;
+    m << "rejected depth image at t=" << frame.stamp_s << " s: " << toString(status);
+    log(LogLevel::kWarning, static_cast<int>(status), m.str());
+    return status;
+  }
+  return enqueue(std::move(frame));
+}
+
+FrameStatus MapEngine::enqueue(Input input) {
+  if (!config_.pipeline.threaded) {
+    process(input, &sync_batch_);
+    return FrameStatus::kAccepted;
+  }
+  bool dropped = false;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    if (stopping_) return FrameStatus::kStopped;
+    if (inputs_.size() >= static_cast<std::size_t>(config_.pipeline.input_queue_capacity)) {
+      inputs_.pop_front();  // the oldest waiting frame gives way to the newest
+      dropped = true;
+    }
+    inputs_.push_back(std::move(input));
+  }
+  queue_cv_.notify_all();
+  if (dropped) {
+    {
+      std::lock_guard<std::mutex> lock(stats_mutex_);
+      ++stats_.frames_dropped;
+    }
+    log(LogLevel::kWarning, 6, "input queue full: dropped the oldest waiting frame");
+  }
+  return FrameStatus::kAccepted;
+}
+
+void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
+  const Clock::time_point start = Clock::now();
+  PointCounters counters;
+  if (auto* points = std::get_if<PointCloudFrame>(&input)) {
+    awareness_.process(*points, batch, &counters);
+  } else {
+    DepthFrame& depth = std::get<DepthFrame>(input);
+    PointCloudFrame cloud;
+    cloud.stamp_s = depth.stamp_s;
+    cloud.T_W_B = depth.T_W_B;
+    cloud.T_B_S = depth.T_B_S;
+    cloud.points_S.swap(depth_points_);
+    std::size_t skipped = 0;
+    backProject(depth, &cloud.points_S, &skipped);
+    awareness_.process(cloud, batch, &counters);
+    counters.points_in += skipped;
+    counters.rejected_non_finite += skipped;  // pixels without a measurement
+    depth_points_.swap(cloud.points_S);
+  }
+  batch->awareness_ms = msSince(start);
+  const std::size_t bytes = awareness_.memoryBytes() + batch->free.memoryBytes() +
+                            batch->hits.capacity() * sizeof(HitMeasurement);
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  stats_.points += counters;
+  stats_.memory.awareness_bytes = bytes;
+  awareness_ms_.add(batch->awareness_ms);
+}
+
+void MapEngine::localStep(const MeasurementBatch& batch) {
+  const Clock::time_point start = Clock::now();
+  local_.recenter(batch.T_W_B.translation(), &global_);
+  local_.integrate(batch);
+  const double ms = msSince(start);
+  const std::size_t global_bytes = global_.memoryBytes();
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  ++stats_.frames_mapped;
+  stats_.local = local_.counters();
+  stats_.memory.local_bytes = local_.memoryBytes();
+  stats_.memory.global_bytes = global_bytes;
+  stats_.global_voxels = global_.voxelCount();
+  stats_.global_submaps = global_.submapCount();
+  local_ms_.add(ms);
+  total_ms_.add(ms + batch.awareness_ms);
+}
+
+void MapEngine::process(Input& input, MeasurementBatch* batch) {
+  awarenessStep(input, batch);
+  localStep(*batch);
+}
+
+void MapEngine::awarenessLoop() {
+  for (;;) {
+    Input input;
+    std::unique_ptr<MeasurementBatch> batch;
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      queue_cv_.wait(lock, [&] { return stopping_ || (!inputs_.empty() && !batch_pool_.empty()); });
+      if (stopping_) return;
+      input = std::move(inputs_.front());
+      inputs_.pop_front();
+      batch = std::move(batch_pool_.back());
+      batch_pool_.pop_back();
+      ++in_flight_;
+    }
+    awarenessStep(input, batch.get());
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      // Back-pressure: wait for room rather than drop computed measurements.
+      queue_cv_.wait(lock, [&] {
+        return stopping_ ||
+               batches_.size() < static_cast<std::size_t>(config_.pipeline.batch_queue_capacity);
+      });
+      if (stopping_) return;
+      batches_.push_back(std::move(batch));
+    }
+    queue_cv_.notify_all();
+  }
+}
+
+void MapEngine::localLoop() {
+  for (;;) {
+    std::unique_ptr<MeasurementBatch> batch;
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      queue_cv_.wait(lock, [&] { return stopping_ || !batches_.empty(); });
+      if (stopping_) return;
+      batch = std::move(batches_.front());
+      batches_.pop_front();
+    }
+    localStep(*batch);
+    {
+      std::lock_guard<std::mutex> lock(queue_mutex_);
+      batch_pool_.push_back(std::move(batch));
+      --in_flight_;
+    }
+    queue_cv_.notify_all();
+  }
+}
+
+void MapEngine::flush() {
+  if (!config_.pipeline.threaded) return;
+  std::unique_lock<std::mutex> lock(queue_mutex_);
+  queue_cv_.wait(lock, [&] { return stopping_ || (inputs_.empty() && in_flight_ == 0); });
+}
+
+EngineStats MapEngine::stats() const {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  EngineStats s = stats_;
+  s.awareness = awareness_ms_.summary();
+  s.local_global = local_ms_.summary();
+  s.total = total_ms_.summary();
+  return s;
+}
+
+Occupancy MapEngine::state(const VoxelIndex& index) const {
+  if (local_.contains(index)) return local_.state(index);
+  const SubmapIndex m = local_.submapOf(index);
+  const std::vector<VoxelRecord>* records = global_.find(m);
+  if (records == nullptr) return Occupancy::kUnknown;
+  const Eigen::Vector3i s = global_.submapCells();
+  const VoxelIndex r = index - m.cwiseProduct(s);
+  const std::uint32_t offset = static_cast<std::uint32_t>((r.x() * s.y() + r.y()) * s.z() + r.z());
+  for (const VoxelRecord& rec : *records) {
+    if (rec.offset == offset) return Occupancy::kOccupied;
+  }
+  return Occupancy::kUnknown;
+}
+
+std::vector<VoxelIndex> MapEngine::occupiedVoxels() const {
+  std::vector<VoxelIndex> out;
+  out.reserve(global_.voxelCount());
+  global_.forEachVoxel([&](const VoxelIndex& g, double) { out.push_back(g); });
+  local_.forEachOccupied([&](const VoxelIndex& g, double) { out.push_back(g); });
+  return out;
+}
+
+}  // namespace mlmap

@@ -1,0 +1,160 @@
+#include "mlmap/awareness/awareness_map.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace mlmap {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+AwarenessConfig smallConfig() {
+  AwarenessConfig c;
+  c.rho_cell_m = 0.1;
+  c.rho_cells = 60;   // 6 m
+  c.phi_cells = 90;   // 4 deg
+  c.z_cell_m = 0.2;
+  c.z_cells = 20;
+  c.z_cells_below = 10;
+  c.max_range_m = 6.0;
+  return c;
+}
+
+// Slow reference: walk the 3D segment from the origin to the hit in 1 mm steps; every cell a
+// sample falls in must be free, except cells hit in this frame.
+void expectRayCleared(const AwarenessMap& map, const Eigen::Vector3d& from,
+                      const Eigen::Vector3d& to, const std::vector<Eigen::Vector3d>& hits,
+                      const std::string& what) {
+  std::vector<std::size_t> hit_ids;
+  auto same_cell = [&](const AwarenessCell& a, const AwarenessCell& b) {
+    return a.rho == b.rho && a.phi == b.phi && a.z == b.z;
+  };
+  const int steps = static_cast<int>((to - from).norm() / 0.001) + 1;
+  for (int i = 0; i <= steps; ++i) {
+    const Eigen::Vector3d p = from + (to - from) * (static_cast<double>(i) / steps);
+    // A point on the axis itself belongs to no sector in particular.
+    if ((p - map.origin_W()).head<2>().norm() < 1e-9) continue;
+    AwarenessCell cell;
+    if (!map.cellOf(p, &cell)) continue;
+    bool is_hit = false;
+    for (const Eigen::Vector3d& h : hits) {
+      AwarenessCell hc;
+      if (map.cellOf(h, &hc) && same_cell(hc, cell)) is_hit = true;
+    }
+    if (is_hit) {
+      ASSERT_EQ(map.state(cell), Occupancy::kOccupied) << what;
+    } else {
+      ASSERT_EQ(map.state(cell), Occupancy::kFree)
+          << what << ": cell rho " << cell.rho << " phi " << cell.phi << " z " << cell.z
+          << " at " << p.transpose() << " (sample " << i << "/" << steps << ") not cleared";
+    }
+  }
+}
+
+TEST(AwarenessMap, RaysClearEveryCellUpToTheHitInEverySectorAndAtTheBorders) {
+  const AwarenessConfig config = smallConfig();
+  const Eigen::Vector3d body(3.3, -1.7, 1.25);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double top = (config.z_cells - config.z_cells_below) * config.z_cell_m;
+  const double bottom = -config.z_cells_below * config.z_cell_m;
+  for (int phi = 0; phi < config.phi_cells; ++phi) {
+    AwarenessMap map(config);
+    map.beginFrame(body);
+    // One ray per sector, at a random angle inside it; every fifth ends at a z border, and
+    // sector 0 gets one at its very start.
+    const double angle = (phi + (phi == 0 ? 0.01 : unit(rng))) * config.phi_cell_rad();
+    const double rho = 0.3 + unit(rng) * 5.5;
+    double z = bottom + 0.01 + unit(rng) * (top - bottom - 0.02);
+    if (phi % 5 == 1) z = top - 0.001;
+    if (phi % 5 == 2) z = bottom + 0.001;
+    const Eigen::Vector3d hit = body + Eigen::Vector3d(rho * std::cos(angle), rho * std::sin(angle), z);
+    ASSERT_TRUE(map.markHit(hit));
+    map.castRaysToHits();
+    map.endFrame();
+    expectRayCleared(map, body, hit, {hit}, "sector " + std::to_string(phi));
+    AwarenessCell cell;
+    ASSERT_TRUE(map.cellOf(hit, &cell));
+    EXPECT_EQ(cell.phi, phi);
+  }
+}
+
+TEST(AwarenessMap, RhoZeroColumnAndSteepRays) {
+  const AwarenessConfig config = smallConfig();
+  const Eigen::Vector3d body(0.0, 0.0, 0.0);
+  AwarenessMap map(config);
+  map.beginFrame(body);
+  // Almost straight up and down: the rays stay in rho index 0.
+  const std::vector<Eigen::Vector3d> hits = {{0.03, 0.02, 1.9}, {-0.02, 0.05, -1.95},
+                                             {0.5, 0.01, 1.95}};
+  for (const auto& h : hits) ASSERT_TRUE(map.markHit(h));
+  map.castRaysToHits();
+  map.endFrame();
+  for (const auto& h : hits) expectRayCleared(map, body, h, hits, "steep ray");
+}
+
+TEST(AwarenessMap, HitWinsOverMissInTheSameFrame) {
+  AwarenessMap map(smallConfig());
+  map.beginFrame(Eigen::Vector3d::Zero());
+  const Eigen::Vector3d near(1.05, 0.05, 0.1);
+  const Eigen::Vector3d far(3.05, 0.15, 0.3);  // its ray passes through near's cell
+  ASSERT_TRUE(map.markHit(near));
+  ASSERT_TRUE(map.markHit(far));
+  map.castRaysToHits();
+  map.endFrame();
+  EXPECT_EQ(map.stateAt(near), Occupancy::kOccupied);
+  EXPECT_EQ(map.stateAt(far), Occupancy::kOccupied);
+  EXPECT_EQ(map.stateAt({2.0, 0.1, 0.2}), Occupancy::kFree);
+  EXPECT_EQ(map.stateAt({-2.0, 0.1, 0.2}), Occupancy::kUnknown);
+}
+
+TEST(AwarenessMap, RayCutAtMaximumRangeClearsToTheBorderAndIsNoHit) {
+  AwarenessMap map(smallConfig());
+  map.beginFrame(Eigen::Vector3d::Zero());
+  const Eigen::Vector3d end(5.95, 0.2, 0.5);
+  map.castRay(end, /*end_is_free=*/true);
+  map.endFrame();
+  EXPECT_EQ(map.stateAt(end), Occupancy::kFree);
+  EXPECT_EQ(map.count(Occupancy::kOccupied), 0u);
+  expectRayCleared(map, Eigen::Vector3d::Zero(), end, {}, "cut ray");
+  // A ray leaving through the top is cut at the top border.
+  map.beginFrame(Eigen::Vector3d::Zero());
+  const Eigen::Vector3d up(1.0, 0.0, 10.0);
+  map.castRay(up, /*end_is_free=*/true);
+  map.endFrame();
+  expectRayCleared(map, Eigen::Vector3d::Zero(), Eigen::Vector3d(0.1999, 0.0, 1.999), {}, "top");
+}
+
+TEST(AwarenessMap, ObstaclesAreCarriedByThePoseChangeAndClearedByLaterRays) {
+  AwarenessMap map(smallConfig());
+  const Eigen::Vector3d obstacle(2.0, 1.0, 0.5);
+  map.beginFrame({0.0, 0.0, 0.0});
+  ASSERT_TRUE(map.markHit(obstacle));
+  map.castRaysToHits();
+  map.endFrame();
+  // The body moves 1.3 m; no ray this frame: the obstacle is still where it was in the world.
+  map.beginFrame({-1.3, 0.4, 0.2});
+  map.endFrame();
+  EXPECT_EQ(map.stateAt(obstacle), Occupancy::kOccupied);
+  AwarenessCell cell;
+  ASSERT_TRUE(map.cellOf(obstacle, &cell));
+  EXPECT_LT((map.cellCenter(cell) - obstacle).norm(), 0.25);
+  ASSERT_EQ(map.occupiedPoints().size(), 1u);
+  EXPECT_EQ(map.occupiedPoints()[0], obstacle);  // the measured point, not a cell centre
+  // Now a ray to something behind it passes through: the obstacle moved away.
+  map.beginFrame({-1.3, 0.4, 0.2});
+  const Eigen::Vector3d behind = Eigen::Vector3d(-1.3, 0.4, 0.2) + 1.6 * (obstacle - Eigen::Vector3d(-1.3, 0.4, 0.2));
+  ASSERT_TRUE(map.markHit(behind));
+  map.castRaysToHits();
+  map.endFrame();
+  EXPECT_EQ(map.stateAt(obstacle), Occupancy::kFree);
+  // Carried obstacles leaving the grid are dropped.
+  map.beginFrame({100.0, 0.0, 0.0});
+  map.endFrame();
+  EXPECT_EQ(map.count(Occupancy::kOccupied), 0u);
+}
+
+}  // namespace
+}  // namespace mlmap

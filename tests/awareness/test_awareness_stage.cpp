@@ -1,0 +1,135 @@
+#include "mlmap/awareness/awareness_stage.h"
+
+#include "../support/reference.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace mlmap {
+namespace {
+
+MapConfig testConfig(double resolution) {
+  MapConfig c;
+  c.local_map.resolution_m = resolution;
+  c.awareness.max_range_m = 6.0;
+  c.awareness.rho_cells = 70;
+  return c;
+}
+
+PointCloudFrame randomCloud(std::mt19937& rng, int n, double max_r) {
+  PointCloudFrame f;
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_real_distribution<double> r(0.2, max_r);
+  for (int i = 0; i < n; ++i) {
+    Eigen::Vector3d d(u(rng), u(rng), u(rng));
+    if (d.norm() < 1e-3) continue;
+    f.points_S.push_back((d.normalized() * r(rng)).cast<float>());
+  }
+  Eigen::Vector3d t(1.37, -2.21, 1.05);
+  f.T_W_B.translation() = t;
+  f.T_W_B.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  f.T_B_S = SensorConfig{}.T_B_S();  // offset, optical-frame sensor
+  return f;
+}
+
+// Every voxel that any ray from the sensor to a point passes through gets a free update, unless
+// it holds a hit of the frame; every hit voxel is listed once, and never also free.
+void expectCompleteCarving(double resolution, int points, std::uint32_t seed) {
+  const MapConfig config = testConfig(resolution);
+  AwarenessStage stage(config);
+  std::mt19937 rng(seed);
+  const PointCloudFrame frame = randomCloud(rng, points, 8.0);
+  MeasurementBatch batch;
+  PointCounters counters;
+  stage.process(frame, &batch, &counters);
+
+  std::set<test::Key> hit_keys;
+  for (const HitMeasurement& h : batch.hits) {
+    EXPECT_TRUE(hit_keys.insert(test::key(h.index)).second) << "hit listed twice";
+    EXPECT_EQ(h.index, voxelIndexOf(h.p_W, resolution)) << "a hit is the voxel of its point";
+  }
+  const VoxelBitset& free = batch.free;
+  auto is_free = [&](const VoxelIndex& g) {
+    const VoxelIndex r = g - free.origin();
+    return free.contains(r.x(), r.y(), r.z()) && free.test(r.x(), r.y(), r.z());
+  };
+  for (const auto& k : hit_keys) EXPECT_FALSE(is_free(test::index(k))) << "hit voxel also free";
+
+  const Transform T_W_S = frame.T_W_B * frame.T_B_S;
+  const Eigen::Vector3d o = T_W_S.translation();
+  std::size_t checked = 0;
+  std::size_t hits_expected = 0;
+  for (const Eigen::Vector3f& p_S : frame.points_S) {
+    const double r = p_S.cast<double>().norm();
+    if (r <= config.awareness.min_range_m) continue;
+    const bool cut = r > config.awareness.max_range_m;
+    const Eigen::Vector3d end =
+        o + T_W_S.linear() * p_S.cast<double>() * (cut ? config.awareness.max_range_m / r : 1.0);
+    const VoxelIndex end_voxel = voxelIndexOf(end, resolution);
+    const VoxelIndex end_rel = end_voxel - free.origin();
+    if (!cut && free.contains(end_rel.x(), end_rel.y(), end_rel.z())) {  // else beyond the map's reach
+      ++hits_expected;
+      EXPECT_EQ(hit_keys.count(test::key(end_voxel)), 1u);
+    }
+    for (const test::Key& k : test::referenceRayVoxels(o, end, resolution)) {
+      const VoxelIndex v = test::index(k);
+      if (hit_keys.count(k)) continue;  // a hit wins over a miss
+      const VoxelIndex rel = v - free.origin();
+      if (!free.contains(rel.x(), rel.y(), rel.z())) continue;  // beyond the local map's reach
+      ++checked;
+      ASSERT_TRUE(is_free(v)) << "voxel " << v.transpose() << " on the ray to " << end.transpose()
+                              << " not carved";
+    }
+  }
+  EXPECT_GT(checked, static_cast<std::size_t>(points) * 5);
+  EXPECT_EQ(counters.points_in, frame.points_S.size());
+  EXPECT_EQ(counters.hit_voxels, batch.hits.size());
+  EXPECT_EQ(counters.free_voxels, free.count());
+  EXPECT_EQ(batch.free_count, free.count());
+  EXPECT_GT(hits_expected, 0u);
+}
+
+TEST(AwarenessStage, CarvingIsCompleteAgainstA3DReferenceWalk) {
+  expectCompleteCarving(0.2, 400, 1);
+  expectCompleteCarving(0.1, 300, 2);
+  expectCompleteCarving(0.05, 150, 3);
+}
+
+TEST(AwarenessStage, RejectsBadPointsWithCountersAndKeepsGoodOnes) {
+  MapConfig config = testConfig(0.2);
+  AwarenessStage stage(config);
+  PointCloudFrame frame;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  frame.points_S = {{nan, 0, 1}, {0, inf, 1}, {0, 0, 0}, {0, 0, 0.05f}, {1e30f, 0, 0},
+                    {0, 0, 3.0f},  {0, 0, 3.01f}, {0, 0, 100.0f}};
+  MeasurementBatch batch;
+  PointCounters c;
+  stage.process(frame, &batch, &c);
+  EXPECT_EQ(c.points_in, 8u);
+  EXPECT_EQ(c.rejected_non_finite, 2u);
+  EXPECT_EQ(c.rejected_too_close, 2u);
+  EXPECT_EQ(c.beyond_max_range, 2u);  // 1e30 and 100 m: rays cut at 6 m, no hits
+  ASSERT_EQ(batch.hits.size(), 1u);   // 3.0 and 3.01 m share a voxel: one update
+  EXPECT_NEAR(batch.hits[0].p_W.z(), 3.0, 1e-6);
+  EXPECT_TRUE(batch.hits[0].index == voxelIndexOf(Eigen::Vector3d(0, 0, 3.0), 0.2));
+}
+
+TEST(AwarenessStage, SampleCountKeepsThatManyPoints) {
+  MapConfig config = testConfig(0.2);
+  config.awareness.sample_count = 100;
+  AwarenessStage stage(config);
+  std::mt19937 rng(9);
+  const PointCloudFrame frame = randomCloud(rng, 2000, 5.0);
+  MeasurementBatch batch;
+  PointCounters c;
+  stage.process(frame, &batch, &c);
+  EXPECT_EQ(c.sampled_out, frame.points_S.size() - 100);
+  EXPECT_LE(batch.hits.size(), 100u);
+  EXPECT_GT(batch.hits.size(), 80u);
+}
+
+}  // namespace
+}  // namespace mlmap

@@ -1,0 +1,152 @@
+// mlmap_bench: per-frame cost of the engine (synchronous mode, one core) on simulated 640x480
+// depth frames and on the shared real RealSense frames. Prints median and p99 per stage and the
+// memory by layer. Figures, not pass/fail: see README "Performance".
+
+#include "mlmap/eval/sim_flight.h"
+#include "mlmap/io/frame_directory.h"
+#include "mlmap/pipeline/map_engine.h"
+
+#include <CLI/CLI.hpp>
+
+#include <sys/resource.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+namespace {
+
+using namespace mlmap;
+
+double megabytes(std::size_t bytes) { return static_cast<double>(bytes) / 1e6; }
+
+struct Case {
+  std::string name;
+  MapConfig config;
+};
+
+MapConfig at(double res, Eigen::Vector3i cells) {
+  MapConfig c;
+  c.local_map.resolution_m = res;
+  c.local_map.size_cells = cells;
+  return c;
+}
+
+double peakRssMb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;
+}
+
+struct Row {
+  std::string name;
+  double points;
+  EngineStats stats;
+};
+
+Row run(const Case& c, const std::vector<DepthFrame>& frames, int repeats) {
+  MapEngine engine(c.config);
+  double points = 0.0;
+  double stamp = 0.0;
+  for (int r = 0; r < repeats; ++r) {
+    for (DepthFrame f : frames) {
+      f.stamp_s = (stamp += 0.1);
+      f.T_B_S = c.config.sensor.T_B_S();
+      engine.submit(std::move(f));
+    }
+  }
+  const EngineStats s = engine.stats();
+  points = static_cast<double>(s.points.points_in - s.points.rejected_non_finite) /
+           static_cast<double>(std::max<std::uint64_t>(s.frames_mapped, 1));
+  return {c.name, points, s};
+}
+
+void print(const Row& r, std::FILE* json, bool last) {
+  const EngineStats& s = r.stats;
+  if (json == nullptr) std::printf("%-34s %8.0f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.1f %7.1f\n", r.name.c_str(), r.points,
+              s.awareness.median_ms, s.awareness.p99_ms, s.local_global.median_ms,
+              s.local_global.p99_ms, s.total.median_ms, s.total.p99_ms,
+              megabytes(s.memory.local_bytes), megabytes(s.memory.awareness_bytes + s.memory.global_bytes));
+  if (json != nullptr) {
+    std::fprintf(json,
+                 "  {\"case\": \"%s\", \"points_per_frame\": %.0f, \"frames\": %zu, "
+                 "\"awareness_ms\": {\"median\": %.3f, \"p99\": %.3f}, "
+                 "\"local_global_ms\": {\"median\": %.3f, \"p99\": %.3f}, "
+                 "\"total_ms\": {\"median\": %.3f, \"p99\": %.3f}, "
+                 "\"memory_bytes\": {\"awareness\": %zu, \"local\": %zu, \"global\": %zu}}%s\n",
+                 r.name.c_str(), r.points, s.total.samples, s.awareness.median_ms,
+                 s.awareness.p99_ms, s.local_global.median_ms, s.local_global.p99_ms,
+                 s.total.median_ms, s.total.p99_ms, s.memory.awareness_bytes, s.memory.local_bytes,
+                 s.memory.global_bytes, last ? "" : ",");
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"mlmap benchmark: per-frame engine cost (synchronous, one core) on simulated and real depth frames"};
+  int frame_count = 60;
+  int repeats = 2;
+  std::string real_dir = MLMAP_SHARED_DATA_DIR "/realsense_tabletop";
+  std::string json_path;
+  app.add_option("--frames", frame_count, "simulated frames (spread over the default flight)")
+      ->check(CLI::Range(1, 10000))->capture_default_str();
+  app.add_option("--repeats", repeats, "passes over the frames")->check(CLI::Range(1, 100))->capture_default_str();
+  app.add_option("--real", real_dir, "RGB-D frame folder ('' to skip)")->capture_default_str();
+  app.add_option("--json", json_path, "also write the figures as JSON");
+  CLI11_PARSE(app, argc, argv);
+
+  // Render the simulated frames once (the simulator's cost is not measured).
+  const io::Scenario scenario = io::defaultScenario();
+  const sim::DepthCamera camera(scenario.camera);
+  const Transform T_B_S = SensorConfig{}.T_B_S();
+  std::vector<DepthFrame> sim_frames;
+  const int total = eval::frameCount(scenario);
+  for (int i = 0; i < frame_count; ++i) {
+    const double t = eval::frameTime(scenario, (i * total) / frame_count);
+    DepthFrame f;
+    f.T_W_B = scenario.trajectory.poseAt(t);
+    camera.render(scenario.world, f.T_W_B * T_B_S, t, &f);
+    sim_frames.push_back(std::move(f));
+  }
+  MapConfig sampled = at(0.2, {95, 95, 35});
+  sampled.awareness.sample_count = 500;
+  const std::vector<Case> sim_cases = {
+      {"sim 640x480, 0.2 m, 95x95x35 (T2)", at(0.2, {95, 95, 35})},
+      {"sim 640x480, 0.1 m, 165x165x75", at(0.1, {165, 165, 75})},
+      {"sim 640x480, 0.2 m, 500 samples", sampled},
+  };
+  std::FILE* json = json_path.empty() ? nullptr : std::fopen(json_path.c_str(), "w");
+  if (json != nullptr) std::fprintf(json, "[\n");
+  std::printf("%-34s %8s %15s %15s %15s %15s\n", "", "points", "awareness ms", "local-global ms",
+              "total ms", "memory MB");
+  std::printf("%-34s %8s %7s %7s %7s %7s %7s %7s %7s %7s\n", "case", "/frame", "median", "p99",
+              "median", "p99", "median", "p99", "local", "other");
+  std::vector<Row> rows;
+  for (const Case& c : sim_cases) {
+    rows.push_back(run(c, sim_frames, repeats));
+    print(rows.back(), nullptr, false);
+  }
+  if (!real_dir.empty() && std::filesystem::exists(real_dir)) {
+    const io::FrameDirectory dir(real_dir);
+    std::vector<DepthFrame> real;
+    for (std::size_t i = 0; i < dir.size(); ++i) real.push_back(dir.read(i));
+    for (double res : {0.05, 0.02}) {
+      MapConfig c = at(res, {200, 200, 200});
+      c.sensor.translation_B_m.setZero();
+      c.sensor.rotation_rpy_deg.setZero();
+      c.log_odds.hit = 0.6;
+      char name[64];
+      std::snprintf(name, sizeof(name), "real RealSense 640x480, %.2f m", res);
+      rows.push_back(run({name, c}, real, repeats));
+      print(rows.back(), nullptr, false);
+    }
+  }
+  std::printf("peak resident memory of the benchmark process: %.0f MB\n", peakRssMb());
+  if (json != nullptr) {
+    for (std::size_t i = 0; i < rows.size(); ++i) print(rows[i], json, i + 1 == rows.size());
+    std::fprintf(json, "]\n");
+    std::fclose(json);
+  }
+  return 0;
+}

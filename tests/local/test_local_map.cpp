@@ -1,0 +1,242 @@
+#include "mlmap/local/local_map.h"
+
+#include "../support/reference.h"
+
+#include <gtest/gtest.h>
+
+#include <map>
+#include <random>
+
+namespace mlmap {
+namespace {
+
+LocalMapConfig smallMap() {
+  LocalMapConfig c;
+  c.resolution_m = 1.0;
+  c.size_cells = {10, 15, 5};  // submaps of 2 x 3 x 1 voxels
+  return c;
+}
+
+MeasurementBatch makeBatch(const Eigen::Vector3d& body, const std::vector<VoxelIndex>& hits,
+                           const std::vector<VoxelIndex>& frees) {
+  MeasurementBatch b;
+  b.T_W_B.translation() = body;
+  const VoxelIndex origin = voxelIndexOf(body, 1.0) - VoxelIndex::Constant(20);
+  b.free.reset(origin, Eigen::Vector3i::Constant(41));
+  for (const VoxelIndex& h : hits) b.hits.push_back({h, h.cast<double>()});
+  for (const VoxelIndex& f : frees) {
+    const VoxelIndex r = f - origin;
+    if (b.free.contains(r.x(), r.y(), r.z()) && !b.free.testAndSet(r.x(), r.y(), r.z())) ++b.free_count;
+  }
+  return b;
+}
+
+TEST(LogOdds, SaturatesAndReadsThreeStates) {
+  LogOddsConfig c;
+  const LogOddsModel model(c);
+  LogOddsQ v = kUnknownLogOdds;
+  EXPECT_EQ(model.state(v), Occupancy::kUnknown);
+  model.hit(v);
+  EXPECT_NEAR(dequantizeLogOdds(v), 0.85, 1e-9);
+  EXPECT_EQ(model.state(v), Occupancy::kOccupied);
+  for (int i = 0; i < 20; ++i) model.hit(v);
+  EXPECT_NEAR(dequantizeLogOdds(v), c.clamp_max, 1e-9);
+  model.miss(v);
+  EXPECT_NEAR(dequantizeLogOdds(v), c.clamp_max - 0.4, 1e-9);  // saturation keeps it responsive
+  for (int i = 0; i < 40; ++i) model.miss(v);
+  EXPECT_NEAR(dequantizeLogOdds(v), c.clamp_min, 1e-9);
+  EXPECT_EQ(model.state(v), Occupancy::kFree);
+  LogOddsQ u = kUnknownLogOdds;
+  model.miss(u);
+  EXPECT_NEAR(dequantizeLogOdds(u), -0.4, 1e-9);
+  EXPECT_NEAR(probabilityFromLogOdds(0.85), 0.7, 0.001);  // Table 1, natural log
+  EXPECT_NEAR(probabilityFromLogOdds(-0.4), 0.4, 0.002);
+}
+
+// The torus with submap retirement against a plain std::map of the whole world.
+TEST(LocalMap, MatchesAWholeWorldReferenceThroughRandomFlights) {
+  const LocalMapConfig config = smallMap();
+  const LogOddsConfig lo;
+  const LogOddsModel model(lo);
+  LocalMap map(config, lo);
+  GlobalMap global(config.submap_cells(), config.resolution_m);
+  std::map<test::Key, LogOddsQ> reference;  // what a perfect sliding map + global store keeps
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> offset(-6, 6);
+  std::uniform_real_distribution<double> step(-1.5, 1.5);
+  Eigen::Vector3d body(0.5, 0.5, 0.5);
+  for (int frame = 0; frame < 400; ++frame) {
+    body += Eigen::Vector3d(step(rng), step(rng), 0.3 * step(rng));
+    if (frame == 200) body += Eigen::Vector3d(40.0, 0.0, 0.0);  // a jump: whole-window reset
+    if (frame > 300) body *= 0.9;                            // fly back home
+    map.recenter(body, &global);
+    // Reference: what left the window keeps only its occupied voxels.
+    for (auto it = reference.begin(); it != reference.end();) {
+      if (!map.contains(test::index(it->first)) && !model.isOccupied(it->second)) {
+        it = reference.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    std::vector<VoxelIndex> hits;
+    std::vector<VoxelIndex> frees;
+    const VoxelIndex b = voxelIndexOf(body, 1.0);
+    for (int i = 0; i < 30; ++i) {
+      const VoxelIndex v = b + VoxelIndex(offset(rng), offset(rng), offset(rng) / 3);
+      bool dup = false;
+      for (const auto& h : hits) dup = dup || h == v;
+      for (const auto& f : frees) dup = dup || f == v;
+      if (dup) continue;
+      (i % 3 == 0 ? hits : frees).push_back(v);
+    }
+    map.integrate(makeBatch(body, hits, frees));
+    for (const auto& h : hits) {
+      if (!map.contains(h)) continue;
+      auto [it, inserted] = reference.emplace(test::key(h), kUnknownLogOdds);
+      model.hit(it->second);
+    }
+    for (const auto& f : frees) {
+      if (!map.contains(f)) continue;
+      auto [it, inserted] = reference.emplace(test::key(f), kUnknownLogOdds);
+      model.miss(it->second);
+    }
+  }
+  // Compare everything: inside the window exact log-odds; outside, the global store.
+  std::map<test::Key, double> stored;
+  global.forEachVoxel([&](const VoxelIndex& g, double l) { stored[test::key(g)] = l; });
+  std::size_t compared = 0;
+  for (const auto& [k, v] : reference) {
+    const VoxelIndex g = test::index(k);
+    if (map.contains(g)) {
+      double l = 0.0;
+      ASSERT_TRUE(map.logOdds(g, &l)) << g.transpose();
+      EXPECT_NEAR(l, dequantizeLogOdds(v), 1e-9);
+      EXPECT_EQ(stored.count(k), 0u) << "an active voxel must not also sit in the global map";
+    } else {
+      ASSERT_TRUE(model.isOccupied(v));
+      ASSERT_EQ(stored.count(k), 1u) << "retired occupied voxel lost: " << g.transpose();
+      EXPECT_NEAR(stored[k], dequantizeLogOdds(v), 1e-9);
+    }
+    ++compared;
+  }
+  // Nothing else is known anywhere.
+  std::size_t known_in_window = 0;
+  for (int x = 0; x < 10; ++x)
+    for (int y = 0; y < 15; ++y)
+      for (int z = 0; z < 5; ++z) {
+        const VoxelIndex g = map.minIndex() + VoxelIndex(x, y, z);
+        if (map.state(g) != Occupancy::kUnknown) {
+          ++known_in_window;
+          EXPECT_EQ(reference.count(test::key(g)), 1u) << "stale value at " << g.transpose();
+        }
+      }
+  EXPECT_EQ(stored.size() + known_in_window, reference.size());
+  EXPECT_GT(compared, 300u);
+  EXPECT_GT(map.counters().shifts, 50u);
+  EXPECT_EQ(map.counters().resets, 1u);
+}
+
+TEST(LocalMap, RecycledSubmapsStartUnknownAfterAShift) {
+  const LocalMapConfig config = smallMap();
+  LocalMap map(config, LogOddsConfig{});
+  GlobalMap global(config.submap_cells(), 1.0);
+  map.recenter({0.5, 0.5, 0.5}, &global);
+  // Fill the whole window with free and occupied voxels.
+  std::vector<VoxelIndex> hits;
+  std::vector<VoxelIndex> frees;
+  for (int x = 0; x < 10; ++x)
+    for (int y = 0; y < 15; ++y)
+      for (int z = 0; z < 5; ++z) {
+        const VoxelIndex g = map.minIndex() + VoxelIndex(x, y, z);
+        ((x + y + z) % 4 == 0 ? hits : frees).push_back(g);
+      }
+  map.integrate(makeBatch({0.5, 0.5, 0.5}, hits, frees));
+  const VoxelIndex old_min = map.minIndex();
+  // Leave the centre submap diagonally: a 26-neighbour shift in x, y and z.
+  map.recenter({2.5, 3.5, 1.5}, &global);
+  EXPECT_EQ(map.centerSubmap(), SubmapIndex(1, 1, 1));
+  EXPECT_EQ(map.minIndex(), old_min + VoxelIndex(2, 3, 1));
+  std::size_t unknown = 0;
+  for (int x = 0; x < 10; ++x)
+    for (int y = 0; y < 15; ++y)
+      for (int z = 0; z < 5; ++z) {
+        const VoxelIndex g = map.minIndex() + VoxelIndex(x, y, z);
+        const bool was_inside = (g - old_min).minCoeff() >= 0 && g.x() - old_min.x() < 10 &&
+                                g.y() - old_min.y() < 15 && g.z() - old_min.z() < 5;
+        if (!was_inside) {
+          EXPECT_EQ(map.state(g), Occupancy::kUnknown) << "stale value at " << g.transpose();
+          ++unknown;
+        } else {
+          EXPECT_NE(map.state(g), Occupancy::kUnknown);
+        }
+      }
+  EXPECT_EQ(unknown, 10u * 15u * 5u - 8u * 12u * 4u);
+}
+
+TEST(LocalMap, SlidingRoundTripKeepsOccupiedVoxelsWhereTheyWere) {
+  LocalMapConfig config;
+  config.resolution_m = 0.2;
+  config.size_cells = {25, 25, 10};
+  LocalMap map(config, LogOddsConfig{});
+  GlobalMap global(config.submap_cells(), config.resolution_m);
+  const Eigen::Vector3d home(0.1, 0.1, 0.1);
+  map.recenter(home, &global);
+  std::vector<VoxelIndex> hits = {{1, 2, 0}, {-3, 4, 1}, {5, -5, -2}, {0, 0, 3}};
+  for (int i = 0; i < 3; ++i) map.integrate(makeBatch(home, hits, {}));
+  // Fly 60 m away in a loop and come back.
+  for (double x = 0.0; x < 60.0; x += 0.5) map.recenter(home + Eigen::Vector3d(x, 0.3 * x, 0.0), &global);
+  for (const VoxelIndex& h : hits) EXPECT_FALSE(map.contains(h));
+  EXPECT_EQ(global.voxelCount(), hits.size());
+  for (double x = 60.0; x >= 0.0; x -= 0.5) map.recenter(home + Eigen::Vector3d(x, -0.2 * x, 0.0), &global);
+  for (const VoxelIndex& h : hits) {
+    double l = 0.0;
+    ASSERT_TRUE(map.logOdds(h, &l)) << h.transpose();
+    EXPECT_NEAR(l, 3 * 0.85, 1e-9);
+  }
+  EXPECT_EQ(global.voxelCount(), 0u);
+}
+
+TEST(LocalGlobal, GlobalMemoryGrowsWithOccupiedVoxelsNotWithTheAreaFlown) {
+  LocalMapConfig config;
+  config.resolution_m = 0.2;
+  config.size_cells = {25, 25, 10};
+  LocalMap map(config, LogOddsConfig{});
+  GlobalMap global(config.submap_cells(), config.resolution_m);
+  Eigen::Vector3d body(0.1, 0.1, 0.1);
+  map.recenter(body, &global);
+  // 500 m through free space: every voxel seen is free.
+  std::vector<VoxelIndex> frees;
+  for (int i = -10; i < 10; ++i) frees.push_back(VoxelIndex(i, 0, 0));
+  for (double x = 0.0; x < 500.0; x += 0.5) {
+    body.x() = x;
+    map.recenter(body, &global);
+    const VoxelIndex b = voxelIndexOf(body, 0.2);
+    std::vector<VoxelIndex> f;
+    for (const auto& v : frees) f.push_back(b + v);
+    map.integrate(makeBatch(body, {}, f));
+  }
+  EXPECT_EQ(global.voxelCount(), 0u);
+  EXPECT_LT(global.memoryBytes(), 4096u);
+  // The same flight along a wall (4 voxels high, one voxel per 0.2 m): memory follows the
+  // occupied voxels.
+  std::size_t obstacles = 0;
+  for (double x = 500.1; x < 1000.0; x += 0.2) {
+    body.x() = x;
+    map.recenter(body, &global);
+    const VoxelIndex b = voxelIndexOf(body, 0.2);
+    std::vector<VoxelIndex> hits;
+    for (int z = 0; z < 4; ++z) hits.push_back(b + VoxelIndex(0, 5, z));
+    obstacles += hits.size();
+    map.integrate(makeBatch(body, hits, {}));
+  }
+  map.recenter(body + Eigen::Vector3d(100.0, 0.0, 0.0), &global);  // retire everything
+  EXPECT_EQ(global.voxelCount(), obstacles);
+  const double bytes_per_voxel =
+      static_cast<double>(global.memoryBytes()) / static_cast<double>(obstacles);
+  EXPECT_LT(bytes_per_voxel, 16.0) << "global map bytes per occupied voxel";
+  std::printf("global map: %zu occupied voxels in %zu bytes (%.1f B/voxel)\n", obstacles,
+              global.memoryBytes(), bytes_per_voxel);
+}
+
+}  // namespace
+}  // namespace mlmap
