@@ -110,19 +110,18 @@ void AwarenessMap::castRay(const Eigen::Vector3d& end_W, bool end_is_free) {
   if (d.z() < z_bottom) scale = std::min(scale, z_bottom / d.z());
   const double rho = std::hypot(d.x(), d.y());
   if (rho >= config_.radius_m()) scale = std::min(scale, config_.radius_m() / rho);
-  bool cut = false;
   if (!end_is_free && scale >= 1.0) markHit(end_W);
   if (scale < 1.0) {
-    // Stay a hair inside so the border cell is the end cell.
+    // Stay a hair inside so the border cell is the end cell (cleared, not hit).
     scale *= 1.0 - 1e-9;
     end = origin_W_ + d * scale;
-    cut = true;
   }
   AwarenessCell cell;
   if (!cellOf(end, &cell)) return;
-  const bool free_end = end_is_free || cut;
+  // One cone per end cell and frame: the cone to a cell holds every ray into it.
   std::uint8_t& v = cells_[linear(cell.rho, cell.phi, cell.z)];
-  if (!free_end && (v & kWalkedBit)) return;
+  if (v & kWalkedBit) return;
+  v |= kWalkedBit;
   walkCone(cell);
 }
 
@@ -133,6 +132,7 @@ void AwarenessMap::walkCone(const AwarenessCell& end) {
   // cell's corners. In the end column the cone is the cell plus the part reached from the origin.
   const double dr = config_.rho_cell_m;
   const double dz = config_.z_cell_m;
+  const double inv_dz = 1.0 / dz;
   const int below = config_.z_cells_below;
   const double r0 = end.rho * dr;
   const double r1 = r0 + dr;
@@ -142,8 +142,8 @@ void AwarenessMap::walkCone(const AwarenessCell& end) {
                                   static_cast<std::size_t>(config_.rho_cells) *
                                   static_cast<std::size_t>(config_.z_cells);
   auto clear_range = [&](int rho, double z_lo, double z_hi) {
-    int k0 = static_cast<int>(std::floor((z_lo + kEdgeEpsilon) / dz)) + below;
-    int k1 = static_cast<int>(std::ceil((z_hi - kEdgeEpsilon) / dz)) - 1 + below;
+    int k0 = floorToInt((z_lo + kEdgeEpsilon) * inv_dz) + below;
+    int k1 = ceilToInt((z_hi - kEdgeEpsilon) * inv_dz) - 1 + below;
     k0 = std::max(k0, 0);
     k1 = std::min(k1, config_.z_cells - 1);
     std::uint8_t* column = cells_.data() + sector_base +

@@ -7,9 +7,9 @@
 namespace mlmap {
 namespace {
 constexpr std::uint32_t kCutFlag = 0x80000000u;
-// Direction bins at most this many voxels wide at the maximum range (over-carving bound).
+// A bin's shared cone stops where the bin is this many voxels wide (over-carving bound).
 constexpr double kBinWidthVoxels = 1.0;
-constexpr int kMaxBinsPerFaceSide = 256;
+constexpr int kMaxBinsPerFaceSide = 256;  // finest level: 6 x 256^2 bins (19 MB with all levels)
 
 std::uint32_t hashKey(std::uint32_t key) {
   key ^= key >> 16;
@@ -40,26 +40,21 @@ PointCounters& PointCounters::operator+=(const PointCounters& o) {
 AwarenessStage::AwarenessStage(const MapConfig& config)
     : config_(config), map_(config.awareness), table_(1u << 15), rng_(config.awareness.sample_seed) {
   const double range_voxels = config.awareness.max_range_m / config.local_map.resolution_m;
-  // Cube-map face coordinates span [-1, 1]; a bin of width 2 / n subtends at most ~2 / n rad.
-  bins_per_face_side_ = std::clamp(static_cast<int>(std::ceil(2.0 * range_voxels / kBinWidthVoxels)),
-                                   8, kMaxBinsPerFaceSide);
-  bins_.resize(6u * static_cast<std::size_t>(bins_per_face_side_) *
-               static_cast<std::size_t>(bins_per_face_side_));
+  // Cube-map face coordinates span [-1, 1]; a bin of width 2 / n subtends at most ~2 / n rad,
+  // so it is about a voxel wide at n / 2 voxels away.
+  int n = 2;
+  while (n < kMaxBinsPerFaceSide && n < 2.0 * range_voxels / kBinWidthVoxels) n *= 2;
+  bins_per_face_side_ = n;
+  for (; n >= 1; n /= 2) {
+    levels_.emplace_back(6u * static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
+    touched_.emplace_back();
+  }
 }
 
-std::uint32_t AwarenessStage::directionBin(const Eigen::Vector3d& d) const {
-  const Eigen::Vector3d m = d.cwiseAbs();
-  int axis = 0;
-  if (m.y() > m[axis]) axis = 1;
-  if (m.z() > m[axis]) axis = 2;
-  const double inv = 1.0 / std::max(m[axis], 1e-12);
-  const double u = d[(axis + 1) % 3] * inv;  // in [-1, 1]
-  const double v = d[(axis + 2) % 3] * inv;
-  const int n = bins_per_face_side_;
-  const int iu = std::min(static_cast<int>((u + 1.0) * 0.5 * n), n - 1);
-  const int iv = std::min(static_cast<int>((v + 1.0) * 0.5 * n), n - 1);
-  const int face = axis * 2 + (d[axis] < 0.0 ? 1 : 0);
-  return static_cast<std::uint32_t>((face * n + iu) * n + iv);
+std::size_t AwarenessStage::binIndex(int level, const End& e) const {
+  const std::size_t n = static_cast<std::size_t>(bins_per_face_side_ >> level);
+  return (static_cast<std::size_t>(e.face) * n + static_cast<std::size_t>(e.iu >> level)) * n +
+         static_cast<std::size_t>(e.iv >> level);
 }
 
 std::uint32_t AwarenessStage::findOrAddEnd(std::uint32_t key, bool cut, const Eigen::Vector3i& voxel) {
@@ -71,8 +66,8 @@ std::uint32_t AwarenessStage::findOrAddEnd(std::uint32_t key, bool cut, const Ei
     for (std::uint32_t e = 0; e < ends_.size(); ++e) {
       const Eigen::Vector3i& v = ends_[e].voxel;  // only ends inside the box are in ends_ here
       const std::uint32_t k =
-          static_cast<std::uint32_t>((static_cast<std::size_t>(v.x()) * hit_bits_.dims().y() + v.y()) *
-                                         hit_bits_.dims().z() + v.z()) |
+          static_cast<std::uint32_t>((static_cast<std::size_t>(v.x()) * box_dims_.y() + v.y()) *
+                                         box_dims_.z() + v.z()) |
           (ends_[e].cut ? kCutFlag : 0u);
       std::uint32_t h = hashKey(k) & mask;
       while (bigger[h].stamp == stamp_) h = (h + 1) & mask;
@@ -117,7 +112,7 @@ void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* bat
   for (int a = 0; a < 3; ++a) half[a] = std::min(range_voxels, 3 * submap[a] + offset_voxels);
   const VoxelIndex box_origin = sensor_voxel - half;
   const Eigen::Vector3i dims = 2 * half + Eigen::Vector3i::Ones();
-  hit_bits_.reset(box_origin, dims);
+  box_dims_ = dims;
   batch->free.reset(box_origin, dims);
   batch->hits.clear();
   batch->stamp_s = frame.stamp_s;
@@ -146,78 +141,79 @@ void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* bat
     c.sampled_out = n - count;
   }
 
-  // Point voxel: floor((o + R p) / res), in double so that a point on a voxel face goes to the
-  // same side as voxelIndexOf() puts it; box-relative coordinates give the point's box.
+  // Points in world voxel units, w = o / res + (R / res) p: the voxel is floor(w). Scalar code:
+  // this loop runs for every point of the frame.
   const double inv_res = 1.0 / res;
   const Eigen::Vector3d origin_vox = o_W * inv_res - box_origin.cast<double>();
-  const Eigen::Matrix3d R_W_S = T_W_S.linear();
+  const Eigen::Matrix3d M = T_W_S.linear() * inv_res;
+  const double m00 = M(0, 0), m01 = M(0, 1), m02 = M(0, 2);
+  const double m10 = M(1, 0), m11 = M(1, 1), m12 = M(1, 2);
+  const double m20 = M(2, 0), m21 = M(2, 1), m22 = M(2, 2);
+  const double ow_x = o_W.x() * inv_res, ow_y = o_W.y() * inv_res, ow_z = o_W.z() * inv_res;
+  const double bx = box_origin.x(), by = box_origin.y(), bz = box_origin.z();
   const double min_range2 = ac.min_range_m * ac.min_range_m;
   const double max_range = ac.max_range_m;
   const double max_range2 = max_range * max_range;
+  const std::uint32_t dim_x = static_cast<std::uint32_t>(dims.x());
   const std::uint32_t dim_y = static_cast<std::uint32_t>(dims.y());
   const std::uint32_t dim_z = static_cast<std::uint32_t>(dims.z());
-  const double box_offset[3] = {static_cast<double>(box_origin.x()),
-                                static_cast<double>(box_origin.y()),
-                                static_cast<double>(box_origin.z())};
   std::uint32_t last_key = 0xFFFFFFFFu;
-  std::uint32_t last_end = 0;
+  End* last = nullptr;
   outside_.clear();
   for (std::size_t idx = 0; idx < count; ++idx) {
     const Eigen::Vector3f& p_S = frame.points_S[sample ? sample_indices_[idx] : idx];
-    if (!std::isfinite(p_S.x()) || !std::isfinite(p_S.y()) || !std::isfinite(p_S.z())) {
+    double x = p_S.x();
+    double y = p_S.y();
+    double z = p_S.z();
+    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
       ++c.rejected_non_finite;
       continue;
     }
-    const Eigen::Vector3d q_S = p_S.cast<double>();
-    const double r2 = q_S.squaredNorm();
+    const double r2 = x * x + y * y + z * z;
     if (r2 <= min_range2) {
       ++c.rejected_too_close;
       continue;
     }
     const bool cut = r2 > max_range2;
-    Eigen::Vector3d p_W = o_W + R_W_S * q_S;
-    if (cut) {
-      p_W = o_W + R_W_S * (q_S * (max_range / std::sqrt(r2)));
+    if (cut) {  // clears its ray up to the maximum range and is no hit
+      const double scale = max_range / std::sqrt(r2);
+      x *= scale;
+      y *= scale;
+      z *= scale;
       ++c.beyond_max_range;
     }
-    // Poses are within 1e6 m and points within max_range_m, so w fits an int.
-    double v[3] = {0.0, 0.0, 0.0};
-    int iv[3] = {0, 0, 0};
-    bool inside = true;
-    for (int a = 0; a < 3; ++a) {
-      const double w = p_W[a] * inv_res;
-      iv[a] = floorToInt(w) - box_origin[a];
-      v[a] = w - box_offset[a];
-      inside = inside && iv[a] >= 0 && iv[a] < dims[a];
-    }
-    const Eigen::Vector3f vf(static_cast<float>(v[0]), static_cast<float>(v[1]),
-                             static_cast<float>(v[2]));
-    if (!inside) {
+    const double wx = ow_x + m00 * x + m01 * y + m02 * z;
+    const double wy = ow_y + m10 * x + m11 * y + m12 * z;
+    const double wz = ow_z + m20 * x + m21 * y + m22 * z;
+    const int ix = floorToInt(wx) - box_origin.x();
+    const int iy = floorToInt(wy) - box_origin.y();
+    const int iz = floorToInt(wz) - box_origin.z();
+    const Eigen::Vector3f v(static_cast<float>(wx - bx), static_cast<float>(wy - by),
+                            static_cast<float>(wz - bz));
+    if (static_cast<std::uint32_t>(ix) >= dim_x || static_cast<std::uint32_t>(iy) >= dim_y ||
+        static_cast<std::uint32_t>(iz) >= dim_z) {
       // Beyond what the local map can hold; the awareness map and the carving still use it.
       End e;
       e.voxel = Eigen::Vector3i::Constant(-1);
-      e.points = {vf, vf};
-      e.p_W = p_W;
+      e.points = {v, v};
+      e.p_W = Eigen::Vector3d(wx, wy, wz) * res;
       e.cut = cut;
       outside_.push_back(e);
       continue;
     }
     const std::uint32_t key =
-        ((static_cast<std::uint32_t>(iv[0]) * dim_y + static_cast<std::uint32_t>(iv[1])) * dim_z +
-         static_cast<std::uint32_t>(iv[2])) |
+        ((static_cast<std::uint32_t>(ix) * dim_y + static_cast<std::uint32_t>(iy)) * dim_z +
+         static_cast<std::uint32_t>(iz)) |
         (cut ? kCutFlag : 0u);
     if (key != last_key) {
-      last_end = findOrAddEnd(key & ~kCutFlag, cut, Eigen::Vector3i(iv[0], iv[1], iv[2]));
+      last = &ends_[findOrAddEnd(key & ~kCutFlag, cut, Eigen::Vector3i(ix, iy, iz))];
       last_key = key;
-      End& e = ends_[last_end];
-      if (e.points.min.x() > e.points.max.x()) {  // new: remember its first point
-        e.p_W = p_W;
-        if (!cut) hit_bits_.testAndSet(iv[0], iv[1], iv[2]);
+      if (last->points.min.x() > last->points.max.x()) {  // new: remember its first point
+        last->p_W = Eigen::Vector3d(wx, wy, wz) * res;
       }
     }
-    End& e = ends_[last_end];
-    e.points.min = e.points.min.cwiseMin(vf);
-    e.points.max = e.points.max.cwiseMax(vf);
+    last->points.min = last->points.min.cwiseMin(v);
+    last->points.max = last->points.max.cwiseMax(v);
   }
 
   // Occupied list (unique voxels).
@@ -240,59 +236,107 @@ void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* bat
   }
   map_.endFrame();
 
-  std::size_t freed = 0;
-  carve(origin_vox, batch, &freed);
-  batch->free_count = freed;
+  carve(origin_vox, batch);
+  batch->free_count = batch->free.count();
   c.hit_voxels = batch->hits.size();
-  c.free_voxels = freed;
+  c.free_voxels = batch->free_count;
   *counters += c;
 }
 
-void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch, std::size_t* freed) {
-  // 1. Bin the ends by direction; each bin's shared cone reaches its nearest member.
-  touched_bins_.clear();
+void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
+  VoxelBitset& free = batch->free;
   ends_.insert(ends_.end(), outside_.begin(), outside_.end());  // hits are listed already
+  // Direction of every end on the finest level, and its distance.
+  const int n0 = bins_per_face_side_;
   for (End& e : ends_) {
-    const Eigen::Vector3d centre = 0.5 * (e.points.min + e.points.max).cast<double>();
-    e.bin = directionBin(centre - o);
+    const Eigen::Vector3d d = 0.5 * (e.points.min + e.points.max).cast<double>() - o;
+    const Eigen::Vector3d m = d.cwiseAbs();
+    int axis = 0;
+    if (m.y() > m[axis]) axis = 1;
+    if (m.z() > m[axis]) axis = 2;
+    const double inv = 1.0 / std::max(m[axis], 1e-12);
+    e.face = axis * 2 + (d[axis] < 0.0 ? 1 : 0);
+    e.iu = std::clamp(static_cast<int>((d[(axis + 1) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
+    e.iv = std::clamp(static_cast<int>((d[(axis + 2) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
     e.near = distanceToBox(o, e.points);
-    Bin& bin = bins_[e.bin];
-    if (bin.stamp != stamp_) {
-      bin.stamp = stamp_;
-      bin.near = e.near;
-      touched_bins_.push_back(e.bin);
-    } else {
-      bin.near = std::min(bin.near, e.near);
+  }
+  const int level_count = static_cast<int>(levels_.size());
+  // Nearest member and reach of every bin, coarse to fine; reach never shrinks towards the fine
+  // end of a chain because the nearest member and the level reach both grow.
+  for (int level = 0; level < level_count; ++level) {
+    std::vector<Bin>& bins = levels_[static_cast<std::size_t>(level)];
+    std::vector<std::uint32_t>& touched = touched_[static_cast<std::size_t>(level)];
+    touched.clear();
+    for (const End& e : ends_) {
+      const std::size_t i = binIndex(level, e);
+      Bin& bin = bins[i];
+      if (bin.stamp != stamp_) {
+        bin.stamp = stamp_;
+        bin.near = e.near;
+        bin.box.min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+        bin.box.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
+        touched.push_back(static_cast<std::uint32_t>(i));
+      } else {
+        bin.near = std::min(bin.near, e.near);
+      }
+    }
+    const double level_reach = 0.5 * kBinWidthVoxels * (n0 >> level);
+    for (std::uint32_t i : touched) bins[i].reach = std::min(bins[i].near, level_reach);
+  }
+  // Each bin carves the part of its members' rays between its parent's reach and its own: the
+  // members' point boxes scaled so that their nearest point lies at the bin's reach. In the ray
+  // parameter u of a member (point = o + u (p - o)), the parent covers u <= parent_reach / near
+  // and the bin continues from there to reach / near, so the chain leaves no gap.
+  const Eigen::Vector3f of = o.cast<float>();
+  for (int level = level_count - 1; level >= 0; --level) {
+    std::vector<Bin>& bins = levels_[static_cast<std::size_t>(level)];
+    for (const End& e : ends_) {
+      Bin& bin = bins[binIndex(level, e)];
+      if (!(e.near > 0.0)) continue;
+      const float lambda = static_cast<float>(bin.reach / e.near);
+      bin.box.min = bin.box.min.cwiseMin(of + lambda * (e.points.min - of));
+      bin.box.max = bin.box.max.cwiseMax(of + lambda * (e.points.max - of));
     }
   }
-  // 2. The bin's box: the hull of its members' point boxes scaled towards the sensor so that
-  //    their nearest point lies at the bin's distance. conv(o, scaled box) holds every member
-  //    ray up to that distance.
-  for (std::uint32_t b : touched_bins_) {
-    bins_[b].box.min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
-    bins_[b].box.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
+  for (int level = level_count - 1; level >= 0; --level) {
+    const std::vector<Bin>& bins = levels_[static_cast<std::size_t>(level)];
+    for (std::uint32_t i : touched_[static_cast<std::size_t>(level)]) {
+      const Bin& bin = bins[i];
+      if (!(bin.reach > 0.0) || bin.box.min.x() > bin.box.max.x()) continue;
+      double parent_reach = 0.0;
+      if (level + 1 < level_count) {
+        // Parent index: halve the in-face coordinates.
+        const std::size_t n = static_cast<std::size_t>(n0 >> level);
+        const std::size_t face = i / (n * n);
+        const std::size_t iu = (i / n) % n;
+        const std::size_t iv = i % n;
+        const std::size_t pn = n / 2;
+        parent_reach = levels_[static_cast<std::size_t>(level + 1)][(face * pn + iu / 2) * pn + iv / 2].reach;
+      }
+      if (bin.reach > parent_reach) carveCone(o, bin.box, parent_reach / bin.reach, &free);
+    }
   }
-  const Eigen::Vector3f of = o.cast<float>();
+  // Each member carves the rest of its own cone.
   for (const End& e : ends_) {
-    Bin& bin = bins_[e.bin];
-    const float lambda = e.near > 0.0 ? static_cast<float>(bin.near / e.near) : 0.0f;
-    bin.box.min = bin.box.min.cwiseMin(of + lambda * (e.points.min - of));
-    bin.box.max = bin.box.max.cwiseMax(of + lambda * (e.points.max - of));
+    const double s_min = e.near > 0.0 ? levels_[0][binIndex(0, e)].reach / e.near : 0.0;
+    carveCone(o, e.points, s_min, &free);
   }
-  for (std::uint32_t b : touched_bins_) {
-    if (bins_[b].near > 0.0) *freed += carveCone(o, bins_[b].box, 0.0, hit_bits_, &batch->free);
-  }
-  // 3. Each member carves the rest of its own cone, beyond the part its bin covered.
-  for (const End& e : ends_) {
-    const double s_min = e.near > 0.0 ? bins_[e.bin].near / e.near : 0.0;
-    *freed += carveCone(o, e.points, s_min, hit_bits_, &batch->free, /*skip_end=*/!e.cut, e.voxel);
+  // A hit wins over a miss.
+  for (const HitMeasurement& h : batch->hits) {
+    const VoxelIndex r = h.index - free.origin();
+    free.data()[free.rowWord(r.x(), r.y()) + static_cast<std::size_t>(r.z() >> 6)] &=
+        ~(std::uint64_t{1} << (r.z() & 63));
   }
 }
 
 std::size_t AwarenessStage::memoryBytes() const {
-  return map_.memoryBytes() + hit_bits_.memoryBytes() + ends_.capacity() * sizeof(End) +
-         table_.capacity() * sizeof(Slot) + bins_.capacity() * sizeof(Bin) +
-         touched_bins_.capacity() * sizeof(std::uint32_t) +
+  std::size_t bins = 0;
+  for (std::size_t l = 0; l < levels_.size(); ++l) {
+    bins += levels_[l].capacity() * sizeof(Bin) + touched_[l].capacity() * sizeof(std::uint32_t);
+  }
+  return bins + map_.memoryBytes() + ends_.capacity() * sizeof(End) +
+         outside_.capacity() * sizeof(End) +
+         table_.capacity() * sizeof(Slot) +
          sample_indices_.capacity() * sizeof(std::uint32_t);
 }
 

@@ -9,10 +9,9 @@ constexpr double kEdgeEpsilon = 1e-9;  // a cone only touching a voxel face does
 }  // namespace
 
 std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
-                      const VoxelBitset& hits, VoxelBitset* free, bool skip_end,
-                      const Eigen::Vector3i& end) {
+                      VoxelBitset* free) {
   const Eigen::Vector3i& dims = free->dims();
-  std::size_t newly = 0;
+  std::size_t slabs = 0;
   // Per axis, the section at s spans [o + s * lo, o + s * hi].
   const Eigen::Vector3d lo = box.min.cast<double>() - origin;
   const Eigen::Vector3d hi = box.max.cast<double>() - origin;
@@ -29,12 +28,7 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
   }
   uint64_t* words = free->data();
   auto mark = [&](int x, int y, int z) {
-    if (skip_end && x == end.x() && y == end.y() && z == end.z()) return;
-    if (hits.test(x, y, z)) return;
-    uint64_t& w = words[free->rowWord(x, y) + static_cast<std::size_t>(z >> 6)];
-    const uint64_t bit = uint64_t{1} << (z & 63);
-    newly += (w & bit) ? 0 : 1;
-    w |= bit;
+    words[free->rowWord(x, y) + static_cast<std::size_t>(z >> 6)] |= uint64_t{1} << (z & 63);
   };
   if (a < 0) {
     // The origin lies inside the box: the cone is the box's hull with the origin; mark the
@@ -44,7 +38,7 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
     for (int x = v0.x(); x <= v1.x(); ++x)
       for (int y = v0.y(); y <= v1.y(); ++y)
         for (int z = v0.z(); z <= v1.z(); ++z) mark(x, y, z);
-    return newly;
+    return 1;
   }
   const int b = (a + 1) % 3;
   const int c = (a + 2) % 3;
@@ -59,11 +53,12 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
   const double inv_fa = 1.0 / fa;
   const int step = forward ? 1 : -1;
   const double s0 = std::max(s_min, 0.0);
-  int i = static_cast<int>(std::floor(oa + s0 * na));
-  const int i_last = static_cast<int>(std::floor(oa + fa - (forward ? kEdgeEpsilon : -kEdgeEpsilon)));
+  int i = floorToInt(oa + s0 * na);
+  const int i_last = floorToInt(oa + fa - (forward ? kEdgeEpsilon : -kEdgeEpsilon));
   int xyz[3];
   for (;; i += step) {
     const bool last = i == i_last;
+    ++slabs;
     if (i >= 0 && i < dims[a]) {
       // s range in which the extent along a overlaps slab [i, i + 1].
       double s_lo;
@@ -82,10 +77,10 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
         const double b_hi = ob + std::max(s_lo * hi[b], s_hi * hi[b]);
         const double c_lo = oc + std::min(s_lo * lo[c], s_hi * lo[c]);
         const double c_hi = oc + std::max(s_lo * hi[c], s_hi * hi[c]);
-        const int j0 = std::max(static_cast<int>(std::floor(b_lo + kEdgeEpsilon)), 0);
-        const int j1 = std::min(static_cast<int>(std::ceil(b_hi - kEdgeEpsilon)) - 1, dims[b] - 1);
-        const int k0 = std::max(static_cast<int>(std::floor(c_lo + kEdgeEpsilon)), 0);
-        const int k1 = std::min(static_cast<int>(std::ceil(c_hi - kEdgeEpsilon)) - 1, dims[c] - 1);
+        const int j0 = std::max(floorToInt(b_lo + kEdgeEpsilon), 0);
+        const int j1 = std::min(ceilToInt(b_hi - kEdgeEpsilon) - 1, dims[b] - 1);
+        const int k0 = std::max(floorToInt(c_lo + kEdgeEpsilon), 0);
+        const int k1 = std::min(ceilToInt(c_hi - kEdgeEpsilon) - 1, dims[c] - 1);
         xyz[a] = i;
         for (int j = j0; j <= j1; ++j) {
           xyz[b] = j;
@@ -99,15 +94,14 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
     if (last) break;
     if ((forward && i > i_last) || (!forward && i < i_last)) break;  // s_min beyond the end
   }
-  return newly;
+  return slabs;
 }
 
-std::size_t carveCone(const Eigen::Vector3d& origin, const Eigen::Vector3i& end, bool include_end,
-                      const VoxelBitset& hits, VoxelBitset* free) {
+std::size_t carveCone(const Eigen::Vector3d& origin, const Eigen::Vector3i& end, VoxelBitset* free) {
   const Eigen::Vector3f lo = end.cast<float>();
   // Just inside the far faces: a point on a far face belongs to the next voxel.
   const Eigen::Vector3f hi = lo + Eigen::Vector3f::Constant(1.0f - 1e-6f);
-  return carveCone(origin, VoxelSpaceBox{lo, hi}, 0.0, hits, free, !include_end, end);
+  return carveCone(origin, VoxelSpaceBox{lo, hi}, 0.0, free);
 }
 
 }  // namespace mlmap

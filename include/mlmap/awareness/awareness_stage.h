@@ -48,22 +48,25 @@ class AwarenessStage {
     VoxelSpaceBox points{};       // bounding box of the frame's points in it (voxel units)
     Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  // first point
     bool cut = false;             // rays cut at max_range_m (free end) rather than hits
-    std::uint32_t bin = 0;        // direction bin
+    int face = 0;                 // direction: cube-map face and finest bin on it
+    int iu = 0;
+    int iv = 0;
     double near = 0.0;            // distance from the sensor to `points` (voxel units)
   };
-  /// Rays bundled by direction: the shared part of their cones, up to the nearest member.
+  /// Rays bundled by direction (a cube-map bin of one level): the shared part of their cones.
   struct Bin {
     std::uint32_t stamp = 0;
     double near = 0.0;            // nearest member distance (voxel units)
-    VoxelSpaceBox box{};          // hull of the members' boxes scaled to `near`
+    double reach = 0.0;           // distance this bin's cone covers: min(near, level reach)
+    VoxelSpaceBox box{};          // hull of the members' boxes scaled to `reach`
   };
   std::uint32_t findOrAddEnd(std::uint32_t key, bool cut, const Eigen::Vector3i& voxel);
-  [[nodiscard]] std::uint32_t directionBin(const Eigen::Vector3d& d) const;
-  void carve(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch, std::size_t* freed);
+  [[nodiscard]] std::size_t binIndex(int level, const End& e) const;
+  void carve(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch);
 
   MapConfig config_;
   AwarenessMap map_;
-  VoxelBitset hit_bits_;
+  Eigen::Vector3i box_dims_ = Eigen::Vector3i::Zero();  // scratch box of the current frame
   std::vector<End> ends_;           // inside the scratch box, one per voxel
   std::vector<End> outside_;        // beyond the box (the local map cannot hold them), per point
   // Open-addressing table: linear box index (+ cut flag) -> index in ends_, valid when stamped.
@@ -74,9 +77,11 @@ class AwarenessStage {
   };
   std::vector<Slot> table_;
   std::uint32_t stamp_ = 0;
-  std::vector<Bin> bins_;
-  std::vector<std::uint32_t> touched_bins_;
-  int bins_per_face_side_ = 0;
+  // Level 0: bins about one voxel wide at the maximum range; level L: 2^L times wider, covering
+  // the distances where they are still about a voxel wide.
+  std::vector<std::vector<Bin>> levels_;
+  std::vector<std::vector<std::uint32_t>> touched_;
+  int bins_per_face_side_ = 0;  // at level 0, a power of two
   std::vector<std::uint32_t> sample_indices_;
   std::mt19937 rng_;
 };

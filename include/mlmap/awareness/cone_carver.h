@@ -22,14 +22,12 @@ struct VoxelSpaceBox {
 };
 
 /// Marks in `free` every voxel that the part s in [s_min, 1] of the cone from `origin` to `box`
-/// overlaps, except voxels set in `hits` and, when `skip_end` is set, the voxel `end`.
-/// Returns how many bits it newly set.
+/// overlaps (voxels outside the bitset's box are skipped). Returns the number of slabs walked.
 std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
-                      const VoxelBitset& hits, VoxelBitset* free, bool skip_end = false,
-                      const Eigen::Vector3i& end = Eigen::Vector3i::Zero());
+                      VoxelBitset* free);
 
-/// The cone to a whole voxel (for a ray whose end is only known to lie in `end`).
-std::size_t carveCone(const Eigen::Vector3d& origin, const Eigen::Vector3i& end, bool include_end,
-                      const VoxelBitset& hits, VoxelBitset* free);
+/// The cone to a whole voxel `end`, the end voxel included (for a ray whose end is only known to
+/// lie somewhere in `end`).
+std::size_t carveCone(const Eigen::Vector3d& origin, const Eigen::Vector3i& end, VoxelBitset* free);
 
 }  // namespace mlmap

@@ -35,6 +35,9 @@ inline int floorToInt(double x) {
   return i - (x < static_cast<double>(i) ? 1 : 0);
 }
 
+/// ceil(x) as an int, for |x| < 2^31.
+inline int ceilToInt(double x) { return -floorToInt(-x); }
+
 /// World voxel index of a world point for a grid of resolution `resolution_m` aligned at the
 /// origin: floor(p / resolution) per axis (computed as p * (1 / resolution), everywhere the same).
 inline VoxelIndex voxelIndexOf(const Eigen::Vector3d& p_W, double resolution_m) {
