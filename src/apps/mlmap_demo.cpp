@@ -60,10 +60,12 @@ void setResolution(MapConfig* c, double resolution_m) {
   c->local_map.size_cells = {cells(19.0), cells(19.0), cells(7.0)};
 }
 
-io::VoxelList voxelList(const std::vector<VoxelIndex>& voxels, double res) {
+/// Voxel centres for the pictures, turned by `R_display_W` (identity, or optical -> FLU).
+io::VoxelList voxelList(const std::vector<VoxelIndex>& voxels, double res,
+                        const Eigen::Matrix3d& R_display_W) {
   io::VoxelList list{res, {}};
   list.centers_W.reserve(voxels.size());
-  for (const VoxelIndex& v : voxels) list.centers_W.push_back(voxelCenter(v, res));
+  for (const VoxelIndex& v : voxels) list.centers_W.push_back(R_display_W * voxelCenter(v, res));
   return list;
 }
 
@@ -210,7 +212,13 @@ int main(int argc, char** argv) {
 
     const EngineStats s = engine.stats();
     const std::vector<VoxelIndex> occupied = engine.occupiedVoxels();
-    const io::VoxelList list = voxelList(occupied, res);
+    // Frame-directory worlds are the first camera's optical frame (z forward, y down): show them
+    // in that camera's FLU frame so that "top" looks down on the scene. The rotation is exact, so
+    // the voxels stay on one grid.
+    Eigen::Matrix3d R_display_W = Eigen::Matrix3d::Identity();
+    if (use_frames) R_display_W << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+    for (Eigen::Vector3d& p : image_options.trajectory_W) p = R_display_W * p;
+    const io::VoxelList list = voxelList(occupied, res, R_display_W);
     const std::string what = "mlmap, " + std::to_string(occupied.size()) + " occupied voxels";
     image_options.title = what + " - top view";
     io::writePng(out_dir + "/map_top.png", io::renderTopDown(list, image_options));
@@ -218,8 +226,8 @@ int main(int argc, char** argv) {
     io::writePng(out_dir + "/map_side.png", io::renderSide(list, image_options));
     if (have_truth) {
       char title[160];
-      std::snprintf(title, sizeof(title), "occupied voxels vs ground truth: precision %.3f, recall %.3f, F1 %.3f",
-                    accuracy.precision, accuracy.recall, accuracy.f1);
+      std::snprintf(title, sizeof(title), "occupied voxels vs ground truth, F1 %.3f (report.json)",
+                    accuracy.f1);
       image_options.title = title;
       io::writePng(out_dir + "/accuracy_top.png",
                    io::renderComparison(list, truth_list, image_options));

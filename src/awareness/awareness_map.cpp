@@ -19,7 +19,7 @@ AwarenessMap::AwarenessMap(const AwarenessConfig& config)
 
 bool AwarenessMap::cellOf(const Eigen::Vector3d& p_W, AwarenessCell* cell) const {
   const Eigen::Vector3d d = p_W - origin_W_;
-  const double rho = std::hypot(d.x(), d.y());
+  const double rho = std::sqrt(d.x() * d.x() + d.y() * d.y());
   const double rho_index = std::floor(rho / config_.rho_cell_m);
   const double z_index = std::floor(d.z() / config_.z_cell_m) + config_.z_cells_below;
   if (!(rho_index < config_.rho_cells) || !(z_index >= 0.0) || !(z_index < config_.z_cells)) {
@@ -127,49 +127,94 @@ void AwarenessMap::castRay(const Eigen::Vector3d& end_W, bool end_is_free) {
 
 void AwarenessMap::walkCone(const AwarenessCell& end) {
   // In the rho-z plane of the sector, the rays from the origin (0, 0) into the end cell
-  // [r0, r1] x [z0, z1] fill the cone conv(origin, cell). Column k < end.rho spans
-  // rho in [ra, rb]; there the cone's z lies between the lowest and highest slopes to the
-  // cell's corners. In the end column the cone is the cell plus the part reached from the origin.
+  // [r0, r1] x [z0, z1] fill the cone conv(origin, cell). In a column k < end.rho the cone's z
+  // lies between the lowest and the highest slope to the cell's corners; in the end column it is
+  // the cell plus the part reached from the origin (the cell scaled by r0 / r1 .. 1).
   const double dr = config_.rho_cell_m;
   const double dz = config_.z_cell_m;
-  const double inv_dz = 1.0 / dz;
-  const int below = config_.z_cells_below;
   const double r0 = end.rho * dr;
   const double r1 = r0 + dr;
-  const double z0 = (end.z - below) * dz;
+  const double z0 = (end.z - config_.z_cells_below) * dz;
   const double z1 = z0 + dz;
-  const std::size_t sector_base = static_cast<std::size_t>(end.phi) *
-                                  static_cast<std::size_t>(config_.rho_cells) *
-                                  static_cast<std::size_t>(config_.z_cells);
-  auto clear_range = [&](int rho, double z_lo, double z_hi) {
-    int k0 = floorToInt((z_lo + kEdgeEpsilon) * inv_dz) + below;
-    int k1 = ceilToInt((z_hi - kEdgeEpsilon) * inv_dz) - 1 + below;
-    k0 = std::max(k0, 0);
-    k1 = std::min(k1, config_.z_cells - 1);
-    std::uint8_t* column = cells_.data() + sector_base +
-                           static_cast<std::size_t>(rho) * static_cast<std::size_t>(config_.z_cells);
-    for (int k = k0; k <= k1; ++k) {
-      std::uint8_t& v = column[k];
-      if (v & kHitBit) continue;
-      v = static_cast<std::uint8_t>((v & kWalkedBit) | kFreeBit);  // clears carried obstacles
-    }
-  };
-  if (end.rho > 0) {
-    const double m_lo = std::min(z0 / r0, z0 / r1);
-    const double m_hi = std::max(z1 / r0, z1 / r1);
-    for (int k = 0; k < end.rho; ++k) {
+  Cone cone;
+  cone.phi = end.phi;
+  cone.rho = end.rho;
+  const double lambda_min = r0 / r1;
+  cone.end_lo = std::min(z0, z0 * lambda_min);
+  cone.end_hi = std::max(z1, z1 * lambda_min);
+  cone.slope_lo = end.rho > 0 ? std::min(z0 / r0, z0 / r1) : 0.0;
+  cone.slope_hi = end.rho > 0 ? std::max(z1 / r0, z1 / r1) : 0.0;
+  cones_.push_back(cone);
+}
+
+void AwarenessMap::clearRange(int phi, int rho, double z_lo, double z_hi) {
+  const double inv_dz = 1.0 / config_.z_cell_m;
+  const int below = config_.z_cells_below;
+  const int k0 = std::max(floorToInt((z_lo + kEdgeEpsilon) * inv_dz) + below, 0);
+  const int k1 = std::min(ceilToInt((z_hi - kEdgeEpsilon) * inv_dz) - 1 + below, config_.z_cells - 1);
+  std::uint8_t* column = cells_.data() + linear(rho, phi, 0);
+  for (int k = k0; k <= k1; ++k) {
+    std::uint8_t& v = column[k];
+    if (v & kHitBit) continue;
+    v = static_cast<std::uint8_t>((v & kWalkedBit) | kFreeBit);  // clears carried obstacles
+  }
+}
+
+void AwarenessMap::sweepCones() {
+  // Per sector, the union of the cones in column k is the union of the slope intervals of the
+  // cones that reach past k, scaled to the column: sweep the columns from far to near, adding
+  // each cone when the sweep passes its end column, and clear the merged intervals.
+  std::sort(cones_.begin(), cones_.end(), [](const Cone& a, const Cone& b) {
+    return a.phi != b.phi ? a.phi < b.phi : a.rho > b.rho;
+  });
+  const double dr = config_.rho_cell_m;
+  for (std::size_t first = 0; first < cones_.size();) {
+    std::size_t last = first;
+    while (last < cones_.size() && cones_[last].phi == cones_[first].phi) ++last;
+    const int phi = cones_[first].phi;
+    merged_.clear();
+    std::size_t next = first;
+    for (int k = cones_[first].rho; k >= 0; --k) {
+      for (; next < last && cones_[next].rho == k; ++next) {
+        const Cone& c = cones_[next];
+        clearRange(phi, k, c.end_lo, c.end_hi);
+        // Insert the slope interval, merging overlaps (the list stays sorted and disjoint).
+        double lo = c.slope_lo;
+        double hi = c.slope_hi;
+        bool placed = false;
+        std::vector<std::pair<double, double>>& out = merge_scratch_;
+        out.clear();
+        for (const auto& iv : merged_) {
+          if (iv.second < lo) {
+            out.push_back(iv);
+          } else if (iv.first > hi) {
+            if (!placed) {
+              out.emplace_back(lo, hi);
+              placed = true;
+            }
+            out.push_back(iv);
+          } else {
+            lo = std::min(lo, iv.first);
+            hi = std::max(hi, iv.second);
+          }
+        }
+        if (!placed) out.emplace_back(lo, hi);
+        merged_.swap(out);
+      }
+      if (k == cones_[first].rho) continue;  // no cone reaches past the farthest end column
       const double ra = k * dr;
       const double rb = ra + dr;
-      clear_range(k, std::min(ra * m_lo, rb * m_lo), std::max(ra * m_hi, rb * m_hi));
+      for (const auto& [m_lo, m_hi] : merged_) {
+        clearRange(phi, k, std::min(ra * m_lo, rb * m_lo), std::max(ra * m_hi, rb * m_hi));
+      }
     }
+    first = last;
   }
-  // End column: lambda in [r0 / r1, 1] scales the cell towards the origin.
-  const double lambda_min = r0 / r1;
-  clear_range(end.rho, std::min(z0, z0 * lambda_min), std::max(z1, z1 * lambda_min));
-  // The end cell was skipped if hit this frame, and cleared otherwise (a ray cut at the range).
+  cones_.clear();
 }
 
 void AwarenessMap::endFrame() {
+  sweepCones();
   occupied_points_.clear();
   for (const Carried& h : hits_) occupied_points_.push_back(h.p_W);
   for (const Carried& c : carried_) {

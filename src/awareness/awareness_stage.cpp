@@ -7,6 +7,11 @@
 namespace mlmap {
 namespace {
 constexpr std::uint32_t kCutFlag = 0x80000000u;
+// Keys of points that are not in a box voxel (box keys stay far below these).
+constexpr std::uint32_t kOutsideCutKey = 0xFFFFFFFCu;
+constexpr std::uint32_t kOutsideHitKey = 0xFFFFFFFDu;
+constexpr std::uint32_t kTooCloseKey = 0xFFFFFFFEu;
+constexpr std::uint32_t kNonFiniteKey = 0xFFFFFFFFu;
 // A bin's shared cone stops where the bin is this many voxels wide (over-carving bound).
 constexpr double kBinWidthVoxels = 1.0;
 constexpr int kMaxBinsPerFaceSide = 256;  // finest level: 6 x 256^2 bins (19 MB with all levels)
@@ -141,8 +146,9 @@ void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* bat
     c.sampled_out = n - count;
   }
 
-  // Points in world voxel units, w = o / res + (R / res) p: the voxel is floor(w). Scalar code:
-  // this loop runs for every point of the frame.
+  // Points in world voxel units, w = o / res + (R / res) p: the voxel is floor(w). Pass 1 turns
+  // every point into a key (box voxel, or why it is not one) and its box coordinates, without
+  // branches; pass 2 groups the runs of equal keys into end voxels.
   const double inv_res = 1.0 / res;
   const Eigen::Vector3d origin_vox = o_W * inv_res - box_origin.cast<double>();
   const Eigen::Matrix3d M = T_W_S.linear() * inv_res;
@@ -157,64 +163,103 @@ void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* bat
   const std::uint32_t dim_x = static_cast<std::uint32_t>(dims.x());
   const std::uint32_t dim_y = static_cast<std::uint32_t>(dims.y());
   const std::uint32_t dim_z = static_cast<std::uint32_t>(dims.z());
-  std::uint32_t last_key = 0xFFFFFFFFu;
-  End* last = nullptr;
-  outside_.clear();
+  // Point -> world voxel units (rays beyond the maximum range cut there). Used by both passes so
+  // that a recomputed point is bit-identical.
+  auto toVoxelUnits = [&](const Eigen::Vector3f& p, double* w) {
+    double x = p.x();
+    double y = p.y();
+    double z = p.z();
+    const double r2 = x * x + y * y + z * z;
+    const double scale = r2 > max_range2 ? max_range / std::sqrt(r2) : 1.0;
+    x *= scale;
+    y *= scale;
+    z *= scale;
+    w[0] = ow_x + m00 * x + m01 * y + m02 * z;
+    w[1] = ow_y + m10 * x + m11 * y + m12 * z;
+    w[2] = ow_z + m20 * x + m21 * y + m22 * z;
+    return r2;
+  };
+  keys_.resize(count);
+  box_coords_.resize(count);
   for (std::size_t idx = 0; idx < count; ++idx) {
     const Eigen::Vector3f& p_S = frame.points_S[sample ? sample_indices_[idx] : idx];
-    double x = p_S.x();
-    double y = p_S.y();
-    double z = p_S.z();
-    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) {
-      ++c.rejected_non_finite;
-      continue;
-    }
-    const double r2 = x * x + y * y + z * z;
-    if (r2 <= min_range2) {
-      ++c.rejected_too_close;
-      continue;
-    }
+    const bool finite = std::isfinite(p_S.x()) & std::isfinite(p_S.y()) & std::isfinite(p_S.z());
+    double w[3] = {0.0, 0.0, 0.0};
+    const double r2 = toVoxelUnits(finite ? p_S : Eigen::Vector3f::Zero().eval(), w);
     const bool cut = r2 > max_range2;
-    if (cut) {  // clears its ray up to the maximum range and is no hit
-      const double scale = max_range / std::sqrt(r2);
-      x *= scale;
-      y *= scale;
-      z *= scale;
-      ++c.beyond_max_range;
-    }
-    const double wx = ow_x + m00 * x + m01 * y + m02 * z;
-    const double wy = ow_y + m10 * x + m11 * y + m12 * z;
-    const double wz = ow_z + m20 * x + m21 * y + m22 * z;
-    const int ix = floorToInt(wx) - box_origin.x();
-    const int iy = floorToInt(wy) - box_origin.y();
-    const int iz = floorToInt(wz) - box_origin.z();
-    const Eigen::Vector3f v(static_cast<float>(wx - bx), static_cast<float>(wy - by),
-                            static_cast<float>(wz - bz));
-    if (static_cast<std::uint32_t>(ix) >= dim_x || static_cast<std::uint32_t>(iy) >= dim_y ||
-        static_cast<std::uint32_t>(iz) >= dim_z) {
-      // Beyond what the local map can hold; the awareness map and the carving still use it.
-      End e;
-      e.voxel = Eigen::Vector3i::Constant(-1);
-      e.points = {v, v};
-      e.p_W = Eigen::Vector3d(wx, wy, wz) * res;
-      e.cut = cut;
-      outside_.push_back(e);
-      continue;
-    }
-    const std::uint32_t key =
+    const int ix = floorToInt(w[0]) - box_origin.x();
+    const int iy = floorToInt(w[1]) - box_origin.y();
+    const int iz = floorToInt(w[2]) - box_origin.z();
+    const bool inside = (static_cast<std::uint32_t>(ix) < dim_x) &
+                        (static_cast<std::uint32_t>(iy) < dim_y) &
+                        (static_cast<std::uint32_t>(iz) < dim_z);
+    const std::uint32_t voxel =
         ((static_cast<std::uint32_t>(ix) * dim_y + static_cast<std::uint32_t>(iy)) * dim_z +
          static_cast<std::uint32_t>(iz)) |
         (cut ? kCutFlag : 0u);
-    if (key != last_key) {
-      last = &ends_[findOrAddEnd(key & ~kCutFlag, cut, Eigen::Vector3i(ix, iy, iz))];
-      last_key = key;
-      if (last->points.min.x() > last->points.max.x()) {  // new: remember its first point
-        last->p_W = Eigen::Vector3d(wx, wy, wz) * res;
-      }
-    }
-    last->points.min = last->points.min.cwiseMin(v);
-    last->points.max = last->points.max.cwiseMax(v);
+    const std::uint32_t outside = cut ? kOutsideCutKey : kOutsideHitKey;
+    keys_[idx] = !finite ? kNonFiniteKey
+                 : r2 <= min_range2 ? kTooCloseKey
+                 : inside ? voxel
+                          : outside;
+    box_coords_[idx] = Eigen::Vector3f(static_cast<float>(w[0] - bx), static_cast<float>(w[1] - by),
+                                       static_cast<float>(w[2] - bz));
   }
+  // Pass 2. The current run of points in one voxel (depth images give runs along a row) keeps its
+  // box in registers and merges it into the voxel's entry when the run ends.
+  std::uint32_t last_key = 0xFFFFFFFFu;
+  End* last = nullptr;
+  Eigen::Vector3f run_min = Eigen::Vector3f::Zero();
+  Eigen::Vector3f run_max = Eigen::Vector3f::Zero();
+  auto flush_run = [&]() {
+    if (last == nullptr) return;
+    last->points.min = last->points.min.cwiseMin(run_min);
+    last->points.max = last->points.max.cwiseMax(run_max);
+  };
+  auto worldPoint = [&](std::size_t idx) {
+    double w[3] = {0.0, 0.0, 0.0};
+    toVoxelUnits(frame.points_S[sample ? sample_indices_[idx] : idx], w);
+    return Eigen::Vector3d(w[0] * res, w[1] * res, w[2] * res);
+  };
+  outside_.clear();
+  for (std::size_t idx = 0; idx < count; ++idx) {
+    const std::uint32_t key = keys_[idx];
+    const Eigen::Vector3f& v = box_coords_[idx];
+    if (key >= kOutsideCutKey) {
+      if (key == kNonFiniteKey) {
+        ++c.rejected_non_finite;
+      } else if (key == kTooCloseKey) {
+        ++c.rejected_too_close;
+      } else {
+        // Beyond what the local map can hold; the awareness map and the carving still use it.
+        End e;
+        e.voxel = Eigen::Vector3i::Constant(-1);
+        e.points = {v, v};
+        e.p_W = worldPoint(idx);
+        e.cut = key == kOutsideCutKey;
+        c.beyond_max_range += e.cut ? 1 : 0;
+        outside_.push_back(e);
+      }
+      continue;
+    }
+    if (key != last_key) {
+      flush_run();
+      const bool cut = (key & kCutFlag) != 0;
+      const std::uint32_t voxel = key & ~kCutFlag;
+      const Eigen::Vector3i iv(static_cast<int>(voxel / (dim_y * dim_z)),
+                               static_cast<int>((voxel / dim_z) % dim_y),
+                               static_cast<int>(voxel % dim_z));
+      last = &ends_[findOrAddEnd(voxel, cut, iv)];
+      last_key = key;
+      if (last->points.min.x() > last->points.max.x()) last->p_W = worldPoint(idx);  // first point
+      run_min = run_max = v;
+    } else {
+      run_min = run_min.cwiseMin(v);
+      run_max = run_max.cwiseMax(v);
+    }
+    c.beyond_max_range += (key & kCutFlag) ? 1 : 0;
+  }
+  flush_run();
 
   // Occupied list (unique voxels).
   for (const End& e : ends_) {
@@ -337,7 +382,8 @@ std::size_t AwarenessStage::memoryBytes() const {
   return bins + map_.memoryBytes() + ends_.capacity() * sizeof(End) +
          outside_.capacity() * sizeof(End) +
          table_.capacity() * sizeof(Slot) +
-         sample_indices_.capacity() * sizeof(std::uint32_t);
+         sample_indices_.capacity() * sizeof(std::uint32_t) +
+         keys_.capacity() * sizeof(std::uint32_t) + box_coords_.capacity() * sizeof(Eigen::Vector3f);
 }
 
 }  // namespace mlmap

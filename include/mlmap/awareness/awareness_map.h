@@ -48,6 +48,8 @@ class AwarenessMap {
 
   /// Casts the rays to every cell hit in this frame (call after all markHit()).
   void castRaysToHits();
+  // Rays take effect in endFrame(), one sweep per sector over all the frame's cones, so every
+  // hit of the frame is protected whatever the call order.
 
   /// Cell holding a world point; false outside the grid.
   [[nodiscard]] bool cellOf(const Eigen::Vector3d& p_W, AwarenessCell* cell) const;
@@ -59,7 +61,8 @@ class AwarenessMap {
   [[nodiscard]] Eigen::Vector3d cellCenter(const AwarenessCell& cell) const;
   /// One measured world point per occupied cell (hits of this frame and carried obstacles).
   [[nodiscard]] const std::vector<Eigen::Vector3d>& occupiedPoints() const { return occupied_points_; }
-  /// Call after the rays: gathers occupiedPoints() for output and for the next frame's transfer.
+  /// Call after the hits and rays: clears the rays' cones (a hit of the frame is never cleared),
+  /// then gathers occupiedPoints() for output and for the next frame's transfer.
   void endFrame();
 
   [[nodiscard]] const AwarenessConfig& config() const { return config_; }
@@ -83,6 +86,8 @@ class AwarenessMap {
            static_cast<std::size_t>(z);
   }
   void walkCone(const AwarenessCell& end);
+  void clearRange(int phi, int rho, double z_lo, double z_hi);
+  void sweepCones();
 
   AwarenessConfig config_;
   double phi_cell_rad_;
@@ -95,6 +100,19 @@ class AwarenessMap {
   std::vector<Carried> carried_;   // obstacles of earlier frames, re-indexed
   std::vector<Carried> hits_;      // hit cells of this frame
   std::vector<AwarenessCell> hit_cells_;
+  /// A 2D cone of this frame, cleared by sweepCones(): slopes z / rho to the end cell's corners,
+  /// and the z range it covers in its own end column.
+  struct Cone {
+    int phi = 0;
+    int rho = 0;
+    double slope_lo = 0.0;
+    double slope_hi = 0.0;
+    double end_lo = 0.0;
+    double end_hi = 0.0;
+  };
+  std::vector<Cone> cones_;
+  std::vector<std::pair<double, double>> merged_;        // disjoint slope intervals, sorted
+  std::vector<std::pair<double, double>> merge_scratch_;
   std::vector<Eigen::Vector3d> occupied_points_;
 };
 

@@ -83,6 +83,8 @@ class AwarenessStage {
   std::vector<std::vector<std::uint32_t>> touched_;
   int bins_per_face_side_ = 0;  // at level 0, a power of two
   std::vector<std::uint32_t> sample_indices_;
+  std::vector<std::uint32_t> keys_;            // per point: box voxel key, or why it has none
+  std::vector<Eigen::Vector3f> box_coords_;    // per point: box-relative voxel units
   std::mt19937 rng_;
 };
 
