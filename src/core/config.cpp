@@ -107,6 +107,28 @@ std::vector<std::string> MapConfig::validate() const {
   local_map.validate(&errors);
   sensor.validate(&errors);
   pipeline.validate(&errors);
+  if (errors.empty()) {
+    // The awareness stage keeps one bit per voxel of a box around the sensor that reaches the
+    // maximum range or the local map's farthest extent, whichever is nearer (and keys its voxels
+    // with 31 bits).
+    const double res = local_map.resolution_m;
+    const double range_voxels = std::ceil(awareness.max_range_m / res) + 1.0;
+    const double offset_voxels = std::ceil(sensor.translation_B_m.norm() / res) + 1.0;
+    double box_voxels = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      const double submap = local_map.size_cells[a] / LocalMapConfig::kSubmapsPerAxis;
+      box_voxels *= 2.0 * std::min(range_voxels, 3.0 * submap + offset_voxels) + 1.0;
+    }
+    constexpr double kMaxScratchVoxels = 268435456.0;  // 2^28: a 32 MB bitset
+    if (box_voxels > kMaxScratchVoxels) {
+      std::ostringstream message;
+      message << "awareness.max_range_m / local_map.resolution_m: the free-space scratch box around "
+                 "the sensor would hold "
+              << box_voxels << " voxels (limit 2^28); lower max_range_m, the resolution or the "
+                 "local map size";
+      errors.push_back(message.str());
+    }
+  }
   if (errors.empty() && awareness.max_range_m > awareness.radius_m() + 1e-9) {
     std::ostringstream message;
     message << "awareness.max_range_m: must not exceed the awareness radius rho_cells * rho_cell_m = "

@@ -161,6 +161,7 @@ MapConfig loadConfigYaml(const std::string& path) {
 
 std::string toYaml(const MapConfig& c) {
   YAML::Emitter out;
+  out.SetDoublePrecision(15);  // 0.1 prints as 0.1; anything typed with <= 15 digits round-trips
   auto vec = [&](const auto& v) {
     out << YAML::Flow << YAML::BeginSeq;
     for (int i = 0; i < v.size(); ++i) out << v[i];

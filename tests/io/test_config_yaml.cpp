@@ -55,6 +55,9 @@ TEST(ConfigYaml, UnknownKeysAndBadValuesAreClearErrors) {
   EXPECT_NE(errorOf("awareness: {phi_cells: 0}").find("awareness.phi_cells"), std::string::npos);
   EXPECT_NE(errorOf("awareness: {max_range_m: 20}").find("awareness radius"), std::string::npos);
   EXPECT_NE(errorOf("log_odds: {miss: 0.4}").find("log_odds.miss"), std::string::npos);
+  EXPECT_NE(errorOf("local_map: {resolution_m: 0.01, size_cells: [2000, 2000, 50]}")
+                .find("free-space scratch box"),
+            std::string::npos);
   EXPECT_NE(errorOf("local_map: {resolution_m: .nan}").find("local_map.resolution_m"),
             std::string::npos);
   EXPECT_NE(errorOf("awareness: [1, 2]").find("must be a mapping"), std::string::npos);
