@@ -108,7 +108,7 @@ void AwarenessMap::castRay(const Eigen::Vector3d& end_W, bool end_is_free) {
   const double z_bottom = -config_.z_cells_below * config_.z_cell_m;
   if (d.z() >= z_top) scale = std::min(scale, z_top / d.z());
   if (d.z() < z_bottom) scale = std::min(scale, z_bottom / d.z());
-  const double rho = std::hypot(d.x(), d.y());
+  const double rho = std::sqrt(d.x() * d.x() + d.y() * d.y());
   if (rho >= config_.radius_m()) scale = std::min(scale, config_.radius_m() / rho);
   if (!end_is_free && scale >= 1.0) markHit(end_W);
   if (scale < 1.0) {
@@ -160,10 +160,34 @@ void AwarenessMap::clearRange(int phi, int rho, double z_lo, double z_hi) {
   }
 }
 
+void AwarenessMap::insertSlopes(double lo, double hi) {
+  // merged_ stays sorted and disjoint: overlapping intervals fuse into the new one.
+  std::vector<std::pair<double, double>>& out = merge_scratch_;
+  out.clear();
+  bool placed = false;
+  for (const auto& iv : merged_) {
+    if (iv.second < lo) {
+      out.push_back(iv);
+    } else if (iv.first > hi) {
+      if (!placed) {
+        out.emplace_back(lo, hi);
+        placed = true;
+      }
+      out.push_back(iv);
+    } else {
+      lo = std::min(lo, iv.first);
+      hi = std::max(hi, iv.second);
+    }
+  }
+  if (!placed) out.emplace_back(lo, hi);
+  merged_.swap(out);
+}
+
 void AwarenessMap::sweepCones() {
   // Per sector, the union of the cones in column k is the union of the slope intervals of the
-  // cones that reach past k, scaled to the column: sweep the columns from far to near, adding
-  // each cone when the sweep passes its end column, and clear the merged intervals.
+  // cones that reach past k, scaled to the column, plus the end-column ranges of the cones that
+  // end in k: sweep the columns from far to near, merging each cone's slopes once the sweep has
+  // passed its end column.
   std::sort(cones_.begin(), cones_.end(), [](const Cone& a, const Cone& b) {
     return a.phi != b.phi ? a.phi < b.phi : a.rho > b.rho;
   });
@@ -175,37 +199,17 @@ void AwarenessMap::sweepCones() {
     merged_.clear();
     std::size_t next = first;
     for (int k = cones_[first].rho; k >= 0; --k) {
-      for (; next < last && cones_[next].rho == k; ++next) {
-        const Cone& c = cones_[next];
-        clearRange(phi, k, c.end_lo, c.end_hi);
-        // Insert the slope interval, merging overlaps (the list stays sorted and disjoint).
-        double lo = c.slope_lo;
-        double hi = c.slope_hi;
-        bool placed = false;
-        std::vector<std::pair<double, double>>& out = merge_scratch_;
-        out.clear();
-        for (const auto& iv : merged_) {
-          if (iv.second < lo) {
-            out.push_back(iv);
-          } else if (iv.first > hi) {
-            if (!placed) {
-              out.emplace_back(lo, hi);
-              placed = true;
-            }
-            out.push_back(iv);
-          } else {
-            lo = std::min(lo, iv.first);
-            hi = std::max(hi, iv.second);
-          }
-        }
-        if (!placed) out.emplace_back(lo, hi);
-        merged_.swap(out);
-      }
-      if (k == cones_[first].rho) continue;  // no cone reaches past the farthest end column
+      // Column k: the cones that reach past it (their slopes, scaled to the column)...
       const double ra = k * dr;
       const double rb = ra + dr;
       for (const auto& [m_lo, m_hi] : merged_) {
         clearRange(phi, k, std::min(ra * m_lo, rb * m_lo), std::max(ra * m_hi, rb * m_hi));
+      }
+      // ...and the cones that end in it (their end-column range); from now on they reach past.
+      for (; next < last && cones_[next].rho == k; ++next) {
+        const Cone& c = cones_[next];
+        clearRange(phi, k, c.end_lo, c.end_hi);
+        insertSlopes(c.slope_lo, c.slope_hi);
       }
     }
     first = last;

@@ -14,7 +14,7 @@ constexpr std::uint32_t kTooCloseKey = 0xFFFFFFFEu;
 constexpr std::uint32_t kNonFiniteKey = 0xFFFFFFFFu;
 // A bin's shared cone stops where the bin is this many voxels wide (over-carving bound).
 constexpr double kBinWidthVoxels = 1.0;
-constexpr int kMaxBinsPerFaceSide = 256;  // finest level: 6 x 256^2 bins (19 MB with all levels)
+constexpr int kMaxBinsPerFaceSide = 256;  // finest level 6 x 256^2 bins; 25 MB with all levels
 
 std::uint32_t hashKey(std::uint32_t key) {
   key ^= key >> 16;

@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <random>
+#include <set>
+#include <tuple>
 
 namespace mlmap {
 namespace {
@@ -78,6 +80,58 @@ TEST(AwarenessMap, RaysClearEveryCellUpToTheHitInEverySectorAndAtTheBorders) {
     AwarenessCell cell;
     ASSERT_TRUE(map.cellOf(hit, &cell));
     EXPECT_EQ(cell.phi, phi);
+  }
+}
+
+// The other direction: a ray clears nothing it does not reach. Every free cell must be crossed
+// by some ray from the origin into the hit cell (dense rays to its corners and interior).
+TEST(AwarenessMap, RaysClearNothingBeyondTheirCone) {
+  const AwarenessConfig config = smallConfig();
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 40; ++trial) {
+    AwarenessMap map(config);
+    const Eigen::Vector3d body(0.0, 0.0, 0.0);
+    map.beginFrame(body);
+    const double angle = unit(rng) * 6.283;
+    const double rho = 0.2 + unit(rng) * 5.5;
+    const double z = -1.9 + unit(rng) * 3.8;
+    const Eigen::Vector3d hit(rho * std::cos(angle), rho * std::sin(angle), z);
+    ASSERT_TRUE(map.markHit(hit));
+    if (trial % 2 == 1) {  // a second, nearer hit in the same sector must not widen the first
+      ASSERT_TRUE(map.markHit(0.4 * hit + Eigen::Vector3d(0.0, 0.0, 0.5)));
+    }
+    map.castRaysToHits();
+    map.endFrame();
+    // Reference: cells crossed by rays to a 21 x 21 grid over each hit cell's rho-z rectangle.
+    std::set<std::tuple<int, int, int>> reached;
+    for (const Eigen::Vector3d& h : {hit, Eigen::Vector3d(0.4 * hit + Eigen::Vector3d(0, 0, 0.5))}) {
+      AwarenessCell hc;
+      ASSERT_TRUE(map.cellOf(h, &hc));
+      const double phi = std::atan2(h.y(), h.x());
+      for (int a = 0; a <= 20; ++a) {
+        for (int b = 0; b <= 20; ++b) {
+          const double r = (hc.rho + 0.001 + 0.998 * a / 20.0) * config.rho_cell_m;
+          const double zz = (hc.z - config.z_cells_below + 0.001 + 0.998 * b / 20.0) * config.z_cell_m;
+          const Eigen::Vector3d target(r * std::cos(phi), r * std::sin(phi), zz);
+          const int steps = static_cast<int>(target.norm() / 0.002) + 1;
+          for (int i = 1; i <= steps; ++i) {
+            AwarenessCell c;
+            if (map.cellOf(target * (static_cast<double>(i) / steps), &c)) reached.insert({c.rho, c.phi, c.z});
+          }
+        }
+      }
+    }
+    for (int r = 0; r < config.rho_cells; ++r) {
+      for (int p = 0; p < config.phi_cells; ++p) {
+        for (int k = 0; k < config.z_cells; ++k) {
+          if (map.state({r, p, k}) != Occupancy::kFree) continue;
+          EXPECT_EQ(reached.count({r, p, k}), 1u)
+              << "trial " << trial << ": cell rho " << r << " phi " << p << " z " << k
+              << " cleared though no ray into the hit reaches it";
+        }
+      }
+    }
   }
 }
 

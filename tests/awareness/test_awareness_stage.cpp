@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 namespace mlmap {
@@ -34,6 +35,10 @@ PointCloudFrame randomCloud(std::mt19937& rng, int n, double max_r) {
   return f;
 }
 
+// Bound on carved / crossed voxels for these sparse random clouds (fixed seeds): measured 1.08
+// at 0.2, 0.1 and 0.05 m; direction bins four voxels wide instead of one give 1.18-1.24 and fail.
+constexpr double kMaxOverCarving = 1.15;
+
 // Every voxel that any ray from the sensor to a point passes through gets a free update, unless
 // it holds a hit of the frame; every hit voxel is listed once, and never also free.
 void expectCompleteCarving(double resolution, int points, std::uint32_t seed) {
@@ -61,6 +66,7 @@ void expectCompleteCarving(double resolution, int points, std::uint32_t seed) {
   const Eigen::Vector3d o = T_W_S.translation();
   std::size_t checked = 0;
   std::size_t hits_expected = 0;
+  std::set<test::Key> crossed;  // every voxel a ray crosses (hits excluded), inside the box
   for (const Eigen::Vector3f& p_S : frame.points_S) {
     const double r = p_S.cast<double>().norm();
     if (r <= config.awareness.min_range_m) continue;
@@ -79,11 +85,18 @@ void expectCompleteCarving(double resolution, int points, std::uint32_t seed) {
       const VoxelIndex rel = v - free.origin();
       if (!free.contains(rel.x(), rel.y(), rel.z())) continue;  // beyond the local map's reach
       ++checked;
+      crossed.insert(k);
       ASSERT_TRUE(is_free(v)) << "voxel " << v.transpose() << " on the ray to " << end.transpose()
                               << " not carved";
     }
   }
   EXPECT_GT(checked, static_cast<std::size_t>(points) * 5);
+  // ...and carves little more than that: the bundled cones overshoot the rays by their slab
+  // rectangles and bin widths, about a voxel.
+  const double ratio = static_cast<double>(free.count()) / static_cast<double>(crossed.size());
+  std::printf("%.2f m: %zu voxels carved for %zu crossed by the rays (x%.2f)\n", resolution,
+              free.count(), crossed.size(), ratio);
+  EXPECT_LT(ratio, kMaxOverCarving);
   EXPECT_EQ(counters.points_in, frame.points_S.size());
   EXPECT_EQ(counters.hit_voxels, batch.hits.size());
   EXPECT_EQ(counters.free_voxels, free.count());

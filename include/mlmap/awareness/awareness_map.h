@@ -87,6 +87,7 @@ class AwarenessMap {
   }
   void walkCone(const AwarenessCell& end);
   void clearRange(int phi, int rho, double z_lo, double z_hi);
+  void insertSlopes(double lo, double hi);
   void sweepCones();
 
   AwarenessConfig config_;
