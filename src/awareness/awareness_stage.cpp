@@ -1,20 +1,30 @@
 #include "mlmap/awareness/awareness_stage.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
+
+// Hot loops get an AVX2 clone next to the portable one, picked at load time (GCC ifunc).
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && \
+    !defined(__SANITIZE_THREAD__)
+#define MLMAP_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define MLMAP_VECTOR_CLONES
+#endif
 
 namespace mlmap {
 namespace {
 constexpr std::uint32_t kCutFlag = 0x80000000u;
 // Keys of points that are not in a box voxel (box keys stay far below these).
-constexpr std::uint32_t kOutsideCutKey = 0xFFFFFFFCu;
+constexpr std::uint32_t kOutsideCutKey = 0xFFFFFFFCu;  // kOutsideHitKey - 1
 constexpr std::uint32_t kOutsideHitKey = 0xFFFFFFFDu;
 constexpr std::uint32_t kTooCloseKey = 0xFFFFFFFEu;
 constexpr std::uint32_t kNonFiniteKey = 0xFFFFFFFFu;
 // A bin's shared cone stops where the bin is this many voxels wide (over-carving bound).
 constexpr double kBinWidthVoxels = 1.0;
-constexpr int kMaxBinsPerFaceSide = 256;  // finest level 6 x 256^2 bins; 25 MB with all levels
+constexpr int kMaxBinsPerFaceSide = 256;
+constexpr std::size_t kPointBlock = AwarenessStage::kPointBlock;  // finest level 6 x 256^2 bins; 25 MB with all levels
 
 std::uint32_t hashKey(std::uint32_t key) {
   key ^= key >> 16;
@@ -23,6 +33,68 @@ std::uint32_t hashKey(std::uint32_t key) {
   key *= 0x846ca68bu;
   key ^= key >> 16;
   return key;
+}
+
+// Pass 1 of the point loop on a block of points in structure-of-arrays form: world voxel units
+// w = o + M p (rays beyond the maximum range cut there), the box voxel key or why there is none,
+// and the box-relative coordinates (x, y, z, 0). Straight-line code the compiler vectorises.
+struct PointKernel {
+  std::array<double, 9> m{};           // R_W_S / resolution, row-major
+  std::array<double, 3> o{};           // sensor origin in world voxel units
+  std::array<double, 3> box_origin{};  // scratch box origin (world voxel index)
+  std::array<std::uint32_t, 3> dims{};
+  double min_range2 = 0.0;
+  double max_range = 0.0;
+};
+
+inline int floorToIntVec(double x) {  // floorToInt in a form the vectoriser takes
+  const int i = static_cast<int>(x);
+  return x < static_cast<double>(i) ? i - 1 : i;
+}
+
+MLMAP_VECTOR_CLONES void classifyPoints(const PointKernel& k, const float* xs, const float* ys,
+                                        const float* zs, std::size_t n, std::uint32_t* keys,
+                                        float* coords) {
+  // Locals, so that the compiler knows the stores below do not change them.
+  const double m0 = k.m[0], m1 = k.m[1], m2 = k.m[2], m3 = k.m[3], m4 = k.m[4], m5 = k.m[5];
+  const double m6 = k.m[6], m7 = k.m[7], m8 = k.m[8];
+  const double o0 = k.o[0], o1 = k.o[1], o2 = k.o[2];
+  const double bo0 = k.box_origin[0], bo1 = k.box_origin[1], bo2 = k.box_origin[2];
+  const std::uint32_t d0 = k.dims[0], d1 = k.dims[1], d2 = k.dims[2];
+  const double max_range = k.max_range;
+  const double max_range2 = max_range * max_range;
+  const double min_range2 = k.min_range2;
+  for (std::size_t i = 0; i < n; ++i) {
+    double x = xs[i];
+    double y = ys[i];
+    double z = zs[i];
+    const double r2 = x * x + y * y + z * z;
+    const bool finite = r2 <= std::numeric_limits<double>::max();  // false for NaN and Inf
+    const bool cut = r2 > max_range2;
+    // min(1, max / |p|): exactly 1 for every point within range (and for NaN), branch-free.
+    const double q = max_range / std::sqrt(r2);
+    const double scale = q < 1.0 ? q : 1.0;
+    x *= scale;
+    y *= scale;
+    z *= scale;
+    // World voxel units first, as worldPoint() computes them, then box-relative.
+    const double b0 = (o0 + m0 * x + m1 * y + m2 * z) - bo0;
+    const double b1 = (o1 + m3 * x + m4 * y + m5 * z) - bo1;
+    const double b2 = (o2 + m6 * x + m7 * y + m8 * z) - bo2;
+    const std::uint32_t ix = static_cast<std::uint32_t>(floorToIntVec(b0));
+    const std::uint32_t iy = static_cast<std::uint32_t>(floorToIntVec(b1));
+    const std::uint32_t iz = static_cast<std::uint32_t>(floorToIntVec(b2));
+    const bool inside = (ix < d0) & (iy < d1) & (iz < d2);
+    const std::uint32_t cut_flag = cut ? kCutFlag : 0u;
+    const std::uint32_t voxel = ((ix * d1 + iy) * d2 + iz) | cut_flag;
+    const std::uint32_t outside = kOutsideHitKey - (cut ? 1u : 0u);  // kOutsideCutKey when cut
+    const std::uint32_t valid = r2 <= min_range2 ? kTooCloseKey : inside ? voxel : outside;
+    keys[i] = finite ? valid : kNonFiniteKey;
+    coords[4 * i + 0] = static_cast<float>(b0);
+    coords[4 * i + 1] = static_cast<float>(b1);
+    coords[4 * i + 2] = static_cast<float>(b2);
+    coords[4 * i + 3] = 0.0f;
+  }
 }
 
 double distanceToBox(const Eigen::Vector3d& o, const VoxelSpaceBox& b) {
@@ -181,40 +253,37 @@ void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* bat
   };
   keys_.resize(count);
   box_coords_.resize(count);
-  for (std::size_t idx = 0; idx < count; ++idx) {
-    const Eigen::Vector3f& p_S = frame.points_S[sample ? sample_indices_[idx] : idx];
-    const bool finite = std::isfinite(p_S.x()) & std::isfinite(p_S.y()) & std::isfinite(p_S.z());
-    double w[3] = {0.0, 0.0, 0.0};
-    const double r2 = toVoxelUnits(finite ? p_S : Eigen::Vector3f::Zero().eval(), w);
-    const bool cut = r2 > max_range2;
-    const int ix = floorToInt(w[0]) - box_origin.x();
-    const int iy = floorToInt(w[1]) - box_origin.y();
-    const int iz = floorToInt(w[2]) - box_origin.z();
-    const bool inside = (static_cast<std::uint32_t>(ix) < dim_x) &
-                        (static_cast<std::uint32_t>(iy) < dim_y) &
-                        (static_cast<std::uint32_t>(iz) < dim_z);
-    const std::uint32_t voxel =
-        ((static_cast<std::uint32_t>(ix) * dim_y + static_cast<std::uint32_t>(iy)) * dim_z +
-         static_cast<std::uint32_t>(iz)) |
-        (cut ? kCutFlag : 0u);
-    const std::uint32_t outside = cut ? kOutsideCutKey : kOutsideHitKey;
-    keys_[idx] = !finite ? kNonFiniteKey
-                 : r2 <= min_range2 ? kTooCloseKey
-                 : inside ? voxel
-                          : outside;
-    box_coords_[idx] = Eigen::Vector3f(static_cast<float>(w[0] - bx), static_cast<float>(w[1] - by),
-                                       static_cast<float>(w[2] - bz));
+  PointKernel kernel;
+  kernel.m = {m00, m01, m02, m10, m11, m12, m20, m21, m22};
+  kernel.o = {ow_x, ow_y, ow_z};
+  kernel.box_origin = {bx, by, bz};
+  kernel.dims = {dim_x, dim_y, dim_z};
+  kernel.min_range2 = min_range2;
+  kernel.max_range = max_range;
+  for (std::size_t first = 0; first < count; first += kPointBlock) {
+    const std::size_t len = std::min(kPointBlock, count - first);
+    float* xs = block_xyz_.data();
+    float* ys = xs + kPointBlock;
+    float* zs = ys + kPointBlock;
+    for (std::size_t i = 0; i < len; ++i) {
+      const Eigen::Vector3f& p = frame.points_S[sample ? sample_indices_[first + i] : first + i];
+      xs[i] = p.x();
+      ys[i] = p.y();
+      zs[i] = p.z();
+    }
+    classifyPoints(kernel, xs, ys, zs, len, keys_.data() + first,
+                   box_coords_[first].data());
   }
   // Pass 2. The current run of points in one voxel (depth images give runs along a row) keeps its
   // box in registers and merges it into the voxel's entry when the run ends.
   std::uint32_t last_key = 0xFFFFFFFFu;
   End* last = nullptr;
-  Eigen::Vector3f run_min = Eigen::Vector3f::Zero();
-  Eigen::Vector3f run_max = Eigen::Vector3f::Zero();
+  Eigen::Array4f run_min = Eigen::Array4f::Zero();
+  Eigen::Array4f run_max = Eigen::Array4f::Zero();
   auto flush_run = [&]() {
     if (last == nullptr) return;
-    last->points.min = last->points.min.cwiseMin(run_min);
-    last->points.max = last->points.max.cwiseMax(run_max);
+    last->points.min = last->points.min.cwiseMin(run_min.head<3>().matrix());
+    last->points.max = last->points.max.cwiseMax(run_max.head<3>().matrix());
   };
   auto worldPoint = [&](std::size_t idx) {
     double w[3] = {0.0, 0.0, 0.0};
@@ -224,7 +293,7 @@ void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* bat
   outside_.clear();
   for (std::size_t idx = 0; idx < count; ++idx) {
     const std::uint32_t key = keys_[idx];
-    const Eigen::Vector3f& v = box_coords_[idx];
+    const Eigen::Array4f v = Eigen::Array4f::Map(box_coords_[idx].data());
     if (key >= kOutsideCutKey) {
       if (key == kNonFiniteKey) {
         ++c.rejected_non_finite;
@@ -234,7 +303,7 @@ void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* bat
         // Beyond what the local map can hold; the awareness map and the carving still use it.
         End e;
         e.voxel = Eigen::Vector3i::Constant(-1);
-        e.points = {v, v};
+        e.points = {v.head<3>().matrix(), v.head<3>().matrix()};
         e.p_W = worldPoint(idx);
         e.cut = key == kOutsideCutKey;
         c.beyond_max_range += e.cut ? 1 : 0;
@@ -254,8 +323,8 @@ void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* bat
       if (last->points.min.x() > last->points.max.x()) last->p_W = worldPoint(idx);  // first point
       run_min = run_max = v;
     } else {
-      run_min = run_min.cwiseMin(v);
-      run_max = run_max.cwiseMax(v);
+      run_min = run_min.min(v);
+      run_max = run_max.max(v);
     }
     c.beyond_max_range += (key & kCutFlag) ? 1 : 0;
   }
@@ -383,7 +452,7 @@ std::size_t AwarenessStage::memoryBytes() const {
          outside_.capacity() * sizeof(End) +
          table_.capacity() * sizeof(Slot) +
          sample_indices_.capacity() * sizeof(std::uint32_t) +
-         keys_.capacity() * sizeof(std::uint32_t) + box_coords_.capacity() * sizeof(Eigen::Vector3f);
+         keys_.capacity() * sizeof(std::uint32_t) + box_coords_.capacity() * sizeof(box_coords_[0]) + block_xyz_.capacity() * sizeof(float);
 }
 
 }  // namespace mlmap

@@ -89,11 +89,13 @@ int main(int argc, char** argv) {
   int repeats = 2;
   std::string real_dir = MLMAP_SHARED_DATA_DIR "/realsense_tabletop";
   std::string json_path;
+  std::string only;
   app.add_option("--frames", frame_count, "simulated frames (spread over the default flight)")
       ->check(CLI::Range(1, 10000))->capture_default_str();
   app.add_option("--repeats", repeats, "passes over the frames")->check(CLI::Range(1, 100))->capture_default_str();
   app.add_option("--real", real_dir, "RGB-D frame folder ('' to skip)")->capture_default_str();
   app.add_option("--json", json_path, "also write the figures as JSON");
+  app.add_option("--only", only, "run only the cases whose name contains this text (e.g. '0.1 m')");
   CLI11_PARSE(app, argc, argv);
 
   // Render the simulated frames once (the simulator's cost is not measured).
@@ -123,7 +125,9 @@ int main(int argc, char** argv) {
   std::printf("%-34s %8s %7s %7s %7s %7s %7s %7s %7s %7s\n", "case", "/frame", "median", "p99",
               "median", "p99", "median", "p99", "local", "other");
   std::vector<Row> rows;
+  auto selected = [&](const std::string& name) { return name.find(only) != std::string::npos; };
   for (const Case& c : sim_cases) {
+    if (!selected(c.name)) continue;
     rows.push_back(run(c, sim_frames, repeats));
     print(rows.back(), nullptr, false);
   }
@@ -138,6 +142,7 @@ int main(int argc, char** argv) {
       c.log_odds.hit = 0.6;
       char name[64];
       std::snprintf(name, sizeof(name), "real RealSense 640x480, %.2f m", res);
+      if (!selected(name)) continue;
       rows.push_back(run({name, c}, real, repeats));
       print(rows.back(), nullptr, false);
     }

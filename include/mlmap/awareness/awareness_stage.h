@@ -8,6 +8,7 @@
 #include "mlmap/core/measurement_batch.h"
 #include "mlmap/core/config.h"
 
+#include <array>
 #include <cstdint>
 #include <random>
 #include <vector>
@@ -30,6 +31,9 @@ struct PointCounters {
 /// Runs the awareness map and produces measurement batches. Not thread-safe: one owner thread.
 class AwarenessStage {
  public:
+  /// Points are classified in blocks of this many (structure of arrays, vectorised).
+  static constexpr std::size_t kPointBlock = 1024;
+
   /// `config` must be valid (MapConfig::validate() empty).
   explicit AwarenessStage(const MapConfig& config);
 
@@ -84,7 +88,8 @@ class AwarenessStage {
   int bins_per_face_side_ = 0;  // at level 0, a power of two
   std::vector<std::uint32_t> sample_indices_;
   std::vector<std::uint32_t> keys_;            // per point: box voxel key, or why it has none
-  std::vector<Eigen::Vector3f> box_coords_;    // per point: box-relative voxel units
+  std::vector<std::array<float, 4>> box_coords_;  // per point: box-relative voxel units, 0
+  std::vector<float> block_xyz_ = std::vector<float>(3 * kPointBlock);  // one block, x | y | z
   std::mt19937 rng_;
 };
 
