@@ -171,13 +171,137 @@ std::uint32_t AwarenessStage::findOrAddEnd(std::uint32_t key, bool cut, const Ei
   }
 }
 
+void AwarenessStage::Source::fill(std::size_t first, std::size_t len, float* xs, float* ys,
+                                  float* zs) const {
+  if (depth == nullptr) {
+    for (std::size_t i = 0; i < len; ++i) {
+      const Eigen::Vector3f& p = points[indices != nullptr ? indices[first + i] : first + i];
+      xs[i] = p.x();
+      ys[i] = p.y();
+      zs[i] = p.z();
+    }
+    return;
+  }
+  // Depth pixels, row segment by row segment; pixels without data become NaN points (counted as
+  // non-finite, as backProject() counts them).
+  const std::size_t width = static_cast<std::size_t>(depth->intrinsics.width);
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  std::size_t done = 0;
+  while (done < len) {
+    const std::size_t pixel = first + done;
+    const std::size_t u0 = pixel % width;
+    const std::size_t seg = std::min(len - done, width - u0);
+    const float ray_y = (static_cast<float>(pixel / width) - cy) * inv_fy;
+    const float* rx = ray_x->data() + u0;
+    float* X = xs + done;
+    float* Y = ys + done;
+    float* Z = zs + done;
+    if (depth->encoding == DepthEncoding::kUint16Millimetres) {
+      const std::uint16_t* raw = depth->depth_mm.data() + pixel;
+      for (std::size_t i = 0; i < seg; ++i) {
+        const bool valid = (raw[i] != 0) & (raw[i] != 0xFFFF);
+        const float z = valid ? static_cast<float>(raw[i]) * 0.001f : kNaN;
+        X[i] = rx[i] * z;
+        Y[i] = ray_y * z;
+        Z[i] = z;
+      }
+    } else {
+      const float* raw = depth->depth_m.data() + pixel;
+      for (std::size_t i = 0; i < seg; ++i) {
+        const bool valid = (raw[i] > 0.0f) & (raw[i] <= std::numeric_limits<float>::max());
+        const float z = valid ? raw[i] : kNaN;
+        X[i] = rx[i] * z;
+        Y[i] = ray_y * z;
+        Z[i] = z;
+      }
+    }
+    done += seg;
+  }
+}
+
+Eigen::Vector3f AwarenessStage::Source::point(std::size_t i) const {
+  float p[3];
+  fill(i, 1, &p[0], &p[1], &p[2]);
+  return {p[0], p[1], p[2]};
+}
+
 void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* batch,
                              PointCounters* counters) {
   const AwarenessConfig& ac = config_.awareness;
+  Source source;
+  source.points = frame.points_S.data();
+  source.count = frame.points_S.size();
+  PointCounters c;
+  c.points_in = source.count;
+  if (ac.sample_count > 0 && source.count > static_cast<std::size_t>(ac.sample_count)) {
+    const std::size_t n = source.count;
+    sample_indices_.resize(n);
+    std::iota(sample_indices_.begin(), sample_indices_.end(), 0u);
+    source.count = static_cast<std::size_t>(ac.sample_count);
+    for (std::size_t i = 0; i < source.count; ++i) {
+      std::uniform_int_distribution<std::size_t> pick(i, n - 1);
+      std::swap(sample_indices_[i], sample_indices_[pick(rng_)]);
+    }
+    c.sampled_out = n - source.count;
+    source.indices = sample_indices_.data();
+  }
+  processSource(source, frame.stamp_s, frame.T_W_B, frame.T_B_S, batch, &c);
+  *counters += c;
+}
+
+bool AwarenessStage::process(const DepthFrame& frame, MeasurementBatch* batch,
+                             PointCounters* counters) {
+  const PinholeIntrinsics& K = frame.intrinsics;
+  const std::size_t n = static_cast<std::size_t>(std::max(K.width, 0)) *
+                        static_cast<std::size_t>(std::max(K.height, 0));
+  const bool is_mm = frame.encoding == DepthEncoding::kUint16Millimetres;
+  if (n == 0 || (is_mm ? frame.depth_mm.size() : frame.depth_m.size()) != n || !(K.fx > 0.0) ||
+      !(K.fy > 0.0)) {
+    return false;
+  }
+  if (config_.awareness.sample_count > 0) {
+    // Sub-sampling draws from the valid points only: go through a cloud.
+    PointCloudFrame cloud;
+    cloud.stamp_s = frame.stamp_s;
+    cloud.T_W_B = frame.T_W_B;
+    cloud.T_B_S = frame.T_B_S;
+    cloud.points_S.swap(depth_points_);
+    std::size_t skipped = 0;
+    backProject(frame, &cloud.points_S, &skipped);
+    process(cloud, batch, counters);
+    counters->points_in += skipped;
+    counters->rejected_non_finite += skipped;  // pixels without a measurement
+    depth_points_.swap(cloud.points_S);
+    return true;
+  }
+  // Every pixel straight into the point kernel, no intermediate cloud. Same arithmetic as
+  // backProject(): x = ((u - cx) / fx) z, y = ((v - cy) / fy) z in float.
+  const float inv_fx = static_cast<float>(1.0 / K.fx);
+  ray_x_.resize(static_cast<std::size_t>(K.width));
+  for (int u = 0; u < K.width; ++u) {
+    ray_x_[static_cast<std::size_t>(u)] = (static_cast<float>(u) - static_cast<float>(K.cx)) * inv_fx;
+  }
+  Source source;
+  source.depth = &frame;
+  source.count = n;
+  source.ray_x = &ray_x_;
+  source.inv_fy = static_cast<float>(1.0 / K.fy);
+  source.cy = static_cast<float>(K.cy);
+  PointCounters c;
+  c.points_in = n;
+  processSource(source, frame.stamp_s, frame.T_W_B, frame.T_B_S, batch, &c);
+  *counters += c;
+  return true;
+}
+
+void AwarenessStage::processSource(const Source& source, double stamp_s, const Transform& T_W_B,
+                                   const Transform& T_B_S, MeasurementBatch* batch,
+                                   PointCounters* counters) {
+  const AwarenessConfig& ac = config_.awareness;
   const double res = config_.local_map.resolution_m;
-  const Transform T_W_S = frame.T_W_B * frame.T_B_S;
+  const Transform T_W_S = T_W_B * T_B_S;
   const Eigen::Vector3d o_W = T_W_S.translation();
-  const Eigen::Vector3d body_W = frame.T_W_B.translation();
+  const Eigen::Vector3d body_W = T_W_B.translation();
 
   // Scratch box around the sensor: everything within range that the local map can hold. After
   // re-centring the body lies in the centre submap, so the map reaches at most 3 submaps away.
@@ -192,8 +316,8 @@ void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* bat
   box_dims_ = dims;
   batch->free.reset(box_origin, dims);
   batch->hits.clear();
-  batch->stamp_s = frame.stamp_s;
-  batch->T_W_B = frame.T_W_B;
+  batch->stamp_s = stamp_s;
+  batch->T_W_B = T_W_B;
   batch->sensor_origin_W = o_W;
   batch->resolution_m = res;
   ends_.clear();
@@ -202,21 +326,8 @@ void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* bat
     stamp_ = 1;
   }
 
-  PointCounters c;
-  const std::size_t n = frame.points_S.size();
-  c.points_in = n;
-  const bool sample = ac.sample_count > 0 && n > static_cast<std::size_t>(ac.sample_count);
-  std::size_t count = n;
-  if (sample) {
-    sample_indices_.resize(n);
-    std::iota(sample_indices_.begin(), sample_indices_.end(), 0u);
-    count = static_cast<std::size_t>(ac.sample_count);
-    for (std::size_t i = 0; i < count; ++i) {
-      std::uniform_int_distribution<std::size_t> pick(i, n - 1);
-      std::swap(sample_indices_[i], sample_indices_[pick(rng_)]);
-    }
-    c.sampled_out = n - count;
-  }
+  PointCounters& c = *counters;
+  const std::size_t count = source.count;
 
   // Points in world voxel units, w = o / res + (R / res) p: the voxel is floor(w). Pass 1 turns
   // every point into a key (box voxel, or why it is not one) and its box coordinates, without
@@ -265,12 +376,7 @@ void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* bat
     float* xs = block_xyz_.data();
     float* ys = xs + kPointBlock;
     float* zs = ys + kPointBlock;
-    for (std::size_t i = 0; i < len; ++i) {
-      const Eigen::Vector3f& p = frame.points_S[sample ? sample_indices_[first + i] : first + i];
-      xs[i] = p.x();
-      ys[i] = p.y();
-      zs[i] = p.z();
-    }
+    source.fill(first, len, xs, ys, zs);
     classifyPoints(kernel, xs, ys, zs, len, keys_.data() + first,
                    box_coords_[first].data());
   }
@@ -287,7 +393,7 @@ void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* bat
   };
   auto worldPoint = [&](std::size_t idx) {
     double w[3] = {0.0, 0.0, 0.0};
-    toVoxelUnits(frame.points_S[sample ? sample_indices_[idx] : idx], w);
+    toVoxelUnits(source.point(idx), w);
     return Eigen::Vector3d(w[0] * res, w[1] * res, w[2] * res);
   };
   outside_.clear();
@@ -354,7 +460,6 @@ void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* bat
   batch->free_count = batch->free.count();
   c.hit_voxels = batch->hits.size();
   c.free_voxels = batch->free_count;
-  *counters += c;
 }
 
 void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {

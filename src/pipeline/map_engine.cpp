@@ -223,18 +223,7 @@ void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
   if (auto* points = std::get_if<PointCloudFrame>(&input)) {
     awareness_.process(*points, batch, &counters);
   } else {
-    DepthFrame& depth = std::get<DepthFrame>(input);
-    PointCloudFrame cloud;
-    cloud.stamp_s = depth.stamp_s;
-    cloud.T_W_B = depth.T_W_B;
-    cloud.T_B_S = depth.T_B_S;
-    cloud.points_S.swap(depth_points_);
-    std::size_t skipped = 0;
-    backProject(depth, &cloud.points_S, &skipped);
-    awareness_.process(cloud, batch, &counters);
-    counters.points_in += skipped;
-    counters.rejected_non_finite += skipped;  // pixels without a measurement
-    depth_points_.swap(cloud.points_S);
+    awareness_.process(std::get<DepthFrame>(input), batch, &counters);  // checked in submit()
   }
   batch->awareness_ms = msSince(start);
   const std::size_t bytes = awareness_.memoryBytes() + batch->free.memoryBytes() +

@@ -37,8 +37,13 @@ class AwarenessStage {
   /// `config` must be valid (MapConfig::validate() empty).
   explicit AwarenessStage(const MapConfig& config);
 
-  /// Processes a frame whose poses were validated. Fills `batch` (reusing its memory).
+  /// Processes a frame whose poses were validated. Fills `batch` (reusing its memory) and adds
+  /// to `counters`.
   void process(const PointCloudFrame& frame, MeasurementBatch* batch, PointCounters* counters);
+  /// The same for a depth image: every pixel is a point on the ray through its centre (as
+  /// backProject() makes it), pixels without data count as non-finite points. Returns false,
+  /// touching nothing, when the image size or intrinsics are inconsistent.
+  bool process(const DepthFrame& frame, MeasurementBatch* batch, PointCounters* counters);
 
   /// The awareness map after the last frame.
   [[nodiscard]] const AwarenessMap& map() const { return map_; }
@@ -46,6 +51,21 @@ class AwarenessStage {
   [[nodiscard]] std::size_t memoryBytes() const;
 
  private:
+  /// Where a frame's points come from: a cloud (optionally sub-sampled) or the pixels of a
+  /// depth image, read in blocks into structure-of-arrays form.
+  struct Source {
+    std::size_t count = 0;
+    const Eigen::Vector3f* points = nullptr;   // cloud
+    const std::uint32_t* indices = nullptr;    // sub-sampled cloud: the chosen points
+    const DepthFrame* depth = nullptr;         // or a depth image
+    const std::vector<float>* ray_x = nullptr; // (u - cx) / fx per column
+    float inv_fy = 0.0f;
+    float cy = 0.0f;
+    void fill(std::size_t first, std::size_t len, float* xs, float* ys, float* zs) const;
+    [[nodiscard]] Eigen::Vector3f point(std::size_t i) const;
+  };
+  void processSource(const Source& source, double stamp_s, const Transform& T_W_B,
+                     const Transform& T_B_S, MeasurementBatch* batch, PointCounters* counters);
   /// A voxel where rays end in this frame: the box of its points and the first point.
   struct End {
     Eigen::Vector3i voxel = Eigen::Vector3i::Zero();  // box-relative
@@ -87,6 +107,8 @@ class AwarenessStage {
   std::vector<std::vector<std::uint32_t>> touched_;
   int bins_per_face_side_ = 0;  // at level 0, a power of two
   std::vector<std::uint32_t> sample_indices_;
+  std::vector<float> ray_x_;                   // depth images: (u - cx) / fx per column
+  std::vector<Eigen::Vector3f> depth_points_;  // depth images with sub-sampling: the cloud
   std::vector<std::uint32_t> keys_;            // per point: box voxel key, or why it has none
   std::vector<std::array<float, 4>> box_coords_;  // per point: box-relative voxel units, 0
   std::vector<float> block_xyz_ = std::vector<float>(3 * kPointBlock);  // one block, x | y | z

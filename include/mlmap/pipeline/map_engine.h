@@ -149,7 +149,6 @@ class MapEngine {
   std::thread awareness_thread_;
   std::thread local_thread_;
   MeasurementBatch sync_batch_;
-  std::vector<Eigen::Vector3f> depth_points_;
 };
 
 }  // namespace mlmap
