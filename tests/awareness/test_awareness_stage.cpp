@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -142,6 +143,67 @@ TEST(AwarenessStage, SampleCountKeepsThatManyPoints) {
   EXPECT_EQ(c.sampled_out, frame.points_S.size() - 100);
   EXPECT_LE(batch.hits.size(), 100u);
   EXPECT_GT(batch.hits.size(), 80u);
+}
+
+// A depth image read pixel by pixel gives exactly what its back-projected cloud gives, with the
+// pixels that have no data counted as non-finite points; both encodings.
+TEST(AwarenessStage, DepthImageMatchesItsBackProjectedCloud) {
+  for (const DepthEncoding encoding :
+       {DepthEncoding::kUint16Millimetres, DepthEncoding::kFloat32Metres}) {
+    DepthFrame depth;
+    depth.encoding = encoding;
+    depth.intrinsics = {60.0, 55.0, 39.5, 30.0, 80, 61};  // odd sizes: row segments in blocks
+    depth.T_W_B.translation() = Eigen::Vector3d(1.37, -2.21, 1.05);
+    depth.T_W_B.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    depth.T_B_S = SensorConfig{}.T_B_S();
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> z(0.3f, 8.0f);  // some beyond max range 6 m
+    const std::size_t n = 80 * 61;
+    for (std::size_t i = 0; i < n; ++i) {
+      const bool hole = i % 7 == 0;
+      const float d = z(rng);
+      if (encoding == DepthEncoding::kUint16Millimetres) {
+        depth.depth_mm.push_back(hole ? (i % 2 ? 0 : 0xFFFF) : static_cast<std::uint16_t>(d * 1000));
+      } else {
+        const float bad[] = {0.0f, std::numeric_limits<float>::quiet_NaN(),
+                             std::numeric_limits<float>::infinity(), -1.0f};
+        depth.depth_m.push_back(hole ? bad[i % 4] : d);
+      }
+    }
+    PointCloudFrame cloud;
+    cloud.T_W_B = depth.T_W_B;
+    cloud.T_B_S = depth.T_B_S;
+    std::size_t skipped = 0;
+    ASSERT_TRUE(backProject(depth, &cloud.points_S, &skipped));
+    ASSERT_GT(skipped, n / 8);
+
+    const MapConfig config = testConfig(0.1);
+    AwarenessStage from_depth(config);
+    AwarenessStage from_cloud(config);
+    MeasurementBatch a;
+    MeasurementBatch b;
+    PointCounters ca;
+    PointCounters cb;
+    ASSERT_TRUE(from_depth.process(depth, &a, &ca));
+    from_cloud.process(cloud, &b, &cb);
+    EXPECT_EQ(ca.points_in, n);
+    EXPECT_EQ(ca.points_in, cb.points_in + skipped);
+    EXPECT_EQ(ca.rejected_non_finite, cb.rejected_non_finite + skipped);
+    EXPECT_EQ(ca.beyond_max_range, cb.beyond_max_range);
+    EXPECT_GT(ca.beyond_max_range, 0u);
+    ASSERT_EQ(a.hits.size(), b.hits.size());
+    for (std::size_t i = 0; i < a.hits.size(); ++i) {
+      EXPECT_TRUE(a.hits[i].index == b.hits[i].index);
+      EXPECT_EQ(a.hits[i].p_W, b.hits[i].p_W);
+    }
+    EXPECT_EQ(a.free_count, b.free_count);
+    EXPECT_TRUE(std::equal(a.free.data(), a.free.data() + a.free.dims().x() * a.free.dims().y() *
+                                                            a.free.wordsPerRow(),
+                           b.free.data()));
+
+    depth.intrinsics.width = 79;  // size no longer matches the data
+    EXPECT_FALSE(from_depth.process(depth, &a, &ca));
+  }
 }
 
 }  // namespace
