@@ -100,6 +100,41 @@ void PipelineConfig::validate(std::vector<std::string>* errors) const {
           "pipeline.batch_queue_capacity", "must be in [1, 1000]", batch_queue_capacity, errors);
 }
 
+void ProjectedGridConfig::validate(std::vector<std::string>* errors) const {
+  require(std::isfinite(band_min_m) && std::abs(band_min_m) <= 1000.0, "projected_grid.band_min_m",
+          "must be a finite height within 1000 m", band_min_m, errors);
+  require(std::isfinite(band_max_m) && std::abs(band_max_m) <= 1000.0, "projected_grid.band_max_m",
+          "must be a finite height within 1000 m", band_max_m, errors);
+  require(!(band_max_m < band_min_m), "projected_grid.band_max_m", "must not be below band_min_m",
+          band_max_m, errors);
+}
+
+const char* toString(UnknownAs policy) {
+  switch (policy) {
+    case UnknownAs::kOccupied:
+      return "occupied";
+    case UnknownAs::kFree:
+      return "free";
+  }
+  return "invalid";
+}
+
+void EsdfConfig::validate(std::vector<std::string>* errors) const {
+  require(std::isfinite(max_distance_m) && max_distance_m > 0.0 && max_distance_m <= 1000.0,
+          "esdf.max_distance_m", "must be finite, > 0 and <= 1000 m", max_distance_m, errors);
+  require(unknown_as == UnknownAs::kOccupied || unknown_as == UnknownAs::kFree, "esdf.unknown_as",
+          "must be occupied or free", static_cast<int>(unknown_as), errors);
+  require(num_threads >= 1 && num_threads <= kMaxThreads, "esdf.num_threads", "must be in [1, 64]",
+          num_threads, errors);
+  require(std::isfinite(max_rate_hz) && max_rate_hz >= 0.0, "esdf.max_rate_hz",
+          "must be finite and >= 0 (0: no limit)", max_rate_hz, errors);
+  for (int a = 0; a < 3; ++a) {
+    require(std::isfinite(box_size_m[a]) && box_size_m[a] >= 0.0 && box_size_m[a] <= 10000.0,
+            "esdf.box_size_m", "must be finite, >= 0 and <= 10000 m per axis (0: whole local map)",
+            box_size_m[a], errors);
+  }
+}
+
 std::vector<std::string> MapConfig::validate() const {
   std::vector<std::string> errors;
   awareness.validate(&errors);
@@ -107,6 +142,8 @@ std::vector<std::string> MapConfig::validate() const {
   local_map.validate(&errors);
   sensor.validate(&errors);
   pipeline.validate(&errors);
+  projected_grid.validate(&errors);
+  esdf.validate(&errors);
   if (errors.empty()) {
     // The awareness stage keeps one bit per voxel of a box around the sensor that reaches the
     // maximum range or the local map's farthest extent, whichever is nearer (and keys its voxels

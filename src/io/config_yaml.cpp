@@ -74,6 +74,7 @@ class Section {
   static const char* typeName(const int*) { return "an integer"; }
   static const char* typeName(const std::uint32_t*) { return "a non-negative integer"; }
   static const char* typeName(const bool*) { return "true or false"; }
+  static const char* typeName(const std::string*) { return "text"; }
 
   YAML::Node node_;
   std::string path_;
@@ -142,6 +143,34 @@ MapConfig parseConfigYaml(const std::string& text, const std::string& source_nam
       s.read("batch_queue_capacity", &p.batch_queue_capacity);
       s.read("reject_out_of_order", &p.reject_out_of_order);
     }
+    {
+      Section s(top.child("projected_grid"), "projected_grid", &errors);
+      ProjectedGridConfig& g = c.projected_grid;
+      s.read("enabled", &g.enabled);
+      s.read("relative_band", &g.relative_band);
+      s.read("band_min_m", &g.band_min_m);
+      s.read("band_max_m", &g.band_max_m);
+      s.read("probability_values", &g.probability_values);
+      s.read("include_global", &g.include_global);
+    }
+    {
+      Section s(top.child("esdf"), "esdf", &errors);
+      EsdfConfig& e = c.esdf;
+      s.read("enabled", &e.enabled);
+      s.read("max_distance_m", &e.max_distance_m);
+      std::string unknown = toString(e.unknown_as);
+      s.read("unknown_as", &unknown);
+      if (unknown == "occupied") {
+        e.unknown_as = UnknownAs::kOccupied;
+      } else if (unknown == "free") {
+        e.unknown_as = UnknownAs::kFree;
+      } else {
+        errors.push_back("esdf.unknown_as: must be occupied or free (got " + unknown + ")");
+      }
+      s.read("num_threads", &e.num_threads);
+      s.read("max_rate_hz", &e.max_rate_hz);
+      s.readVector("box_size_m", &e.box_size_m);
+    }
   }
   for (std::string& e : errors) {
     if (!e.empty() && e[0] == '.') e.erase(0, 1);  // top-level keys have no section prefix
@@ -203,6 +232,23 @@ std::string toYaml(const MapConfig& c) {
   out << YAML::Key << "input_queue_capacity" << YAML::Value << c.pipeline.input_queue_capacity;
   out << YAML::Key << "batch_queue_capacity" << YAML::Value << c.pipeline.batch_queue_capacity;
   out << YAML::Key << "reject_out_of_order" << YAML::Value << c.pipeline.reject_out_of_order;
+  out << YAML::EndMap;
+  out << YAML::Key << "projected_grid" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "enabled" << YAML::Value << c.projected_grid.enabled;
+  out << YAML::Key << "relative_band" << YAML::Value << c.projected_grid.relative_band;
+  out << YAML::Key << "band_min_m" << YAML::Value << c.projected_grid.band_min_m;
+  out << YAML::Key << "band_max_m" << YAML::Value << c.projected_grid.band_max_m;
+  out << YAML::Key << "probability_values" << YAML::Value << c.projected_grid.probability_values;
+  out << YAML::Key << "include_global" << YAML::Value << c.projected_grid.include_global;
+  out << YAML::EndMap;
+  out << YAML::Key << "esdf" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "enabled" << YAML::Value << c.esdf.enabled;
+  out << YAML::Key << "max_distance_m" << YAML::Value << c.esdf.max_distance_m;
+  out << YAML::Key << "unknown_as" << YAML::Value << toString(c.esdf.unknown_as);
+  out << YAML::Key << "num_threads" << YAML::Value << c.esdf.num_threads;
+  out << YAML::Key << "max_rate_hz" << YAML::Value << c.esdf.max_rate_hz;
+  out << YAML::Key << "box_size_m" << YAML::Value;
+  vec(c.esdf.box_size_m);
   out << YAML::EndMap;
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";

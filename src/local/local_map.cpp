@@ -181,7 +181,10 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
   }
   for (const HitMeasurement& h : batch.hits) {
     if (contains(h.index)) {
-      model_.hit(cells_[slot(h.index)]);
+      LogOddsQ& v = cells_[slot(h.index)];
+      const Occupancy before = model_.state(v);
+      model_.hit(v);
+      counters_.state_changes += before != model_.state(v) ? 1 : 0;
       ++counters_.hits_applied;
     } else {
       ++counters_.outside_window;
@@ -195,6 +198,7 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
   const int z_first = std::max(0, min_index_.z() - origin.z());              // box-relative
   const int z_end = std::min(dims.z(), min_index_.z() + size_.z() - origin.z());
   std::uint64_t applied = 0;
+  std::uint64_t changes = 0;
   for (int i = 0; i < dims.x(); ++i) {
     const int gx = origin.x() + i;
     const bool x_in = gx >= min_index_.x() && gx < min_index_.x() + size_.x();
@@ -221,13 +225,45 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
             ++counters_.outside_window;
             continue;
           }
-          model_.miss(column[floorMod(origin.z() + k, size_.z())]);
+          LogOddsQ& v = column[floorMod(origin.z() + k, size_.z())];
+          const Occupancy before = model_.state(v);
+          model_.miss(v);
+          changes += before != model_.state(v) ? 1 : 0;
           ++applied;
         }
       }
     }
   }
   counters_.misses_applied += applied;
+  counters_.state_changes += changes;
+}
+
+void LocalMap::copyWindow(LocalWindow* out) const {
+  out->resolution_m = config_.resolution_m;
+  out->model = model_;
+  if (!placed_) {
+    out->min_index = VoxelIndex::Zero();
+    out->size = Eigen::Vector3i::Zero();
+    out->log_odds.clear();
+    return;
+  }
+  out->min_index = min_index_;
+  out->size = size_;
+  const std::size_t nz = static_cast<std::size_t>(size_.z());
+  out->log_odds.resize(static_cast<std::size_t>(size_.prod()));
+  // Each torus column is the window's z row rotated by (min z mod nz): two contiguous copies.
+  const std::size_t split = static_cast<std::size_t>(floorMod(min_index_.z(), size_.z()));
+  LogOddsQ* dst = out->log_odds.data();
+  for (int x = 0; x < size_.x(); ++x) {
+    const std::size_t sx = static_cast<std::size_t>(floorMod(min_index_.x() + x, size_.x()));
+    for (int y = 0; y < size_.y(); ++y) {
+      const std::size_t sy = static_cast<std::size_t>(floorMod(min_index_.y() + y, size_.y()));
+      const LogOddsQ* column = cells_.data() + (sx * static_cast<std::size_t>(size_.y()) + sy) * nz;
+      std::copy(column + split, column + nz, dst);
+      std::copy(column, column + split, dst + (nz - split));
+      dst += nz;
+    }
+  }
 }
 
 }  // namespace mlmap

@@ -88,6 +88,7 @@ MapEngine::MapEngine(const MapConfig& config, LogSink log)
       awareness_(config_),
       local_(config_.local_map, config_.log_odds),
       global_(config_.local_map.submap_cells(), config_.local_map.resolution_m),
+      planning_(config_, config_.pipeline.threaded),
       log_limits_(8) {
   if (config_.pipeline.threaded) {
     for (int i = 0; i < config_.pipeline.batch_queue_capacity + 1; ++i) {
@@ -239,8 +240,11 @@ void MapEngine::localStep(const MeasurementBatch& batch) {
   local_.recenter(batch.T_W_B.translation(), &global_);
   local_.integrate(batch);
   const double ms = msSince(start);
+  planning_.update(local_, global_, ++frames_integrated_, batch.stamp_s, batch.T_W_B);
   const std::size_t global_bytes = global_.memoryBytes();
+  const std::size_t planning_bytes = planning_.memoryBytes();
   std::lock_guard<std::mutex> lock(stats_mutex_);
+  stats_.memory.planning_bytes = planning_bytes;
   ++stats_.frames_mapped;
   stats_.local = local_.counters();
   stats_.memory.local_bytes = local_.memoryBytes();
@@ -307,8 +311,11 @@ void MapEngine::localLoop() {
 
 void MapEngine::flush() {
   if (!config_.pipeline.threaded) return;
-  std::unique_lock<std::mutex> lock(queue_mutex_);
-  queue_cv_.wait(lock, [&] { return stopping_ || (inputs_.empty() && in_flight_ == 0); });
+  {
+    std::unique_lock<std::mutex> lock(queue_mutex_);
+    queue_cv_.wait(lock, [&] { return stopping_ || (inputs_.empty() && in_flight_ == 0); });
+  }
+  planning_.flush();
 }
 
 EngineStats MapEngine::stats() const {
@@ -317,6 +324,7 @@ EngineStats MapEngine::stats() const {
   s.awareness = awareness_ms_.summary();
   s.local_global = local_ms_.summary();
   s.total = total_ms_.summary();
+  s.planning = planning_.stats();
   return s;
 }
 

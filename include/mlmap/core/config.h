@@ -88,6 +88,51 @@ struct PipelineConfig {
   void validate(std::vector<std::string>* errors) const;
 };
 
+/// The projected 2D grid for ground-plane planners (paper Fig. 6, nav_msgs/OccupancyGrid values).
+struct ProjectedGridConfig {
+  bool enabled = true;
+  /// true: the band is relative to the body height; false: absolute heights in W.
+  bool relative_band = true;
+  double band_min_m = -0.3;  ///< lower end of the height band [m]
+  double band_max_m = 0.3;   ///< upper end of the height band [m]
+  /// false: -1 unknown, 0 free, 100 occupied. true: known cells hold the band's highest
+  /// occupancy probability scaled to 0..100.
+  bool probability_values = false;
+  /// Also project the global map's occupied voxels (the grid grows to the global extent).
+  bool include_global = false;
+
+  void validate(std::vector<std::string>* errors) const;
+};
+
+/// How unknown (never observed) voxels count for planners (distance field, collision checks).
+enum class UnknownAs : std::uint8_t {
+  kOccupied,  ///< unknown is an obstacle (safe default: a planner keeps away from it)
+  kFree,      ///< unknown is free space (optimistic planning)
+};
+
+/// Human-readable name of an unknown-voxel policy ("occupied", "free").
+const char* toString(UnknownAs policy);
+
+/// The local ESDF for planners (mlmap/planning/esdf.h).
+struct EsdfConfig {
+  bool enabled = true;
+  /// Distances are clamped to [-max_distance_m, +max_distance_m]; larger values cost more time.
+  double max_distance_m = 2.0;
+  /// How unknown voxels count (obstacle by default).
+  UnknownAs unknown_as = UnknownAs::kOccupied;
+  /// Threads used by one computation, the caller's included (1 = the caller's thread only).
+  int num_threads = 1;
+  /// Recomputed at most this often (by frame stamps) and only when a voxel state changed in the
+  /// window or the box moved; 0 = at every change.
+  double max_rate_hz = 10.0;
+  /// Box centred on the body [m]; 0 along an axis = the whole local map along it (default).
+  Eigen::Vector3d box_size_m = Eigen::Vector3d::Zero();
+
+  static constexpr int kMaxThreads = 64;
+  /// Appends every problem as "esdf.key: what is wrong (got X)"; appends nothing when valid.
+  void validate(std::vector<std::string>* errors) const;
+};
+
 /// Everything the engine needs.
 struct MapConfig {
   AwarenessConfig awareness;
@@ -95,6 +140,8 @@ struct MapConfig {
   LocalMapConfig local_map;
   SensorConfig sensor;
   PipelineConfig pipeline;
+  ProjectedGridConfig projected_grid;
+  EsdfConfig esdf;
 
   /// All problems found, each as "section.key: what is wrong (got X)". Empty = valid.
   [[nodiscard]] std::vector<std::string> validate() const;

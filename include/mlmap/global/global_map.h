@@ -37,6 +37,12 @@ class GlobalMap {
   /// Voxels of one submap, or nullptr.
   [[nodiscard]] const std::vector<VoxelRecord>* find(const SubmapIndex& submap) const;
 
+  /// Calls f(submap index, its records) for every stored submap.
+  template <typename F>
+  void forEachSubmap(F&& f) const {
+    for (const auto& [key, records] : submaps_) f(unpack(key), records);
+  }
+
   /// Calls f(world voxel index, log-odds) for every stored voxel.
   template <typename F>
   void forEachVoxel(F&& f) const {

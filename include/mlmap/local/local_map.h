@@ -28,6 +28,40 @@ struct LocalMapCounters {
   std::uint64_t resets = 0;               ///< jumps too far for a shift: whole window retired
   std::uint64_t submaps_retired = 0;      ///< submaps handed to the global map
   std::uint64_t submaps_restored = 0;     ///< submaps taken back from the global map
+  /// Updates that changed a voxel's state (unknown / free / occupied): what planning layers
+  /// derived from states (ESDF, 2D grid) need to know to skip a recomputation.
+  std::uint64_t state_changes = 0;
+};
+
+/// A copy of the local map's window in box order, for readers on other threads (planning
+/// snapshots). Voxel (x, y, z) of the window, world index min_index + (x, y, z), is
+/// log_odds[(x * size.y() + y) * size.z() + z]: x-major, z fastest.
+struct LocalWindow {
+  VoxelIndex min_index = VoxelIndex::Zero();       ///< first voxel (world index)
+  Eigen::Vector3i size = Eigen::Vector3i::Zero();  ///< voxels per axis (0: map not placed yet)
+  double resolution_m = 0.2;                       ///< voxel edge
+  LogOddsModel model{LogOddsConfig{}};             ///< thresholds of the map it was copied from
+  std::vector<LogOddsQ> log_odds;                  ///< stored log-odds, see above
+
+  /// True when the world voxel lies in the window.
+  [[nodiscard]] bool contains(const VoxelIndex& g) const {
+    const VoxelIndex r = g - min_index;
+    return static_cast<unsigned>(r.x()) < static_cast<unsigned>(size.x()) &&
+           static_cast<unsigned>(r.y()) < static_cast<unsigned>(size.y()) &&
+           static_cast<unsigned>(r.z()) < static_cast<unsigned>(size.z());
+  }
+  /// Stored value of a world voxel in the window.
+  [[nodiscard]] LogOddsQ at(const VoxelIndex& g) const {
+    const VoxelIndex r = g - min_index;
+    return log_odds[(static_cast<std::size_t>(r.x()) * static_cast<std::size_t>(size.y()) +
+                     static_cast<std::size_t>(r.y())) *
+                        static_cast<std::size_t>(size.z()) +
+                    static_cast<std::size_t>(r.z())];
+  }
+  /// State of a world voxel; unknown outside the window.
+  [[nodiscard]] Occupancy state(const VoxelIndex& g) const {
+    return contains(g) ? model.state(at(g)) : Occupancy::kUnknown;
+  }
 };
 
 /// Dense sliding voxel window. Not thread-safe: owned by the local-global stage.
@@ -44,6 +78,10 @@ class LocalMap {
   /// Applies a frame's measurements: +hit for occupied voxels, +miss for free ones (Eq. 8-9),
   /// each voxel once. Measurements outside the window are counted and dropped.
   void integrate(const MeasurementBatch& batch);
+
+  /// Copies the window into `out` in box order (reusing its memory). An unplaced map gives an
+  /// empty window.
+  void copyWindow(LocalWindow* out) const;
 
   /// Retires every submap to `global` (e.g. before saving a complete map); the window stays.
   void retireAll(GlobalMap* global);

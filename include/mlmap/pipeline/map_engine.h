@@ -8,6 +8,7 @@
 #include "mlmap/core/config.h"
 #include "mlmap/global/global_map.h"
 #include "mlmap/local/local_map.h"
+#include "mlmap/planning/planning_layers.h"
 
 #include <condition_variable>
 #include <deque>
@@ -46,7 +47,10 @@ struct MemoryUsage {
   std::size_t awareness_bytes = 0;  ///< cylindrical grid, per-frame scratch and batch
   std::size_t local_bytes = 0;      ///< active-area voxels
   std::size_t global_bytes = 0;     ///< retired submaps' occupied voxels
-  [[nodiscard]] std::size_t total() const { return awareness_bytes + local_bytes + global_bytes; }
+  std::size_t planning_bytes = 0;   ///< snapshots (window copies, 2D grids) and ESDF buffers
+  [[nodiscard]] std::size_t total() const {
+    return awareness_bytes + local_bytes + global_bytes + planning_bytes;
+  }
 };
 
 /// Everything the engine counts. Frames: in = accepted + rejected_*; dropped counts accepted
@@ -67,6 +71,7 @@ struct EngineStats {
   MemoryUsage memory;
   std::size_t global_voxels = 0;
   std::size_t global_submaps = 0;
+  PlanningStats planning;      ///< snapshots, 2D grid and ESDF (not part of `total`)
 };
 
 /// Severity of an engine log message.
@@ -87,8 +92,13 @@ class MapEngine {
   FrameStatus submit(PointCloudFrame frame);
   /// The same for a depth image; it is back-projected on the awareness stage.
   FrameStatus submit(DepthFrame frame);
-  /// Waits until every queued frame is mapped (no-op in synchronous mode).
+  /// Waits until every queued frame is mapped and its planning layers are published (no-op in
+  /// synchronous mode).
   void flush();
+
+  /// What planners read: the latest snapshot of the local window, 2D grid and ESDF. Safe to call
+  /// from any thread at any time; keep the pointer for a planning cycle (see MapSnapshot).
+  [[nodiscard]] std::shared_ptr<const MapSnapshot> snapshot() const { return planning_.snapshot(); }
 
   [[nodiscard]] EngineStats stats() const;
   [[nodiscard]] const MapConfig& config() const { return config_; }
@@ -119,6 +129,8 @@ class MapEngine {
   AwarenessStage awareness_;
   LocalMap local_;
   GlobalMap global_;
+  PlanningLayers planning_;
+  std::uint64_t frames_integrated_ = 0;  // local-global stage only
 
   // Statistics, guarded by stats_mutex_.
   mutable std::mutex stats_mutex_;

@@ -1,0 +1,303 @@
+#pragma once
+/// @file
+/// Exact signed Euclidean distance field (ESDF) over a dense box of the world voxel grid, for
+/// planners: distance to the nearest obstacle and its gradient at any point of the box.
+///
+/// Definition. A voxel is an *obstacle* when it is occupied, or unknown under
+/// `UnknownAs::kOccupied`; every other voxel is *non-obstacle*. With centre(v) the centre of
+/// voxel v in metres (see voxelCenter()):
+/// - for a non-obstacle voxel c: d(c) = + min over obstacle voxels o in the box of
+///   |centre(c) - centre(o)|;
+/// - for an obstacle voxel c: d(c) = - min over non-obstacle voxels f in the box of
+///   |centre(c) - centre(f)|.
+/// d is then clamped to [-max_distance_m, +max_distance_m]; a box with no obstacle voxel gives
+/// +max_distance_m everywhere and a box with no non-obstacle voxel gives -max_distance_m
+/// everywhere. Only voxels inside the box count: space outside the box is not seen, so it is
+/// neither obstacle nor free. An obstacle voxel next to a non-obstacle one has d = -resolution_m
+/// and that neighbour d = +resolution_m, so the interpolated field (below) crosses zero on the
+/// face between them.
+///
+/// Between cell centres the field is the trilinear interpolation of the 8 surrounding cell
+/// values; EsdfMap::query() returns it with its analytic gradient.
+///
+/// Algorithm: exact separable Euclidean distance transform on integer squared distances
+/// (Felzenszwalb & Huttenlocher, "Distance Transforms of Sampled Functions", 2012): a two-sweep
+/// 1D distance along x, then the lower envelope of parabolas along y and along z. The outside
+/// (distance to obstacles) and inside (distance to free space) transforms run in the same
+/// passes on one signed buffer, each evaluated only where it is needed. Squared distances beyond
+/// (max_distance_m / resolution_m)^2 are treated as infinite, which keeps the clamped result
+/// exact. Linear in the number of voxels; one sqrt (a table lookup) per voxel; no allocation
+/// after the first compute() of the largest box.
+
+#include "mlmap/core/config.h"
+#include "mlmap/core/types.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mlmap {
+
+/// Dense box of occupancy states on the world voxel grid (voxel i spans [i * res, (i + 1) * res)
+/// per axis). `states[(x * size.y() + y) * size.z() + z]` holds box-relative voxel (x, y, z),
+/// i.e. world voxel min_index + (x, y, z): x-major, z fastest (the local map's iteration order).
+struct OccupancyBox {
+  VoxelIndex min_index = VoxelIndex::Zero();       ///< world index of the first voxel
+  Eigen::Vector3i size = Eigen::Vector3i::Zero();  ///< voxels per axis
+  double resolution_m = 0.2;                       ///< voxel edge length [m]
+  std::vector<Occupancy> states;                   ///< size.prod() states, see above
+
+  /// Sets the box geometry and fills every voxel with `fill`.
+  void reset(const VoxelIndex& min_index_in, const Eigen::Vector3i& size_in, double resolution_m_in,
+             Occupancy fill = Occupancy::kUnknown) {
+    min_index = min_index_in;
+    size = size_in;
+    resolution_m = resolution_m_in;
+    states.assign(static_cast<std::size_t>(std::max(0, size.x())) *
+                      static_cast<std::size_t>(std::max(0, size.y())) *
+                      static_cast<std::size_t>(std::max(0, size.z())),
+                  fill);
+  }
+  /// True when the world voxel lies inside the box.
+  [[nodiscard]] bool contains(const VoxelIndex& world_index) const {
+    const VoxelIndex r = world_index - min_index;
+    return static_cast<unsigned>(r.x()) < static_cast<unsigned>(size.x()) &&
+           static_cast<unsigned>(r.y()) < static_cast<unsigned>(size.y()) &&
+           static_cast<unsigned>(r.z()) < static_cast<unsigned>(size.z());
+  }
+  /// Position in `states` of a world voxel inside the box.
+  [[nodiscard]] std::size_t offsetOf(const VoxelIndex& world_index) const {
+    const VoxelIndex r = world_index - min_index;
+    return (static_cast<std::size_t>(r.x()) * static_cast<std::size_t>(size.y()) +
+            static_cast<std::size_t>(r.y())) *
+               static_cast<std::size_t>(size.z()) +
+           static_cast<std::size_t>(r.z());
+  }
+  /// State of a world voxel inside the box.
+  [[nodiscard]] Occupancy& at(const VoxelIndex& world_index) {
+    return states[offsetOf(world_index)];
+  }
+  /// State of a world voxel inside the box.
+  [[nodiscard]] Occupancy at(const VoxelIndex& world_index) const {
+    return states[offsetOf(world_index)];
+  }
+};
+
+/// The signed distance field of one OccupancyBox (see the file comment for the definition).
+///
+/// compute() rebuilds the whole field; the const accessors may then be called concurrently from
+/// any number of threads. compute() itself must not run concurrently with anything else on the
+/// same object.
+class EsdfMap {
+ public:
+  /// Largest accepted box edge in voxels (keeps every squared distance in 32 bits).
+  static constexpr int kMaxCellsPerAxis = 16384;
+  /// Largest accepted box in voxels (about 2.3 GB of buffers at 9 bytes per voxel).
+  static constexpr std::int64_t kMaxCells = std::int64_t{1} << 28;
+
+  /// Result of query(): distance, gradient and whether they may be trusted.
+  struct Query {
+    /// Interpolated signed distance [m]; 0 outside the box.
+    double distance_m = 0.0;
+    /// d distance_m / d p_W (dimensionless); zero outside the box.
+    Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
+    /// True when p_W is inside the box and its voxel is known (free or occupied). Inside the box
+    /// but in an unknown voxel, distance_m and gradient are still filled in, with valid = false.
+    bool valid = false;
+  };
+
+  /// Throws std::invalid_argument listing every problem when `config` is not valid.
+  explicit EsdfMap(const EsdfConfig& config);
+
+  /// Recomputes the whole field from `box` (exact, linear time). Buffers are reused across calls.
+  /// Returns false, leaving the map empty (every query invalid), when the box is malformed:
+  /// a size below 1 or above kMaxCellsPerAxis, more than kMaxCells voxels, states.size() not
+  /// size.prod(), a resolution that is not finite and positive, or indices beyond +-2^30.
+  /// With num_threads > 1 the work is split over that many threads (created per call); the
+  /// result is bit-identical to one thread. std::bad_alloc propagates, leaving the map empty.
+  [[nodiscard]] bool compute(const OccupancyBox& box);
+
+  /// Trilinear distance and its analytic gradient at a world point (metres). The 8-cell stencil
+  /// is clamped at the box border so any point inside the box works: within half a voxel of a
+  /// box face the value is held constant across that face (gradient component 0 along its
+  /// normal). The value therefore always lies between the values of the 8 cells used.
+  /// valid = false outside the box or when the point's voxel is unknown. Allocation-free.
+  [[nodiscard]] Query query(const Eigen::Vector3d& p_W) const;
+
+  /// Cell value of a world voxel [m] (the value at its centre); NaN outside the box.
+  [[nodiscard]] float distanceAt(const VoxelIndex& world_index) const;
+  /// True when the world voxel lies inside the box of the last successful compute().
+  [[nodiscard]] bool contains(const VoxelIndex& world_index) const {
+    const VoxelIndex r = world_index - min_index_;
+    return static_cast<unsigned>(r.x()) < static_cast<unsigned>(size_.x()) &&
+           static_cast<unsigned>(r.y()) < static_cast<unsigned>(size_.y()) &&
+           static_cast<unsigned>(r.z()) < static_cast<unsigned>(size_.z());
+  }
+  /// True when the world voxel is inside the box and was unknown in the box given to compute().
+  [[nodiscard]] bool isUnknown(const VoxelIndex& world_index) const {
+    if (!contains(world_index)) return false;
+    const VoxelIndex r = world_index - min_index_;
+    return unknownBit(r.x(), r.y(), r.z());
+  }
+
+  /// True until the first successful compute() (and after a failed one).
+  [[nodiscard]] bool empty() const { return size_.prod() == 0; }
+  /// First voxel of the box (world index, inclusive).
+  [[nodiscard]] const VoxelIndex& minIndex() const { return min_index_; }
+  /// One past the last voxel of the box (world index).
+  [[nodiscard]] VoxelIndex maxIndex() const { return min_index_ + size_; }
+  /// Box size in voxels.
+  [[nodiscard]] const Eigen::Vector3i& size() const { return size_; }
+  /// Voxel edge length of the last successful compute() [m].
+  [[nodiscard]] double resolution_m() const { return resolution_m_; }
+  /// Lower corner of the box in W [m].
+  [[nodiscard]] Eigen::Vector3d minCorner_W() const {
+    return min_index_.cast<double>() * resolution_m_;
+  }
+  /// Upper corner of the box in W [m].
+  [[nodiscard]] Eigen::Vector3d maxCorner_W() const {
+    return maxIndex().cast<double>() * resolution_m_;
+  }
+  /// Cell values [m] in OccupancyBox order (x-major, z fastest), e.g. for publishing; empty
+  /// after a failed compute().
+  [[nodiscard]] const std::vector<float>& distances() const { return field_; }
+  /// The configuration in use.
+  [[nodiscard]] const EsdfConfig& config() const { return config_; }
+  /// Bytes held by the field (4 per voxel), the unknown mask (1 bit per voxel) and the reusable
+  /// work buffers (4 per voxel and a little per thread).
+  [[nodiscard]] std::size_t memoryBytes() const;
+
+ private:
+  /// Per-thread scratch (envelopes sized for the longest y or z line + 1).
+  struct Scratch {
+    std::vector<std::int32_t> runs;           ///< starts of the same-sign runs of a line
+    std::vector<std::int32_t> out_sites;      ///< outside-transform envelope: positions
+    std::vector<std::int32_t> in_sites;       ///< inside-transform envelope: positions
+    std::vector<std::int32_t> out_keys32;     ///< f(q) + q^2 when it fits 32-bit arithmetic
+    std::vector<std::int32_t> in_keys32;      ///< (inside envelope)
+    std::vector<std::int64_t> out_keys64;     ///< f(q) + q^2 otherwise
+    std::vector<std::int64_t> in_keys64;      ///< (inside envelope)
+    std::vector<std::int32_t> near_free;      ///< x pass: nearest non-obstacle x per (y, z)
+    std::vector<std::int32_t> near_obstacle;  ///< x pass: nearest obstacle x per (y, z)
+  };
+
+  /// Unknown bit of box-relative voxel (x, y, z) (inside the box).
+  [[nodiscard]] bool unknownBit(int x, int y, int z) const {
+    const std::size_t bit = static_cast<std::size_t>(x) * slab_bits_ +
+                            static_cast<std::size_t>(y) * static_cast<std::size_t>(size_.z()) +
+                            static_cast<std::size_t>(z);
+    return ((unknown_bits_[bit >> 6] >> (bit & 63)) & 1u) != 0;
+  }
+  [[nodiscard]] std::size_t offsetOf(const VoxelIndex& world_index) const {
+    const VoxelIndex r = world_index - min_index_;
+    return (static_cast<std::size_t>(r.x()) * static_cast<std::size_t>(size_.y()) +
+            static_cast<std::size_t>(r.y())) *
+               static_cast<std::size_t>(size_.z()) +
+           static_cast<std::size_t>(r.z());
+  }
+  /// Empties the map (size 0, every query invalid); keeps the buffers' capacity.
+  void clear();
+  /// Pass 1 (x, two sweeps) over the y rows [y_begin, y_end): 1D distances.
+  void sweepRows(const OccupancyBox& box, int y_begin, int y_end, Scratch* scratch);
+  /// Pass 2 (y) and pass 3 (z) over the x slabs [x_begin, x_end), writing the field in metres
+  /// and the unknown mask.
+  void transformSlabs(const OccupancyBox& box, int x_begin, int x_end, Scratch* scratch);
+  /// Signed squared voxel distance (or +-inf_) -> clamped signed metres, without the table.
+  /// Needs cap_sq_, inf_ and resolution_m_ of the current compute().
+  [[nodiscard]] float slowMetres(std::int32_t value) const;
+
+  EsdfConfig config_;
+  VoxelIndex min_index_ = VoxelIndex::Zero();
+  Eigen::Vector3i size_ = Eigen::Vector3i::Zero();
+  double resolution_m_ = 1.0;
+  double inv_resolution_ = 1.0;
+  std::ptrdiff_t step_x_ = 0;  ///< query stencil: offset of the +1 neighbour in x (0 if nx = 1)
+  std::ptrdiff_t step_y_ = 0;  ///< ... in y
+  std::ptrdiff_t step_z_ = 0;  ///< ... in z
+
+  std::int32_t cap_sq_ = 0;  ///< squared voxel distances above this clamp to max_distance_m
+  std::int32_t inf_ = 1;     ///< cap_sq_ + 1: "farther than the cap" in the work buffer
+  std::int32_t cap_d_ = 0;   ///< largest d with d * d <= cap_sq_
+  bool narrow_keys_ = true;  ///< the envelope arithmetic of every line fits 32 bits
+  std::vector<float> field_;           ///< clamped signed distance per voxel [m]
+  /// One bit per voxel, set where the box voxel was unknown; each x slab starts on a new
+  /// 64-bit word (slab_bits_ apart) so that threads never share a word.
+  std::vector<std::uint64_t> unknown_bits_;
+  std::size_t slab_bits_ = 0;
+  std::vector<std::int32_t> work_;     ///< +d^2 (non-obstacle) / -d^2 (obstacle), in voxels
+  std::vector<float> metres_table_;    ///< slowMetres(v) at [v + inf_] (when the cap is small)
+  std::vector<Scratch> scratch_;       ///< one per thread
+};
+
+inline EsdfMap::Query EsdfMap::query(const Eigen::Vector3d& p_W) const {
+  Query q;
+  // Continuous grid coordinates; the range test also rejects NaN before any float->int cast.
+  constexpr double kMaxGrid = 1073741824.0;  // 2^30
+  const double gx = p_W.x() * inv_resolution_;
+  const double gy = p_W.y() * inv_resolution_;
+  const double gz = p_W.z() * inv_resolution_;
+  if (!(std::abs(gx) < kMaxGrid && std::abs(gy) < kMaxGrid && std::abs(gz) < kMaxGrid)) return q;
+  const int vx = floorToInt(gx) - min_index_.x();
+  const int vy = floorToInt(gy) - min_index_.y();
+  const int vz = floorToInt(gz) - min_index_.z();
+  if (static_cast<unsigned>(vx) >= static_cast<unsigned>(size_.x()) ||
+      static_cast<unsigned>(vy) >= static_cast<unsigned>(size_.y()) ||
+      static_cast<unsigned>(vz) >= static_cast<unsigned>(size_.z())) {
+    return q;
+  }
+  const std::ptrdiff_t ny = size_.y();
+  const std::ptrdiff_t nz = size_.z();
+  q.valid = !unknownBit(vx, vy, vz);
+
+  // Cell-centre coordinates: cell i has its centre at i. Lower stencil corner clamped to
+  // [0, n - 2] (0 when n = 1), fraction clamped to [0, 1].
+  const double ux = gx - (static_cast<double>(min_index_.x()) + 0.5);
+  const double uy = gy - (static_cast<double>(min_index_.y()) + 0.5);
+  const double uz = gz - (static_cast<double>(min_index_.z()) + 0.5);
+  const int ix = std::clamp(floorToInt(ux), 0, std::max(size_.x() - 2, 0));
+  const int iy = std::clamp(floorToInt(uy), 0, std::max(size_.y() - 2, 0));
+  const int iz = std::clamp(floorToInt(uz), 0, std::max(size_.z() - 2, 0));
+  const double rx = ux - ix;
+  const double ry = uy - iy;
+  const double rz = uz - iz;
+  const double tx = std::clamp(rx, 0.0, 1.0);
+  const double ty = std::clamp(ry, 0.0, 1.0);
+  const double tz = std::clamp(rz, 0.0, 1.0);
+  const double kx = rx == tx ? inv_resolution_ : 0.0;  // d t / d p, 0 where held constant
+  const double ky = ry == ty ? inv_resolution_ : 0.0;
+  const double kz = rz == tz ? inv_resolution_ : 0.0;
+
+  const float* c = field_.data() + (ix * ny + iy) * nz + iz;
+  const double c000 = c[0];
+  const double c001 = c[step_z_];
+  const double c010 = c[step_y_];
+  const double c011 = c[step_y_ + step_z_];
+  const double c100 = c[step_x_];
+  const double c101 = c[step_x_ + step_z_];
+  const double c110 = c[step_x_ + step_y_];
+  const double c111 = c[step_x_ + step_y_ + step_z_];
+  const double dz00 = c001 - c000;
+  const double dz01 = c011 - c010;
+  const double dz10 = c101 - c100;
+  const double dz11 = c111 - c110;
+  const double c00 = c000 + tz * dz00;
+  const double c01 = c010 + tz * dz01;
+  const double c10 = c100 + tz * dz10;
+  const double c11 = c110 + tz * dz11;
+  const double dy0 = c01 - c00;
+  const double dy1 = c11 - c10;
+  const double c0 = c00 + ty * dy0;
+  const double c1 = c10 + ty * dy1;
+  q.distance_m = c0 + tx * (c1 - c0);
+  q.gradient.x() = (c1 - c0) * kx;
+  q.gradient.y() = (dy0 + tx * (dy1 - dy0)) * ky;
+  const double dz0 = dz00 + ty * (dz01 - dz00);
+  const double dz1 = dz10 + ty * (dz11 - dz10);
+  q.gradient.z() = (dz0 + tx * (dz1 - dz0)) * kz;
+  return q;
+}
+
+}  // namespace mlmap

@@ -1,0 +1,114 @@
+#pragma once
+/// @file
+/// Builds what planners read (local window copy, projected 2D grid, ESDF) after each mapped frame
+/// and publishes it as MapSnapshot objects. Owned by the engine; update() runs on the local-global
+/// stage, snapshot() on any thread.
+///
+/// The ESDF is recomputed only when a voxel state changed in the window or the box moved, and at
+/// most at esdf.max_rate_hz (stamps of the frames). With `own_thread` it is computed on a planning
+/// thread of its own so that mapping never waits for it; a frame that finds the thread busy
+/// replaces the one waiting (latest only, counted). Otherwise it runs inside update().
+
+#include "mlmap/core/config.h"
+#include "mlmap/global/global_map.h"
+#include "mlmap/local/local_map.h"
+#include "mlmap/planning/map_snapshot.h"
+
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace mlmap {
+
+/// Costs and counts of the planning layers. Times in ms per update.
+struct PlanningStats {
+  std::uint64_t snapshots = 0;           ///< snapshots published
+  std::uint64_t grid_updates = 0;        ///< 2D grid rebuilt
+  std::uint64_t esdf_updates = 0;        ///< ESDF recomputed
+  std::uint64_t esdf_unchanged = 0;      ///< skipped: no state change in the window, box still
+  std::uint64_t esdf_rate_limited = 0;   ///< skipped: sooner than 1 / esdf.max_rate_hz
+  std::uint64_t esdf_superseded = 0;     ///< planning thread busy: a newer frame took its place
+  double last_snapshot_ms = 0.0;         ///< copying the window and publishing
+  double last_grid_ms = 0.0;
+  double last_esdf_ms = 0.0;
+  double max_snapshot_ms = 0.0;
+  double max_grid_ms = 0.0;
+  double max_esdf_ms = 0.0;
+  std::uint64_t esdf_frame = 0;          ///< frame the published ESDF was computed from
+  std::size_t snapshot_bytes = 0;        ///< window copies and grids, pooled
+  std::size_t esdf_bytes = 0;            ///< fields and work buffers, pooled
+};
+
+/// See the file comment.
+class PlanningLayers {
+ public:
+  PlanningLayers(const MapConfig& config, bool own_thread);
+  ~PlanningLayers();
+  PlanningLayers(const PlanningLayers&) = delete;
+  PlanningLayers& operator=(const PlanningLayers&) = delete;
+
+  /// After frame `frame` was integrated: copy, rebuild what is due, publish.
+  void update(const LocalMap& local, const GlobalMap& global, std::uint64_t frame, double stamp_s,
+              const Transform& T_W_B);
+  /// The latest snapshot (never null). Thread-safe; cheap (a shared-pointer copy under a mutex).
+  [[nodiscard]] std::shared_ptr<const MapSnapshot> snapshot() const;
+  /// Waits until an ESDF handed to the planning thread is published.
+  void flush();
+  [[nodiscard]] PlanningStats stats() const;
+  /// Bytes held by the published layers and the reusable buffers.
+  [[nodiscard]] std::size_t memoryBytes() const;
+
+ private:
+  struct EsdfJob {
+    std::shared_ptr<const LocalWindow> window;
+    Eigen::Vector3d body_W = Eigen::Vector3d::Zero();
+    std::uint64_t frame = 0;
+  };
+  std::shared_ptr<const EsdfMap> computeEsdf(const EsdfJob& job);
+  void publish(std::shared_ptr<const LocalWindow> window, std::shared_ptr<const ProjectedGrid> grid,
+               std::shared_ptr<const EsdfMap> esdf, bool keep_esdf, std::uint64_t frame,
+               double stamp_s, const Transform& T_W_B);
+  void planningLoop();
+  [[nodiscard]] VoxelIndex esdfBoxMin(const LocalWindow& window, const Eigen::Vector3d& body_W,
+                                      Eigen::Vector3i* size) const;
+  template <typename T>
+  static std::shared_ptr<T> reuse(std::vector<std::shared_ptr<T>>* pool);
+
+  MapConfig config_;
+  bool own_thread_;
+
+  mutable std::mutex snapshot_mutex_;  // guards snapshot_ (pointer swap only)
+  std::shared_ptr<const MapSnapshot> snapshot_;
+
+  // Local-global stage only.
+  std::vector<std::shared_ptr<LocalWindow>> window_pool_;
+  std::vector<std::shared_ptr<ProjectedGrid>> grid_pool_;
+  std::shared_ptr<const ProjectedGrid> grid_;
+  std::uint64_t grid_changes_ = ~std::uint64_t{0};
+  VoxelIndex grid_window_min_ = VoxelIndex::Zero();
+  int grid_band_k0_ = 0;
+  int grid_band_k1_ = 0;
+  std::uint64_t esdf_changes_ = ~std::uint64_t{0};
+  VoxelIndex esdf_box_min_ = VoxelIndex::Zero();
+  double esdf_stamp_s_ = -1e300;
+
+  // ESDF computation (planning thread, or the local-global stage without one).
+  std::vector<std::shared_ptr<EsdfMap>> esdf_pool_;
+  OccupancyBox esdf_box_;
+
+  mutable std::mutex stats_mutex_;
+  PlanningStats stats_;
+
+  std::mutex job_mutex_;
+  std::condition_variable job_cv_;
+  bool has_job_ = false;
+  bool busy_ = false;
+  bool stopping_ = false;
+  EsdfJob job_;
+  std::thread thread_;
+};
+
+}  // namespace mlmap

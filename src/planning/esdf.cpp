@@ -1,0 +1,502 @@
+#include "mlmap/planning/esdf.h"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <system_error>
+#include <thread>
+
+namespace mlmap {
+namespace {
+
+/// Rows (y) swept together by the x pass.
+constexpr int kRowBlock = 32;
+/// Largest metres lookup table (entries); larger caps use sqrt directly.
+constexpr std::size_t kMaxLookupEntries = std::size_t{1} << 16;
+/// Largest accepted |index| of the box corners (keeps grid coordinates far from int overflow).
+constexpr std::int64_t kMaxAbsIndex = std::int64_t{1} << 30;
+
+template <typename T>
+void require(bool ok, const std::string& key, const std::string& what, const T& value,
+             std::vector<std::string>* errors) {
+  if (ok) return;
+  std::ostringstream message;
+  message << key << ": " << what << " (got " << value << ")";
+  errors->push_back(message.str());
+}
+
+std::string joinErrors(const std::vector<std::string>& errors) {
+  std::ostringstream out;
+  out << "invalid ESDF configuration:";
+  for (const std::string& e : errors) out << "\n  " << e;
+  return out.str();
+}
+
+const EsdfConfig& validated(const EsdfConfig& config) {
+  std::vector<std::string> errors;
+  config.validate(&errors);
+  if (!errors.empty()) throw std::invalid_argument(joinErrors(errors));
+  return config;
+}
+
+bool wellFormed(const OccupancyBox& box) {
+  for (int a = 0; a < 3; ++a) {
+    if (box.size[a] < 1 || box.size[a] > EsdfMap::kMaxCellsPerAxis) return false;
+    const std::int64_t lo = box.min_index[a];
+    if (lo < -kMaxAbsIndex || lo + box.size[a] > kMaxAbsIndex) return false;
+  }
+  const std::int64_t cells = std::int64_t{box.size.x()} * box.size.y() * box.size.z();
+  return cells <= EsdfMap::kMaxCells && box.states.size() == static_cast<std::size_t>(cells) &&
+         std::isfinite(box.resolution_m) && box.resolution_m > 0.0;
+}
+
+/// Runs work(thread, begin, end) over [0, count) cut into `threads` contiguous ranges; the
+/// caller's thread takes range 0. Deterministic: a range's result does not depend on the others.
+template <typename Work>
+void parallelFor(int count, int threads, const Work& work) {
+  threads = std::max(1, std::min(threads, count));
+  const auto begin = [&](int t) {
+    return static_cast<int>(static_cast<std::int64_t>(count) * t / threads);
+  };
+  std::vector<std::thread> pool;
+  pool.reserve(static_cast<std::size_t>(threads - 1));
+  for (int t = 1; t < threads; ++t) {
+    const int b = begin(t);
+    const int e = begin(t + 1);
+    try {
+      pool.emplace_back([&work, t, b, e] { work(t, b, e); });
+    } catch (const std::system_error&) {
+      work(t, b, e);  // no thread available: do that range here (it owns scratch t alone)
+    }
+  }
+  work(0, 0, begin(1));
+  for (std::thread& thread : pool) thread.join();
+}
+
+/// Bit i set when byte i of p[0..8) is 0 (Occupancy::kUnknown).
+inline std::uint64_t zeroBytes8(const std::uint8_t* p) {
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  std::uint64_t t = 0;
+  std::memcpy(&t, p, sizeof(t));
+  constexpr std::uint64_t kLow7 = 0x7F7F7F7F7F7F7F7FULL;
+  const std::uint64_t nonzero = ((t & kLow7) + kLow7) | t;  // high bit of a byte: byte != 0
+  const std::uint64_t zero = (~nonzero >> 7) & 0x0101010101010101ULL;
+  return (zero * 0x0102040810204080ULL) >> 56;  // bit 8i -> bit i
+#else
+  std::uint64_t bits = 0;
+  for (int b = 0; b < 8; ++b) bits |= static_cast<std::uint64_t>(p[b] == 0 ? 1 : 0) << b;
+  return bits;
+#endif
+}
+
+// ---- Pass 1 (x): two sweeps of the 1D distance to the nearest voxel of the other kind ----
+
+/// Forward sweep over `n` consecutive voxels (a run of z, and of y when rows are blocked) at x:
+/// updates the last non-obstacle / obstacle x of each and writes the signed distance to the last
+/// voxel of the other kind (negative for obstacles). Branch-free, so it vectorises.
+void sweepForward(const std::uint8_t* __restrict states, std::int32_t* __restrict a,
+                  std::int32_t* __restrict last_free, std::int32_t* __restrict last_obstacle, int n,
+                  std::int32_t x, std::int32_t unknown_is_obstacle) {
+  constexpr auto kUnknown = static_cast<std::uint8_t>(Occupancy::kUnknown);
+  constexpr auto kOccupied = static_cast<std::uint8_t>(Occupancy::kOccupied);
+  for (int z = 0; z < n; ++z) {
+    const std::int32_t state = states[z];
+    const std::int32_t is_unknown = state == kUnknown ? 1 : 0;
+    const bool obstacle = ((state == kOccupied ? 1 : 0) | (is_unknown & unknown_is_obstacle)) != 0;
+    const std::int32_t lf = last_free[z];
+    const std::int32_t lo = last_obstacle[z];
+    last_free[z] = obstacle ? lf : x;
+    last_obstacle[z] = obstacle ? x : lo;
+    a[z] = obstacle ? lf - x : x - lo;  // signed: negative for obstacles
+  }
+}
+
+/// Backward sweep of pass 1: the same towards higher x, keeping the nearer side, capped (+-inf
+/// beyond cap_d). The distance is left unsquared (the y pass squares it).
+void sweepBackward(std::int32_t* __restrict a, std::int32_t* __restrict next_free,
+                   std::int32_t* __restrict next_obstacle, int n, std::int32_t x,
+                   std::int32_t cap_d, std::int32_t inf) {
+  for (int z = 0; z < n; ++z) {
+    // Branch-free so that it vectorises: m is all ones for an obstacle, 0 otherwise.
+    const std::int32_t left = a[z];
+    const std::int32_t m = -static_cast<std::int32_t>(left < 0);
+    const std::int32_t nf = next_free[z];
+    const std::int32_t no = next_obstacle[z];
+    next_free[z] = (nf & m) | (x & ~m);
+    next_obstacle[z] = (x & m) | (no & ~m);
+    const std::int32_t from_left = (left ^ m) - m;  // |left|
+    const std::int32_t from_right = ((nf & m) | (no & ~m)) - x;
+    const std::int32_t d = std::min(from_left, from_right);
+    const std::int32_t v = d <= cap_d ? d : inf;  // distance, not squared: the y pass squares it
+    a[z] = (v ^ m) - m;                            // -v for obstacles
+  }
+}
+
+// ---- Passes 2 (y) and 3 (z): exact 1D transforms by lower envelopes of parabolas ----
+
+/// One line of the work buffer with a stride between its voxels (the y pass).
+struct StridedLine {
+  std::int32_t* base;
+  std::ptrdiff_t stride;
+  std::int32_t& operator[](std::ptrdiff_t i) const { return base[i * stride]; }
+};
+
+/// One thread's envelope buffers, each at least one longer than the longest line.
+template <typename Key>
+struct LineBuffers {
+  std::int32_t* runs;       ///< starts of the same-sign runs of the line
+  std::int32_t* out_sites;  ///< outside-transform envelope: positions ...
+  Key* out_keys;            ///< ... and f(q) + q^2
+  std::int32_t* in_sites;   ///< inside-transform envelope
+  Key* in_keys;
+};
+
+/// Adds the parabola (x - q)^2 + f, stored as key = f + q^2, to a lower envelope whose sites
+/// are increasing and < q, dropping the parabolas it hides (Felzenszwalb & Huttenlocher, with
+/// the intersection test cross-multiplied so that it needs no division).
+template <typename Key>
+inline void pushParabola(std::int32_t* sites, Key* keys, int* count, std::int32_t q, Key key) {
+  int m = *count;
+  while (m >= 2) {
+    const Key top = keys[m - 1];
+    // intersection(q, top) <= intersection(below, top): `top` is nowhere the lowest.
+    if ((key - top) * static_cast<Key>(sites[m - 1] - sites[m - 2]) <=
+        (top - keys[m - 2]) * static_cast<Key>(q - sites[m - 1])) {
+      --m;
+    } else {
+      break;
+    }
+  }
+  sites[m] = q;
+  keys[m] = key;
+  *count = m + 1;
+}
+
+/// Writes the envelope's minimum at the positions of the runs [runs[r], runs[r + 1]) for
+/// r = first, first + 2, ... (the runs of one sign), times `sign` (+1 or -1). Positions where
+/// the minimum exceeds `cap` are skipped: they hold no site, so they already hold +-inf.
+/// sites[count], keys[count] must hold a sentinel that never wins, at position >= n + cap_d.
+template <typename Key, typename Line>
+inline void evaluateRuns(Line line, const std::int32_t* runs, int run_count, int first,
+                         const std::int32_t* sites, const Key* keys, std::int32_t cap,
+                         std::int32_t cap_d, std::int32_t sign) {
+  int k = 0;
+  for (int r = first; r < run_count; r += 2) {
+    const int end = runs[r + 1];
+    int p = runs[r];
+    while (p < end) {
+      const Key two_p = static_cast<Key>(2 * p);
+      Key best = keys[k] - two_p * sites[k];
+      for (;;) {
+        const Key next = keys[k + 1] - two_p * sites[k + 1];
+        if (next > best) break;
+        best = next;
+        ++k;
+      }
+      const Key d = best + static_cast<Key>(p) * p;
+      if (d <= cap) {
+        line[p] = sign * static_cast<std::int32_t>(d);
+        ++p;
+        continue;
+      }
+      // Nothing within reach here. Parabolas before k lose to k from here on, k itself (when
+      // p >= sites[k]) only grows, and the others are more than cap_d away until their site is
+      // within cap_d: jump there.
+      const int next_site = p < sites[k] ? sites[k] : sites[k + 1];
+      p = std::max(p + 1, next_site - cap_d);
+    }
+  }
+}
+
+/// The exact 1D transform of one line of n signed values, in place: each non-obstacle value
+/// becomes min over j of f_out(j) + (p - j)^2 and each obstacle value -(min over j of
+/// f_in(j) + (p - j)^2), capped (+-inf above cap).
+/// - Outside transform: its sites are the non-obstacle voxels with a finite value, and the
+///   obstacle voxels (f = 0) next to a non-obstacle voxel of the line (the inner voxels of an
+///   obstacle run are never nearer to a non-obstacle voxel than the run's ends). It is evaluated
+///   at non-obstacle voxels only.
+/// - Inside transform: the same with the roles swapped.
+/// With kSquare the finite inputs are distances (the x pass's output), else squared distances.
+template <typename Key, typename Line, bool kSquare>
+void transformLine(Line line, int n, std::int32_t cap, std::int32_t cap_d,
+                   const LineBuffers<Key>& buffers) {
+  std::int32_t* runs = buffers.runs;
+  std::int32_t* out_sites = buffers.out_sites;
+  Key* out_keys = buffers.out_keys;
+  std::int32_t* in_sites = buffers.in_sites;
+  Key* in_keys = buffers.in_keys;
+  const std::int32_t inf = cap + 1;
+  int out_count = 0;
+  int in_count = 0;
+  int run_count = 0;
+  int j = 0;
+  while (j < n) {
+    const int l = j;
+    runs[run_count++] = l;
+    if (line[j] > 0) {
+      if (l > 0) pushParabola<Key>(in_sites, in_keys, &in_count, l, static_cast<Key>(l) * l);
+      for (; j < n && line[j] > 0; ++j) {
+        const std::int32_t v = line[j];
+        if (v < inf) {
+          const Key f = kSquare ? static_cast<Key>(v) * v : static_cast<Key>(v);
+          pushParabola<Key>(out_sites, out_keys, &out_count, j, static_cast<Key>(j) * j + f);
+        }
+      }
+      const int r = j - 1;
+      if (j < n && (r != l || l == 0)) {
+        pushParabola<Key>(in_sites, in_keys, &in_count, r, static_cast<Key>(r) * r);
+      }
+    } else {
+      if (l > 0) pushParabola<Key>(out_sites, out_keys, &out_count, l, static_cast<Key>(l) * l);
+      for (; j < n && line[j] < 0; ++j) {
+        const std::int32_t v = line[j];
+        if (v > -inf) {
+          const Key f = kSquare ? static_cast<Key>(v) * v : -static_cast<Key>(v);
+          pushParabola<Key>(in_sites, in_keys, &in_count, j, static_cast<Key>(j) * j + f);
+        }
+      }
+      const int r = j - 1;
+      if (j < n && (r != l || l == 0)) {
+        pushParabola<Key>(out_sites, out_keys, &out_count, r, static_cast<Key>(r) * r);
+      }
+    }
+  }
+  runs[run_count] = n;
+  const int first_free = line[0] > 0 ? 0 : 1;
+  // Sentinel: far right and above every real value at every position of the line.
+  const int sentinel_site = n + cap_d + 1;
+  const Key sentinel_key = static_cast<Key>(cap) + static_cast<Key>(n) * n +
+                           2 * static_cast<Key>(n) * sentinel_site + 1;
+  if (out_count > 0) {
+    out_sites[out_count] = sentinel_site;
+    out_keys[out_count] = sentinel_key;
+    evaluateRuns<Key, Line>(line, runs, run_count, first_free, out_sites, out_keys, cap, cap_d, 1);
+  }
+  if (in_count > 0) {
+    in_sites[in_count] = sentinel_site;
+    in_keys[in_count] = sentinel_key;
+    evaluateRuns<Key, Line>(line, runs, run_count, 1 - first_free, in_sites, in_keys, cap, cap_d,
+                            -1);
+  }
+}
+
+/// Pass 2 (y, stride nz) and pass 3 (z, contiguous) over one x slab of ny x nz voxels. Pass 2
+/// also squares the x pass's distances, so it runs even when ny = 1. The slab stays in cache.
+template <typename Key>
+void transformSlab(std::int32_t* a, int ny, int nz, std::int32_t cap, std::int32_t cap_d,
+                   const LineBuffers<Key>& buffers) {
+  for (int z = 0; z < nz; ++z) {
+    transformLine<Key, StridedLine, true>(StridedLine{a + z, nz}, ny, cap, cap_d, buffers);
+  }
+  if (nz == 1) return;
+  for (int y = 0; y < ny; ++y) {
+    transformLine<Key, std::int32_t*, false>(a + static_cast<std::ptrdiff_t>(y) * nz, nz, cap,
+                                             cap_d, buffers);
+  }
+}
+
+}  // namespace
+
+EsdfMap::EsdfMap(const EsdfConfig& config) : config_(validated(config)) {}
+
+void EsdfMap::clear() {
+  min_index_.setZero();
+  size_.setZero();
+  step_x_ = step_y_ = step_z_ = 0;
+  field_.clear();  // capacities are kept
+  unknown_bits_.clear();
+  slab_bits_ = 0;
+}
+
+bool EsdfMap::compute(const OccupancyBox& box) {
+  if (!wellFormed(box)) {
+    clear();
+    return false;
+  }
+  min_index_ = box.min_index;
+  size_ = box.size;
+  resolution_m_ = box.resolution_m;
+  inv_resolution_ = 1.0 / resolution_m_;
+  const int nx = size_.x();
+  const int ny = size_.y();
+  const int nz = size_.z();
+  step_z_ = nz > 1 ? 1 : 0;
+  step_y_ = ny > 1 ? nz : 0;
+  step_x_ = nx > 1 ? static_cast<std::ptrdiff_t>(ny) * nz : 0;
+
+  // Squared voxel distances above cap_sq_ are beyond max_distance_m (cap_sq_ > (max / res)^2),
+  // or beyond anything the box holds; the work buffer stores them as inf_.
+  const double max_cells = config_.max_distance_m / resolution_m_;
+  const double box_sq = static_cast<double>(nx - 1) * (nx - 1) +
+                        static_cast<double>(ny - 1) * (ny - 1) +
+                        static_cast<double>(nz - 1) * (nz - 1);
+  cap_sq_ = static_cast<std::int32_t>(std::min(std::floor(max_cells * max_cells), box_sq) + 1.0);
+  inf_ = cap_sq_ + 1;
+  const std::int64_t longest_line = std::max(ny, nz);
+  narrow_keys_ = (cap_sq_ + longest_line * longest_line) * longest_line < (std::int64_t{1} << 29);
+  cap_d_ = static_cast<std::int32_t>(std::sqrt(static_cast<double>(cap_sq_)));
+  while (std::int64_t{cap_d_ + 1} * (cap_d_ + 1) <= cap_sq_) ++cap_d_;
+  while (std::int64_t{cap_d_} * cap_d_ > cap_sq_) --cap_d_;
+  if (2 * static_cast<std::size_t>(inf_) + 1 <= kMaxLookupEntries) {
+    metres_table_.resize(2 * static_cast<std::size_t>(inf_) + 1);
+    for (std::int32_t v = -inf_; v <= inf_; ++v) {
+      metres_table_[static_cast<std::size_t>(v + inf_)] = slowMetres(v);
+    }
+  } else {
+    metres_table_.clear();
+  }
+
+  // Buffers (grown only; a failed allocation leaves the map empty).
+  const int threads = std::max(1, config_.num_threads);
+  try {
+    const std::size_t cells = box.states.size();
+    field_.resize(cells);
+    const std::size_t slab_words = (static_cast<std::size_t>(ny) * nz + 63) / 64;
+    slab_bits_ = slab_words * 64;
+    unknown_bits_.resize(slab_words * static_cast<std::size_t>(nx));
+    work_.resize(cells);
+    if (scratch_.size() < static_cast<std::size_t>(threads)) {
+      scratch_.resize(static_cast<std::size_t>(threads));
+    }
+    const std::size_t longest = static_cast<std::size_t>(std::max(ny, nz)) + 1;
+    const std::size_t row_block =
+        static_cast<std::size_t>(std::min(kRowBlock, ny)) * static_cast<std::size_t>(nz);
+    for (Scratch& s : scratch_) {
+      if (s.near_free.size() < row_block) {
+        s.near_free.resize(row_block);
+        s.near_obstacle.resize(row_block);
+      }
+      if (s.runs.size() >= longest) continue;
+      for (std::vector<std::int32_t>* v :
+           {&s.runs, &s.out_sites, &s.in_sites, &s.out_keys32, &s.in_keys32}) {
+        v->resize(longest);
+      }
+      s.out_keys64.resize(longest);
+      s.in_keys64.resize(longest);
+    }
+  } catch (...) {
+    clear();
+    throw;
+  }
+
+  parallelFor(ny, threads, [this, &box](int t, int b, int e) {
+    sweepRows(box, b, e, &scratch_[static_cast<std::size_t>(t)]);
+  });
+  parallelFor(nx, threads, [this, &box](int t, int b, int e) {
+    transformSlabs(box, b, e, &scratch_[static_cast<std::size_t>(t)]);
+  });
+  return true;
+}
+
+void EsdfMap::sweepRows(const OccupancyBox& box, int y_begin, int y_end, Scratch* scratch) {
+  const int nx = size_.x();
+  const int ny = size_.y();
+  const int nz = size_.z();
+  const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
+  const std::int32_t unknown_is_obstacle = config_.unknown_as == UnknownAs::kOccupied ? 1 : 0;
+  constexpr std::int32_t kFar = std::int32_t{1} << 24;  // beyond any cap_d
+  std::int32_t* near_free = scratch->near_free.data();
+  std::int32_t* near_obstacle = scratch->near_obstacle.data();
+  const auto* states = reinterpret_cast<const std::uint8_t*>(box.states.data());
+  // kRowBlock rows (y) at a time: each x step then reads one contiguous run of the arrays.
+  for (int y0 = y_begin; y0 < y_end; y0 += kRowBlock) {
+    const std::size_t row = static_cast<std::size_t>(y0) * nz;
+    const int n = std::min(kRowBlock, y_end - y0) * nz;
+    std::fill(near_free, near_free + n, -kFar);
+    std::fill(near_obstacle, near_obstacle + n, -kFar);
+    for (int x = 0; x < nx; ++x) {
+      const std::size_t base = static_cast<std::size_t>(x) * slab + row;
+      sweepForward(states + base, work_.data() + base, near_free, near_obstacle, n, x,
+                   unknown_is_obstacle);
+    }
+    std::fill(near_free, near_free + n, nx - 1 + kFar);
+    std::fill(near_obstacle, near_obstacle + n, nx - 1 + kFar);
+    for (int x = nx - 1; x >= 0; --x) {
+      sweepBackward(work_.data() + static_cast<std::size_t>(x) * slab + row, near_free,
+                    near_obstacle, n, x, cap_d_, inf_);
+    }
+  }
+}
+
+void EsdfMap::transformSlabs(const OccupancyBox& box, int x_begin, int x_end, Scratch* scratch) {
+  const int ny = size_.y();
+  const int nz = size_.z();
+  const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
+  const float* table = metres_table_.empty() ? nullptr : metres_table_.data() + inf_;
+  const auto* states = reinterpret_cast<const std::uint8_t*>(box.states.data());
+  constexpr auto kUnknown = static_cast<std::uint8_t>(Occupancy::kUnknown);
+  for (int x = x_begin; x < x_end; ++x) {
+    const std::size_t first = static_cast<std::size_t>(x) * slab;
+    std::int32_t* a = work_.data() + first;
+    if (narrow_keys_) {
+      transformSlab<std::int32_t>(a, ny, nz, cap_sq_, cap_d_,
+                                  {scratch->runs.data(), scratch->out_sites.data(),
+                                   scratch->out_keys32.data(), scratch->in_sites.data(),
+                                   scratch->in_keys32.data()});
+    } else {
+      transformSlab<std::int64_t>(a, ny, nz, cap_sq_, cap_d_,
+                                  {scratch->runs.data(), scratch->out_sites.data(),
+                                   scratch->out_keys64.data(), scratch->in_sites.data(),
+                                   scratch->in_keys64.data()});
+    }
+    // Metres and the unknown mask, contiguous.
+    float* field = field_.data() + first;
+    if (table != nullptr) {
+      for (std::size_t i = 0; i < slab; ++i) field[i] = table[a[i]];
+    } else {
+      for (std::size_t i = 0; i < slab; ++i) field[i] = slowMetres(a[i]);
+    }
+    // The unknown bits of the slab (its own words).
+    const std::uint8_t* slab_states = states + first;
+    std::uint64_t* words = unknown_bits_.data() + static_cast<std::size_t>(x) * (slab_bits_ / 64);
+    std::size_t i = 0;
+    for (; i + 64 <= slab; i += 64) {
+      std::uint64_t word = 0;
+      for (std::size_t g = 0; g < 64; g += 8) word |= zeroBytes8(slab_states + i + g) << g;
+      words[i / 64] = word;
+    }
+    if (i < slab) {
+      std::uint64_t word = 0;
+      for (std::size_t b = 0; i + b < slab; ++b) {
+        word |= static_cast<std::uint64_t>(slab_states[i + b] == kUnknown ? 1 : 0) << b;
+      }
+      words[i / 64] = word;
+    }
+  }
+}
+
+float EsdfMap::slowMetres(std::int32_t value) const {
+  const float max_m = static_cast<float>(config_.max_distance_m);
+  const std::int32_t magnitude = value < 0 ? -value : value;
+  const float m =
+      magnitude >= inf_
+          ? max_m
+          : std::min(static_cast<float>(std::sqrt(static_cast<double>(magnitude)) * resolution_m_),
+                     max_m);
+  return value < 0 ? -m : m;
+}
+
+float EsdfMap::distanceAt(const VoxelIndex& world_index) const {
+  if (!contains(world_index)) return std::numeric_limits<float>::quiet_NaN();
+  return field_[offsetOf(world_index)];
+}
+
+std::size_t EsdfMap::memoryBytes() const {
+  std::size_t bytes = field_.capacity() * sizeof(float) +
+                      unknown_bits_.capacity() * sizeof(std::uint64_t) +
+                      work_.capacity() * sizeof(std::int32_t) +
+                      metres_table_.capacity() * sizeof(float) +
+                      scratch_.capacity() * sizeof(Scratch);
+  for (const Scratch& s : scratch_) {
+    bytes += (s.runs.capacity() + s.out_sites.capacity() + s.in_sites.capacity() +
+              s.out_keys32.capacity() + s.in_keys32.capacity() + s.near_free.capacity() +
+              s.near_obstacle.capacity()) *
+                 sizeof(std::int32_t) +
+             (s.out_keys64.capacity() + s.in_keys64.capacity()) * sizeof(std::int64_t);
+  }
+  return bytes;
+}
+
+}  // namespace mlmap

@@ -1,0 +1,281 @@
+#include "mlmap/planning/planning_layers.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <utility>
+
+namespace mlmap {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+}  // namespace
+
+PlanningLayers::PlanningLayers(const MapConfig& config, bool own_thread)
+    : config_(config),
+      own_thread_(own_thread && config.esdf.enabled),
+      snapshot_(std::make_shared<const MapSnapshot>(nullptr, nullptr, nullptr, 0, 0.0,
+                                                    Transform::Identity())) {
+  if (own_thread_) thread_ = std::thread([this] { planningLoop(); });
+}
+
+PlanningLayers::~PlanningLayers() {
+  {
+    std::lock_guard<std::mutex> lock(job_mutex_);
+    stopping_ = true;
+  }
+  job_cv_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+// A buffer of the pool that no published snapshot holds any more, or a new one. Only the owner
+// thread of the pool calls this; a use count of 1 (the pool's own) cannot grow behind its back
+// because readers only reach buffers through snapshots.
+template <typename T>
+std::shared_ptr<T> PlanningLayers::reuse(std::vector<std::shared_ptr<T>>* pool) {
+  for (const std::shared_ptr<T>& p : *pool) {
+    if (p.use_count() == 1) return p;
+  }
+  pool->push_back(std::make_shared<T>());
+  return pool->back();
+}
+
+std::shared_ptr<const MapSnapshot> PlanningLayers::snapshot() const {
+  std::lock_guard<std::mutex> lock(snapshot_mutex_);
+  return snapshot_;
+}
+
+void PlanningLayers::publish(std::shared_ptr<const LocalWindow> window,
+                             std::shared_ptr<const ProjectedGrid> grid,
+                             std::shared_ptr<const EsdfMap> esdf, bool keep_esdf,
+                             std::uint64_t frame, double stamp_s, const Transform& T_W_B) {
+  std::shared_ptr<const MapSnapshot> old;
+  std::lock_guard<std::mutex> lock(snapshot_mutex_);
+  // Read and replace under one lock, so that a field the planning thread published meanwhile
+  // is carried over rather than lost.
+  std::uint64_t esdf_frame = frame;
+  if (keep_esdf) {
+    esdf = snapshot_->esdfPtr();
+    esdf_frame = snapshot_->esdfFrame();
+  }
+  old = std::exchange(snapshot_, std::make_shared<const MapSnapshot>(
+                                     std::move(window), std::move(grid), std::move(esdf), frame,
+                                     stamp_s, T_W_B, esdf_frame));
+}
+
+void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std::uint64_t frame,
+                            double stamp_s, const Transform& T_W_B) {
+  const Clock::time_point start = Clock::now();
+  const std::shared_ptr<LocalWindow> window = reuse(&window_pool_);
+  local.copyWindow(window.get());
+  const double copy_ms = msSince(start);
+  const std::uint64_t changes = local.counters().state_changes;
+  const Eigen::Vector3d body_W = T_W_B.translation();
+
+  // 2D grid: rebuilt when a state changed, the window moved or the band's layers moved.
+  double grid_ms = -1.0;
+  const ProjectedGridConfig& gc = config_.projected_grid;
+  if (gc.enabled) {
+    const double res = window->resolution_m;
+    const double offset = gc.relative_band ? body_W.z() : 0.0;
+    int band_k0 = 0;
+    int band_k1 = 0;
+    bandLayers(gc.band_min_m + offset, gc.band_max_m + offset, res, &band_k0, &band_k1);
+    if (grid_ == nullptr || changes != grid_changes_ || window->min_index != grid_window_min_ ||
+        band_k0 != grid_band_k0_ || band_k1 != grid_band_k1_ || gc.include_global) {
+      const Clock::time_point grid_start = Clock::now();
+      const std::shared_ptr<ProjectedGrid> grid = reuse(&grid_pool_);
+      projectToGrid(*window, &global, gc, body_W.z(), grid.get());
+      grid_ = grid;
+      grid_changes_ = changes;
+      grid_window_min_ = window->min_index;
+      grid_band_k0_ = band_k0;
+      grid_band_k1_ = band_k1;
+      grid_ms = msSince(grid_start);
+    }
+  }
+
+  // ESDF: due when something changed and the rate allows.
+  bool esdf_due = false;
+  bool unchanged = false;
+  bool rate_limited = false;
+  if (config_.esdf.enabled && window->size.prod() > 0) {
+    Eigen::Vector3i size;
+    const VoxelIndex box_min = esdfBoxMin(*window, body_W, &size);
+    unchanged = changes == esdf_changes_ && box_min == esdf_box_min_;
+    rate_limited = !unchanged && config_.esdf.max_rate_hz > 0.0 &&
+                   stamp_s - esdf_stamp_s_ < 1.0 / config_.esdf.max_rate_hz;
+    if (!unchanged && !rate_limited) {
+      esdf_due = true;
+      esdf_changes_ = changes;
+      esdf_box_min_ = box_min;
+      esdf_stamp_s_ = stamp_s;
+    }
+  }
+
+  std::shared_ptr<const EsdfMap> esdf;
+  double esdf_ms = -1.0;
+  const EsdfJob job{window, body_W, frame};
+  const bool compute_here = esdf_due && !own_thread_;
+  if (compute_here) {
+    const Clock::time_point esdf_start = Clock::now();
+    esdf = computeEsdf(job);
+    esdf_ms = msSince(esdf_start);
+  }
+  const Clock::time_point publish_start = Clock::now();
+  publish(window, grid_, std::move(esdf), /*keep_esdf=*/!compute_here, frame, stamp_s, T_W_B);
+  const double snapshot_ms = copy_ms + msSince(publish_start);
+  std::size_t bytes = 0;
+  for (const auto& w : window_pool_) bytes += w->log_odds.capacity() * sizeof(LogOddsQ);
+  for (const auto& g : grid_pool_) bytes += g->cells.capacity();
+  bool superseded = false;
+  if (esdf_due && own_thread_) {
+    {
+      std::lock_guard<std::mutex> lock(job_mutex_);
+      superseded = has_job_;
+      job_ = job;
+      has_job_ = true;
+    }
+    job_cv_.notify_all();
+  }
+
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  stats_.snapshot_bytes = bytes;
+  ++stats_.snapshots;
+  stats_.last_snapshot_ms = snapshot_ms;
+  stats_.max_snapshot_ms = std::max(stats_.max_snapshot_ms, snapshot_ms);
+  if (grid_ms >= 0.0) {
+    ++stats_.grid_updates;
+    stats_.last_grid_ms = grid_ms;
+    stats_.max_grid_ms = std::max(stats_.max_grid_ms, grid_ms);
+  }
+  if (esdf_ms >= 0.0) {
+    ++stats_.esdf_updates;
+    stats_.last_esdf_ms = esdf_ms;
+    stats_.max_esdf_ms = std::max(stats_.max_esdf_ms, esdf_ms);
+    stats_.esdf_frame = frame;
+  }
+  stats_.esdf_unchanged += unchanged ? 1 : 0;
+  stats_.esdf_rate_limited += rate_limited ? 1 : 0;
+  stats_.esdf_superseded += superseded ? 1 : 0;
+}
+
+VoxelIndex PlanningLayers::esdfBoxMin(const LocalWindow& window, const Eigen::Vector3d& body_W,
+                                      Eigen::Vector3i* size) const {
+  const double res = window.resolution_m;
+  VoxelIndex box_min = window.min_index;
+  *size = window.size;
+  const VoxelIndex body = voxelIndexOf(body_W, res);
+  for (int a = 0; a < 3; ++a) {
+    const double edge_m = config_.esdf.box_size_m[a];
+    if (!(edge_m > 0.0)) continue;  // 0: the whole window along this axis
+    const int cells = std::min(window.size[a], std::max(1, static_cast<int>(std::lround(edge_m / res))));
+    (*size)[a] = cells;
+    box_min[a] = std::clamp(body[a] - cells / 2, window.min_index[a],
+                            window.min_index[a] + window.size[a] - cells);
+  }
+  return box_min;
+}
+
+std::shared_ptr<const EsdfMap> PlanningLayers::computeEsdf(const EsdfJob& job) {
+  const LocalWindow& window = *job.window;
+  Eigen::Vector3i size;
+  const VoxelIndex box_min = esdfBoxMin(window, job.body_W, &size);
+  esdf_box_.reset(box_min, size, window.resolution_m);
+  const LogOddsModel& model = window.model;
+  Occupancy* out = esdf_box_.states.data();
+  for (int x = 0; x < size.x(); ++x) {
+    for (int y = 0; y < size.y(); ++y) {
+      const VoxelIndex first(box_min.x() + x, box_min.y() + y, box_min.z());
+      const VoxelIndex r = first - window.min_index;
+      const LogOddsQ* column =
+          window.log_odds.data() +
+          (static_cast<std::size_t>(r.x()) * static_cast<std::size_t>(window.size.y()) +
+           static_cast<std::size_t>(r.y())) *
+              static_cast<std::size_t>(window.size.z()) +
+          static_cast<std::size_t>(r.z());
+      for (int z = 0; z < size.z(); ++z) *out++ = model.state(column[z]);
+    }
+  }
+  std::shared_ptr<EsdfMap> esdf;
+  for (const std::shared_ptr<EsdfMap>& p : esdf_pool_) {
+    if (p.use_count() == 1) {
+      esdf = p;
+      break;
+    }
+  }
+  if (esdf == nullptr) {
+    esdf_pool_.push_back(std::make_shared<EsdfMap>(config_.esdf));
+    esdf = esdf_pool_.back();
+  }
+  const bool ok = esdf->compute(esdf_box_);
+  std::size_t bytes = esdf_box_.states.capacity() * sizeof(Occupancy);
+  for (const auto& e : esdf_pool_) bytes += e->memoryBytes();
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.esdf_bytes = bytes;
+  }
+  return ok ? esdf : nullptr;
+}
+
+void PlanningLayers::planningLoop() {
+  for (;;) {
+    EsdfJob job;
+    {
+      std::unique_lock<std::mutex> lock(job_mutex_);
+      job_cv_.wait(lock, [&] { return stopping_ || has_job_; });
+      if (stopping_) return;
+      job = std::move(job_);
+      job_ = EsdfJob{};
+      has_job_ = false;
+      busy_ = true;
+    }
+    const Clock::time_point start = Clock::now();
+    std::shared_ptr<const EsdfMap> esdf = computeEsdf(job);
+    const double ms = msSince(start);
+    {
+      // The newest window and grid with the new field.
+      std::shared_ptr<const MapSnapshot> old;
+      std::lock_guard<std::mutex> lock(snapshot_mutex_);
+      const MapSnapshot& s = *snapshot_;
+      old = std::exchange(snapshot_, std::make_shared<const MapSnapshot>(
+                                         s.windowPtr(), s.gridPtr(), std::move(esdf), s.frame(),
+                                         s.stamp_s(), s.T_W_B(), job.frame));
+    }
+    {
+      std::lock_guard<std::mutex> lock(stats_mutex_);
+      ++stats_.esdf_updates;
+      stats_.last_esdf_ms = ms;
+      stats_.max_esdf_ms = std::max(stats_.max_esdf_ms, ms);
+      stats_.esdf_frame = job.frame;
+    }
+    {
+      std::lock_guard<std::mutex> lock(job_mutex_);
+      busy_ = false;
+    }
+    job_cv_.notify_all();
+  }
+}
+
+void PlanningLayers::flush() {
+  if (!own_thread_) return;
+  std::unique_lock<std::mutex> lock(job_mutex_);
+  job_cv_.wait(lock, [&] { return stopping_ || (!has_job_ && !busy_); });
+}
+
+PlanningStats PlanningLayers::stats() const {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  return stats_;
+}
+
+std::size_t PlanningLayers::memoryBytes() const {
+  std::lock_guard<std::mutex> lock(stats_mutex_);
+  return stats_.snapshot_bytes + stats_.esdf_bytes;
+}
+
+}  // namespace mlmap

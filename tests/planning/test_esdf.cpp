@@ -1,0 +1,596 @@
+#include "mlmap/planning/esdf.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+namespace mlmap {
+namespace {
+
+bool isObstacle(Occupancy s, UnknownAs unknown_as) {
+  return s == Occupancy::kOccupied ||
+         (s == Occupancy::kUnknown && unknown_as == UnknownAs::kOccupied);
+}
+
+/// The definition, literally: for every voxel the nearest voxel centre of the other kind over
+/// all pairs of the box (double precision), signed, unclamped; +-infinity when there is none.
+/// Costs (obstacle voxels) x (other voxels).
+std::vector<double> bruteForceUnclamped(const OccupancyBox& box, UnknownAs unknown_as) {
+  const std::size_t n = box.states.size();
+  std::vector<Eigen::Vector3d> centre(n);
+  std::vector<std::size_t> obstacles;
+  std::vector<std::size_t> others;
+  for (int x = 0; x < box.size.x(); ++x) {
+    for (int y = 0; y < box.size.y(); ++y) {
+      for (int z = 0; z < box.size.z(); ++z) {
+        const VoxelIndex g = box.min_index + VoxelIndex(x, y, z);
+        const std::size_t i = box.offsetOf(g);
+        centre[i] = voxelCenter(g, box.resolution_m);
+        (isObstacle(box.states[i], unknown_as) ? obstacles : others).push_back(i);
+      }
+    }
+  }
+  std::vector<double> out(n);
+  const auto nearest = [&](const std::vector<std::size_t>& from, const std::vector<std::size_t>& to,
+                           double sign) {
+    for (const std::size_t i : from) {
+      double best = std::numeric_limits<double>::infinity();
+      for (const std::size_t j : to) best = std::min(best, (centre[i] - centre[j]).squaredNorm());
+      out[i] = sign * std::sqrt(best);
+    }
+  };
+  nearest(others, obstacles, 1.0);
+  nearest(obstacles, others, -1.0);
+  return out;
+}
+
+double clampTo(double d, double max_m) { return std::max(-max_m, std::min(max_m, d)); }
+
+/// Compares every cell of `map` with the clamped reference: equal within float rounding, same sign.
+void expectMatches(const EsdfMap& map, const OccupancyBox& box,
+                   const std::vector<double>& unclamped, const std::string& what) {
+  const double max_m = map.config().max_distance_m;
+  int failures = 0;
+  for (int x = 0; x < box.size.x(); ++x) {
+    for (int y = 0; y < box.size.y(); ++y) {
+      for (int z = 0; z < box.size.z(); ++z) {
+        const VoxelIndex g = box.min_index + VoxelIndex(x, y, z);
+        const double expected = clampTo(unclamped[box.offsetOf(g)], max_m);
+        const double actual = map.distanceAt(g);
+        const bool ok = std::abs(actual - expected) <= 1e-5 * std::abs(expected) &&
+                        (actual < 0.0) == (expected < 0.0);
+        if (!ok && ++failures <= 5) {
+          ADD_FAILURE() << what << ": voxel (" << x << ", " << y << ", " << z << ") state "
+                        << toString(box.states[box.offsetOf(g)]) << ": got " << actual
+                        << ", expected " << expected;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(failures, 0) << what;
+}
+
+OccupancyBox randomBox(const VoxelIndex& min_index, const Eigen::Vector3i& size, double res,
+                       double p_occupied, double p_unknown, std::mt19937* rng) {
+  OccupancyBox box;
+  box.reset(min_index, size, res, Occupancy::kFree);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (Occupancy& s : box.states) {
+    const double r = u(*rng);
+    s = r < p_occupied ? Occupancy::kOccupied
+                       : (r < p_occupied + p_unknown ? Occupancy::kUnknown : Occupancy::kFree);
+  }
+  return box;
+}
+
+/// Fills the world-index box [lo, hi] (inclusive, clipped to the box) with `state`.
+void fill(OccupancyBox* box, const VoxelIndex& lo, const VoxelIndex& hi, Occupancy state) {
+  for (int x = lo.x(); x <= hi.x(); ++x) {
+    for (int y = lo.y(); y <= hi.y(); ++y) {
+      for (int z = lo.z(); z <= hi.z(); ++z) {
+        if (box->contains({x, y, z})) box->at({x, y, z}) = state;
+      }
+    }
+  }
+}
+
+EsdfConfig config(double max_m, UnknownAs unknown_as, int threads = 1) {
+  EsdfConfig c;
+  c.max_distance_m = max_m;
+  c.unknown_as = unknown_as;
+  c.num_threads = threads;
+  return c;
+}
+
+// Random scenes of several densities and sizes (non-cubic; more y rows than one 32-row block of
+// the x pass), negative and positive corners, both unknown policies, three clamps (one never
+// reached), one and two threads. One map per configuration is reused across the scenes.
+TEST(Esdf, RandomScenesMatchBruteForce) {
+  std::mt19937 rng(11);
+  struct Shape {
+    VoxelIndex min_index;
+    Eigen::Vector3i size;
+    double res;
+  };
+  const std::vector<Shape> shapes = {{{-7, 4, -12}, {17, 13, 9}, 0.2},
+                                     {{3, -20, 5}, {9, 11, 37}, 0.37},
+                                     {{-40, -1, 0}, {33, 5, 20}, 0.1},
+                                     {{-2, -50, 3}, {6, 35, 7}, 0.3}};
+  const std::vector<std::pair<double, double>> densities = {
+      {0.01, 0.0}, {0.05, 0.2}, {0.2, 0.1}, {0.45, 0.0}, {0.7, 0.2}};
+  struct Setup {
+    UnknownAs policy;
+    double max_m;
+    int threads;
+  };
+  std::vector<Setup> setups;
+  std::vector<EsdfMap> maps;
+  for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+    for (const double max_m : {0.45, 2.0, 1000.0}) {
+      for (const int threads : {1, 2}) {
+        setups.push_back({policy, max_m, threads});
+        maps.emplace_back(config(max_m, policy, threads));
+      }
+    }
+  }
+  for (const Shape& shape : shapes) {
+    for (const auto& [p_occ, p_unk] : densities) {
+      const OccupancyBox box =
+          randomBox(shape.min_index, shape.size, shape.res, p_occ, p_unk, &rng);
+      for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+        const std::vector<double> reference = bruteForceUnclamped(box, policy);
+        for (std::size_t i = 0; i < setups.size(); ++i) {
+          if (setups[i].policy != policy) continue;
+          ASSERT_TRUE(maps[i].compute(box));
+          std::ostringstream what;
+          what << "policy " << toString(policy) << ", max " << setups[i].max_m << " m, "
+               << setups[i].threads << " threads, size " << shape.size.transpose()
+               << ", occupied " << p_occ << ", unknown " << p_unk;
+          expectMatches(maps[i], box, reference, what.str());
+        }
+      }
+    }
+  }
+}
+
+TEST(Esdf, StructuredScenesMatchBruteForce) {
+  std::vector<std::pair<std::string, OccupancyBox>> scenes;
+  const VoxelIndex lo(-9, -6, -4);
+  const Eigen::Vector3i size(19, 14, 11);
+  OccupancyBox box;
+  box.reset(lo, size, 0.25, Occupancy::kFree);
+  scenes.push_back({"empty", box});
+  box.reset(lo, size, 0.25, Occupancy::kOccupied);
+  scenes.push_back({"all occupied", box});
+  box.reset(lo, size, 0.25, Occupancy::kUnknown);
+  scenes.push_back({"all unknown", box});
+  box.reset(lo, size, 0.25, Occupancy::kFree);
+  box.at({0, 0, 0}) = Occupancy::kOccupied;
+  scenes.push_back({"single occupied voxel", box});
+  box.reset(lo, size, 0.25, Occupancy::kOccupied);
+  box.at({1, -2, 3}) = Occupancy::kFree;
+  scenes.push_back({"single free voxel", box});
+  box.reset(lo, size, 0.25, Occupancy::kFree);
+  fill(&box, {2, -100, -100}, {3, 100, 100}, Occupancy::kOccupied);
+  scenes.push_back({"wall", box});
+  box.reset(lo, size, 0.25, Occupancy::kFree);
+  fill(&box, {-9, -6, -4}, {9, 7, -3}, Occupancy::kOccupied);  // floor
+  fill(&box, {-6, -3, -2}, {-2, 1, 3}, Occupancy::kOccupied);   // a solid block on it
+  fill(&box, {3, 2, 0}, {6, 5, 2}, Occupancy::kOccupied);       // a floating block
+  fill(&box, {7, -100, -100}, {100, 100, 100}, Occupancy::kUnknown);  // unseen slab
+  scenes.push_back({"boxes, floor and unknown slab", box});
+  box.reset({5, 5, 5}, {1, 1, 40}, 0.2, Occupancy::kFree);
+  box.at({5, 5, 20}) = Occupancy::kOccupied;
+  scenes.push_back({"z line", box});
+  box.reset({-30, 5, 5}, {40, 1, 1}, 0.2, Occupancy::kFree);
+  box.at({-3, 5, 5}) = Occupancy::kOccupied;
+  box.at({4, 5, 5}) = Occupancy::kUnknown;
+  scenes.push_back({"x line", box});
+  box.reset({5, -30, 5}, {1, 40, 1}, 0.2, Occupancy::kOccupied);
+  box.at({5, -20, 5}) = Occupancy::kFree;
+  scenes.push_back({"y line", box});
+  box.reset({2, 2, 2}, {1, 1, 1}, 0.2, Occupancy::kFree);
+  scenes.push_back({"one voxel", box});
+  box.reset({-3, -4, -5}, {30, 25, 1}, 0.2, Occupancy::kFree);
+  fill(&box, {5, -100, -100}, {5, 100, 100}, Occupancy::kOccupied);
+  fill(&box, {-100, 8, -100}, {100, 8, 100}, Occupancy::kOccupied);
+  scenes.push_back({"flat slab with two walls", box});
+
+  for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+    for (const double max_m : {0.6, 1.5, 100.0}) {
+      EsdfMap map(config(max_m, policy));
+      for (const auto& [name, scene] : scenes) {
+        ASSERT_TRUE(map.compute(scene)) << name;
+        expectMatches(map, scene, bruteForceUnclamped(scene, policy),
+                      name + " (" + toString(policy) + ", max " + std::to_string(max_m) + ")");
+      }
+    }
+  }
+}
+
+TEST(Esdf, DefinitionCornerCases) {
+  OccupancyBox box;
+  box.reset({0, 0, 0}, {10, 8, 6}, 0.2, Occupancy::kFree);
+  EsdfMap map(config(1.0, UnknownAs::kOccupied));
+  ASSERT_TRUE(map.compute(box));
+  EXPECT_FLOAT_EQ(map.distanceAt({3, 3, 3}), 1.0f);  // nothing to hit: +max
+  box.at({3, 3, 3}) = Occupancy::kOccupied;
+  ASSERT_TRUE(map.compute(box));
+  EXPECT_FLOAT_EQ(map.distanceAt({3, 3, 3}), -0.2f);  // obstacle next to free space: -res
+  EXPECT_FLOAT_EQ(map.distanceAt({4, 3, 3}), 0.2f);   // free next to it: +res
+  EXPECT_FLOAT_EQ(map.distanceAt({4, 4, 4}), static_cast<float>(0.2 * std::sqrt(3.0)));
+  EXPECT_FLOAT_EQ(map.distanceAt({9, 7, 5}), 1.0f);  // sqrt(36 + 16 + 4) * 0.2 = 1.497: clamped
+  EXPECT_TRUE(std::isnan(map.distanceAt({10, 0, 0})));
+  EXPECT_TRUE(std::isnan(map.distanceAt({-1, 0, 0})));
+  // Unknown voxels are obstacles only under kOccupied.
+  box.at({3, 3, 3}) = Occupancy::kUnknown;
+  ASSERT_TRUE(map.compute(box));
+  EXPECT_FLOAT_EQ(map.distanceAt({4, 3, 3}), 0.2f);
+  EXPECT_TRUE(map.isUnknown({3, 3, 3}));
+  EXPECT_FALSE(map.isUnknown({4, 3, 3}));
+  EsdfMap optimistic(config(1.0, UnknownAs::kFree));
+  ASSERT_TRUE(optimistic.compute(box));
+  EXPECT_FLOAT_EQ(optimistic.distanceAt({4, 3, 3}), 1.0f);
+}
+
+// A larger box than brute force over all pairs allows: compared with a search of every voxel
+// within 4 voxels, exact once clamped at 3.5 voxels; 38 y rows are two row blocks of the x pass.
+TEST(Esdf, LargeRandomSceneMatchesWindowedReference) {
+  std::mt19937 rng(3);
+  const OccupancyBox box = randomBox({-20, 7, -3}, {45, 38, 35}, 0.2, 0.03, 0.02, &rng);
+  const double max_m = 0.7;  // 3.5 voxels
+  for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+    EsdfMap map(config(max_m, policy, policy == UnknownAs::kOccupied ? 1 : 2));
+    ASSERT_TRUE(map.compute(box));
+    std::vector<char> obstacle_at(box.states.size());
+    for (std::size_t i = 0; i < box.states.size(); ++i) {
+      obstacle_at[i] = isObstacle(box.states[i], policy) ? 1 : 0;
+    }
+    const auto at = [&](int x, int y, int z) {
+      return obstacle_at[(static_cast<std::size_t>(x) * box.size.y() + y) * box.size.z() + z];
+    };
+    const int r = 4;
+    int failures = 0;
+    for (int x = 0; x < box.size.x(); ++x) {
+      for (int y = 0; y < box.size.y(); ++y) {
+        for (int z = 0; z < box.size.z(); ++z) {
+          const VoxelIndex g = box.min_index + VoxelIndex(x, y, z);
+          const bool obstacle = at(x, y, z) != 0;
+          int best_sq = std::numeric_limits<int>::max();
+          for (int ox = std::max(0, x - r); ox <= std::min(box.size.x() - 1, x + r); ++ox) {
+            for (int oy = std::max(0, y - r); oy <= std::min(box.size.y() - 1, y + r); ++oy) {
+              for (int oz = std::max(0, z - r); oz <= std::min(box.size.z() - 1, z + r); ++oz) {
+                if ((at(ox, oy, oz) != 0) == obstacle) continue;
+                const int sq = (ox - x) * (ox - x) + (oy - y) * (oy - y) + (oz - z) * (oz - z);
+                best_sq = std::min(best_sq, sq);
+              }
+            }
+          }
+          const double best = best_sq == std::numeric_limits<int>::max()
+                                  ? std::numeric_limits<double>::infinity()
+                                  : std::sqrt(static_cast<double>(best_sq)) * box.resolution_m;
+          const double expected = clampTo(obstacle ? -best : best, max_m);
+          const double actual = map.distanceAt(g);
+          const bool ok = std::abs(actual - expected) <= 1e-5 * std::abs(expected) &&
+                          (actual < 0.0) == (expected < 0.0);
+          if (!ok && ++failures <= 5) {
+            ADD_FAILURE() << "voxel " << g.transpose() << ": got " << actual << ", expected "
+                          << expected;
+          }
+        }
+      }
+    }
+    EXPECT_EQ(failures, 0);
+  }
+}
+
+// Lines so long and a clamp so far that the envelope needs 64-bit arithmetic and the metres
+// table is not used; sparse obstacles keep the brute force cheap.
+TEST(Esdf, LongLinesAndFarClampMatchBruteForce) {
+  std::mt19937 rng(8);
+  OccupancyBox box = randomBox({-3, 11, -700}, {2, 20, 900}, 0.1, 0.0008, 0.0004, &rng);
+  for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+    for (const double max_m : {3.0, 1000.0}) {
+      EsdfMap map(config(max_m, policy, 2));
+      ASSERT_TRUE(map.compute(box));
+      expectMatches(map, box, bruteForceUnclamped(box, policy),
+                    std::string("long lines, ") + toString(policy) + ", max " +
+                        std::to_string(max_m));
+    }
+  }
+}
+
+TEST(Esdf, TwoThreadsAreBitIdenticalToOne) {
+  std::mt19937 rng(7);
+  std::vector<OccupancyBox> boxes;
+  boxes.push_back(randomBox({-30, -20, -5}, {64, 48, 40}, 0.1, 0.02, 0.05, &rng));
+  boxes.push_back(randomBox({0, 0, 0}, {3, 70, 17}, 0.2, 0.3, 0.1, &rng));
+  OccupancyBox sparse;
+  sparse.reset({-10, -10, -10}, {40, 33, 21}, 0.2, Occupancy::kFree);
+  sparse.at({0, 0, 0}) = Occupancy::kOccupied;
+  boxes.push_back(sparse);
+  for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+    EsdfMap one(config(1.5, policy, 1));
+    EsdfMap two(config(1.5, policy, 2));
+    EsdfMap three(config(1.5, policy, 3));
+    for (const OccupancyBox& box : boxes) {
+      ASSERT_TRUE(one.compute(box));
+      ASSERT_TRUE(two.compute(box));
+      ASSERT_TRUE(three.compute(box));
+      ASSERT_EQ(one.distances().size(), box.states.size());
+      ASSERT_EQ(two.distances().size(), box.states.size());
+      EXPECT_EQ(std::memcmp(one.distances().data(), two.distances().data(),
+                            box.states.size() * sizeof(float)),
+                0);
+      EXPECT_EQ(std::memcmp(one.distances().data(), three.distances().data(),
+                            box.states.size() * sizeof(float)),
+                0);
+      // The unknown mask too (each thread writes its own slabs of it).
+      for (int x = 0; x < box.size.x(); ++x) {
+        for (int y = 0; y < box.size.y(); ++y) {
+          for (int z = 0; z < box.size.z(); ++z) {
+            const VoxelIndex g = box.min_index + VoxelIndex(x, y, z);
+            const bool unknown = box.at(g) == Occupancy::kUnknown;
+            ASSERT_EQ(one.isUnknown(g), unknown);
+            ASSERT_EQ(two.isUnknown(g), unknown);
+            ASSERT_EQ(three.isUnknown(g), unknown);
+          }
+        }
+      }
+    }
+  }
+}
+
+TEST(Esdf, RecomputingReusesBuffersWithoutStaleValues) {
+  std::mt19937 rng(5);
+  const OccupancyBox big = randomBox({-5, -5, -5}, {30, 30, 30}, 0.2, 0.1, 0.1, &rng);
+  const OccupancyBox small = randomBox({2, 3, 4}, {7, 5, 9}, 0.3, 0.2, 0.1, &rng);
+  EsdfMap reused(config(1.0, UnknownAs::kOccupied, 2));
+  ASSERT_TRUE(reused.compute(big));
+  const std::size_t bytes = reused.memoryBytes();
+  EXPECT_GE(bytes, big.states.size() * 8);
+  ASSERT_TRUE(reused.compute(small));
+  EXPECT_EQ(reused.memoryBytes(), bytes);  // no reallocation for a smaller box
+  EsdfMap fresh(config(1.0, UnknownAs::kOccupied, 2));
+  ASSERT_TRUE(fresh.compute(small));
+  ASSERT_EQ(reused.distances().size(), small.states.size());
+  EXPECT_EQ(std::memcmp(reused.distances().data(), fresh.distances().data(),
+                        small.states.size() * sizeof(float)),
+            0);
+  EXPECT_EQ(reused.size(), small.size);
+  EXPECT_EQ(reused.minIndex(), small.min_index);
+  EXPECT_EQ(reused.maxIndex(), small.min_index + small.size);
+  EXPECT_DOUBLE_EQ(reused.resolution_m(), 0.3);
+}
+
+TEST(Esdf, TrilinearValueEqualsCellValueAtCentres) {
+  std::mt19937 rng(2);
+  const OccupancyBox box = randomBox({-4, 6, -2}, {12, 9, 7}, 0.15, 0.15, 0.1, &rng);
+  EsdfMap map(config(0.6, UnknownAs::kOccupied));
+  ASSERT_TRUE(map.compute(box));
+  for (int x = 0; x < box.size.x(); ++x) {
+    for (int y = 0; y < box.size.y(); ++y) {
+      for (int z = 0; z < box.size.z(); ++z) {
+        const VoxelIndex g = box.min_index + VoxelIndex(x, y, z);
+        const EsdfMap::Query q = map.query(voxelCenter(g, box.resolution_m));
+        EXPECT_NEAR(q.distance_m, map.distanceAt(g), 1e-9) << g.transpose();
+      }
+    }
+  }
+}
+
+// Central differences of query() at random points away from the kinks of the interpolation
+// (cell-centre planes, where the stencil changes) and from the box faces.
+TEST(Esdf, GradientMatchesFiniteDifferences) {
+  std::mt19937 rng(9);
+  const OccupancyBox box = randomBox({-6, -3, 2}, {14, 11, 9}, 0.2, 0.08, 0.05, &rng);
+  EsdfMap map(config(1.0, UnknownAs::kOccupied));
+  ASSERT_TRUE(map.compute(box));
+  const double res = box.resolution_m;
+  const double h = 1e-4 * res;
+  std::uniform_real_distribution<double> frac(0.05, 0.95);
+  int checked = 0;
+  int nonzero = 0;
+  for (int i = 0; i < 2000; ++i) {
+    // Cell-centre coordinate u in [-0.45, n - 0.55] with frac(u) in [0.05, 0.95].
+    Eigen::Vector3d p;
+    for (int a = 0; a < 3; ++a) {
+      std::uniform_int_distribution<int> cell(-1, box.size[a] - 1);
+      const double u = cell(rng) + frac(rng);
+      if (u < -0.45 || u > box.size[a] - 0.55) {
+        p[a] = std::numeric_limits<double>::quiet_NaN();
+        continue;
+      }
+      p[a] = (box.min_index[a] + 0.5 + u) * res;
+    }
+    if (!p.allFinite()) continue;
+    const EsdfMap::Query q = map.query(p);
+    ASSERT_TRUE(map.contains(voxelIndexOf(p, res)));
+    for (int a = 0; a < 3; ++a) {
+      Eigen::Vector3d step = Eigen::Vector3d::Zero();
+      step[a] = h;
+      const double fd = (map.query(p + step).distance_m - map.query(p - step).distance_m) / (2 * h);
+      EXPECT_NEAR(q.gradient[a], fd, 1e-6) << "axis " << a << " at " << p.transpose();
+      if (std::abs(q.gradient[a]) > 1e-3) ++nonzero;
+    }
+    ++checked;
+  }
+  EXPECT_GT(checked, 500);
+  EXPECT_GT(nonzero, 300);
+}
+
+// Within half a voxel of a box face the stencil is clamped: the value is that at the border
+// cell-centre plane and the gradient has no component along the face normal.
+TEST(Esdf, BorderHalfCellsHoldTheBorderValue) {
+  std::mt19937 rng(4);
+  const OccupancyBox box = randomBox({-3, 5, -8}, {9, 7, 6}, 0.25, 0.15, 0.1, &rng);
+  EsdfMap map(config(0.8, UnknownAs::kOccupied));
+  ASSERT_TRUE(map.compute(box));
+  const Eigen::Vector3d lo = map.minCorner_W();
+  const Eigen::Vector3d hi = map.maxCorner_W();
+  const double res = box.resolution_m;
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::uniform_real_distribution<double> half(0.01, 0.49);
+  for (int i = 0; i < 300; ++i) {
+    const int axis = i % 3;
+    const bool upper = (i / 3) % 2 == 1;
+    Eigen::Vector3d p = lo + Eigen::Vector3d(u(rng), u(rng), u(rng)).cwiseProduct(hi - lo);
+    p[axis] = upper ? hi[axis] - half(rng) * res : lo[axis] + half(rng) * res;
+    Eigen::Vector3d on_plane = p;
+    on_plane[axis] = upper ? hi[axis] - 0.5 * res : lo[axis] + 0.5 * res;
+    const EsdfMap::Query q = map.query(p);
+    const EsdfMap::Query r = map.query(on_plane);
+    EXPECT_NEAR(q.distance_m, r.distance_m, 1e-9) << p.transpose();
+    EXPECT_EQ(q.gradient[axis], 0.0) << p.transpose();
+  }
+}
+
+TEST(Esdf, WallGivesUnitGradientAwayFromIt) {
+  OccupancyBox box;
+  box.reset({-10, -5, -5}, {30, 10, 10}, 0.1, Occupancy::kFree);
+  fill(&box, {0, -100, -100}, {0, 100, 100}, Occupancy::kOccupied);  // wall x in [0, 0.1)
+  EsdfMap map(config(1.0, UnknownAs::kOccupied));
+  ASSERT_TRUE(map.compute(box));
+  for (const double x : {0.33, 0.52, 0.87}) {
+    const EsdfMap::Query q = map.query({x, 0.013, -0.21});
+    ASSERT_TRUE(q.valid);
+    EXPECT_NEAR(q.distance_m, x - 0.05, 1e-6);
+    EXPECT_NEAR(q.gradient.x(), 1.0, 1e-5);
+    EXPECT_NEAR(q.gradient.y(), 0.0, 1e-9);
+    EXPECT_NEAR(q.gradient.z(), 0.0, 1e-9);
+  }
+  const EsdfMap::Query behind = map.query({-0.47, 0.2, 0.3});
+  EXPECT_NEAR(behind.distance_m, 0.52, 1e-6);
+  EXPECT_NEAR(behind.gradient.x(), -1.0, 1e-5);
+  const EsdfMap::Query clamped = map.query({0.92 + 0.5, 0.0, 0.0});
+  EXPECT_NEAR(clamped.distance_m, 1.0, 1e-6);
+  EXPECT_NEAR(clamped.gradient.norm(), 0.0, 1e-9);
+}
+
+TEST(Esdf, ValidOnlyInsideTheBoxAndInKnownVoxels) {
+  OccupancyBox box;
+  box.reset({-3, 2, -1}, {6, 5, 4}, 0.5, Occupancy::kFree);
+  box.at({-3, 2, -1}) = Occupancy::kOccupied;
+  box.at({1, 4, 1}) = Occupancy::kUnknown;
+  box.at({2, 6, 2}) = Occupancy::kOccupied;
+  EsdfMap map(config(2.0, UnknownAs::kOccupied));
+  EXPECT_TRUE(map.empty());
+  EXPECT_FALSE(map.query({0.1, 1.1, 0.1}).valid);  // nothing computed yet
+  ASSERT_TRUE(map.compute(box));
+  EXPECT_FALSE(map.empty());
+  for (int x = -3; x < 3; ++x) {
+    for (int y = 2; y < 7; ++y) {
+      for (int z = -1; z < 3; ++z) {
+        const VoxelIndex g(x, y, z);
+        const Eigen::Vector3d c = voxelCenter(g, 0.5);
+        const bool unknown = box.at(g) == Occupancy::kUnknown;
+        EXPECT_EQ(map.query(c).valid, !unknown) << g.transpose();
+        // Corners of the voxel (the lower one belongs to it).
+        EXPECT_EQ(map.query(g.cast<double>() * 0.5).valid, !unknown) << g.transpose();
+      }
+    }
+  }
+  const EsdfMap::Query in_unknown = map.query(voxelCenter({1, 4, 1}, 0.5));
+  EXPECT_FALSE(in_unknown.valid);
+  EXPECT_FLOAT_EQ(static_cast<float>(in_unknown.distance_m), -0.5f);  // still filled in
+  const Eigen::Vector3d lo = map.minCorner_W();
+  const Eigen::Vector3d hi = map.maxCorner_W();
+  EXPECT_TRUE(lo.isApprox(Eigen::Vector3d(-1.5, 1.0, -0.5)));
+  EXPECT_TRUE(hi.isApprox(Eigen::Vector3d(1.5, 3.5, 1.5)));
+  EXPECT_TRUE(map.query(lo).valid);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const Eigen::Vector3d& p :
+       {Eigen::Vector3d(hi), Eigen::Vector3d(hi.x() - 1e-3, hi.y() - 1e-3, hi.z()),
+        Eigen::Vector3d(lo.x() - 1e-9, 2.0, 0.0), Eigen::Vector3d(0.0, 3.6, 0.0),
+        Eigen::Vector3d(0.0, 2.0, -0.51), Eigen::Vector3d(nan, 2.0, 0.0),
+        Eigen::Vector3d(0.0, std::numeric_limits<double>::infinity(), 0.0),
+        Eigen::Vector3d(1e300, 2.0, 0.0)}) {
+    const EsdfMap::Query q = map.query(p);
+    EXPECT_FALSE(q.valid) << p.transpose();
+    EXPECT_EQ(q.distance_m, 0.0);
+    EXPECT_EQ(q.gradient, Eigen::Vector3d::Zero());
+  }
+}
+
+TEST(Esdf, MalformedBoxIsRejectedAndLeavesTheMapEmpty) {
+  EsdfMap map(config(1.0, UnknownAs::kOccupied));
+  OccupancyBox box;
+  box.reset({0, 0, 0}, {4, 4, 4}, 0.2, Occupancy::kFree);
+  ASSERT_TRUE(map.compute(box));
+  OccupancyBox bad = box;
+  bad.states.pop_back();
+  EXPECT_FALSE(map.compute(bad));
+  EXPECT_TRUE(map.empty());
+  EXPECT_FALSE(map.query({0.3, 0.3, 0.3}).valid);
+  EXPECT_TRUE(std::isnan(map.distanceAt({1, 1, 1})));
+  bad = box;
+  bad.resolution_m = 0.0;
+  EXPECT_FALSE(map.compute(bad));
+  bad.resolution_m = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_FALSE(map.compute(bad));
+  bad.reset({0, 0, 0}, {4, 0, 4}, 0.2);
+  EXPECT_FALSE(map.compute(bad));
+  bad.reset({0, 0, 0}, {4, -2, 4}, 0.2);
+  EXPECT_FALSE(map.compute(bad));
+  bad.reset({0, 0, 0}, {EsdfMap::kMaxCellsPerAxis + 1, 1, 1}, 0.2);
+  EXPECT_FALSE(map.compute(bad));
+  bad.reset({2147483600, 0, 0}, {4, 4, 4}, 0.2);
+  EXPECT_FALSE(map.compute(bad));
+  EXPECT_TRUE(map.compute(box));
+  EXPECT_TRUE(map.query({0.3, 0.3, 0.3}).valid);
+}
+
+TEST(EsdfConfig, DefaultsAreValid) {
+  std::vector<std::string> errors;
+  EsdfConfig{}.validate(&errors);
+  EXPECT_TRUE(errors.empty());
+  EXPECT_EQ(EsdfConfig{}.unknown_as, UnknownAs::kOccupied);
+}
+
+TEST(EsdfConfig, BadValuesNameTheKey) {
+  const auto problems = [](const EsdfConfig& c) {
+    std::vector<std::string> errors;
+    c.validate(&errors);
+    return errors;
+  };
+  for (const double bad : {0.0, -1.0, std::numeric_limits<double>::quiet_NaN(),
+                           std::numeric_limits<double>::infinity()}) {
+    EsdfConfig c;
+    c.max_distance_m = bad;
+    const std::vector<std::string> errors = problems(c);
+    ASSERT_EQ(errors.size(), 1u) << bad;
+    EXPECT_EQ(errors[0].rfind("esdf.max_distance_m: ", 0), 0u) << errors[0];
+    EXPECT_NE(errors[0].find("(got "), std::string::npos) << errors[0];
+  }
+  for (const int bad : {0, -3, 65}) {
+    EsdfConfig c;
+    c.num_threads = bad;
+    const std::vector<std::string> errors = problems(c);
+    ASSERT_EQ(errors.size(), 1u) << bad;
+    EXPECT_EQ(errors[0].rfind("esdf.num_threads: ", 0), 0u) << errors[0];
+    EXPECT_NE(errors[0].find("(got " + std::to_string(bad) + ")"), std::string::npos) << errors[0];
+  }
+  EsdfConfig c;
+  c.unknown_as = static_cast<UnknownAs>(7);
+  c.max_distance_m = -2.0;
+  c.num_threads = 0;
+  const std::vector<std::string> errors = problems(c);
+  ASSERT_EQ(errors.size(), 3u);
+  EXPECT_EQ(errors[1].rfind("esdf.unknown_as: ", 0), 0u) << errors[1];
+  try {
+    EsdfMap map(c);
+    ADD_FAILURE() << "an invalid config must throw";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("esdf.max_distance_m"), std::string::npos) << what;
+    EXPECT_NE(what.find("esdf.num_threads"), std::string::npos) << what;
+  }
+}
+
+}  // namespace
+}  // namespace mlmap
