@@ -10,6 +10,7 @@
 
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -42,23 +43,40 @@ struct Row {
   std::string name;
   double points;
   EngineStats stats;
+  std::vector<double> snapshot_ms, grid_ms, esdf_ms;  // planning layers, per update
 };
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5)];
+}
 
 Row run(const Case& c, const std::vector<DepthFrame>& frames, int repeats) {
   MapEngine engine(c.config);
   double points = 0.0;
   double stamp = 0.0;
+  Row row;
+  PlanningStats last;
   for (int r = 0; r < repeats; ++r) {
     for (DepthFrame f : frames) {
       f.stamp_s = (stamp += 0.1);
       f.T_B_S = c.config.sensor.T_B_S();
       engine.submit(std::move(f));
+      const PlanningStats p = engine.stats().planning;
+      if (p.snapshots > last.snapshots) row.snapshot_ms.push_back(p.last_snapshot_ms);
+      if (p.grid_updates > last.grid_updates) row.grid_ms.push_back(p.last_grid_ms);
+      if (p.esdf_updates > last.esdf_updates) row.esdf_ms.push_back(p.last_esdf_ms);
+      last = p;
     }
   }
   const EngineStats s = engine.stats();
   points = static_cast<double>(s.points.points_in - s.points.rejected_non_finite) /
            static_cast<double>(std::max<std::uint64_t>(s.frames_mapped, 1));
-  return {c.name, points, s};
+  row.name = c.name;
+  row.points = points;
+  row.stats = s;
+  return row;
 }
 
 void print(const Row& r, std::FILE* json, bool last) {
@@ -146,6 +164,16 @@ int main(int argc, char** argv) {
       rows.push_back(run({name, c}, real, repeats));
       print(rows.back(), nullptr, false);
     }
+  }
+  std::printf("\nplanning layers after each frame (ms; snapshot = window copy + publish):\n");
+  std::printf("%-34s %15s %15s %15s %8s\n", "case", "snapshot", "2D grid", "ESDF", "ESDF");
+  std::printf("%-34s %7s %7s %7s %7s %7s %7s %8s\n", "", "median", "p99", "median", "p99",
+              "median", "p99", "updates");
+  for (const Row& r : rows) {
+    std::printf("%-34s %7.3f %7.3f %7.3f %7.3f %7.2f %7.2f %8zu\n", r.name.c_str(),
+                quantile(r.snapshot_ms, 0.5), quantile(r.snapshot_ms, 0.99), quantile(r.grid_ms, 0.5),
+                quantile(r.grid_ms, 0.99), quantile(r.esdf_ms, 0.5), quantile(r.esdf_ms, 0.99),
+                r.esdf_ms.size());
   }
   std::printf("peak resident memory of the benchmark process: %.0f MB\n", peakRssMb());
   if (json != nullptr) {
