@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 namespace mlmap {
 namespace {
@@ -107,6 +108,14 @@ void ProjectedGridConfig::validate(std::vector<std::string>* errors) const {
           "must be a finite height within 1000 m", band_max_m, errors);
   require(!(band_max_m < band_min_m), "projected_grid.band_max_m", "must not be below band_min_m",
           band_max_m, errors);
+}
+
+void throwIfInvalid(const std::vector<std::string>& errors, const std::string& what) {
+  if (errors.empty()) return;
+  std::ostringstream out;
+  out << "invalid " << what << ":";
+  for (const std::string& e : errors) out << "\n  " << e;
+  throw std::invalid_argument(out.str());
 }
 
 const char* toString(UnknownAs policy) {

@@ -21,16 +21,8 @@ double nowSeconds() {
   return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
 }
 
-std::string joinErrors(const std::vector<std::string>& errors) {
-  std::ostringstream out;
-  out << "invalid mlmap configuration:";
-  for (const std::string& e : errors) out << "\n  " << e;
-  return out.str();
-}
-
 const MapConfig& validated(const MapConfig& config) {
-  const std::vector<std::string> errors = config.validate();
-  if (!errors.empty()) throw std::invalid_argument(joinErrors(errors));
+  throwIfInvalid(config.validate(), "mlmap configuration");
   return config;
 }
 

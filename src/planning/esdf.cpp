@@ -3,7 +3,6 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 #include <system_error>
 #include <thread>
@@ -18,26 +17,10 @@ constexpr std::size_t kMaxLookupEntries = std::size_t{1} << 16;
 /// Largest accepted |index| of the box corners (keeps grid coordinates far from int overflow).
 constexpr std::int64_t kMaxAbsIndex = std::int64_t{1} << 30;
 
-template <typename T>
-void require(bool ok, const std::string& key, const std::string& what, const T& value,
-             std::vector<std::string>* errors) {
-  if (ok) return;
-  std::ostringstream message;
-  message << key << ": " << what << " (got " << value << ")";
-  errors->push_back(message.str());
-}
-
-std::string joinErrors(const std::vector<std::string>& errors) {
-  std::ostringstream out;
-  out << "invalid ESDF configuration:";
-  for (const std::string& e : errors) out << "\n  " << e;
-  return out.str();
-}
-
 const EsdfConfig& validated(const EsdfConfig& config) {
   std::vector<std::string> errors;
   config.validate(&errors);
-  if (!errors.empty()) throw std::invalid_argument(joinErrors(errors));
+  throwIfInvalid(errors, "ESDF configuration");
   return config;
 }
 

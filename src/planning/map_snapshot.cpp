@@ -121,13 +121,10 @@ bool MapSnapshot::isBoxFree(const Eigen::Vector3d& min_W, const Eigen::Vector3d&
   if (!inside && unknown == UnknownAs::kOccupied) return false;
   const VoxelIndex a = lo.cwiseMax(w_lo);
   const VoxelIndex b = hi.cwiseMin(w_hi - VoxelIndex::Ones());
-  const LogOddsModel& model = window_->model;
   for (int x = a.x(); x <= b.x(); ++x) {
     for (int y = a.y(); y <= b.y(); ++y) {
       for (int z = a.z(); z <= b.z(); ++z) {
-        const LogOddsQ v = window_->at(VoxelIndex(x, y, z));
-        if (model.isOccupied(v)) return false;
-        if (v == kUnknownLogOdds && unknown == UnknownAs::kOccupied) return false;
+        if (voxelBlocks(VoxelIndex(x, y, z), unknown)) return false;
       }
     }
   }

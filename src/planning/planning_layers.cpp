@@ -36,12 +36,12 @@ PlanningLayers::~PlanningLayers() {
 // A buffer of the pool that no published snapshot holds any more, or a new one. Only the owner
 // thread of the pool calls this; a use count of 1 (the pool's own) cannot grow behind its back
 // because readers only reach buffers through snapshots.
-template <typename T>
-std::shared_ptr<T> PlanningLayers::reuse(std::vector<std::shared_ptr<T>>* pool) {
+template <typename T, typename... Args>
+std::shared_ptr<T> PlanningLayers::reuse(std::vector<std::shared_ptr<T>>* pool, const Args&... args) {
   for (const std::shared_ptr<T>& p : *pool) {
     if (p.use_count() == 1) return p;
   }
-  pool->push_back(std::make_shared<T>());
+  pool->push_back(std::make_shared<T>(args...));
   return pool->back();
 }
 
@@ -77,7 +77,8 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
   const std::uint64_t changes = local.counters().state_changes;
   const Eigen::Vector3d body_W = T_W_B.translation();
 
-  // 2D grid: rebuilt when a state changed, the window moved or the band's layers moved.
+  // 2D grid: rebuilt when a state changed, the window moved or the band's layers moved. The
+  // global map only changes when submaps are retired or restored, which moves the window.
   double grid_ms = -1.0;
   const ProjectedGridConfig& gc = config_.projected_grid;
   if (gc.enabled) {
@@ -87,7 +88,7 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
     int band_k1 = 0;
     bandLayers(gc.band_min_m + offset, gc.band_max_m + offset, res, &band_k0, &band_k1);
     if (grid_ == nullptr || changes != grid_changes_ || window->min_index != grid_window_min_ ||
-        band_k0 != grid_band_k0_ || band_k1 != grid_band_k1_ || gc.include_global) {
+        band_k0 != grid_band_k0_ || band_k1 != grid_band_k1_) {
       const Clock::time_point grid_start = Clock::now();
       const std::shared_ptr<ProjectedGrid> grid = reuse(&grid_pool_);
       projectToGrid(*window, &global, gc, body_W.z(), grid.get());
@@ -202,17 +203,7 @@ std::shared_ptr<const EsdfMap> PlanningLayers::computeEsdf(const EsdfJob& job) {
       for (int z = 0; z < size.z(); ++z) *out++ = model.state(column[z]);
     }
   }
-  std::shared_ptr<EsdfMap> esdf;
-  for (const std::shared_ptr<EsdfMap>& p : esdf_pool_) {
-    if (p.use_count() == 1) {
-      esdf = p;
-      break;
-    }
-  }
-  if (esdf == nullptr) {
-    esdf_pool_.push_back(std::make_shared<EsdfMap>(config_.esdf));
-    esdf = esdf_pool_.back();
-  }
+  const std::shared_ptr<EsdfMap> esdf = reuse(&esdf_pool_, config_.esdf);
   const bool ok = esdf->compute(esdf_box_);
   std::size_t bytes = esdf_box_.states.capacity() * sizeof(Occupancy);
   for (const auto& e : esdf_pool_) bytes += e->memoryBytes();

@@ -249,3 +249,76 @@ TEST(MapEngine, MapsTheSharedRealDepthFrames) {
 
 }  // namespace
 }  // namespace mlmap
+
+namespace mlmap {
+namespace {
+
+// The snapshot after a synchronous flight holds exactly the engine's window, the grid of that
+// window, and (with no rate limit) the ESDF of that window.
+TEST(MapEngine, SnapshotHoldsTheWindowItsGridAndItsEsdf) {
+  const io::Scenario scenario = io::defaultScenario();
+  MapConfig config;
+  config.esdf.max_rate_hz = 0.0;
+  MapEngine engine(config);
+  eval::FlightOptions options;
+  options.max_frames = 30;
+  eval::flyScenario(scenario, engine, options);
+
+  const auto snap = engine.snapshot();
+  ASSERT_EQ(snap->frame(), 30u);
+  const LocalMap& local = engine.localMap();
+  const LocalWindow& window = snap->window();
+  ASSERT_EQ(window.min_index, local.minIndex());
+  ASSERT_EQ(window.size, local.config().size_cells);
+  std::size_t occupied = 0;
+  for (int x = 0; x < window.size.x(); ++x) {
+    for (int y = 0; y < window.size.y(); ++y) {
+      for (int z = 0; z < window.size.z(); ++z) {
+        const VoxelIndex g = window.min_index + VoxelIndex(x, y, z);
+        ASSERT_EQ(window.state(g), local.state(g));
+        occupied += window.state(g) == Occupancy::kOccupied;
+      }
+    }
+  }
+  EXPECT_GT(occupied, 1000u);
+
+  ProjectedGrid grid;
+  projectToGrid(window, &engine.globalMap(), config.projected_grid, snap->T_W_B().translation().z(),
+                &grid);
+  EXPECT_EQ(snap->grid().cells, grid.cells);
+  EXPECT_EQ(snap->grid().origin_W, grid.origin_W);
+
+  ASSERT_NE(snap->esdf(), nullptr);
+  ASSERT_EQ(snap->esdfFrame(), snap->frame());
+  OccupancyBox box;
+  box.reset(window.min_index, window.size, window.resolution_m);
+  for (std::size_t i = 0; i < box.states.size(); ++i) {
+    box.states[i] = window.model.state(window.log_odds[i]);
+  }
+  EsdfMap reference(config.esdf);
+  ASSERT_TRUE(reference.compute(box));
+  EXPECT_EQ(snap->esdf()->distances(), reference.distances());
+}
+
+// The ESDF is recomputed at most at its rate (frame stamps) and the skips are counted.
+TEST(MapEngine, EsdfIsRateLimitedByFrameStamps) {
+  const io::Scenario scenario = io::defaultScenario();
+  MapConfig config;
+  config.esdf.max_rate_hz = 2.0;
+  MapEngine engine(config);
+  eval::FlightOptions options;
+  options.max_frames = 40;
+  eval::flyScenario(scenario, engine, options);
+  const PlanningStats p = engine.stats().planning;
+  const double span_s = eval::frameTime(scenario, 39) - eval::frameTime(scenario, 0);
+  EXPECT_EQ(p.snapshots, 40u);
+  EXPECT_GE(p.grid_updates, 1u);
+  EXPECT_LE(p.grid_updates, 40u);
+  EXPECT_GE(p.esdf_updates, 1u);
+  EXPECT_LE(static_cast<double>(p.esdf_updates), span_s * 2.0 + 1.0);
+  EXPECT_EQ(p.esdf_updates + p.esdf_rate_limited + p.esdf_unchanged, 40u);
+  EXPECT_GT(p.esdf_rate_limited, 0u);
+}
+
+}  // namespace
+}  // namespace mlmap

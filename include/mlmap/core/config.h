@@ -133,6 +133,10 @@ struct EsdfConfig {
   void validate(std::vector<std::string>* errors) const;
 };
 
+/// Throws std::invalid_argument "invalid <what>:" followed by one error per line, when `errors`
+/// is not empty (the form every config check in mlmap reports in).
+void throwIfInvalid(const std::vector<std::string>& errors, const std::string& what);
+
 /// Everything the engine needs.
 struct MapConfig {
   AwarenessConfig awareness;

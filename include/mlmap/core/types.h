@@ -45,6 +45,27 @@ inline VoxelIndex voxelIndexOf(const Eigen::Vector3d& p_W, double resolution_m) 
   return {floorToInt(p_W.x() * inv), floorToInt(p_W.y() * inv), floorToInt(p_W.z() * inv)};
 }
 
+/// True when world voxel `g` lies in the box [min_index, min_index + size).
+inline bool boxContains(const VoxelIndex& min_index, const Eigen::Vector3i& size,
+                        const VoxelIndex& g) {
+  const VoxelIndex r = g - min_index;
+  return static_cast<unsigned>(r.x()) < static_cast<unsigned>(size.x()) &&
+         static_cast<unsigned>(r.y()) < static_cast<unsigned>(size.y()) &&
+         static_cast<unsigned>(r.z()) < static_cast<unsigned>(size.z());
+}
+
+/// Position of world voxel `g` (inside the box) in a dense box stored x-major, z fastest:
+/// ((x * size.y) + y) * size.z + z for g = min_index + (x, y, z). The order of every dense box
+/// in mlmap (local window copies, ESDF boxes).
+inline std::size_t boxOffset(const VoxelIndex& min_index, const Eigen::Vector3i& size,
+                             const VoxelIndex& g) {
+  const VoxelIndex r = g - min_index;
+  return (static_cast<std::size_t>(r.x()) * static_cast<std::size_t>(size.y()) +
+          static_cast<std::size_t>(r.y())) *
+             static_cast<std::size_t>(size.z()) +
+         static_cast<std::size_t>(r.z());
+}
+
 /// Centre of a world voxel in metres.
 inline Eigen::Vector3d voxelCenter(const VoxelIndex& index, double resolution_m) {
   return (index.cast<double>().array() + 0.5).matrix() * resolution_m;

@@ -44,19 +44,10 @@ struct LocalWindow {
   std::vector<LogOddsQ> log_odds;                  ///< stored log-odds, see above
 
   /// True when the world voxel lies in the window.
-  [[nodiscard]] bool contains(const VoxelIndex& g) const {
-    const VoxelIndex r = g - min_index;
-    return static_cast<unsigned>(r.x()) < static_cast<unsigned>(size.x()) &&
-           static_cast<unsigned>(r.y()) < static_cast<unsigned>(size.y()) &&
-           static_cast<unsigned>(r.z()) < static_cast<unsigned>(size.z());
-  }
+  [[nodiscard]] bool contains(const VoxelIndex& g) const { return boxContains(min_index, size, g); }
   /// Stored value of a world voxel in the window.
   [[nodiscard]] LogOddsQ at(const VoxelIndex& g) const {
-    const VoxelIndex r = g - min_index;
-    return log_odds[(static_cast<std::size_t>(r.x()) * static_cast<std::size_t>(size.y()) +
-                     static_cast<std::size_t>(r.y())) *
-                        static_cast<std::size_t>(size.z()) +
-                    static_cast<std::size_t>(r.z())];
+    return log_odds[boxOffset(min_index, size, g)];
   }
   /// State of a world voxel; unknown outside the window.
   [[nodiscard]] Occupancy state(const VoxelIndex& g) const {

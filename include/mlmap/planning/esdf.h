@@ -63,18 +63,11 @@ struct OccupancyBox {
   }
   /// True when the world voxel lies inside the box.
   [[nodiscard]] bool contains(const VoxelIndex& world_index) const {
-    const VoxelIndex r = world_index - min_index;
-    return static_cast<unsigned>(r.x()) < static_cast<unsigned>(size.x()) &&
-           static_cast<unsigned>(r.y()) < static_cast<unsigned>(size.y()) &&
-           static_cast<unsigned>(r.z()) < static_cast<unsigned>(size.z());
+    return boxContains(min_index, size, world_index);
   }
   /// Position in `states` of a world voxel inside the box.
   [[nodiscard]] std::size_t offsetOf(const VoxelIndex& world_index) const {
-    const VoxelIndex r = world_index - min_index;
-    return (static_cast<std::size_t>(r.x()) * static_cast<std::size_t>(size.y()) +
-            static_cast<std::size_t>(r.y())) *
-               static_cast<std::size_t>(size.z()) +
-           static_cast<std::size_t>(r.z());
+    return boxOffset(min_index, size, world_index);
   }
   /// State of a world voxel inside the box.
   [[nodiscard]] Occupancy& at(const VoxelIndex& world_index) {
@@ -131,10 +124,7 @@ class EsdfMap {
   [[nodiscard]] float distanceAt(const VoxelIndex& world_index) const;
   /// True when the world voxel lies inside the box of the last successful compute().
   [[nodiscard]] bool contains(const VoxelIndex& world_index) const {
-    const VoxelIndex r = world_index - min_index_;
-    return static_cast<unsigned>(r.x()) < static_cast<unsigned>(size_.x()) &&
-           static_cast<unsigned>(r.y()) < static_cast<unsigned>(size_.y()) &&
-           static_cast<unsigned>(r.z()) < static_cast<unsigned>(size_.z());
+    return boxContains(min_index_, size_, world_index);
   }
   /// True when the world voxel is inside the box and was unknown in the box given to compute().
   [[nodiscard]] bool isUnknown(const VoxelIndex& world_index) const {
@@ -192,11 +182,7 @@ class EsdfMap {
     return ((unknown_bits_[bit >> 6] >> (bit & 63)) & 1u) != 0;
   }
   [[nodiscard]] std::size_t offsetOf(const VoxelIndex& world_index) const {
-    const VoxelIndex r = world_index - min_index_;
-    return (static_cast<std::size_t>(r.x()) * static_cast<std::size_t>(size_.y()) +
-            static_cast<std::size_t>(r.y())) *
-               static_cast<std::size_t>(size_.z()) +
-           static_cast<std::size_t>(r.z());
+    return boxOffset(min_index_, size_, world_index);
   }
   /// Empties the map (size 0, every query invalid); keeps the buffers' capacity.
   void clear();

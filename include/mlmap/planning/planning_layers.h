@@ -74,8 +74,8 @@ class PlanningLayers {
   void planningLoop();
   [[nodiscard]] VoxelIndex esdfBoxMin(const LocalWindow& window, const Eigen::Vector3d& body_W,
                                       Eigen::Vector3i* size) const;
-  template <typename T>
-  static std::shared_ptr<T> reuse(std::vector<std::shared_ptr<T>>* pool);
+  template <typename T, typename... Args>
+  static std::shared_ptr<T> reuse(std::vector<std::shared_ptr<T>>* pool, const Args&... args);
 
   MapConfig config_;
   bool own_thread_;
