@@ -10,6 +10,9 @@ packages=(
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev  # depth PNGs, map pictures
   libcli11-dev libspdlog-dev           # command line, logging
   libgtest-dev                         # tests
+  libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools  # DDS component (Fast DDS 2.9, ROS 2 wire types)
+  cyclonedds-dev cyclonedds-tools      # cross-vendor interoperability test (ROS 2's other tier-1 DDS)
+  iproute2                             # network-namespace tests
 )
 
 missing=()

@@ -1,0 +1,58 @@
+# Generates C++ for the IDL files under idl/ with fastddsgen at build time (nothing generated is
+# committed: the output is tied to the Fast DDS / Fast CDR version found) and builds it as a library.
+#
+#   mlmap_idl_library(<target> IDL_ROOT <dir> [PACKAGES <pkg>...])
+#
+# Each <dir>/<pkg>/msg/<Name>_.idl yields <build>/idl_gen/<pkg>/msg/<Name>_{.h,.cxx,PubSubTypes.h,
+# PubSubTypes.cxx}; the generated headers include each other as "<pkg>/msg/<Name>_.h", so the
+# target exports <build>/idl_gen as its include directory.
+#
+# fastddsgen 2.3 pitfalls handled here (see ../shared/reference/dds-ros2-wire.md): -cs (member
+# `pose_` vs type `Pose_`), absolute paths (relative ones silently give empty headers), one run
+# over every file (it writes the code of included files too; a run per file would race in
+# parallel builds), and outputs moved into <pkg>/msg/ afterwards because it writes them flat.
+find_program(FASTDDSGEN_EXECUTABLE fastddsgen REQUIRED)
+
+function(mlmap_idl_library target)
+  cmake_parse_arguments(ARG "" "IDL_ROOT" "" ${ARGN})
+  get_filename_component(root "${ARG_IDL_ROOT}" ABSOLUTE)
+  file(GLOB idl_files CONFIGURE_DEPENDS "${root}/*/msg/*_.idl")
+  set(gen_dir "${CMAKE_CURRENT_BINARY_DIR}/idl_gen")
+  set(flat_dir "${gen_dir}/_flat")
+  set(outputs "")
+  set(sources "")
+  set(moves "")
+  set(seen "")
+  foreach(idl IN LISTS idl_files)
+    get_filename_component(name "${idl}" NAME_WE)
+    get_filename_component(msg_dir "${idl}" DIRECTORY)
+    get_filename_component(pkg_dir "${msg_dir}" DIRECTORY)
+    get_filename_component(pkg "${pkg_dir}" NAME)
+    if(name IN_LIST seen)
+      message(FATAL_ERROR "IDL type name ${name} appears in two packages; fastddsgen writes flat")
+    endif()
+    list(APPEND seen "${name}")
+    foreach(suffix .h .cxx PubSubTypes.h PubSubTypes.cxx)
+      set(out "${gen_dir}/${pkg}/msg/${name}${suffix}")
+      list(APPEND outputs "${out}")
+      list(APPEND moves COMMAND ${CMAKE_COMMAND} -E copy_if_different "${flat_dir}/${name}${suffix}" "${out}")
+      if(suffix MATCHES "cxx$")
+        list(APPEND sources "${out}")
+      endif()
+    endforeach()
+  endforeach()
+  add_custom_command(
+    OUTPUT ${outputs}
+    COMMAND ${CMAKE_COMMAND} -E rm -rf "${flat_dir}"
+    COMMAND ${CMAKE_COMMAND} -E make_directory "${flat_dir}"
+    COMMAND ${FASTDDSGEN_EXECUTABLE} -cs -replace -d "${flat_dir}" -I "${root}" ${idl_files}
+    ${moves}
+    DEPENDS ${idl_files}
+    COMMENT "Generating Fast DDS types from ${root} with fastddsgen"
+    VERBATIM)
+  add_library(${target} ${sources})
+  target_include_directories(${target} SYSTEM PUBLIC "${gen_dir}")
+  target_link_libraries(${target} PUBLIC fastcdr fastrtps)
+  target_compile_features(${target} PUBLIC cxx_std_17)
+  set_target_properties(${target} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+endfunction()

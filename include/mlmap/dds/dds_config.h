@@ -1,0 +1,90 @@
+#pragma once
+/// @file
+/// Configuration of the DDS component (the `dds` section of the node's YAML file) and the ROS 2
+/// naming rules it follows.
+///
+/// Resolution order for the domain and the discovery range, as ROS 2 does: the config value when
+/// set, else the environment (ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE), else the ROS 2
+/// default (domain 0, SUBNET). FASTRTPS_DEFAULT_PROFILES_FILE is read by Fast DDS itself; a
+/// `profiles_file` in the config is loaded on top of it.
+
+#include <string>
+#include <vector>
+
+namespace mlmap::dds {
+
+/// ROS_AUTOMATIC_DISCOVERY_RANGE.
+enum class DiscoveryRange {
+  kSystemDefault,  ///< not set anywhere: SUBNET
+  kLocalhost,      ///< SHM + UDPv4 on 127.0.0.1 only, unicast discovery to 127.0.0.1 (no multicast)
+  kSubnet,         ///< Fast DDS built-in transports, multicast discovery (a vehicle LAN)
+  kOff,            ///< no automatic discovery: only the profile's initial peers
+};
+/// Parses "LOCALHOST", "SUBNET", "OFF", "SYSTEM_DEFAULT" (case-insensitive). False otherwise.
+bool parseDiscoveryRange(const std::string& text, DiscoveryRange* range);
+const char* toString(DiscoveryRange range);
+
+/// Topic names (ROS names, without `rt/` and without the namespace). Empty input names disable
+/// that input; empty output names disable that output.
+struct TopicNames {
+  // Inputs (BEST_EFFORT readers: they match any publisher).
+  std::string cloud = "cloud";                          ///< sensor_msgs/PointCloud2, sensor frame
+  std::string pose = "pose";                            ///< geometry_msgs/PoseStamped, T_W_B
+  std::string odometry = "";                            ///< nav_msgs/Odometry (alternative to pose)
+  std::string depth_image = "";                         ///< sensor_msgs/Image 16UC1 / 32FC1
+  std::string camera_info = "";                         ///< sensor_msgs/CameraInfo of the depth image
+  // Outputs (RELIABLE writers).
+  std::string awareness = "mlmap/awareness/occupied";   ///< PointCloud2, awareness occupied cells
+  std::string local_map = "mlmap/local_map/occupied";   ///< PointCloud2, local occupied voxels
+  std::string global_map = "mlmap/global_map/occupied"; ///< PointCloud2, TRANSIENT_LOCAL
+  std::string grid = "mlmap/grid";                      ///< nav_msgs/OccupancyGrid, TRANSIENT_LOCAL
+  std::string esdf_slice = "mlmap/esdf/slice";          ///< PointCloud2 with `intensity` = distance
+  std::string esdf_block = "mlmap/esdf/block";          ///< mlmap_msgs/VoxelBlock
+  std::string status = "mlmap/status";                  ///< mlmap_msgs/Status
+};
+
+/// Publishing rates [Hz] of the outputs (0 disables that output). Outputs are published from
+/// their own thread at most at these rates, and only when their content changed.
+struct PublishRates {
+  double awareness_hz = 10.0;
+  double local_map_hz = 5.0;
+  double global_map_hz = 0.5;
+  double grid_hz = 2.0;
+  double esdf_hz = 2.0;
+  double status_hz = 1.0;
+};
+
+/// The `dds` section.
+struct DdsConfig {
+  int domain_id = -1;              ///< -1: ROS_DOMAIN_ID, else 0. Valid: 0..232
+  std::string ns;                  ///< topic namespace ("uav1" -> rt/uav1/...); "" for none
+  std::string discovery_range;     ///< "" (environment / default) or LOCALHOST / SUBNET / OFF
+  std::string profiles_file;       ///< Fast DDS XML profiles to load ("" for none)
+  std::string participant_profile; ///< participant profile of those files to use ("" default)
+  bool large_data = true;          ///< 16 MB shared-memory segment, 4 MB socket buffers (multi-MB clouds)
+  std::string world_frame = "map";         ///< frame_id of the maps and parent of rt/tf
+  std::string body_frame = "base_link";    ///< child of rt/tf, parent of the sensor on rt/tf_static
+  std::string sensor_frame = "camera_depth_optical_frame";  ///< child on rt/tf_static
+  TopicNames topics;
+  PublishRates rates;
+  double pose_tolerance_s = 0.05;  ///< a cloud needs a pose within this of its stamp
+  double pose_buffer_s = 2.0;      ///< poses kept for pairing
+  double max_future_s = 1.0;       ///< stamps farther ahead of the newest pose are rejected
+  double esdf_slice_height_m = 0.0;  ///< slice height relative to the body [m]
+
+  /// Every problem as "dds.key: what is wrong (got X)". Empty = valid.
+  [[nodiscard]] std::vector<std::string> validate() const;
+};
+
+/// The DDS topic of a ROS topic: "rt/" + ns + "/" + name (a leading '/' of name or ns and double
+/// slashes are dropped). Example: ("uav1", "cloud") -> "rt/uav1/cloud".
+std::string ddsTopicName(const std::string& ns, const std::string& name);
+
+/// The domain to use: config value if >= 0, else ROS_DOMAIN_ID if set and valid, else 0.
+/// Throws std::invalid_argument when ROS_DOMAIN_ID is set but not an integer in 0..232.
+int resolveDomainId(const DdsConfig& config);
+/// The discovery range to use: config value if set, else ROS_AUTOMATIC_DISCOVERY_RANGE, else
+/// kSystemDefault. Throws std::invalid_argument on an unknown value.
+DiscoveryRange resolveDiscoveryRange(const DdsConfig& config);
+
+}  // namespace mlmap::dds
