@@ -74,9 +74,10 @@ TimingSummary MapEngine::Samples::summary() const {
   return s;
 }
 
-MapEngine::MapEngine(const MapConfig& config, LogSink log)
+MapEngine::MapEngine(const MapConfig& config, LogSink log, EngineObservers observers)
     : config_(validated(config)),
       log_sink_(std::move(log)),
+      observers_(std::move(observers)),
       awareness_(config_),
       local_(config_.local_map, config_.log_odds),
       global_(config_.local_map.submap_cells(), config_.local_map.resolution_m),
@@ -219,6 +220,7 @@ void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
     awareness_.process(std::get<DepthFrame>(input), batch, &counters);  // checked in submit()
   }
   batch->awareness_ms = msSince(start);
+  if (observers_.awareness) observers_.awareness(awareness_.map(), batch->stamp_s, batch->T_W_B);
   const std::size_t bytes = awareness_.memoryBytes() + batch->free.memoryBytes() +
                             batch->hits.capacity() * sizeof(HitMeasurement);
   std::lock_guard<std::mutex> lock(stats_mutex_);
@@ -233,6 +235,14 @@ void MapEngine::localStep(const MeasurementBatch& batch) {
   local_.integrate(batch);
   const double ms = msSince(start);
   planning_.update(local_, global_, ++frames_integrated_, batch.stamp_s, batch.T_W_B);
+  if (observers_.global_changed) {
+    const LocalMapCounters& c = local_.counters();
+    const std::uint64_t moves = c.submaps_retired + c.submaps_restored;
+    if (moves != global_moves_seen_) {
+      global_moves_seen_ = moves;
+      observers_.global_changed(global_, batch.stamp_s);
+    }
+  }
   const std::size_t global_bytes = global_.memoryBytes();
   const std::size_t planning_bytes = planning_.memoryBytes();
   std::lock_guard<std::mutex> lock(stats_mutex_);

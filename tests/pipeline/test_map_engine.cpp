@@ -182,6 +182,42 @@ TEST(MapEngine, ThreadedModeBuildsTheSameMapAsTheSynchronousMode) {
   EXPECT_EQ(threaded_engine.stats().frames_dropped, 0u);
 }
 
+TEST(MapEngine, ObserversSeeEveryAwarenessFrameAndEveryGlobalChange) {
+  // Threaded, so the observers run on the engine's threads as they would under a publisher.
+  MapConfig c = configAt(0.2);
+  c.pipeline.threaded = true;
+  c.pipeline.input_queue_capacity = 1000;
+  std::vector<double> awareness_stamps;
+  std::size_t last_awareness_points = 0;
+  std::size_t global_calls = 0;
+  std::size_t last_global_voxels = 0;
+  EngineObservers observers;
+  observers.awareness = [&](const AwarenessMap& map, double stamp_s, const Transform& T_W_B) {
+    awareness_stamps.push_back(stamp_s);
+    last_awareness_points = map.occupiedPoints().size();
+    EXPECT_TRUE(map.origin_W().isApprox(T_W_B.translation()));
+  };
+  observers.global_changed = [&](const GlobalMap& map, double) {
+    ++global_calls;
+    last_global_voxels = map.voxelCount();
+  };
+  MapEngine engine(c, {}, observers);
+  // Fly 30 m along x: submaps retire into the global map on the way.
+  const int frames = 60;
+  for (int i = 0; i < frames; ++i) engine.submit(cloudAt(1.0 + i, {0.5 * i, 0.0, 1.0}));
+  engine.flush();
+  ASSERT_EQ(awareness_stamps.size(), static_cast<std::size_t>(frames));
+  for (int i = 0; i < frames; ++i) EXPECT_EQ(awareness_stamps[i], 1.0 + i);
+  EXPECT_EQ(last_awareness_points, engine.awareness().occupiedPoints().size());
+  EXPECT_GT(last_awareness_points, 0u);
+  const EngineStats s = engine.stats();
+  ASSERT_GT(s.local.submaps_retired, 0u);
+  EXPECT_GT(global_calls, 1u);
+  EXPECT_LT(global_calls, static_cast<std::size_t>(frames));  // only frames that moved submaps
+  EXPECT_EQ(last_global_voxels, engine.globalMap().voxelCount());
+  EXPECT_GT(last_global_voxels, 0u);
+}
+
 TEST(MapEngine, FullInputQueueDropsTheOldestFrameAndCountsIt) {
   MapConfig c = configAt(0.1);
   c.pipeline.threaded = true;

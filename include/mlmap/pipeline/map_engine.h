@@ -79,11 +79,22 @@ enum class LogLevel { kInfo, kWarning, kError };
 /// Receives rate-limited log lines (default: none). Called from the thread that saw the problem.
 using LogSink = std::function<void(LogLevel, const std::string&)>;
 
+/// Optional observers of the layers the snapshot does not carry, called on the engine's own
+/// threads (the caller's in synchronous mode) while that layer is not being written. They run
+/// inside the mapping loop: copy what you need and return (e.g. a publisher's hand-over).
+struct EngineObservers {
+  /// After the awareness update of every frame (awareness thread).
+  std::function<void(const AwarenessMap& map, double stamp_s, const Transform& T_W_B)> awareness;
+  /// After a frame that moved submaps between the local and the global map (local-global
+  /// thread), and after the first frame.
+  std::function<void(const GlobalMap& map, double stamp_s)> global_changed;
+};
+
 /// Owns the three layers. Submit frames from one thread; read the layers after flush().
 class MapEngine {
  public:
   /// Throws std::invalid_argument listing every problem when `config` is not valid.
-  explicit MapEngine(const MapConfig& config, LogSink log = {});
+  explicit MapEngine(const MapConfig& config, LogSink log = {}, EngineObservers observers = {});
   ~MapEngine();
   MapEngine(const MapEngine&) = delete;
   MapEngine& operator=(const MapEngine&) = delete;
@@ -126,6 +137,8 @@ class MapEngine {
 
   MapConfig config_;
   LogSink log_sink_;
+  EngineObservers observers_;
+  std::uint64_t global_moves_seen_ = ~std::uint64_t{0};  // local-global stage only
   AwarenessStage awareness_;
   LocalMap local_;
   GlobalMap global_;
