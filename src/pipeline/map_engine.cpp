@@ -10,15 +10,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kTimingWindow = 2000;   // frames kept for median / p99
-constexpr double kLogIntervalS = 1.0;         // at most one line per reason and second
 constexpr double kMaxAbsCoordinate_m = 1e6;   // keeps voxel indices far from int overflow
 
 double msSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-double nowSeconds() {
-  return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
 }
 
 const MapConfig& validated(const MapConfig& config) {
@@ -76,13 +71,12 @@ TimingSummary MapEngine::Samples::summary() const {
 
 MapEngine::MapEngine(const MapConfig& config, LogSink log, EngineObservers observers)
     : config_(validated(config)),
-      log_sink_(std::move(log)),
+      log_(std::move(log), 8),
       observers_(std::move(observers)),
       awareness_(config_),
       local_(config_.local_map, config_.log_odds),
       global_(config_.local_map.submap_cells(), config_.local_map.resolution_m),
-      planning_(config_, config_.pipeline.threaded),
-      log_limits_(8) {
+      planning_(config_, config_.pipeline.threaded) {
   if (config_.pipeline.threaded) {
     for (int i = 0; i < config_.pipeline.batch_queue_capacity + 1; ++i) {
       batch_pool_.push_back(std::make_unique<MeasurementBatch>());
@@ -100,28 +94,6 @@ MapEngine::~MapEngine() {
   queue_cv_.notify_all();
   if (awareness_thread_.joinable()) awareness_thread_.join();
   if (local_thread_.joinable()) local_thread_.join();
-}
-
-void MapEngine::log(LogLevel level, int reason, const std::string& message) {
-  if (!log_sink_) return;
-  std::uint64_t suppressed = 0;
-  {
-    std::lock_guard<std::mutex> lock(stats_mutex_);
-    RateLimit& limit = log_limits_[static_cast<std::size_t>(reason) % log_limits_.size()];
-    const double now = nowSeconds();
-    if (now - limit.last_s < kLogIntervalS) {
-      ++limit.suppressed;
-      return;
-    }
-    limit.last_s = now;
-    suppressed = limit.suppressed;
-    limit.suppressed = 0;
-  }
-  if (suppressed > 0) {
-    log_sink_(level, message + " (" + std::to_string(suppressed) + " similar since the last report)");
-  } else {
-    log_sink_(level, message);
-  }
 }
 
 FrameStatus MapEngine::admit(double stamp_s, const Transform& T_W_B, const Transform& T_B_S) {
@@ -154,7 +126,7 @@ FrameStatus MapEngine::submit(PointCloudFrame frame) {
   if (status != FrameStatus::kAccepted) {
     std::ostringstream m;
     m << "rejected point cloud at t=" << frame.stamp_s << " s: " << toString(status);
-    log(LogLevel::kWarning, static_cast<int>(status), m.str());
+    log_.log(LogLevel::kWarning, static_cast<int>(status), m.str());
     return status;
   }
   return enqueue(std::move(frame));
@@ -179,7 +151,7 @@ FrameStatus MapEngine::submit(DepthFrame frame) {
   if (status != FrameStatus::kAccepted) {
     std::ostringstream m;
     m << "rejected depth image at t=" << frame.stamp_s << " s: " << toString(status);
-    log(LogLevel::kWarning, static_cast<int>(status), m.str());
+    log_.log(LogLevel::kWarning, static_cast<int>(status), m.str());
     return status;
   }
   return enqueue(std::move(frame));
@@ -206,7 +178,7 @@ FrameStatus MapEngine::enqueue(Input input) {
       std::lock_guard<std::mutex> lock(stats_mutex_);
       ++stats_.frames_dropped;
     }
-    log(LogLevel::kWarning, 6, "input queue full: dropped the oldest waiting frame");
+    log_.log(LogLevel::kWarning, 6, "input queue full: dropped the oldest waiting frame");
   }
   return FrameStatus::kAccepted;
 }
@@ -235,13 +207,9 @@ void MapEngine::localStep(const MeasurementBatch& batch) {
   local_.integrate(batch);
   const double ms = msSince(start);
   planning_.update(local_, global_, ++frames_integrated_, batch.stamp_s, batch.T_W_B);
-  if (observers_.global_changed) {
+  if (observers_.global) {
     const LocalMapCounters& c = local_.counters();
-    const std::uint64_t moves = c.submaps_retired + c.submaps_restored;
-    if (moves != global_moves_seen_) {
-      global_moves_seen_ = moves;
-      observers_.global_changed(global_, batch.stamp_s);
-    }
+    observers_.global(global_, batch.stamp_s, c.submaps_retired + c.submaps_restored);
   }
   const std::size_t global_bytes = global_.memoryBytes();
   const std::size_t planning_bytes = planning_.memoryBytes();

@@ -189,7 +189,7 @@ TEST(MapEngine, ObserversSeeEveryAwarenessFrameAndEveryGlobalChange) {
   c.pipeline.input_queue_capacity = 1000;
   std::vector<double> awareness_stamps;
   std::size_t last_awareness_points = 0;
-  std::size_t global_calls = 0;
+  std::size_t global_changes = 0;
   std::size_t last_global_voxels = 0;
   EngineObservers observers;
   observers.awareness = [&](const AwarenessMap& map, double stamp_s, const Transform& T_W_B) {
@@ -197,8 +197,11 @@ TEST(MapEngine, ObserversSeeEveryAwarenessFrameAndEveryGlobalChange) {
     last_awareness_points = map.occupiedPoints().size();
     EXPECT_TRUE(map.origin_W().isApprox(T_W_B.translation()));
   };
-  observers.global_changed = [&](const GlobalMap& map, double) {
-    ++global_calls;
+  std::uint64_t last_version = 0;
+  observers.global = [&](const GlobalMap& map, double, std::uint64_t version) {
+    if (version != last_version) ++global_changes;
+    EXPECT_GE(version, last_version);
+    last_version = version;
     last_global_voxels = map.voxelCount();
   };
   MapEngine engine(c, {}, observers);
@@ -212,8 +215,9 @@ TEST(MapEngine, ObserversSeeEveryAwarenessFrameAndEveryGlobalChange) {
   EXPECT_GT(last_awareness_points, 0u);
   const EngineStats s = engine.stats();
   ASSERT_GT(s.local.submaps_retired, 0u);
-  EXPECT_GT(global_calls, 1u);
-  EXPECT_LT(global_calls, static_cast<std::size_t>(frames));  // only frames that moved submaps
+  EXPECT_GT(global_changes, 1u);
+  EXPECT_LT(global_changes, static_cast<std::size_t>(frames));  // only frames that moved submaps
+  EXPECT_EQ(last_version, s.local.submaps_retired + s.local.submaps_restored);
   EXPECT_EQ(last_global_voxels, engine.globalMap().voxelCount());
   EXPECT_GT(last_global_voxels, 0u);
 }

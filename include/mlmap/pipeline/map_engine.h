@@ -9,6 +9,7 @@
 #include "mlmap/global/global_map.h"
 #include "mlmap/local/local_map.h"
 #include "mlmap/planning/planning_layers.h"
+#include "mlmap/pipeline/rate_limited_log.h"
 
 #include <condition_variable>
 #include <deque>
@@ -74,10 +75,6 @@ struct EngineStats {
   PlanningStats planning;      ///< snapshots, 2D grid and ESDF (not part of `total`)
 };
 
-/// Severity of an engine log message.
-enum class LogLevel { kInfo, kWarning, kError };
-/// Receives rate-limited log lines (default: none). Called from the thread that saw the problem.
-using LogSink = std::function<void(LogLevel, const std::string&)>;
 
 /// Optional observers of the layers the snapshot does not carry, called on the engine's own
 /// threads (the caller's in synchronous mode) while that layer is not being written. They run
@@ -85,9 +82,10 @@ using LogSink = std::function<void(LogLevel, const std::string&)>;
 struct EngineObservers {
   /// After the awareness update of every frame (awareness thread).
   std::function<void(const AwarenessMap& map, double stamp_s, const Transform& T_W_B)> awareness;
-  /// After a frame that moved submaps between the local and the global map (local-global
-  /// thread), and after the first frame.
-  std::function<void(const GlobalMap& map, double stamp_s)> global_changed;
+  /// After the local-global update of every frame (local-global thread). `version` counts the
+  /// submap moves between the local and the global map so far: the global map changed exactly
+  /// when it differs from the previous call's.
+  std::function<void(const GlobalMap& map, double stamp_s, std::uint64_t version)> global;
 };
 
 /// Owns the three layers. Submit frames from one thread; read the layers after flush().
@@ -132,13 +130,11 @@ class MapEngine {
   void localStep(const MeasurementBatch& batch);
   void awarenessLoop();
   void localLoop();
-  void log(LogLevel level, int reason, const std::string& message);
   FrameStatus enqueue(Input input);
 
   MapConfig config_;
-  LogSink log_sink_;
+  RateLimitedLog log_;  // one line per reason and second
   EngineObservers observers_;
-  std::uint64_t global_moves_seen_ = ~std::uint64_t{0};  // local-global stage only
   AwarenessStage awareness_;
   LocalMap local_;
   GlobalMap global_;
@@ -157,11 +153,6 @@ class MapEngine {
   Samples awareness_ms_, local_ms_, total_ms_;
   double last_stamp_s_ = -1e300;
   bool have_stamp_ = false;
-  struct RateLimit {
-    double last_s = -1e300;
-    std::uint64_t suppressed = 0;
-  };
-  std::vector<RateLimit> log_limits_;
 
   // Threaded mode.
   std::mutex queue_mutex_;
