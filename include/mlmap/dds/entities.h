@@ -1,0 +1,107 @@
+#pragma once
+/// @file
+/// Small helpers every mlmap DDS program uses: registering a generated type, creating a topic's
+/// reader or writer, and a listener that takes samples and hands them over.
+
+#include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/SampleInfo.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+#include <fastdds/dds/topic/TypeSupport.hpp>
+
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+namespace mlmap::dds {
+
+/// Registers the generated type `PubSubType` with the participant (once) and returns its DDS
+/// type name, e.g. "sensor_msgs::msg::dds_::PointCloud2_". Throws std::runtime_error on failure.
+template <typename PubSubType>
+std::string registerType(eprosima::fastdds::dds::DomainParticipant* participant) {
+  eprosima::fastdds::dds::TypeSupport type(new PubSubType());
+  const std::string name = type.get_type_name();
+  if (participant->find_type(name).empty() &&
+      type.register_type(participant) != eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
+    throw std::runtime_error("cannot register DDS type " + name);
+  }
+  return name;
+}
+
+/// The participant's topic `dds_topic` of type `PubSubType`, created on first use.
+template <typename PubSubType>
+eprosima::fastdds::dds::Topic* findOrCreateTopic(eprosima::fastdds::dds::DomainParticipant* participant,
+                                                 const std::string& dds_topic) {
+  const std::string type = registerType<PubSubType>(participant);
+  if (eprosima::fastdds::dds::TopicDescription* d = participant->lookup_topicdescription(dds_topic)) {
+    if (d->get_type_name() != type) {
+      throw std::runtime_error("topic " + dds_topic + " already exists with type " + d->get_type_name());
+    }
+    return static_cast<eprosima::fastdds::dds::Topic*>(d);
+  }
+  eprosima::fastdds::dds::Topic* topic =
+      participant->create_topic(dds_topic, type, eprosima::fastdds::dds::TOPIC_QOS_DEFAULT);
+  if (topic == nullptr) throw std::runtime_error("cannot create topic " + dds_topic);
+  return topic;
+}
+
+/// A writer of `PubSubType` on `dds_topic`. Throws std::runtime_error on failure.
+template <typename PubSubType>
+eprosima::fastdds::dds::DataWriter* createWriter(eprosima::fastdds::dds::Publisher* publisher,
+                                                 const std::string& dds_topic,
+                                                 const eprosima::fastdds::dds::DataWriterQos& qos) {
+  auto* participant = const_cast<eprosima::fastdds::dds::DomainParticipant*>(publisher->get_participant());
+  eprosima::fastdds::dds::DataWriter* writer =
+      publisher->create_datawriter(findOrCreateTopic<PubSubType>(participant, dds_topic), qos);
+  if (writer == nullptr) throw std::runtime_error("cannot create a writer on " + dds_topic);
+  return writer;
+}
+
+/// Takes every sample of a reader and hands it to `sink` (on Fast DDS's listener thread: keep
+/// `sink` short). A payload that fails to deserialise (malformed input can make Fast CDR throw,
+/// see idl/README.md) goes to `on_error` and the next sample is taken.
+template <typename Msg>
+class TakeListener : public eprosima::fastdds::dds::DataReaderListener {
+ public:
+  TakeListener(std::function<void(Msg&&)> sink, std::function<void(const std::string&)> on_error)
+      : sink_(std::move(sink)), on_error_(std::move(on_error)) {}
+  void on_data_available(eprosima::fastdds::dds::DataReader* reader) override {
+    for (;;) {
+      Msg msg;
+      eprosima::fastdds::dds::SampleInfo info;
+      try {
+        if (reader->take_next_sample(&msg, &info) !=
+            eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
+          return;
+        }
+      } catch (const std::exception& e) {
+        on_error_(std::string("cannot deserialise a sample: ") + e.what());
+        continue;
+      }
+      if (info.valid_data) sink_(std::move(msg));
+    }
+  }
+
+ private:
+  std::function<void(Msg&&)> sink_;
+  std::function<void(const std::string&)> on_error_;
+};
+
+/// A reader of `PubSubType` on `dds_topic` whose samples go to `listener` (which must outlive
+/// the reader). Throws std::runtime_error on failure.
+template <typename PubSubType>
+eprosima::fastdds::dds::DataReader* createReader(eprosima::fastdds::dds::Subscriber* subscriber,
+                                                 const std::string& dds_topic,
+                                                 const eprosima::fastdds::dds::DataReaderQos& qos,
+                                                 eprosima::fastdds::dds::DataReaderListener* listener) {
+  auto* participant = const_cast<eprosima::fastdds::dds::DomainParticipant*>(subscriber->get_participant());
+  eprosima::fastdds::dds::DataReader* reader = subscriber->create_datareader(
+      findOrCreateTopic<PubSubType>(participant, dds_topic), qos, listener);
+  if (reader == nullptr) throw std::runtime_error("cannot create a reader on " + dds_topic);
+  return reader;
+}
+
+}  // namespace mlmap::dds

@@ -1,0 +1,67 @@
+#pragma once
+/// @file
+/// The onboard mapping node: one DomainParticipant, ROS 2 topics in, map layers out.
+///
+/// Threads (paper Figure 5):
+/// - Fast DDS's listener threads only take samples and hand them over (a bounded queue);
+/// - the input thread decodes and validates messages, pairs clouds and depth images with poses
+///   (PoseBuffer) and submits frames to the engine;
+/// - the engine's awareness and local-global threads map;
+/// - the publishing thread turns snapshots and layer copies into messages at the configured
+///   rates, so a slow or vanished subscriber never blocks mapping.
+///
+/// Every rejected input is counted (NodeCounters, also in the status message) and logged at most
+/// once per second per reason.
+
+#include "mlmap/dds/node_config.h"
+#include "mlmap/dds/participant.h"
+#include "mlmap/pipeline/map_engine.h"
+#include "mlmap/pipeline/pose_buffer.h"
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+
+namespace mlmap::dds {
+
+/// What the node counted so far (the engine's own counters are in EngineStats).
+struct NodeCounters {
+  std::uint64_t clouds_received = 0;      ///< PointCloud2 samples taken
+  std::uint64_t images_received = 0;      ///< depth Image samples taken
+  std::uint64_t poses_received = 0;       ///< PoseStamped / Odometry samples taken
+  std::uint64_t inputs_malformed = 0;     ///< cloud / image / camera info / pose that failed to decode
+  std::uint64_t images_without_info = 0;  ///< depth image before any valid CameraInfo
+  std::uint64_t frames_without_pose = 0;  ///< no pose within the tolerance (or none came in time)
+  std::uint64_t frames_future = 0;        ///< stamp more than max_future_s after the newest pose
+  std::uint64_t frames_handover_dropped = 0;  ///< hand-over queue full: oldest frame dropped
+  std::uint64_t poses_rejected = 0;       ///< out of order, far future, or invalid (PoseBuffer)
+  std::uint64_t frames_submitted = 0;     ///< frames given to the engine
+  std::uint64_t frames_engine_rejected = 0;  ///< refused by the engine (see EngineStats)
+  std::uint64_t messages_published = 0;   ///< all outputs together
+};
+
+/// Runs the mapping node until destroyed (or stop()).
+class MappingNode {
+ public:
+  /// Creates the participant, the engine, the readers and writers, publishes rt/tf_static and
+  /// starts the threads. Throws std::invalid_argument (bad config) or std::runtime_error (DDS).
+  explicit MappingNode(const NodeConfig& config, LogSink log = {});
+  ~MappingNode();
+  MappingNode(const MappingNode&) = delete;
+  MappingNode& operator=(const MappingNode&) = delete;
+
+  /// Stops taking input, drains the engine, publishes the last state and joins every thread.
+  /// Idempotent.
+  void stop();
+
+  [[nodiscard]] NodeCounters counters() const;
+  [[nodiscard]] EngineStats engineStats() const;
+  /// The domain the participant joined.
+  [[nodiscard]] int domainId() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace mlmap::dds

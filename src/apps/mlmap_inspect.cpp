@@ -1,0 +1,342 @@
+// mlmap_inspect: subscribes to mlmap_node's layers, prints what arrives (rates, sizes) and writes
+// pictures of the received layers and a JSON summary. With --scenario it also scores the received
+// occupied voxels against the scenario's ground truth; with --expect-all it fails (exit 2) unless
+// every enabled layer arrived.
+
+#include "mlmap/dds/entities.h"
+#include "mlmap/dds/node_config.h"
+#include "mlmap/dds/participant.h"
+#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/eval/sim_flight.h"
+#include "mlmap/io/map_image.h"
+#include "mlmap/io/world_yaml.h"
+
+#include "mlmap_msgs/msg/Status_PubSubTypes.h"
+#include "mlmap_msgs/msg/VoxelBlock_PubSubTypes.h"
+#include "nav_msgs/msg/OccupancyGrid_PubSubTypes.h"
+#include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
+#include "tf2_msgs/msg/TFMessage_PubSubTypes.h"
+
+#include <CLI/CLI.hpp>
+#include <opencv2/imgproc.hpp>
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <thread>
+
+namespace {
+
+using namespace mlmap;
+namespace fdds = eprosima::fastdds::dds;
+using Clock = std::chrono::steady_clock;
+
+std::atomic<bool> g_stop{false};
+extern "C" void onSignal(int) { g_stop = true; }
+
+/// What arrived on one topic.
+struct TopicLog {
+  std::string dds_topic;
+  std::uint64_t messages = 0;
+  std::uint64_t bytes = 0;
+  std::size_t last_points = 0;  // points / cells / voxels of the last message
+  Clock::time_point first, last;
+};
+
+/// Everything received, guarded by one mutex (listener threads write, main reads).
+struct Received {
+  std::mutex mutex;
+  std::map<std::string, TopicLog> topics;
+  std::vector<Eigen::Vector3f> local, global, awareness, esdf_slice;
+  std::vector<float> esdf_slice_distance;
+  dds::nav_msgs::OccupancyGrid_ grid;
+  dds::mlmap_msgs::Status_ status;
+  std::vector<Eigen::Vector3d> trajectory_W;
+  std::uint64_t malformed = 0;
+
+  void note(const std::string& name, std::size_t bytes, std::size_t points) {
+    TopicLog& t = topics[name];
+    if (t.messages == 0) t.first = Clock::now();
+    t.last = Clock::now();
+    ++t.messages;
+    t.bytes += bytes;
+    t.last_points = points;
+  }
+};
+
+/// x, y, z (and intensity when present) of a cloud; false when it is malformed.
+bool readCloud(const dds::sensor_msgs::PointCloud2_& msg, std::vector<Eigen::Vector3f>* points) {
+  return dds::decodePointCloud2(msg, points).ok();
+}
+
+cv::Mat gridImage(const dds::nav_msgs::OccupancyGrid_& grid) {
+  const int w = static_cast<int>(grid.info_().width_());
+  const int h = static_cast<int>(grid.info_().height_());
+  cv::Mat image(h, w, CV_8UC3);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const int v = grid.data_()[static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +
+                                 static_cast<std::size_t>(x)];
+      // Row 0 of the grid is its lowest y: flip so north is up.
+      cv::Vec3b& px = image.at<cv::Vec3b>(h - 1 - y, x);
+      if (v < 0) {
+        px = cv::Vec3b(200, 200, 200);  // unknown: grey
+      } else {
+        const auto g = static_cast<unsigned char>(255 - 255 * v / 100);
+        px = cv::Vec3b(g, g, g);  // free white .. occupied black
+      }
+    }
+  }
+  const int scale = std::max(1, 600 / std::max(1, std::max(w, h)));
+  cv::Mat big;
+  cv::resize(image, big, cv::Size(w * scale, h * scale), 0, 0, cv::INTER_NEAREST);
+  return big;
+}
+
+io::VoxelList voxelList(const std::vector<Eigen::Vector3f>& points, double res) {
+  io::VoxelList list{res, {}};
+  list.centers_W.reserve(points.size());
+  for (const Eigen::Vector3f& p : points) {
+    // Re-snap to the voxel centre (float transport rounds a little).
+    list.centers_W.push_back(voxelCenter(voxelIndexOf(p.cast<double>(), res), res));
+  }
+  return list;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"mlmap_inspect: watch mlmap_node's layers over DDS, write pictures and a summary"};
+  std::string config_path, out_dir, scenario_path;
+  double duration_s = 0.0, idle_s = 0.0;
+  bool expect_all = false, use_default_scenario = false;
+  double min_precision = 0.0;
+  app.add_option("-c,--config", config_path, "node configuration (topics, namespace, domain)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--duration", duration_s, "stop after this many seconds (0: until SIGINT)");
+  app.add_option("--idle-stop", idle_s, "stop once nothing arrived for this many seconds after the first message (0: never)");
+  app.add_option("--out", out_dir, "write pictures and summary.json into this folder");
+  app.add_option("--scenario", scenario_path, "score received voxels against this scenario's world")
+      ->check(CLI::ExistingFile);
+  app.add_flag("--default-scenario", use_default_scenario, "score against the built-in scenario");
+  app.add_flag("--expect-all", expect_all, "exit 2 unless every enabled layer arrived");
+  app.add_option("--min-precision", min_precision, "exit 2 when the scored precision is lower");
+  CLI11_PARSE(app, argc, argv);
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+
+  try {
+    const dds::NodeConfig config =
+        config_path.empty() ? dds::NodeConfig{} : dds::loadNodeConfigYaml(config_path);
+    const dds::TopicNames& n = config.dds.topics;
+    const dds::PublishRates& r = config.dds.rates;
+    const std::string& ns = config.dds.ns;
+    dds::ParticipantPtr participant = dds::createParticipant(config.dds, "mlmap_inspect");
+    fdds::Subscriber* subscriber = participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+    Received rx;
+    std::vector<std::unique_ptr<fdds::DataReaderListener>> listeners;
+    auto onError = [&rx](const std::string& what) {
+      std::lock_guard<std::mutex> lock(rx.mutex);
+      ++rx.malformed;
+      spdlog::warn("{}", what);
+    };
+    std::vector<std::string> expected;
+    auto cloudTopic = [&](const std::string& name, double rate_hz, bool latched,
+                          std::vector<Eigen::Vector3f> Received::*store) {
+      if (name.empty() || rate_hz <= 0) return;
+      expected.push_back(name);
+      auto l = std::make_unique<dds::TakeListener<dds::sensor_msgs::PointCloud2_>>(
+          [&rx, name, store](dds::sensor_msgs::PointCloud2_&& msg) {
+            std::vector<Eigen::Vector3f> points;
+            const bool ok = readCloud(msg, &points);
+            std::lock_guard<std::mutex> lock(rx.mutex);
+            if (!ok) {
+              ++rx.malformed;
+              return;
+            }
+            rx.note(name, msg.data_().size(), points.size());
+            rx.*store = std::move(points);
+          },
+          onError);
+      dds::createReader<dds::sensor_msgs::PointCloud2_PubSubType>(
+          subscriber, dds::ddsTopicName(ns, name), dds::reliableReaderQos(latched, 2), l.get());
+      listeners.push_back(std::move(l));
+    };
+    cloudTopic(n.awareness, r.awareness_hz, false, &Received::awareness);
+    cloudTopic(n.local_map, r.local_map_hz, false, &Received::local);
+    cloudTopic(n.global_map, r.global_map_hz, true, &Received::global);
+    if (!n.esdf_slice.empty() && r.esdf_hz > 0) {
+      expected.push_back(n.esdf_slice);
+      auto l = std::make_unique<dds::TakeListener<dds::sensor_msgs::PointCloud2_>>(
+          [&rx, name = n.esdf_slice](dds::sensor_msgs::PointCloud2_&& msg) {
+            std::vector<Eigen::Vector3f> points;
+            const bool ok = readCloud(msg, &points);
+            std::lock_guard<std::mutex> lock(rx.mutex);
+            if (!ok) return void(++rx.malformed);
+            rx.note(name, msg.data_().size(), points.size());
+            rx.esdf_slice = std::move(points);
+            // intensity = distance: float32 at offset 12 in mlmap's own slice layout.
+            rx.esdf_slice_distance.resize(rx.esdf_slice.size());
+            for (std::size_t i = 0; i < rx.esdf_slice.size() && msg.point_step_() >= 16; ++i) {
+              std::memcpy(&rx.esdf_slice_distance[i], msg.data_().data() + i * msg.point_step_() + 12, 4);
+            }
+          },
+          onError);
+      dds::createReader<dds::sensor_msgs::PointCloud2_PubSubType>(
+          subscriber, dds::ddsTopicName(ns, n.esdf_slice), dds::reliableReaderQos(false, 2), l.get());
+      listeners.push_back(std::move(l));
+    }
+    if (!n.grid.empty() && r.grid_hz > 0) {
+      expected.push_back(n.grid);
+      auto l = std::make_unique<dds::TakeListener<dds::nav_msgs::OccupancyGrid_>>(
+          [&rx, name = n.grid](dds::nav_msgs::OccupancyGrid_&& msg) {
+            std::lock_guard<std::mutex> lock(rx.mutex);
+            rx.note(name, msg.data_().size(), msg.data_().size());
+            rx.grid = std::move(msg);
+          },
+          onError);
+      dds::createReader<dds::nav_msgs::OccupancyGrid_PubSubType>(
+          subscriber, dds::ddsTopicName(ns, n.grid), dds::reliableReaderQos(true, 1), l.get());
+      listeners.push_back(std::move(l));
+    }
+    if (!n.esdf_block.empty() && r.esdf_hz > 0) {
+      expected.push_back(n.esdf_block);
+      auto l = std::make_unique<dds::TakeListener<dds::mlmap_msgs::VoxelBlock_>>(
+          [&rx, name = n.esdf_block](dds::mlmap_msgs::VoxelBlock_&& msg) {
+            std::lock_guard<std::mutex> lock(rx.mutex);
+            rx.note(name, msg.values_().size() * 4, msg.values_().size());
+          },
+          onError);
+      dds::createReader<dds::mlmap_msgs::VoxelBlock_PubSubType>(
+          subscriber, dds::ddsTopicName(ns, n.esdf_block), dds::reliableReaderQos(false, 2), l.get());
+      listeners.push_back(std::move(l));
+    }
+    if (!n.status.empty() && r.status_hz > 0) {
+      expected.push_back(n.status);
+      auto l = std::make_unique<dds::TakeListener<dds::mlmap_msgs::Status_>>(
+          [&rx, name = n.status](dds::mlmap_msgs::Status_&& msg) {
+            std::lock_guard<std::mutex> lock(rx.mutex);
+            rx.note(name, sizeof(msg), 1);
+            rx.status = std::move(msg);
+          },
+          onError);
+      dds::createReader<dds::mlmap_msgs::Status_PubSubType>(
+          subscriber, dds::ddsTopicName(ns, n.status), dds::reliableReaderQos(false, 10), l.get());
+      listeners.push_back(std::move(l));
+    }
+    {
+      expected.push_back("tf");
+      auto l = std::make_unique<dds::TakeListener<::tf2_msgs::msg::dds_::TFMessage_>>(
+          [&rx](::tf2_msgs::msg::dds_::TFMessage_&& msg) {
+            std::lock_guard<std::mutex> lock(rx.mutex);
+            rx.note("tf", 0, msg.transforms_().size());
+            for (const auto& t : msg.transforms_()) {
+              const auto& p = t.transform_().translation_();
+              rx.trajectory_W.emplace_back(p.x_(), p.y_(), p.z_());
+            }
+          },
+          onError);
+      dds::createReader<::tf2_msgs::msg::dds_::TFMessage_PubSubType>(
+          subscriber, dds::ddsTopicName(ns, "tf"), dds::reliableReaderQos(false, 100), l.get());
+      listeners.push_back(std::move(l));
+    }
+
+    spdlog::info("listening for {} layers of mlmap_node (namespace '{}')", expected.size(), ns);
+    const auto start = Clock::now();
+    auto last_print = start;
+    while (!g_stop) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      const auto now = Clock::now();
+      const double elapsed = std::chrono::duration<double>(now - start).count();
+      if (duration_s > 0 && elapsed >= duration_s) break;
+      std::lock_guard<std::mutex> lock(rx.mutex);
+      if (idle_s > 0) {
+        Clock::time_point newest = Clock::time_point::min();
+        for (const auto& [name, t] : rx.topics) newest = std::max(newest, t.last);
+        if (newest != Clock::time_point::min() &&
+            std::chrono::duration<double>(now - newest).count() > idle_s) {
+          break;
+        }
+      }
+      if (std::chrono::duration<double>(now - last_print).count() >= 2.0) {
+        last_print = now;
+        std::string line;
+        for (const auto& [name, t] : rx.topics) line += fmt::format(" {}:{}", name, t.messages);
+        spdlog::info("received{}", line.empty() ? " nothing yet" : line);
+      }
+    }
+    participant.reset();  // no more callbacks from here on
+    listeners.clear();
+
+    // Summary.
+    const double res = config.map.local_map.resolution_m;
+    std::vector<std::string> missing;
+    for (const std::string& name : expected) {
+      if (rx.topics.count(name) == 0) missing.push_back(name);
+    }
+    for (const auto& [name, t] : rx.topics) {
+      const double span = std::chrono::duration<double>(t.last - t.first).count();
+      spdlog::info("{:28} {:6} messages {:8.2f} Hz {:9.1f} kB/msg, last {} points/cells", name,
+                   t.messages, span > 0 ? static_cast<double>(t.messages - 1) / span : 0.0,
+                   static_cast<double>(t.bytes) / 1e3 / static_cast<double>(t.messages), t.last_points);
+    }
+    for (const std::string& name : missing) spdlog::warn("{:28} nothing received", name);
+
+    // Score local + global voxels against ground truth.
+    double precision = -1.0;
+    std::size_t scored = 0;
+    if (!scenario_path.empty() || use_default_scenario) {
+      const io::Scenario scenario =
+          scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(scenario_path);
+      eval::VoxelSet voxels;
+      for (const auto* list : {&rx.local, &rx.global}) {
+        for (const Eigen::Vector3f& p : *list) voxels.insert(voxelIndexOf(p.cast<double>(), res));
+      }
+      std::size_t right = 0;
+      for (const VoxelIndex& v : voxels) right += eval::touchesSolid(scenario.world, v, res) ? 1 : 0;
+      scored = voxels.size();
+      precision = scored > 0 ? static_cast<double>(right) / static_cast<double>(scored) : 0.0;
+      spdlog::info("received occupied voxels (local + global): {}, precision against the scenario: {:.3f}",
+                   scored, precision);
+    }
+
+    if (!out_dir.empty()) {
+      std::filesystem::create_directories(out_dir);
+      std::vector<Eigen::Vector3f> all = rx.global;
+      all.insert(all.end(), rx.local.begin(), rx.local.end());
+      io::MapImageOptions options;
+      options.trajectory_W = rx.trajectory_W;
+      options.title = "received over DDS: local + global occupied voxels";
+      io::writePng(out_dir + "/dds_map_top.png", io::renderTopDown(voxelList(all, res), options));
+      options.title = "received over DDS: awareness occupied cells (last frame)";
+      io::writePng(out_dir + "/dds_awareness_top.png",
+                   io::renderTopDown(voxelList(rx.awareness, res), options));
+      if (!rx.grid.data_().empty()) io::writePng(out_dir + "/dds_grid.png", gridImage(rx.grid));
+      std::ofstream json(out_dir + "/summary.json");
+      json << "{\n  \"topics\": {";
+      bool first = true;
+      for (const auto& [name, t] : rx.topics) {
+        json << (first ? "" : ",") << "\n    \"" << name << "\": {\"messages\": " << t.messages
+             << ", \"bytes\": " << t.bytes << ", \"last_points\": " << t.last_points << "}";
+        first = false;
+      }
+      json << "\n  },\n  \"missing\": [";
+      for (std::size_t i = 0; i < missing.size(); ++i) json << (i ? ", " : "") << '"' << missing[i] << '"';
+      json << "],\n  \"malformed\": " << rx.malformed << ",\n  \"scored_voxels\": " << scored
+           << ",\n  \"precision\": " << precision << ",\n  \"node_frames_mapped\": "
+           << rx.status.frames_mapped_() << "\n}\n";
+      spdlog::info("wrote pictures and summary.json to {}", out_dir);
+    }
+    if (expect_all && !missing.empty()) return 2;
+    if (min_precision > 0 && precision < min_precision) return 2;
+    return 0;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  }
+}

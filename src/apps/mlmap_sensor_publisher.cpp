@@ -1,0 +1,274 @@
+// mlmap_sensor_publisher: plays a sensor driver and an odometry source over DDS. Flies the
+// simulator through a scenario (or replays a folder of RGB-D frames) and publishes, in real time,
+// sensor_msgs/PointCloud2 (or a depth Image + CameraInfo) and geometry_msgs/PoseStamped on the
+// topics of the node configuration.
+
+#include "mlmap/dds/entities.h"
+#include "mlmap/dds/node_config.h"
+#include "mlmap/dds/participant.h"
+#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/io/frame_directory.h"
+#include "mlmap/io/world_yaml.h"
+#include "mlmap/sim/depth_camera.h"
+
+#include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
+#include "sensor_msgs/msg/CameraInfo_PubSubTypes.h"
+#include "sensor_msgs/msg/Image_PubSubTypes.h"
+#include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
+
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstring>
+#include <memory>
+#include <optional>
+#include <thread>
+
+namespace {
+
+using namespace mlmap;
+namespace fdds = eprosima::fastdds::dds;
+using Clock = std::chrono::steady_clock;
+
+std::atomic<bool> g_stop{false};
+extern "C" void onSignal(int) { g_stop = true; }
+
+/// An organised cloud (width x height) of float32 x, y, z, intensity (16 bytes per point, as a
+/// depth camera driver publishes it); pixels without a return are NaN (is_dense false).
+dds::sensor_msgs::PointCloud2_ organisedCloud(const DepthFrame& frame, double stamp_s,
+                                              const std::string& frame_id) {
+  dds::sensor_msgs::PointCloud2_ msg;
+  msg.header_().stamp_(dds::toRosTime(stamp_s));
+  msg.header_().frame_id_(frame_id);
+  const PinholeIntrinsics& k = frame.intrinsics;
+  msg.width_(static_cast<std::uint32_t>(k.width));
+  msg.height_(static_cast<std::uint32_t>(k.height));
+  const char* names[] = {"x", "y", "z", "intensity"};
+  for (std::uint32_t i = 0; i < 4; ++i) {
+    dds::sensor_msgs::PointField_ f;
+    f.name_(names[i]);
+    f.offset_(4 * i);
+    f.datatype_(7);  // FLOAT32
+    f.count_(1);
+    msg.fields_().push_back(f);
+  }
+  msg.is_bigendian_(false);
+  msg.point_step_(16);
+  msg.row_step_(16u * msg.width_());
+  msg.is_dense_(false);
+  std::vector<std::uint8_t>& data = msg.data_();
+  data.resize(static_cast<std::size_t>(msg.row_step_()) * msg.height_());
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::size_t i = 0;
+  for (int v = 0; v < k.height; ++v) {
+    for (int u = 0; u < k.width; ++u, ++i) {
+      const double z = frame.encoding == DepthEncoding::kFloat32Metres ? frame.depth_m[i]
+                                                                       : frame.depth_mm[i] * 1e-3;
+      float p[4] = {nan, nan, nan, nan};
+      if (std::isfinite(z) && z > 0.0 && !(frame.encoding == DepthEncoding::kUint16Millimetres &&
+                                           frame.depth_mm[i] == 65535)) {
+        p[0] = static_cast<float>((u - k.cx) * z / k.fx);
+        p[1] = static_cast<float>((v - k.cy) * z / k.fy);
+        p[2] = static_cast<float>(z);
+        p[3] = static_cast<float>(z);
+      }
+      std::memcpy(data.data() + 16 * i, p, sizeof(p));
+    }
+  }
+  return msg;
+}
+
+dds::sensor_msgs::Image_ depthImage(const DepthFrame& frame, double stamp_s, const std::string& frame_id) {
+  dds::sensor_msgs::Image_ msg;
+  msg.header_().stamp_(dds::toRosTime(stamp_s));
+  msg.header_().frame_id_(frame_id);
+  msg.width_(static_cast<std::uint32_t>(frame.intrinsics.width));
+  msg.height_(static_cast<std::uint32_t>(frame.intrinsics.height));
+  msg.is_bigendian_(0);
+  const bool mm = frame.encoding == DepthEncoding::kUint16Millimetres;
+  msg.encoding_(mm ? "16UC1" : "32FC1");
+  msg.step_(msg.width_() * (mm ? 2u : 4u));
+  const std::size_t bytes = static_cast<std::size_t>(msg.step_()) * msg.height_();
+  msg.data_().resize(bytes);
+  std::memcpy(msg.data_().data(), mm ? static_cast<const void*>(frame.depth_mm.data())
+                                     : static_cast<const void*>(frame.depth_m.data()),
+              bytes);
+  return msg;
+}
+
+dds::sensor_msgs::CameraInfo_ cameraInfo(const PinholeIntrinsics& k, double stamp_s,
+                                         const std::string& frame_id) {
+  dds::sensor_msgs::CameraInfo_ msg;
+  msg.header_().stamp_(dds::toRosTime(stamp_s));
+  msg.header_().frame_id_(frame_id);
+  msg.width_(static_cast<std::uint32_t>(k.width));
+  msg.height_(static_cast<std::uint32_t>(k.height));
+  msg.distortion_model_("plumb_bob");
+  msg.d_(std::vector<double>(5, 0.0));
+  msg.k_({k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1});
+  msg.r_({1, 0, 0, 0, 1, 0, 0, 0, 1});
+  msg.p_({k.fx, 0, k.cx, 0, 0, k.fy, k.cy, 0, 0, 0, 1, 0});
+  return msg;
+}
+
+dds::geometry_msgs::PoseStamped_ poseMessage(const Transform& T_W_B, double stamp_s,
+                                             const std::string& frame_id) {
+  dds::geometry_msgs::PoseStamped_ msg;
+  msg.header_().stamp_(dds::toRosTime(stamp_s));
+  msg.header_().frame_id_(frame_id);
+  const Eigen::Quaterniond q(T_W_B.linear());
+  msg.pose_().position_().x_(T_W_B.translation().x());
+  msg.pose_().position_().y_(T_W_B.translation().y());
+  msg.pose_().position_().z_(T_W_B.translation().z());
+  msg.pose_().orientation_().x_(q.x());
+  msg.pose_().orientation_().y_(q.y());
+  msg.pose_().orientation_().z_(q.z());
+  msg.pose_().orientation_().w_(q.w());
+  return msg;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"mlmap_sensor_publisher: simulated (or replayed) depth sensor + odometry over DDS"};
+  std::string config_path, scenario_path, frames_dir, mode = "cloud";
+  double rate_hz = 0.0, pose_rate_hz = 50.0, wait_s = 10.0;
+  int max_frames = 0;
+  app.add_option("-c,--config", config_path, "node configuration (its dds section and sensor mounting)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--scenario", scenario_path, "scenario YAML (default: the built-in room)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--frames-dir", frames_dir, "replay a folder of RGB-D frames instead (see README)")
+      ->check(CLI::ExistingDirectory);
+  app.add_option("--mode", mode, "what the sensor publishes: cloud (PointCloud2) or depth (Image)")
+      ->check(CLI::IsMember({"cloud", "depth"}));
+  app.add_option("--rate", rate_hz, "frames per second (default: the scenario's; 30 for a replay)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--pose-rate", pose_rate_hz, "poses per second (simulator only)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--max-frames", max_frames, "stop after this many frames (0: all)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--wait-for-subscriber", wait_s,
+                 "seconds to wait for a subscriber of the sensor topic before starting")
+      ->check(CLI::NonNegativeNumber);
+  CLI11_PARSE(app, argc, argv);
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+
+  try {
+    const dds::NodeConfig config =
+        config_path.empty() ? dds::NodeConfig{} : dds::loadNodeConfigYaml(config_path);
+    std::optional<io::Scenario> scenario;
+    std::unique_ptr<io::FrameDirectory> replay;
+    if (!frames_dir.empty()) {
+      replay = std::make_unique<io::FrameDirectory>(frames_dir);
+      if (rate_hz <= 0) rate_hz = io::kFrameDirectoryRate_hz;
+    } else {
+      scenario = scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(scenario_path);
+      if (rate_hz <= 0) rate_hz = scenario->frame_rate_hz;
+    }
+    const dds::TopicNames& topics = config.dds.topics;
+    const bool depth_mode = mode == "depth";
+    const std::string sensor_topic = depth_mode ? topics.depth_image : topics.cloud;
+    if (sensor_topic.empty() || topics.pose.empty() || (depth_mode && topics.camera_info.empty())) {
+      throw std::runtime_error("the configuration disables the " + mode + " or pose topic");
+    }
+
+    dds::ParticipantPtr participant = dds::createParticipant(config.dds, "mlmap_sensor_publisher");
+    fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+    const auto ns = config.dds.ns;
+    // Sensor drivers and odometry publish best-effort (ROS 2 sensor data QoS; PX4 does too).
+    fdds::DataWriterQos sensor_qos = dds::reliableWriterQos(5);
+    sensor_qos.reliability().kind = fdds::BEST_EFFORT_RELIABILITY_QOS;
+    fdds::DataWriter* sensor_writer =
+        depth_mode ? dds::createWriter<dds::sensor_msgs::Image_PubSubType>(publisher, dds::ddsTopicName(ns, sensor_topic), sensor_qos)
+                   : dds::createWriter<dds::sensor_msgs::PointCloud2_PubSubType>(publisher, dds::ddsTopicName(ns, sensor_topic), sensor_qos);
+    fdds::DataWriter* info_writer =
+        depth_mode ? dds::createWriter<dds::sensor_msgs::CameraInfo_PubSubType>(publisher, dds::ddsTopicName(ns, topics.camera_info), sensor_qos)
+                   : nullptr;
+    fdds::DataWriter* pose_writer = dds::createWriter<dds::geometry_msgs::PoseStamped_PubSubType>(
+        publisher, dds::ddsTopicName(ns, topics.pose), sensor_qos);
+
+    // Wait for the mapping node (matching is asynchronous; frames sent before it are lost).
+    const auto wait_start = Clock::now();
+    fdds::PublicationMatchedStatus matched;
+    while (!g_stop && std::chrono::duration<double>(Clock::now() - wait_start).count() < wait_s) {
+      sensor_writer->get_publication_matched_status(matched);
+      if (matched.current_count > 0) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    spdlog::info("publishing {} on {} ({} subscriber(s)) at {} Hz", depth_mode ? "depth images" : "clouds",
+                 dds::ddsTopicName(ns, sensor_topic), matched.current_count, rate_hz);
+
+    const int available = replay ? static_cast<int>(replay->size())
+                                 : static_cast<int>(std::floor(scenario->trajectory.duration_s() * rate_hz)) + 1;
+    const int frames = max_frames > 0 ? std::min(max_frames, available) : available;
+    const Transform T_B_S = config.map.sensor.T_B_S();
+    if (replay && !T_B_S.isApprox(Transform::Identity())) {
+      spdlog::warn("replayed frames are camera poses (T_B_S = identity) but the configuration mounts "
+                   "the sensor elsewhere: give mlmap_node a config with sensor translation 0 and "
+                   "rotation 0 (config/mlmap_node_replay.yaml)");
+    }
+    std::optional<sim::DepthCamera> camera;
+    if (scenario) camera.emplace(scenario->camera);
+    // Stamps look like a real system's: wall-clock time at the start plus the flight time.
+    const double stamp0_s = std::floor(std::chrono::duration<double>(
+                                std::chrono::system_clock::now().time_since_epoch()).count());
+    const std::string& world = config.dds.world_frame;
+    const std::string& sensor = config.dds.sensor_frame;
+    const auto start = Clock::now();
+    const double pose_period_s = 1.0 / pose_rate_hz;
+    long pose_k = 0;
+    int sent = 0;
+    auto publishPose = [&](const Transform& T_W_B, double t_s) {
+      dds::geometry_msgs::PoseStamped_ pose = poseMessage(T_W_B, stamp0_s + t_s, world);
+      pose_writer->write(&pose);
+    };
+    for (int i = 0; i < frames && !g_stop; ++i) {
+      DepthFrame frame;
+      double t_s = 0.0;
+      if (replay) {
+        frame = replay->read(static_cast<std::size_t>(i));
+        t_s = frame.stamp_s;
+      } else {
+        t_s = i / rate_hz;
+        frame.T_W_B = scenario->trajectory.poseAt(t_s);
+        camera->render(scenario->world, frame.T_W_B * T_B_S, t_s, &frame);
+      }
+      std::this_thread::sleep_until(start + std::chrono::duration_cast<Clock::duration>(
+                                                std::chrono::duration<double>(i / rate_hz)));
+      if (replay) {
+        publishPose(frame.T_W_B, t_s);  // the recording has one pose per frame
+      } else {
+        // Odometry runs ahead of the camera by up to one pose period, as a fast IMU-based
+        // estimator does, so each frame finds poses on both sides of its stamp.
+        for (; pose_k * pose_period_s <= t_s + pose_period_s + 1e-9; ++pose_k) {
+          publishPose(scenario->trajectory.poseAt(pose_k * pose_period_s), pose_k * pose_period_s);
+        }
+      }
+      if (depth_mode) {
+        dds::sensor_msgs::CameraInfo_ info = cameraInfo(frame.intrinsics, stamp0_s + t_s, sensor);
+        info_writer->write(&info);
+        dds::sensor_msgs::Image_ image = depthImage(frame, stamp0_s + t_s, sensor);
+        sensor_writer->write(&image);
+      } else {
+        dds::sensor_msgs::PointCloud2_ cloud = organisedCloud(frame, stamp0_s + t_s, sensor);
+        sensor_writer->write(&cloud);
+      }
+      ++sent;
+      if (frames >= 10 && (i + 1) % (frames / 10) == 0) {
+        spdlog::info("{} / {} frames published", i + 1, frames);
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));  // let the last samples leave
+    spdlog::info("done: {} frames published", sent);
+    return 0;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,648 @@
+#include "mlmap/dds/mapping_node.h"
+
+#include "mlmap/dds/entities.h"
+#include "mlmap/dds/ros_conversions.h"
+
+#include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
+#include "mlmap_msgs/msg/Status_PubSubTypes.h"
+#include "mlmap_msgs/msg/VoxelBlock_PubSubTypes.h"
+#include "nav_msgs/msg/OccupancyGrid_PubSubTypes.h"
+#include "nav_msgs/msg/Odometry_PubSubTypes.h"
+#include "sensor_msgs/msg/CameraInfo_PubSubTypes.h"
+#include "sensor_msgs/msg/Image_PubSubTypes.h"
+#include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
+#include "tf2_msgs/msg/TFMessage_PubSubTypes.h"
+
+
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <mutex>
+#include <sstream>
+#include <thread>
+#include <variant>
+
+namespace mlmap::dds {
+namespace fdds = eprosima::fastdds::dds;
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr std::size_t kMaxQueuedFrames = 3;    // clouds / images waiting for the input thread
+constexpr std::size_t kMaxQueuedOther = 1000;  // poses, camera infos
+constexpr std::size_t kMaxPendingFrames = 8;   // decoded frames waiting for their pose
+constexpr double kPoseWait_s = 0.5;            // wall time a frame may wait for its pose
+
+// Log reasons (one line per reason and second).
+enum Reason : int {
+  kReasonMalformed,
+  kReasonNoPose,
+  kReasonFuture,
+  kReasonPose,
+  kReasonNoInfo,
+  kReasonHandover,
+  kReasonEngine,
+  kReasonDds,
+  kReasonCount
+};
+
+double secondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+/// Publishes at most at `rate_hz` (0: never).
+struct RateGate {
+  double period_s = 0.0;
+  bool enabled = false;
+  Clock::time_point last = Clock::time_point::min();
+  explicit RateGate(double rate_hz) : period_s(rate_hz > 0 ? 1.0 / rate_hz : 0.0), enabled(rate_hz > 0) {}
+  [[nodiscard]] bool due() const {
+    return enabled && (last == Clock::time_point::min() || secondsSince(last) >= period_s);
+  }
+  void mark() { last = Clock::now(); }
+};
+
+}  // namespace
+
+struct MappingNode::Impl {
+  // Messages as the listeners hand them over.
+  using Input = std::variant<sensor_msgs::PointCloud2_, sensor_msgs::Image_, sensor_msgs::CameraInfo_,
+                             geometry_msgs::PoseStamped_, nav_msgs::Odometry_>;
+  using Frame = std::variant<PointCloudFrame, DepthFrame>;
+  struct Pending {
+    Frame frame;
+    Clock::time_point since;
+  };
+  /// A layer copy made on an engine thread for the publishing thread.
+  struct LayerCopy {
+    std::vector<Eigen::Vector3f> points_W;
+    double stamp_s = 0.0;
+    bool fresh = false;
+  };
+
+  NodeConfig config;
+  RateLimitedLog log;
+  Clock::time_point started = Clock::now();
+  ParticipantPtr participant;
+  std::unique_ptr<MapEngine> engine;
+  PoseBuffer poses;
+  Transform T_B_S;
+
+  // Listeners must outlive their readers: declared before the participant is reset.
+  std::vector<std::unique_ptr<fdds::DataReaderListener>> listeners;
+  fdds::DataWriter* tf_writer = nullptr;
+  fdds::DataWriter* tf_static_writer = nullptr;
+  fdds::DataWriter* awareness_writer = nullptr;
+  fdds::DataWriter* local_writer = nullptr;
+  fdds::DataWriter* global_writer = nullptr;
+  fdds::DataWriter* grid_writer = nullptr;
+  fdds::DataWriter* esdf_slice_writer = nullptr;
+  fdds::DataWriter* esdf_block_writer = nullptr;
+  fdds::DataWriter* status_writer = nullptr;
+
+  // Hand-over queue (listeners -> input thread).
+  std::mutex input_mutex;
+  std::condition_variable input_cv;
+  std::deque<Input> inputs;
+  std::size_t queued_frames = 0;
+  bool stopping = false;
+
+  // Input thread state.
+  std::deque<Pending> pending;
+  sensor_msgs::CameraInfo_ camera_info;
+  bool have_camera_info = false;
+
+  // Layer copies (engine threads -> publishing thread).
+  std::mutex layer_mutex;
+  std::condition_variable publish_cv;
+  LayerCopy awareness_copy;
+  LayerCopy global_copy;
+  RateGate awareness_copy_gate;
+  RateGate global_copy_gate;
+  std::uint64_t global_version_copied = ~std::uint64_t{0};
+  bool publish_stop = false;
+
+  mutable std::mutex counters_mutex;
+  NodeCounters counters;
+
+  std::thread input_thread;
+  std::thread publish_thread;
+  std::atomic<bool> stopped{false};
+  int domain_id = -1;
+
+  Impl(const NodeConfig& c, LogSink sink)
+      : config(c),
+        log(std::move(sink), kReasonCount),
+        poses(PoseBufferConfig{c.dds.pose_tolerance_s, c.dds.pose_buffer_s, c.dds.max_future_s}),
+        T_B_S(c.map.sensor.T_B_S()),
+        awareness_copy_gate(c.dds.rates.awareness_hz),
+        global_copy_gate(c.dds.rates.global_map_hz) {}
+
+  void count(std::uint64_t NodeCounters::*field, std::uint64_t n = 1) {
+    std::lock_guard<std::mutex> lock(counters_mutex);
+    counters.*field += n;
+  }
+
+  std::string topic(const std::string& name) const { return ddsTopicName(config.dds.ns, name); }
+
+  // ---- Set-up ------------------------------------------------------------------------------
+  template <typename PubSubType>
+  fdds::DataWriter* makeWriter(fdds::Publisher* publisher, const std::string& name,
+                               const fdds::DataWriterQos& qos) {
+    return name.empty() ? nullptr : createWriter<PubSubType>(publisher, topic(name), qos);
+  }
+
+  template <typename PubSubType, typename Msg>
+  void makeReader(fdds::Subscriber* subscriber, const std::string& name) {
+    if (name.empty()) return;
+    auto listener = std::make_unique<TakeListener<Msg>>(
+        [this](Msg&& msg) { handOver(Input(std::move(msg))); },
+        [this](const std::string& what) {
+          count(&NodeCounters::inputs_malformed);
+          log.log(LogLevel::kWarning, kReasonMalformed, what);
+        });
+    createReader<PubSubType>(subscriber, topic(name), sensorReaderQos(), listener.get());
+    listeners.push_back(std::move(listener));
+  }
+
+  void setUp() {
+    MapConfig map_config = config.map;
+    map_config.pipeline.threaded = true;  // Figure 5: the node always runs both stages threaded
+    EngineObservers observers;
+    observers.awareness = [this](const AwarenessMap& map, double stamp_s, const Transform&) {
+      copyAwareness(map, stamp_s);
+    };
+    observers.global = [this](const GlobalMap& map, double stamp_s, std::uint64_t version) {
+      copyGlobal(map, stamp_s, version);
+    };
+    engine = std::make_unique<MapEngine>(
+        map_config, [this](LogLevel level, const std::string& m) { log.log(level, kReasonEngine, m); },
+        std::move(observers));
+
+    participant = createParticipant(config.dds, "mlmap_node");
+    domain_id = static_cast<int>(participant->get_domain_id());
+    fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+    fdds::Subscriber* subscriber = participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+    if (publisher == nullptr || subscriber == nullptr) {
+      throw std::runtime_error("cannot create the DDS publisher / subscriber");
+    }
+
+    using CloudType = sensor_msgs::PointCloud2_PubSubType;
+    using TfType = ::tf2_msgs::msg::dds_::TFMessage_PubSubType;
+    const TopicNames& n = config.dds.topics;
+    const PublishRates& r = config.dds.rates;
+    auto when = [](double rate_hz, const std::string& name) { return rate_hz > 0 ? name : std::string(); };
+    tf_writer = makeWriter<TfType>(publisher, "tf", reliableWriterQos(100));
+    tf_static_writer = makeWriter<TfType>(publisher, "tf_static", latchedWriterQos());
+    awareness_writer = makeWriter<CloudType>(publisher, when(r.awareness_hz, n.awareness), reliableWriterQos(2));
+    local_writer = makeWriter<CloudType>(publisher, when(r.local_map_hz, n.local_map), reliableWriterQos(2));
+    global_writer = makeWriter<CloudType>(publisher, when(r.global_map_hz, n.global_map), latchedWriterQos());
+    grid_writer = makeWriter<nav_msgs::OccupancyGrid_PubSubType>(publisher, when(r.grid_hz, n.grid), latchedWriterQos());
+    esdf_slice_writer = makeWriter<CloudType>(publisher, when(r.esdf_hz, n.esdf_slice), reliableWriterQos(2));
+    esdf_block_writer = makeWriter<mlmap_msgs::VoxelBlock_PubSubType>(publisher, when(r.esdf_hz, n.esdf_block), reliableWriterQos(2));
+    status_writer = makeWriter<mlmap_msgs::Status_PubSubType>(publisher, when(r.status_hz, n.status), reliableWriterQos(10));
+
+    makeReader<sensor_msgs::PointCloud2_PubSubType, sensor_msgs::PointCloud2_>(subscriber, n.cloud);
+    makeReader<geometry_msgs::PoseStamped_PubSubType, geometry_msgs::PoseStamped_>(subscriber, n.pose);
+    makeReader<nav_msgs::Odometry_PubSubType, nav_msgs::Odometry_>(subscriber, n.odometry);
+    makeReader<sensor_msgs::Image_PubSubType, sensor_msgs::Image_>(subscriber, n.depth_image);
+    makeReader<sensor_msgs::CameraInfo_PubSubType, sensor_msgs::CameraInfo_>(subscriber, n.camera_info);
+
+    // The sensor's mounting, latched for late joiners.
+    ::tf2_msgs::msg::dds_::TFMessage_ tf_static;
+    tf_static.transforms_().push_back(toTransformStamped(T_B_S, 0.0, config.dds.body_frame,
+                                                         config.dds.sensor_frame));
+    tf_static_writer->write(&tf_static);
+
+    input_thread = std::thread([this] { inputLoop(); });
+    publish_thread = std::thread([this] { publishLoop(); });
+  }
+
+  // ---- Listener threads: hand over only ----------------------------------------------------
+  void handOver(Input&& input) {
+    const bool is_frame = std::holds_alternative<sensor_msgs::PointCloud2_>(input) ||
+                          std::holds_alternative<sensor_msgs::Image_>(input);
+    bool dropped = false;
+    {
+      std::lock_guard<std::mutex> lock(input_mutex);
+      if (stopping) return;
+      if (is_frame) {
+        if (queued_frames >= kMaxQueuedFrames) {
+          for (auto it = inputs.begin(); it != inputs.end(); ++it) {
+            if (std::holds_alternative<sensor_msgs::PointCloud2_>(*it) ||
+                std::holds_alternative<sensor_msgs::Image_>(*it)) {
+              inputs.erase(it);
+              --queued_frames;
+              dropped = true;
+              break;
+            }
+          }
+        }
+        ++queued_frames;
+      } else if (inputs.size() - queued_frames >= kMaxQueuedOther) {
+        return;  // the input thread is stalled; poses are worthless by then
+      }
+      inputs.push_back(std::move(input));
+    }
+    input_cv.notify_one();
+    if (dropped) {
+      count(&NodeCounters::frames_handover_dropped);
+      log.log(LogLevel::kWarning, kReasonHandover,
+              "input thread behind: dropped the oldest waiting cloud / image");
+    }
+  }
+
+  // ---- Input thread: decode, pair with poses, submit ---------------------------------------
+  void inputLoop() {
+    std::vector<Eigen::Vector3f> scratch;
+    for (;;) {
+      Input input;
+      {
+        std::unique_lock<std::mutex> lock(input_mutex);
+        input_cv.wait_for(lock, std::chrono::milliseconds(50),
+                          [this] { return stopping || !inputs.empty(); });
+        if (inputs.empty()) {
+          if (stopping) break;
+          lock.unlock();
+          expirePending();
+          continue;
+        }
+        input = std::move(inputs.front());
+        inputs.pop_front();
+        if (std::holds_alternative<sensor_msgs::PointCloud2_>(input) ||
+            std::holds_alternative<sensor_msgs::Image_>(input)) {
+          --queued_frames;
+        }
+      }
+      std::visit([this](auto& msg) { handle(msg); }, input);
+      expirePending();
+    }
+    // Shutting down: what still waits for a pose will not get one.
+    if (!pending.empty()) count(&NodeCounters::frames_without_pose, pending.size());
+    pending.clear();
+  }
+
+  void malformed(const char* what, const DecodeStatus& status) {
+    count(&NodeCounters::inputs_malformed);
+    log.log(LogLevel::kWarning, kReasonMalformed,
+            std::string("rejected a malformed ") + what + ": " + toString(status.error) +
+                (status.detail.empty() ? "" : " (" + status.detail + ")"));
+  }
+
+  void handle(sensor_msgs::PointCloud2_& msg) {
+    count(&NodeCounters::clouds_received);
+    if (msg.header_().stamp_().nanosec_() >= 1000000000u) {
+      return malformed("PointCloud2", DecodeStatus{DecodeError::kBadStamp, "nanosec >= 1e9"});
+    }
+    PointCloudFrame frame;
+    const DecodeStatus status = decodePointCloud2(msg, &frame.points_S);
+    if (!status.ok()) return malformed("PointCloud2", status);
+    frame.stamp_s = toSeconds(msg.header_().stamp_());
+    frame.T_B_S = T_B_S;
+    place(Frame(std::move(frame)));
+  }
+
+  void handle(sensor_msgs::Image_& msg) {
+    count(&NodeCounters::images_received);
+    if (!have_camera_info) {
+      count(&NodeCounters::images_without_info);
+      log.log(LogLevel::kWarning, kReasonNoInfo, "depth image before any valid CameraInfo: dropped");
+      return;
+    }
+    if (msg.header_().stamp_().nanosec_() >= 1000000000u) {
+      return malformed("depth Image", DecodeStatus{DecodeError::kBadStamp, "nanosec >= 1e9"});
+    }
+    DepthFrame frame;
+    const DecodeStatus status = decodeDepthImage(msg, camera_info, &frame);
+    if (!status.ok()) return malformed("depth Image", status);
+    frame.stamp_s = toSeconds(msg.header_().stamp_());
+    frame.T_B_S = T_B_S;
+    place(Frame(std::move(frame)));
+  }
+
+  void handle(sensor_msgs::CameraInfo_& msg) {
+    // Checked with each image it is used for (decodeDepthImage()): a bad one rejects those.
+    camera_info = std::move(msg);
+    have_camera_info = true;
+  }
+
+  void handle(geometry_msgs::PoseStamped_& msg) {
+    double stamp_s = 0.0;
+    Transform T_W_B;
+    count(&NodeCounters::poses_received);
+    const DecodeStatus status = decodePose(msg, &stamp_s, &T_W_B);
+    if (!status.ok()) return malformed("PoseStamped", status);
+    addPose(stamp_s, T_W_B);
+  }
+
+  void handle(nav_msgs::Odometry_& msg) {
+    double stamp_s = 0.0;
+    Transform T_W_B;
+    count(&NodeCounters::poses_received);
+    const DecodeStatus status = decodePose(msg, &stamp_s, &T_W_B);
+    if (!status.ok()) return malformed("Odometry", status);
+    addPose(stamp_s, T_W_B);
+  }
+
+  void addPose(double stamp_s, const Transform& T_W_B) {
+    const PoseBuffer::AddResult result = poses.add(stamp_s, T_W_B);
+    if (result != PoseBuffer::AddResult::kAdded) {
+      count(&NodeCounters::poses_rejected);
+      const char* why = result == PoseBuffer::AddResult::kOutOfOrder ? "not newer than the last pose"
+                        : result == PoseBuffer::AddResult::kFuture   ? "far ahead of the last pose"
+                                                                     : "not a valid pose";
+      std::ostringstream m;
+      m << "rejected a pose stamped " << std::fixed << stamp_s << ": " << why;
+      log.log(LogLevel::kWarning, kReasonPose, m.str());
+      return;
+    }
+    // Frames waiting for this pose, in stamp order.
+    while (!pending.empty()) {
+      const PoseBuffer::LookupResult found = tryPlace(pending.front().frame);
+      if (found == PoseBuffer::LookupResult::kPending) break;
+      pending.pop_front();
+    }
+  }
+
+  static double stampOf(const Frame& frame) {
+    return std::visit([](const auto& f) { return f.stamp_s; }, frame);
+  }
+
+  /// Submits the frame when its pose is known; kPending leaves it to the caller.
+  PoseBuffer::LookupResult tryPlace(Frame& frame) {
+    Transform T_W_B;
+    const double stamp_s = stampOf(frame);
+    const PoseBuffer::LookupResult found = poses.lookup(stamp_s, &T_W_B);
+    if (found == PoseBuffer::LookupResult::kFound) {
+      std::visit([&](auto& f) { f.T_W_B = T_W_B; }, frame);
+      const FrameStatus status = std::visit([&](auto& f) { return engine->submit(std::move(f)); }, frame);
+      count(status == FrameStatus::kAccepted ? &NodeCounters::frames_submitted
+                                             : &NodeCounters::frames_engine_rejected);
+    } else if (found == PoseBuffer::LookupResult::kNoPose) {
+      noPose(stamp_s);
+    }
+    return found;
+  }
+
+  void noPose(double stamp_s) {
+    count(&NodeCounters::frames_without_pose);
+    std::ostringstream m;
+    m << "dropped a frame stamped " << std::fixed << stamp_s << ": no pose within "
+      << config.dds.pose_tolerance_s << " s of it";
+    log.log(LogLevel::kWarning, kReasonNoPose, m.str());
+  }
+
+  void place(Frame&& frame) {
+    double newest = 0.0;
+    const double stamp_s = stampOf(frame);
+    if (poses.newestStamp(&newest) && stamp_s > newest + config.dds.max_future_s) {
+      count(&NodeCounters::frames_future);
+      std::ostringstream m;
+      m << "dropped a frame stamped " << std::fixed << stamp_s << ": " << stamp_s - newest
+        << " s after the newest pose";
+      log.log(LogLevel::kWarning, kReasonFuture, m.str());
+      return;
+    }
+    if (!pending.empty() || tryPlace(frame) == PoseBuffer::LookupResult::kPending) {
+      if (!pending.empty() && stamp_s <= stampOf(pending.back().frame)) {
+        // Waiting frames stay in stamp order; the engine would refuse this one anyway.
+        count(&NodeCounters::frames_engine_rejected);
+        return;
+      }
+      if (pending.size() >= kMaxPendingFrames) {
+        noPose(stampOf(pending.front().frame));
+        pending.pop_front();
+      }
+      pending.push_back({std::move(frame), Clock::now()});
+      // A pose may already cover it (frames queued behind an earlier waiting one).
+      while (!pending.empty() && tryPlace(pending.front().frame) != PoseBuffer::LookupResult::kPending) {
+        pending.pop_front();
+      }
+    }
+  }
+
+  void expirePending() {
+    while (!pending.empty() && secondsSince(pending.front().since) > kPoseWait_s) {
+      noPose(stampOf(pending.front().frame));
+      pending.pop_front();
+    }
+  }
+
+  // ---- Engine threads: copy layers for the publishing thread -------------------------------
+  void copyAwareness(const AwarenessMap& map, double stamp_s) {
+    std::lock_guard<std::mutex> lock(layer_mutex);
+    if (!awareness_copy_gate.due()) return;
+    awareness_copy_gate.mark();
+    awareness_copy.points_W.clear();
+    AwarenessCell cell;
+    for (const Eigen::Vector3d& p : map.occupiedPoints()) {
+      if (map.cellOf(p, &cell)) awareness_copy.points_W.push_back(map.cellCenter(cell).cast<float>());
+    }
+    awareness_copy.stamp_s = stamp_s;
+    awareness_copy.fresh = true;
+    publish_cv.notify_one();
+  }
+
+  void copyGlobal(const GlobalMap& map, double stamp_s, std::uint64_t version, bool force = false) {
+    std::lock_guard<std::mutex> lock(layer_mutex);
+    if (version == global_version_copied || (!force && !global_copy_gate.due())) return;
+    global_copy_gate.mark();
+    global_version_copied = version;
+    global_copy.points_W.clear();
+    global_copy.points_W.reserve(map.voxelCount());
+    const double res = map.resolution_m();
+    map.forEachVoxel([&](const VoxelIndex& g, double) {
+      global_copy.points_W.push_back(voxelCenter(g, res).cast<float>());
+    });
+    global_copy.stamp_s = stamp_s;
+    global_copy.fresh = true;
+    publish_cv.notify_one();
+  }
+
+  // ---- Publishing thread -------------------------------------------------------------------
+  void write(fdds::DataWriter* writer, void* msg) {
+    if (writer == nullptr) return;
+    if (writer->write(msg)) {
+      count(&NodeCounters::messages_published);
+    } else {
+      log.log(LogLevel::kWarning, kReasonDds, "a DDS write failed on " + writer->get_topic()->get_name());
+    }
+  }
+
+  void publishLoop() {
+    const PublishRates& r = config.dds.rates;
+    RateGate local_gate(r.local_map_hz), grid_gate(r.grid_hz), esdf_gate(r.esdf_hz),
+        status_gate(r.status_hz);
+    std::uint64_t tf_frame = 0, local_frame = 0;
+    std::shared_ptr<const ProjectedGrid> grid_sent;  // held, so a new one never reuses its address
+    std::shared_ptr<const EsdfMap> esdf_sent;
+    const std::string& world = config.dds.world_frame;
+    for (bool last = false; !last;) {
+      LayerCopy awareness, global;
+      {
+        std::unique_lock<std::mutex> lock(layer_mutex);
+        publish_cv.wait_for(lock, std::chrono::milliseconds(20), [this] { return publish_stop; });
+        last = publish_stop;
+        if (awareness_copy.fresh) std::swap(awareness, awareness_copy);
+        if (global_copy.fresh) std::swap(global, global_copy);
+        awareness_copy.fresh = global_copy.fresh = false;
+      }
+      if (awareness.fresh) {
+        sensor_msgs::PointCloud2_ msg = encodePointCloud2(awareness.points_W, nullptr, awareness.stamp_s, world);
+        write(awareness_writer, &msg);
+      }
+      if (global.fresh) {
+        sensor_msgs::PointCloud2_ msg = encodePointCloud2(global.points_W, nullptr, global.stamp_s, world);
+        write(global_writer, &msg);
+      }
+      const std::shared_ptr<const MapSnapshot> snap = engine->snapshot();
+      if (snap && snap->frame() != tf_frame) {
+        tf_frame = snap->frame();
+        ::tf2_msgs::msg::dds_::TFMessage_ tf;
+        tf.transforms_().push_back(toTransformStamped(snap->T_W_B(), snap->stamp_s(), world,
+                                                      config.dds.body_frame));
+        write(tf_writer, &tf);
+      }
+      if (snap && snap->frame() != local_frame && (last || local_gate.due()) && local_writer) {
+        local_gate.mark();
+        local_frame = snap->frame();
+        sensor_msgs::PointCloud2_ msg =
+            encodePointCloud2(occupiedCenters(snap->window()), nullptr, snap->stamp_s(), world);
+        write(local_writer, &msg);
+      }
+      if (snap && snap->gridPtr() != grid_sent && !snap->grid().cells.empty() &&
+          (last || grid_gate.due()) && grid_writer) {
+        grid_gate.mark();
+        grid_sent = snap->gridPtr();
+        const double z_m = snap->grid().band_min_z_m;
+        nav_msgs::OccupancyGrid_ msg = toOccupancyGrid(snap->grid(), z_m, snap->stamp_s(), world);
+        write(grid_writer, &msg);
+      }
+      if (snap && snap->esdf() != nullptr && snap->esdfPtr() != esdf_sent && !snap->esdf()->empty() &&
+          (last || esdf_gate.due())) {
+        esdf_gate.mark();
+        esdf_sent = snap->esdfPtr();
+        if (esdf_block_writer) {
+          mlmap_msgs::VoxelBlock_ block = toVoxelBlock(*snap->esdf(), snap->stamp_s(), world);
+          write(esdf_block_writer, &block);
+        }
+        if (esdf_slice_writer) {
+          const double z_m = snap->T_W_B().translation().z() + config.dds.esdf_slice_height_m;
+          sensor_msgs::PointCloud2_ slice = esdfSliceCloud(*snap->esdf(), z_m, snap->stamp_s(), world);
+          write(esdf_slice_writer, &slice);
+        }
+      }
+      if ((last || status_gate.due()) && status_writer) {
+        status_gate.mark();
+        mlmap_msgs::Status_ status = statusMessage(snap ? snap->stamp_s() : 0.0);
+        write(status_writer, &status);
+      }
+    }
+  }
+
+  static std::vector<Eigen::Vector3f> occupiedCenters(const LocalWindow& window) {
+    std::vector<Eigen::Vector3f> out;
+    const Eigen::Vector3i& n = window.size;
+    std::size_t i = 0;
+    for (int x = 0; x < n.x(); ++x) {
+      for (int y = 0; y < n.y(); ++y) {
+        for (int z = 0; z < n.z(); ++z, ++i) {
+          if (window.model.state(window.log_odds[i]) == Occupancy::kOccupied) {
+            out.push_back(voxelCenter(window.min_index + VoxelIndex(x, y, z), window.resolution_m)
+                              .cast<float>());
+          }
+        }
+      }
+    }
+    return out;
+  }
+
+  mlmap_msgs::Status_ statusMessage(double stamp_s) const {
+    const EngineStats s = engine->stats();
+    const NodeCounters c = snapshotCounters();
+    mlmap_msgs::Status_ m;
+    m.header_().stamp_(toRosTime(stamp_s));
+    m.header_().frame_id_(config.dds.world_frame);
+    m.version_(1);
+    m.uptime_s_(secondsSince(started));
+    m.frames_in_(s.frames_in);
+    m.frames_mapped_(s.frames_mapped);
+    m.frames_dropped_(s.frames_dropped + c.frames_handover_dropped);
+    m.frames_rejected_(s.rejected_invalid_pose + s.rejected_out_of_order + s.rejected_empty +
+                       s.rejected_bad_image);
+    m.clouds_malformed_(c.inputs_malformed);
+    m.clouds_without_pose_(c.frames_without_pose + c.frames_future + c.images_without_info);
+    m.poses_rejected_(c.poses_rejected);
+    m.points_rejected_(s.points.rejected_non_finite + s.points.rejected_too_close);
+    m.awareness_median_ms_(s.awareness.median_ms);
+    m.awareness_p99_ms_(s.awareness.p99_ms);
+    m.local_global_median_ms_(s.local_global.median_ms);
+    m.local_global_p99_ms_(s.local_global.p99_ms);
+    m.total_median_ms_(s.total.median_ms);
+    m.total_p99_ms_(s.total.p99_ms);
+    m.esdf_last_ms_(s.planning.last_esdf_ms);
+    m.awareness_bytes_(s.memory.awareness_bytes);
+    m.local_bytes_(s.memory.local_bytes);
+    m.global_bytes_(s.memory.global_bytes);
+    m.planning_bytes_(s.memory.planning_bytes);
+    m.global_voxels_(s.global_voxels);
+    return m;
+  }
+
+  NodeCounters snapshotCounters() const {
+    std::lock_guard<std::mutex> lock(counters_mutex);
+    return counters;
+  }
+
+  void stop() {
+    if (stopped.exchange(true)) return;
+    {
+      std::lock_guard<std::mutex> lock(input_mutex);
+      stopping = true;
+    }
+    input_cv.notify_all();
+    if (input_thread.joinable()) input_thread.join();  // drains the hand-over queue
+    if (engine) {
+      engine->flush();
+      // The engine is idle now: hand over the global map's last state, whatever the rate limit.
+      const EngineStats s = engine->stats();
+      const std::shared_ptr<const MapSnapshot> snap = engine->snapshot();
+      if (global_writer != nullptr && s.frames_mapped > 0) {
+        copyGlobal(engine->globalMap(), snap ? snap->stamp_s() : 0.0,
+                   s.local.submaps_retired + s.local.submaps_restored, true);
+      }
+    }
+    {
+      std::lock_guard<std::mutex> lock(layer_mutex);
+      publish_stop = true;
+    }
+    publish_cv.notify_all();
+    if (publish_thread.joinable()) publish_thread.join();  // publishes the final state once
+    // Readers first (their listeners die with us), then everything else.
+    participant.reset();
+    listeners.clear();
+  }
+};
+
+MappingNode::MappingNode(const NodeConfig& config, LogSink log)
+    : impl_((throwIfInvalid(config.dds.validate(), "dds configuration"),
+             std::make_unique<Impl>(config, std::move(log)))) {
+  try {
+    impl_->setUp();
+  } catch (...) {
+    impl_->stop();
+    throw;
+  }
+}
+
+MappingNode::~MappingNode() { stop(); }
+
+void MappingNode::stop() { impl_->stop(); }
+
+NodeCounters MappingNode::counters() const { return impl_->snapshotCounters(); }
+
+EngineStats MappingNode::engineStats() const { return impl_->engine->stats(); }
+
+int MappingNode::domainId() const { return impl_->domain_id; }
+
+}  // namespace mlmap::dds
