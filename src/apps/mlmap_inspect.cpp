@@ -54,8 +54,8 @@ struct Received {
   std::map<std::string, TopicLog> topics;
   std::vector<Eigen::Vector3f> local, global, awareness, esdf_slice;
   std::vector<float> esdf_slice_distance;
-  dds::nav_msgs::OccupancyGrid_ grid;
-  dds::mlmap_msgs::Status_ status;
+  mlmap::dds::nav_msgs::OccupancyGrid_ grid;
+  mlmap::dds::mlmap_msgs::Status_ status;
   std::vector<Eigen::Vector3d> trajectory_W;
   std::uint64_t malformed = 0;
 
@@ -70,11 +70,11 @@ struct Received {
 };
 
 /// x, y, z (and intensity when present) of a cloud; false when it is malformed.
-bool readCloud(const dds::sensor_msgs::PointCloud2_& msg, std::vector<Eigen::Vector3f>* points) {
-  return dds::decodePointCloud2(msg, points).ok();
+bool readCloud(const mlmap::dds::sensor_msgs::PointCloud2_& msg, std::vector<Eigen::Vector3f>* points) {
+  return mlmap::dds::decodePointCloud2(msg, points).ok();
 }
 
-cv::Mat gridImage(const dds::nav_msgs::OccupancyGrid_& grid) {
+cv::Mat gridImage(const mlmap::dds::nav_msgs::OccupancyGrid_& grid) {
   const int w = static_cast<int>(grid.info_().width_());
   const int h = static_cast<int>(grid.info_().height_());
   cv::Mat image(h, w, CV_8UC3);
@@ -131,12 +131,12 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, onSignal);
 
   try {
-    const dds::NodeConfig config =
-        config_path.empty() ? dds::NodeConfig{} : dds::loadNodeConfigYaml(config_path);
-    const dds::TopicNames& n = config.dds.topics;
-    const dds::PublishRates& r = config.dds.rates;
+    const mlmap::dds::NodeConfig config =
+        config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(config_path);
+    const mlmap::dds::TopicNames& n = config.dds.topics;
+    const mlmap::dds::PublishRates& r = config.dds.rates;
     const std::string& ns = config.dds.ns;
-    dds::ParticipantPtr participant = dds::createParticipant(config.dds, "mlmap_inspect");
+    mlmap::dds::ParticipantPtr participant = mlmap::dds::createParticipant(config.dds, "mlmap_inspect");
     fdds::Subscriber* subscriber = participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
     Received rx;
     std::vector<std::unique_ptr<fdds::DataReaderListener>> listeners;
@@ -150,8 +150,8 @@ int main(int argc, char** argv) {
                           std::vector<Eigen::Vector3f> Received::*store) {
       if (name.empty() || rate_hz <= 0) return;
       expected.push_back(name);
-      auto l = std::make_unique<dds::TakeListener<dds::sensor_msgs::PointCloud2_>>(
-          [&rx, name, store](dds::sensor_msgs::PointCloud2_&& msg) {
+      auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::sensor_msgs::PointCloud2_>>(
+          [&rx, name, store](mlmap::dds::sensor_msgs::PointCloud2_&& msg) {
             std::vector<Eigen::Vector3f> points;
             const bool ok = readCloud(msg, &points);
             std::lock_guard<std::mutex> lock(rx.mutex);
@@ -163,8 +163,8 @@ int main(int argc, char** argv) {
             rx.*store = std::move(points);
           },
           onError);
-      dds::createReader<dds::sensor_msgs::PointCloud2_PubSubType>(
-          subscriber, dds::ddsTopicName(ns, name), dds::reliableReaderQos(latched, 2), l.get());
+      mlmap::dds::createReader<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(
+          subscriber, mlmap::dds::ddsTopicName(ns, name), mlmap::dds::reliableReaderQos(latched, 2), l.get());
       listeners.push_back(std::move(l));
     };
     cloudTopic(n.awareness, r.awareness_hz, false, &Received::awareness);
@@ -172,8 +172,8 @@ int main(int argc, char** argv) {
     cloudTopic(n.global_map, r.global_map_hz, true, &Received::global);
     if (!n.esdf_slice.empty() && r.esdf_hz > 0) {
       expected.push_back(n.esdf_slice);
-      auto l = std::make_unique<dds::TakeListener<dds::sensor_msgs::PointCloud2_>>(
-          [&rx, name = n.esdf_slice](dds::sensor_msgs::PointCloud2_&& msg) {
+      auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::sensor_msgs::PointCloud2_>>(
+          [&rx, name = n.esdf_slice](mlmap::dds::sensor_msgs::PointCloud2_&& msg) {
             std::vector<Eigen::Vector3f> points;
             const bool ok = readCloud(msg, &points);
             std::lock_guard<std::mutex> lock(rx.mutex);
@@ -187,51 +187,51 @@ int main(int argc, char** argv) {
             }
           },
           onError);
-      dds::createReader<dds::sensor_msgs::PointCloud2_PubSubType>(
-          subscriber, dds::ddsTopicName(ns, n.esdf_slice), dds::reliableReaderQos(false, 2), l.get());
+      mlmap::dds::createReader<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(
+          subscriber, mlmap::dds::ddsTopicName(ns, n.esdf_slice), mlmap::dds::reliableReaderQos(false, 2), l.get());
       listeners.push_back(std::move(l));
     }
     if (!n.grid.empty() && r.grid_hz > 0) {
       expected.push_back(n.grid);
-      auto l = std::make_unique<dds::TakeListener<dds::nav_msgs::OccupancyGrid_>>(
-          [&rx, name = n.grid](dds::nav_msgs::OccupancyGrid_&& msg) {
+      auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::nav_msgs::OccupancyGrid_>>(
+          [&rx, name = n.grid](mlmap::dds::nav_msgs::OccupancyGrid_&& msg) {
             std::lock_guard<std::mutex> lock(rx.mutex);
             rx.note(name, msg.data_().size(), msg.data_().size());
             rx.grid = std::move(msg);
           },
           onError);
-      dds::createReader<dds::nav_msgs::OccupancyGrid_PubSubType>(
-          subscriber, dds::ddsTopicName(ns, n.grid), dds::reliableReaderQos(true, 1), l.get());
+      mlmap::dds::createReader<mlmap::dds::nav_msgs::OccupancyGrid_PubSubType>(
+          subscriber, mlmap::dds::ddsTopicName(ns, n.grid), mlmap::dds::reliableReaderQos(true, 1), l.get());
       listeners.push_back(std::move(l));
     }
     if (!n.esdf_block.empty() && r.esdf_hz > 0) {
       expected.push_back(n.esdf_block);
-      auto l = std::make_unique<dds::TakeListener<dds::mlmap_msgs::VoxelBlock_>>(
-          [&rx, name = n.esdf_block](dds::mlmap_msgs::VoxelBlock_&& msg) {
+      auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::mlmap_msgs::VoxelBlock_>>(
+          [&rx, name = n.esdf_block](mlmap::dds::mlmap_msgs::VoxelBlock_&& msg) {
             std::lock_guard<std::mutex> lock(rx.mutex);
             rx.note(name, msg.values_().size() * 4, msg.values_().size());
           },
           onError);
-      dds::createReader<dds::mlmap_msgs::VoxelBlock_PubSubType>(
-          subscriber, dds::ddsTopicName(ns, n.esdf_block), dds::reliableReaderQos(false, 2), l.get());
+      mlmap::dds::createReader<mlmap::dds::mlmap_msgs::VoxelBlock_PubSubType>(
+          subscriber, mlmap::dds::ddsTopicName(ns, n.esdf_block), mlmap::dds::reliableReaderQos(false, 2), l.get());
       listeners.push_back(std::move(l));
     }
     if (!n.status.empty() && r.status_hz > 0) {
       expected.push_back(n.status);
-      auto l = std::make_unique<dds::TakeListener<dds::mlmap_msgs::Status_>>(
-          [&rx, name = n.status](dds::mlmap_msgs::Status_&& msg) {
+      auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::mlmap_msgs::Status_>>(
+          [&rx, name = n.status](mlmap::dds::mlmap_msgs::Status_&& msg) {
             std::lock_guard<std::mutex> lock(rx.mutex);
             rx.note(name, sizeof(msg), 1);
             rx.status = std::move(msg);
           },
           onError);
-      dds::createReader<dds::mlmap_msgs::Status_PubSubType>(
-          subscriber, dds::ddsTopicName(ns, n.status), dds::reliableReaderQos(false, 10), l.get());
+      mlmap::dds::createReader<mlmap::dds::mlmap_msgs::Status_PubSubType>(
+          subscriber, mlmap::dds::ddsTopicName(ns, n.status), mlmap::dds::reliableReaderQos(false, 10), l.get());
       listeners.push_back(std::move(l));
     }
     {
       expected.push_back("tf");
-      auto l = std::make_unique<dds::TakeListener<::tf2_msgs::msg::dds_::TFMessage_>>(
+      auto l = std::make_unique<mlmap::dds::TakeListener<::tf2_msgs::msg::dds_::TFMessage_>>(
           [&rx](::tf2_msgs::msg::dds_::TFMessage_&& msg) {
             std::lock_guard<std::mutex> lock(rx.mutex);
             rx.note("tf", 0, msg.transforms_().size());
@@ -241,8 +241,8 @@ int main(int argc, char** argv) {
             }
           },
           onError);
-      dds::createReader<::tf2_msgs::msg::dds_::TFMessage_PubSubType>(
-          subscriber, dds::ddsTopicName(ns, "tf"), dds::reliableReaderQos(false, 100), l.get());
+      mlmap::dds::createReader<::tf2_msgs::msg::dds_::TFMessage_PubSubType>(
+          subscriber, mlmap::dds::ddsTopicName(ns, "tf"), mlmap::dds::reliableReaderQos(false, 100), l.get());
       listeners.push_back(std::move(l));
     }
 

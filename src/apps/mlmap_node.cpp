@@ -42,23 +42,23 @@ int main(int argc, char** argv) {
   auto logger = spdlog::stderr_color_mt("mlmap_node");
   spdlog::set_default_logger(logger);
   try {
-    const dds::NodeConfig config =
-        config_path.empty() ? dds::NodeConfig{} : dds::loadNodeConfigYaml(config_path);
+    const mlmap::dds::NodeConfig config =
+        config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(config_path);
     if (print_config) {
-      std::cout << dds::toYaml(config);
+      std::cout << mlmap::dds::toYaml(config);
       return 0;
     }
     std::signal(SIGINT, onSignal);
     std::signal(SIGTERM, onSignal);
-    dds::MappingNode node(config, [](LogLevel level, const std::string& message) {
+    mlmap::dds::MappingNode node(config, [](LogLevel level, const std::string& message) {
       spdlog::log(level == LogLevel::kError     ? spdlog::level::err
                   : level == LogLevel::kWarning ? spdlog::level::warn
                                                 : spdlog::level::info,
                   message);
     });
     spdlog::info("mapping on DDS domain {} (namespace '{}'), cloud topic {}, pose topic {}",
-                 node.domainId(), config.dds.ns, dds::ddsTopicName(config.dds.ns, config.dds.topics.cloud),
-                 dds::ddsTopicName(config.dds.ns, config.dds.topics.pose));
+                 node.domainId(), config.dds.ns, mlmap::dds::ddsTopicName(config.dds.ns, config.dds.topics.cloud),
+                 mlmap::dds::ddsTopicName(config.dds.ns, config.dds.topics.pose));
     const auto start = std::chrono::steady_clock::now();
     auto last_report = start;
     while (!g_stop) {
@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
       if (report_every_s > 0 && std::chrono::duration<double>(now - last_report).count() >= report_every_s) {
         last_report = now;
         const EngineStats s = node.engineStats();
-        const dds::NodeCounters c = node.counters();
+        const mlmap::dds::NodeCounters c = node.counters();
         spdlog::info("frames: {} received, {} mapped, {} without pose, {} malformed; total {:.1f} ms "
                      "median, {:.1f} ms p99; {:.1f} MB",
                      c.clouds_received + c.images_received, s.frames_mapped, c.frames_without_pose,
@@ -79,7 +79,7 @@ int main(int argc, char** argv) {
     spdlog::info("stopping");
     node.stop();
     const EngineStats s = node.engineStats();
-    const dds::NodeCounters c = node.counters();
+    const mlmap::dds::NodeCounters c = node.counters();
     spdlog::info("done: {} frames mapped ({} dropped, {} rejected by the engine, {} without pose, "
                  "{} malformed inputs, {} poses rejected); {} messages published",
                  s.frames_mapped, s.frames_dropped + c.frames_handover_dropped,

@@ -39,17 +39,17 @@ extern "C" void onSignal(int) { g_stop = true; }
 
 /// An organised cloud (width x height) of float32 x, y, z, intensity (16 bytes per point, as a
 /// depth camera driver publishes it); pixels without a return are NaN (is_dense false).
-dds::sensor_msgs::PointCloud2_ organisedCloud(const DepthFrame& frame, double stamp_s,
+mlmap::dds::sensor_msgs::PointCloud2_ organisedCloud(const DepthFrame& frame, double stamp_s,
                                               const std::string& frame_id) {
-  dds::sensor_msgs::PointCloud2_ msg;
-  msg.header_().stamp_(dds::toRosTime(stamp_s));
+  mlmap::dds::sensor_msgs::PointCloud2_ msg;
+  msg.header_().stamp_(mlmap::dds::toRosTime(stamp_s));
   msg.header_().frame_id_(frame_id);
   const PinholeIntrinsics& k = frame.intrinsics;
   msg.width_(static_cast<std::uint32_t>(k.width));
   msg.height_(static_cast<std::uint32_t>(k.height));
   const char* names[] = {"x", "y", "z", "intensity"};
   for (std::uint32_t i = 0; i < 4; ++i) {
-    dds::sensor_msgs::PointField_ f;
+    mlmap::dds::sensor_msgs::PointField_ f;
     f.name_(names[i]);
     f.offset_(4 * i);
     f.datatype_(7);  // FLOAT32
@@ -82,9 +82,9 @@ dds::sensor_msgs::PointCloud2_ organisedCloud(const DepthFrame& frame, double st
   return msg;
 }
 
-dds::sensor_msgs::Image_ depthImage(const DepthFrame& frame, double stamp_s, const std::string& frame_id) {
-  dds::sensor_msgs::Image_ msg;
-  msg.header_().stamp_(dds::toRosTime(stamp_s));
+mlmap::dds::sensor_msgs::Image_ depthImage(const DepthFrame& frame, double stamp_s, const std::string& frame_id) {
+  mlmap::dds::sensor_msgs::Image_ msg;
+  msg.header_().stamp_(mlmap::dds::toRosTime(stamp_s));
   msg.header_().frame_id_(frame_id);
   msg.width_(static_cast<std::uint32_t>(frame.intrinsics.width));
   msg.height_(static_cast<std::uint32_t>(frame.intrinsics.height));
@@ -100,10 +100,10 @@ dds::sensor_msgs::Image_ depthImage(const DepthFrame& frame, double stamp_s, con
   return msg;
 }
 
-dds::sensor_msgs::CameraInfo_ cameraInfo(const PinholeIntrinsics& k, double stamp_s,
+mlmap::dds::sensor_msgs::CameraInfo_ cameraInfo(const PinholeIntrinsics& k, double stamp_s,
                                          const std::string& frame_id) {
-  dds::sensor_msgs::CameraInfo_ msg;
-  msg.header_().stamp_(dds::toRosTime(stamp_s));
+  mlmap::dds::sensor_msgs::CameraInfo_ msg;
+  msg.header_().stamp_(mlmap::dds::toRosTime(stamp_s));
   msg.header_().frame_id_(frame_id);
   msg.width_(static_cast<std::uint32_t>(k.width));
   msg.height_(static_cast<std::uint32_t>(k.height));
@@ -115,10 +115,10 @@ dds::sensor_msgs::CameraInfo_ cameraInfo(const PinholeIntrinsics& k, double stam
   return msg;
 }
 
-dds::geometry_msgs::PoseStamped_ poseMessage(const Transform& T_W_B, double stamp_s,
+mlmap::dds::geometry_msgs::PoseStamped_ poseMessage(const Transform& T_W_B, double stamp_s,
                                              const std::string& frame_id) {
-  dds::geometry_msgs::PoseStamped_ msg;
-  msg.header_().stamp_(dds::toRosTime(stamp_s));
+  mlmap::dds::geometry_msgs::PoseStamped_ msg;
+  msg.header_().stamp_(mlmap::dds::toRosTime(stamp_s));
   msg.header_().frame_id_(frame_id);
   const Eigen::Quaterniond q(T_W_B.linear());
   msg.pose_().position_().x_(T_W_B.translation().x());
@@ -160,8 +160,8 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, onSignal);
 
   try {
-    const dds::NodeConfig config =
-        config_path.empty() ? dds::NodeConfig{} : dds::loadNodeConfigYaml(config_path);
+    const mlmap::dds::NodeConfig config =
+        config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(config_path);
     std::optional<io::Scenario> scenario;
     std::unique_ptr<io::FrameDirectory> replay;
     if (!frames_dir.empty()) {
@@ -171,27 +171,27 @@ int main(int argc, char** argv) {
       scenario = scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(scenario_path);
       if (rate_hz <= 0) rate_hz = scenario->frame_rate_hz;
     }
-    const dds::TopicNames& topics = config.dds.topics;
+    const mlmap::dds::TopicNames& topics = config.dds.topics;
     const bool depth_mode = mode == "depth";
     const std::string sensor_topic = depth_mode ? topics.depth_image : topics.cloud;
     if (sensor_topic.empty() || topics.pose.empty() || (depth_mode && topics.camera_info.empty())) {
       throw std::runtime_error("the configuration disables the " + mode + " or pose topic");
     }
 
-    dds::ParticipantPtr participant = dds::createParticipant(config.dds, "mlmap_sensor_publisher");
+    mlmap::dds::ParticipantPtr participant = mlmap::dds::createParticipant(config.dds, "mlmap_sensor_publisher");
     fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
     const auto ns = config.dds.ns;
     // Sensor drivers and odometry publish best-effort (ROS 2 sensor data QoS; PX4 does too).
-    fdds::DataWriterQos sensor_qos = dds::reliableWriterQos(5);
+    fdds::DataWriterQos sensor_qos = mlmap::dds::reliableWriterQos(5);
     sensor_qos.reliability().kind = fdds::BEST_EFFORT_RELIABILITY_QOS;
     fdds::DataWriter* sensor_writer =
-        depth_mode ? dds::createWriter<dds::sensor_msgs::Image_PubSubType>(publisher, dds::ddsTopicName(ns, sensor_topic), sensor_qos)
-                   : dds::createWriter<dds::sensor_msgs::PointCloud2_PubSubType>(publisher, dds::ddsTopicName(ns, sensor_topic), sensor_qos);
+        depth_mode ? mlmap::dds::createWriter<mlmap::dds::sensor_msgs::Image_PubSubType>(publisher, mlmap::dds::ddsTopicName(ns, sensor_topic), sensor_qos)
+                   : mlmap::dds::createWriter<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(publisher, mlmap::dds::ddsTopicName(ns, sensor_topic), sensor_qos);
     fdds::DataWriter* info_writer =
-        depth_mode ? dds::createWriter<dds::sensor_msgs::CameraInfo_PubSubType>(publisher, dds::ddsTopicName(ns, topics.camera_info), sensor_qos)
+        depth_mode ? mlmap::dds::createWriter<mlmap::dds::sensor_msgs::CameraInfo_PubSubType>(publisher, mlmap::dds::ddsTopicName(ns, topics.camera_info), sensor_qos)
                    : nullptr;
-    fdds::DataWriter* pose_writer = dds::createWriter<dds::geometry_msgs::PoseStamped_PubSubType>(
-        publisher, dds::ddsTopicName(ns, topics.pose), sensor_qos);
+    fdds::DataWriter* pose_writer = mlmap::dds::createWriter<mlmap::dds::geometry_msgs::PoseStamped_PubSubType>(
+        publisher, mlmap::dds::ddsTopicName(ns, topics.pose), sensor_qos);
 
     // Wait for the mapping node (matching is asynchronous; frames sent before it are lost).
     const auto wait_start = Clock::now();
@@ -202,7 +202,7 @@ int main(int argc, char** argv) {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
     spdlog::info("publishing {} on {} ({} subscriber(s)) at {} Hz", depth_mode ? "depth images" : "clouds",
-                 dds::ddsTopicName(ns, sensor_topic), matched.current_count, rate_hz);
+                 mlmap::dds::ddsTopicName(ns, sensor_topic), matched.current_count, rate_hz);
 
     const int available = replay ? static_cast<int>(replay->size())
                                  : static_cast<int>(std::floor(scenario->trajectory.duration_s() * rate_hz)) + 1;
@@ -225,7 +225,7 @@ int main(int argc, char** argv) {
     long pose_k = 0;
     int sent = 0;
     auto publishPose = [&](const Transform& T_W_B, double t_s) {
-      dds::geometry_msgs::PoseStamped_ pose = poseMessage(T_W_B, stamp0_s + t_s, world);
+      mlmap::dds::geometry_msgs::PoseStamped_ pose = poseMessage(T_W_B, stamp0_s + t_s, world);
       pose_writer->write(&pose);
     };
     for (int i = 0; i < frames && !g_stop; ++i) {
@@ -246,17 +246,18 @@ int main(int argc, char** argv) {
       } else {
         // Odometry runs ahead of the camera by up to one pose period, as a fast IMU-based
         // estimator does, so each frame finds poses on both sides of its stamp.
-        for (; pose_k * pose_period_s <= t_s + pose_period_s + 1e-9; ++pose_k) {
-          publishPose(scenario->trajectory.poseAt(pose_k * pose_period_s), pose_k * pose_period_s);
+        for (; static_cast<double>(pose_k) * pose_period_s <= t_s + pose_period_s + 1e-9; ++pose_k) {
+          const double pose_t_s = static_cast<double>(pose_k) * pose_period_s;
+          publishPose(scenario->trajectory.poseAt(pose_t_s), pose_t_s);
         }
       }
       if (depth_mode) {
-        dds::sensor_msgs::CameraInfo_ info = cameraInfo(frame.intrinsics, stamp0_s + t_s, sensor);
+        mlmap::dds::sensor_msgs::CameraInfo_ info = cameraInfo(frame.intrinsics, stamp0_s + t_s, sensor);
         info_writer->write(&info);
-        dds::sensor_msgs::Image_ image = depthImage(frame, stamp0_s + t_s, sensor);
+        mlmap::dds::sensor_msgs::Image_ image = depthImage(frame, stamp0_s + t_s, sensor);
         sensor_writer->write(&image);
       } else {
-        dds::sensor_msgs::PointCloud2_ cloud = organisedCloud(frame, stamp0_s + t_s, sensor);
+        mlmap::dds::sensor_msgs::PointCloud2_ cloud = organisedCloud(frame, stamp0_s + t_s, sensor);
         sensor_writer->write(&cloud);
       }
       ++sent;

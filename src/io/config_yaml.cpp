@@ -1,191 +1,103 @@
 #include "mlmap/io/config_yaml.h"
 
+#include "mlmap/io/yaml_section.h"
+
 #include <yaml-cpp/yaml.h>
 
-#include <fstream>
-#include <set>
-#include <sstream>
 #include <stdexcept>
 
 namespace mlmap::io {
-namespace {
 
-/// Reads the keys of one YAML mapping into typed fields, remembering every problem.
-class Section {
- public:
-  Section(const YAML::Node& node, std::string path, std::vector<std::string>* errors)
-      : node_(node), path_(std::move(path)), errors_(errors) {
-    if (node_ && !node_.IsMap() && !node_.IsNull()) {
-      errors_->push_back(path_ + ": must be a mapping of keys to values");
-      node_ = YAML::Node();
-    }
+void readEngineSections(Section& top, MapConfig* config) {
+  MapConfig& c = *config;
+  std::vector<std::string>& errors = *top.errors();
+  {
+    Section s(top.child("awareness"), "awareness", &errors);
+    AwarenessConfig& a = c.awareness;
+    s.read("rho_cell_m", &a.rho_cell_m);
+    s.read("rho_cells", &a.rho_cells);
+    s.read("phi_cells", &a.phi_cells);
+    s.read("z_cell_m", &a.z_cell_m);
+    s.read("z_cells", &a.z_cells);
+    s.read("z_cells_below", &a.z_cells_below);
+    s.read("min_range_m", &a.min_range_m);
+    s.read("max_range_m", &a.max_range_m);
+    s.read("sample_count", &a.sample_count);
+    s.read("sample_seed", &a.sample_seed);
   }
-  ~Section() {
-    if (!node_ || !node_.IsMap()) return;
-    for (const auto& kv : node_) {
-      const std::string key = kv.first.as<std::string>();
-      if (known_.count(key) == 0) {
-        std::string allowed;
-        for (const std::string& k : known_) allowed += (allowed.empty() ? "" : ", ") + k;
-        errors_->push_back(path_ + "." + key + ": unknown key (known keys: " + allowed + ")");
-      }
-    }
+  {
+    Section s(top.child("log_odds"), "log_odds", &errors);
+    LogOddsConfig& l = c.log_odds;
+    s.read("hit", &l.hit);
+    s.read("miss", &l.miss);
+    s.read("clamp_min", &l.clamp_min);
+    s.read("clamp_max", &l.clamp_max);
+    s.read("occupied_threshold", &l.occupied_threshold);
   }
-  Section(const Section&) = delete;
-  Section& operator=(const Section&) = delete;
-
-  template <typename T>
-  void read(const std::string& key, T* value) {
-    known_.insert(key);
-    if (!node_ || !node_.IsMap() || !node_[key]) return;
-    try {
-      *value = node_[key].template as<T>();
-    } catch (const YAML::Exception&) {
-      errors_->push_back(path_ + "." + key + ": cannot read '" + YAML::Dump(node_[key]) +
-                         "' as " + typeName(value));
-    }
+  {
+    Section s(top.child("local_map"), "local_map", &errors);
+    s.read("resolution_m", &c.local_map.resolution_m);
+    s.readVector("size_cells", &c.local_map.size_cells);
   }
-  template <typename Vec>
-  void readVector(const std::string& key, Vec* value) {
-    known_.insert(key);
-    if (!node_ || !node_.IsMap() || !node_[key]) return;
-    const YAML::Node v = node_[key];
-    if (!v.IsSequence() || static_cast<int>(v.size()) != value->size()) {
-      errors_->push_back(path_ + "." + key + ": must be a list of " +
-                         std::to_string(value->size()) + " numbers");
-      return;
-    }
-    try {
-      for (int i = 0; i < value->size(); ++i) {
-        (*value)[i] = v[static_cast<std::size_t>(i)].template as<typename Vec::Scalar>();
-      }
-    } catch (const YAML::Exception&) {
-      errors_->push_back(path_ + "." + key + ": cannot read '" + YAML::Dump(v) + "' as numbers");
-    }
+  {
+    Section s(top.child("sensor"), "sensor", &errors);
+    s.readVector("translation_B_m", &c.sensor.translation_B_m);
+    s.readVector("rotation_rpy_deg", &c.sensor.rotation_rpy_deg);
   }
-  YAML::Node child(const std::string& key) {
-    known_.insert(key);
-    return (node_ && node_.IsMap()) ? node_[key] : YAML::Node();
+  {
+    Section s(top.child("pipeline"), "pipeline", &errors);
+    PipelineConfig& p = c.pipeline;
+    s.read("threaded", &p.threaded);
+    s.read("input_queue_capacity", &p.input_queue_capacity);
+    s.read("batch_queue_capacity", &p.batch_queue_capacity);
+    s.read("reject_out_of_order", &p.reject_out_of_order);
   }
-  [[nodiscard]] const std::string& path() const { return path_; }
-
- private:
-  static const char* typeName(const double*) { return "a number"; }
-  static const char* typeName(const int*) { return "an integer"; }
-  static const char* typeName(const std::uint32_t*) { return "a non-negative integer"; }
-  static const char* typeName(const bool*) { return "true or false"; }
-  static const char* typeName(const std::string*) { return "text"; }
-
-  YAML::Node node_;
-  std::string path_;
-  std::vector<std::string>* errors_;
-  std::set<std::string> known_;
-};
-
-std::string joined(const std::string& source, const std::vector<std::string>& errors) {
-  std::ostringstream out;
-  out << source << ": invalid mlmap configuration:";
-  for (const std::string& e : errors) out << "\n  " << e;
-  return out.str();
+  {
+    Section s(top.child("projected_grid"), "projected_grid", &errors);
+    ProjectedGridConfig& g = c.projected_grid;
+    s.read("enabled", &g.enabled);
+    s.read("relative_band", &g.relative_band);
+    s.read("band_min_m", &g.band_min_m);
+    s.read("band_max_m", &g.band_max_m);
+    s.read("probability_values", &g.probability_values);
+    s.read("include_global", &g.include_global);
+  }
+  {
+    Section s(top.child("esdf"), "esdf", &errors);
+    EsdfConfig& e = c.esdf;
+    s.read("enabled", &e.enabled);
+    s.read("max_distance_m", &e.max_distance_m);
+    std::string unknown = toString(e.unknown_as);
+    s.read("unknown_as", &unknown);
+    if (unknown == "occupied") {
+      e.unknown_as = UnknownAs::kOccupied;
+    } else if (unknown == "free") {
+      e.unknown_as = UnknownAs::kFree;
+    } else {
+      errors.push_back("esdf.unknown_as: must be occupied or free (got " + unknown + ")");
+    }
+    s.read("num_threads", &e.num_threads);
+    s.read("max_rate_hz", &e.max_rate_hz);
+    s.readVector("box_size_m", &e.box_size_m);
+  }
 }
 
-}  // namespace
-
 MapConfig parseConfigYaml(const std::string& text, const std::string& source_name) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(source_name + ": not valid YAML: " + e.what());
-  }
+  const YAML::Node root = parseYamlDocument(text, source_name);
   MapConfig c;
   std::vector<std::string> errors;
   {
     Section top(root, "", &errors);
-    {
-      Section s(top.child("awareness"), "awareness", &errors);
-      AwarenessConfig& a = c.awareness;
-      s.read("rho_cell_m", &a.rho_cell_m);
-      s.read("rho_cells", &a.rho_cells);
-      s.read("phi_cells", &a.phi_cells);
-      s.read("z_cell_m", &a.z_cell_m);
-      s.read("z_cells", &a.z_cells);
-      s.read("z_cells_below", &a.z_cells_below);
-      s.read("min_range_m", &a.min_range_m);
-      s.read("max_range_m", &a.max_range_m);
-      s.read("sample_count", &a.sample_count);
-      s.read("sample_seed", &a.sample_seed);
-    }
-    {
-      Section s(top.child("log_odds"), "log_odds", &errors);
-      LogOddsConfig& l = c.log_odds;
-      s.read("hit", &l.hit);
-      s.read("miss", &l.miss);
-      s.read("clamp_min", &l.clamp_min);
-      s.read("clamp_max", &l.clamp_max);
-      s.read("occupied_threshold", &l.occupied_threshold);
-    }
-    {
-      Section s(top.child("local_map"), "local_map", &errors);
-      s.read("resolution_m", &c.local_map.resolution_m);
-      s.readVector("size_cells", &c.local_map.size_cells);
-    }
-    {
-      Section s(top.child("sensor"), "sensor", &errors);
-      s.readVector("translation_B_m", &c.sensor.translation_B_m);
-      s.readVector("rotation_rpy_deg", &c.sensor.rotation_rpy_deg);
-    }
-    {
-      Section s(top.child("pipeline"), "pipeline", &errors);
-      PipelineConfig& p = c.pipeline;
-      s.read("threaded", &p.threaded);
-      s.read("input_queue_capacity", &p.input_queue_capacity);
-      s.read("batch_queue_capacity", &p.batch_queue_capacity);
-      s.read("reject_out_of_order", &p.reject_out_of_order);
-    }
-    {
-      Section s(top.child("projected_grid"), "projected_grid", &errors);
-      ProjectedGridConfig& g = c.projected_grid;
-      s.read("enabled", &g.enabled);
-      s.read("relative_band", &g.relative_band);
-      s.read("band_min_m", &g.band_min_m);
-      s.read("band_max_m", &g.band_max_m);
-      s.read("probability_values", &g.probability_values);
-      s.read("include_global", &g.include_global);
-    }
-    {
-      Section s(top.child("esdf"), "esdf", &errors);
-      EsdfConfig& e = c.esdf;
-      s.read("enabled", &e.enabled);
-      s.read("max_distance_m", &e.max_distance_m);
-      std::string unknown = toString(e.unknown_as);
-      s.read("unknown_as", &unknown);
-      if (unknown == "occupied") {
-        e.unknown_as = UnknownAs::kOccupied;
-      } else if (unknown == "free") {
-        e.unknown_as = UnknownAs::kFree;
-      } else {
-        errors.push_back("esdf.unknown_as: must be occupied or free (got " + unknown + ")");
-      }
-      s.read("num_threads", &e.num_threads);
-      s.read("max_rate_hz", &e.max_rate_hz);
-      s.readVector("box_size_m", &e.box_size_m);
-    }
-  }
-  for (std::string& e : errors) {
-    if (!e.empty() && e[0] == '.') e.erase(0, 1);  // top-level keys have no section prefix
-  }
+    readEngineSections(top, &c);
+  }  // reports unknown top-level keys
+  stripTopLevelDots(&errors);
   if (errors.empty()) errors = c.validate();
-  if (!errors.empty()) throw std::runtime_error(joined(source_name, errors));
+  if (!errors.empty()) throwConfigErrors(source_name, errors);
   return c;
 }
 
 MapConfig loadConfigYaml(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open the configuration file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return parseConfigYaml(buffer.str(), path);
+  return parseConfigYaml(readConfigFile(path), path);
 }
 
 std::string toYaml(const MapConfig& c) {

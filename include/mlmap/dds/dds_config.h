@@ -18,7 +18,8 @@ enum class DiscoveryRange {
   kSystemDefault,  ///< not set anywhere: SUBNET
   kLocalhost,      ///< SHM + UDPv4 on 127.0.0.1 only, unicast discovery to 127.0.0.1 (no multicast)
   kSubnet,         ///< Fast DDS built-in transports, multicast discovery (a vehicle LAN)
-  kOff,            ///< no automatic discovery: only the profile's initial peers
+  kOff,            ///< no automatic discovery: no multicast, and only the profile's own initial
+                   ///< peers are contacted (none added); peers that list this host still find it
 };
 /// Parses "LOCALHOST", "SUBNET", "OFF", "SYSTEM_DEFAULT" (case-insensitive). False otherwise.
 bool parseDiscoveryRange(const std::string& text, DiscoveryRange* range);
@@ -59,8 +60,10 @@ struct DdsConfig {
   int domain_id = -1;              ///< -1: ROS_DOMAIN_ID, else 0. Valid: 0..232
   std::string ns;                  ///< topic namespace ("uav1" -> rt/uav1/...); "" for none
   std::string discovery_range;     ///< "" (environment / default) or LOCALHOST / SUBNET / OFF
-  std::string profiles_file;       ///< Fast DDS XML profiles to load ("" for none)
-  std::string participant_profile; ///< participant profile of those files to use ("" default)
+  std::string profiles_file;       ///< Fast DDS XML profiles to load ("" for none); needs
+                                   ///< participant_profile (its is_default_profile is not used)
+  std::string participant_profile; ///< participant profile to use, from profiles_file or from
+                                   ///< FASTRTPS_DEFAULT_PROFILES_FILE ("": the factory default)
   bool large_data = true;          ///< 16 MB shared-memory segment, 4 MB socket buffers (multi-MB clouds)
   std::string world_frame = "map";         ///< frame_id of the maps and parent of rt/tf
   std::string body_frame = "base_link";    ///< child of rt/tf, parent of the sensor on rt/tf_static
@@ -72,7 +75,12 @@ struct DdsConfig {
   double max_future_s = 1.0;       ///< stamps farther ahead of the newest pose are rejected
   double esdf_slice_height_m = 0.0;  ///< slice height relative to the body [m]
 
-  /// Every problem as "dds.key: what is wrong (got X)". Empty = valid.
+  /// Every problem as "dds.key: what is wrong (got X)". Empty = valid. Checks: domain_id -1 or
+  /// 0..232; ns and topic names valid ROS names (letters, digits, '_', tokens not starting with a
+  /// digit, single '/' separators) or empty; discovery_range empty or parseable; frames
+  /// non-empty, without a leading '/' or whitespace (tf2 rules); rates finite and >= 0;
+  /// pose_tolerance_s, pose_buffer_s, max_future_s finite and > 0; esdf_slice_height_m finite;
+  /// participant_profile set when profiles_file is; camera_info set when depth_image is.
   [[nodiscard]] std::vector<std::string> validate() const;
 };
 

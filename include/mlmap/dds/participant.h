@@ -6,9 +6,11 @@
 #include "mlmap/dds/dds_config.h"
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
 
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -20,12 +22,57 @@ struct ParticipantDeleter {
 };
 using ParticipantPtr = std::unique_ptr<eprosima::fastdds::dds::DomainParticipant, ParticipantDeleter>;
 
-/// Creates the participant named `name` on the resolved domain with the resolved discovery range
-/// (see DdsConfig). Loads `profiles_file` first when set; LOCALHOST replaces the transports with
-/// SHM + UDPv4 on 127.0.0.1 and unicast discovery to 127.0.0.1; `large_data` sizes the SHM
-/// segment and socket buffers for multi-MB samples. Throws std::runtime_error with the reason
-/// when Fast DDS refuses.
+/// Creates the participant named `name` on the resolved domain (resolveDomainId) with the
+/// resolved discovery range (resolveDiscoveryRange), as rmw_fastrtps does for a ROS 2 node.
+///
+/// Base QoS: `participant_profile` when set (from `profiles_file`, loaded first when set, or from
+/// FASTRTPS_DEFAULT_PROFILES_FILE), else the factory's default participant QoS (Fast DDS's
+/// defaults, or the is_default_profile of FASTRTPS_DEFAULT_PROFILES_FILE). The QoS name becomes
+/// `name` (when not empty); discovery history memory becomes PREALLOCATED_WITH_REALLOC and the
+/// user data "enclave=/;" when the profile sets none (both as rmw_fastrtps).
+///
+/// Discovery range:
+/// - kLocalhost: the transports are replaced by SHM + UDPv4 restricted to 127.0.0.1 (interface
+///   white list, maxInitialPeersRange 32), no multicast locators, metatraffic unicast on
+///   127.0.0.1 and the initial peers exactly {127.0.0.1}: up to 32 participants on the host find
+///   each other, nothing leaves the host. The profile's other settings (discovery protocol,
+///   discovery servers, ...) stay.
+/// - kSubnet / kSystemDefault: the profile's transports and discovery are left as they are.
+/// - kOff: the profile's transports stay; multicast locators (discovery and user data) are
+///   removed and nothing is added to the initial peers, so the participant only announces itself
+///   to the profile's own initial peers (none by default): it finds nobody by itself, but a
+///   participant that lists this host as a peer still finds it.
+///
+/// `large_data` raises (never lowers) the SHM segment to 16 MB and the socket buffers to 4 MB on
+/// the transports in use: Fast DDS's built-in transports (UDPv4 + SHM) are replaced by the same
+/// two, sized; a profile's own SHM / UDPv4 / UDPv6 / TCP descriptors are copied and sized (the
+/// profile itself is not modified); other transports are left alone. Over SHM the sender's
+/// segment decides, over UDP the receiver's buffer (bounded by net.core.rmem_max).
+///
+/// Throws std::runtime_error with the reason when the profiles file, the profile or the
+/// environment is invalid, or Fast DDS refuses to create the participant.
 ParticipantPtr createParticipant(const DdsConfig& config, const std::string& name);
+
+/// What createParticipant() creates, without creating it (for logs, `--print-config` and tests).
+struct ParticipantSetup {
+  int domain_id = 0;
+  DiscoveryRange discovery_range = DiscoveryRange::kSystemDefault;  ///< as resolved
+  eprosima::fastdds::dds::DomainParticipantQos qos;
+};
+/// Resolves the domain, the discovery range and the QoS exactly as createParticipant() does
+/// (loading `profiles_file` when set). Throws std::runtime_error like it.
+ParticipantSetup participantSetup(const DdsConfig& config, const std::string& name);
+
+/// Segment size of the SHM transport with `large_data` [bytes].
+inline constexpr std::uint32_t kLargeDataShmSegmentBytes = 16u * 1024u * 1024u;
+/// Socket send / receive buffer size with `large_data` [bytes].
+inline constexpr std::uint32_t kLargeDataSocketBufferBytes = 4u * 1024u * 1024u;
+/// Participants per host that find each other with kLocalhost (ports tried per initial peer).
+inline constexpr std::uint32_t kLocalhostMaxInitialPeersRange = 32;
+
+// The QoS helpers throw std::invalid_argument for depth < 1. Every one uses
+// PREALLOCATED_WITH_REALLOC history memory, so samples larger than the type's bounded estimate
+// (every PointCloud2 of a real sensor) fit.
 
 /// ROS 2 "sensor data" QoS: BEST_EFFORT, VOLATILE, KEEP_LAST depth (5).
 eprosima::fastdds::dds::DataReaderQos sensorReaderQos(int depth = 5);

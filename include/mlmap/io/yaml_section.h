@@ -1,0 +1,151 @@
+#pragma once
+/// @file
+/// Strict reading of YAML configuration files: every key of a mapping must be read by the code
+/// (an unknown key is an error naming it), every value must convert to the field's type, and
+/// every problem is collected so that one run reports all of them. Used by the engine loader
+/// (config_yaml.h) and by loaders of other sections of the same file (mlmap_node's `dds`).
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace mlmap::io {
+
+/// Reads the keys of one YAML mapping into typed fields, remembering every problem as
+/// "<path>.<key>: what is wrong". When it goes out of scope it reports every key of the mapping
+/// that no read() / readVector() / child() asked for as an unknown key. A missing key leaves the
+/// field untouched (its default applies); a null node (`section:` with nothing under it) reads
+/// as an empty mapping.
+class Section {
+ public:
+  /// `path` is the dotted name of this mapping ("" for the document's top level, whose error
+  /// messages then start with '.': throwConfigErrors() drops it).
+  Section(const YAML::Node& node, std::string path, std::vector<std::string>* errors)
+      : node_(node), path_(std::move(path)), errors_(errors) {
+    if (node_ && !node_.IsMap() && !node_.IsNull()) {
+      errors_->push_back(path_ + ": must be a mapping of keys to values");
+      node_ = YAML::Node();
+    }
+  }
+  ~Section() {
+    if (!node_ || !node_.IsMap()) return;
+    for (const auto& kv : node_) {
+      const std::string key = kv.first.as<std::string>();
+      if (known_.count(key) == 0) {
+        std::string allowed;
+        for (const std::string& k : known_) allowed += (allowed.empty() ? "" : ", ") + k;
+        errors_->push_back(path_ + "." + key + ": unknown key (known keys: " + allowed + ")");
+      }
+    }
+  }
+  Section(const Section&) = delete;
+  Section& operator=(const Section&) = delete;
+
+  /// Reads `key` into `value` when present; a value of the wrong type is an error. For text, a
+  /// null value (`key:` with nothing after it, or `~`) reads as the empty string.
+  template <typename T>
+  void read(const std::string& key, T* value) {
+    known_.insert(key);
+    if (!node_ || !node_.IsMap() || !node_[key]) return;
+    if constexpr (std::is_same_v<T, std::string>) {
+      if (node_[key].IsNull()) {
+        value->clear();
+        return;
+      }
+    }
+    try {
+      *value = node_[key].template as<T>();
+    } catch (const YAML::Exception&) {
+      errors_->push_back(path_ + "." + key + ": cannot read '" + YAML::Dump(node_[key]) +
+                         "' as " + typeName(value));
+    }
+  }
+  /// Reads `key` as a list of exactly value->size() numbers into a fixed-size Eigen vector.
+  template <typename Vec>
+  void readVector(const std::string& key, Vec* value) {
+    known_.insert(key);
+    if (!node_ || !node_.IsMap() || !node_[key]) return;
+    const YAML::Node v = node_[key];
+    if (!v.IsSequence() || static_cast<int>(v.size()) != value->size()) {
+      errors_->push_back(path_ + "." + key + ": must be a list of " +
+                         std::to_string(value->size()) + " numbers");
+      return;
+    }
+    try {
+      for (int i = 0; i < value->size(); ++i) {
+        (*value)[i] = v[static_cast<std::size_t>(i)].template as<typename Vec::Scalar>();
+      }
+    } catch (const YAML::Exception&) {
+      errors_->push_back(path_ + "." + key + ": cannot read '" + YAML::Dump(v) + "' as numbers");
+    }
+  }
+  /// Marks `key` as known and returns its node (an undefined node when absent), to be read by
+  /// a nested Section.
+  YAML::Node child(const std::string& key) {
+    known_.insert(key);
+    return (node_ && node_.IsMap()) ? node_[key] : YAML::Node();
+  }
+  /// Dotted path of this mapping.
+  [[nodiscard]] const std::string& path() const { return path_; }
+  /// Where this section (and its children) collect problems.
+  [[nodiscard]] std::vector<std::string>* errors() const { return errors_; }
+
+ private:
+  static const char* typeName(const double*) { return "a number"; }
+  static const char* typeName(const int*) { return "an integer"; }
+  static const char* typeName(const std::uint32_t*) { return "a non-negative integer"; }
+  static const char* typeName(const bool*) { return "true or false"; }
+  static const char* typeName(const std::string*) { return "text"; }
+
+  YAML::Node node_;
+  std::string path_;
+  std::vector<std::string>* errors_;
+  std::set<std::string> known_;
+};
+
+/// Parses YAML text. Throws std::runtime_error "<source_name>: not valid YAML: ..." on a syntax
+/// error.
+inline YAML::Node parseYamlDocument(const std::string& text, const std::string& source_name) {
+  try {
+    return YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(source_name + ": not valid YAML: " + e.what());
+  }
+}
+
+/// The whole text of a configuration file. Throws std::runtime_error "<path>: cannot open the
+/// configuration file".
+inline std::string readConfigFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open the configuration file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return buffer.str();
+}
+
+/// Drops the leading '.' of problems found at the top level of a document (Section path "").
+inline void stripTopLevelDots(std::vector<std::string>* errors) {
+  for (std::string& e : *errors) {
+    if (!e.empty() && e[0] == '.') e.erase(0, 1);
+  }
+}
+
+/// Throws std::runtime_error "<source_name>: invalid mlmap configuration:" followed by one
+/// problem per line.
+[[noreturn]] inline void throwConfigErrors(const std::string& source_name,
+                                           const std::vector<std::string>& errors) {
+  std::ostringstream out;
+  out << source_name << ": invalid mlmap configuration:";
+  for (const std::string& e : errors) out << "\n  " << e;
+  throw std::runtime_error(out.str());
+}
+
+}  // namespace mlmap::io

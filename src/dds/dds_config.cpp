@@ -1,0 +1,227 @@
+#include "mlmap/dds/dds_config.h"
+
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+#include <stdexcept>
+
+namespace mlmap::dds {
+namespace {
+
+constexpr int kMaxDomainId = 232;  // ROS 2's limit: higher ids overflow the RTPS port range on Linux
+
+std::string upper(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return text;
+}
+
+std::string number(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+/// Why `name` is not a valid ROS topic name or namespace ("" when it is): tokens of letters,
+/// digits and '_' that do not start with a digit, separated by single '/', optionally starting
+/// with '/', not ending with '/' (rcl's rules, without substitutions such as `~` or `{node}`).
+std::string rosNameProblem(const std::string& name) {
+  const std::size_t begin = (!name.empty() && name[0] == '/') ? 1 : 0;
+  if (begin == name.size()) return "must contain at least one token";
+  bool token_start = true;
+  for (std::size_t i = begin; i < name.size(); ++i) {
+    const char c = name[i];
+    if (c == '/') {
+      if (token_start) return "must not contain an empty token ('//')";
+      token_start = true;
+      continue;
+    }
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') {
+      return std::string("may only contain letters, digits, '_' and '/' (found '") + c + "')";
+    }
+    if (token_start && std::isdigit(static_cast<unsigned char>(c))) {
+      return "a token must not start with a digit";
+    }
+    token_start = false;
+  }
+  if (token_start) return "must not end with '/'";
+  return "";
+}
+
+void checkRate(const char* key, double hz, std::vector<std::string>* errors) {
+  if (!std::isfinite(hz) || hz < 0.0) {
+    errors->push_back(std::string("dds.rates.") + key + ": must be >= 0 (0 disables) (got " +
+                      number(hz) + ")");
+  }
+}
+
+void checkPositive(const char* key, double value, std::vector<std::string>* errors) {
+  if (!std::isfinite(value) || value <= 0.0) {
+    errors->push_back(std::string("dds.") + key + ": must be > 0 (got " + number(value) + ")");
+  }
+}
+
+void checkFrame(const char* key, const std::string& frame, std::vector<std::string>* errors) {
+  if (frame.empty()) {
+    errors->push_back(std::string("dds.") + key + ": must not be empty");
+  } else if (frame[0] == '/') {
+    errors->push_back(std::string("dds.") + key + ": tf2 frame ids must not start with '/' (got " +
+                      frame + ")");
+  } else if (frame.find_first_of(" \t\n") != std::string::npos) {
+    errors->push_back(std::string("dds.") + key + ": must not contain whitespace (got '" + frame +
+                      "')");
+  }
+}
+
+void checkTopic(const char* key, const std::string& topic, std::vector<std::string>* errors) {
+  if (topic.empty()) return;  // disabled
+  const std::string problem = rosNameProblem(topic);
+  if (!problem.empty()) {
+    errors->push_back(std::string("dds.topics.") + key + ": not a valid ROS topic name: " +
+                      problem + " (got '" + topic + "')");
+  }
+}
+
+}  // namespace
+
+bool parseDiscoveryRange(const std::string& text, DiscoveryRange* range) {
+  const std::string u = upper(text);
+  if (u == "LOCALHOST") {
+    *range = DiscoveryRange::kLocalhost;
+  } else if (u == "SUBNET") {
+    *range = DiscoveryRange::kSubnet;
+  } else if (u == "OFF") {
+    *range = DiscoveryRange::kOff;
+  } else if (u == "SYSTEM_DEFAULT") {
+    *range = DiscoveryRange::kSystemDefault;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+const char* toString(DiscoveryRange range) {
+  switch (range) {
+    case DiscoveryRange::kSystemDefault:
+      return "SYSTEM_DEFAULT";
+    case DiscoveryRange::kLocalhost:
+      return "LOCALHOST";
+    case DiscoveryRange::kSubnet:
+      return "SUBNET";
+    case DiscoveryRange::kOff:
+      return "OFF";
+  }
+  return "?";
+}
+
+std::vector<std::string> DdsConfig::validate() const {
+  std::vector<std::string> errors;
+  if (domain_id < -1 || domain_id > kMaxDomainId) {
+    errors.push_back("dds.domain_id: must be -1 (ROS_DOMAIN_ID, else 0) or 0.." +
+                     std::to_string(kMaxDomainId) + " (got " + std::to_string(domain_id) + ")");
+  }
+  if (!ns.empty()) {
+    const std::string problem = rosNameProblem(ns);
+    if (!problem.empty()) {
+      errors.push_back("dds.ns: not a valid ROS namespace: " + problem + " (got '" + ns + "')");
+    }
+  }
+  DiscoveryRange range{};
+  if (!discovery_range.empty() && !parseDiscoveryRange(discovery_range, &range)) {
+    errors.push_back("dds.discovery_range: must be empty, LOCALHOST, SUBNET, OFF or SYSTEM_DEFAULT (got " +
+                     discovery_range + ")");
+  }
+  if (!profiles_file.empty() && participant_profile.empty()) {
+    errors.push_back("dds.participant_profile: must name the participant profile to use from "
+                     "dds.profiles_file (" + profiles_file + "), e.g. mlmap_loopback");
+  }
+  checkFrame("world_frame", world_frame, &errors);
+  checkFrame("body_frame", body_frame, &errors);
+  checkFrame("sensor_frame", sensor_frame, &errors);
+
+  checkTopic("cloud", topics.cloud, &errors);
+  checkTopic("pose", topics.pose, &errors);
+  checkTopic("odometry", topics.odometry, &errors);
+  checkTopic("depth_image", topics.depth_image, &errors);
+  checkTopic("camera_info", topics.camera_info, &errors);
+  checkTopic("awareness", topics.awareness, &errors);
+  checkTopic("local_map", topics.local_map, &errors);
+  checkTopic("global_map", topics.global_map, &errors);
+  checkTopic("grid", topics.grid, &errors);
+  checkTopic("esdf_slice", topics.esdf_slice, &errors);
+  checkTopic("esdf_block", topics.esdf_block, &errors);
+  checkTopic("status", topics.status, &errors);
+  if (!topics.depth_image.empty() && topics.camera_info.empty()) {
+    errors.push_back("dds.topics.camera_info: must be set when dds.topics.depth_image is (the "
+                     "depth image is unprojected with its intrinsics)");
+  }
+
+  checkRate("awareness_hz", rates.awareness_hz, &errors);
+  checkRate("local_map_hz", rates.local_map_hz, &errors);
+  checkRate("global_map_hz", rates.global_map_hz, &errors);
+  checkRate("grid_hz", rates.grid_hz, &errors);
+  checkRate("esdf_hz", rates.esdf_hz, &errors);
+  checkRate("status_hz", rates.status_hz, &errors);
+
+  checkPositive("pose_tolerance_s", pose_tolerance_s, &errors);
+  checkPositive("pose_buffer_s", pose_buffer_s, &errors);
+  checkPositive("max_future_s", max_future_s, &errors);
+  if (!std::isfinite(esdf_slice_height_m)) {
+    errors.push_back("dds.esdf_slice_height_m: must be a finite number (got " +
+                     number(esdf_slice_height_m) + ")");
+  }
+  return errors;
+}
+
+std::string ddsTopicName(const std::string& ns, const std::string& name) {
+  std::string out = "rt";
+  // Appends the '/'-separated tokens of `part`, dropping empty ones (leading, trailing, '//').
+  auto append = [&out](const std::string& part) {
+    std::size_t begin = 0;
+    while (begin <= part.size()) {
+      std::size_t end = part.find('/', begin);
+      if (end == std::string::npos) end = part.size();
+      if (end > begin) out += "/" + part.substr(begin, end - begin);
+      begin = end + 1;
+    }
+  };
+  append(ns);
+  append(name);
+  return out;
+}
+
+int resolveDomainId(const DdsConfig& config) {
+  if (config.domain_id >= 0) return config.domain_id;
+  const char* env = std::getenv("ROS_DOMAIN_ID");
+  if (env == nullptr || *env == '\0') return 0;  // ROS 2 treats an empty value as unset
+  errno = 0;
+  char* end = nullptr;
+  const long value = std::strtol(env, &end, 10);
+  while (end != nullptr && std::isspace(static_cast<unsigned char>(*end))) ++end;
+  if (errno != 0 || end == env || *end != '\0' || value < 0 || value > kMaxDomainId) {
+    throw std::invalid_argument(std::string("ROS_DOMAIN_ID must be an integer in 0..") +
+                                std::to_string(kMaxDomainId) + " (got '" + env + "')");
+  }
+  return static_cast<int>(value);
+}
+
+DiscoveryRange resolveDiscoveryRange(const DdsConfig& config) {
+  DiscoveryRange range = DiscoveryRange::kSystemDefault;
+  if (!config.discovery_range.empty()) {
+    if (!parseDiscoveryRange(config.discovery_range, &range)) {
+      throw std::invalid_argument("dds.discovery_range must be LOCALHOST, SUBNET, OFF or "
+                                  "SYSTEM_DEFAULT (got '" + config.discovery_range + "')");
+    }
+    return range;
+  }
+  const char* env = std::getenv("ROS_AUTOMATIC_DISCOVERY_RANGE");
+  if (env == nullptr || *env == '\0') return DiscoveryRange::kSystemDefault;
+  if (!parseDiscoveryRange(env, &range)) {
+    throw std::invalid_argument(std::string("ROS_AUTOMATIC_DISCOVERY_RANGE must be LOCALHOST, "
+                                            "SUBNET, OFF or SYSTEM_DEFAULT (got '") + env + "')");
+  }
+  return range;
+}
+
+}  // namespace mlmap::dds

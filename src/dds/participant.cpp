@@ -1,0 +1,241 @@
+#include "mlmap/dds/participant.h"
+
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
+#include <fastdds/rtps/common/Locator.h>
+#include <fastdds/rtps/transport/TCPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/TCPv6TransportDescriptor.h>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/UDPv6TransportDescriptor.h>
+#include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <vector>
+
+namespace mlmap::dds {
+namespace {
+
+namespace fdds = eprosima::fastdds::dds;
+namespace frtps = eprosima::fastrtps::rtps;
+using eprosima::fastdds::rtps::SharedMemTransportDescriptor;
+using eprosima::fastdds::rtps::TCPv4TransportDescriptor;
+using eprosima::fastdds::rtps::TCPv6TransportDescriptor;
+using eprosima::fastdds::rtps::TransportDescriptorInterface;
+using eprosima::fastdds::rtps::UDPv4TransportDescriptor;
+using eprosima::fastdds::rtps::UDPv6TransportDescriptor;
+using TransportPtr = std::shared_ptr<TransportDescriptorInterface>;
+using eprosima::fastrtps::types::ReturnCode_t;
+
+constexpr const char* kLoopbackAddress = "127.0.0.1";
+
+/// UDPv4 127.0.0.1 with port 0: Fast DDS fills in the well-known ports of the domain (for an
+/// initial peer: one per participant index up to maxInitialPeersRange).
+frtps::Locator_t loopbackLocator() {
+  frtps::Locator_t locator;
+  locator.kind = LOCATOR_KIND_UDPv4;
+  frtps::IPLocator::setIPv4(locator, kLoopbackAddress);
+  return locator;
+}
+
+fdds::DomainParticipantQos baseQos(const DdsConfig& config) {
+  fdds::DomainParticipantFactory* factory = fdds::DomainParticipantFactory::get_instance();
+  // FASTRTPS_DEFAULT_PROFILES_FILE / ./DEFAULT_FASTRTPS_PROFILES.xml, once per process.
+  factory->load_profiles();
+  if (!config.profiles_file.empty() &&
+      factory->load_XML_profiles_file(config.profiles_file) != ReturnCode_t::RETCODE_OK) {
+    throw std::runtime_error("dds.profiles_file: Fast DDS cannot load '" + config.profiles_file +
+                             "' (missing file or invalid XML; see the Fast DDS log above)");
+  }
+  fdds::DomainParticipantQos qos;
+  if (config.participant_profile.empty()) {
+    factory->get_default_participant_qos(qos);
+  } else if (factory->get_participant_qos_from_profile(config.participant_profile, qos) !=
+             ReturnCode_t::RETCODE_OK) {
+    throw std::runtime_error("dds.participant_profile: no participant profile '" +
+                             config.participant_profile + "' in the loaded XML profiles" +
+                             (config.profiles_file.empty() ? std::string()
+                                                           : " (" + config.profiles_file + ")"));
+  }
+  return qos;
+}
+
+void useLoopbackOnly(fdds::DomainParticipantQos* qos) {
+  fdds::TransportConfigQos& transport = qos->transport();
+  transport.use_builtin_transports = false;
+  transport.user_transports.clear();
+  transport.user_transports.push_back(std::make_shared<SharedMemTransportDescriptor>());
+  auto udp = std::make_shared<UDPv4TransportDescriptor>();
+  udp->interfaceWhiteList = {kLoopbackAddress};
+  udp->maxInitialPeersRange = kLocalhostMaxInitialPeersRange;
+  transport.user_transports.push_back(udp);
+
+  fdds::WireProtocolConfigQos& wire = qos->wire_protocol();
+  wire.builtin.metatrafficMulticastLocatorList.clear();
+  wire.builtin.metatrafficUnicastLocatorList.clear();
+  wire.builtin.metatrafficUnicastLocatorList.push_back(loopbackLocator());
+  wire.builtin.initialPeersList.clear();
+  wire.builtin.initialPeersList.push_back(loopbackLocator());
+  wire.default_multicast_locator_list.clear();
+  wire.default_unicast_locator_list.clear();  // Fast DDS picks one per transport: SHM + 127.0.0.1
+}
+
+void withoutAutomaticDiscovery(fdds::DomainParticipantQos* qos) {
+  fdds::WireProtocolConfigQos& wire = qos->wire_protocol();
+  wire.builtin.metatrafficMulticastLocatorList.clear();
+  wire.default_multicast_locator_list.clear();
+  if (wire.builtin.metatrafficUnicastLocatorList.empty()) {
+    // Any address, computed port. Without a unicast locator Fast DDS would add the default
+    // multicast one again (and use it as the initial peer).
+    wire.builtin.metatrafficUnicastLocatorList.push_back(frtps::Locator_t());
+  }
+}
+
+/// A copy of `descriptor` of concrete type D with its socket buffers raised to the large-data
+/// size, or nullptr when `descriptor` is not a D.
+template <typename D>
+TransportPtr withLargeSocketBuffers(const TransportPtr& descriptor) {
+  const auto typed = std::dynamic_pointer_cast<D>(descriptor);
+  if (!typed) return nullptr;
+  auto copy = std::make_shared<D>(*typed);
+  copy->sendBufferSize = std::max(copy->sendBufferSize, kLargeDataSocketBufferBytes);
+  copy->receiveBufferSize = std::max(copy->receiveBufferSize, kLargeDataSocketBufferBytes);
+  return copy;
+}
+
+TransportPtr sizedForLargeData(const TransportPtr& descriptor) {
+  if (const auto shm = std::dynamic_pointer_cast<SharedMemTransportDescriptor>(descriptor)) {
+    auto copy = std::make_shared<SharedMemTransportDescriptor>(*shm);
+    copy->segment_size(std::max(copy->segment_size(), kLargeDataShmSegmentBytes));
+    return copy;
+  }
+  using Sizer = TransportPtr (*)(const TransportPtr&);
+  constexpr Sizer kSocketSizers[] = {withLargeSocketBuffers<UDPv4TransportDescriptor>,
+                                     withLargeSocketBuffers<UDPv6TransportDescriptor>,
+                                     withLargeSocketBuffers<TCPv4TransportDescriptor>,
+                                     withLargeSocketBuffers<TCPv6TransportDescriptor>};
+  for (const Sizer sized : kSocketSizers) {
+    if (TransportPtr copy = sized(descriptor)) return copy;
+  }
+  return descriptor;  // unknown kind: left as the profile made it
+}
+
+void sizeForLargeData(fdds::DomainParticipantQos* qos) {
+  fdds::TransportConfigQos& transport = qos->transport();
+  if (transport.use_builtin_transports) {
+    // Fast DDS 2.9's built-in transports are UDPv4 + SHM; make them explicit so they can be
+    // sized. The participant-level socket sizes apply only to the built-in UDPv4: carry them.
+    auto udp = std::make_shared<UDPv4TransportDescriptor>();
+    udp->sendBufferSize = transport.send_socket_buffer_size;
+    udp->receiveBufferSize = transport.listen_socket_buffer_size;
+    transport.user_transports.insert(transport.user_transports.begin(),
+                                      {std::make_shared<SharedMemTransportDescriptor>(), udp});
+    transport.use_builtin_transports = false;
+  }
+  for (TransportPtr& descriptor : transport.user_transports) {
+    descriptor = sizedForLargeData(descriptor);
+  }
+}
+
+void checkDepth(int depth) {
+  if (depth < 1) {
+    throw std::invalid_argument("KEEP_LAST history depth must be >= 1 (got " +
+                                std::to_string(depth) + ")");
+  }
+}
+
+}  // namespace
+
+void ParticipantDeleter::operator()(fdds::DomainParticipant* participant) const {
+  if (participant == nullptr) return;
+  participant->delete_contained_entities();
+  fdds::DomainParticipantFactory::get_instance()->delete_participant(participant);
+}
+
+ParticipantSetup participantSetup(const DdsConfig& config, const std::string& name) {
+  ParticipantSetup setup;
+  try {
+    setup.domain_id = resolveDomainId(config);
+    setup.discovery_range = resolveDiscoveryRange(config);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(e.what());
+  }
+  fdds::DomainParticipantQos& qos = setup.qos;
+  qos = baseQos(config);
+  if (!name.empty()) qos.name(name);
+
+  switch (setup.discovery_range) {
+    case DiscoveryRange::kLocalhost:
+      useLoopbackOnly(&qos);
+      break;
+    case DiscoveryRange::kOff:
+      withoutAutomaticDiscovery(&qos);
+      break;
+    case DiscoveryRange::kSubnet:
+    case DiscoveryRange::kSystemDefault:
+      break;  // the profile's (or Fast DDS's) transports and multicast discovery
+  }
+  if (config.large_data) sizeForLargeData(&qos);
+
+  // As rmw_fastrtps: discovery data of participants with many endpoints can exceed the
+  // preallocated 5000 bytes.
+  qos.wire_protocol().builtin.readerHistoryMemoryPolicy = frtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  qos.wire_protocol().builtin.writerHistoryMemoryPolicy = frtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  if (qos.user_data().data_vec().empty()) {
+    const std::string enclave = "enclave=/;";
+    qos.user_data().data_vec(std::vector<frtps::octet>(enclave.begin(), enclave.end()));
+  }
+  return setup;
+}
+
+ParticipantPtr createParticipant(const DdsConfig& config, const std::string& name) {
+  const ParticipantSetup setup = participantSetup(config, name);
+  fdds::DomainParticipant* participant =
+      fdds::DomainParticipantFactory::get_instance()->create_participant(
+          static_cast<fdds::DomainId_t>(setup.domain_id), setup.qos);
+  if (participant == nullptr) {
+    throw std::runtime_error("Fast DDS refused to create participant '" + name + "' on domain " +
+                             std::to_string(setup.domain_id) + " with discovery range " +
+                             toString(setup.discovery_range) + " (see the Fast DDS log above)");
+  }
+  return ParticipantPtr(participant);
+}
+
+fdds::DataReaderQos sensorReaderQos(int depth) {
+  checkDepth(depth);
+  fdds::DataReaderQos qos = fdds::DATAREADER_QOS_DEFAULT;
+  qos.reliability().kind = fdds::BEST_EFFORT_RELIABILITY_QOS;
+  qos.durability().kind = fdds::VOLATILE_DURABILITY_QOS;
+  qos.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
+  qos.history().depth = depth;
+  qos.endpoint().history_memory_policy = frtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  return qos;
+}
+
+fdds::DataWriterQos reliableWriterQos(int depth) {
+  checkDepth(depth);
+  fdds::DataWriterQos qos = fdds::DATAWRITER_QOS_DEFAULT;
+  qos.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
+  qos.durability().kind = fdds::VOLATILE_DURABILITY_QOS;  // Fast DDS's writer default is TRANSIENT_LOCAL
+  qos.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
+  qos.history().depth = depth;
+  qos.publish_mode().kind = fdds::SYNCHRONOUS_PUBLISH_MODE;
+  qos.endpoint().history_memory_policy = frtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  return qos;
+}
+
+fdds::DataWriterQos latchedWriterQos() {
+  fdds::DataWriterQos qos = reliableWriterQos(1);
+  qos.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
+  return qos;
+}
+
+fdds::DataReaderQos reliableReaderQos(bool latched, int depth) {
+  fdds::DataReaderQos qos = sensorReaderQos(depth);
+  qos.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
+  if (latched) qos.durability().kind = fdds::TRANSIENT_LOCAL_DURABILITY_QOS;
+  return qos;
+}
+
+}  // namespace mlmap::dds
