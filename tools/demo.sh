@@ -1,11 +1,30 @@
 #!/usr/bin/env bash
-# The main job: installs what is missing, builds (Release) and runs the demo on the built-in
-# simulated room. Pictures, accuracy, timings and memory land in demo_output/.
+# The main job: installs what is missing, builds (Release) and runs
+#  1. the mapping demo on the built-in simulated room: pictures, accuracy, timings and memory in
+#     demo_output/;
+#  2. the same flight over DDS on loopback, as on a vehicle: mlmap_sensor_publisher (simulated
+#     depth camera + odometry) -> mlmap_node -> mlmap_inspect, which writes pictures of the layers
+#     it received and summary.json to demo_output/dds/.
 # Extra arguments go to mlmap_demo (see `build/mlmap_demo --help`), e.g.
 #   bash tools/demo.sh --frames ../shared/data/realsense_tabletop
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/install_deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DMLMAP_BUILD_TESTS=OFF >/dev/null
-cmake --build build -j2 --target mlmap_demo
+cmake --build build -j2 --target mlmap_demo mlmap_node mlmap_sensor_publisher mlmap_inspect
 ./build/mlmap_demo --out demo_output "$@"
+
+echo "== the same flight over DDS (loopback only, domain ${MLMAP_DEMO_DOMAIN:-42})"
+export ROS_DOMAIN_ID=${MLMAP_DEMO_DOMAIN:-42} ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
+mkdir -p demo_output/dds
+./build/mlmap_node --report-every 5 > demo_output/dds/node.log 2>&1 &
+node=$!
+./build/mlmap_inspect --out demo_output/dds --default-scenario --idle-stop 3 --duration 300 \
+  > demo_output/dds/inspect.log 2>&1 &
+inspect=$!
+trap 'kill $node $inspect 2>/dev/null || true' EXIT
+./build/mlmap_sensor_publisher
+kill -INT $node && wait $node || true
+wait $inspect || true
+tail -n 12 demo_output/dds/node.log demo_output/dds/inspect.log
+echo "pictures of the layers received over DDS: demo_output/dds/*.png"
