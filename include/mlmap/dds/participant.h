@@ -35,13 +35,16 @@ using ParticipantPtr = std::unique_ptr<eprosima::fastdds::dds::DomainParticipant
 /// - kLocalhost: the transports are replaced by SHM + UDPv4 restricted to 127.0.0.1 (interface
 ///   white list, maxInitialPeersRange 32), no multicast locators, metatraffic unicast on
 ///   127.0.0.1 and the initial peers exactly {127.0.0.1}: up to 32 participants on the host find
-///   each other, nothing leaves the host. The profile's other settings (discovery protocol,
-///   discovery servers, ...) stay.
+///   each other, nothing leaves the host. The profile's user-data locators are dropped too
+///   (Fast DDS then listens on SHM + 127.0.0.1); its other settings (discovery protocol,
+///   discovery servers, ...) stay. Stricter than rmw_fastrtps, which keeps the built-in
+///   transports and only confines discovery.
 /// - kSubnet / kSystemDefault: the profile's transports and discovery are left as they are.
 /// - kOff: the profile's transports stay; multicast locators (discovery and user data) are
 ///   removed and nothing is added to the initial peers, so the participant only announces itself
 ///   to the profile's own initial peers (none by default): it finds nobody by itself, but a
-///   participant that lists this host as a peer still finds it.
+///   participant that lists this host as a peer still finds it. (rmw_fastrtps switches
+///   discovery off entirely instead, which also ignores the profile's peers.)
 ///
 /// `large_data` raises (never lowers) the SHM segment to 16 MB and the socket buffers to 4 MB on
 /// the transports in use: Fast DDS's built-in transports (UDPv4 + SHM) are replaced by the same
