@@ -580,7 +580,8 @@ sensor_msgs::CameraInfo_ makeInfo(std::uint32_t width, std::uint32_t height) {
 }
 
 /// A depth image whose pixel (u, v) holds `value(u, v)` in the encoding's unit, rows padded to
-/// `step`, with `extra` bytes after the last row.
+/// `step`, with `extra` bytes after the last row. With a step too short for a row (a malformed
+/// image), the pixels that would not fit are not written.
 template <typename Value>
 sensor_msgs::Image_ makeImage(const std::string& encoding, std::uint32_t width,
                               std::uint32_t height, std::uint32_t step, bool big_endian,
@@ -593,8 +594,11 @@ sensor_msgs::Image_ makeImage(const std::string& encoding, std::uint32_t width,
   image.is_bigendian_(big_endian ? 1 : 0);
   image.data_().assign(static_cast<std::size_t>(step) * height + extra, 0xEE);
   const bool is_float = encoding == "32FC1";
+  const std::size_t bytes_per_pixel = is_float ? 4 : 2;
   for (std::uint32_t v = 0; v < height; ++v) {
     for (std::uint32_t u = 0; u < width; ++u) {
+      const std::size_t at = static_cast<std::size_t>(v) * step + u * bytes_per_pixel;
+      if (at + bytes_per_pixel > image.data_().size()) continue;
       std::uint8_t* p = image.data_().data() + static_cast<std::size_t>(v) * step;
       if (is_float) {
         putBits(p + 4 * u, bitsOf(static_cast<float>(value(u, v))), 4, big_endian);

@@ -169,7 +169,7 @@ Bytes smallCloudBytes(bool big_endian) {
 
 SerializedPayload_t payloadOf(const Bytes& bytes) {
   SerializedPayload_t payload(static_cast<std::uint32_t>(bytes.size()));
-  std::memcpy(payload.data, bytes.data(), bytes.size());
+  if (!bytes.empty()) std::memcpy(payload.data, bytes.data(), bytes.size());  // data: null if 0
   payload.length = static_cast<std::uint32_t>(bytes.size());
   return payload;
 }
