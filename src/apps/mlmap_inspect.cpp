@@ -69,11 +69,6 @@ struct Received {
   }
 };
 
-/// x, y, z (and intensity when present) of a cloud; false when it is malformed.
-bool readCloud(const mlmap::dds::sensor_msgs::PointCloud2_& msg, std::vector<Eigen::Vector3f>* points) {
-  return mlmap::dds::decodePointCloud2(msg, points).ok();
-}
-
 cv::Mat gridImage(const mlmap::dds::nav_msgs::OccupancyGrid_& grid) {
   const int w = static_cast<int>(grid.info_().width_());
   const int h = static_cast<int>(grid.info_().height_());
@@ -96,6 +91,33 @@ cv::Mat gridImage(const mlmap::dds::nav_msgs::OccupancyGrid_& grid) {
   cv::Mat big;
   cv::resize(image, big, cv::Size(w * scale, h * scale), 0, 0, cv::INTER_NEAREST);
   return big;
+}
+
+/// The ESDF slice seen from above, each voxel coloured by its distance (TURBO, low = near).
+cv::Mat esdfSliceImage(const std::vector<Eigen::Vector3f>& points, const std::vector<float>& distance_m,
+                       double res) {
+  Eigen::Vector2f lo(1e9f, 1e9f), hi(-1e9f, -1e9f);
+  float d_lo = 1e9f, d_hi = -1e9f;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    lo = lo.cwiseMin(points[i].head<2>());
+    hi = hi.cwiseMax(points[i].head<2>());
+    d_lo = std::min(d_lo, distance_m[i]);
+    d_hi = std::max(d_hi, distance_m[i]);
+  }
+  const int w = static_cast<int>(std::lround((hi.x() - lo.x()) / res)) + 1;
+  const int h = static_cast<int>(std::lround((hi.y() - lo.y()) / res)) + 1;
+  const int px = std::max(2, 600 / std::max(w, h));  // about 600 pixels across
+  cv::Mat image(h * px, w * px, CV_8UC3, cv::Scalar(255, 255, 255));
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const int x = static_cast<int>(std::lround((points[i].x() - lo.x()) / res));
+    const int y = h - 1 - static_cast<int>(std::lround((points[i].y() - lo.y()) / res));
+    const double f = d_hi > d_lo ? (distance_m[i] - d_lo) / (d_hi - d_lo) : 0.0;
+    const cv::Vec3b c = io::heightColorBgr(f);
+    cv::rectangle(image, cv::Rect(x * px, y * px, px, px), cv::Scalar(c[0], c[1], c[2]), cv::FILLED);
+  }
+  cv::putText(image, cv::format("ESDF slice: %.2f m (blue) .. %.2f m (red)", d_lo, d_hi),
+              cv::Point(4, 14), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0));
+  return image;
 }
 
 io::VoxelList voxelList(const std::vector<Eigen::Vector3f>& points, double res) {
@@ -146,20 +168,27 @@ int main(int argc, char** argv) {
       spdlog::warn("{}", what);
     };
     std::vector<std::string> expected;
+    // A PointCloud2 layer; `intensity` (optional) receives the `intensity` field, which mlmap's
+    // clouds carry as float32 at offset 12 (the ESDF slice's distances).
     auto cloudTopic = [&](const std::string& name, double rate_hz, bool latched,
-                          std::vector<Eigen::Vector3f> Received::*store) {
+                          std::vector<Eigen::Vector3f> Received::*store,
+                          std::vector<float> Received::*intensity) {
       if (name.empty() || rate_hz <= 0) return;
       expected.push_back(name);
       auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::sensor_msgs::PointCloud2_>>(
-          [&rx, name, store](mlmap::dds::sensor_msgs::PointCloud2_&& msg) {
+          [&rx, name, store, intensity](mlmap::dds::sensor_msgs::PointCloud2_&& msg) {
             std::vector<Eigen::Vector3f> points;
-            const bool ok = readCloud(msg, &points);
+            const bool ok = mlmap::dds::decodePointCloud2(msg, &points).ok();
             std::lock_guard<std::mutex> lock(rx.mutex);
-            if (!ok) {
-              ++rx.malformed;
-              return;
-            }
+            if (!ok) return void(++rx.malformed);
             rx.note(name, msg.data_().size(), points.size());
+            if (intensity != nullptr && msg.point_step_() >= 16) {
+              std::vector<float>& values = rx.*intensity;
+              values.resize(points.size());
+              for (std::size_t i = 0; i < points.size(); ++i) {
+                std::memcpy(&values[i], msg.data_().data() + i * msg.point_step_() + 12, 4);
+              }
+            }
             rx.*store = std::move(points);
           },
           onError);
@@ -167,30 +196,10 @@ int main(int argc, char** argv) {
           subscriber, mlmap::dds::ddsTopicName(ns, name), mlmap::dds::reliableReaderQos(latched, 2), l.get());
       listeners.push_back(std::move(l));
     };
-    cloudTopic(n.awareness, r.awareness_hz, false, &Received::awareness);
-    cloudTopic(n.local_map, r.local_map_hz, false, &Received::local);
-    cloudTopic(n.global_map, r.global_map_hz, true, &Received::global);
-    if (!n.esdf_slice.empty() && r.esdf_hz > 0) {
-      expected.push_back(n.esdf_slice);
-      auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::sensor_msgs::PointCloud2_>>(
-          [&rx, name = n.esdf_slice](mlmap::dds::sensor_msgs::PointCloud2_&& msg) {
-            std::vector<Eigen::Vector3f> points;
-            const bool ok = readCloud(msg, &points);
-            std::lock_guard<std::mutex> lock(rx.mutex);
-            if (!ok) return void(++rx.malformed);
-            rx.note(name, msg.data_().size(), points.size());
-            rx.esdf_slice = std::move(points);
-            // intensity = distance: float32 at offset 12 in mlmap's own slice layout.
-            rx.esdf_slice_distance.resize(rx.esdf_slice.size());
-            for (std::size_t i = 0; i < rx.esdf_slice.size() && msg.point_step_() >= 16; ++i) {
-              std::memcpy(&rx.esdf_slice_distance[i], msg.data_().data() + i * msg.point_step_() + 12, 4);
-            }
-          },
-          onError);
-      mlmap::dds::createReader<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(
-          subscriber, mlmap::dds::ddsTopicName(ns, n.esdf_slice), mlmap::dds::reliableReaderQos(false, 2), l.get());
-      listeners.push_back(std::move(l));
-    }
+    cloudTopic(n.awareness, r.awareness_hz, false, &Received::awareness, nullptr);
+    cloudTopic(n.local_map, r.local_map_hz, false, &Received::local, nullptr);
+    cloudTopic(n.global_map, r.global_map_hz, true, &Received::global, nullptr);
+    cloudTopic(n.esdf_slice, r.esdf_hz, false, &Received::esdf_slice, &Received::esdf_slice_distance);
     if (!n.grid.empty() && r.grid_hz > 0) {
       expected.push_back(n.grid);
       auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::nav_msgs::OccupancyGrid_>>(
@@ -317,6 +326,10 @@ int main(int argc, char** argv) {
       io::writePng(out_dir + "/dds_awareness_top.png",
                    io::renderTopDown(voxelList(rx.awareness, res), options));
       if (!rx.grid.data_().empty()) io::writePng(out_dir + "/dds_grid.png", gridImage(rx.grid));
+      if (!rx.esdf_slice.empty() && rx.esdf_slice_distance.size() == rx.esdf_slice.size()) {
+        io::writePng(out_dir + "/dds_esdf_slice.png",
+                     esdfSliceImage(rx.esdf_slice, rx.esdf_slice_distance, res));
+      }
       std::ofstream json(out_dir + "/summary.json");
       json << "{\n  \"topics\": {";
       bool first = true;
@@ -329,7 +342,8 @@ int main(int argc, char** argv) {
       for (std::size_t i = 0; i < missing.size(); ++i) json << (i ? ", " : "") << '"' << missing[i] << '"';
       json << "],\n  \"malformed\": " << rx.malformed << ",\n  \"scored_voxels\": " << scored
            << ",\n  \"precision\": " << precision << ",\n  \"node_frames_mapped\": "
-           << rx.status.frames_mapped_() << "\n}\n";
+           << rx.status.frames_mapped_() << ",\n  \"node_global_voxels\": " << rx.status.global_voxels_()
+           << "\n}\n";
       spdlog::info("wrote pictures and summary.json to {}", out_dir);
     }
     if (expect_all && !missing.empty()) return 2;

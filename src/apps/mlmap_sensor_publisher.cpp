@@ -136,7 +136,7 @@ mlmap::dds::geometry_msgs::PoseStamped_ poseMessage(const Transform& T_W_B, doub
 int main(int argc, char** argv) {
   CLI::App app{"mlmap_sensor_publisher: simulated (or replayed) depth sensor + odometry over DDS"};
   std::string config_path, scenario_path, frames_dir, mode = "cloud";
-  double rate_hz = 0.0, pose_rate_hz = 50.0, wait_s = 10.0;
+  double rate_hz = 0.0, pose_rate_hz = 50.0, wait_s = 10.0, speed = 1.0;
   int max_frames = 0;
   app.add_option("-c,--config", config_path, "node configuration (its dds section and sensor mounting)")
       ->check(CLI::ExistingFile);
@@ -148,7 +148,11 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"cloud", "depth"}));
   app.add_option("--rate", rate_hz, "frames per second (default: the scenario's; 30 for a replay)")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--pose-rate", pose_rate_hz, "poses per second (simulator only)")
+  app.add_option("--speed", speed,
+                 "flight seconds per wall-clock second (simulator only): > 1 flies farther in the "
+                 "same number of frames")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--pose-rate", pose_rate_hz, "poses per second of flight (simulator only)")
       ->check(CLI::PositiveNumber);
   app.add_option("--max-frames", max_frames, "stop after this many frames (0: all)")
       ->check(CLI::NonNegativeNumber);
@@ -235,7 +239,7 @@ int main(int argc, char** argv) {
         frame = replay->read(static_cast<std::size_t>(i));
         t_s = frame.stamp_s;
       } else {
-        t_s = i / rate_hz;
+        t_s = speed * i / rate_hz;
         frame.T_W_B = scenario->trajectory.poseAt(t_s);
         camera->render(scenario->world, frame.T_W_B * T_B_S, t_s, &frame);
       }

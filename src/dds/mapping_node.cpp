@@ -326,21 +326,14 @@ struct MappingNode::Impl {
     have_camera_info = true;
   }
 
-  void handle(geometry_msgs::PoseStamped_& msg) {
+  /// PoseStamped or Odometry.
+  template <typename PoseMsg>
+  void handle(PoseMsg& msg) {
     double stamp_s = 0.0;
     Transform T_W_B;
     count(&NodeCounters::poses_received);
     const DecodeStatus status = decodePose(msg, &stamp_s, &T_W_B);
-    if (!status.ok()) return malformed("PoseStamped", status);
-    addPose(stamp_s, T_W_B);
-  }
-
-  void handle(nav_msgs::Odometry_& msg) {
-    double stamp_s = 0.0;
-    Transform T_W_B;
-    count(&NodeCounters::poses_received);
-    const DecodeStatus status = decodePose(msg, &stamp_s, &T_W_B);
-    if (!status.ok()) return malformed("Odometry", status);
+    if (!status.ok()) return malformed("pose", status);
     addPose(stamp_s, T_W_B);
   }
 
