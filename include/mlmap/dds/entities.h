@@ -12,17 +12,47 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
+#include <exception>
 #include <functional>
 #include <stdexcept>
 #include <string>
 
 namespace mlmap::dds {
 
-/// Registers the generated type `PubSubType` with the participant (once) and returns its DDS
-/// type name, e.g. "sensor_msgs::msg::dds_::PointCloud2_". Throws std::runtime_error on failure.
+namespace detail {
+/// Set on the calling thread when a CheckedType failed to deserialise a payload.
+inline bool& deserializeFailed() {
+  thread_local bool failed = false;
+  return failed;
+}
+}  // namespace detail
+
+/// A generated type whose deserialize() never throws. Fast CDR throws on some malformed payloads
+/// (a bool byte other than 0/1, an unknown encapsulation) past the generated code, and Fast DDS
+/// 2.9 then leaves the sample in the reader's history, so every later take() would throw on it
+/// again. Here the sample is taken like any other, and the failure is flagged on the taking
+/// thread (TakeListener drops and reports it): Fast DDS ignores deserialize()'s return value.
+template <typename PubSubType>
+class CheckedType : public PubSubType {
+ public:
+  bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t* payload, void* data) override {
+    bool ok = false;
+    try {
+      ok = PubSubType::deserialize(payload, data);
+    } catch (const std::exception&) {
+      ok = false;
+    }
+    if (!ok) detail::deserializeFailed() = true;
+    return ok;
+  }
+};
+
+/// Registers the generated type `PubSubType` (as a CheckedType) with the participant, once, and
+/// returns its DDS type name, e.g. "sensor_msgs::msg::dds_::PointCloud2_". Throws
+/// std::runtime_error on failure.
 template <typename PubSubType>
 std::string registerType(eprosima::fastdds::dds::DomainParticipant* participant) {
-  eprosima::fastdds::dds::TypeSupport type(new PubSubType());
+  eprosima::fastdds::dds::TypeSupport type(new CheckedType<PubSubType>());
   const std::string name = type.get_type_name();
   if (participant->find_type(name).empty() &&
       type.register_type(participant) != eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
@@ -61,8 +91,8 @@ eprosima::fastdds::dds::DataWriter* createWriter(eprosima::fastdds::dds::Publish
 }
 
 /// Takes every sample of a reader and hands it to `sink` (on Fast DDS's listener thread: keep
-/// `sink` short). A payload that fails to deserialise (malformed input can make Fast CDR throw,
-/// see idl/README.md) goes to `on_error` and the next sample is taken.
+/// `sink` short). A payload that fails to deserialise (the reader's type must come from
+/// registerType(), see CheckedType) is reported to `on_error` and dropped.
 template <typename Msg>
 class TakeListener : public eprosima::fastdds::dds::DataReaderListener {
  public:
@@ -72,15 +102,15 @@ class TakeListener : public eprosima::fastdds::dds::DataReaderListener {
     for (;;) {
       Msg msg;
       eprosima::fastdds::dds::SampleInfo info;
-      try {
-        if (reader->take_next_sample(&msg, &info) !=
-            eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
-          return;
-        }
-      } catch (const std::exception& e) {
-        on_error_(std::string("cannot deserialise a sample: ") + e.what());
+      detail::deserializeFailed() = false;
+      const bool taken = reader->take_next_sample(&msg, &info) ==
+                         eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
+      if (detail::deserializeFailed()) {  // taken or not, the sample has left the history
+        on_error_("cannot deserialise a sample on " + reader->get_topicdescription()->get_name() +
+                  " (malformed CDR)");
         continue;
       }
+      if (!taken) return;
       if (info.valid_data) sink_(std::move(msg));
     }
   }

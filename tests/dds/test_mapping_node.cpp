@@ -1,0 +1,414 @@
+// The mapping node's input side over DDS: malformed samples (bad CDR, bad layouts, bad values,
+// bad poses, bad stamps) are rejected and counted while good frames keep being mapped.
+// Participants on loopback only (DiscoveryRange::kLocalhost), domains 170..189.
+#include "mlmap/dds/entities.h"
+#include "mlmap/dds/mapping_node.h"
+#include "mlmap/dds/participant.h"
+#include "mlmap/dds/ros_conversions.h"
+
+#include "raw_type.h"
+
+#include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
+#include "nav_msgs/msg/Odometry_PubSubTypes.h"
+#include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace mlmap::dds {
+namespace {
+
+namespace fdds = eprosima::fastdds::dds;
+using sensor_msgs::PointCloud2_;
+using test_support::CdrBytes;
+using test_support::RawBytes;
+using test_support::RawType;
+using Clock = std::chrono::steady_clock;
+
+constexpr auto kTimeout = std::chrono::seconds(10);
+constexpr const char* kCloudType = "sensor_msgs::msg::dds_::PointCloud2_";
+
+bool waitFor(const std::function<bool()>& condition, std::chrono::milliseconds timeout = kTimeout) {
+  const auto deadline = Clock::now() + timeout;
+  while (!condition()) {
+    if (Clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return true;
+}
+
+DdsConfig localhostConfig(int domain_id) {
+  DdsConfig config;
+  config.domain_id = domain_id;
+  config.discovery_range = "LOCALHOST";
+  return config;
+}
+
+/// A writer of arbitrary bytes on `dds_topic` under the type name `type_name`.
+fdds::DataWriter* rawWriter(fdds::DomainParticipant* participant, const std::string& dds_topic,
+                            const std::string& type_name) {
+  fdds::TypeSupport type(new RawType(type_name, 1u << 20));
+  if (type.register_type(participant) != ReturnCode_t::RETCODE_OK) return nullptr;
+  fdds::Topic* topic = participant->create_topic(dds_topic, type_name, fdds::TOPIC_QOS_DEFAULT);
+  fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  if (topic == nullptr || publisher == nullptr) return nullptr;
+  return publisher->create_datawriter(topic, reliableWriterQos(50));
+}
+
+bool writerMatched(fdds::DataWriter* writer) {
+  fdds::PublicationMatchedStatus status;
+  writer->get_publication_matched_status(status);
+  return status.current_count > 0;
+}
+
+/// The CDR of a PointCloud2 with one float32 x, y, z point, up to (not including) is_bigendian.
+CdrBytes cloudPrefix(std::int32_t stamp_s) {
+  CdrBytes b;
+  b.i32(stamp_s).u32(0).str("sensor");  // header
+  b.u32(1).u32(1);                      // height, width
+  b.u32(3);                             // fields
+  const char* names[] = {"x", "y", "z"};
+  for (std::uint32_t i = 0; i < 3; ++i) b.str(names[i]).u32(4 * i).u8(7).u32(1);
+  return b;
+}
+
+/// The rest of that cloud: is_bigendian, point_step, row_step, data, is_dense.
+RawBytes cloudBytes(std::int32_t stamp_s, std::uint8_t is_bigendian_byte) {
+  CdrBytes b = cloudPrefix(stamp_s);
+  b.u8(is_bigendian_byte).u32(12).u32(12).u32(12);
+  const float xyz[3] = {1.0f, 2.0f, 3.0f};
+  for (float v : xyz) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &v, 4);
+    for (int k = 0; k < 4; ++k) b.u8(static_cast<std::uint8_t>(bits >> (8 * k)));
+  }
+  b.u8(1);
+  return b.bytes();
+}
+
+TEST(TakeListener, PayloadsFastCdrCannotParseAreCountedOnceAndTheNextSampleArrives) {
+  const ParticipantPtr sender = createParticipant(localhostConfig(170), "raw_sender");
+  const ParticipantPtr receiver = createParticipant(localhostConfig(170), "listener");
+  fdds::DataWriter* writer = rawWriter(sender.get(), "rt/test/cloud", kCloudType);
+  ASSERT_NE(writer, nullptr);
+
+  std::atomic<int> good{0}, errors{0};
+  std::atomic<std::int32_t> last_stamp{0};
+  TakeListener<PointCloud2_> listener(
+      [&](PointCloud2_&& cloud) {
+        last_stamp = cloud.header_().stamp_().sec_();
+        ++good;
+      },
+      [&](const std::string&) { ++errors; });
+  fdds::Subscriber* subscriber = receiver->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+  createReader<sensor_msgs::PointCloud2_PubSubType>(subscriber, "rt/test/cloud", reliableReaderQos(),
+                                                    &listener);
+  ASSERT_TRUE(waitFor([&] { return writerMatched(writer); }));
+
+  RawBytes sample = cloudBytes(1, 0);
+  ASSERT_TRUE(writer->write(&sample));
+  ASSERT_TRUE(waitFor([&] { return good == 1; })) << "a well-formed raw cloud was not received";
+  EXPECT_EQ(last_stamp, 1);
+
+  // A bool byte that is neither 0 nor 1 (Fast CDR throws BadParamException), a payload cut in
+  // the middle of the data (NotEnoughMemoryException), an unknown encapsulation.
+  RawBytes bad_bool = cloudBytes(2, 7);
+  RawBytes truncated = cloudBytes(3, 0);
+  truncated.resize(truncated.size() - 8);
+  RawBytes bad_encapsulation = cloudBytes(4, 0);
+  bad_encapsulation[1] = 0x77;
+  for (RawBytes* b : {&bad_bool, &truncated, &bad_encapsulation}) ASSERT_TRUE(writer->write(b));
+  sample = cloudBytes(5, 0);
+  ASSERT_TRUE(writer->write(&sample));
+  ASSERT_TRUE(waitFor([&] { return good == 2; })) << "the good sample after the bad ones was lost";
+  EXPECT_EQ(last_stamp, 5);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(errors, 3) << "each bad sample must be reported exactly once";
+  EXPECT_EQ(good, 2) << "a bad sample was handed over as if it were valid";
+}
+
+// ---- The node ------------------------------------------------------------------------------
+
+/// A vehicle hovering at (0, 0, 1) facing +x, a wall at x = 3 m: stamped poses and clouds as a
+/// sensor driver and an odometry source would publish them to a MappingNode.
+class SensorSide {
+ public:
+  SensorSide(int domain_id, const NodeConfig& node_config)
+      : config_(node_config),
+        participant_(createParticipant(localhostConfig(domain_id), "sensor_side")),
+        raw_participant_(createParticipant(localhostConfig(domain_id), "raw_sensor_side")) {
+    fdds::Publisher* publisher = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+    const TopicNames& topics = config_.dds.topics;
+    cloud_ = createWriter<sensor_msgs::PointCloud2_PubSubType>(publisher, "rt/" + topics.cloud,
+                                                               reliableWriterQos(50));
+    if (!topics.pose.empty()) {
+      pose_ = createWriter<geometry_msgs::PoseStamped_PubSubType>(publisher, "rt/" + topics.pose,
+                                                                  reliableWriterQos(50));
+    }
+    if (!topics.odometry.empty()) {
+      odometry_ = createWriter<nav_msgs::Odometry_PubSubType>(publisher, "rt/" + topics.odometry,
+                                                              reliableWriterQos(50));
+    }
+    raw_cloud_ = rawWriter(raw_participant_.get(), "rt/" + topics.cloud, kCloudType);
+    T_W_B_.translation() = Eigen::Vector3d(0.0, 0.0, 1.0);
+    const Transform T_S_W = (T_W_B_ * config_.map.sensor.T_B_S()).inverse();
+    for (double y = -1.0; y <= 1.0; y += 0.05) {
+      for (double z = 0.5; z <= 1.5; z += 0.05) {
+        wall_S_.push_back((T_S_W * Eigen::Vector3d(3.0, y, z)).cast<float>());
+      }
+    }
+  }
+
+  /// Waits until the node's readers matched every writer.
+  bool matched() const {
+    return waitFor([&] {
+      for (fdds::DataWriter* w : {cloud_, pose_, odometry_, raw_cloud_}) {
+        if (w != nullptr && !writerMatched(w)) return false;
+      }
+      return true;
+    });
+  }
+
+  /// A PoseStamped (or Odometry, whichever the node reads) of the hovering vehicle.
+  void pose(double stamp_s, const Eigen::Quaterniond& q = Eigen::Quaterniond::Identity(),
+            double x_m = 0.0) {
+    geometry_msgs::Pose_ p;
+    p.position_().x_(x_m);
+    p.position_().z_(T_W_B_.translation().z());
+    p.orientation_().x_(q.x());
+    p.orientation_().y_(q.y());
+    p.orientation_().z_(q.z());
+    p.orientation_().w_(q.w());
+    if (pose_ != nullptr) {
+      geometry_msgs::PoseStamped_ msg;
+      msg.header_().stamp_(toRosTime(stamp_s));
+      msg.header_().frame_id_("map");
+      msg.pose_(p);
+      ASSERT_TRUE(pose_->write(&msg));
+    } else {
+      nav_msgs::Odometry_ msg;
+      msg.header_().stamp_(toRosTime(stamp_s));
+      msg.header_().frame_id_("map");
+      msg.child_frame_id_("base_link");
+      msg.pose_().pose_(p);
+      msg.pose_().covariance_().fill(0.0);
+      ASSERT_TRUE(odometry_->write(&msg));
+    }
+  }
+
+  /// The wall as the sensor sees it from the hover pose.
+  [[nodiscard]] sensor_msgs::PointCloud2_ wallCloud(double stamp_s) const {
+    return encodePointCloud2(wall_S_, nullptr, stamp_s, config_.dds.sensor_frame);
+  }
+
+  void cloud(sensor_msgs::PointCloud2_ msg) { ASSERT_TRUE(cloud_->write(&msg)); }
+  void rawCloud(RawBytes bytes) { ASSERT_TRUE(raw_cloud_->write(&bytes)); }
+
+  /// Poses just before and after `stamp_s`, then the wall cloud at `stamp_s`.
+  void frame(double stamp_s) {
+    pose(stamp_s - 0.01);
+    pose(stamp_s + 0.01);
+    cloud(wallCloud(stamp_s));
+  }
+
+ private:
+  NodeConfig config_;
+  ParticipantPtr participant_;
+  ParticipantPtr raw_participant_;
+  fdds::DataWriter* cloud_ = nullptr;
+  fdds::DataWriter* pose_ = nullptr;
+  fdds::DataWriter* odometry_ = nullptr;
+  fdds::DataWriter* raw_cloud_ = nullptr;
+  Transform T_W_B_ = Transform::Identity();
+  std::vector<Eigen::Vector3f> wall_S_;
+};
+
+NodeConfig nodeConfig(int domain_id) {
+  NodeConfig config;
+  config.dds = localhostConfig(domain_id);
+  return config;
+}
+
+/// Log lines of a node, kept for inspection.
+struct CapturedLog {
+  std::mutex mutex;
+  std::vector<std::string> lines;
+  LogSink sink() {
+    return [this](LogLevel, const std::string& line) {
+      std::lock_guard<std::mutex> lock(mutex);
+      lines.push_back(line);
+    };
+  }
+  int count(const std::string& part) {
+    std::lock_guard<std::mutex> lock(mutex);
+    int n = 0;
+    for (const std::string& line : lines) n += line.find(part) != std::string::npos ? 1 : 0;
+    return n;
+  }
+};
+
+/// Waits until the engine mapped `frames` frames. Poses and clouds travel on different topics, so
+/// the tests wait for the outcome they expect rather than for a message count.
+bool mapped(const MappingNode& node, std::uint64_t frames) {
+  return waitFor([&] { return node.engineStats().frames_mapped == frames; });
+}
+
+/// Waits until `counter` of the node reaches `value`.
+bool counted(const MappingNode& node, std::uint64_t NodeCounters::*counter, std::uint64_t value) {
+  return waitFor([&] { return node.counters().*counter == value; });
+}
+
+TEST(MappingNodeInput, MalformedCloudsAreRejectedCountedLoggedOnceAndGoodFramesStillMapped) {
+  const NodeConfig config = nodeConfig(171);
+  CapturedLog log;
+  MappingNode node(config, log.sink());
+  SensorSide sensor(171, config);
+  ASSERT_TRUE(sensor.matched()) << "the node's readers did not match";
+
+  double t_s = 100.0;
+  sensor.frame(t_s);
+  ASSERT_TRUE(mapped(node, 1)) << "a good frame was not mapped";
+
+  // Each breaks one rule of sensor_msgs/PointCloud2; a decoder that trusted it would read out of
+  // bounds or map garbage.
+  using Mutation = std::function<void(sensor_msgs::PointCloud2_&)>;
+  const std::vector<Mutation> broken = {
+      [](auto& m) { m.data_().pop_back(); },                        // data shorter than the sizes
+      [](auto& m) { m.data_().push_back(0); },                      // data longer than the sizes
+      [](auto& m) { m.row_step_(m.row_step_() - 1); },              // row_step < width * point_step
+      [](auto& m) { m.point_step_(8); m.row_step_(8 * m.width_()); m.data_().resize(m.row_step_()); },
+      [](auto& m) { m.fields_().pop_back(); },                      // no z
+      [](auto& m) { m.fields_()[0].datatype_(5); },                 // x as INT32
+      [](auto& m) { m.fields_()[1].offset_(2); },                   // y overlaps x
+      [](auto& m) { m.fields_()[2].count_(0); },                    // z with count 0
+      [](auto& m) { m.header_().stamp_().nanosec_(1000000000u); },  // not a time
+  };
+  for (std::size_t i = 0; i < broken.size(); ++i) {
+    t_s += 0.1;
+    sensor_msgs::PointCloud2_ msg = sensor.wallCloud(t_s);
+    broken[i](msg);
+    sensor.pose(t_s - 0.01);
+    sensor.pose(t_s + 0.01);
+    sensor.cloud(msg);
+    ASSERT_TRUE(counted(node, &NodeCounters::inputs_malformed, i + 1)) << "broken cloud " << i;
+  }
+  // Payloads Fast CDR cannot parse never reach the node's input thread (no clouds_received).
+  t_s += 0.1;
+  RawBytes truncated = cloudBytes(static_cast<std::int32_t>(t_s), 0);
+  truncated.resize(truncated.size() - 8);
+  sensor.rawCloud(truncated);
+  sensor.rawCloud(cloudBytes(static_cast<std::int32_t>(t_s), 9));
+  ASSERT_TRUE(counted(node, &NodeCounters::inputs_malformed, broken.size() + 2))
+      << "malformed clouds counted: " << node.counters().inputs_malformed;
+
+  // Non-finite points are not a malformed cloud: the frame is mapped, the points are counted.
+  t_s += 0.1;
+  sensor_msgs::PointCloud2_ with_nan = sensor.wallCloud(t_s);
+  const float bad[] = {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+                       -std::numeric_limits<float>::infinity()};
+  for (std::size_t i = 0; i < 3; ++i) std::memcpy(with_nan.data_().data() + 12 * i + 4 * i, &bad[i], 4);
+  sensor.pose(t_s - 0.01);
+  sensor.pose(t_s + 0.01);
+  sensor.cloud(with_nan);
+  ASSERT_TRUE(mapped(node, 2)) << "a cloud with some non-finite points was not mapped";
+
+  t_s += 0.1;
+  sensor.frame(t_s);
+  ASSERT_TRUE(mapped(node, 3)) << "good frames after bad ones must still be mapped";
+
+  // The engine may finish a frame before the input thread counts it as submitted.
+  EXPECT_TRUE(counted(node, &NodeCounters::frames_submitted, 3));
+  const NodeCounters c = node.counters();
+  const EngineStats e = node.engineStats();
+  EXPECT_EQ(c.inputs_malformed, broken.size() + 2);
+  EXPECT_EQ(c.clouds_received, 1 + broken.size() + 2);  // not the two raw ones
+  EXPECT_EQ(c.frames_submitted, 3u);
+  EXPECT_EQ(e.frames_mapped, 3u);
+  EXPECT_EQ(e.points.rejected_non_finite, 3u);
+  EXPECT_GT(e.points.hit_voxels, 0u);
+  // One log line for the burst (the limit is one per reason and second), not one per cloud.
+  const int lines = log.count("malformed");
+  EXPECT_GE(lines, 1);
+  EXPECT_LE(lines, 2);
+}
+
+TEST(MappingNodeInput, BadPosesAndStampsAreRejectedAndCountedAndMappingResumesWithThePoses) {
+  const NodeConfig config = nodeConfig(172);
+  CapturedLog log;
+  MappingNode node(config, log.sink());
+  SensorSide sensor(172, config);
+  ASSERT_TRUE(sensor.matched());
+  double t_s = 200.0;
+  sensor.frame(t_s);
+  ASSERT_TRUE(mapped(node, 1));
+
+  // Poses that must never be used: not a rotation, not finite, older than the newest, far ahead.
+  const double newest_s = t_s + 0.01;
+  sensor.pose(newest_s + 0.01, Eigen::Quaterniond(2.0, 0.0, 0.0, 0.0));  // norm 2
+  sensor.pose(newest_s + 0.02, Eigen::Quaterniond::Identity(), std::nan(""));
+  sensor.pose(newest_s - 0.5);
+  sensor.pose(newest_s + config.dds.max_future_s + 5.0);
+  ASSERT_TRUE(counted(node, &NodeCounters::poses_received, 2 + 4));
+  NodeCounters c = node.counters();
+  EXPECT_EQ(c.inputs_malformed, 2u) << "non-unit quaternion and NaN position";
+  EXPECT_EQ(c.poses_rejected, 2u) << "out of order and far future";
+
+  // A cloud far ahead of every pose: dropped at once (no pose will ever be close to it).
+  sensor.cloud(sensor.wallCloud(newest_s + config.dds.max_future_s + 2.0));
+  EXPECT_TRUE(counted(node, &NodeCounters::frames_future, 1));
+
+  // A cloud older than the last mapped frame, though it has poses: the engine refuses it.
+  sensor.cloud(sensor.wallCloud(t_s - 0.005));
+  EXPECT_TRUE(counted(node, &NodeCounters::frames_engine_rejected, 1));
+
+  // The pose stream stops: a newer cloud waits for its pose, then is dropped, not mapped with
+  // the last pose.
+  sensor.cloud(sensor.wallCloud(newest_s + 0.2));
+  ASSERT_TRUE(counted(node, &NodeCounters::frames_without_pose, 1))
+      << "a frame without a pose was not dropped";
+  // A cloud in a gap of the pose stream (nearest pose 0.5 s away): dropped, not interpolated.
+  t_s = newest_s + 1.0;
+  sensor.pose(t_s);
+  sensor.cloud(sensor.wallCloud(t_s - 0.5));
+  ASSERT_TRUE(counted(node, &NodeCounters::frames_without_pose, 2));
+
+  // Poses resume: mapping resumes.
+  for (int k = 1; k <= 3; ++k) {
+    sensor.frame(t_s + 0.1 * k);
+    ASSERT_TRUE(mapped(node, 1 + static_cast<std::uint64_t>(k))) << "mapping did not resume";
+  }
+  EXPECT_TRUE(counted(node, &NodeCounters::frames_submitted, 4));
+  c = node.counters();
+  EXPECT_EQ(c.frames_engine_rejected, 1u);
+  EXPECT_EQ(c.frames_without_pose, 2u);
+  EXPECT_EQ(node.engineStats().rejected_out_of_order, 1u);
+  EXPECT_GE(log.count("no pose within"), 1);
+  EXPECT_GE(log.count("rejected a pose"), 1);
+}
+
+TEST(MappingNodeInput, OdometryInsteadOfPoseStampedPairsAndMaps) {
+  NodeConfig config = nodeConfig(173);
+  config.dds.topics.pose = "";
+  config.dds.topics.odometry = "odom";
+  MappingNode node(config);
+  SensorSide sensor(173, config);
+  ASSERT_TRUE(sensor.matched());
+  for (int k = 0; k < 3; ++k) {
+    sensor.frame(300.0 + 0.1 * k);
+    ASSERT_TRUE(mapped(node, static_cast<std::uint64_t>(k) + 1));
+  }
+  EXPECT_EQ(node.counters().poses_received, 6u);
+  EXPECT_EQ(node.engineStats().frames_mapped, 3u);
+  EXPECT_GT(node.engineStats().points.hit_voxels, 0u);
+}
+
+}  // namespace
+}  // namespace mlmap::dds
