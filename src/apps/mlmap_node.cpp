@@ -56,9 +56,13 @@ int main(int argc, char** argv) {
                                                 : spdlog::level::info,
                   message);
     });
-    spdlog::info("mapping on DDS domain {} (namespace '{}'), cloud topic {}, pose topic {}",
-                 node.domainId(), config.dds.ns, mlmap::dds::ddsTopicName(config.dds.ns, config.dds.topics.cloud),
-                 mlmap::dds::ddsTopicName(config.dds.ns, config.dds.topics.pose));
+    std::string inputs;
+    const mlmap::dds::TopicNames& t = config.dds.topics;
+    for (const std::string* name : {&t.cloud, &t.depth_image, &t.camera_info, &t.pose, &t.odometry}) {
+      if (!name->empty()) inputs += (inputs.empty() ? "" : ", ") + mlmap::dds::ddsTopicName(config.dds.ns, *name);
+    }
+    spdlog::info("mapping on DDS domain {} (namespace '{}'), inputs: {}", node.domainId(), config.dds.ns,
+                 inputs);
     const auto start = std::chrono::steady_clock::now();
     auto last_report = start;
     while (!g_stop) {
