@@ -1,7 +1,9 @@
 // mlmap_inspect: subscribes to mlmap_node's layers, prints what arrives (rates, sizes) and writes
 // pictures of the received layers and a JSON summary. With --scenario it also scores the received
-// occupied voxels against the scenario's ground truth; with --expect-all it fails (exit 2) unless
-// every enabled layer arrived.
+// occupied voxels against the scenario's ground truth; with --expect-all (or --expect) it fails
+// (exit 2) unless every enabled (or every listed) layer arrived. The age of each message at
+// arrival (wall clock minus its header stamp: the delay from capture to the ground when the
+// sensor stamps with the wall clock) is summarised per topic.
 
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/node_config.h"
@@ -27,6 +29,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <mutex>
 #include <thread>
 
@@ -41,12 +44,24 @@ extern "C" void onSignal(int) { g_stop = true; }
 
 /// What arrived on one topic.
 struct TopicLog {
-  std::string dds_topic;
   std::uint64_t messages = 0;
   std::uint64_t bytes = 0;
   std::size_t last_points = 0;  // points / cells / voxels of the last message
   Clock::time_point first, last;
+  std::vector<double> age_ms;   // wall clock at arrival minus header stamp, per message
 };
+
+double wallClock_s() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+/// The q-quantile (0..1) of `values` (nearest rank); 0 when empty.
+double quantile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(values.size()))) - (q > 0 ? 1 : 0);
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
+  return values[k];
+}
 
 /// Everything received, guarded by one mutex (listener threads write, main reads).
 struct Received {
@@ -59,13 +74,15 @@ struct Received {
   std::vector<Eigen::Vector3d> trajectory_W;
   std::uint64_t malformed = 0;
 
-  void note(const std::string& name, std::size_t bytes, std::size_t points) {
+  void note(const std::string& name, std::size_t bytes, std::size_t points,
+            const ::builtin_interfaces::msg::dds_::Time_& stamp) {
     TopicLog& t = topics[name];
     if (t.messages == 0) t.first = Clock::now();
     t.last = Clock::now();
     ++t.messages;
     t.bytes += bytes;
     t.last_points = points;
+    t.age_ms.push_back(1e3 * (wallClock_s() - mlmap::dds::toSeconds(stamp)));
   }
 };
 
@@ -137,6 +154,7 @@ int main(int argc, char** argv) {
   std::string config_path, out_dir, scenario_path;
   double duration_s = 0.0, idle_s = 0.0;
   bool expect_all = false, use_default_scenario = false;
+  std::vector<std::string> expect_topics;
   double min_precision = 0.0;
   app.add_option("-c,--config", config_path, "node configuration (topics, namespace, domain)")
       ->check(CLI::ExistingFile);
@@ -147,6 +165,9 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   app.add_flag("--default-scenario", use_default_scenario, "score against the built-in scenario");
   app.add_flag("--expect-all", expect_all, "exit 2 unless every enabled layer arrived");
+  app.add_option("--expect", expect_topics,
+                 "exit 2 unless these layers arrived (topic names as in the config, e.g. mlmap/grid)")
+      ->delimiter(',');
   app.add_option("--min-precision", min_precision, "exit 2 when the scored precision is lower");
   CLI11_PARSE(app, argc, argv);
   std::signal(SIGINT, onSignal);
@@ -181,7 +202,7 @@ int main(int argc, char** argv) {
             const bool ok = mlmap::dds::decodePointCloud2(msg, &points).ok();
             std::lock_guard<std::mutex> lock(rx.mutex);
             if (!ok) return void(++rx.malformed);
-            rx.note(name, msg.data_().size(), points.size());
+            rx.note(name, msg.data_().size(), points.size(), msg.header_().stamp_());
             if (intensity != nullptr && msg.point_step_() >= 16) {
               std::vector<float>& values = rx.*intensity;
               values.resize(points.size());
@@ -205,7 +226,7 @@ int main(int argc, char** argv) {
       auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::nav_msgs::OccupancyGrid_>>(
           [&rx, name = n.grid](mlmap::dds::nav_msgs::OccupancyGrid_&& msg) {
             std::lock_guard<std::mutex> lock(rx.mutex);
-            rx.note(name, msg.data_().size(), msg.data_().size());
+            rx.note(name, msg.data_().size(), msg.data_().size(), msg.header_().stamp_());
             rx.grid = std::move(msg);
           },
           onError);
@@ -218,7 +239,7 @@ int main(int argc, char** argv) {
       auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::mlmap_msgs::VoxelBlock_>>(
           [&rx, name = n.esdf_block](mlmap::dds::mlmap_msgs::VoxelBlock_&& msg) {
             std::lock_guard<std::mutex> lock(rx.mutex);
-            rx.note(name, msg.values_().size() * 4, msg.values_().size());
+            rx.note(name, msg.values_().size() * 4, msg.values_().size(), msg.header_().stamp_());
           },
           onError);
       mlmap::dds::createReader<mlmap::dds::mlmap_msgs::VoxelBlock_PubSubType>(
@@ -230,7 +251,7 @@ int main(int argc, char** argv) {
       auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::mlmap_msgs::Status_>>(
           [&rx, name = n.status](mlmap::dds::mlmap_msgs::Status_&& msg) {
             std::lock_guard<std::mutex> lock(rx.mutex);
-            rx.note(name, sizeof(msg), 1);
+            rx.note(name, sizeof(msg), 1, msg.header_().stamp_());
             rx.status = std::move(msg);
           },
           onError);
@@ -243,7 +264,8 @@ int main(int argc, char** argv) {
       auto l = std::make_unique<mlmap::dds::TakeListener<::tf2_msgs::msg::dds_::TFMessage_>>(
           [&rx](::tf2_msgs::msg::dds_::TFMessage_&& msg) {
             std::lock_guard<std::mutex> lock(rx.mutex);
-            rx.note("tf", 0, msg.transforms_().size());
+            if (msg.transforms_().empty()) return;
+            rx.note("tf", 0, msg.transforms_().size(), msg.transforms_().front().header_().stamp_());
             for (const auto& t : msg.transforms_()) {
               const auto& p = t.transform_().translation_();
               rx.trajectory_W.emplace_back(p.x_(), p.y_(), p.z_());
@@ -288,13 +310,20 @@ int main(int argc, char** argv) {
     for (const std::string& name : expected) {
       if (rx.topics.count(name) == 0) missing.push_back(name);
     }
+    std::vector<std::string> missing_listed;
+    for (const std::string& name : expect_topics) {
+      if (rx.topics.count(name) == 0) missing_listed.push_back(name);
+    }
     for (const auto& [name, t] : rx.topics) {
       const double span = std::chrono::duration<double>(t.last - t.first).count();
-      spdlog::info("{:28} {:6} messages {:8.2f} Hz {:9.1f} kB/msg, last {} points/cells", name,
-                   t.messages, span > 0 ? static_cast<double>(t.messages - 1) / span : 0.0,
-                   static_cast<double>(t.bytes) / 1e3 / static_cast<double>(t.messages), t.last_points);
+      spdlog::info("{:28} {:6} messages {:8.2f} Hz {:9.1f} kB/msg, last {} points/cells, age at "
+                   "arrival median {:.1f} ms, p99 {:.1f} ms",
+                   name, t.messages, span > 0 ? static_cast<double>(t.messages - 1) / span : 0.0,
+                   static_cast<double>(t.bytes) / 1e3 / static_cast<double>(t.messages), t.last_points,
+                   quantile(t.age_ms, 0.5), quantile(t.age_ms, 0.99));
     }
     for (const std::string& name : missing) spdlog::warn("{:28} nothing received", name);
+    for (const std::string& name : missing_listed) spdlog::error("{:28} expected, nothing received", name);
 
     // Score local + global voxels against ground truth.
     double precision = -1.0;
@@ -335,7 +364,9 @@ int main(int argc, char** argv) {
       bool first = true;
       for (const auto& [name, t] : rx.topics) {
         json << (first ? "" : ",") << "\n    \"" << name << "\": {\"messages\": " << t.messages
-             << ", \"bytes\": " << t.bytes << ", \"last_points\": " << t.last_points << "}";
+             << ", \"bytes\": " << t.bytes << ", \"age_ms\": {\"median\": " << quantile(t.age_ms, 0.5)
+             << ", \"p99\": " << quantile(t.age_ms, 0.99) << "}, \"last_points\": " << t.last_points
+             << "}";
         first = false;
       }
       json << "\n  },\n  \"missing\": [";
@@ -347,6 +378,7 @@ int main(int argc, char** argv) {
       spdlog::info("wrote pictures and summary.json to {}", out_dir);
     }
     if (expect_all && !missing.empty()) return 2;
+    if (!missing_listed.empty()) return 2;
     if (min_precision > 0 && precision < min_precision) return 2;
     return 0;
   } catch (const std::exception& e) {
