@@ -153,7 +153,7 @@ int main(int argc, char** argv) {
   CLI::App app{"mlmap_inspect: watch mlmap_node's layers over DDS, write pictures and a summary"};
   std::string config_path, out_dir, scenario_path;
   double duration_s = 0.0, idle_s = 0.0;
-  bool expect_all = false, use_default_scenario = false;
+  bool expect_all = false, use_default_scenario = false, as_bridge = false;
   std::vector<std::string> expect_topics;
   double min_precision = 0.0;
   app.add_option("-c,--config", config_path, "node configuration (topics, namespace, domain)")
@@ -165,6 +165,9 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   app.add_flag("--default-scenario", use_default_scenario, "score against the built-in scenario");
   app.add_flag("--expect-all", expect_all, "exit 2 unless every enabled layer arrived");
+  app.add_flag("--as-bridge", as_bridge,
+               "subscribe as the ROS 2 ground-station bridge does over a radio link: BEST_EFFORT "
+               "for the awareness, local map and ESDF slice, no ESDF block");
   app.add_option("--expect", expect_topics,
                  "exit 2 unless these layers arrived (topic names as in the config, e.g. mlmap/grid)")
       ->delimiter(',');
@@ -191,6 +194,10 @@ int main(int argc, char** argv) {
     std::vector<std::string> expected;
     // A PointCloud2 layer; `intensity` (optional) receives the `intensity` field, which mlmap's
     // clouds carry as float32 at offset 12 (the ESDF slice's distances).
+    // Heavy layers over a lossy link: a lost sample is never repaired, the next one replaces it.
+    const auto heavyQos = [as_bridge](int depth) {
+      return as_bridge ? mlmap::dds::sensorReaderQos(1) : mlmap::dds::reliableReaderQos(false, depth);
+    };
     auto cloudTopic = [&](const std::string& name, double rate_hz, bool latched,
                           std::vector<Eigen::Vector3f> Received::*store,
                           std::vector<float> Received::*intensity) {
@@ -214,7 +221,8 @@ int main(int argc, char** argv) {
           },
           onError);
       mlmap::dds::createReader<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(
-          subscriber, mlmap::dds::ddsTopicName(ns, name), mlmap::dds::reliableReaderQos(latched, 2), l.get());
+          subscriber, mlmap::dds::ddsTopicName(ns, name),
+          latched ? mlmap::dds::reliableReaderQos(true, 2) : heavyQos(2), l.get());
       listeners.push_back(std::move(l));
     };
     cloudTopic(n.awareness, r.awareness_hz, false, &Received::awareness, nullptr);
@@ -234,7 +242,7 @@ int main(int argc, char** argv) {
           subscriber, mlmap::dds::ddsTopicName(ns, n.grid), mlmap::dds::reliableReaderQos(true, 1), l.get());
       listeners.push_back(std::move(l));
     }
-    if (!n.esdf_block.empty() && r.esdf_hz > 0) {
+    if (!n.esdf_block.empty() && r.esdf_hz > 0 && !as_bridge) {
       expected.push_back(n.esdf_block);
       auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::mlmap_msgs::VoxelBlock_>>(
           [&rx, name = n.esdf_block](mlmap::dds::mlmap_msgs::VoxelBlock_&& msg) {

@@ -1,0 +1,104 @@
+#!/usr/bin/env bash
+# The vehicle and the ground station on two hosts of a LAN, made here with two network namespaces
+# joined by a veth pair: multicast discovery between them as on a vehicle's network, and the link
+# from the vehicle limited to 10 Mbit/s (tc tbf: this kernel has no netem).
+#   netns_ground_link.sh <bin dir> <out dir> <domain id>
+# Onboard namespace: mlmap_sensor_publisher (10 Hz, shared memory to the node) -> mlmap_node.
+# Ground namespace (UDP only: nothing can bypass the link through shared memory), mlmap_inspect as
+# the bridge's stand-in:
+#   late     joins 4 s into the flight, leaves cleanly 7 s later: every layer must have crossed;
+#   vanish   joins at 4 s and is killed (-9) at 8 s, as a ground station that loses power;
+#   rejoin   joins at 12 s and stays to the end: every layer again, and the age of what it sees;
+#   latched  joins after the flight, when nothing new is published: must get the 2D grid and the
+#            global map (TRANSIENT_LOCAL), the latter equal to the node's.
+# Onboard, every frame must be mapped: the ground station's coming and going and the slow link do
+# not slow or stop the mapping. Needs root (ip netns, tc).
+set -uo pipefail
+bin=$1 out=$2
+export ROS_DOMAIN_ID=$3
+export ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET   # multicast discovery, inside the namespaces only
+unset FASTRTPS_DEFAULT_PROFILES_FILE
+here=$(cd "$(dirname "$0")" && pwd)
+frames=250 rate_hz=10
+[ "$(id -u)" = 0 ] || { echo "FAIL: needs root for network namespaces"; exit 1; }
+for tool in ip tc; do command -v $tool >/dev/null || { echo "FAIL: $tool missing (iproute2)"; exit 1; }; done
+rm -rf "$out" && mkdir -p "$out"
+
+tag=mlmap$$ on=mlmap$$on ground=mlmap$$gr
+pids=()
+cleanup() {
+  for p in "${pids[@]}"; do kill -9 "$p" 2>/dev/null; done
+  wait 2>/dev/null
+  ip netns del "$on" 2>/dev/null
+  ip netns del "$ground" 2>/dev/null
+}
+trap cleanup EXIT
+set -e
+ip netns add "$on"
+ip netns add "$ground"
+ip link add "${tag}a" type veth peer name "${tag}b"
+ip link set "${tag}a" netns "$on"
+ip link set "${tag}b" netns "$ground"
+ip -n "$on" addr add 10.77.0.1/24 dev "${tag}a"
+ip -n "$ground" addr add 10.77.0.2/24 dev "${tag}b"
+for side in "$on:${tag}a" "$ground:${tag}b"; do
+  ns=${side%%:*} dev=${side#*:}
+  ip -n "$ns" link set lo up
+  ip -n "$ns" link set "$dev" up multicast on
+  ip -n "$ns" route add 224.0.0.0/4 dev "$dev"   # discovery multicast goes over the LAN
+done
+# 10 Mbit/s from the vehicle to the ground, at most 400 ms of queue (then the link drops).
+ip netns exec "$on" tc qdisc add dev "${tag}a" root tbf rate 10mbit burst 32kbit latency 400ms
+set +e
+
+cfg="$out/node.yaml" ground_cfg="$out/ground.yaml"
+# A 9 m window so the flight retires submaps into the global map; long queues so a busy machine
+# delays frames rather than dropping them.
+printf 'local_map: {size_cells: [45, 45, 25]}\npipeline: {input_queue_capacity: 64}\n' > "$cfg"
+cp "$cfg" "$ground_cfg"
+printf 'dds:\n  profiles_file: %s\n  participant_profile: mlmap_udp_only\n' \
+  "$here/../../config/dds/udp_only.xml" >> "$ground_cfg"
+# `ip netns exec` execs the program: $! is the program's pid, so signals reach it.
+ground_inspect=(ip netns exec "$ground" "$bin/mlmap_inspect" --config "$ground_cfg" --as-bridge)
+ip netns exec "$on" "$bin/mlmap_node" --config "$cfg" --report-every 0 > "$out/node.log" 2>&1 &
+node=$!; pids+=($node)
+ip netns exec "$on" "$bin/mlmap_sensor_publisher" --config "$cfg" --rate $rate_hz \
+  --max-frames $frames > "$out/publisher.log" 2>&1 &
+publisher=$!; pids+=($publisher)
+sleep 4
+"${ground_inspect[@]}" --out "$out/late" --duration 7 --expect-all > "$out/late.log" 2>&1 &
+late=$!; pids+=($late)
+"${ground_inspect[@]}" > "$out/vanish.log" 2>&1 &
+vanish=$!; pids+=($vanish)
+sleep 4
+kill -9 $vanish
+sleep 4
+"${ground_inspect[@]}" --out "$out/rejoin" --expect-all > "$out/rejoin.log" 2>&1 &
+rejoin=$!; pids+=($rejoin)
+wait $publisher; pub_rc=$?
+wait $late; late_rc=$?
+sleep 3   # the last frames' layers cross
+kill -INT $rejoin; wait $rejoin; rejoin_rc=$?
+sleep 2   # the node is idle now: only what is latched can reach a newcomer
+"${ground_inspect[@]}" --out "$out/latched" --duration 4 \
+  --expect mlmap/grid,mlmap/global_map/occupied > "$out/latched.log" 2>&1
+latched_rc=$?
+kill -INT $node; wait $node; node_rc=$?
+
+for f in publisher node late rejoin latched; do echo "== $f"; cat "$out/$f.log"; done
+echo "publisher $pub_rc, node $node_rc, late $late_rc, rejoin $rejoin_rc, latched $latched_rc"
+fail() { echo "FAIL: $*"; exit 1; }
+[ $pub_rc -eq 0 ] && [ $node_rc -eq 0 ] || fail "an onboard process failed"
+[ $late_rc -eq 0 ] || fail "a late-joining ground station did not get every layer"
+[ $rejoin_rc -eq 0 ] || fail "a ground station rejoining did not get every layer"
+[ $latched_rc -eq 0 ] || fail "a ground station joining after the flight did not get the grid and global map"
+done_line=$(grep 'done: ' "$out/node.log")
+mapped=$(sed -n 's/.*done: \([0-9]*\) frames mapped (\([0-9]*\) dropped.*/\1 \2/p' <<<"$done_line")
+[ "$mapped" = "$frames 0" ] || fail "onboard mapping was disturbed: $done_line"
+global=$(sed -n 's/.*"mlmap\/global_map\/occupied": {.*"last_points": \([0-9]*\)}.*/\1/p' "$out/latched/summary.json")
+node_global=$(sed -n 's/.*"node_global_voxels": \([0-9]*\).*/\1/p' "$out/latched/summary.json")
+echo "latched global map: ${global:-none} voxels received after the flight, the node reported ${node_global:-?}"
+[ "${global:-0}" -gt 0 ] && [ "$global" = "$node_global" ] || fail "latched global map"
+echo "age of the layers at the ground station (10 Mbit/s link), median / p99 [ms]:"
+sed -n 's/.*"\([a-z_/]*\)": {"messages": \([0-9]*\),.*"age_ms": {"median": \([-0-9.e]*\), "p99": \([-0-9.e]*\)}.*/  \1: \3 \/ \4 (\2 messages)/p' \
+  "$out/rejoin/summary.json"
