@@ -6,6 +6,7 @@
 #include "mlmap/dds/participant.h"
 #include "mlmap/dds/ros_conversions.h"
 
+#include "dds_test_support.h"
 #include "raw_type.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
@@ -17,6 +18,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <limits>
 #include <mutex>
@@ -29,28 +31,13 @@ namespace {
 namespace fdds = eprosima::fastdds::dds;
 using sensor_msgs::PointCloud2_;
 using test_support::CdrBytes;
+using test_support::localhostConfig;
+using test_support::waitFor;
+using test_support::writerMatched;
 using test_support::RawBytes;
 using test_support::RawType;
-using Clock = std::chrono::steady_clock;
 
-constexpr auto kTimeout = std::chrono::seconds(10);
 constexpr const char* kCloudType = "sensor_msgs::msg::dds_::PointCloud2_";
-
-bool waitFor(const std::function<bool()>& condition, std::chrono::milliseconds timeout = kTimeout) {
-  const auto deadline = Clock::now() + timeout;
-  while (!condition()) {
-    if (Clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  return true;
-}
-
-DdsConfig localhostConfig(int domain_id) {
-  DdsConfig config;
-  config.domain_id = domain_id;
-  config.discovery_range = "LOCALHOST";
-  return config;
-}
 
 /// A writer of arbitrary bytes on `dds_topic` under the type name `type_name`.
 fdds::DataWriter* rawWriter(fdds::DomainParticipant* participant, const std::string& dds_topic,
@@ -61,12 +48,6 @@ fdds::DataWriter* rawWriter(fdds::DomainParticipant* participant, const std::str
   fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
   if (topic == nullptr || publisher == nullptr) return nullptr;
   return publisher->create_datawriter(topic, reliableWriterQos(50));
-}
-
-bool writerMatched(fdds::DataWriter* writer) {
-  fdds::PublicationMatchedStatus status;
-  writer->get_publication_matched_status(status);
-  return status.current_count > 0;
 }
 
 /// The CDR of a PointCloud2 with one float32 x, y, z point, up to (not including) is_bigendian.

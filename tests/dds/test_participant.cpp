@@ -3,6 +3,7 @@
 // test has its own domain id (150..169), so parallel test processes never meet.
 #include "mlmap/dds/participant.h"
 
+#include "dds_test_support.h"
 #include "scoped_env.h"
 
 #include "sensor_msgs/msg/PointCloud2_.h"
@@ -39,9 +40,13 @@ namespace frtps = eprosima::fastrtps::rtps;
 using eprosima::fastdds::rtps::SharedMemTransportDescriptor;
 using eprosima::fastdds::rtps::UDPv4TransportDescriptor;
 using sensor_msgs::msg::dds_::PointCloud2_;
+using test_support::kDiscoveryTimeout;
+using test_support::localhostConfig;
+using test_support::readerMatched;
 using test_support::ScopedEnv;
+using test_support::waitFor;
+using test_support::writerMatched;
 
-constexpr auto kDiscoveryTimeout = std::chrono::seconds(10);
 constexpr std::uint32_t kLargeCloudPoints = 300000;  // x 16 B = 4.8 MB, a depth camera's frame
 
 /// Fast DDS delivers between participants of one process without any transport by default;
@@ -52,22 +57,6 @@ void deliverThroughTransports() {
   eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(settings);
 }
 
-bool waitFor(const std::function<bool()>& condition,
-             std::chrono::milliseconds timeout = kDiscoveryTimeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (!condition()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  return true;
-}
-
-DdsConfig localhostConfig(int domain_id) {
-  DdsConfig config;
-  config.domain_id = domain_id;
-  config.discovery_range = "LOCALHOST";
-  return config;
-}
 
 std::string profilePath(const std::string& file) {
   return std::string(MLMAP_SOURCE_DIR) + "/config/dds/" + file;
@@ -153,21 +142,9 @@ PointCloud2_ makeCloud(std::uint32_t points, std::uint32_t seed, std::int32_t st
   return cloud;
 }
 
-bool writerMatched(fdds::DataWriter* writer) {
-  fdds::PublicationMatchedStatus status;
-  writer->get_publication_matched_status(status);
-  return status.current_count > 0;
-}
-
-bool readerMatched(fdds::DataReader* reader) {
-  fdds::SubscriptionMatchedStatus status;
-  reader->get_subscription_matched_status(status);
-  return status.current_count > 0;
-}
-
 /// Takes the next valid sample, waiting up to `timeout`.
 bool takeCloud(fdds::DataReader* reader, PointCloud2_* cloud,
-               std::chrono::seconds timeout = kDiscoveryTimeout) {
+               std::chrono::milliseconds timeout = kDiscoveryTimeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   while (std::chrono::steady_clock::now() < deadline) {
     if (!reader->wait_for_unread_message(eprosima::fastrtps::Duration_t(1, 0))) continue;
