@@ -27,6 +27,7 @@ setup(
     entry_points={
         'console_scripts': [
             'mlmap_bridge = mlmap_bridge.bridge_node:main',
+            'mlmap_check = mlmap_bridge.checker_node:main',
         ],
     },
 )
