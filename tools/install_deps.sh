@@ -25,7 +25,8 @@ packages=(
 ground_tools=(
   python3-numpy python3-pytest python3-yaml  # bridge conversions, checker logic and their tests
   python3-rosidl                       # .msg and IDL parsers: the mlmap_msgs parity test
-  python3-catkin-pkg colcon python3-colcon-ros python3-setuptools  # package.xml, colcon discovery and install
+  python3-catkin-pkg python3-setuptools  # package.xml checks
+  colcon python3-colcon-ros python3-colcon-package-information  # colcon discovery (list) and install
   python3-flake8 pydocstyle shellcheck  # lint (the ament flake8 / pep257 rules)
 )
 if [ "${1:-}" != --onboard ]; then
