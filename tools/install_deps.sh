@@ -1,7 +1,13 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages mlmap needs, only those that are missing (apt-get, through sudo
 # when not root). Safe to run again: it does nothing when everything is there.
+#   bash tools/install_deps.sh            everything: build, tests, ground-station tools' tests
+#   bash tools/install_deps.sh --onboard  without the ground-station tools (docker/onboard.Dockerfile)
 set -euo pipefail
+case "${1:-}" in
+  "" | --onboard) ;;
+  *) echo "usage: $0 [--onboard]" >&2; exit 2 ;;
+esac
 
 packages=(
   g++ make cmake                       # toolchain
@@ -14,6 +20,18 @@ packages=(
   cyclonedds-dev cyclonedds-tools      # cross-vendor interoperability test (ROS 2's other tier-1 DDS)
   iproute2                             # network-namespace tests
 )
+# The ROS 2 ground-station tools (tools/ros2, docker/): no ROS in Debian 12, so their tests run
+# the ROS-free parts under /usr/bin/python3 and lint the rest.
+ground_tools=(
+  python3-numpy python3-pytest python3-yaml  # bridge conversions, checker logic and their tests
+  python3-rosidl                       # .msg and IDL parsers: the mlmap_msgs parity test
+  python3-catkin-pkg python3-setuptools  # package.xml checks
+  colcon python3-colcon-ros python3-colcon-package-information  # colcon discovery (list) and install
+  python3-flake8 pydocstyle shellcheck  # lint (the ament flake8 / pep257 rules)
+)
+if [ "${1:-}" != --onboard ]; then
+  packages+=("${ground_tools[@]}")
+fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -25,7 +25,7 @@ else
   # queues long enough that a loaded machine delays frames rather than dropping them.
   printf 'local_map: {size_cells: [45, 45, 25]}\npipeline: {input_queue_capacity: 64}\n' > "$cfg"
   if [ "$mode" = depth ]; then
-    printf 'dds:\n  topics:\n    cloud: ""\n    depth_image: camera/depth/image_rect_raw\n    camera_info: camera/depth/camera_info\n' >> "$cfg"
+    cat "$here/../../config/mlmap_node_depth.yaml" >> "$cfg"  # the depth topics, as docker/compose.yaml
   fi
   frames=40
   publish=(--mode "$mode" --max-frames 40 --rate 20 --speed 4)

@@ -1,0 +1,350 @@
+"""The ROS 2 packages, containers and docs agree with mlmap and with each other.
+
+No ROS 2 and no Docker engine run on the project's machines, so these files cannot be run here.
+This test checks what can be checked without them: the package manifests (catkin_pkg, colcon's
+own discovery, a colcon install of the bridge), the bridge's and checker's topics and frames
+against mlmap_node's documented defaults, and the containers' files against the commands the
+rest of the test suite runs (tools/demo.sh's build, mlmap_node's configuration parser, the
+programs' --help). Set MLMAP_BIN_DIR to the folder holding mlmap_node (ctest does) to check the
+compose commands against the real programs.
+"""
+
+import ast
+import os
+from pathlib import Path
+import re
+import shlex
+import subprocess
+import sys
+import xml.etree.ElementTree as ElementTree
+
+from catkin_pkg.package import parse_package
+from mlmap_bridge import checks
+from mlmap_bridge.parameters import defaults
+import pytest
+import yaml
+
+REPO = Path(__file__).resolve().parents[2]
+ROS2 = REPO / 'tools' / 'ros2'
+BRIDGE = ROS2 / 'mlmap_bridge'
+DOCKER = REPO / 'docker'
+SYSTEM_PYTHON = '/usr/bin/python3'
+
+
+def _yaml(path: Path):
+    return yaml.safe_load(path.read_text())
+
+
+# ---- Package manifests --------------------------------------------------------------------------
+
+def _package(path: Path):
+    warnings = []
+    package = parse_package(str(path), warnings=warnings)
+    package.validate(warnings=warnings)
+    assert warnings == [], warnings
+    return package
+
+
+def test_manifests_are_valid_format_3_with_their_build_types():
+    """Each package.xml parses and validates; build types as colcon must see them."""
+    expected = {REPO: ('mlmap', 'cmake'), ROS2 / 'mlmap_msgs': ('mlmap_msgs', 'ament_cmake'),
+                BRIDGE: ('mlmap_bridge', 'ament_python')}
+    for path, (name, build_type) in expected.items():
+        package = _package(path)
+        assert (package.name, package.get_build_type(), package.package_format) == \
+            (name, build_type, 3)
+    assert 'rosidl_interface_packages' in [
+        g.name for g in _package(ROS2 / 'mlmap_msgs').member_of_groups]
+
+
+def test_versions_agree():
+    """The root package.xml has CMake's project version; setup.py has the bridge's."""
+    cmake_version = re.search(r'project\(mlmap VERSION ([\d.]+)',
+                              (REPO / 'CMakeLists.txt').read_text()).group(1)
+    assert _package(REPO).version == cmake_version
+    setup_version = re.search(r"version='([\d.]+)'", (BRIDGE / 'setup.py').read_text()).group(1)
+    assert _package(BRIDGE).version == setup_version
+
+
+# What each find_package() of CMakeLists.txt is called in rosdep (None: nothing to install).
+ROSDEP_KEYS = {'Eigen3': 'eigen', 'Threads': None, 'yaml-cpp': 'yaml-cpp',
+               'OpenCVLite': 'libopencv-dev', 'CLI11': 'cli11', 'spdlog': 'spdlog',
+               'fastcdr': 'fastcdr', 'fastrtps': 'fastrtps', 'GTest': 'gtest'}
+
+
+def test_root_manifest_depends_on_everything_cmake_finds():
+    """A new find_package() must get its rosdep key in package.xml (and here)."""
+    found = set()
+    for cmake in (REPO / 'CMakeLists.txt', REPO / 'tests' / 'CMakeLists.txt'):
+        code = re.sub(r'#.*', '', cmake.read_text())
+        found |= set(re.findall(r'find_package\(([\w-]+)', code))
+    unknown = found - set(ROSDEP_KEYS)
+    assert not unknown, f'add the rosdep keys of {unknown} to package.xml and ROSDEP_KEYS'
+    package = _package(REPO)
+    declared = {d.name for d in package.build_depends + package.test_depends}
+    for name in found:
+        assert ROSDEP_KEYS[name] is None or ROSDEP_KEYS[name] in declared, name
+
+
+def _imports(path: Path):
+    """Top-level names of the modules a Python file imports (relative imports excluded)."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names |= {a.name.split('.')[0] for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.level == 0:
+            names.add(node.module.split('.')[0])
+    return names
+
+
+PYTHON_KEYS = {'numpy': 'python3-numpy', 'pytest': 'python3-pytest', 'yaml': 'python3-yaml'}
+TEST_HELPERS = {'cloud_helpers', 'fake_msgs', 'mlmap_bridge'}
+
+
+def test_bridge_manifest_declares_every_import():
+    """Every module the bridge imports is an exec_depend, every test import a test_depend."""
+    package = _package(BRIDGE)
+    exec_depends = {d.name for d in package.exec_depends}
+    test_depends = {d.name for d in package.test_depends} | exec_depends
+    sources = list((BRIDGE / 'mlmap_bridge').glob('*.py')) + [BRIDGE / 'launch/bridge.launch.py']
+    for files, declared in ((sources, exec_depends),
+                            (list((BRIDGE / 'test').glob('*.py')), test_depends)):
+        for path in files:
+            for name in _imports(path) - set(sys.stdlib_module_names) - TEST_HELPERS:
+                assert PYTHON_KEYS.get(name, name) in declared, f'{path.name} imports {name}'
+
+
+def _colcon(*args, cwd=REPO):
+    return subprocess.run(['colcon', '--log-base', os.devnull, *args], cwd=cwd, check=True,
+                          capture_output=True, text=True).stdout
+
+
+def test_colcon_sees_mlmap_as_cmake_and_the_ros2_packages_from_their_path():
+    """colcon stops at the root package, so the README builds tools/ros2 from its own path."""
+    def listed(path):
+        rows = [line.split('\t') for line in _colcon('list', '--base-paths', path).splitlines()]
+        return sorted(f'{name} {kind}' for name, _, kind in rows)
+    assert listed(str(REPO)) == ['mlmap (ros.cmake)']
+    assert listed(str(ROS2)) == ['mlmap_bridge (ros.ament_python)', 'mlmap_msgs (ros.ament_cmake)']
+
+
+def test_colcon_installs_the_bridge_where_ros2_finds_it(tmp_path):
+    """A colcon build (no ROS needed for an ament_python package) installs the executables
+    where `ros2 run` looks, the launch, parameter and RViz files, and importable modules."""
+    _colcon('build', '--base-paths', str(BRIDGE), '--build-base', str(tmp_path / 'build'),
+            '--install-base', str(tmp_path / 'install'), cwd=tmp_path)
+    prefix = tmp_path / 'install' / 'mlmap_bridge'
+    for relative in ('lib/mlmap_bridge/mlmap_bridge', 'lib/mlmap_bridge/mlmap_check',
+                     'share/ament_index/resource_index/packages/mlmap_bridge',
+                     'share/mlmap_bridge/package.xml', 'share/mlmap_bridge/config/bridge.yaml',
+                     'share/mlmap_bridge/launch/bridge.launch.py',
+                     'share/mlmap_bridge/rviz/mlmap.rviz'):
+        assert (prefix / relative).is_file(), relative
+    site = next(prefix.glob('lib/python3*/site-packages'))
+    probe = ('from mlmap_bridge import checks, conversions, markers, parameters; '
+             'print(conversions.__file__)')
+    out = subprocess.run([SYSTEM_PYTHON, '-c', probe], env={'PYTHONPATH': str(site)},
+                         check=True, capture_output=True, text=True).stdout
+    assert out.startswith(str(site))
+
+
+# ---- Topics, types and frames against mlmap_node -------------------------------------------
+
+def test_bridge_defaults_are_the_node_defaults():
+    """Topic names, body frame and ESDF clamp distance of config/mlmap_node.yaml / mlmap.yaml."""
+    dds = _yaml(REPO / 'config' / 'mlmap_node.yaml')['dds']
+    params = defaults()
+    for name in ('awareness', 'local_map', 'global_map', 'esdf_slice', 'grid', 'status'):
+        assert params[f'{name}_topic'] == '/' + dds['topics'][name], name
+    assert params['body_frame'] == dds['body_frame']
+    assert checks.Frames() == checks.Frames(dds['world_frame'], dds['body_frame'],
+                                            dds['sensor_frame'])
+    esdf = _yaml(REPO / 'config' / 'mlmap.yaml')['esdf']
+    assert params['esdf_max_distance_m'] == esdf['max_distance_m']
+
+
+def _documented_outputs():
+    """(topic, type, latched) of each output row of idl/README.md's topic table."""
+    rows = []
+    for line in (REPO / 'idl' / 'README.md').read_text().splitlines():
+        cells = [c.strip() for c in line.strip().strip('|').split('|')]
+        if len(cells) == 5 and cells[0].startswith('/') and not cells[3].startswith('reader'):
+            package, name = cells[2].split()[0].split('/')
+            rows.append((cells[0], f'{package}/msg/{name}', 'TRANSIENT_LOCAL' in cells[3]))
+    return rows
+
+
+def test_checker_expects_every_documented_output_with_its_type_and_durability():
+    """checks.NODE_TOPICS is idl/README.md's output table: topics, types, latching."""
+    documented = _documented_outputs()
+    assert len(documented) == 9
+    expected = [(e.topic, e.type_name, e.latched) for e in checks.NODE_TOPICS]
+    assert sorted(expected) == sorted(documented)
+
+
+# ---- Containers ---------------------------------------------------------------------------------
+
+def _compose():
+    return _yaml(DOCKER / 'compose.yaml')
+
+
+def _dockerfile(name: str):
+    """Instructions of a Dockerfile as (KEYWORD, arguments) with continuation lines joined."""
+    text = re.sub(r'\\\n', ' ', (DOCKER / name).read_text())
+    lines = [line.strip() for line in text.splitlines()]
+    return [tuple(line.split(None, 1)) for line in lines if line and not line.startswith('#')]
+
+
+def test_compose_services_share_one_dds_setup():
+    """Four services, one domain, UDP only through the same profile file in both images."""
+    services = _compose()['services']
+    assert set(services) == {'node', 'publisher', 'bridge', 'checker'}
+    environments = [s['environment'] for s in services.values()]
+    assert all(env == environments[0] for env in environments)
+    env = environments[0]
+    assert env['ROS_DOMAIN_ID'] == '${ROS_DOMAIN_ID:-0}'
+    assert env['RMW_IMPLEMENTATION'] == 'rmw_fastrtps_cpp'
+    assert env['FASTRTPS_DEFAULT_PROFILES_FILE'] == '/opt/mlmap/config/dds/udp_only.xml'
+    for service in services.values():
+        assert (REPO / 'docker' / service['build']['context'] /
+                service['build']['dockerfile']).is_file()
+    assert services['checker']['profiles'] == ['test']
+
+
+def test_the_profile_is_udp_only_and_in_both_images_at_the_same_path():
+    """No shared memory between containers: the default profile has UDPv4 alone."""
+    ns = {'f': 'http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles'}
+    root = ElementTree.parse(REPO / 'config' / 'dds' / 'udp_only.xml').getroot()
+    kinds = [t.find('f:type', ns).text for t in root.iterfind('.//f:transport_descriptor', ns)]
+    assert kinds == ['UDPv4']
+    participant = root.find('.//f:participant', ns)
+    assert participant.get('is_default_profile') == 'true'
+    assert participant.find('.//f:useBuiltinTransports', ns).text == 'false'
+    onboard, ground = _dockerfile('onboard.Dockerfile'), _dockerfile('ground.Dockerfile')
+    assert ('WORKDIR', '/opt/mlmap') in onboard and ('COPY', 'config ./config') in onboard
+    assert ('COPY', 'config/dds/udp_only.xml /opt/mlmap/config/dds/udp_only.xml') in ground
+
+
+def test_onboard_image_builds_like_tools_demo_sh():
+    """Debian 12, Debian packages through install_deps.sh, and demo.sh's configure and build."""
+    onboard = _dockerfile('onboard.Dockerfile')
+    assert onboard[0] == ('FROM', 'debian:12')
+    runs = ' && '.join(args for keyword, args in onboard if keyword == 'RUN')
+    assert 'bash tools/install_deps.sh --onboard' in runs
+    assert '--onboard)' in (REPO / 'tools' / 'install_deps.sh').read_text()
+    demo = (REPO / 'tools' / 'demo.sh').read_text()
+    for command in ('cmake -S . -B build', 'cmake --build build'):
+        in_demo = re.search(re.escape(command) + r'[^\n>]*', demo).group(0).split()
+        in_image = re.search(re.escape(command) + r'[^&\n]*', runs).group(0).split()
+        assert in_image == in_demo, command
+
+
+def test_onboard_image_copies_everything_cmake_reads():
+    """Each top-level folder CMakeLists.txt names (src/, idl, cmake, ...) is copied in."""
+    cmake = (REPO / 'CMakeLists.txt').read_text()
+    used = set(re.findall(r'(?:PROJECT_SOURCE_DIR\}/|[\s(])(cmake|idl|include|src|tests)\b[/)]',
+                          cmake))
+    assert {'cmake', 'idl', 'include', 'src', 'tests'} <= used
+    copied = {args.split()[0] for keyword, args in _dockerfile('onboard.Dockerfile')
+              if keyword == 'COPY'}
+    assert used | {'CMakeLists.txt', 'config'} <= copied
+
+
+def test_ground_image_builds_tests_and_runs_the_bridge():
+    """ros:jazzy, tools/ros2 built and tested with colcon, the bridge as in compose."""
+    ground = _dockerfile('ground.Dockerfile')
+    assert ground[0] == ('FROM', 'ros:jazzy')
+    assert ('COPY', 'tools/ros2 src/mlmap_ros2') in ground
+    assert ('WORKDIR', '/opt/mlmap_ws') in ground
+    runs = ' '.join(args for keyword, args in ground if keyword == 'RUN')
+    for step in ('rosdep install --from-paths src', 'colcon build', 'colcon test',
+                 'colcon test-result'):
+        assert step in runs, step
+    entrypoint = (DOCKER / 'ground_entrypoint.sh').read_text()
+    assert 'source /opt/ros/jazzy/setup.bash --' in entrypoint
+    assert 'source /opt/mlmap_ws/install/setup.bash --' in entrypoint
+    assert 'exec "$@"' in entrypoint
+    assert os.access(DOCKER / 'ground_entrypoint.sh', os.X_OK)
+    cmd = dict(ground)['CMD']
+    assert ast.literal_eval(cmd) == _compose()['services']['bridge']['command']
+
+
+def _command(service: str):
+    """A service's command as a list of words (a `sh -c` script split like a shell would)."""
+    command = _compose()['services'][service]['command']
+    if command[:2] == ['sh', '-c']:
+        return shlex.split(command[2])
+    return command
+
+
+def test_commands_name_the_programs_and_files_the_images_hold():
+    """Node and camera use one existing config; the programs are built, the checker's and the
+    launch file's options exist."""
+    node, publisher = _command('node'), _command('publisher')
+    assert node[0] == 'mlmap_node' and 'mlmap_sensor_publisher' in publisher
+    config = node[node.index('--config') + 1]
+    assert publisher[publisher.index('--config') + 1] == config
+    assert (REPO / config).is_file() and config.startswith('config/')
+    assert '--mode' in publisher and publisher[publisher.index('--mode') + 1] == 'depth'
+    assert 'mlmap_node' in (REPO / 'tools' / 'demo.sh').read_text()
+    checker = _command('checker')
+    assert checker[:4] == ['ros2', 'run', 'mlmap_bridge', 'mlmap_check']
+    source = (BRIDGE / 'mlmap_bridge' / 'checker_node.py').read_text()
+    for option in (w for w in checker if w.startswith('--')):
+        assert f"'{option}'" in source, option
+    assert "'mlmap_check = mlmap_bridge.checker_node:main'" in (BRIDGE / 'setup.py').read_text()
+    bridge = _command('bridge')
+    launch = (BRIDGE / 'launch' / 'bridge.launch.py').read_text()
+    for argument in (w.split(':=')[0] for w in bridge if ':=' in w):
+        assert f"DeclareLaunchArgument(\n            '{argument}'" in launch, argument
+    script = (DOCKER / 'run_integration_test.sh').read_text()
+    assert 'run --rm checker' in script and 'exit "$verdict"' in script
+
+
+BIN_DIR = os.environ.get('MLMAP_BIN_DIR')
+needs_binaries = pytest.mark.skipif(not BIN_DIR, reason='MLMAP_BIN_DIR (mlmap_node) not given')
+
+
+@needs_binaries
+@pytest.mark.parametrize('service', ['node', 'publisher'])
+def test_compose_options_exist_in_the_programs(service):
+    """Every --option of the compose commands is one the program lists in --help."""
+    words = _command(service)
+    program = next(w for w in words if w.startswith('mlmap_'))
+    helptext = subprocess.run([str(Path(BIN_DIR) / program), '--help'], check=True,
+                              capture_output=True, text=True).stdout
+    for option in (w for w in words if w.startswith('--')):
+        assert re.search(rf'(^|[\s,]){re.escape(option)}\b', helptext), f'{program} {option}'
+
+
+@needs_binaries
+def test_mlmap_node_accepts_the_compose_configuration():
+    """mlmap_node's own strict parser reads the file (unknown keys and bad values fail)."""
+    node = _command('node')
+    config = node[node.index('--config') + 1]
+    printed = subprocess.run([str(Path(BIN_DIR) / 'mlmap_node'), '--config', config,
+                              '--print-config'], cwd=REPO, check=True, capture_output=True,
+                             text=True).stdout
+    topics = yaml.safe_load(printed)['dds']['topics']
+    assert topics['cloud'] == '' and topics['depth_image'] and topics['camera_info']
+
+
+# ---- README ---------------------------------------------------------------------------------
+
+def test_readme_gives_the_ground_station_commands():
+    """The newcomer's commands are in the README, name real services, and it says what CI
+    does not run."""
+    readme = (REPO / 'README.md').read_text()
+    section = readme[readme.index('## Ground station (ROS 2 Jazzy)'):]
+    section = section[:section.index('\n## ', 1)]
+    for command in ('ln -s "$PWD/tools/ros2" ~/mlmap_ws/src/', 'colcon build',
+                    'source ~/mlmap_ws/install/setup.bash',
+                    'ros2 launch mlmap_bridge bridge.launch.py',
+                    'rviz2 -d tools/ros2/mlmap_bridge/rviz/mlmap.rviz',
+                    'bash docker/run_integration_test.sh', '-DMLMAP_BUILD_TESTS=OFF'):
+        assert command in section, command
+    assert (REPO / 'tools/ros2/mlmap_bridge/rviz/mlmap.rviz').is_file()
+    started = re.search(r'docker compose -f docker/compose.yaml up -d ([\w ]+)', section)
+    assert set(started.group(1).split()) == {'node', 'publisher'}
+    assert set(started.group(1).split()) <= set(_compose()['services'])
+    assert 'No Docker engine runs on the CI machines' in section

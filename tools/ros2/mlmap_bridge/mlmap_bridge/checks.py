@@ -1,0 +1,364 @@
+"""What counts as "this layer reached ROS 2 intact": the integration checker's judgement.
+
+checker_node.py (rclpy) subscribes to every topic below in the ground-station container and
+feeds each sample to its check; this module holds the checks, without importing rclpy, so the
+unit tests run them on hand-built messages (test/test_checks.py). A check returns the list of
+problems it found; an empty list means the sample is plausible.
+
+Plausible means what a correct mlmap_node and bridge produce in any world: the right frame,
+fields and sizes; finite values in their documented ranges; voxel centres on the voxel grid;
+a mapping node that has mapped frames. Nothing here depends on the simulated room.
+"""
+
+from dataclasses import dataclass
+import math
+from typing import Callable, Dict, Iterable, List, Optional, Tuple
+
+import numpy as np
+
+from .conversions import CloudLayoutError, grid_spacing, read_cloud_fields
+from .markers import CUBE_LIST, TEXT_VIEW_FACING
+
+FLOAT32 = 7
+SUPPORTED_VERSION = 1
+MAX_COORDINATE_M = 1.0e5   # a map coordinate beyond this is garbage, not a place
+GRID_TOLERANCE = 0.01      # voxels: how far from (i + 0.5) * edge a centre may sit
+
+Check = Callable[[object, 'Frames'], List[str]]
+
+
+@dataclass(frozen=True)
+class Frames:
+    """The frames mlmap_node was configured with (dds.world_frame, body_frame, sensor_frame)."""
+
+    world: str = 'map'
+    body: str = 'base_link'
+    sensor: str = 'camera_depth_optical_frame'
+
+
+def _frame(header, expected: str) -> List[str]:
+    """Check a header's frame_id."""
+    if header.frame_id != expected:
+        return [f'frame_id {header.frame_id!r}, expected {expected!r}']
+    return []
+
+
+def _cloud_fields(msg, names: Tuple[str, ...]) -> Tuple[Optional[np.ndarray], List[str]]:
+    """Decode the named fields of a cloud, or return the reason it cannot be decoded."""
+    try:
+        values = read_cloud_fields(msg, names)
+    except CloudLayoutError as error:
+        return None, [f'undecodable cloud: {error}']
+    problems = []
+    total = int(msg.width) * int(msg.height)
+    if len(values) != total:
+        problems.append(f'{total - len(values)} of {total} points are not finite')
+    return values, problems
+
+
+def _float32_xyz(msg) -> List[str]:
+    """Check x, y, z are float32 at offsets 0, 4, 8, as mlmap_node writes them."""
+    layout = {f.name: (int(f.offset), int(f.datatype)) for f in msg.fields}
+    expected = {'x': (0, FLOAT32), 'y': (4, FLOAT32), 'z': (8, FLOAT32)}
+    wrong = [n for n, v in expected.items() if layout.get(n) != v]
+    return [f'fields {wrong} not float32 at 0/4/8: {layout}'] if wrong else []
+
+
+def voxel_edge(xyz: np.ndarray) -> Optional[float]:
+    """Estimate the voxel edge of a cloud of voxel centres to float32 precision, or None.
+
+    grid_spacing gives it to about 1e-5 m. Dividing the widest extent by the number of voxels
+    it spans refines that enough to number every centre, (i + 0.5) * edge; a least-squares fit
+    of the edge to those numbers then makes it as exact as the float32 centres allow, so the
+    grid test below holds hundreds of metres from the origin.
+    """
+    edge = grid_spacing(xyz)
+    if edge is None:
+        return None
+    span = float((xyz.max(axis=0) - xyz.min(axis=0)).max())
+    edge = span / max(1, round(span / edge))
+    cells = np.round(xyz / edge - 0.5) + 0.5
+    return float(np.sum(xyz * cells) / np.sum(cells * cells))
+
+
+def _on_voxel_grid(xyz: np.ndarray) -> List[str]:
+    """Check that points are voxel centres (i + 0.5) * edge of the world-aligned grid."""
+    edge = voxel_edge(xyz)
+    if edge is None:
+        return []  # fewer than two distinct coordinates on every axis: nothing to compare
+    cells = xyz / edge - 0.5
+    off = float(np.abs(cells - np.round(cells)).max())
+    # float32 centres: about 1e-7 of the coordinate; anything near 0.5 voxel is off the grid.
+    if off > GRID_TOLERANCE + 1e-6 * float(np.abs(cells).max()):
+        return [f'points are not voxel centres of a {edge:.4f} m grid (off by {off:.3g} voxel)']
+    return []
+
+
+def check_occupied_cloud(msg, frames: Frames, on_grid: bool = True) -> List[str]:
+    """Check an occupied-voxel layer: world frame, finite points, on the voxel grid."""
+    problems = _frame(msg.header, frames.world) + _float32_xyz(msg)
+    xyz, decode_problems = _cloud_fields(msg, ('x', 'y', 'z'))
+    problems += decode_problems
+    if xyz is None:
+        return problems
+    if len(xyz) == 0:
+        return problems + ['no points']
+    if np.abs(xyz).max() > MAX_COORDINATE_M:
+        problems.append(f'coordinates up to {np.abs(xyz).max():.3g} m')
+    if on_grid:
+        problems += _on_voxel_grid(xyz)
+    return problems
+
+
+def check_awareness_cloud(msg, frames: Frames) -> List[str]:
+    """Check the awareness layer: cylindrical cell centres, so not on a Cartesian grid."""
+    return check_occupied_cloud(msg, frames, on_grid=False)
+
+
+def check_esdf_slice(msg, frames: Frames) -> List[str]:
+    """Check the ESDF slice: one voxel layer (one z) of centres with finite distances."""
+    problems = _frame(msg.header, frames.world) + _float32_xyz(msg)
+    values, decode_problems = _cloud_fields(msg, ('x', 'y', 'z', 'intensity'))
+    problems += decode_problems
+    if values is None:
+        return problems
+    if len(values) == 0:
+        return problems + ['no points']
+    z = values[:, 2]
+    if np.ptp(z) > 1e-4:
+        problems.append(f'z spans {z.min():.3f}..{z.max():.3f} m; a slice has one layer')
+    problems += _on_voxel_grid(values[:, :3])
+    if not (values[:, 3] > 0).any():
+        problems.append('no positive distance: no free space in the slice')
+    return problems
+
+
+def check_grid(msg, frames: Frames) -> List[str]:
+    """Check a nav_msgs/OccupancyGrid: sizes agree, cells in {-1, 0..100}, some cells observed."""
+    problems = _frame(msg.header, frames.world)
+    info = msg.info
+    cells = np.asarray(msg.data, dtype=np.int64)
+    if not info.resolution > 0:
+        problems.append(f'resolution {info.resolution}')
+    if int(info.width) * int(info.height) != cells.size or cells.size == 0:
+        problems.append(f'{cells.size} cells for {info.width} x {info.height}')
+    bad = cells[(cells != -1) & ((cells < 0) | (cells > 100))]
+    if bad.size:
+        problems.append(f'{bad.size} cells outside -1 and 0..100, e.g. {int(bad[0])}')
+    if cells.size and not (cells >= 0).any():
+        problems.append('every cell unknown')
+    q = info.origin.orientation
+    if abs(math.sqrt(q.x ** 2 + q.y ** 2 + q.z ** 2 + q.w ** 2) - 1.0) > 1e-3:
+        problems.append('origin orientation is not a unit quaternion')
+    return problems
+
+
+def check_voxel_block(msg, frames: Frames) -> List[str]:
+    """Check a mlmap_msgs/VoxelBlock (ESDF): version, sizes, values within +-max_value or NaN."""
+    if int(msg.version) != SUPPORTED_VERSION:
+        return [f'layout version {msg.version}, expected {SUPPORTED_VERSION}']
+    problems = _frame(msg.header, frames.world)
+    if msg.layer != 'esdf':
+        problems.append(f'layer {msg.layer!r}, expected "esdf"')
+    if not msg.resolution > 0 or not msg.max_value > 0:
+        problems.append(f'resolution {msg.resolution}, max_value {msg.max_value}')
+    values = np.asarray(msg.values, dtype=np.float64)
+    size = int(msg.size_x) * int(msg.size_y) * int(msg.size_z)
+    if size != values.size or size == 0:
+        problems.append(f'{values.size} values for {msg.size_x} x {msg.size_y} x {msg.size_z}')
+    known = values[~np.isnan(values)]
+    if known.size == 0:
+        return problems + ['every voxel unknown (NaN)']
+    limit = float(msg.max_value) * (1 + 1e-6)
+    if not np.isfinite(known).all() or np.abs(known).max() > limit:
+        problems.append(f'values beyond +-{msg.max_value}: {known.min():.3g}..{known.max():.3g}')
+    if not (known > 0).any():
+        problems.append('no positive distance: no free space')
+    return problems
+
+
+def check_status(msg, frames: Frames) -> List[str]:
+    """Check a mlmap_msgs/Status: version, frames mapped, consistent counters and timings."""
+    if int(msg.version) != SUPPORTED_VERSION:
+        return [f'layout version {msg.version}, expected {SUPPORTED_VERSION}']
+    problems = _frame(msg.header, frames.world)
+    if not msg.uptime_s > 0:
+        problems.append(f'uptime {msg.uptime_s}')
+    if int(msg.frames_mapped) < 1:
+        problems.append('no frame mapped yet')
+    if int(msg.frames_mapped) > int(msg.frames_in):
+        problems.append(f'{msg.frames_mapped} frames mapped of {msg.frames_in} received')
+    for stage in ('awareness', 'local_global', 'total'):
+        median = getattr(msg, f'{stage}_median_ms')
+        p99 = getattr(msg, f'{stage}_p99_ms')
+        if not (math.isfinite(median) and math.isfinite(p99) and 0 <= median <= p99):
+            problems.append(f'{stage} median {median} ms, p99 {p99} ms')
+    if int(msg.local_bytes) <= 0:
+        problems.append('local map memory 0')
+    return problems
+
+
+def _transform_problems(transforms: Iterable, parent: str, child: str) -> List[str]:
+    """Find parent -> child among the transforms and check it is a proper rigid transform."""
+    found = [t for t in transforms if t.header.frame_id == parent and t.child_frame_id == child]
+    if not found:
+        pairs = [(t.header.frame_id, t.child_frame_id) for t in transforms]
+        return [f'no {parent} -> {child} transform among {pairs}']
+    t = found[-1].transform
+    values = [t.translation.x, t.translation.y, t.translation.z]
+    q = t.rotation
+    if not all(math.isfinite(v) for v in values):
+        return [f'{parent} -> {child}: translation {values}']
+    if abs(math.sqrt(q.x ** 2 + q.y ** 2 + q.z ** 2 + q.w ** 2) - 1.0) > 1e-3:
+        return [f'{parent} -> {child}: rotation is not a unit quaternion']
+    return []
+
+
+def check_tf(msg, frames: Frames) -> List[str]:
+    """Check rt/tf: the vehicle's pose, world -> body."""
+    return _transform_problems(msg.transforms, frames.world, frames.body)
+
+
+def check_tf_static(msg, frames: Frames) -> List[str]:
+    """Check rt/tf_static: the sensor mounting, body -> sensor."""
+    return _transform_problems(msg.transforms, frames.body, frames.sensor)
+
+
+def check_cube_markers(msg, frames: Frames) -> List[str]:
+    """Check a bridge layer: a CUBE_LIST in the world frame with one colour per cube."""
+    cubes = [m for m in msg.markers if m.type == CUBE_LIST]
+    if not cubes:
+        return [f'no CUBE_LIST marker among {len(msg.markers)} markers']
+    problems = []
+    for m in cubes:
+        problems += _frame(m.header, frames.world)
+        if not m.points or len(m.points) != len(m.colors):
+            problems.append(f'{len(m.points)} cubes, {len(m.colors)} colours')
+        if not min(m.scale.x, m.scale.y, m.scale.z) > 0:
+            problems.append(f'cube size {m.scale.x} x {m.scale.y} x {m.scale.z}')
+        channels = [v for c in m.colors for v in (c.r, c.g, c.b, c.a)]
+        if channels and not (0.0 <= min(channels) and max(channels) <= 1.0):
+            problems.append('colour channels outside 0..1')
+    return problems
+
+
+def check_status_markers(msg, frames: Frames) -> List[str]:
+    """Check the bridge's status overlay: a text at the body frame that reports mapping."""
+    texts = [m for m in msg.markers if m.type == TEXT_VIEW_FACING]
+    if not texts:
+        return ['no text marker']
+    problems = _frame(texts[0].header, frames.body)
+    if 'frames mapped' not in texts[0].text:
+        problems.append(f'text does not report mapping: {texts[0].text!r}')
+    return problems
+
+
+def check_status_text(msg, frames: Frames) -> List[str]:
+    """Check the bridge's status as std_msgs/String."""
+    return [] if 'frames mapped' in msg.data else [f'text: {msg.data!r}']
+
+
+@dataclass(frozen=True)
+class Expectation:
+    """A topic that must reach ROS 2: its type, whether it is latched, and its check."""
+
+    topic: str
+    type_name: str      # as `ros2 topic list -t` prints it
+    latched: bool       # published TRANSIENT_LOCAL: subscribe so, to get the latched sample
+    check: Check
+
+
+CLOUD = 'sensor_msgs/msg/PointCloud2'
+MARKERS = 'visualization_msgs/msg/MarkerArray'
+
+# mlmap_node's outputs (idl/README.md, default names) and the bridge's (default parameters).
+NODE_TOPICS = (
+    Expectation('/mlmap/awareness/occupied', CLOUD, False, check_awareness_cloud),
+    Expectation('/mlmap/local_map/occupied', CLOUD, False, check_occupied_cloud),
+    Expectation('/mlmap/global_map/occupied', CLOUD, True, check_occupied_cloud),
+    Expectation('/mlmap/grid', 'nav_msgs/msg/OccupancyGrid', True, check_grid),
+    Expectation('/mlmap/esdf/slice', CLOUD, False, check_esdf_slice),
+    Expectation('/mlmap/esdf/block', 'mlmap_msgs/msg/VoxelBlock', False, check_voxel_block),
+    Expectation('/mlmap/status', 'mlmap_msgs/msg/Status', False, check_status),
+    Expectation('/tf', 'tf2_msgs/msg/TFMessage', False, check_tf),
+    Expectation('/tf_static', 'tf2_msgs/msg/TFMessage', True, check_tf_static),
+)
+BRIDGE_TOPICS = (
+    Expectation('/mlmap/viz/awareness', MARKERS, False, check_cube_markers),
+    Expectation('/mlmap/viz/local_map', MARKERS, False, check_cube_markers),
+    Expectation('/mlmap/viz/global_map', MARKERS, True, check_cube_markers),
+    Expectation('/mlmap/viz/esdf_slice', MARKERS, False, check_cube_markers),
+    Expectation('/mlmap/viz/grid', 'nav_msgs/msg/OccupancyGrid', True, check_grid),
+    Expectation('/mlmap/viz/status', MARKERS, False, check_status_markers),
+    Expectation('/mlmap/viz/status_text', 'std_msgs/msg/String', False, check_status_text),
+)
+EXPECTED_TOPICS = NODE_TOPICS + BRIDGE_TOPICS
+
+
+def parse_topic_list(output: str) -> Dict[str, List[str]]:
+    """Parse `ros2 topic list -t` output ("/topic [pkg/msg/Type]" a line) into topic -> types."""
+    topics: Dict[str, List[str]] = {}
+    for line in output.splitlines():
+        line = line.strip()
+        if not line:
+            continue
+        name, _, rest = line.partition(' ')
+        types = rest.strip().strip('[]')
+        topics[name] = [t.strip() for t in types.split(',') if t.strip()]
+    return topics
+
+
+def check_topic_list(topics: Dict[str, List[str]],
+                     expected: Iterable[Expectation] = EXPECTED_TOPICS) -> List[str]:
+    """Every expected topic is listed, with its type and no other."""
+    problems = []
+    for e in expected:
+        if e.topic not in topics:
+            problems.append(f'{e.topic} missing from `ros2 topic list`')
+        elif topics[e.topic] != [e.type_name]:
+            problems.append(f'{e.topic} listed as {topics[e.topic]}, expected {e.type_name}')
+    return problems
+
+
+@dataclass
+class TopicResult:
+    """What the checker saw on one topic."""
+
+    expectation: Expectation
+    samples: int = 0
+    passed: bool = False
+    last_problems: Tuple[str, ...] = ('no sample received',)
+
+    def record(self, problems: List[str]) -> None:
+        """Count a sample; one plausible sample passes the topic for good.
+
+        Early samples may fairly fail (a status before the first frame is mapped, a grid
+        still all unknown), so a failure after a pass changes nothing.
+        """
+        self.samples += 1
+        if not problems:
+            self.passed = True
+        elif not self.passed:
+            self.last_problems = tuple(problems)
+
+
+def verdict(results: Iterable[TopicResult], topic_list_problems: List[str]) -> Tuple[bool, str]:
+    """Return (passed, report): one line per topic, then the `ros2 topic list` findings."""
+    lines, failed, count = [], 0, 0
+    for r in results:
+        count += 1
+        e = r.expectation
+        if r.passed:
+            lines.append(f'PASS {e.topic} [{e.type_name}] ({r.samples} samples)')
+        else:
+            failed += 1
+            lines.append(f'FAIL {e.topic} [{e.type_name}] ({r.samples} samples): '
+                         + '; '.join(r.last_problems))
+    for problem in topic_list_problems:
+        lines.append(f'FAIL ros2 topic list: {problem}')
+    if not topic_list_problems:
+        lines.append('PASS ros2 topic list: every topic with its type')
+    passed = failed == 0 and not topic_list_problems
+    lines.append(f'{"PASSED" if passed else "FAILED"}: {count - failed} of {count} topics '
+                 f'plausible, topic list {"ok" if not topic_list_problems else "wrong"}')
+    return passed, '\n'.join(lines)

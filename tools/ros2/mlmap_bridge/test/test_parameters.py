@@ -1,0 +1,82 @@
+"""The parameter table, config/bridge.yaml and rviz/mlmap.rviz agree with each other."""
+
+from pathlib import Path
+
+from mlmap_bridge import checks
+from mlmap_bridge.parameters import CLOUD_LAYERS, defaults, PARAMETERS
+import pytest
+import yaml
+
+PACKAGE = Path(__file__).resolve().parents[1]
+
+
+def _yaml(relative: str):
+    return yaml.safe_load((PACKAGE / relative).read_text())
+
+
+def test_names_are_unique_and_described():
+    """Every parameter has a ROS-valid name, once, and a description (ParameterDescriptor)."""
+    names = [p.name for p in PARAMETERS]
+    assert len(names) == len(set(names))
+    for p in PARAMETERS:
+        assert p.name.isidentifier() and p.name == p.name.lower()
+        assert len(p.description) > 10, p.name
+
+
+def test_bridge_yaml_lists_every_parameter_with_its_default_and_type():
+    """The launch file's params file: same names, values and types (ROS parameters are typed:
+    0 where the node declared 0.0 would be refused)."""
+    listed = _yaml('config/bridge.yaml')['mlmap_bridge']['ros__parameters']
+    assert list(listed) == [p.name for p in PARAMETERS]
+    for name, default in defaults().items():
+        assert type(listed[name]) is type(default) and listed[name] == default, name
+
+
+def test_every_cloud_layer_has_its_parameters():
+    """<name>_topic, <name>_max_rate_hz and a cube size for each layer; a grid and status too."""
+    names = set(defaults())
+    for layer in CLOUD_LAYERS:
+        assert {f'{layer.name}_topic', f'{layer.name}_max_rate_hz',
+                layer.cube_size_parameter} <= names
+        assert layer.color_by in ('height', 'distance')
+    assert {'grid_topic', 'grid_max_rate_hz', 'status_topic', 'output_prefix'} <= names
+
+
+def test_checker_expects_the_bridge_outputs_under_the_default_prefix():
+    """checks.BRIDGE_TOPICS are what the bridge publishes with its defaults."""
+    prefix = defaults()['output_prefix']
+    outputs = {f'{prefix}/{layer.name}' for layer in CLOUD_LAYERS}
+    outputs |= {f'{prefix}/grid', f'{prefix}/status', f'{prefix}/status_text'}
+    assert {e.topic for e in checks.BRIDGE_TOPICS} == outputs
+    assert defaults()['body_frame'] == checks.Frames().body
+
+
+def _displays():
+    config = _yaml('rviz/mlmap.rviz')['Visualization Manager']
+    return config, {d['Topic']['Value']: d for d in config['Displays'] if 'Topic' in d}
+
+
+def test_rviz_shows_every_output_in_the_world_frame():
+    """A display per marker topic and the grid, QoS the bridge serves, fixed frame = map."""
+    config, displays = _displays()
+    assert config['Global Options']['Fixed Frame'] == checks.Frames().world
+    classes = {d['Class'] for d in config['Displays']}
+    assert {'rviz_default_plugins/TF', 'rviz_default_plugins/Grid'} <= classes
+    prefix = defaults()['output_prefix']
+    expected = {f'{prefix}/{layer.name}': ('MarkerArray', layer.latched) for layer in CLOUD_LAYERS}
+    expected[f'{prefix}/status'] = ('MarkerArray', False)
+    expected[f'{prefix}/grid'] = ('Map', True)
+    for topic, (kind, latched) in expected.items():
+        display = displays[topic]
+        assert display['Class'] == f'rviz_default_plugins/{kind}' and display['Enabled'], topic
+        qos = display['Topic']
+        assert qos['Reliability Policy'] == 'Reliable', topic
+        # A TRANSIENT_LOCAL subscription to a VOLATILE publisher would never match.
+        assert qos['Durability Policy'] == ('Transient Local' if latched else 'Volatile'), topic
+
+
+@pytest.mark.parametrize('relative', ['launch/bridge.launch.py', 'config/bridge.yaml',
+                                      'rviz/mlmap.rviz', 'resource/mlmap_bridge'])
+def test_installed_files_exist(relative):
+    """setup.py installs these by glob; a missing one would silently not be installed."""
+    assert (PACKAGE / relative).is_file()
