@@ -236,9 +236,13 @@ int main(int argc, char** argv) {
     mlmap::dds::ParticipantPtr participant = mlmap::dds::createParticipant(config.dds, "mlmap_sensor_publisher");
     fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
     const auto ns = config.dds.ns;
-    // Sensor drivers and odometry publish best-effort (ROS 2 sensor data QoS; PX4 does too).
-    fdds::DataWriterQos sensor_qos = mlmap::dds::reliableWriterQos(5);
-    sensor_qos.reliability().kind = fdds::BEST_EFFORT_RELIABILITY_QOS;
+    // Sensor drivers and odometry publish best-effort (ROS 2 sensor data QoS; PX4 does too), and
+    // mlmap_node reads best-effort: that is what its readers get from this writer. The writer
+    // offers RELIABLE (KEEP_LAST 5, so it never blocks) because Fast DDS 2.9.1's best-effort
+    // writers do not drop a same-host reader's UDP locator when shared memory reaches it
+    // (eProsima/Fast-DDS#3655, fixed after 2.9.1; Jazzy's 2.14 has the fix): every 4.9 MB cloud
+    // crossed loopback UDP too, which doubled its transport cost in the latency benchmark.
+    const fdds::DataWriterQos sensor_qos = mlmap::dds::reliableWriterQos(5);
     fdds::DataWriter* sensor_writer =
         depth_mode ? mlmap::dds::createWriter<mlmap::dds::sensor_msgs::Image_PubSubType>(publisher, mlmap::dds::ddsTopicName(ns, sensor_topic), sensor_qos)
                    : mlmap::dds::createWriter<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(publisher, mlmap::dds::ddsTopicName(ns, sensor_topic), sensor_qos);
