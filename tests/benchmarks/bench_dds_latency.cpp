@@ -291,11 +291,22 @@ int main(int argc, char** argv) {
                   to_tf = summarize(tf_ms), output = summarize(output_ms),
                   cloud = summarize(cloud_ms);
     const auto& st = rx.status;
-    const std::uint64_t received = local.size();
-    const std::int64_t missing =
-        static_cast<std::int64_t>(frames_sent) - static_cast<std::int64_t>(received);
-    const std::uint64_t node_lost = st.frames_dropped_() + st.frames_rejected_() +
-                                    st.clouds_without_pose_() + st.clouds_malformed_();
+    // Where frames were lost: on the way to the node (transport; sent - mapped - node drops), in
+    // the node (hand-over / engine queue full, rejected, no pose, malformed), or as local maps:
+    // published (rt/tf of that stamp arrived) but lost on the way, or never published because
+    // the publishing thread found two snapshots at once (no rt/tf either).
+    const auto sent = static_cast<std::int64_t>(frames_sent);
+    const auto mapped = static_cast<std::int64_t>(st.frames_mapped_());
+    const auto received = static_cast<std::int64_t>(local.size());
+    const auto node_lost = static_cast<std::int64_t>(st.frames_dropped_() + st.frames_rejected_() +
+                                                     st.clouds_without_pose_() +
+                                                     st.clouds_malformed_());
+    const std::int64_t missing = sent - received;
+    const std::int64_t lost_before_node = std::max<std::int64_t>(0, sent - mapped - node_lost);
+    std::int64_t local_lost_in_transport = 0;
+    for (const auto& [stamp_s, ms] : tf) local_lost_in_transport += local.count(stamp_s) == 0 ? 1 : 0;
+    const std::int64_t local_not_published =
+        std::max<std::int64_t>(0, mapped - received - local_lost_in_transport);
     const bool have_status = rx.statuses > 0;
     const bool drops_ok = frames_sent > 0 && missing == 0 && node_lost == 0;
     const double p50_target_ms = st.total_median_ms_() + kTargetP50Margin_ms;
@@ -303,16 +314,19 @@ int main(int argc, char** argv) {
 
     std::printf("\n== %s: capture -> local map at the subscriber (stamps after the first %.1f s)\n",
                 label.c_str(), warmup_s);
-    std::printf("frames: %d sent, %llu reached the node's engine, %llu mapped, %llu dropped, %llu "
-                "rejected, %llu without pose, %llu malformed; %llu local maps received (%lld "
-                "missing)\n",
-                frames_sent, static_cast<unsigned long long>(st.frames_in_()),
-                static_cast<unsigned long long>(st.frames_mapped_()),
+    std::printf("frames: %d sent, %lld mapped, %lld local maps received (%lld missing)\n",
+                frames_sent, static_cast<long long>(mapped), static_cast<long long>(received),
+                static_cast<long long>(missing));
+    std::printf("  lost on the way to the node: %lld; in the node: %llu dropped (queue full), %llu "
+                "rejected, %llu without pose, %llu malformed; local maps not published: %lld, "
+                "published but lost on the way: %lld\n",
+                static_cast<long long>(lost_before_node),
                 static_cast<unsigned long long>(st.frames_dropped_()),
                 static_cast<unsigned long long>(st.frames_rejected_()),
                 static_cast<unsigned long long>(st.clouds_without_pose_()),
                 static_cast<unsigned long long>(st.clouds_malformed_()),
-                static_cast<unsigned long long>(received), static_cast<long long>(missing));
+                static_cast<long long>(local_not_published),
+                static_cast<long long>(local_lost_in_transport));
     std::printf("local map: %.0f voxels, %.1f kB per message\n", local_points, local_kb);
     std::printf("%-44s %8s %8s %8s %8s\n", "[ms]", "p50", "p90", "p99", "max");
     auto row = [](const char* name, const Summary& s) {
@@ -338,10 +352,10 @@ int main(int argc, char** argv) {
                 verdict(have_status && latency.count > 0 && latency.p99_ms <= p99_target_ms));
     if (!have_status) std::printf("no status message arrived: engine figures unknown\n");
     // One line for tools/bench_dds_latency.sh's comparison table.
-    std::printf("result %s sent=%d received=%llu node_lost=%llu p50=%.2f p99=%.2f max=%.2f "
+    std::printf("result %s sent=%d mapped=%lld received=%lld p50=%.2f p99=%.2f max=%.2f "
                 "engine_p50=%.2f engine_p99=%.2f to_tf_p50=%.2f output_p50=%.2f\n",
-                label.c_str(), frames_sent, static_cast<unsigned long long>(received),
-                static_cast<unsigned long long>(node_lost), latency.p50_ms, latency.p99_ms,
+                label.c_str(), frames_sent, static_cast<long long>(mapped),
+                static_cast<long long>(received), latency.p50_ms, latency.p99_ms,
                 latency.max_ms, st.total_median_ms_(), st.total_p99_ms_(), to_tf.p50_ms,
                 output.p50_ms);
 
@@ -349,7 +363,10 @@ int main(int argc, char** argv) {
       std::ofstream out(json_path);
       out << "{\n  \"label\": \"" << label << "\",\n  \"warmup_s\": " << warmup_s
           << ",\n  \"frames_sent\": " << frames_sent << ",\n  \"local_maps_received\": " << received
-          << ",\n  \"frames_missing\": " << missing << ",\n  \"node\": {\"frames_in\": "
+          << ",\n  \"frames_missing\": " << missing << ",\n  \"lost_before_node\": "
+          << lost_before_node << ",\n  \"local_maps_not_published\": " << local_not_published
+          << ",\n  \"local_maps_lost_in_transport\": " << local_lost_in_transport
+          << ",\n  \"node\": {\"frames_in\": "
           << st.frames_in_() << ", \"frames_mapped\": " << st.frames_mapped_()
           << ", \"frames_dropped\": " << st.frames_dropped_() << ", \"frames_rejected\": "
           << st.frames_rejected_() << ", \"clouds_without_pose\": " << st.clouds_without_pose_()
