@@ -2,6 +2,12 @@
 // simulator through a scenario (or replays a folder of RGB-D frames) and publishes, in real time,
 // sensor_msgs/PointCloud2 (or a depth Image + CameraInfo) and geometry_msgs/PoseStamped on the
 // topics of the node configuration.
+//
+// Stamps are wall-clock capture times, as a real driver's: frame i is captured at start + i / rate
+// (system clock) and sent at that instant, so receive time - stamp is the end-to-end latency
+// (tools/bench_dds_latency.sh). --speed maps flight time onto those stamps (flight time = speed
+// x wall time), poses included, so faster flights stay consistent. --prerender renders and
+// encodes every frame before streaming, so a slow simulator cannot delay the frames.
 
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/node_config.h"
@@ -19,6 +25,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -27,6 +34,7 @@
 #include <memory>
 #include <optional>
 #include <thread>
+#include <vector>
 
 namespace {
 
@@ -115,6 +123,45 @@ mlmap::dds::sensor_msgs::CameraInfo_ cameraInfo(const PinholeIntrinsics& k, doub
   return msg;
 }
 
+/// One frame ready to send: its sensor message(s), stamped at send time (setStamp()).
+struct PreparedFrame {
+  double flight_s = 0.0;  ///< simulator time the frame shows (replay: unused)
+  Transform T_W_B = Transform::Identity();  ///< body pose of a replayed frame
+  std::optional<mlmap::dds::sensor_msgs::PointCloud2_> cloud;  ///< cloud mode
+  std::optional<mlmap::dds::sensor_msgs::Image_> image;        ///< depth mode, with `info`
+  std::optional<mlmap::dds::sensor_msgs::CameraInfo_> info;
+
+  void setStamp(double stamp_s) {
+    const auto stamp = mlmap::dds::toRosTime(stamp_s);
+    if (cloud) cloud->header_().stamp_(stamp);
+    if (image) image->header_().stamp_(stamp);
+    if (info) info->header_().stamp_(stamp);
+  }
+  [[nodiscard]] std::size_t bytes() const {
+    return (cloud ? cloud->data_().size() : 0) + (image ? image->data_().size() : 0);
+  }
+};
+
+double wallClockNow_s() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+/// Waits until every writer has a matched reader (false: timed out or stopped).
+bool waitForReaders(const std::vector<fdds::DataWriter*>& writers, double timeout_s) {
+  const auto start = Clock::now();
+  for (;;) {
+    bool all = true;
+    for (fdds::DataWriter* w : writers) {
+      fdds::PublicationMatchedStatus matched;
+      w->get_publication_matched_status(matched);
+      all = all && matched.current_count > 0;
+    }
+    if (all) return true;
+    if (g_stop || std::chrono::duration<double>(Clock::now() - start).count() >= timeout_s) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+}
+
 mlmap::dds::geometry_msgs::PoseStamped_ poseMessage(const Transform& T_W_B, double stamp_s,
                                              const std::string& frame_id) {
   mlmap::dds::geometry_msgs::PoseStamped_ msg;
@@ -138,6 +185,7 @@ int main(int argc, char** argv) {
   std::string config_path, scenario_path, frames_dir, mode = "cloud";
   double rate_hz = 0.0, pose_rate_hz = 50.0, wait_s = 10.0, speed = 1.0;
   int max_frames = 0;
+  bool prerender = false;
   app.add_option("-c,--config", config_path, "node configuration (its dds section and sensor mounting)")
       ->check(CLI::ExistingFile);
   app.add_option("--scenario", scenario_path, "scenario YAML (default: the built-in room)")
@@ -150,15 +198,18 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--speed", speed,
                  "flight seconds per wall-clock second (simulator only): > 1 flies farther in the "
-                 "same number of frames")
+                 "same number of frames (stamps stay wall-clock times)")
       ->check(CLI::PositiveNumber);
   app.add_option("--pose-rate", pose_rate_hz, "poses per second of flight (simulator only)")
       ->check(CLI::PositiveNumber);
   app.add_option("--max-frames", max_frames, "stop after this many frames (0: all)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--wait-for-subscriber", wait_s,
-                 "seconds to wait for a subscriber of the sensor topic before starting")
+                 "seconds to wait for subscribers of the sensor and pose topics before starting")
       ->check(CLI::NonNegativeNumber);
+  app.add_flag("--prerender", prerender,
+               "render and encode every frame before streaming (benchmarks: the simulator cannot "
+               "hold the rate; memory = frames x message size, 4.8 MB per 640x480 cloud)");
   CLI11_PARSE(app, argc, argv);
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
@@ -185,9 +236,13 @@ int main(int argc, char** argv) {
     mlmap::dds::ParticipantPtr participant = mlmap::dds::createParticipant(config.dds, "mlmap_sensor_publisher");
     fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
     const auto ns = config.dds.ns;
-    // Sensor drivers and odometry publish best-effort (ROS 2 sensor data QoS; PX4 does too).
-    fdds::DataWriterQos sensor_qos = mlmap::dds::reliableWriterQos(5);
-    sensor_qos.reliability().kind = fdds::BEST_EFFORT_RELIABILITY_QOS;
+    // Sensor drivers and odometry publish best-effort (ROS 2 sensor data QoS; PX4 does too), and
+    // mlmap_node reads best-effort: that is what its readers get from this writer. The writer
+    // offers RELIABLE (KEEP_LAST 5, so it never blocks) because Fast DDS 2.9.1's best-effort
+    // writers do not drop a same-host reader's UDP locator when shared memory reaches it
+    // (eProsima/Fast-DDS#3655, fixed after 2.9.1; Jazzy's 2.14 has the fix): every 4.9 MB cloud
+    // crossed loopback UDP too, which doubled its transport cost in the latency benchmark.
+    const fdds::DataWriterQos sensor_qos = mlmap::dds::reliableWriterQos(5);
     fdds::DataWriter* sensor_writer =
         depth_mode ? mlmap::dds::createWriter<mlmap::dds::sensor_msgs::Image_PubSubType>(publisher, mlmap::dds::ddsTopicName(ns, sensor_topic), sensor_qos)
                    : mlmap::dds::createWriter<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(publisher, mlmap::dds::ddsTopicName(ns, sensor_topic), sensor_qos);
@@ -197,16 +252,15 @@ int main(int argc, char** argv) {
     fdds::DataWriter* pose_writer = mlmap::dds::createWriter<mlmap::dds::geometry_msgs::PoseStamped_PubSubType>(
         publisher, mlmap::dds::ddsTopicName(ns, topics.pose), sensor_qos);
 
-    // Wait for the mapping node (matching is asynchronous; frames sent before it are lost).
-    const auto wait_start = Clock::now();
-    fdds::PublicationMatchedStatus matched;
-    while (!g_stop && std::chrono::duration<double>(Clock::now() - wait_start).count() < wait_s) {
-      sensor_writer->get_publication_matched_status(matched);
-      if (matched.current_count > 0) break;
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-    spdlog::info("publishing {} on {} ({} subscriber(s)) at {} Hz", depth_mode ? "depth images" : "clouds",
-                 mlmap::dds::ddsTopicName(ns, sensor_topic), matched.current_count, rate_hz);
+    // Wait for the mapping node (matching is asynchronous; frames sent before it are lost). A
+    // writer can see its match before the reader has matched it: a short grace period after.
+    std::vector<fdds::DataWriter*> writers = {sensor_writer, pose_writer};
+    if (info_writer != nullptr) writers.push_back(info_writer);
+    const bool matched = waitForReaders(writers, wait_s);
+    if (matched) std::this_thread::sleep_for(std::chrono::milliseconds(250));
+    fdds::PublicationMatchedStatus sensor_matched;
+    sensor_writer->get_publication_matched_status(sensor_matched);
+    if (!matched) spdlog::warn("not every topic has a subscriber after {} s: publishing anyway", wait_s);
 
     const int available = replay ? static_cast<int>(replay->size())
                                  : static_cast<int>(std::floor(scenario->trajectory.duration_s() * rate_hz)) + 1;
@@ -219,58 +273,103 @@ int main(int argc, char** argv) {
     }
     std::optional<sim::DepthCamera> camera;
     if (scenario) camera.emplace(scenario->camera);
-    // Stamps look like a real system's: wall-clock time at the start plus the flight time.
-    const double stamp0_s = std::floor(std::chrono::duration<double>(
-                                std::chrono::system_clock::now().time_since_epoch()).count());
     const std::string& world = config.dds.world_frame;
     const std::string& sensor = config.dds.sensor_frame;
+
+    // Frame i, encoded (stamps are set when it is sent).
+    auto prepare = [&](int i) {
+      PreparedFrame prepared;
+      DepthFrame frame;
+      if (replay) {
+        frame = replay->read(static_cast<std::size_t>(i));
+        prepared.T_W_B = frame.T_W_B;
+      } else {
+        prepared.flight_s = speed * i / rate_hz;
+        frame.T_W_B = scenario->trajectory.poseAt(prepared.flight_s);
+        camera->render(scenario->world, frame.T_W_B * T_B_S, prepared.flight_s, &frame);
+      }
+      if (depth_mode) {
+        prepared.info = cameraInfo(frame.intrinsics, 0.0, sensor);
+        prepared.image = depthImage(frame, 0.0, sensor);
+      } else {
+        prepared.cloud = organisedCloud(frame, 0.0, sensor);
+      }
+      return prepared;
+    };
+    std::vector<PreparedFrame> prerendered;
+    if (prerender) {
+      const auto render_start = Clock::now();
+      auto last_line = render_start;
+      std::size_t bytes = 0;
+      prerendered.reserve(static_cast<std::size_t>(frames));
+      for (int i = 0; i < frames && !g_stop; ++i) {
+        prerendered.push_back(prepare(i));
+        bytes += prerendered.back().bytes();
+        if (std::chrono::duration<double>(Clock::now() - last_line).count() >= 2.0 || i + 1 == frames) {
+          last_line = Clock::now();
+          spdlog::info("prerendered {} / {} frames ({:.0f} MB, {:.1f} s)", i + 1, frames,
+                       static_cast<double>(bytes) / 1e6,
+                       std::chrono::duration<double>(last_line - render_start).count());
+        }
+      }
+    }
+    spdlog::info("publishing {} on {} ({} subscriber(s)) at {} Hz", depth_mode ? "depth images" : "clouds",
+                 mlmap::dds::ddsTopicName(ns, sensor_topic), sensor_matched.current_count, rate_hz);
+
+    // Frame i is captured at start + i / rate: wall-clock stamp wall0 + i / rate. The simulator's
+    // flight time t maps to the stamp wall0 + t / speed (poses as well as frames).
     const auto start = Clock::now();
+    const double wall0_s = wallClockNow_s();
     const double pose_period_s = 1.0 / pose_rate_hz;
     long pose_k = 0;
-    int sent = 0;
-    auto publishPose = [&](const Transform& T_W_B, double t_s) {
-      mlmap::dds::geometry_msgs::PoseStamped_ pose = poseMessage(T_W_B, stamp0_s + t_s, world);
+    int sent = 0, late = 0;
+    double max_late_ms = 0.0;
+    constexpr double kLate_ms = 5.0;
+    auto publishPose = [&](const Transform& T_W_B, double stamp_s) {
+      mlmap::dds::geometry_msgs::PoseStamped_ pose = poseMessage(T_W_B, stamp_s, world);
       pose_writer->write(&pose);
     };
     for (int i = 0; i < frames && !g_stop; ++i) {
-      DepthFrame frame;
-      double t_s = 0.0;
+      PreparedFrame frame = prerender ? std::move(prerendered[static_cast<std::size_t>(i)]) : prepare(i);
+      const auto due = start + std::chrono::duration_cast<Clock::duration>(
+                                   std::chrono::duration<double>(i / rate_hz));
+      std::this_thread::sleep_until(due);
+      const double late_ms = std::chrono::duration<double, std::milli>(Clock::now() - due).count();
+      max_late_ms = std::max(max_late_ms, late_ms);
+      late += late_ms > kLate_ms ? 1 : 0;
+      const double stamp_s = wall0_s + i / rate_hz;
       if (replay) {
-        frame = replay->read(static_cast<std::size_t>(i));
-        t_s = frame.stamp_s;
-      } else {
-        t_s = speed * i / rate_hz;
-        frame.T_W_B = scenario->trajectory.poseAt(t_s);
-        camera->render(scenario->world, frame.T_W_B * T_B_S, t_s, &frame);
-      }
-      std::this_thread::sleep_until(start + std::chrono::duration_cast<Clock::duration>(
-                                                std::chrono::duration<double>(i / rate_hz)));
-      if (replay) {
-        publishPose(frame.T_W_B, t_s);  // the recording has one pose per frame
+        publishPose(frame.T_W_B, stamp_s);  // the recording has one pose per frame
       } else {
         // Odometry runs ahead of the camera by up to one pose period, as a fast IMU-based
         // estimator does, so each frame finds poses on both sides of its stamp.
-        for (; static_cast<double>(pose_k) * pose_period_s <= t_s + pose_period_s + 1e-9; ++pose_k) {
+        for (; static_cast<double>(pose_k) * pose_period_s <= frame.flight_s + pose_period_s + 1e-9;
+             ++pose_k) {
           const double pose_t_s = static_cast<double>(pose_k) * pose_period_s;
-          publishPose(scenario->trajectory.poseAt(pose_t_s), pose_t_s);
+          publishPose(scenario->trajectory.poseAt(pose_t_s), wall0_s + pose_t_s / speed);
         }
       }
+      frame.setStamp(stamp_s);
       if (depth_mode) {
-        mlmap::dds::sensor_msgs::CameraInfo_ info = cameraInfo(frame.intrinsics, stamp0_s + t_s, sensor);
-        info_writer->write(&info);
-        mlmap::dds::sensor_msgs::Image_ image = depthImage(frame, stamp0_s + t_s, sensor);
-        sensor_writer->write(&image);
+        info_writer->write(&*frame.info);
+        sensor_writer->write(&*frame.image);
       } else {
-        mlmap::dds::sensor_msgs::PointCloud2_ cloud = organisedCloud(frame, stamp0_s + t_s, sensor);
-        sensor_writer->write(&cloud);
+        sensor_writer->write(&*frame.cloud);
       }
       ++sent;
       if (frames >= 10 && (i + 1) % (frames / 10) == 0) {
         spdlog::info("{} / {} frames published", i + 1, frames);
       }
     }
+    if (late > 0) {
+      spdlog::warn("{} of {} frames left more than {} ms after their capture time (max {:.1f} ms; "
+                   "their latency includes it): {}",
+                   late, sent, kLate_ms, max_late_ms,
+                   prerender ? "the machine is busy" : "the simulator is slower than --rate (try --prerender)");
+    }
     std::this_thread::sleep_for(std::chrono::milliseconds(300));  // let the last samples leave
-    spdlog::info("done: {} frames published", sent);
+    spdlog::info("done: {} frames published; at most {:.2f} ms after their capture time", sent,
+                 max_late_ms);
     return 0;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());

@@ -32,6 +32,10 @@ constexpr std::size_t kMaxQueuedFrames = 3;    // clouds / images waiting for th
 constexpr std::size_t kMaxQueuedOther = 1000;  // poses, camera infos
 constexpr std::size_t kMaxPendingFrames = 8;   // decoded frames waiting for their pose
 constexpr double kPoseWait_s = 0.5;            // wall time a frame may wait for its pose
+// The publishing thread wakes when the engine announces a snapshot or a layer copy; this poll
+// only serves the rate gates (status, a gated layer whose period ran out) and the ESDF the
+// planning thread republishes.
+constexpr std::chrono::milliseconds kPublishPoll{20};
 
 // Log reasons (one line per reason and second).
 enum Reason : int {
@@ -120,6 +124,7 @@ struct MappingNode::Impl {
   RateGate awareness_copy_gate;
   RateGate global_copy_gate;
   std::uint64_t global_version_copied = ~std::uint64_t{0};
+  bool snapshot_fresh = false;  // the engine published a snapshot since the last look
   bool publish_stop = false;
 
   mutable std::mutex counters_mutex;
@@ -175,6 +180,7 @@ struct MappingNode::Impl {
     observers.global = [this](const GlobalMap& map, double stamp_s, std::uint64_t version) {
       copyGlobal(map, stamp_s, version);
     };
+    observers.snapshot = [this](std::uint64_t, double) { announceSnapshot(); };
     engine = std::make_unique<MapEngine>(
         map_config, [this](LogLevel level, const std::string& m) { log.log(level, kReasonEngine, m); },
         std::move(observers));
@@ -452,6 +458,16 @@ struct MappingNode::Impl {
     publish_cv.notify_one();
   }
 
+  /// Wakes the publishing thread: a frame's snapshot is out (a flag and a notify, so mapping
+  /// never waits for publishing).
+  void announceSnapshot() {
+    {
+      std::lock_guard<std::mutex> lock(layer_mutex);
+      snapshot_fresh = true;
+    }
+    publish_cv.notify_one();
+  }
+
   // ---- Publishing thread -------------------------------------------------------------------
   void write(fdds::DataWriter* writer, void* msg) {
     if (writer == nullptr) return;
@@ -474,8 +490,11 @@ struct MappingNode::Impl {
       LayerCopy awareness, global;
       {
         std::unique_lock<std::mutex> lock(layer_mutex);
-        publish_cv.wait_for(lock, std::chrono::milliseconds(20), [this] { return publish_stop; });
+        publish_cv.wait_for(lock, kPublishPoll, [this] {
+          return publish_stop || snapshot_fresh || awareness_copy.fresh || global_copy.fresh;
+        });
         last = publish_stop;
+        snapshot_fresh = false;
         if (awareness_copy.fresh) std::swap(awareness, awareness_copy);
         if (global_copy.fresh) std::swap(global, global_copy);
         awareness_copy.fresh = global_copy.fresh = false;

@@ -207,6 +207,7 @@ void MapEngine::localStep(const MeasurementBatch& batch) {
   local_.integrate(batch);
   const double ms = msSince(start);
   planning_.update(local_, global_, ++frames_integrated_, batch.stamp_s, batch.T_W_B);
+  if (observers_.snapshot) observers_.snapshot(frames_integrated_, batch.stamp_s);
   if (observers_.global) {
     const LocalMapCounters& c = local_.counters();
     observers_.global(global_, batch.stamp_s, c.submaps_retired + c.submaps_restored);

@@ -178,6 +178,7 @@ TEST(ShippedProfiles, EachLoadsCreatesAParticipantAndHasOneDefaultProfile) {
   };
   const Profile profiles[] = {{"default.xml", "mlmap_default"},
                               {"loopback.xml", "mlmap_loopback"},
+                              {"loopback_udp_only.xml", "mlmap_loopback_udp_only"},
                               {"udp_only.xml", "mlmap_udp_only"},
                               {"large_data.xml", "mlmap_large_data"},
                               {"discovery_server_client.xml", "mlmap_discovery_client"}};
@@ -190,7 +191,9 @@ TEST(ShippedProfiles, EachLoadsCreatesAParticipantAndHasOneDefaultProfile) {
                                     "\" is_default_profile=\"true\">"),
               1);
     DdsConfig config = localhostConfig(domain_id++);  // LAN profiles: kept off the network
-    if (std::string(p.file) == "loopback.xml") config.discovery_range = "";  // its own transports
+    const std::string file = p.file;
+    if (file == "loopback.xml") config.discovery_range = "";  // its own transports
+    if (file == "loopback_udp_only.xml") config.discovery_range = "OFF";  // as documented in it
     config.profiles_file = profilePath(p.file);
     config.participant_profile = p.name;
     config.large_data = false;
@@ -220,6 +223,34 @@ TEST(ShippedProfiles, EachLoadsCreatesAParticipantAndHasOneDefaultProfile) {
     EXPECT_TRUE(isLoopbackOnly(qos.wire_protocol().builtin.initialPeersList));
     EXPECT_TRUE(isLoopbackOnly(qos.wire_protocol().builtin.metatrafficUnicastLocatorList));
     EXPECT_TRUE(qos.wire_protocol().builtin.metatrafficMulticastLocatorList.empty());
+  }
+  {
+    const auto qos = profileQos("mlmap_loopback_udp_only");
+    EXPECT_FALSE(qos.transport().use_builtin_transports);
+    ASSERT_EQ(qos.transport().user_transports.size(), 1u);  // no SHM
+    const auto udp = onlyTransport<UDPv4TransportDescriptor>(qos);
+    ASSERT_NE(udp, nullptr);
+    EXPECT_EQ(udp->interfaceWhiteList, std::vector<std::string>{"127.0.0.1"});
+    EXPECT_EQ(udp->maxInitialPeersRange, kLocalhostMaxInitialPeersRange);
+    EXPECT_EQ(udp->sendBufferSize, kLargeDataSocketBufferBytes);
+    EXPECT_EQ(udp->receiveBufferSize, kLargeDataSocketBufferBytes);
+    EXPECT_TRUE(isLoopbackOnly(qos.wire_protocol().builtin.initialPeersList));
+    EXPECT_TRUE(isLoopbackOnly(qos.wire_protocol().builtin.metatrafficUnicastLocatorList));
+    EXPECT_TRUE(qos.wire_protocol().builtin.metatrafficMulticastLocatorList.empty());
+    // As documented (discovery_range OFF, large_data on): still UDP on 127.0.0.1 only, no SHM.
+    DdsConfig config;
+    config.domain_id = 160;
+    config.discovery_range = "OFF";
+    config.profiles_file = profilePath("loopback_udp_only.xml");
+    config.participant_profile = "mlmap_loopback_udp_only";
+    const ParticipantSetup setup = participantSetup(config, "test");
+    ASSERT_EQ(setup.qos.transport().user_transports.size(), 1u);
+    const auto used = onlyTransport<UDPv4TransportDescriptor>(setup.qos);
+    ASSERT_NE(used, nullptr);
+    EXPECT_EQ(used->interfaceWhiteList, std::vector<std::string>{"127.0.0.1"});
+    EXPECT_TRUE(setup.qos.wire_protocol().builtin.metatrafficMulticastLocatorList.empty());
+    EXPECT_TRUE(setup.qos.wire_protocol().default_multicast_locator_list.empty());
+    EXPECT_TRUE(isLoopbackOnly(setup.qos.wire_protocol().builtin.initialPeersList));
   }
   {
     const auto qos = profileQos("mlmap_udp_only");

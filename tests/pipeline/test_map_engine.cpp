@@ -182,7 +182,7 @@ TEST(MapEngine, ThreadedModeBuildsTheSameMapAsTheSynchronousMode) {
   EXPECT_EQ(threaded_engine.stats().frames_dropped, 0u);
 }
 
-TEST(MapEngine, ObserversSeeEveryAwarenessFrameAndEveryGlobalChange) {
+TEST(MapEngine, ObserversSeeEveryAwarenessFrameEverySnapshotAndEveryGlobalChange) {
   // Threaded, so the observers run on the engine's threads as they would under a publisher.
   MapConfig c = configAt(0.2);
   c.pipeline.threaded = true;
@@ -204,11 +204,31 @@ TEST(MapEngine, ObserversSeeEveryAwarenessFrameAndEveryGlobalChange) {
     last_version = version;
     last_global_voxels = map.voxelCount();
   };
+  // Every mapped frame announces its snapshot once it is published: snapshot() already returns
+  // it inside the call (the planning thread may republish it with a new ESDF, same frame).
+  std::vector<std::uint64_t> snapshot_frames;
+  std::vector<double> snapshot_stamps;
+  MapEngine* engine_seen = nullptr;
+  observers.snapshot = [&](std::uint64_t frame, double stamp_s) {
+    snapshot_frames.push_back(frame);
+    snapshot_stamps.push_back(stamp_s);
+    ASSERT_NE(engine_seen, nullptr);
+    const std::shared_ptr<const MapSnapshot> snap = engine_seen->snapshot();
+    EXPECT_EQ(snap->frame(), frame);
+    EXPECT_EQ(snap->stamp_s(), stamp_s);
+  };
   MapEngine engine(c, {}, observers);
+  engine_seen = &engine;
   // Fly 30 m along x: submaps retire into the global map on the way.
   const int frames = 60;
   for (int i = 0; i < frames; ++i) engine.submit(cloudAt(1.0 + i, {0.5 * i, 0.0, 1.0}));
   engine.flush();
+  ASSERT_EQ(snapshot_frames.size(), static_cast<std::size_t>(frames));
+  for (int i = 0; i < frames; ++i) {
+    EXPECT_EQ(snapshot_frames[i], static_cast<std::uint64_t>(i + 1));
+    EXPECT_EQ(snapshot_stamps[i], 1.0 + i);
+  }
+  EXPECT_EQ(engine.snapshot()->frame(), static_cast<std::uint64_t>(frames));
   ASSERT_EQ(awareness_stamps.size(), static_cast<std::size_t>(frames));
   for (int i = 0; i < frames; ++i) EXPECT_EQ(awareness_stamps[i], 1.0 + i);
   EXPECT_EQ(last_awareness_points, engine.awareness().occupiedPoints().size());

@@ -76,9 +76,10 @@ struct EngineStats {
 };
 
 
-/// Optional observers of the layers the snapshot does not carry, called on the engine's own
-/// threads (the caller's in synchronous mode) while that layer is not being written. They run
-/// inside the mapping loop: copy what you need and return (e.g. a publisher's hand-over).
+/// Optional observers of the layers the snapshot does not carry, and of each new snapshot,
+/// called on the engine's own threads (the caller's in synchronous mode) while that layer is not
+/// being written. They run inside the mapping loop: copy what you need and return (e.g. a
+/// publisher's hand-over).
 struct EngineObservers {
   /// After the awareness update of every frame (awareness thread).
   std::function<void(const AwarenessMap& map, double stamp_s, const Transform& T_W_B)> awareness;
@@ -86,6 +87,11 @@ struct EngineObservers {
   /// submap moves between the local and the global map so far: the global map changed exactly
   /// when it differs from the previous call's.
   std::function<void(const GlobalMap& map, double stamp_s, std::uint64_t version)> global;
+  /// After the snapshot of every mapped frame is published (local-global thread, before
+  /// `global`): from then on snapshot() returns it or a newer one. `frame` is its
+  /// MapSnapshot::frame(). Lets a publisher wake as soon as there is something new instead of
+  /// polling. (A snapshot the planning thread republishes with a new ESDF is not announced.)
+  std::function<void(std::uint64_t frame, double stamp_s)> snapshot;
 };
 
 /// Owns the three layers. Submit frames from one thread; read the layers after flush().

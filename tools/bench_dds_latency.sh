@@ -1,0 +1,138 @@
+#!/usr/bin/env bash
+# The DDS latency benchmark: mlmap_sensor_publisher streams 640 x 480 organised clouds (307,200
+# points x 16 B = 4.9 MB) at 30 Hz to mlmap_node, and mlmap_bench_dds_latency measures, at a
+# subscriber of the local-map layer, capture -> local map latency (p50, p99) and dropped frames,
+# once over shared memory and once over UDP only, on loopback. Prints the figures against the
+# targets (no dropped frame; p50 <= engine compute median + 5 ms; p99 <= engine p99 + 15 ms).
+# Figures, not a test: only --smoke fails, when a frame sent did not reach the subscriber.
+#
+#   tools/bench_dds_latency.sh [--build DIR] [--out DIR] [--seconds S] [--rate HZ]
+#                              [--modes "shm udp"] [--domain ID] [--probe-cloud] [--smoke]
+#
+#   --build DIR    where the programs are (default: build-perf)
+#   --out DIR      logs, node configs, latency_<mode>.json (default: bench_output/dds_latency)
+#   --seconds S    seconds of streaming per mode (default 25)
+#   --rate HZ      frames per second (default 30)
+#   --modes LIST   shm: the node's default (LOCALHOST: SHM with a 16 MB segment + UDP 127.0.0.1);
+#                  udp: config/dds/loopback_udp_only.xml (UDPv4 on 127.0.0.1 only, 4 MB buffers)
+#   --domain ID    DDS domain of every run, one after the other (default 135; keep to 135..139)
+#   --probe-cloud  the subscriber also times the clouds' own transport (adds a second reader)
+#   --smoke        check, not measure: deep queues so a loaded machine delays rather than drops,
+#                  and fail unless every frame reached the subscriber and the node mapped it all
+set -uo pipefail
+repo=$(cd "$(dirname "$0")/.." && pwd)
+bin=$repo/build-perf out=$repo/bench_output/dds_latency seconds=25 rate=30 modes="shm udp"
+domain=135 probe=() smoke=0
+while [ $# -gt 0 ]; do
+  case $1 in
+    --build) bin=$(cd "$2" && pwd); shift 2 ;;
+    --out) out=$2; shift 2 ;;
+    --seconds) seconds=$2; shift 2 ;;
+    --rate) rate=$2; shift 2 ;;
+    --modes) modes=$2; shift 2 ;;
+    --domain) domain=$2; shift 2 ;;
+    --probe-cloud) probe=(--probe-cloud); shift ;;
+    --smoke) smoke=1; shift ;;
+    *) echo "unknown option $1 (see the comment at the top of $0)" >&2; exit 64 ;;
+  esac
+done
+for p in mlmap_node mlmap_sensor_publisher mlmap_bench_dds_latency; do
+  [ -x "$bin/$p" ] || { echo "no $bin/$p: build first (cmake --build $bin)" >&2; exit 2; }
+done
+frames=$(awk -v s="$seconds" -v r="$rate" 'BEGIN { printf "%d", s * r }')
+[ "$frames" -gt 0 ] || { echo "--seconds x --rate gives no frame" >&2; exit 64; }
+
+export ROS_DOMAIN_ID=$domain
+export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST   # never leave loopback (the udp mode says OFF + a loopback profile)
+unset FASTRTPS_DEFAULT_PROFILES_FILE
+mkdir -p "$out"
+pids=()
+trap 'for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done' EXIT
+load() { cut -d' ' -f1-3 /proc/loadavg; }
+hwm_mb() { awk '/VmHWM/ { printf "%.0f", $2 / 1024 }' "/proc/$1/status" 2>/dev/null; }
+
+results=() status=0
+echo "DDS latency benchmark: $frames frames at $rate Hz per mode ($modes), domain $domain, $(nproc) cores"
+for mode in $modes; do
+  dir=$out/$mode
+  rm -rf "$dir" && mkdir -p "$dir"
+  cfg=$dir/node.yaml
+  # Every snapshot published (local_map_hz above the frame rate); everything else as deployed.
+  {
+    [ $smoke -eq 1 ] && printf 'pipeline: {input_queue_capacity: 64}\n'
+    printf 'dds:\n  rates: {local_map_hz: 100.0, status_hz: 2.0}\n'
+    case $mode in
+      shm) ;;
+      udp) printf '  discovery_range: "OFF"\n  profiles_file: %s\n  participant_profile: mlmap_loopback_udp_only\n' \
+             "$repo/config/dds/loopback_udp_only.xml" ;;
+      *) echo "unknown mode $mode (shm, udp)" >&2; exit 64 ;;
+    esac
+  } > "$cfg"
+  load_before=$(load)
+
+  "$bin/mlmap_node" --config "$cfg" --report-every 0 > "$dir/node.log" 2>&1 &
+  node=$!
+  "$bin/mlmap_bench_dds_latency" --config "$cfg" --frames "$frames" --label "$mode" \
+    --json "$out/latency_$mode.json" --idle-stop 3 --duration $((seconds * 4 + 180)) "${probe[@]}" \
+    $([ $smoke -eq 1 ] && echo --require-all) > "$dir/bench.log" 2>&1 &
+  bench=$!
+  pids=($node $bench)
+  for _ in $(seq 200); do grep -qs '^ready' "$dir/bench.log" && break; sleep 0.1; done
+  grep -q '^ready' "$dir/bench.log" || echo "warning: the subscriber did not match the node in 20 s"
+
+  "$bin/mlmap_sensor_publisher" --config "$cfg" --rate "$rate" --max-frames "$frames" --prerender \
+    > "$dir/publisher.log" 2>&1 &
+  pub=$!
+  pids+=($pub)
+  pub_mb=0
+  while kill -0 $pub 2>/dev/null; do
+    m=$(hwm_mb $pub); [ -n "$m" ] && pub_mb=$m
+    sleep 0.5
+  done
+  wait $pub
+  pub_rc=$?
+  node_mb=$(hwm_mb $node)
+  load_after=$(load)
+  kill -INT $node
+  wait $node
+  node_rc=$?
+  wait $bench
+  bench_rc=$?
+  pids=()
+
+  echo
+  echo "== $mode: load average (1/5/15 min) before the run $load_before, at the end of streaming $load_after"
+  sed -n '/^== /,$p' "$dir/bench.log" | grep -v '^result '
+  grep -E 'done:|late|error|warn' "$dir/publisher.log" | sed 's/^/publisher: /'
+  grep -E 'done:|error|warn' "$dir/node.log" | sed 's/^/node: /' | head -20
+  echo "peak memory: node ${node_mb:-?} MB, publisher ${pub_mb} MB (prerendered frames)"
+  line=$(grep '^result ' "$dir/bench.log")
+  results+=("$line node_mb=${node_mb:-?} load=${load_before%% *}/${load_after%% *}")
+  mapped=$(sed -n 's/.*done: \([0-9]*\) frames mapped.*/\1/p' "$dir/node.log")
+  if [ $pub_rc -ne 0 ] || [ $node_rc -ne 0 ] || [ $bench_rc -ne 0 ]; then
+    echo "FAIL ($mode): publisher $pub_rc, node $node_rc, subscriber $bench_rc"
+    status=1
+  fi
+  if [ $smoke -eq 1 ] && [ "${mapped:-0}" -ne "$frames" ]; then
+    echo "FAIL ($mode): the node mapped ${mapped:-no} frames of $frames"
+    status=1
+  fi
+done
+
+echo
+echo "== Summary: capture -> local map at the subscriber, $frames frames of 640x480 at $rate Hz per mode"
+printf '%-5s %6s %7s %9s %8s %8s %8s %11s %11s %7s %7s  %s\n' mode sent mapped received \
+  p50_ms p99_ms max_ms engine_p50 engine_p99 "p50 ok" "p99 ok" "1-min load before/after"
+for r in "${results[@]}"; do
+  get() { echo "$r" | tr ' ' '\n' | sed -n "s/^$1=//p"; }
+  mode=$(echo "$r" | cut -d' ' -f2)
+  p50=$(get p50) p99=$(get p99) e50=$(get engine_p50) e99=$(get engine_p99)
+  ok50=$(awk -v a="$p50" -v b="$e50" 'BEGIN { print (a <= b + 5) ? "yes" : "NO" }')
+  ok99=$(awk -v a="$p99" -v b="$e99" 'BEGIN { print (a <= b + 15) ? "yes" : "NO" }')
+  printf '%-5s %6s %7s %9s %8s %8s %8s %11s %11s %7s %7s  %s\n' "$mode" "$(get sent)" "$(get mapped)" \
+    "$(get received)" "$p50" "$p99" "$(get max)" "$e50" "$e99" "$ok50" "$ok99" "$(echo "$r" | sed 's/.*load=//')"
+done
+echo "targets: received = sent (no dropped frame); p50 <= engine_p50 + 5 ms; p99 <= engine_p99 + 15 ms"
+echo "(latency figures leave out the first second of stamps; the per-mode tables above have every frame)"
+echo "JSON: $out/latency_<mode>.json; logs: $out/<mode>/"
+exit $status
