@@ -12,7 +12,7 @@
 #   latched  joins after the flight, when nothing new is published: must get the 2D grid and the
 #            global map (TRANSIENT_LOCAL), the latter equal to the node's.
 # Onboard, every frame must be mapped: the ground station's coming and going and the slow link do
-# not slow or stop the mapping. Needs root (ip netns, tc).
+# not slow or stop the mapping. Needs root (unshare, nsenter, ip, tc).
 set -uo pipefail
 bin=$1 out=$2
 export ROS_DOMAIN_ID=$3
@@ -21,34 +21,39 @@ unset FASTRTPS_DEFAULT_PROFILES_FILE
 here=$(cd "$(dirname "$0")" && pwd)
 frames=250 rate_hz=10
 [ "$(id -u)" = 0 ] || { echo "FAIL: needs root for network namespaces"; exit 1; }
-for tool in ip tc; do command -v $tool >/dev/null || { echo "FAIL: $tool missing (iproute2)"; exit 1; }; done
+for tool in ip tc unshare nsenter; do
+  command -v $tool >/dev/null || { echo "FAIL: $tool missing (iproute2, util-linux)"; exit 1; }
+done
 rm -rf "$out" && mkdir -p "$out"
 
-tag=mlmap$$ on=mlmap$$on ground=mlmap$$gr
+# Each namespace lives as long as a process holding it (no `ip netns add`: it needs / to be a
+# mount point, which a chroot's is not); `nsenter -n` runs a program in it and execs, so $! is
+# the program's pid and signals reach it.
+tag=mlmap$$
 pids=()
 cleanup() {
   for p in "${pids[@]}"; do kill -9 "$p" 2>/dev/null; done
   wait 2>/dev/null
-  ip netns del "$on" 2>/dev/null
-  ip netns del "$ground" 2>/dev/null
 }
 trap cleanup EXIT
+unshare -n sleep 3600 & on=$!; pids+=($on)
+unshare -n sleep 3600 & ground=$!; pids+=($ground)
+sleep 0.2
+in_ns() { local ns=$1; shift; nsenter -t "$ns" -n "$@"; }
 set -e
-ip netns add "$on"
-ip netns add "$ground"
 ip link add "${tag}a" type veth peer name "${tag}b"
 ip link set "${tag}a" netns "$on"
 ip link set "${tag}b" netns "$ground"
-ip -n "$on" addr add 10.77.0.1/24 dev "${tag}a"
-ip -n "$ground" addr add 10.77.0.2/24 dev "${tag}b"
+in_ns "$on" ip addr add 10.77.0.1/24 dev "${tag}a"
+in_ns "$ground" ip addr add 10.77.0.2/24 dev "${tag}b"
 for side in "$on:${tag}a" "$ground:${tag}b"; do
   ns=${side%%:*} dev=${side#*:}
-  ip -n "$ns" link set lo up
-  ip -n "$ns" link set "$dev" up multicast on
-  ip -n "$ns" route add 224.0.0.0/4 dev "$dev"   # discovery multicast goes over the LAN
+  in_ns "$ns" ip link set lo up
+  in_ns "$ns" ip link set "$dev" up multicast on
+  in_ns "$ns" ip route add 224.0.0.0/4 dev "$dev"   # discovery multicast goes over the LAN
 done
 # 10 Mbit/s from the vehicle to the ground, at most 400 ms of queue (then the link drops).
-ip netns exec "$on" tc qdisc add dev "${tag}a" root tbf rate 10mbit burst 32kbit latency 400ms
+in_ns "$on" tc qdisc add dev "${tag}a" root tbf rate 10mbit burst 32kbit latency 400ms
 set +e
 
 cfg="$out/node.yaml" ground_cfg="$out/ground.yaml"
@@ -58,11 +63,10 @@ printf 'local_map: {size_cells: [45, 45, 25]}\npipeline: {input_queue_capacity: 
 cp "$cfg" "$ground_cfg"
 printf 'dds:\n  profiles_file: %s\n  participant_profile: mlmap_udp_only\n' \
   "$here/../../config/dds/udp_only.xml" >> "$ground_cfg"
-# `ip netns exec` execs the program: $! is the program's pid, so signals reach it.
-ground_inspect=(ip netns exec "$ground" "$bin/mlmap_inspect" --config "$ground_cfg" --as-bridge)
-ip netns exec "$on" "$bin/mlmap_node" --config "$cfg" --report-every 0 > "$out/node.log" 2>&1 &
+ground_inspect=(nsenter -t "$ground" -n "$bin/mlmap_inspect" --config "$ground_cfg" --as-bridge)
+nsenter -t "$on" -n "$bin/mlmap_node" --config "$cfg" --report-every 0 > "$out/node.log" 2>&1 &
 node=$!; pids+=($node)
-ip netns exec "$on" "$bin/mlmap_sensor_publisher" --config "$cfg" --rate $rate_hz \
+nsenter -t "$on" -n "$bin/mlmap_sensor_publisher" --config "$cfg" --rate $rate_hz \
   --max-frames $frames > "$out/publisher.log" 2>&1 &
 publisher=$!; pids+=($publisher)
 sleep 4
