@@ -41,6 +41,7 @@ for p in mlmap_node mlmap_sensor_publisher mlmap_bench_dds_latency; do
 done
 frames=$(awk -v s="$seconds" -v r="$rate" 'BEGIN { printf "%d", s * r }')
 [ "$frames" -gt 0 ] || { echo "--seconds x --rate gives no frame" >&2; exit 64; }
+require=(); [ $smoke -eq 1 ] && require=(--require-all)
 
 export ROS_DOMAIN_ID=$domain
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST   # never leave loopback (the udp mode says OFF + a loopback profile)
@@ -74,16 +75,16 @@ for mode in $modes; do
   node=$!
   "$bin/mlmap_bench_dds_latency" --config "$cfg" --frames "$frames" --label "$mode" \
     --json "$out/latency_$mode.json" --idle-stop 3 --duration $((seconds * 4 + 180)) "${probe[@]}" \
-    $([ $smoke -eq 1 ] && echo --require-all) > "$dir/bench.log" 2>&1 &
+    "${require[@]}" > "$dir/bench.log" 2>&1 &
   bench=$!
-  pids=($node $bench)
+  pids=("$node" "$bench")
   for _ in $(seq 200); do grep -qs '^ready' "$dir/bench.log" && break; sleep 0.1; done
   grep -q '^ready' "$dir/bench.log" || echo "warning: the subscriber did not match the node in 20 s"
 
   "$bin/mlmap_sensor_publisher" --config "$cfg" --rate "$rate" --max-frames "$frames" --prerender \
     > "$dir/publisher.log" 2>&1 &
   pub=$!
-  pids+=($pub)
+  pids+=("$pub")
   pub_mb=0
   while kill -0 $pub 2>/dev/null; do
     m=$(hwm_mb $pub); [ -n "$m" ] && pub_mb=$m

@@ -36,9 +36,17 @@ cleanup() {
   wait 2>/dev/null
 }
 trap cleanup EXIT
-unshare -n sleep 3600 & on=$!; pids+=($on)
-unshare -n sleep 3600 & ground=$!; pids+=($ground)
-sleep 0.2
+unshare -n sleep 3600 & on=$!; pids+=("$on")
+unshare -n sleep 3600 & ground=$!; pids+=("$ground")
+# Never configure the host's own network: wait until both holders are in namespaces of their own.
+for holder in $on $ground; do
+  for _ in $(seq 100); do
+    [ "$(readlink /proc/$holder/ns/net)" != "$(readlink /proc/self/ns/net)" ] && break
+    sleep 0.05
+  done
+  [ "$(readlink /proc/$holder/ns/net)" != "$(readlink /proc/self/ns/net)" ] ||
+    { echo "FAIL: unshare -n made no network namespace"; exit 1; }
+done
 in_ns() { local ns=$1; shift; nsenter -t "$ns" -n "$@"; }
 set -e
 ip link add "${tag}a" type veth peer name "${tag}b"
@@ -65,20 +73,20 @@ printf 'dds:\n  profiles_file: %s\n  participant_profile: mlmap_udp_only\n' \
   "$here/../../config/dds/udp_only.xml" >> "$ground_cfg"
 ground_inspect=(nsenter -t "$ground" -n "$bin/mlmap_inspect" --config "$ground_cfg" --as-bridge)
 nsenter -t "$on" -n "$bin/mlmap_node" --config "$cfg" --report-every 0 > "$out/node.log" 2>&1 &
-node=$!; pids+=($node)
+node=$!; pids+=("$node")
 nsenter -t "$on" -n "$bin/mlmap_sensor_publisher" --config "$cfg" --rate $rate_hz \
   --max-frames $frames > "$out/publisher.log" 2>&1 &
-publisher=$!; pids+=($publisher)
+publisher=$!; pids+=("$publisher")
 sleep 4
 "${ground_inspect[@]}" --out "$out/late" --duration 7 --expect-all > "$out/late.log" 2>&1 &
-late=$!; pids+=($late)
+late=$!; pids+=("$late")
 "${ground_inspect[@]}" > "$out/vanish.log" 2>&1 &
-vanish=$!; pids+=($vanish)
+vanish=$!; pids+=("$vanish")
 sleep 4
 kill -9 $vanish
 sleep 4
 "${ground_inspect[@]}" --out "$out/rejoin" --expect-all > "$out/rejoin.log" 2>&1 &
-rejoin=$!; pids+=($rejoin)
+rejoin=$!; pids+=("$rejoin")
 wait $publisher; pub_rc=$?
 wait $late; late_rc=$?
 sleep 3   # the last frames' layers cross

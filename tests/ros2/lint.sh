@@ -7,6 +7,8 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 python_dirs=(tools/ros2 tests/ros2)
 shell_scripts=(docker/run_integration_test.sh docker/ground_entrypoint.sh tests/ros2/lint.sh)
+# The project's other scripts: warnings and errors (quoting, word splitting), not style.
+other_scripts=(tools/*.sh tests/dds/*.sh tests/interop/*.sh tests/integration/*.sh .ci/run)
 # (build, install and log: what a colcon build inside tools/ros2 would leave)
 /usr/bin/python3 -m flake8 --max-line-length 99 --extend-exclude build,install,log \
   "${python_dirs[@]}"
@@ -15,4 +17,5 @@ for script in "${shell_scripts[@]}"; do
   bash -n "$script"
 done
 shellcheck "${shell_scripts[@]}"
+shellcheck -S warning "${other_scripts[@]}"
 echo "lint: flake8, pydocstyle, bash -n and shellcheck found nothing"
