@@ -12,6 +12,7 @@
 #include "mlmap/eval/sim_flight.h"
 #include "mlmap/io/map_image.h"
 #include "mlmap/io/world_yaml.h"
+#include "mlmap/pipeline/map_engine.h"
 
 #include "mlmap_msgs/msg/Status_PubSubTypes.h"
 #include "mlmap_msgs/msg/VoxelBlock_PubSubTypes.h"
@@ -51,17 +52,7 @@ struct TopicLog {
   std::vector<double> age_ms;   // wall clock at arrival minus header stamp, per message
 };
 
-double wallClock_s() {
-  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-}
 
-/// The q-quantile (0..1) of `values` (nearest rank); 0 when empty.
-double quantile(std::vector<double> values, double q) {
-  if (values.empty()) return 0.0;
-  const auto k = static_cast<std::size_t>(std::ceil(q * static_cast<double>(values.size()))) - (q > 0 ? 1 : 0);
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
-  return values[k];
-}
 
 /// Everything received, guarded by one mutex (listener threads write, main reads).
 struct Received {
@@ -82,7 +73,7 @@ struct Received {
     ++t.messages;
     t.bytes += bytes;
     t.last_points = points;
-    t.age_ms.push_back(1e3 * (wallClock_s() - mlmap::dds::toSeconds(stamp)));
+    t.age_ms.push_back(1e3 * (mlmap::dds::wallClockNow_s() - mlmap::dds::toSeconds(stamp)));
   }
 };
 
@@ -323,12 +314,13 @@ int main(int argc, char** argv) {
       if (rx.topics.count(name) == 0) missing_listed.push_back(name);
     }
     for (const auto& [name, t] : rx.topics) {
+      const TimingSummary age = summarizeTimings(t.age_ms);
       const double span = std::chrono::duration<double>(t.last - t.first).count();
       spdlog::info("{:28} {:6} messages {:8.2f} Hz {:9.1f} kB/msg, last {} points/cells, age at "
                    "arrival median {:.1f} ms, p99 {:.1f} ms",
                    name, t.messages, span > 0 ? static_cast<double>(t.messages - 1) / span : 0.0,
                    static_cast<double>(t.bytes) / 1e3 / static_cast<double>(t.messages), t.last_points,
-                   quantile(t.age_ms, 0.5), quantile(t.age_ms, 0.99));
+                   age.median_ms, age.p99_ms);
     }
     for (const std::string& name : missing) spdlog::warn("{:28} nothing received", name);
     for (const std::string& name : missing_listed) spdlog::error("{:28} expected, nothing received", name);
@@ -371,9 +363,10 @@ int main(int argc, char** argv) {
       json << "{\n  \"topics\": {";
       bool first = true;
       for (const auto& [name, t] : rx.topics) {
+        const TimingSummary age = summarizeTimings(t.age_ms);
         json << (first ? "" : ",") << "\n    \"" << name << "\": {\"messages\": " << t.messages
-             << ", \"bytes\": " << t.bytes << ", \"age_ms\": {\"median\": " << quantile(t.age_ms, 0.5)
-             << ", \"p99\": " << quantile(t.age_ms, 0.99) << "}, \"last_points\": " << t.last_points
+             << ", \"bytes\": " << t.bytes << ", \"age_ms\": {\"median\": " << age.median_ms
+             << ", \"p99\": " << age.p99_ms << "}, \"last_points\": " << t.last_points
              << "}";
         first = false;
       }

@@ -142,10 +142,6 @@ struct PreparedFrame {
   }
 };
 
-double wallClockNow_s() {
-  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-}
-
 /// Waits until every writer has a matched reader (false: timed out or stopped).
 bool waitForReaders(const std::vector<fdds::DataWriter*>& writers, double timeout_s) {
   const auto start = Clock::now();
@@ -319,7 +315,7 @@ int main(int argc, char** argv) {
     // Frame i is captured at start + i / rate: wall-clock stamp wall0 + i / rate. The simulator's
     // flight time t maps to the stamp wall0 + t / speed (poses as well as frames).
     const auto start = Clock::now();
-    const double wall0_s = wallClockNow_s();
+    const double wall0_s = mlmap::dds::wallClockNow_s();
     const double pose_period_s = 1.0 / pose_rate_hz;
     long pose_k = 0;
     int sent = 0, late = 0;

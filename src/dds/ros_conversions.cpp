@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cfloat>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -164,6 +165,10 @@ sensor_msgs::PointField_ makeField(const char* name, std::uint32_t offset) {
 }
 
 }  // namespace
+
+double wallClockNow_s() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
 
 double toSeconds(const ros_time::Time_& stamp) {
   return static_cast<double>(stamp.sec_()) + static_cast<double>(stamp.nanosec_()) * 1e-9;

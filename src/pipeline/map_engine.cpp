@@ -50,24 +50,26 @@ void MapEngine::Samples::add(double v) {
   next = (next + 1) % kTimingWindow;
 }
 
-TimingSummary MapEngine::Samples::summary() const {
+double sortedQuantile(const std::vector<double>& sorted, double q) {
+  const auto i = static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1) + 0.5);
+  return sorted[std::min(i, sorted.size() - 1)];
+}
+
+TimingSummary summarizeTimings(std::vector<double> values_ms) {
   TimingSummary s;
-  s.samples = values.size();
-  if (values.empty()) return s;
-  std::vector<double> sorted = values;
-  std::sort(sorted.begin(), sorted.end());
-  auto at = [&](double q) {
-    const std::size_t i = static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1) + 0.5);
-    return sorted[std::min(i, sorted.size() - 1)];
-  };
-  s.median_ms = at(0.5);
-  s.p99_ms = at(0.99);
-  s.max_ms = sorted.back();
+  s.samples = values_ms.size();
+  if (values_ms.empty()) return s;
+  std::sort(values_ms.begin(), values_ms.end());
+  s.median_ms = sortedQuantile(values_ms, 0.5);
+  s.p99_ms = sortedQuantile(values_ms, 0.99);
+  s.max_ms = values_ms.back();
   double sum = 0.0;
-  for (double v : sorted) sum += v;
-  s.mean_ms = sum / static_cast<double>(sorted.size());
+  for (double v : values_ms) sum += v;
+  s.mean_ms = sum / static_cast<double>(values_ms.size());
   return s;
 }
+
+TimingSummary MapEngine::Samples::summary() const { return summarizeTimings(values); }
 
 MapEngine::MapEngine(const MapConfig& config, LogSink log, EngineObservers observers)
     : config_(validated(config)),

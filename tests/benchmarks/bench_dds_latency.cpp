@@ -15,6 +15,7 @@
 // (the ctest smoke run) fails, when a frame sent did not reach this program or no status came.
 
 #include "mlmap/dds/entities.h"
+#include "mlmap/pipeline/map_engine.h"
 #include "mlmap/dds/node_config.h"
 #include "mlmap/dds/participant.h"
 #include "mlmap/dds/ros_conversions.h"
@@ -34,6 +35,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <numeric>
 #include <string>
 #include <thread>
 #include <vector>
@@ -49,10 +51,6 @@ extern "C" void onSignal(int) { g_stop = true; }
 
 constexpr double kTargetP50Margin_ms = 5.0;   // p50 <= engine median + this
 constexpr double kTargetP99Margin_ms = 15.0;  // p99 <= engine p99 + this
-
-double wallClockNow_s() {
-  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
-}
 
 /// One message that arrived: its header stamp and receive time - stamp.
 struct Arrival {
@@ -73,17 +71,11 @@ Summary summarize(std::vector<double> values) {
   s.count = values.size();
   if (values.empty()) return s;
   std::sort(values.begin(), values.end());
-  auto at = [&](double q) {
-    const auto i = static_cast<std::size_t>(q * static_cast<double>(values.size() - 1) + 0.5);
-    return values[std::min(i, values.size() - 1)];
-  };
-  s.p50_ms = at(0.5);
-  s.p90_ms = at(0.9);
-  s.p99_ms = at(0.99);
+  s.p50_ms = sortedQuantile(values, 0.5);
+  s.p90_ms = sortedQuantile(values, 0.9);
+  s.p99_ms = sortedQuantile(values, 0.99);
   s.max_ms = values.back();
-  double sum = 0.0;
-  for (double v : values) sum += v;
-  s.mean_ms = sum / static_cast<double>(values.size());
+  s.mean_ms = std::accumulate(values.begin(), values.end(), 0.0) / static_cast<double>(s.count);
   return s;
 }
 
@@ -173,7 +165,7 @@ int main(int argc, char** argv) {
                            bool activity, const fdds::DataReaderQos& qos) {
       auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::sensor_msgs::PointCloud2_>>(
           [&rx, store, activity](mlmap::dds::sensor_msgs::PointCloud2_&& msg) {
-            const double now_s = wallClockNow_s();
+            const double now_s = mlmap::dds::wallClockNow_s();
             Arrival a;
             a.stamp_s = mlmap::dds::toSeconds(msg.header_().stamp_());
             a.latency_ms = (now_s - a.stamp_s) * 1e3;
@@ -197,7 +189,7 @@ int main(int argc, char** argv) {
     {
       auto l = std::make_unique<mlmap::dds::TakeListener<::tf2_msgs::msg::dds_::TFMessage_>>(
           [&rx](::tf2_msgs::msg::dds_::TFMessage_&& msg) {
-            const double now_s = wallClockNow_s();
+            const double now_s = mlmap::dds::wallClockNow_s();
             std::lock_guard<std::mutex> lock(rx.mutex);
             for (const auto& t : msg.transforms_()) {
               Arrival a;

@@ -33,6 +33,20 @@ PointCloudFrame cloudAt(double t, const Eigen::Vector3d& body) {
   return f;
 }
 
+TEST(TimingSummary, NearestRankOnTheSortedValuesWhateverTheirOrder) {
+  std::vector<double> values;
+  for (int i = 0; i < 100; ++i) values.push_back((i * 37) % 100 + 1);  // 1..100, shuffled
+  const TimingSummary s = summarizeTimings(values);
+  EXPECT_EQ(s.samples, 100u);
+  EXPECT_DOUBLE_EQ(s.median_ms, 51.0);  // rank round(0.5 * 99) = 50 (0-based)
+  EXPECT_DOUBLE_EQ(s.p99_ms, 99.0);     // rank round(0.99 * 99) = 98
+  EXPECT_DOUBLE_EQ(s.max_ms, 100.0);
+  EXPECT_DOUBLE_EQ(s.mean_ms, 50.5);
+  EXPECT_DOUBLE_EQ(sortedQuantile({7.0}, 0.99), 7.0);
+  EXPECT_EQ(summarizeTimings({}).samples, 0u);
+  EXPECT_DOUBLE_EQ(summarizeTimings({}).median_ms, 0.0);
+}
+
 TEST(MapEngine, NoiseFreeSimulatedFlightReachesF1OfAtLeast095At10cm) {
   const io::Scenario scenario = io::defaultScenario();
   MapEngine engine(configAt(0.1));

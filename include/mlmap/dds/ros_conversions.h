@@ -37,6 +37,9 @@ double toSeconds(const ros_time::Time_& stamp);
 /// ROS time of a stamp in seconds (rounded to the nanosecond; nanosec always in [0, 1e9), also
 /// for negative stamps). Not finite gives 0; beyond the int32 seconds range clamps to its ends.
 ros_time::Time_ toRosTime(double stamp_s);
+/// The wall clock (system clock) in seconds since the epoch: what a driver stamps a capture
+/// with, so receive time - stamp is a message's age.
+double wallClockNow_s();
 
 /// Why an input message was rejected (kOk: it was not).
 enum class DecodeError {

@@ -43,6 +43,12 @@ struct TimingSummary {
   std::size_t samples = 0;
 };
 
+/// The q-quantile (0..1) of ascending, non-empty `sorted` values, by nearest rank: the one rule
+/// behind every median and p99 mlmap reports.
+double sortedQuantile(const std::vector<double>& sorted, double q);
+/// Median, p99, mean and maximum of `values_ms` (any order).
+TimingSummary summarizeTimings(std::vector<double> values_ms);
+
 /// Memory in bytes by layer.
 struct MemoryUsage {
   std::size_t awareness_bytes = 0;  ///< cylindrical grid, per-frame scratch and batch
