@@ -1,5 +1,6 @@
 #include "mlmap/io/point_cloud_file.h"
 
+#include "../support/expect_throw.h"
 #include "cloud_file_writers.h"
 
 #include <gtest/gtest.h>
@@ -54,17 +55,8 @@ void expectCloud(const PointCloudFile& cloud, const std::vector<Eigen::Vector3d>
   }
 }
 
-/// Expects `fn` to throw std::runtime_error mentioning every one of `parts`.
 void expectError(const std::function<void()>& fn, const std::vector<std::string>& parts) {
-  try {
-    fn();
-    ADD_FAILURE() << "expected an error mentioning '" << parts.front() << "'";
-  } catch (const std::runtime_error& e) {
-    for (const std::string& part : parts) {
-      EXPECT_NE(std::string(e.what()).find(part), std::string::npos)
-          << "'" << e.what() << "' does not mention '" << part << "'";
-    }
-  }
+  mlmap::testing::expectThrowWith<std::runtime_error>(fn, parts);
 }
 
 TEST(PcdReader, AsciiBinaryAndCompressedReadTheSame) {

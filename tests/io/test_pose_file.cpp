@@ -1,6 +1,7 @@
 #include "mlmap/io/cloud_sequence.h"
 #include "mlmap/io/pose_file.h"
 
+#include "../support/expect_throw.h"
 #include "cloud_file_writers.h"
 
 #include <gtest/gtest.h>
@@ -12,15 +13,7 @@ namespace mlmap::io {
 namespace {
 
 void expectError(const std::function<void()>& fn, const std::vector<std::string>& parts) {
-  try {
-    fn();
-    ADD_FAILURE() << "expected an error mentioning '" << parts.front() << "'";
-  } catch (const std::exception& e) {
-    for (const std::string& part : parts) {
-      EXPECT_NE(std::string(e.what()).find(part), std::string::npos)
-          << "'" << e.what() << "' does not mention '" << part << "'";
-    }
-  }
+  mlmap::testing::expectThrowWith<std::exception>(fn, parts);
 }
 
 /// 90 degrees about z.
