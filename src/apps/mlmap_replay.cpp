@@ -160,7 +160,9 @@ void writeStats(const std::string& path, const RunInfo& info, const MapConfig& c
     << ",\n  \"frames\": [";
   for (std::size_t i = 0; i < frames.size(); ++i) {
     const FrameRecord& f = frames[i];
-    o << (i == 0 ? "\n" : ",\n") << "    {\"name\": " << jsonString(f.name) << ", \"stamp_s\": " << f.stamp_s
+    char stamp[40];
+    std::snprintf(stamp, sizeof(stamp), "%.9f", f.stamp_s);  // full precision of epoch stamps
+    o << (i == 0 ? "\n" : ",\n") << "    {\"name\": " << jsonString(f.name) << ", \"stamp_s\": " << stamp
       << ", \"status\": \"" << toString(f.status) << "\", \"points\": " << f.points
       << ", \"non_finite_dropped\": " << f.non_finite_dropped << ", \"read_ms\": " << f.read_ms
       << ", \"awareness_ms\": " << f.awareness_ms << ", \"local_global_ms\": " << f.local_global_ms

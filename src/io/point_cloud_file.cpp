@@ -7,6 +7,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -279,7 +280,7 @@ PointCloudFile parsePcd(const std::string& content, const std::string& source) {
     }
   }
   cloud.encoding = "pcd " + data;
-  cloud.points_C.reserve(cloud.points_in_file);
+  cloud.points_C.reserve(std::min(cloud.points_in_file, content.size() - pos));  // >= 1 byte each
   const PcdField& fx = fields[static_cast<std::size_t>(xyz[0])];
   const PcdField& fy = fields[static_cast<std::size_t>(xyz[1])];
   const PcdField& fz = fields[static_cast<std::size_t>(xyz[2])];
@@ -323,6 +324,9 @@ PointCloudFile parsePcd(const std::string& content, const std::string& source) {
 
   const auto* bytes = reinterpret_cast<const unsigned char*>(content.data()) + pos;
   const std::size_t available = content.size() - pos;
+  if (n > std::numeric_limits<std::uint32_t>::max() / record) {
+    fail(source, std::to_string(n) + " points of " + std::to_string(record) + " bytes: too large");
+  }
   const std::size_t needed = n * record;
   if (data == "binary") {
     if (available < needed) {
@@ -528,7 +532,7 @@ PointCloudFile parsePly(const std::string& content, const std::string& source) {
   cloud.encoding = "ply " + format;
   cloud.points_in_file = static_cast<std::size_t>(vertex->count);
   cloud.width = static_cast<std::uint32_t>(vertex->count);
-  cloud.points_C.reserve(cloud.points_in_file);
+  cloud.points_C.reserve(std::min(cloud.points_in_file, content.size() - pos));  // >= 1 byte each
   PlyBody body(content, pos, format == "ascii", format == "binary_big_endian", source);
   for (const PlyElement& e : elements) {
     const bool is_vertex = &e == vertex;

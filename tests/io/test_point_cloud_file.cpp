@@ -168,6 +168,13 @@ TEST(PcdReader, MalformedAndTruncatedFilesAreRefusedWithTheReason) {
               {"w.pcd", "'two' is not a number"});
   expectError([&] { (void)parsePcd("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nDATA ascii\n1 2 3\n4 5 6\n", "x.pcd"); },
               {"x.pcd", "more data"});
+  // A huge declared size is refused without allocating it.
+  expectError([&] { (void)parsePcd("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 999999999999\nDATA binary\n", "big.pcd"); },
+              {"big.pcd", "too large"});
+  expectError([&] { (void)parsePcd("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 999999999999\nDATA ascii\n1 2 3\n", "big2.pcd"); },
+              {"big2.pcd", "truncated", "1 of 999999999999"});
+  expectError([&] { (void)parsePly("ply\nformat binary_little_endian 1.0\nelement vertex 999999999999\nproperty float x\nproperty float y\nproperty float z\nend_header\n", "big.ply"); },
+              {"big.ply", "truncated", "vertex 0"});
   expectError([&] { (void)parsePcd("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nVIEWPOINT 0 0 0 2 0 0 0\nDATA ascii\n1 2 3\n", "vp.pcd"); },
               {"vp.pcd", "VIEWPOINT"});
 }
