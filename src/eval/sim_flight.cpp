@@ -67,6 +67,7 @@ FlightResult flyScenario(const io::Scenario& scenario, MapEngine& engine,
       if (overlapsSolid(scenario.world, v, res)) result.observed_truth.insert(v);
     }
     result.trajectory_W.push_back(frame.T_W_B.translation());
+    if (options.before_submit) options.before_submit(result.frames);
     engine.submit(std::move(frame));
     ++result.frames;
     if (options.progress) options.progress(result.frames, planned);

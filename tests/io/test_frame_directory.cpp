@@ -1,5 +1,7 @@
 #include "mlmap/io/frame_directory.h"
 
+#include "../support/expect_throw.h"
+
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -25,20 +27,7 @@ namespace fs = std::filesystem;
 
 const std::string kTabletopDir = std::string(MLMAP_SHARED_DATA_DIR) + "/realsense_tabletop";
 
-/// Expects `fn` to throw `Exception` whose message contains every one of `parts`.
-template <typename Exception = std::runtime_error>
-void expectThrowWith(const std::function<void()>& fn, const std::vector<std::string>& parts) {
-  try {
-    fn();
-    ADD_FAILURE() << "expected an exception mentioning '" << parts.front() << "'";
-  } catch (const Exception& e) {
-    const std::string message = e.what();
-    for (const std::string& part : parts) {
-      EXPECT_NE(message.find(part), std::string::npos)
-          << "message '" << message << "' does not mention '" << part << "'";
-    }
-  }
-}
+using mlmap::testing::expectThrowWith;
 
 // ---- Real data ----------------------------------------------------------------------------------
 

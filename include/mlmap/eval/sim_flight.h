@@ -42,6 +42,9 @@ struct FlightOptions {
   double start_time_s = 0.0;                          ///< first frame time on the trajectory
   /// Called after each frame with (frames done, frames planned).
   std::function<void(int, int)> progress;
+  /// Called just before each frame is submitted (after rendering), with its index in the
+  /// flight: lets a caller time the engine alone.
+  std::function<void(int)> before_submit;
 };
 
 /// What a flight produced.

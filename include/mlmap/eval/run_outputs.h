@@ -1,0 +1,83 @@
+#pragma once
+/// @file
+/// What the offline programs (mlmap_demo, mlmap_replay) share: the engine settings per kind of
+/// data, the progress bar, the simulated flight with its scoring, and the outputs (map pictures,
+/// report.json, the terminal summary).
+
+#include "mlmap/eval/sim_flight.h"
+#include "mlmap/pipeline/map_engine.h"
+
+#include <string>
+#include <vector>
+
+namespace mlmap::eval {
+
+/// A one-line progress bar on stderr (redrawn in place on a terminal, every 10 % otherwise).
+class ProgressBar {
+ public:
+  explicit ProgressBar(std::string label);
+  /// Shows `done` of `total` frames.
+  void update(int done, int total);
+
+ private:
+  std::string label_;
+  bool tty_;
+  int last_decile_ = -1;
+};
+
+/// The kind of data a run maps; it picks the engine defaults of runConfig().
+enum class DataKind {
+  kSimulator,       ///< the simulated depth camera (camera mounted as `sensor:` says)
+  kFrameDirectory,  ///< RGB-D frames whose poses are the camera's (mlmap/io/frame_directory.h)
+  kPointClouds,     ///< point-cloud files with poses (mlmap/io/cloud_sequence.h)
+};
+
+/// Sets the voxel size and keeps the local map near the paper's 19 x 19 x 7 m (<= 250 cells).
+void setResolution(MapConfig* config, double resolution_m);
+
+/// The engine configuration both programs map `kind` with: `config_path` (empty: the defaults),
+/// the resolution `resolution_m` (> 0) or, without a config file, the kind's default (0.1 m
+/// simulator and clouds, 0.02 m frames). Frames: the camera is the body (sensor: identity) and,
+/// without a config file, log_odds.hit = 0.6 (Table 1, low-precision sensor). Not validated.
+/// @throws std::runtime_error when the config file is malformed.
+[[nodiscard]] MapConfig runConfig(const std::string& config_path, DataKind kind, double resolution_m);
+
+/// A simulated flight with its scoring against ground truth.
+struct ScoredFlight {
+  FlightResult flight;
+  Accuracy accuracy;
+  /// Truth for pictures: observed true voxels plus mapped ones that touch a solid.
+  VoxelSet truth;
+};
+
+/// Flies `scenario` into `engine` (flyScenario()) and scores the occupied voxels.
+[[nodiscard]] ScoredFlight flyAndScore(const io::Scenario& scenario, MapEngine& engine,
+                                       const FlightOptions& options);
+
+/// What writeMapOutputs() writes about.
+struct MapOutputs {
+  std::string out_dir;                        ///< must exist
+  std::string source;                         ///< data source, for report.json
+  std::vector<Eigen::Vector3d> trajectory_W;  ///< body positions
+  /// True when the world is an optical camera frame (z forward, y down; frame directories):
+  /// pictures then show it turned to that camera's FLU frame, so "top" looks down.
+  bool optical_world = false;
+  const ScoredFlight* scored = nullptr;       ///< simulator runs: accuracy picture and figures
+};
+
+/// Writes map_top.png, map_side.png (and accuracy_top.png with `scored`) and report.json to
+/// `outputs.out_dir`; returns the names written.
+/// @throws std::runtime_error naming the file that cannot be written.
+std::vector<std::string> writeMapOutputs(const MapOutputs& outputs, const EngineStats& stats,
+                                         const std::vector<VoxelIndex>& occupied, double resolution_m);
+
+/// Prints the engine's figures (and the accuracy, when given) to stdout.
+void printSummary(const EngineStats& stats, double resolution_m, const Accuracy* accuracy);
+
+/// `{"median_ms": ..., "p99_ms": ..., "mean_ms": ..., "max_ms": ..., "frames": ...}`.
+[[nodiscard]] std::string toJson(const TimingSummary& timing);
+
+/// Peak resident set size of this process so far [bytes] (getrusage), 0 when unknown.
+[[nodiscard]] std::size_t peakRssBytes();
+
+}  // namespace mlmap::eval

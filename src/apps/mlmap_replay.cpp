@@ -1,0 +1,414 @@
+// mlmap_replay: runs the engine offline on recorded data (an RGB-D frame directory, or PCD / PLY
+// point clouds with a trajectory file) or on the simulator, and writes the demo's outputs plus
+// the occupied voxels as text and per-frame statistics as JSON.
+
+#include "mlmap/eval/run_outputs.h"
+#include "mlmap/io/cloud_sequence.h"
+#include "mlmap/io/frame_directory.h"
+#include "mlmap/io/voxel_text.h"
+#include "mlmap/pipeline/map_engine.h"
+
+#include <CLI/CLI.hpp>
+#include <spdlog/sinks/stdout_color_sinks.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace {
+
+using namespace mlmap;
+using Clock = std::chrono::steady_clock;
+
+double msBetween(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+/// One frame of the run, for --stats-out.
+struct FrameRecord {
+  std::string name;
+  double stamp_s = 0.0;
+  std::size_t points = 0;              ///< points handed to the engine (depth: pixels)
+  std::size_t non_finite_dropped = 0;  ///< NaN / Inf points the cloud reader dropped
+  FrameStatus status = FrameStatus::kAccepted;
+  double read_ms = 0.0;         ///< reading and parsing the file, or rendering (simulator)
+  double awareness_ms = 0.0;    ///< submit() until the awareness map is updated
+  double local_global_ms = 0.0; ///< re-centring and log-odds updates
+  double planning_ms = 0.0;     ///< snapshot copy, 2D grid and ESDF when due
+  double engine_ms = 0.0;       ///< the whole submit() call
+  std::size_t engine_bytes = 0; ///< the engine's own memory accounting after the frame
+};
+
+/// Times the stages of each frame of a synchronous engine through its observers.
+class FrameTimer {
+ public:
+  EngineObservers observers() {
+    EngineObservers o;
+    o.awareness = [this](const AwarenessMap&, double, const Transform&) { awareness_done_ = Clock::now(); };
+    o.snapshot = [this](std::uint64_t, double) { snapshot_done_ = Clock::now(); };
+    return o;
+  }
+  void begin() {
+    start_ = Clock::now();
+    awareness_done_ = snapshot_done_ = Clock::time_point{};
+  }
+  /// Fills the timings and memory of `r` after submit() returned; updates the engine peak.
+  /// Returns true when the engine mapped a frame since the previous call.
+  bool end(const MapEngine& engine, FrameRecord* r) {
+    const Clock::time_point now = Clock::now();
+    r->engine_ms = msBetween(start_, now);
+    const EngineStats s = engine.stats();
+    if (awareness_done_ != Clock::time_point{} && snapshot_done_ != Clock::time_point{}) {
+      r->awareness_ms = msBetween(start_, awareness_done_);
+      const PlanningStats& p = s.planning;
+      r->planning_ms = p.last_snapshot_ms + (p.grid_updates != last_.grid_updates ? p.last_grid_ms : 0.0) +
+                       (p.esdf_updates != last_.esdf_updates ? p.last_esdf_ms : 0.0);
+      r->local_global_ms = std::max(0.0, msBetween(awareness_done_, snapshot_done_) - r->planning_ms);
+    }
+    last_ = s.planning;
+    r->engine_bytes = s.memory.total();
+    peak_engine_bytes_ = std::max(peak_engine_bytes_, r->engine_bytes);
+    const bool mapped = s.frames_mapped != frames_mapped_;
+    frames_mapped_ = s.frames_mapped;
+    return mapped;
+  }
+  [[nodiscard]] std::size_t peakEngineBytes() const { return peak_engine_bytes_; }
+
+ private:
+  Clock::time_point start_, awareness_done_, snapshot_done_;
+  PlanningStats last_;
+  std::uint64_t frames_mapped_ = 0;
+  std::size_t peak_engine_bytes_ = 0;
+};
+
+std::string jsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof(buf), "\\u%04x", c);
+      out += buf;
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+TimingSummary summarize(const std::vector<FrameRecord>& frames, double FrameRecord::*field) {
+  std::vector<double> values;
+  for (const FrameRecord& f : frames) {
+    if (f.status == FrameStatus::kAccepted) values.push_back(f.*field);
+  }
+  return summarizeTimings(values);
+}
+
+/// What --stats-out holds besides the frames.
+struct RunInfo {
+  std::string source;
+  std::string kind;
+  std::string pairing;
+  std::size_t clouds_without_pose = 0;
+  std::size_t points_in_files = 0;
+};
+
+void writeStats(const std::string& path, const RunInfo& info, const MapConfig& config,
+                const EngineStats& s, const std::vector<FrameRecord>& frames,
+                std::size_t occupied, std::size_t peak_engine_bytes) {
+  std::ofstream o(path);
+  o.precision(10);
+  std::size_t reader_dropped = 0;
+  for (const FrameRecord& f : frames) reader_dropped += f.non_finite_dropped;
+  o << "{\n  \"source\": " << jsonString(info.source) << ",\n  \"kind\": \"" << info.kind << "\""
+    << ",\n  \"pairing\": \"" << info.pairing << "\""
+    << ",\n  \"resolution_m\": " << config.local_map.resolution_m
+    << ",\n  \"max_range_m\": " << config.awareness.max_range_m
+    << ",\n  \"timing_ms\": {\"read\": " << eval::toJson(summarize(frames, &FrameRecord::read_ms))
+    << ",\n                \"awareness\": " << eval::toJson(summarize(frames, &FrameRecord::awareness_ms))
+    << ",\n                \"local_global\": " << eval::toJson(summarize(frames, &FrameRecord::local_global_ms))
+    << ",\n                \"planning\": " << eval::toJson(summarize(frames, &FrameRecord::planning_ms))
+    << ",\n                \"engine\": " << eval::toJson(summarize(frames, &FrameRecord::engine_ms)) << "}"
+    << ",\n  \"memory_bytes\": {\"peak_rss\": " << eval::peakRssBytes()
+    << ", \"engine_peak\": " << peak_engine_bytes << ", \"engine_final\": {\"awareness\": "
+    << s.memory.awareness_bytes << ", \"local\": " << s.memory.local_bytes
+    << ", \"global\": " << s.memory.global_bytes << ", \"planning\": " << s.memory.planning_bytes
+    << ", \"total\": " << s.memory.total() << "}}"
+    << ",\n  \"counters\": {\"frames\": " << frames.size() << ", \"frames_mapped\": " << s.frames_mapped
+    << ", \"rejected_invalid_pose\": " << s.rejected_invalid_pose
+    << ", \"rejected_out_of_order\": " << s.rejected_out_of_order
+    << ", \"rejected_empty\": " << s.rejected_empty << ", \"rejected_bad_image\": " << s.rejected_bad_image
+    << ",\n               \"clouds_without_pose\": " << info.clouds_without_pose
+    << ", \"points_in_files\": " << info.points_in_files
+    << ", \"non_finite_dropped_by_reader\": " << reader_dropped
+    << ",\n               \"points_in\": " << s.points.points_in
+    << ", \"no_data_or_non_finite\": " << s.points.rejected_non_finite
+    << ", \"too_close\": " << s.points.rejected_too_close
+    << ", \"beyond_max_range\": " << s.points.beyond_max_range
+    << ", \"hit_voxels\": " << s.points.hit_voxels << ", \"free_voxels\": " << s.points.free_voxels
+    << ",\n               \"occupied_voxels\": " << occupied << ", \"global_voxels\": " << s.global_voxels
+    << ", \"global_submaps\": " << s.global_submaps << ", \"local_shifts\": " << s.local.shifts
+    << ", \"submaps_retired\": " << s.local.submaps_retired
+    << ", \"submaps_restored\": " << s.local.submaps_restored
+    << ", \"esdf_updates\": " << s.planning.esdf_updates << "}"
+    << ",\n  \"frames\": [";
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const FrameRecord& f = frames[i];
+    char stamp[40];
+    std::snprintf(stamp, sizeof(stamp), "%.9f", f.stamp_s);  // full precision of epoch stamps
+    o << (i == 0 ? "\n" : ",\n") << "    {\"name\": " << jsonString(f.name) << ", \"stamp_s\": " << stamp
+      << ", \"status\": \"" << toString(f.status) << "\", \"points\": " << f.points
+      << ", \"non_finite_dropped\": " << f.non_finite_dropped << ", \"read_ms\": " << f.read_ms
+      << ", \"awareness_ms\": " << f.awareness_ms << ", \"local_global_ms\": " << f.local_global_ms
+      << ", \"planning_ms\": " << f.planning_ms << ", \"engine_ms\": " << f.engine_ms
+      << ", \"engine_bytes\": " << f.engine_bytes << "}";
+  }
+  o << "\n  ]\n}\n";
+  if (!o) throw std::runtime_error(path + ": cannot write");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "mlmap_replay: runs the mapping engine offline on recorded data and writes the map.\n"
+      "Sources (one of):\n"
+      "  --frames DIR              an RGB-D frame directory (frame-N.depth.png, frame-N.pose.txt,\n"
+      "                            intrinsics.K.txt; the poses are the camera's)\n"
+      "  --clouds DIR --poses FILE PCD (ascii, binary, binary_compressed) / PLY (ascii, binary\n"
+      "                            little / big endian) clouds with a TUM or CSV trajectory\n"
+      "  (neither)                 the simulator: the demo's built-in room flight\n"
+      "Clouds whose file names are time stamps (1305031102.175304.pcd, or 16+ digit nanoseconds)\n"
+      "get the pose at their stamp, interpolated between the two poses around it when the nearer\n"
+      "is within 0.05 s (never extrapolated; clouds without a pose are skipped and counted). Other\n"
+      "names are paired by order (natural sort) and need exactly one pose per cloud.\n"
+      "Writes to --out: map_top.png, map_side.png (accuracy_top.png for the simulator),\n"
+      "report.json (as mlmap_demo), occupied_voxels.txt ('ix iy iz' per line, sorted,\n"
+      "i = floor(coordinate / resolution), world grid aligned at the origin; '#' header line) and\n"
+      "stats.json (per-frame timings per stage, peak memory, counters)."};
+  std::string frames_dir, clouds_dir, poses_path, extrinsic_text, config_path, scenario_path;
+  std::string out_dir = "mlmap_replay_out";
+  std::string voxels_out, stats_out;
+  double resolution_m = 0.0;
+  double max_range_m = 0.0;
+  int max_frames = 0;
+  auto* frames_opt = app.add_option("--frames", frames_dir, "RGB-D frame directory to map")
+                         ->check(CLI::ExistingDirectory);
+  auto* clouds_opt = app.add_option("--clouds", clouds_dir, "directory of .pcd / .ply point clouds "
+                                                            "(in the sensor frame; a PCD VIEWPOINT is taken "
+                                                            "as the sensor's pose in the cloud's frame) to map")
+                         ->check(CLI::ExistingDirectory);
+  auto* poses_opt =
+      app.add_option("--poses", poses_path,
+                     "trajectory of the clouds: TUM ('t tx ty tz qx qy qz qw', '#' comments) or CSV "
+                     "with a header (t|time|timestamp|stamp[_s|_ms|_us|_ns], x|tx|px|pos_x|position_x "
+                     "..., qx|q_x|rot_x|orientation_x ... qw); CSV when the name ends in .csv or the "
+                     "first line has a comma. The poses are the sensor's unless --extrinsic is given")
+          ->check(CLI::ExistingFile);
+  auto* extrinsic_opt =
+      app.add_option("--extrinsic", extrinsic_text,
+                     "the sensor (cloud frame) in the pose frame, \"x y z qx qy qz qw\" (metres, unit "
+                     "quaternion), e.g. a LiDAR on a vehicle whose poses --poses gives (default: "
+                     "identity, the poses are the sensor's)");
+  clouds_opt->needs(poses_opt);
+  poses_opt->needs(clouds_opt);
+  extrinsic_opt->needs(clouds_opt);
+  frames_opt->excludes(clouds_opt);
+  auto* scenario_opt = app.add_option("--scenario", scenario_path,
+                                      "simulator: world + flight YAML (default: the built-in room)")
+                           ->check(CLI::ExistingFile);
+  scenario_opt->excludes(frames_opt)->excludes(clouds_opt);
+  app.add_option("--resolution", resolution_m,
+                 "voxel size [m]; the local map keeps ~19x19x7 m (default: --config's, or without "
+                 "--config 0.02 for --frames and 0.1 otherwise)")
+      ->check(CLI::Range(0.01, 2.0));
+  app.add_option("--max-range", max_range_m,
+                 "maximum range [m] (awareness.max_range_m; default: --config's, 10): farther points "
+                 "clear their ray up to here and mark nothing; the awareness grid grows to reach it")
+      ->check(CLI::Range(0.1, 400.0));
+  app.add_option("--config", config_path, "engine configuration YAML (config/mlmap.yaml documents "
+                                          "every key; the replay always runs synchronously)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--out", out_dir, "output folder")->capture_default_str();
+  app.add_option("--voxels-out", voxels_out, "occupied voxels as text (default: OUT/occupied_voxels.txt)");
+  app.add_option("--stats-out", stats_out,
+                 "statistics JSON (default: OUT/stats.json): per-frame timings by stage (read, "
+                 "awareness, local_global, planning, engine) with their median / p99, peak memory "
+                 "(process RSS, engine accounting) and counters");
+  app.add_option("--max-frames", max_frames, "stop after N frames (0: all)")->check(CLI::NonNegativeNumber);
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_default_logger(spdlog::stderr_color_mt("mlmap"));  // stdout carries the results
+  if (voxels_out.empty()) voxels_out = out_dir + "/occupied_voxels.txt";
+  if (stats_out.empty()) stats_out = out_dir + "/stats.json";
+
+  try {
+    const eval::DataKind kind = !frames_dir.empty()   ? eval::DataKind::kFrameDirectory
+                                : !clouds_dir.empty() ? eval::DataKind::kPointClouds
+                                                      : eval::DataKind::kSimulator;
+    MapConfig config = eval::runConfig(config_path, kind, resolution_m);
+    io::CloudSequenceOptions cloud_options;
+    if (kind == eval::DataKind::kPointClouds) {
+      // The cloud sequence gives T_B_S (extrinsic and viewpoint); the config's sensor is unused.
+      if (!extrinsic_text.empty()) {
+        try {
+          cloud_options.T_P_C = io::parseTransformXyzQuat(extrinsic_text);
+        } catch (const std::invalid_argument& e) {
+          spdlog::error("--extrinsic '{}': {}", extrinsic_text, e.what());
+          return 2;
+        }
+      }
+    }
+    if (max_range_m > 0.0) {
+      config.awareness.max_range_m = max_range_m;
+      if (config.awareness.radius_m() < max_range_m) {
+        config.awareness.rho_cells = static_cast<int>(std::ceil(max_range_m / config.awareness.rho_cell_m));
+      }
+    }
+    if (config.pipeline.threaded) {
+      spdlog::warn("pipeline.threaded: the replay runs synchronously (every frame is mapped, in order)");
+      config.pipeline.threaded = false;
+    }
+    const std::vector<std::string> problems = config.validate();
+    if (!problems.empty()) {
+      for (const auto& p : problems) spdlog::error("{}", p);
+      return 2;
+    }
+    std::filesystem::create_directories(out_dir);
+
+    FrameTimer timer;
+    MapEngine engine(config,
+                     [](LogLevel level, const std::string& message) {
+                       if (level == LogLevel::kError) {
+                         spdlog::error("{}", message);
+                       } else {
+                         spdlog::warn("{}", message);
+                       }
+                     },
+                     timer.observers());
+    const double res = config.local_map.resolution_m;
+    std::vector<FrameRecord> records;
+    RunInfo info;
+    eval::MapOutputs outputs;
+    outputs.out_dir = out_dir;
+    eval::ScoredFlight scored;
+    auto submit = [&](auto frame, FrameRecord record) {
+      outputs.trajectory_W.push_back(frame.T_W_B.translation());
+      record.stamp_s = frame.stamp_s;
+      timer.begin();
+      record.status = engine.submit(std::move(frame));
+      (void)timer.end(engine, &record);
+      records.push_back(std::move(record));
+    };
+
+    if (kind == eval::DataKind::kFrameDirectory) {
+      const io::FrameDirectory frames(frames_dir);
+      const std::size_t n = max_frames > 0 ? std::min<std::size_t>(frames.size(), max_frames) : frames.size();
+      spdlog::info("mapping {} RGB-D frames of {} at {} m", n, frames_dir, res);
+      eval::ProgressBar bar("mapping");
+      for (std::size_t i = 0; i < n; ++i) {
+        FrameRecord record;
+        record.name = frames.frameName(i);
+        const Clock::time_point start = Clock::now();
+        DepthFrame frame = frames.read(i);
+        record.read_ms = msBetween(start, Clock::now());
+        record.points = frame.depth_mm.size() + frame.depth_m.size();
+        submit(std::move(frame), std::move(record));
+        bar.update(static_cast<int>(i + 1), static_cast<int>(n));
+      }
+      info = {frames_dir, "frames", "frame files", 0, 0};
+      outputs.optical_world = true;  // the world is the first camera's optical frame
+    } else if (kind == eval::DataKind::kPointClouds) {
+      const io::CloudSequence clouds(clouds_dir, poses_path, cloud_options);
+      info = {clouds_dir + " + " + poses_path, "clouds", io::toString(clouds.pairing()),
+              clouds.unpaired().size(), 0};
+      if (!clouds.unpaired().empty()) {
+        spdlog::warn("{} of {} clouds have no pose within {} s of their stamp and are skipped (first: {})",
+                     clouds.unpaired().size(), clouds.size() + clouds.unpaired().size(),
+                     cloud_options.pose_tolerance_s, clouds.unpaired().front());
+      }
+      const std::size_t n = max_frames > 0 ? std::min<std::size_t>(clouds.size(), max_frames) : clouds.size();
+      spdlog::info("mapping {} clouds of {} paired {} with {} poses at {} m, max range {} m", n,
+                   clouds_dir, io::toString(clouds.pairing()), clouds.poseCount(), res,
+                   config.awareness.max_range_m);
+      eval::ProgressBar bar("mapping");
+      for (std::size_t i = 0; i < n; ++i) {
+        FrameRecord record;
+        record.name = clouds.clouds()[i].file_name;
+        io::PointCloudFile file;
+        const Clock::time_point start = Clock::now();
+        PointCloudFrame frame = clouds.read(i, &file);
+        record.read_ms = msBetween(start, Clock::now());
+        record.points = frame.points_S.size();
+        record.non_finite_dropped = file.non_finite_dropped;
+        info.points_in_files += file.points_in_file;
+        submit(std::move(frame), std::move(record));
+        bar.update(static_cast<int>(i + 1), static_cast<int>(n));
+      }
+    } else {
+      const io::Scenario scenario =
+          scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(scenario_path);
+      eval::FlightOptions options;
+      if (max_frames > 0) options.max_frames = max_frames;
+      eval::ProgressBar bar("flying ");
+      Clock::time_point frame_start = Clock::now();
+      FrameRecord record;
+      options.before_submit = [&](int i) {
+        record = FrameRecord{};
+        record.name = "sim-" + std::to_string(i);
+        record.read_ms = msBetween(frame_start, Clock::now());
+        record.points = static_cast<std::size_t>(scenario.camera.intrinsics.width) *
+                        static_cast<std::size_t>(scenario.camera.intrinsics.height);
+        timer.begin();
+      };
+      options.progress = [&](int done, int total) {
+        // Called right after submit(): the frame's status is the engine's last counters'.
+        record.status = timer.end(engine, &record) ? FrameStatus::kAccepted : FrameStatus::kEmpty;
+        record.stamp_s = eval::frameTime(scenario, done - 1);
+        records.push_back(record);
+        bar.update(done, total);
+        frame_start = Clock::now();
+      };
+      spdlog::info("flying the {} scenario at {} m voxels",
+                   scenario_path.empty() ? "built-in room" : scenario_path, res);
+      scored = eval::flyAndScore(scenario, engine, options);
+      outputs.trajectory_W = scored.flight.trajectory_W;
+      outputs.scored = &scored;
+      info = {scenario_path.empty() ? "simulator: built-in room" : "simulator: " + scenario_path,
+              "simulator", "simulated poses", 0, 0};
+    }
+    engine.flush();
+    outputs.source = info.source;
+
+    const EngineStats s = engine.stats();
+    const std::vector<VoxelIndex> occupied = engine.occupiedVoxels();
+    std::vector<std::string> written = eval::writeMapOutputs(outputs, s, occupied, res);
+    io::writeVoxelText(voxels_out, occupied, res);
+    writeStats(stats_out, info, config, s, records, occupied.size(), timer.peakEngineBytes());
+    eval::printSummary(s, res, outputs.scored != nullptr ? &scored.accuracy : nullptr);
+    const TimingSummary read = summarize(records, &FrameRecord::read_ms);
+    const TimingSummary planning = summarize(records, &FrameRecord::planning_ms);
+    const TimingSummary whole = summarize(records, &FrameRecord::engine_ms);
+    std::printf("  replay per frame [ms] median   p99\n");
+    std::printf("    planning layers    %7.2f %7.2f   (snapshot, 2D grid, ESDF when due)\n", planning.median_ms,
+                planning.p99_ms);
+    std::printf("    submit() in all    %7.2f %7.2f\n", whole.median_ms, whole.p99_ms);
+    std::printf("    reading the input  %7.2f %7.2f\n", read.median_ms, read.p99_ms);
+    std::printf("  peak memory          %.1f MB resident (process), %.1f MB engine accounting\n",
+                static_cast<double>(eval::peakRssBytes()) / 1e6,
+                static_cast<double>(timer.peakEngineBytes()) / 1e6);
+    std::string names;
+    for (const std::string& name : written) names += (names.empty() ? "" : ", ") + name;
+    std::printf("\n  wrote %s/{%s}\n        %s (%zu occupied voxels)\n        %s\n", out_dir.c_str(),
+                names.c_str(), voxels_out.c_str(), occupied.size(), stats_out.c_str());
+    return s.frames_mapped > 0 ? 0 : 3;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,188 @@
+#include "mlmap/eval/run_outputs.h"
+
+#include "mlmap/io/config_yaml.h"
+#include "mlmap/io/map_image.h"
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace mlmap::eval {
+namespace {
+
+double megabytes(std::size_t bytes) { return static_cast<double>(bytes) / 1e6; }
+
+/// Voxel centres for the pictures, turned by `R_display_W` (identity, or optical -> FLU).
+io::VoxelList voxelList(const std::vector<VoxelIndex>& voxels, double res,
+                        const Eigen::Matrix3d& R_display_W) {
+  io::VoxelList list{res, {}};
+  list.centers_W.reserve(voxels.size());
+  for (const VoxelIndex& v : voxels) list.centers_W.push_back(R_display_W * voxelCenter(v, res));
+  return list;
+}
+
+}  // namespace
+
+ProgressBar::ProgressBar(std::string label) : label_(std::move(label)), tty_(isatty(2) != 0) {}
+
+void ProgressBar::update(int done, int total) {
+  if (total <= 0) return;
+  const int percent = 100 * done / total;
+  if (!tty_ && percent / 10 == last_decile_ && done != total) return;
+  last_decile_ = percent / 10;
+  constexpr int kWidth = 30;
+  const int filled = kWidth * done / total;
+  std::fprintf(stderr, "%s%s [%s%s] %3d%% %d/%d frames%s", tty_ ? "\r" : "", label_.c_str(),
+               std::string(static_cast<std::size_t>(filled), '#').c_str(),
+               std::string(static_cast<std::size_t>(kWidth - filled), '.').c_str(), percent, done,
+               total, (tty_ && done != total) ? "" : "\n");
+  std::fflush(stderr);
+}
+
+void setResolution(MapConfig* c, double resolution_m) {
+  c->local_map.resolution_m = resolution_m;
+  auto cells = [&](double extent_m) {
+    const double n = std::min(extent_m / resolution_m, 250.0);
+    return std::max(5, static_cast<int>(std::lround(n / 5.0)) * 5);
+  };
+  c->local_map.size_cells = {cells(19.0), cells(19.0), cells(7.0)};
+}
+
+MapConfig runConfig(const std::string& config_path, DataKind kind, double resolution_m) {
+  MapConfig config = config_path.empty() ? MapConfig{} : io::loadConfigYaml(config_path);
+  const bool frames = kind == DataKind::kFrameDirectory;
+  if (resolution_m > 0.0 || config_path.empty()) {
+    setResolution(&config, resolution_m > 0.0 ? resolution_m : (frames ? 0.02 : 0.1));
+  }
+  if (frames) {
+    // The frame poses are camera poses: the camera is the body.
+    config.sensor.translation_B_m.setZero();
+    config.sensor.rotation_rpy_deg.setZero();
+    if (config_path.empty()) config.log_odds.hit = 0.6;  // Table 1: low-precision sensor
+  }
+  return config;
+}
+
+ScoredFlight flyAndScore(const io::Scenario& scenario, MapEngine& engine, const FlightOptions& options) {
+  ScoredFlight s;
+  s.flight = flyScenario(scenario, engine, options);
+  const double res = engine.config().local_map.resolution_m;
+  const std::vector<VoxelIndex> mapped = engine.occupiedVoxels();
+  s.accuracy = scoreOccupancy(mapped, s.flight.observed_truth, scenario.world, res);
+  s.truth = s.flight.observed_truth;
+  for (const VoxelIndex& v : mapped) {
+    if (touchesSolid(scenario.world, v, res)) s.truth.insert(v);
+  }
+  return s;
+}
+
+std::string toJson(const TimingSummary& t) {
+  std::ostringstream o;
+  o << "{\"median_ms\": " << t.median_ms << ", \"p99_ms\": " << t.p99_ms
+    << ", \"mean_ms\": " << t.mean_ms << ", \"max_ms\": " << t.max_ms
+    << ", \"frames\": " << t.samples << "}";
+  return o.str();
+}
+
+std::vector<std::string> writeMapOutputs(const MapOutputs& outputs, const EngineStats& s,
+                                         const std::vector<VoxelIndex>& occupied, double res) {
+  const std::string& out_dir = outputs.out_dir;
+  std::vector<std::string> written;
+  io::MapImageOptions image_options;
+  image_options.trajectory_W = outputs.trajectory_W;
+  // The rotation is exact, so the voxels stay on one grid.
+  Eigen::Matrix3d R_display_W = Eigen::Matrix3d::Identity();
+  if (outputs.optical_world) R_display_W << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  for (Eigen::Vector3d& p : image_options.trajectory_W) p = R_display_W * p;
+  const io::VoxelList list = voxelList(occupied, res, R_display_W);
+  const std::string what = "mlmap, " + std::to_string(occupied.size()) + " occupied voxels";
+  image_options.title = what + " - top view";
+  io::writePng(out_dir + "/map_top.png", io::renderTopDown(list, image_options));
+  image_options.title = what + " - side view";
+  io::writePng(out_dir + "/map_side.png", io::renderSide(list, image_options));
+  written = {"map_top.png", "map_side.png"};
+  const Accuracy* accuracy = outputs.scored != nullptr ? &outputs.scored->accuracy : nullptr;
+  if (accuracy != nullptr) {
+    io::VoxelList truth_list{res, {}};
+    for (const VoxelIndex& v : outputs.scored->truth) truth_list.centers_W.push_back(voxelCenter(v, res));
+    char title[160];
+    std::snprintf(title, sizeof(title), "occupied voxels vs ground truth, F1 %.3f (report.json)",
+                  accuracy->f1);
+    image_options.title = title;
+    io::writePng(out_dir + "/accuracy_top.png", io::renderComparison(list, truth_list, image_options));
+    written.push_back("accuracy_top.png");
+  }
+
+  std::ofstream report(out_dir + "/report.json");
+  report << "{\n  \"source\": \"" << outputs.source << "\",\n  \"resolution_m\": " << res
+         << ",\n  \"frames_mapped\": " << s.frames_mapped
+         << ",\n  \"frames_dropped\": " << s.frames_dropped
+         << ",\n  \"frames_rejected\": "
+         << s.rejected_invalid_pose + s.rejected_out_of_order + s.rejected_empty + s.rejected_bad_image
+         << ",\n  \"occupied_voxels\": " << occupied.size()
+         << ",\n  \"timing\": {\"awareness\": " << toJson(s.awareness)
+         << ", \"local_global\": " << toJson(s.local_global) << ", \"total\": " << toJson(s.total)
+         << "},\n  \"memory_bytes\": {\"awareness\": " << s.memory.awareness_bytes
+         << ", \"local\": " << s.memory.local_bytes << ", \"global\": " << s.memory.global_bytes
+         << "},\n  \"global_map\": {\"occupied_voxels\": " << s.global_voxels
+         << ", \"submaps\": " << s.global_submaps << "},\n  \"local_map\": {\"shifts\": "
+         << s.local.shifts << ", \"submaps_retired\": " << s.local.submaps_retired
+         << ", \"submaps_restored\": " << s.local.submaps_restored
+         << "},\n  \"points\": {\"in\": " << s.points.points_in
+         << ", \"no_data_or_non_finite\": " << s.points.rejected_non_finite
+         << ", \"too_close\": " << s.points.rejected_too_close
+         << ", \"beyond_max_range\": " << s.points.beyond_max_range
+         << ", \"hit_voxels\": " << s.points.hit_voxels
+         << ", \"free_voxels\": " << s.points.free_voxels << "}";
+  if (accuracy != nullptr) {
+    report << ",\n  \"accuracy\": {\"precision\": " << accuracy->precision
+           << ", \"recall\": " << accuracy->recall << ", \"f1\": " << accuracy->f1
+           << ", \"mapped\": " << accuracy->mapped
+           << ", \"observed_truth\": " << accuracy->observed_truth << "}";
+  }
+  report << "\n}\n";
+  if (!report) throw std::runtime_error(out_dir + "/report.json: cannot write");
+  written.push_back("report.json");
+  return written;
+}
+
+void printSummary(const EngineStats& s, double res, const Accuracy* accuracy) {
+  std::printf("\n  frames mapped        %llu (rejected: pose %llu, order %llu, empty %llu; dropped %llu)\n",
+              static_cast<unsigned long long>(s.frames_mapped),
+              static_cast<unsigned long long>(s.rejected_invalid_pose),
+              static_cast<unsigned long long>(s.rejected_out_of_order),
+              static_cast<unsigned long long>(s.rejected_empty),
+              static_cast<unsigned long long>(s.frames_dropped));
+  std::printf("  voxel size           %.3f m\n", res);
+  std::printf("  per frame [ms]       median    p99\n");
+  std::printf("    awareness          %7.2f %7.2f\n", s.awareness.median_ms, s.awareness.p99_ms);
+  std::printf("    local-global       %7.2f %7.2f\n", s.local_global.median_ms, s.local_global.p99_ms);
+  std::printf("    total              %7.2f %7.2f\n", s.total.median_ms, s.total.p99_ms);
+  std::printf("  memory [MB]          awareness %.1f, local %.1f, global %.2f (%zu occupied voxels in %zu submaps)\n",
+              megabytes(s.memory.awareness_bytes), megabytes(s.memory.local_bytes),
+              megabytes(s.memory.global_bytes), s.global_voxels, s.global_submaps);
+  std::printf("  points               %llu in, %llu without data/NaN, %llu too close, %llu beyond range\n",
+              static_cast<unsigned long long>(s.points.points_in),
+              static_cast<unsigned long long>(s.points.rejected_non_finite),
+              static_cast<unsigned long long>(s.points.rejected_too_close),
+              static_cast<unsigned long long>(s.points.beyond_max_range));
+  if (accuracy != nullptr) {
+    std::printf("  accuracy             precision %.4f, recall %.4f, F1 %.4f (%zu mapped, %zu observed true voxels)\n",
+                accuracy->precision, accuracy->recall, accuracy->f1, accuracy->mapped,
+                accuracy->observed_truth);
+  }
+}
+
+std::size_t peakRssBytes() {
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) != 0) return 0;
+  return static_cast<std::size_t>(usage.ru_maxrss) * 1024u;  // Linux: kilobytes
+}
+
+}  // namespace mlmap::eval
