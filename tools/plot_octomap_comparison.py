@@ -30,6 +30,15 @@ MLMAP_COLOUR = '#d95f02'
 OCTOMAP_COLOUR = '#1b9e77'
 
 
+def save(fig, out, name):
+    """Write `fig` as out/name and return the path."""
+    fig.tight_layout()
+    path = os.path.join(out, name)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def load_cases(dirs):
     """Return every case of every compare.json, in order."""
     cases = []
@@ -89,11 +98,7 @@ def plot_time(cases, out):
         ax.set_ylabel('ms')
         ax.set_title(c['name'], fontsize=9)
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    path = os.path.join(out, 'octomap_time.png')
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save(fig, out, 'octomap_time.png')
 
 
 def plot_memory(cases, out):
@@ -114,16 +119,17 @@ def plot_memory(cases, out):
                 continue
             xs = path_m[:len(mem)] if use_path else range(len(mem))
             ax.plot(xs, [m / 1e6 for m in mem], color=colour, label=label)
+        layers = c['mlmap'].get('map_memory_bytes', [])
+        if layers:
+            xs = path_m[:len(layers)] if use_path else range(len(layers))
+            ax.plot(xs, [m / 1e6 for m in layers], color=MLMAP_COLOUR, linestyle='--',
+                    label='mlmap map layers alone (local + global)')
         ax.set_xlabel('path [m]' if use_path else 'frame')
         ax.set_ylabel('memory [MB]')
         ax.set_title(f'{c["name"]}: memory over the walk', fontsize=10)
         ax.set_ylim(bottom=0)
         ax.legend(fontsize=8)
-    fig.tight_layout()
-    path = os.path.join(out, 'octomap_memory.png')
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save(fig, out, 'octomap_memory.png')
 
 
 def plot_agreement(cases, out):
@@ -147,11 +153,7 @@ def plot_agreement(cases, out):
     ax.set_ylabel('mlmap against OctoMap')
     ax.set_title('occupied-voxel agreement (dashed: IoU 0.8)')
     ax.legend(fontsize=7, ncol=3, loc='lower right')
-    fig.tight_layout()
-    path = os.path.join(out, 'octomap_agreement.png')
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
+    return save(fig, out, 'octomap_agreement.png')
 
 
 def read_voxels(path):
@@ -204,11 +206,7 @@ def plot_diff(path, out, frame_hint):
     counts = {w: sum(1 for r in rows if r[3] == w) for w in (1, 2, 3)}
     fig.suptitle(f'{name}: occupied voxels at {resolution} m, both {counts[3]}, '
                  f'only mlmap {counts[1]}, only OctoMap {counts[2]}')
-    fig.tight_layout()
-    out_path = os.path.join(out, f'octomap_diff_{name}.png')
-    fig.savefig(out_path, dpi=110)
-    plt.close(fig)
-    return out_path
+    return save(fig, out, f'octomap_diff_{name}.png')
 
 
 def main():

@@ -257,6 +257,7 @@ struct CaseResult {
   std::vector<double> mlmap_ms, octomap_ms, path_m;
   std::vector<double> mlmap_mapping_ms;  ///< mlmap_ms minus the planner snapshot (window copy)
   std::vector<std::size_t> mlmap_bytes, octomap_bytes;
+  std::vector<std::size_t> mlmap_map_bytes;  ///< the map layers alone: local + global
   std::size_t mlmap_peak_bytes = 0, octomap_peak_bytes = 0;
   std::size_t rss_before_bytes = 0, rss_peak_bytes = 0;
   EngineStats stats;
@@ -348,6 +349,7 @@ CaseResult runCase(const Dataset& d, double resolution_m, const Options& o) {
       r.mlmap_mapping_ms.push_back(mlmap_ms - (snapshot ? stats.planning.last_snapshot_ms : 0.0));
       const std::size_t bytes = stats.memory.total();
       r.mlmap_bytes.push_back(bytes);
+      r.mlmap_map_bytes.push_back(stats.memory.local_bytes + stats.memory.global_bytes);
       r.mlmap_peak_bytes = std::max(r.mlmap_peak_bytes, bytes);
     }
     progress.update(i + 1, mlmap_ms, octomap_ms);
@@ -503,6 +505,8 @@ void writeJson(std::ostream& out, const std::vector<CaseResult>& results, const 
     writeArray(out, r.mlmap_ms, 3);
     out << ",\n       \"memory_bytes\": ";
     writeArray(out, r.mlmap_bytes);
+    out << ",\n       \"map_memory_bytes\": ";
+    writeArray(out, r.mlmap_map_bytes);
     out << "},\n     \"octomap\": {\"ran\": " << (r.ran_octomap ? "true" : "false") << ", \"time_ms\": ";
     writeTiming(out, r.octomap_ms);
     out << ", \"peak_memory_bytes\": " << r.octomap_peak_bytes
