@@ -395,7 +395,7 @@ double mb(std::size_t bytes) { return static_cast<double>(bytes) / 1e6; }
 
 void printCase(const CaseResult& r) {
   std::printf("\n== %s: %s\n", r.name.c_str(), r.description.c_str());
-  std::printf("   %d frames, %.0f points/frame into both, max range %.1f m, mlmap window %d x %d x %d\n",
+  std::printf("   %d frames, %.0f points/frame, max range %.1f m, mlmap window %d x %d x %d\n",
               r.frames, r.points_per_frame, r.max_range_m, r.window_cells.x(), r.window_cells.y(),
               r.window_cells.z());
   const TimingSummary a = summarizeTimings(r.mlmap_ms);
