@@ -371,22 +371,20 @@ CaseResult runCase(const Dataset& d, double resolution_m, const Options& o) {
     const eval::VoxelSet b(r.octomap_voxels.occupied.begin(), r.octomap_voxels.occupied.end());
     CaseResult::Truth& t = r.truth;
     t.known = true;
-    for (const VoxelIndex& v : a) {
-      const bool right = eval::touchesSolid(world, v, resolution_m);
-      t.mlmap_right += right ? 1 : 0;
-      if (b.count(v) == 0) {
-        ++t.only_mlmap;
-        t.only_mlmap_right += right ? 1 : 0;
+    // Scores `set` against the truth: all its voxels, and those the `other` map lacks.
+    auto score = [&](const eval::VoxelSet& set, const eval::VoxelSet& other, std::size_t* right,
+                     std::size_t* only, std::size_t* only_right) {
+      for (const VoxelIndex& v : set) {
+        const bool ok = eval::touchesSolid(world, v, resolution_m);
+        *right += ok ? 1 : 0;
+        if (other.count(v) == 0) {
+          ++*only;
+          *only_right += ok ? 1 : 0;
+        }
       }
-    }
-    for (const VoxelIndex& v : b) {
-      const bool right = eval::touchesSolid(world, v, resolution_m);
-      t.octomap_right += right ? 1 : 0;
-      if (a.count(v) == 0) {
-        ++t.only_octomap;
-        t.only_octomap_right += right ? 1 : 0;
-      }
-    }
+    };
+    score(a, b, &t.mlmap_right, &t.only_mlmap, &t.only_mlmap_right);
+    score(b, a, &t.octomap_right, &t.only_octomap, &t.only_octomap_right);
   }
   return r;
 }

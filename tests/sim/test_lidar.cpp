@@ -41,6 +41,14 @@ double exitDistance(const Vector3d& origin, const Vector3d& dir, const Vector3d&
   return t;
 }
 
+/// Calls f(beam, step, direction in S) for every ray, in render()'s order (beam-major).
+template <typename F>
+void forEachRay(const Lidar& lidar, F f) {
+  for (int b = 0; b < lidar.model().beams; ++b) {
+    for (int a = 0; a < lidar.model().azimuth_steps; ++a) f(b, a, lidar.rayDirection_S(b, a));
+  }
+}
+
 TEST(Lidar, DefaultModelIs128By640With30MetreRange) {
   const Lidar lidar;
   EXPECT_EQ(lidar.model().rayCount(), 81920u);
@@ -90,16 +98,12 @@ TEST(Lidar, EveryRayInAClosedRoomReturnsItsWallDistance) {
   EXPECT_TRUE(frame.T_B_S.translation().isApprox(Vector3d(9, 9, 9)));
   ASSERT_EQ(frame.points_S.size(), model.rayCount());  // closed room, all within 30 m
   std::size_t i = 0;
-  for (int b = 0; b < model.beams; ++b) {
-    for (int a = 0; a < model.azimuth_steps; ++a, ++i) {
-      const Vector3d dir_S = lidar.rayDirection_S(b, a);
-      const double expected =
-          exitDistance(T_W_S.translation(), T_W_S.linear() * dir_S, lo, hi);
-      const Vector3d p_S = frame.points_S[i].cast<double>();
-      EXPECT_NEAR(p_S.norm(), expected, 1e-5) << "beam " << b << " step " << a;
-      EXPECT_NEAR((p_S.normalized() - dir_S).norm(), 0.0, 1e-6);
-    }
-  }
+  forEachRay(lidar, [&](int b, int a, const Vector3d& dir_S) {
+    const double expected = exitDistance(T_W_S.translation(), T_W_S.linear() * dir_S, lo, hi);
+    const Vector3d p_S = frame.points_S[i++].cast<double>();
+    EXPECT_NEAR(p_S.norm(), expected, 1e-5) << "beam " << b << " step " << a;
+    EXPECT_NEAR((p_S.normalized() - dir_S).norm(), 0.0, 1e-6);
+  });
 }
 
 TEST(Lidar, RangeLimitsDropReturnsBeyondMaxAndBelowMin) {
@@ -114,12 +118,10 @@ TEST(Lidar, RangeLimitsDropReturnsBeyondMaxAndBelowMin) {
   PointCloudFrame frame;
   lidar.render(world, Transform::Identity(), 0.0, &frame);
   std::size_t expected = 0;
-  for (int b = 0; b < model.beams; ++b) {
-    for (int a = 0; a < model.azimuth_steps; ++a) {
-      const double t = exitDistance(Vector3d::Zero(), lidar.rayDirection_S(b, a), lo, hi);
-      if (t >= model.min_range_m && t <= model.max_range_m) ++expected;
-    }
-  }
+  forEachRay(lidar, [&](int, int, const Vector3d& dir_S) {
+    const double t = exitDistance(Vector3d::Zero(), dir_S, lo, hi);
+    if (t >= model.min_range_m && t <= model.max_range_m) ++expected;
+  });
   EXPECT_LT(expected, model.rayCount());
   EXPECT_GT(expected, model.rayCount() / 2);
   ASSERT_EQ(frame.points_S.size(), expected);
@@ -150,17 +152,15 @@ TEST(Lidar, NoiseIsDeterministicUnbiasedAndHasTheGivenSigma) {
   double sum = 0.0, sum_sq = 0.0;
   std::size_t differing = 0;
   std::size_t i = 0;
-  for (int beam = 0; beam < model.beams; ++beam) {
-    for (int step = 0; step < model.azimuth_steps; ++step, ++i) {
-      EXPECT_EQ(a.points_S[i], b.points_S[i]);
-      if (a.points_S[i] != c.points_S[i]) ++differing;
-      const Vector3d dir = lidar.rayDirection_S(beam, step);
-      const double error = a.points_S[i].cast<double>().norm() -
-                           exitDistance(Vector3d::Zero(), dir, lo, hi);
-      sum += error;
-      sum_sq += error * error;
-    }
-  }
+  forEachRay(lidar, [&](int, int, const Vector3d& dir_S) {
+    EXPECT_EQ(a.points_S[i], b.points_S[i]);
+    if (a.points_S[i] != c.points_S[i]) ++differing;
+    const double error =
+        a.points_S[i].cast<double>().norm() - exitDistance(Vector3d::Zero(), dir_S, lo, hi);
+    sum += error;
+    sum_sq += error * error;
+    ++i;
+  });
   const double n = static_cast<double>(i);
   EXPECT_GT(differing, i * 9 / 10);
   EXPECT_NEAR(sum / n, 0.0, 0.002);
