@@ -16,6 +16,7 @@ packages=(
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev  # depth PNGs, map pictures
   libcli11-dev libspdlog-dev           # command line, logging
   libgtest-dev                         # tests
+  liboctomap-dev                       # side-by-side comparison with OctoMap (mlmap_compare_octomap)
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools  # DDS component (Fast DDS 2.9, ROS 2 wire types)
   cyclonedds-dev cyclonedds-tools      # cross-vendor interoperability test (ROS 2's other tier-1 DDS)
   iproute2                             # network-namespace tests
@@ -29,6 +30,8 @@ ground_tools=(
   colcon python3-colcon-ros python3-colcon-package-information  # colcon discovery (list) and install
   python3-flake8 pydocstyle shellcheck  # lint (the ament flake8 / pep257 rules)
 )
+# Off board too: the charts of the OctoMap comparison (tools/plot_octomap_comparison.py).
+ground_tools+=(python3-matplotlib)
 if [ "${1:-}" != --onboard ]; then
   packages+=("${ground_tools[@]}")
 fi

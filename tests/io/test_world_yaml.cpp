@@ -266,3 +266,35 @@ TEST(WorldYaml, ParseFromStringUsesSourceName) {
 
 }  // namespace
 }  // namespace mlmap::io
+
+namespace mlmap::io {
+namespace {
+
+// The building of the OctoMap comparison's long walk (config/worlds/building.yaml).
+TEST(WorldYaml, BuildingWalkIsAbout250MetresOverThreeFloorsAndKeepsClearOfSolids) {
+  const Scenario s = loadScenarioYaml(std::string(MLMAP_SOURCE_DIR) + "/config/worlds/building.yaml");
+  EXPECT_GT(s.trajectory.length_m(), 240.0);
+  EXPECT_LT(s.trajectory.length_m(), 270.0);
+  const Eigen::AlignedBox3d bounds = s.world.bounds();
+  EXPECT_NEAR(bounds.min().z(), -0.2, 1e-9);
+  EXPECT_NEAR(bounds.max().z(), 9.0, 1e-9);
+  double min_clearance = 1e9, min_z = 1e9, max_z = -1e9;
+  for (double t = 0.0; t <= s.trajectory.duration_s(); t += 0.05) {
+    const Eigen::Vector3d p = s.trajectory.positionAt(t);
+    min_clearance = std::min(min_clearance, s.world.distance(p));
+    min_z = std::min(min_z, p.z());
+    max_z = std::max(max_z, p.z());
+  }
+  EXPECT_GE(min_clearance, 0.5);  // the vehicle never touches a wall, door frame or slab
+  EXPECT_LT(min_z, 2.0);          // it flies on the ground floor ...
+  EXPECT_GT(max_z, 7.0);          // ... and on the top floor
+  // Every floor is closed below the walk except at the two openings it climbs through.
+  for (double t = 0.0; t <= s.trajectory.duration_s(); t += 0.5) {
+    const Eigen::Vector3d p = s.trajectory.positionAt(t);
+    double down = 0.0;
+    ASSERT_TRUE(s.world.raycast(p, -Eigen::Vector3d::UnitZ(), 20.0, 0.0, &down)) << "t " << t;
+  }
+}
+
+}  // namespace
+}  // namespace mlmap::io

@@ -1,0 +1,47 @@
+#!/usr/bin/env bash
+# ctest mlmap_compare_octomap_smoke: the OctoMap comparison on a few frames of every dataset,
+# then the plot script on its output. Fails when a mapper did not run, when OctoMap's keys do
+# not map to mlmap's voxel indices (the program exits non-zero), when the two maps disagree
+# even within one cell, when a chart is missing, or when a bad --cases is not refused.
+# Usage: compare_octomap_smoke.sh BUILD_DIR SOURCE_DIR WORK_DIR
+set -euo pipefail
+build=$1 source=$2 work=$3
+rm -rf "$work" && mkdir -p "$work"
+"$build/mlmap_compare_octomap" --cases realsense:0.05,depth:0.2,lidar:0.3,building:0.2 --frames 2 \
+  --out "$work/results" --voxels --quiet | tee "$work/compare.txt"
+/usr/bin/python3 - "$work/results/compare.json" <<'PY'
+import json, sys
+data = json.load(open(sys.argv[1]))
+cases = data['cases']
+assert [c['dataset'] for c in cases] == ['realsense', 'depth', 'lidar', 'building'], cases
+for c in cases:
+    name = c['name']
+    assert c['frames'] == 2 and len(c['mlmap']['frame_ms']) == 2, name
+    assert len(c['octomap']['frame_ms']) == 2, name
+    assert c['points_per_frame'] > 10000, (name, c['points_per_frame'])
+    assert c['octomap']['key_check']['leaves'] > 100, name
+    assert c['octomap']['key_check']['mismatches'] == 0, name
+    a = c['agreement']
+    assert a['mlmap_voxels'] > 100 and a['octomap_voxels'] > 100, (name, a)
+    assert a['precision_1'] > 0.95 and a['recall_1'] > 0.95, (name, a)
+    assert c['mlmap']['peak_memory_bytes'] > 0 and c['octomap']['peak_memory_bytes'] > 0, name
+    if c['dataset'] != 'realsense':
+        t = c['truth']
+        assert t['mlmap_right'] > 0.95 * a['mlmap_voxels'], (name, t)
+        assert t['octomap_right'] > 0.95 * a['octomap_voxels'], (name, t)
+print('compare.json: 4 cases, keys and agreement checked')
+PY
+/usr/bin/python3 "$source/tools/plot_octomap_comparison.py" "$work/results" --out "$work/png"
+for png in octomap_time octomap_memory octomap_agreement octomap_diff_realsense_0.05 \
+           octomap_diff_building_0.20; do
+  test -s "$work/png/$png.png" || { echo "missing $png.png" >&2; exit 1; }
+done
+if "$build/mlmap_compare_octomap" --cases depth:zero --frames 1 > "$work/bad.txt" 2>&1; then
+  echo "a bad --cases was accepted" >&2; exit 1
+fi
+grep -q "not DATASET:RESOLUTION_M" "$work/bad.txt"
+if "$build/mlmap_compare_octomap" --cases attic:0.1 --frames 1 > "$work/bad.txt" 2>&1; then
+  echo "an unknown dataset was accepted" >&2; exit 1
+fi
+grep -q "unknown dataset 'attic'" "$work/bad.txt"
+echo "smoke run passed"
