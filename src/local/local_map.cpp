@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
 
 namespace mlmap {
 namespace {
@@ -123,6 +126,58 @@ void LocalMap::retireAll(GlobalMap* global) {
       }
     }
   }
+}
+
+void LocalMap::restoreWindow(const LocalWindow& window) {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("local map window: " + what); };
+  if (window.size.prod() == 0) {
+    std::fill(cells_.begin(), cells_.end(), kUnknownLogOdds);
+    placed_ = false;
+    center_ = SubmapIndex::Zero();
+    min_index_ = VoxelIndex::Zero();
+    ++counters_.state_changes;
+    return;
+  }
+  if (window.size != size_) {
+    std::ostringstream m;
+    m << "size " << window.size.transpose() << " voxels, the map has " << size_.transpose();
+    fail(m.str());
+  }
+  if (window.log_odds.size() != cells_.size()) {
+    fail(std::to_string(window.log_odds.size()) + " values for " + std::to_string(cells_.size()) +
+         " voxels");
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (floorMod(window.min_index[a], submap_[a]) != 0) {
+      std::ostringstream m;
+      m << "first voxel " << window.min_index.transpose() << " is not on the submap grid ("
+        << submap_.transpose() << " voxels per submap)";
+      fail(m.str());
+    }
+  }
+  for (std::size_t i = 0; i < window.log_odds.size(); ++i) {
+    const LogOddsQ v = window.log_odds[i];
+    if (v != kUnknownLogOdds && (v < model_.clampMin() || v > model_.clampMax())) {
+      fail("value " + std::to_string(v) + " at window offset " + std::to_string(i) +
+           " is outside the clamping bounds [" + std::to_string(model_.clampMin()) + ", " +
+           std::to_string(model_.clampMax()) + "] (units of 0.001)");
+    }
+  }
+  min_index_ = window.min_index;
+  center_ = SubmapIndex(window.min_index.x() / submap_.x(), window.min_index.y() / submap_.y(),
+                        window.min_index.z() / submap_.z()) +
+            SubmapIndex::Constant(kHalfWindow);
+  placed_ = true;
+  // Box order -> torus slots (the inverse of copyWindow()).
+  const LogOddsQ* src = window.log_odds.data();
+  for (int x = 0; x < size_.x(); ++x) {
+    for (int y = 0; y < size_.y(); ++y) {
+      for (int z = 0; z < size_.z(); ++z) {
+        cells_[slot(min_index_ + VoxelIndex(x, y, z))] = *src++;
+      }
+    }
+  }
+  ++counters_.state_changes;
 }
 
 void LocalMap::recenter(const Eigen::Vector3d& body_W, GlobalMap* global) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <sstream>
 #include <stdexcept>
 
@@ -205,8 +206,14 @@ void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
 
 void MapEngine::localStep(const MeasurementBatch& batch) {
   const Clock::time_point start = Clock::now();
-  local_.recenter(batch.T_W_B.translation(), &global_);
-  local_.integrate(batch);
+  {
+    std::lock_guard<std::mutex> lock(layers_mutex_);
+    local_.recenter(batch.T_W_B.translation(), &global_);
+    local_.integrate(batch);
+    has_mapped_stamp_ = true;
+    last_mapped_stamp_s_ = batch.stamp_s;
+    last_T_W_B_ = batch.T_W_B;
+  }
   const double ms = msSince(start);
   planning_.update(local_, global_, ++frames_integrated_, batch.stamp_s, batch.T_W_B);
   if (observers_.snapshot) observers_.snapshot(frames_integrated_, batch.stamp_s);
@@ -321,6 +328,105 @@ std::vector<VoxelIndex> MapEngine::occupiedVoxels() const {
   global_.forEachVoxel([&](const VoxelIndex& g, double) { out.push_back(g); });
   local_.forEachOccupied([&](const VoxelIndex& g, double) { out.push_back(g); });
   return out;
+}
+
+MapState MapEngine::exportState() const {
+  MapState state;
+  state.local_map = config_.local_map;
+  state.log_odds = config_.log_odds;
+  std::lock_guard<std::mutex> lock(layers_mutex_);
+  local_.copyWindow(&state.window);
+  state.global_submaps.reserve(global_.submapCount());
+  global_.forEachSubmap([&](const SubmapIndex& m, const std::vector<VoxelRecord>& records) {
+    state.global_submaps.emplace_back(m, records);
+  });
+  std::sort(state.global_submaps.begin(), state.global_submaps.end(),
+            [](const auto& a, const auto& b) {
+              return std::lexicographical_compare(a.first.data(), a.first.data() + 3,
+                                                  b.first.data(), b.first.data() + 3);
+            });
+  state.has_last_stamp = has_mapped_stamp_;
+  state.last_stamp_s = last_mapped_stamp_s_;
+  state.T_W_B = last_T_W_B_;
+  state.frames_mapped = frames_restored_ + frames_integrated_;
+  return state;
+}
+
+void MapEngine::restoreState(const MapState& state) {
+  std::vector<std::string> errors;
+  auto differs = [&errors](const char* key, double got, double want) {
+    if (got != want) {
+      std::ostringstream m;
+      m << key << ": the map has " << got << ", this configuration " << want;
+      errors.push_back(m.str());
+    }
+  };
+  differs("local_map.resolution_m", state.local_map.resolution_m, config_.local_map.resolution_m);
+  for (int a = 0; a < 3; ++a) {
+    const char* keys[] = {"local_map.size_cells[0]", "local_map.size_cells[1]",
+                          "local_map.size_cells[2]"};
+    differs(keys[a], state.local_map.size_cells[a], config_.local_map.size_cells[a]);
+  }
+  differs("log_odds.hit", state.log_odds.hit, config_.log_odds.hit);
+  differs("log_odds.miss", state.log_odds.miss, config_.log_odds.miss);
+  differs("log_odds.clamp_min", state.log_odds.clamp_min, config_.log_odds.clamp_min);
+  differs("log_odds.clamp_max", state.log_odds.clamp_max, config_.log_odds.clamp_max);
+  differs("log_odds.occupied_threshold", state.log_odds.occupied_threshold,
+          config_.log_odds.occupied_threshold);
+  if (state.has_last_stamp && !std::isfinite(state.last_stamp_s)) {
+    errors.push_back("last stamp is not finite");
+  }
+  if (!isValidPose(state.T_W_B)) errors.push_back("last body pose is not a valid pose");
+  // Global records: offsets inside the submap, strictly increasing, occupied and within bounds.
+  const LogOddsModel model(config_.log_odds);
+  const std::uint32_t submap_voxels =
+      static_cast<std::uint32_t>(config_.local_map.submap_cells().prod());
+  for (std::size_t i = 0; i < state.global_submaps.size() && errors.empty(); ++i) {
+    const auto& [m, records] = state.global_submaps[i];
+    for (std::size_t k = 0; k < records.size(); ++k) {
+      const VoxelRecord& r = records[k];
+      if (r.offset >= submap_voxels || (k > 0 && r.offset <= records[k - 1].offset) ||
+          !model.isOccupied(r.log_odds) || r.log_odds > model.clampMax()) {
+        std::ostringstream msg;
+        msg << "global submap (" << m.transpose() << ") record " << k << " (offset " << r.offset
+            << ", log-odds " << r.log_odds << ") is not an occupied voxel of the submap";
+        errors.push_back(msg.str());
+        break;
+      }
+    }
+  }
+  if (errors.empty()) {
+    try {
+      LocalMap probe(config_.local_map, config_.log_odds);
+      probe.restoreWindow(state.window);  // validates without touching the engine's layers
+    } catch (const std::invalid_argument& e) {
+      errors.emplace_back(e.what());
+    }
+  }
+  throwIfInvalid(errors, "map state");
+
+  {
+    std::lock_guard<std::mutex> lock(layers_mutex_);
+    global_.clear();
+    for (const auto& [m, records] : state.global_submaps) {
+      global_.store(m, std::vector<VoxelRecord>(records));
+    }
+    local_.restoreWindow(state.window);
+    has_mapped_stamp_ = state.has_last_stamp;
+    last_mapped_stamp_s_ = state.last_stamp_s;
+    last_T_W_B_ = state.T_W_B;
+    frames_restored_ = state.frames_mapped - std::min(state.frames_mapped, frames_integrated_);
+  }
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    have_stamp_ = state.has_last_stamp;
+    last_stamp_s_ = state.has_last_stamp ? state.last_stamp_s : -1e300;
+    stats_.global_voxels = global_.voxelCount();
+    stats_.global_submaps = global_.submapCount();
+    stats_.memory.global_bytes = global_.memoryBytes();
+  }
+  planning_.update(local_, global_, frames_integrated_, state.last_stamp_s, state.T_W_B);
+  planning_.flush();
 }
 
 }  // namespace mlmap
