@@ -4,6 +4,7 @@
 #include "mlmap/eval/sim_flight.h"
 #include "mlmap/io/config_yaml.h"
 #include "mlmap/io/frame_directory.h"
+#include "mlmap/io/map_file.h"
 #include "mlmap/io/map_image.h"
 #include "mlmap/pipeline/map_engine.h"
 
@@ -13,6 +14,7 @@
 
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -114,6 +116,7 @@ int main(int argc, char** argv) {
   bool threaded = false;
   bool print_config = false;
   double noise = -1.0;
+  std::string save_map_path;
   app.add_option("--config", config_path, "engine configuration YAML (default: built-in defaults, "
                                           "see config/mlmap.yaml)")->check(CLI::ExistingFile);
   app.add_option("--scenario", scenario_path, "simulated world + flight YAML (default: the "
@@ -129,6 +132,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-frames", max_frames, "stop after N frames (0: all)")->check(CLI::NonNegativeNumber);
   app.add_option("--noise", noise, "simulated depth noise: sigma = K * z^2 [1/m] (default: the scenario's)")
       ->check(CLI::Range(0.0, 0.1));
+  app.add_option("--save-map", save_map_path,
+                 "save the final map (local + global layers) to this mlmap map file; "
+                 "mlmap_map_tool converts it to PLY / PCD / PGM + YAML / OctoMap .bt");
   app.add_flag("--threaded", threaded, "run the awareness and local-global stages on two threads");
   app.add_flag("--print-config", print_config, "print the effective engine configuration and exit");
   CLI11_PARSE(app, argc, argv);
@@ -271,6 +277,14 @@ int main(int argc, char** argv) {
     }
     std::printf("\n  wrote %s/{map_top.png, map_side.png%s, report.json}\n", out_dir.c_str(),
                 have_truth ? ", accuracy_top.png" : "");
+    if (!save_map_path.empty()) {
+      const auto save_start = std::chrono::steady_clock::now();
+      io::saveMapFile(engine.exportState(), save_map_path);
+      const double save_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - save_start).count();
+      std::printf("  saved the map to %s (%ju bytes, %.1f ms)\n", save_map_path.c_str(),
+                  static_cast<std::uintmax_t>(std::filesystem::file_size(save_map_path)), save_ms);
+    }
     return 0;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
