@@ -4,9 +4,11 @@
 #include "mlmap/io/map_export.h"
 #include "mlmap/io/map_file.h"
 #include "mlmap/io/octomap_export.h"
+#include "mlmap/pipeline/map_engine.h"
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -41,6 +43,7 @@ int main(int argc, char** argv) {
   bool info = false;
   std::vector<double> band;
   bool local_only = false;
+  int bench_runs = 0;
   app.add_option("map", map_path, "the map file")->required()->check(CLI::ExistingFile);
   app.add_flag("--info", info, "print the header, the layers' sizes and the load time");
   app.add_option("--ply", ply_path, "write the occupied voxels (local + global) as binary PLY: "
@@ -49,13 +52,16 @@ int main(int argc, char** argv) {
                                     "(= occupancy probability)");
   app.add_option("--grid", grid_base, "write the 2D grid as BASE.pgm + BASE.yaml (map_server / "
                                       "nav2 map_saver trinary format)");
-  app.add_option("--band", band, "the grid's height band MIN MAX in W [m] (default: the map's "
-                                 "configured band around the last body height, -0.3..0.3 m)")
+  app.add_option("--band", band, "the grid's height band MIN MAX in W [m] (default: the engine's "
+                                 "default band, -0.3..+0.3 m around the map's last body height)")
       ->expected(2);
   app.add_flag("--grid-local-only", local_only, "grid of the local window only (default: local + global)");
   app.add_option("--bt", bt_path, "write an OctoMap binary tree (.bt): occupied and known-free voxels");
+  app.add_option("--bench", bench_runs, "load the map and save it (to MAP.bench, removed after) N "
+                                       "times each; print median / p99 / best times")
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
-  if (!info && ply_path.empty() && pcd_path.empty() && grid_base.empty() && bt_path.empty()) {
+  if (bench_runs == 0 && !info && ply_path.empty() && pcd_path.empty() && grid_base.empty() && bt_path.empty()) {
     std::cerr << "nothing to do: give --info, --ply, --pcd, --grid or --bt (see --help)\n";
     return 2;
   }
@@ -90,6 +96,25 @@ int main(int argc, char** argv) {
       std::printf("  occupied voxels in all: %zu; %ju frames mapped, last stamp %s\n", voxels.size(),
                   static_cast<std::uintmax_t>(state.frames_mapped),
                   state.has_last_stamp ? std::to_string(state.last_stamp_s).c_str() : "none");
+    }
+    if (bench_runs > 0) {
+      std::vector<double> load_times_ms;
+      std::vector<double> save_times_ms;
+      const std::string bench_path = map_path + ".bench";
+      for (int i = 0; i < bench_runs; ++i) {
+        auto start = std::chrono::steady_clock::now();
+        const MapState again = io::loadMapFile(map_path);
+        load_times_ms.push_back(msSince(start));
+        start = std::chrono::steady_clock::now();
+        io::saveMapFile(again, bench_path);
+        save_times_ms.push_back(msSince(start));
+      }
+      std::filesystem::remove(bench_path);
+      for (auto [what, values] : {std::pair{"load", load_times_ms}, std::pair{"save", save_times_ms}}) {
+        const TimingSummary t = summarizeTimings(values);
+        std::printf("%s (%d runs): median %.2f ms, p99 %.2f ms, best %.2f ms\n", what, bench_runs,
+                    t.median_ms, t.p99_ms, *std::min_element(values.begin(), values.end()));
+      }
     }
     if (!ply_path.empty()) {
       io::writePly(voxels, res, ply_path);

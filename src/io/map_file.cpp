@@ -129,7 +129,22 @@ std::string encodeMapFile(const MapState& state) {
                                 std::to_string(voxels) + " voxels");
   }
   const std::size_t global_voxels = state.globalVoxelCount();
-  const std::size_t local_bytes = voxels * sizeof(LogOddsQ) + 4;
+  // The window as runs: (unknown count, known count, the known values), so that never-observed
+  // space costs 8 bytes per run instead of 2 per voxel.
+  std::string runs;
+  Writer rw(&runs);
+  const std::vector<LogOddsQ>& values = state.window.log_odds;
+  for (std::size_t i = 0; i < voxels;) {
+    std::size_t unknown = 0;
+    while (i + unknown < voxels && values[i + unknown] == kUnknownLogOdds) ++unknown;
+    std::size_t known = 0;
+    while (i + unknown + known < voxels && values[i + unknown + known] != kUnknownLogOdds) ++known;
+    rw.integer<std::uint32_t>(static_cast<std::uint32_t>(unknown));
+    rw.integer<std::uint32_t>(static_cast<std::uint32_t>(known));
+    for (std::size_t k = 0; k < known; ++k) rw.integer<std::int16_t>(values[i + unknown + k]);
+    i += unknown + known;
+  }
+  const std::size_t local_bytes = runs.size() + 4;
   const std::size_t global_bytes =
       state.global_submaps.size() * kSubmapHeadBytes + global_voxels * kRecordBytes + 4;
   const std::size_t total = kHeaderBytes + local_bytes + global_bytes + sizeof kTrailer;
@@ -158,7 +173,7 @@ std::string encodeMapFile(const MapState& state) {
   w.crcFrom(0);
 
   const std::size_t local_start = w.size();
-  for (LogOddsQ v : state.window.log_odds) w.integer<std::int16_t>(v);
+  w.bytes(runs.data(), runs.size());
   w.crcFrom(local_start);
 
   const std::size_t global_start = w.size();
@@ -248,7 +263,8 @@ MapState decodeMapFile(const std::string& bytes, const std::string& source) {
 
   const std::size_t window_voxels =
       placed ? static_cast<std::size_t>(state.local_map.size_cells.prod()) : 0;
-  if (local_bytes != window_voxels * sizeof(LogOddsQ) + 4) {
+  if (local_bytes < 4 || local_bytes > total || (placed && local_bytes < 12) ||
+      local_bytes > window_voxels * (sizeof(LogOddsQ) + 8) + 4) {
     refuse(source, "local section of " + std::to_string(local_bytes) + " bytes for a window of " +
                        std::to_string(window_voxels) + " voxels");
   }
@@ -261,7 +277,7 @@ MapState decodeMapFile(const std::string& bytes, const std::string& source) {
   }
 
   const std::size_t local_start = kHeaderBytes;
-  const std::size_t local_data = window_voxels * sizeof(LogOddsQ);
+  const std::size_t local_data = static_cast<std::size_t>(local_bytes) - 4;
   if (Reader(bytes, local_start + local_data).integer<std::uint32_t>() !=
       crc32(bytes.data() + local_start, local_data)) {
     refuse(source, "local map checksum mismatch: the file is corrupted");
@@ -281,9 +297,23 @@ MapState decodeMapFile(const std::string& bytes, const std::string& source) {
   if (placed) {
     state.window.min_index = min_index;
     state.window.size = state.local_map.size_cells;
-    state.window.log_odds.resize(window_voxels);
+    state.window.log_odds.assign(window_voxels, kUnknownLogOdds);
     Reader lr(bytes, local_start);
-    for (LogOddsQ& v : state.window.log_odds) v = lr.integer<std::int16_t>();
+    std::size_t filled = 0;
+    while (lr.pos() + 8 <= local_start + local_data && filled < window_voxels) {
+      const auto unknown = lr.integer<std::uint32_t>();
+      const auto known = lr.integer<std::uint32_t>();
+      if (unknown > window_voxels - filled || known > window_voxels - filled - unknown ||
+          lr.pos() + known * sizeof(LogOddsQ) > local_start + local_data) {
+        break;
+      }
+      filled += unknown;
+      for (std::uint32_t k = 0; k < known; ++k) state.window.log_odds[filled++] = lr.integer<std::int16_t>();
+    }
+    if (filled != window_voxels || lr.pos() != local_start + local_data) {
+      refuse(source, "local map: its runs do not cover the " + std::to_string(window_voxels) +
+                         "-voxel window exactly");
+    }
   }
   Reader gr(bytes, global_start);
   std::uint64_t voxels_read = 0;
@@ -309,25 +339,7 @@ MapState decodeMapFile(const std::string& bytes, const std::string& source) {
 }
 
 void checkMapMatchesConfig(const MapState& state, const MapConfig& config, const std::string& source) {
-  std::vector<std::string> differences;
-  auto compare = [&differences](const std::string& key, double map_value, double config_value) {
-    if (map_value != config_value) {
-      std::ostringstream m;
-      m << key << " is " << map_value << " in the map, " << config_value << " in the configuration";
-      differences.push_back(m.str());
-    }
-  };
-  compare("local_map.resolution_m", state.local_map.resolution_m, config.local_map.resolution_m);
-  for (int a = 0; a < 3; ++a) {
-    compare("local_map.size_cells[" + std::to_string(a) + "]", state.local_map.size_cells[a],
-            config.local_map.size_cells[a]);
-  }
-  compare("log_odds.hit", state.log_odds.hit, config.log_odds.hit);
-  compare("log_odds.miss", state.log_odds.miss, config.log_odds.miss);
-  compare("log_odds.clamp_min", state.log_odds.clamp_min, config.log_odds.clamp_min);
-  compare("log_odds.clamp_max", state.log_odds.clamp_max, config.log_odds.clamp_max);
-  compare("log_odds.occupied_threshold", state.log_odds.occupied_threshold,
-          config.log_odds.occupied_threshold);
+  const std::vector<std::string> differences = mapConfigDifferences(state, config);
   if (differences.empty()) return;
   std::ostringstream m;
   m << source << ": made with a different configuration (fingerprint " << std::hex

@@ -128,8 +128,38 @@ void LocalMap::retireAll(GlobalMap* global) {
   }
 }
 
+std::string LocalMap::windowProblem(const LocalWindow& window) const {
+  if (window.size.prod() == 0) return "";
+  std::ostringstream m;
+  if (window.size != size_) {
+    m << "size " << window.size.transpose() << " voxels, the map has " << size_.transpose();
+    return m.str();
+  }
+  if (window.log_odds.size() != cells_.size()) {
+    m << window.log_odds.size() << " values for " << cells_.size() << " voxels";
+    return m.str();
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (floorMod(window.min_index[a], submap_[a]) != 0) {
+      m << "first voxel " << window.min_index.transpose() << " is not on the submap grid ("
+        << submap_.transpose() << " voxels per submap)";
+      return m.str();
+    }
+  }
+  for (std::size_t i = 0; i < window.log_odds.size(); ++i) {
+    const LogOddsQ v = window.log_odds[i];
+    if (v != kUnknownLogOdds && (v < model_.clampMin() || v > model_.clampMax())) {
+      m << "value " << v << " at window offset " << i << " is outside the clamping bounds ["
+        << model_.clampMin() << ", " << model_.clampMax() << "] (units of 0.001)";
+      return m.str();
+    }
+  }
+  return "";
+}
+
 void LocalMap::restoreWindow(const LocalWindow& window) {
-  auto fail = [](const std::string& what) { throw std::invalid_argument("local map window: " + what); };
+  const std::string problem = windowProblem(window);
+  if (!problem.empty()) throw std::invalid_argument("local map window: " + problem);
   if (window.size.prod() == 0) {
     std::fill(cells_.begin(), cells_.end(), kUnknownLogOdds);
     placed_ = false;
@@ -137,31 +167,6 @@ void LocalMap::restoreWindow(const LocalWindow& window) {
     min_index_ = VoxelIndex::Zero();
     ++counters_.state_changes;
     return;
-  }
-  if (window.size != size_) {
-    std::ostringstream m;
-    m << "size " << window.size.transpose() << " voxels, the map has " << size_.transpose();
-    fail(m.str());
-  }
-  if (window.log_odds.size() != cells_.size()) {
-    fail(std::to_string(window.log_odds.size()) + " values for " + std::to_string(cells_.size()) +
-         " voxels");
-  }
-  for (int a = 0; a < 3; ++a) {
-    if (floorMod(window.min_index[a], submap_[a]) != 0) {
-      std::ostringstream m;
-      m << "first voxel " << window.min_index.transpose() << " is not on the submap grid ("
-        << submap_.transpose() << " voxels per submap)";
-      fail(m.str());
-    }
-  }
-  for (std::size_t i = 0; i < window.log_odds.size(); ++i) {
-    const LogOddsQ v = window.log_odds[i];
-    if (v != kUnknownLogOdds && (v < model_.clampMin() || v > model_.clampMax())) {
-      fail("value " + std::to_string(v) + " at window offset " + std::to_string(i) +
-           " is outside the clamping bounds [" + std::to_string(model_.clampMin()) + ", " +
-           std::to_string(model_.clampMax()) + "] (units of 0.001)");
-    }
   }
   min_index_ = window.min_index;
   center_ = SubmapIndex(window.min_index.x() / submap_.x(), window.min_index.y() / submap_.y(),

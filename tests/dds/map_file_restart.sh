@@ -37,7 +37,7 @@ mapped=$(sed -n 's/.*done: \([0-9]*\) frames mapped.*/\1/p' "$out/node1.log")
 grep -q "shutdown: saved the map to '$out/first.mlmap'" "$out/node1.log" || fail "no save at shutdown"
 grep -q "periodic save: saved the map to '$out/first.mlmap'" "$out/node1.log" || fail "no periodic save"
 [ -s "$out/first.mlmap" ] || fail "no map file"
-ls "$out" | grep -q '\.tmp-' && fail "a temporary file was left behind"
+compgen -G "$out/*.tmp-*" > /dev/null && fail "a temporary file was left behind"
 "$bin/mlmap_map_tool" "$out/first.mlmap" --info > "$out/info.log" 2>&1 || fail "mlmap_map_tool"
 cat "$out/info.log"
 file_global=$(sed -n 's/.*global map: \([0-9]*\) occupied voxels.*/\1/p' "$out/info.log")

@@ -64,10 +64,11 @@ MapState smallState() {
   s.window.model = LogOddsModel(c.log_odds);
   s.window.min_index = VoxelIndex(-4, 2, 6);
   s.window.size = c.local_map.size_cells;
+  // Runs of unknown and observed voxels of every length from 0 to 4, values across the bounds.
   s.window.log_odds.assign(1000, kUnknownLogOdds);
-  s.window.log_odds[7] = 850;
-  s.window.log_odds[500] = -400;
-  s.window.log_odds[999] = 3500;
+  for (int i = 0; i < 1000; ++i) {
+    if (i % 9 >= 4 || i % 5 == 0) s.window.log_odds[i] = static_cast<LogOddsQ>(-2000 + (i * 37) % 5501);
+  }
   s.global_submaps.push_back({SubmapIndex(-9, 0, 1), {{0, 850}, {5, 1700}}});
   s.global_submaps.push_back({SubmapIndex(3, 4, 5), {{7, 3500}}});
   s.has_last_stamp = true;
@@ -78,13 +79,10 @@ MapState smallState() {
 }
 
 void expectSameState(const MapState& a, const MapState& b) {
-  EXPECT_EQ(a.local_map.resolution_m, b.local_map.resolution_m);
-  EXPECT_EQ(a.local_map.size_cells, b.local_map.size_cells);
-  EXPECT_EQ(a.log_odds.hit, b.log_odds.hit);
-  EXPECT_EQ(a.log_odds.miss, b.log_odds.miss);
-  EXPECT_EQ(a.log_odds.clamp_min, b.log_odds.clamp_min);
-  EXPECT_EQ(a.log_odds.clamp_max, b.log_odds.clamp_max);
-  EXPECT_EQ(a.log_odds.occupied_threshold, b.log_odds.occupied_threshold);
+  MapConfig b_config;
+  b_config.local_map = b.local_map;
+  b_config.log_odds = b.log_odds;
+  EXPECT_TRUE(mapConfigDifferences(a, b_config).empty());
   EXPECT_EQ(a.window.min_index, b.window.min_index);
   EXPECT_EQ(a.window.size, b.window.size);
   EXPECT_TRUE(a.window.log_odds == b.window.log_odds);
@@ -278,6 +276,12 @@ TEST(MapFile, TheEngineRefusesInconsistentStatesAndKeepsItsMap) {
   s = smallState();
   s.window.min_index.x() += 1;
   refused(s, "not on the submap grid");
+  s = smallState();
+  s.global_submaps.push_back(s.global_submaps[0]);
+  refused(s, "a global submap is listed twice");
+  s = smallState();
+  s.global_submaps[1].first = SubmapIndex(-1, 2, 4);  // the window's submaps: (-2..2, 1..5, 3..7)
+  refused(s, "lies inside the local window");
 }
 
 TEST(MapFile, AFailedSaveLeavesThePreviousFileAndNoTemporaryFile) {

@@ -69,7 +69,8 @@ def test_versions_agree():
 # What each find_package() of CMakeLists.txt is called in rosdep (None: nothing to install).
 ROSDEP_KEYS = {'Eigen3': 'eigen', 'Threads': None, 'yaml-cpp': 'yaml-cpp',
                'OpenCVLite': 'libopencv-dev', 'CLI11': 'cli11', 'spdlog': 'spdlog',
-               'fastcdr': 'fastcdr', 'fastrtps': 'fastrtps', 'GTest': 'gtest'}
+               'fastcdr': 'fastcdr', 'fastrtps': 'fastrtps', 'GTest': 'gtest',
+               'octomap': 'octomap'}
 
 
 def test_root_manifest_depends_on_everything_cmake_finds():

@@ -15,6 +15,7 @@
 #include "mlmap/global/global_map.h"
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace mlmap {
@@ -83,6 +84,8 @@ class LocalMap {
   /// clamping bounds; otherwise std::invalid_argument says what is wrong and nothing changes.
   /// Counts one state change, so that layers derived from states are rebuilt.
   void restoreWindow(const LocalWindow& window);
+  /// What restoreWindow() would refuse in `window`, or "" when it fits.
+  [[nodiscard]] std::string windowProblem(const LocalWindow& window) const;
 
   /// True when the window has been placed and holds `index`.
   [[nodiscard]] bool contains(const VoxelIndex& index) const;

@@ -9,6 +9,7 @@
 #include "mlmap/local/local_map.h"
 
 #include <cstdint>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -44,5 +45,11 @@ struct MapState {
     return n;
   }
 };
+
+/// The fields that give a map's data its meaning (voxel size, window size, log-odds model) and
+/// differ between a map and `config`, one "key is <map value> in the map, <value> in the
+/// configuration" each; empty when the map fits.
+[[nodiscard]] std::vector<std::string> mapConfigDifferences(const MapState& state,
+                                                            const MapConfig& config);
 
 }  // namespace mlmap
