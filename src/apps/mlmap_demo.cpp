@@ -163,6 +163,13 @@ int main(int argc, char** argv) {
       return 2;
     }
     std::filesystem::create_directories(out_dir);
+    if (!save_map_path.empty()) {  // refuse a bad target before the flight, not after it
+      const std::filesystem::path target(save_map_path);
+      const std::filesystem::path folder = target.has_parent_path() ? target.parent_path() : ".";
+      if (!std::filesystem::is_directory(folder)) {
+        throw std::runtime_error("--save-map: folder '" + folder.string() + "' does not exist");
+      }
+    }
     MapEngine engine(config, [](LogLevel level, const std::string& message) {
       if (level == LogLevel::kError) {
         spdlog::error("{}", message);

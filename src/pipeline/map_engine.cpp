@@ -213,9 +213,10 @@ void MapEngine::localStep(const MeasurementBatch& batch) {
     has_mapped_stamp_ = true;
     last_mapped_stamp_s_ = batch.stamp_s;
     last_T_W_B_ = batch.T_W_B;
+    ++frames_integrated_;
   }
   const double ms = msSince(start);
-  planning_.update(local_, global_, ++frames_integrated_, batch.stamp_s, batch.T_W_B);
+  planning_.update(local_, global_, frames_integrated_, batch.stamp_s, batch.T_W_B);
   if (observers_.snapshot) observers_.snapshot(frames_integrated_, batch.stamp_s);
   if (observers_.global) {
     const LocalMapCounters& c = local_.counters();

@@ -163,7 +163,7 @@ class MapEngine {
   LocalMap local_;
   GlobalMap global_;
   PlanningLayers planning_;
-  std::uint64_t frames_integrated_ = 0;  // local-global stage only
+  std::uint64_t frames_integrated_ = 0;  // local-global stage only (written under layers_mutex_)
 
   // Guards local_ and global_ against exportState() while the local-global stage writes them,
   // and the state of the last mapped frame.
