@@ -4,12 +4,14 @@
 #include "mlmap/eval/run_outputs.h"
 #include "mlmap/io/config_yaml.h"
 #include "mlmap/io/frame_directory.h"
+#include "mlmap/io/map_file.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -29,6 +31,7 @@ int main(int argc, char** argv) {
   bool threaded = false;
   bool print_config = false;
   double noise = -1.0;
+  std::string save_map_path;
   app.add_option("--config", config_path, "engine configuration YAML (default: built-in defaults, "
                                           "see config/mlmap.yaml)")->check(CLI::ExistingFile);
   app.add_option("--scenario", scenario_path, "simulated world + flight YAML (default: the "
@@ -44,6 +47,9 @@ int main(int argc, char** argv) {
   app.add_option("--max-frames", max_frames, "stop after N frames (0: all)")->check(CLI::NonNegativeNumber);
   app.add_option("--noise", noise, "simulated depth noise: sigma = K * z^2 [1/m] (default: the scenario's)")
       ->check(CLI::Range(0.0, 0.1));
+  app.add_option("--save-map", save_map_path,
+                 "save the final map (local + global layers) to this mlmap map file; "
+                 "mlmap_map_tool converts it to PLY / PCD / PGM + YAML / OctoMap .bt");
   app.add_flag("--threaded", threaded, "run the awareness and local-global stages on two threads");
   app.add_flag("--print-config", print_config, "print the effective engine configuration and exit");
   CLI11_PARSE(app, argc, argv);
@@ -65,6 +71,13 @@ int main(int argc, char** argv) {
       return 2;
     }
     std::filesystem::create_directories(out_dir);
+    if (!save_map_path.empty()) {  // refuse a bad target before the flight, not after it
+      const std::filesystem::path target(save_map_path);
+      const std::filesystem::path folder = target.has_parent_path() ? target.parent_path() : ".";
+      if (!std::filesystem::is_directory(folder)) {
+        throw std::runtime_error("--save-map: folder '" + folder.string() + "' does not exist");
+      }
+    }
     MapEngine engine(config, [](LogLevel level, const std::string& message) {
       if (level == LogLevel::kError) {
         spdlog::error("{}", message);
@@ -117,6 +130,14 @@ int main(int argc, char** argv) {
     std::string names;
     for (const std::string& name : written) names += (names.empty() ? "" : ", ") + name;
     std::printf("\n  wrote %s/{%s}\n", out_dir.c_str(), names.c_str());
+    if (!save_map_path.empty()) {
+      const auto save_start = std::chrono::steady_clock::now();
+      io::saveMapFile(engine.exportState(), save_map_path);
+      const double save_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - save_start).count();
+      std::printf("  saved the map to %s (%ju bytes, %.1f ms)\n", save_map_path.c_str(),
+                  static_cast<std::uintmax_t>(std::filesystem::file_size(save_map_path)), save_ms);
+    }
     return 0;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());

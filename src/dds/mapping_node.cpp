@@ -2,6 +2,8 @@
 
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/ros_conversions.h"
+#include "mlmap/io/map_export.h"
+#include "mlmap/io/map_file.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
 #include "mlmap_msgs/msg/Status_PubSubTypes.h"
@@ -17,7 +19,9 @@
 #include <chrono>
 #include <condition_variable>
 #include <deque>
+#include <filesystem>
 #include <functional>
+#include <iomanip>
 #include <mutex>
 #include <sstream>
 #include <thread>
@@ -85,7 +89,9 @@ struct MappingNode::Impl {
   };
 
   NodeConfig config;
+  LogSink sink;  // unlimited: rare messages that must not be merged (map files)
   RateLimitedLog log;
+  bool setup_done = false;  // the map is loaded (if asked) and the node runs: it may be saved
   Clock::time_point started = Clock::now();
   ParticipantPtr participant;
   std::unique_ptr<MapEngine> engine;
@@ -132,12 +138,19 @@ struct MappingNode::Impl {
 
   std::thread input_thread;
   std::thread publish_thread;
+
+  // Periodic map saving (map_file.save_period_s).
+  std::thread save_thread;
+  std::mutex save_mutex;
+  std::condition_variable save_cv;
+  bool save_stop = false;
   std::atomic<bool> stopped{false};
   int domain_id = -1;
 
-  Impl(const NodeConfig& c, LogSink sink)
+  Impl(const NodeConfig& c, const LogSink& sink_in)
       : config(c),
-        log(std::move(sink), kReasonCount),
+        sink(sink_in),
+        log(sink_in, kReasonCount),
         poses(PoseBufferConfig{c.dds.pose_tolerance_s, c.dds.pose_buffer_s, c.dds.max_future_s}),
         T_B_S(c.map.sensor.T_B_S()),
         awareness_copy_gate(c.dds.rates.awareness_hz),
@@ -184,6 +197,7 @@ struct MappingNode::Impl {
     engine = std::make_unique<MapEngine>(
         map_config, [this](LogLevel level, const std::string& m) { log.log(level, kReasonEngine, m); },
         std::move(observers));
+    const bool loaded = loadMap();
 
     participant = createParticipant(config.dds, "mlmap_node");
     domain_id = static_cast<int>(participant->get_domain_id());
@@ -220,8 +234,71 @@ struct MappingNode::Impl {
                                                          config.dds.sensor_frame));
     tf_static_writer->write(&tf_static);
 
+    if (loaded) {
+      // The loaded map goes out at once: the latched global map and grid for late joiners.
+      const std::shared_ptr<const MapSnapshot> snap = engine->snapshot();
+      copyGlobal(engine->globalMap(), snap ? snap->stamp_s() : 0.0, 0, true);
+      announceSnapshot();
+    }
     input_thread = std::thread([this] { inputLoop(); });
     publish_thread = std::thread([this] { publishLoop(); });
+    if (config.map_file.save_period_s > 0.0) save_thread = std::thread([this] { saveLoop(); });
+    setup_done = true;
+  }
+
+  void logAlways(LogLevel level, const std::string& message) {
+    if (sink) sink(level, message);
+  }
+
+  // ---- Map files (start, shutdown, periodic) -------------------------------------------------
+  /// Loads map_file.load_path into the engine; false when there is nothing to load. Throws
+  /// std::runtime_error naming the file when it cannot be used.
+  bool loadMap() {
+    const MapFileOptions& o = config.map_file;
+    if (o.load_path.empty()) return false;
+    if (o.load_missing_ok && !std::filesystem::exists(o.load_path)) {
+      logAlways(LogLevel::kInfo, "no map at '" + o.load_path + "' yet: starting empty");
+      return false;
+    }
+    const auto start = Clock::now();
+    const MapState state = io::loadMapFile(o.load_path);
+    io::checkMapMatchesConfig(state, config.map, o.load_path);
+    engine->restoreState(state);
+    std::ostringstream m;
+    m << std::fixed << std::setprecision(1) << "loaded map '" << o.load_path << "' in "
+      << secondsSince(start) * 1e3 << " ms: "
+      << io::occupiedVoxels(state).size() << " occupied voxels (" << state.globalVoxelCount()
+      << " in the global map), " << state.frames_mapped << " frames mapped before";
+    logAlways(LogLevel::kInfo, m.str());
+    return true;
+  }
+
+  /// Saves the engine's layers to map_file.save_path; logs the outcome, never throws.
+  void saveMap(const char* why) {
+    const std::string& path = config.map_file.save_path;
+    try {
+      const auto start = Clock::now();
+      const MapState state = engine->exportState();
+      io::saveMapFile(state, path);
+      std::ostringstream m;
+      m << std::fixed << std::setprecision(1) << why << ": saved the map to '" << path << "' in "
+        << secondsSince(start) * 1e3 << " ms ("
+        << state.frames_mapped << " frames mapped, " << state.globalVoxelCount()
+        << " global voxels)";
+      logAlways(LogLevel::kInfo, m.str());
+    } catch (const std::exception& e) {
+      logAlways(LogLevel::kError, std::string(why) + ": map not saved: " + e.what());
+    }
+  }
+
+  void saveLoop() {
+    const auto period = std::chrono::duration<double>(config.map_file.save_period_s);
+    std::unique_lock<std::mutex> lock(save_mutex);
+    while (!save_cv.wait_for(lock, period, [this] { return save_stop; })) {
+      lock.unlock();
+      saveMap("periodic save");
+      lock.lock();
+    }
   }
 
   // ---- Listener threads: hand over only ----------------------------------------------------
@@ -614,8 +691,15 @@ struct MappingNode::Impl {
     }
     input_cv.notify_all();
     if (input_thread.joinable()) input_thread.join();  // drains the hand-over queue
+    {
+      std::lock_guard<std::mutex> lock(save_mutex);
+      save_stop = true;
+    }
+    save_cv.notify_all();
+    if (save_thread.joinable()) save_thread.join();
     if (engine) {
       engine->flush();
+      if (!config.map_file.save_path.empty() && setup_done) saveMap("shutdown");
       // The engine is idle now: hand over the global map's last state, whatever the rate limit.
       const EngineStats s = engine->stats();
       const std::shared_ptr<const MapSnapshot> snap = engine->snapshot();

@@ -5,7 +5,9 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <cstddef>
+#include <filesystem>
 #include <vector>
 
 namespace mlmap::dds {
@@ -56,7 +58,39 @@ void readDdsSection(io::Section& top, DdsConfig* dds) {
   s.read("esdf_slice_height_m", &dds->esdf_slice_height_m);
 }
 
+void readMapFileSection(io::Section& top, MapFileOptions* options) {
+  io::Section s(top.child("map_file"), "map_file", top.errors());
+  s.read("load_path", &options->load_path);
+  s.read("load_missing_ok", &options->load_missing_ok);
+  s.read("save_path", &options->save_path);
+  s.read("save_period_s", &options->save_period_s);
+}
+
 }  // namespace
+
+void MapFileOptions::validate(std::vector<std::string>* errors) const {
+  if (!std::isfinite(save_period_s) || save_period_s < 0.0) {
+    errors->push_back("map_file.save_period_s: must be >= 0 (0: only at shutdown) (got " +
+                      std::to_string(save_period_s) + ")");
+  } else if (save_period_s > 0.0 && save_path.empty()) {
+    errors->push_back("map_file.save_period_s: periodic saving needs map_file.save_path");
+  }
+  if (!save_path.empty()) {
+    const std::filesystem::path p(save_path);
+    const std::filesystem::path dir = p.has_parent_path() ? p.parent_path() : ".";
+    std::error_code ec;
+    if (!std::filesystem::is_directory(dir, ec)) {
+      errors->push_back("map_file.save_path: folder '" + dir.string() + "' does not exist (got '" +
+                        save_path + "')");
+    } else if (!p.has_filename() || std::filesystem::is_directory(p, ec)) {
+      errors->push_back("map_file.save_path: is a folder, not a file name (got '" + save_path + "')");
+    }
+  }
+  if (!load_path.empty() && !load_missing_ok && !std::filesystem::exists(load_path)) {
+    errors->push_back("map_file.load_path: no such file (got '" + load_path +
+                      "'; set map_file.load_missing_ok to start empty when it is missing)");
+  }
+}
 
 NodeConfig parseNodeConfigYaml(const std::string& text, const std::string& source_name) {
   const YAML::Node root = io::parseYamlDocument(text, source_name);
@@ -70,6 +104,7 @@ NodeConfig parseNodeConfigYaml(const std::string& text, const std::string& sourc
     engine_problems = errors.size();
     readDdsSection(top, &c.dds);
     dds_problems = errors.size() - engine_problems;
+    readMapFileSection(top, &c.map_file);
   }  // reports unknown top-level keys
   io::stripTopLevelDots(&errors);
   if (engine_problems == 0) {
@@ -78,6 +113,7 @@ NodeConfig parseNodeConfigYaml(const std::string& text, const std::string& sourc
   if (dds_problems == 0) {
     for (std::string& e : c.dds.validate()) errors.push_back(std::move(e));
   }
+  c.map_file.validate(&errors);
   if (!errors.empty()) io::throwConfigErrors(source_name, errors);
   return c;
 }
@@ -132,6 +168,12 @@ std::string toYaml(const NodeConfig& config) {
   number("pose_buffer_s", d.pose_buffer_s);
   number("max_future_s", d.max_future_s);
   number("esdf_slice_height_m", d.esdf_slice_height_m);
+  out << YAML::EndMap;
+  out << YAML::Key << "map_file" << YAML::Value << YAML::BeginMap;
+  text("load_path", config.map_file.load_path);
+  out << YAML::Key << "load_missing_ok" << YAML::Value << config.map_file.load_missing_ok;
+  text("save_path", config.map_file.save_path);
+  number("save_period_s", config.map_file.save_period_s);
   out << YAML::EndMap << YAML::EndMap;
   // Two block mappings at the top level, one after the other, are one mapping.
   return io::toYaml(config.map) + std::string(out.c_str()) + "\n";

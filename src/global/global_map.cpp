@@ -72,3 +72,12 @@ std::size_t GlobalMap::memoryBytes() const {
 }
 
 }  // namespace mlmap
+
+namespace mlmap {
+
+void GlobalMap::clear() {
+  submaps_.clear();
+  voxel_count_ = 0;
+}
+
+}  // namespace mlmap

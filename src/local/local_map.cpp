@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
 
 namespace mlmap {
 namespace {
@@ -123,6 +126,63 @@ void LocalMap::retireAll(GlobalMap* global) {
       }
     }
   }
+}
+
+std::string LocalMap::windowProblem(const LocalWindow& window) const {
+  if (window.size.prod() == 0) return "";
+  std::ostringstream m;
+  if (window.size != size_) {
+    m << "size " << window.size.transpose() << " voxels, the map has " << size_.transpose();
+    return m.str();
+  }
+  if (window.log_odds.size() != cells_.size()) {
+    m << window.log_odds.size() << " values for " << cells_.size() << " voxels";
+    return m.str();
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (floorMod(window.min_index[a], submap_[a]) != 0) {
+      m << "first voxel " << window.min_index.transpose() << " is not on the submap grid ("
+        << submap_.transpose() << " voxels per submap)";
+      return m.str();
+    }
+  }
+  for (std::size_t i = 0; i < window.log_odds.size(); ++i) {
+    const LogOddsQ v = window.log_odds[i];
+    if (v != kUnknownLogOdds && (v < model_.clampMin() || v > model_.clampMax())) {
+      m << "value " << v << " at window offset " << i << " is outside the clamping bounds ["
+        << model_.clampMin() << ", " << model_.clampMax() << "] (units of 0.001)";
+      return m.str();
+    }
+  }
+  return "";
+}
+
+void LocalMap::restoreWindow(const LocalWindow& window) {
+  const std::string problem = windowProblem(window);
+  if (!problem.empty()) throw std::invalid_argument("local map window: " + problem);
+  if (window.size.prod() == 0) {
+    std::fill(cells_.begin(), cells_.end(), kUnknownLogOdds);
+    placed_ = false;
+    center_ = SubmapIndex::Zero();
+    min_index_ = VoxelIndex::Zero();
+    ++counters_.state_changes;
+    return;
+  }
+  min_index_ = window.min_index;
+  center_ = SubmapIndex(window.min_index.x() / submap_.x(), window.min_index.y() / submap_.y(),
+                        window.min_index.z() / submap_.z()) +
+            SubmapIndex::Constant(kHalfWindow);
+  placed_ = true;
+  // Box order -> torus slots (the inverse of copyWindow()).
+  const LogOddsQ* src = window.log_odds.data();
+  for (int x = 0; x < size_.x(); ++x) {
+    for (int y = 0; y < size_.y(); ++y) {
+      for (int z = 0; z < size_.z(); ++z) {
+        cells_[slot(min_index_ + VoxelIndex(x, y, z))] = *src++;
+      }
+    }
+  }
+  ++counters_.state_changes;
 }
 
 void LocalMap::recenter(const Eigen::Vector3d& body_W, GlobalMap* global) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <sstream>
 #include <stdexcept>
 
@@ -205,10 +206,17 @@ void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
 
 void MapEngine::localStep(const MeasurementBatch& batch) {
   const Clock::time_point start = Clock::now();
-  local_.recenter(batch.T_W_B.translation(), &global_);
-  local_.integrate(batch);
+  {
+    std::lock_guard<std::mutex> lock(layers_mutex_);
+    local_.recenter(batch.T_W_B.translation(), &global_);
+    local_.integrate(batch);
+    has_mapped_stamp_ = true;
+    last_mapped_stamp_s_ = batch.stamp_s;
+    last_T_W_B_ = batch.T_W_B;
+    ++frames_integrated_;
+  }
   const double ms = msSince(start);
-  planning_.update(local_, global_, ++frames_integrated_, batch.stamp_s, batch.T_W_B);
+  planning_.update(local_, global_, frames_integrated_, batch.stamp_s, batch.T_W_B);
   if (observers_.snapshot) observers_.snapshot(frames_integrated_, batch.stamp_s);
   if (observers_.global) {
     const LocalMapCounters& c = local_.counters();
@@ -321,6 +329,104 @@ std::vector<VoxelIndex> MapEngine::occupiedVoxels() const {
   global_.forEachVoxel([&](const VoxelIndex& g, double) { out.push_back(g); });
   local_.forEachOccupied([&](const VoxelIndex& g, double) { out.push_back(g); });
   return out;
+}
+
+MapState MapEngine::exportState() const {
+  MapState state;
+  state.local_map = config_.local_map;
+  state.log_odds = config_.log_odds;
+  std::lock_guard<std::mutex> lock(layers_mutex_);
+  local_.copyWindow(&state.window);
+  state.global_submaps.reserve(global_.submapCount());
+  global_.forEachSubmap([&](const SubmapIndex& m, const std::vector<VoxelRecord>& records) {
+    state.global_submaps.emplace_back(m, records);
+  });
+  std::sort(state.global_submaps.begin(), state.global_submaps.end(),
+            [](const auto& a, const auto& b) {
+              return std::lexicographical_compare(a.first.data(), a.first.data() + 3,
+                                                  b.first.data(), b.first.data() + 3);
+            });
+  state.has_last_stamp = has_mapped_stamp_;
+  state.last_stamp_s = last_mapped_stamp_s_;
+  state.T_W_B = last_T_W_B_;
+  state.frames_mapped = frames_restored_ + frames_integrated_;
+  return state;
+}
+
+void MapEngine::restoreState(const MapState& state) {
+  std::vector<std::string> errors = mapConfigDifferences(state, config_);
+  if (state.has_last_stamp && !std::isfinite(state.last_stamp_s)) {
+    errors.push_back("last stamp is not finite");
+  }
+  if (!isValidPose(state.T_W_B)) errors.push_back("last body pose is not a valid pose");
+  // Global records: offsets inside the submap, strictly increasing, occupied and within bounds.
+  const LogOddsModel model(config_.log_odds);
+  const std::uint32_t submap_voxels =
+      static_cast<std::uint32_t>(config_.local_map.submap_cells().prod());
+  const std::string window_problem = local_.windowProblem(state.window);
+  if (!window_problem.empty()) errors.push_back("local map window: " + window_problem);
+  // Submaps: each once, and none inside the window (the window holds those).
+  std::vector<SubmapIndex> submaps;
+  for (const auto& entry : state.global_submaps) submaps.push_back(entry.first);
+  auto less = [](const SubmapIndex& a, const SubmapIndex& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  };
+  std::sort(submaps.begin(), submaps.end(), less);
+  if (std::adjacent_find(submaps.begin(), submaps.end()) != submaps.end()) {
+    errors.push_back("a global submap is listed twice");
+  }
+  const Eigen::Vector3i submap_cells = config_.local_map.submap_cells();
+  const int n = LocalMapConfig::kSubmapsPerAxis;
+  for (const SubmapIndex& m : submaps) {
+    if (state.window.size.prod() == 0 || !window_problem.empty()) break;
+    const VoxelIndex first = m.cwiseProduct(submap_cells);
+    if (boxContains(state.window.min_index, state.window.size, first)) {
+      std::ostringstream msg;
+      msg << "global submap (" << m.transpose() << ") lies inside the local window (" << n
+          << " x " << n << " x " << n << " submaps from voxel " << state.window.min_index.transpose() << ")";
+      errors.push_back(msg.str());
+      break;
+    }
+  }
+  for (std::size_t i = 0; i < state.global_submaps.size() && errors.empty(); ++i) {
+    const auto& [m, records] = state.global_submaps[i];
+    for (std::size_t k = 0; k < records.size(); ++k) {
+      const VoxelRecord& r = records[k];
+      if (r.offset >= submap_voxels || (k > 0 && r.offset <= records[k - 1].offset) ||
+          !model.isOccupied(r.log_odds) || r.log_odds > model.clampMax()) {
+        std::ostringstream msg;
+        msg << "global submap (" << m.transpose() << ") record " << k << " (offset " << r.offset
+            << ", log-odds " << r.log_odds << ") is not an occupied voxel of the submap";
+        errors.push_back(msg.str());
+        break;
+      }
+    }
+  }
+
+  throwIfInvalid(errors, "map state");
+
+  {
+    std::lock_guard<std::mutex> lock(layers_mutex_);
+    global_.clear();
+    for (const auto& [m, records] : state.global_submaps) {
+      global_.store(m, std::vector<VoxelRecord>(records));
+    }
+    local_.restoreWindow(state.window);
+    has_mapped_stamp_ = state.has_last_stamp;
+    last_mapped_stamp_s_ = state.last_stamp_s;
+    last_T_W_B_ = state.T_W_B;
+    frames_restored_ = state.frames_mapped - std::min(state.frames_mapped, frames_integrated_);
+  }
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    have_stamp_ = state.has_last_stamp;
+    last_stamp_s_ = state.has_last_stamp ? state.last_stamp_s : -1e300;
+    stats_.global_voxels = global_.voxelCount();
+    stats_.global_submaps = global_.submapCount();
+    stats_.memory.global_bytes = global_.memoryBytes();
+  }
+  planning_.update(local_, global_, frames_integrated_, state.last_stamp_s, state.T_W_B);
+  planning_.flush();
 }
 
 }  // namespace mlmap

@@ -203,6 +203,37 @@ TEST(NodeConfigYaml, PrintedConfigReadsBackIdentically) {
   EXPECT_FALSE(sameConfig(back, NodeConfig{}));
 }
 
+TEST(NodeConfigYaml, MapFileSectionIsReadValidatedAndPrinted) {
+  const NodeConfig defaults = parseNodeConfigYaml("{}");
+  EXPECT_EQ(defaults.map_file.load_path, "");
+  EXPECT_EQ(defaults.map_file.save_path, "");
+  EXPECT_DOUBLE_EQ(defaults.map_file.save_period_s, 0.0);
+  EXPECT_FALSE(defaults.map_file.load_missing_ok);
+  const NodeConfig c = parseNodeConfigYaml(
+      "map_file: {load_path: /nonexistent/map.mlmap, load_missing_ok: true, save_path: "
+      "/tmp/map.mlmap, save_period_s: 30}");
+  EXPECT_EQ(c.map_file.load_path, "/nonexistent/map.mlmap");
+  EXPECT_TRUE(c.map_file.load_missing_ok);
+  EXPECT_EQ(c.map_file.save_path, "/tmp/map.mlmap");
+  EXPECT_DOUBLE_EQ(c.map_file.save_period_s, 30.0);
+  EXPECT_TRUE(sameConfig(parseNodeConfigYaml(toYaml(c)), c));
+
+  EXPECT_TRUE(contains(errorOf("map_file: {save_path: /tmp/m.mlmap, save_period_s: -1}"),
+                       "map_file.save_period_s: must be >= 0"));
+  EXPECT_TRUE(contains(errorOf("map_file: {save_period_s: 10}"),
+                       "map_file.save_period_s: periodic saving needs map_file.save_path"));
+  EXPECT_TRUE(contains(errorOf("map_file: {save_path: /nonexistent/dir/m.mlmap}"),
+                       "map_file.save_path: folder '/nonexistent/dir' does not exist"));
+  EXPECT_TRUE(contains(errorOf("map_file: {save_path: /tmp}"), "map_file.save_path: is a folder"));
+  EXPECT_TRUE(contains(errorOf("map_file: {load_path: /nonexistent/map.mlmap}"),
+                       "map_file.load_path: no such file (got '/nonexistent/map.mlmap'"));
+  EXPECT_TRUE(contains(errorOf("map_file: {save_paht: x}"),
+                       "map_file.save_paht: unknown key (known keys: load_missing_ok, load_path, "
+                       "save_path, save_period_s)"));
+  EXPECT_TRUE(contains(errorOf("map_file: {save_period_s: soon}"),
+                       "map_file.save_period_s: cannot read 'soon'"));
+}
+
 TEST(NodeConfigYaml, ShippedFilesEqualTheDefaultsInCode) {
   EXPECT_TRUE(sameConfig(loadNodeConfigYaml(MLMAP_SOURCE_DIR "/config/mlmap_node.yaml"),
                          NodeConfig{}));

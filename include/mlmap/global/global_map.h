@@ -34,6 +34,8 @@ class GlobalMap {
   /// Moves a submap's voxels out (for the local map when the submap becomes active again).
   /// Returns false when nothing is stored for it.
   bool take(const SubmapIndex& submap, std::vector<VoxelRecord>* records);
+  /// Removes every stored submap.
+  void clear();
   /// Voxels of one submap, or nullptr.
   [[nodiscard]] const std::vector<VoxelRecord>* find(const SubmapIndex& submap) const;
 

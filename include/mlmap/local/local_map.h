@@ -15,6 +15,7 @@
 #include "mlmap/global/global_map.h"
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace mlmap {
@@ -76,6 +77,15 @@ class LocalMap {
 
   /// Retires every submap to `global` (e.g. before saving a complete map); the window stays.
   void retireAll(GlobalMap* global);
+
+  /// Replaces the whole window by `window` (as copyWindow() gives it; an empty window unplaces
+  /// the map), e.g. when a saved map is loaded. Its size must equal the configured size, its
+  /// first voxel must lie on the submap grid and every value must be unknown or within the
+  /// clamping bounds; otherwise std::invalid_argument says what is wrong and nothing changes.
+  /// Counts one state change, so that layers derived from states are rebuilt.
+  void restoreWindow(const LocalWindow& window);
+  /// What restoreWindow() would refuse in `window`, or "" when it fits.
+  [[nodiscard]] std::string windowProblem(const LocalWindow& window) const;
 
   /// True when the window has been placed and holds `index`.
   [[nodiscard]] bool contains(const VoxelIndex& index) const;

@@ -8,6 +8,7 @@
 #include "mlmap/core/config.h"
 #include "mlmap/global/global_map.h"
 #include "mlmap/local/local_map.h"
+#include "mlmap/local/map_state.h"
 #include "mlmap/planning/planning_layers.h"
 #include "mlmap/pipeline/rate_limited_log.h"
 
@@ -134,6 +135,17 @@ class MapEngine {
   /// Every occupied voxel, local and global, with its log-odds (after flush()).
   [[nodiscard]] std::vector<VoxelIndex> occupiedVoxels() const;
 
+  /// The local and global layers as they are between two frames (what a map file saves). Safe to
+  /// call from any thread at any time: it waits for the frame being integrated, if any. Frames
+  /// still queued are not in it; call flush() first to include them (e.g. at shutdown).
+  [[nodiscard]] MapState exportState() const;
+  /// Replaces the local and global layers by `state` (a loaded map) and publishes a snapshot of
+  /// it. Later frames must be newer than its last stamp. Call before submitting frames, or after
+  /// flush() with no frame in flight. Throws std::invalid_argument, changing nothing, when the
+  /// state does not fit this engine (voxel size, window size or log-odds model differ from the
+  /// configuration, or its data is inconsistent); the message names what differs.
+  void restoreState(const MapState& state);
+
  private:
   using Input = std::variant<PointCloudFrame, DepthFrame>;
   FrameStatus admit(double stamp_s, const Transform& T_W_B, const Transform& T_B_S);
@@ -151,7 +163,15 @@ class MapEngine {
   LocalMap local_;
   GlobalMap global_;
   PlanningLayers planning_;
-  std::uint64_t frames_integrated_ = 0;  // local-global stage only
+  std::uint64_t frames_integrated_ = 0;  // local-global stage only (written under layers_mutex_)
+
+  // Guards local_ and global_ against exportState() while the local-global stage writes them,
+  // and the state of the last mapped frame.
+  mutable std::mutex layers_mutex_;
+  bool has_mapped_stamp_ = false;
+  double last_mapped_stamp_s_ = 0.0;
+  Transform last_T_W_B_ = Transform::Identity();
+  std::uint64_t frames_restored_ = 0;  // frames mapped before the state restored last
 
   // Statistics, guarded by stats_mutex_.
   mutable std::mutex stats_mutex_;
