@@ -233,7 +233,9 @@ int main(int argc, char** argv) {
                  "clear their ray up to here and mark nothing; the awareness grid grows to reach it")
       ->check(CLI::Range(0.1, 400.0));
   app.add_option("--config", config_path, "engine configuration YAML (config/mlmap.yaml documents "
-                                          "every key; the replay always runs synchronously)")
+                                          "every key; an mlmap_node file works too, its dds and "
+                                          "map_file sections are skipped; the replay always runs "
+                                          "synchronously)")
       ->check(CLI::ExistingFile);
   app.add_option("--out", out_dir, "output folder")->capture_default_str();
   app.add_option("--voxels-out", voxels_out, "occupied voxels as text (default: OUT/occupied_voxels.txt)");

@@ -55,7 +55,9 @@ void setResolution(MapConfig* c, double resolution_m) {
 }
 
 MapConfig runConfig(const std::string& config_path, DataKind kind, double resolution_m) {
-  MapConfig config = config_path.empty() ? MapConfig{} : io::loadConfigYaml(config_path);
+  // mlmap_node's files work too: their dds and map_file sections do not concern the engine.
+  MapConfig config =
+      config_path.empty() ? MapConfig{} : io::loadConfigYaml(config_path, io::kNodeOnlySections);
   const bool frames = kind == DataKind::kFrameDirectory;
   if (resolution_m > 0.0 || config_path.empty()) {
     setResolution(&config, resolution_m > 0.0 ? resolution_m : (frames ? 0.02 : 0.1));

@@ -82,13 +82,15 @@ void readEngineSections(Section& top, MapConfig* config) {
   }
 }
 
-MapConfig parseConfigYaml(const std::string& text, const std::string& source_name) {
+MapConfig parseConfigYaml(const std::string& text, const std::string& source_name,
+                          const std::vector<std::string>& skipped_sections) {
   const YAML::Node root = parseYamlDocument(text, source_name);
   MapConfig c;
   std::vector<std::string> errors;
   {
     Section top(root, "", &errors);
     readEngineSections(top, &c);
+    for (const std::string& key : skipped_sections) (void)top.child(key);
   }  // reports unknown top-level keys
   stripTopLevelDots(&errors);
   if (errors.empty()) errors = c.validate();
@@ -96,8 +98,8 @@ MapConfig parseConfigYaml(const std::string& text, const std::string& source_nam
   return c;
 }
 
-MapConfig loadConfigYaml(const std::string& path) {
-  return parseConfigYaml(readConfigFile(path), path);
+MapConfig loadConfigYaml(const std::string& path, const std::vector<std::string>& skipped_sections) {
+  return parseConfigYaml(readConfigFile(path), path, skipped_sections);
 }
 
 std::string toYaml(const MapConfig& c) {

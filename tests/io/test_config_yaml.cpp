@@ -42,6 +42,25 @@ TEST(ConfigYaml, ShippedDefaultFileEqualsTheDefaultsInCode) {
   EXPECT_TRUE(sameConfig(io::loadConfigYaml(MLMAP_SOURCE_DIR "/config/mlmap.yaml"), MapConfig{}));
 }
 
+TEST(ConfigYaml, OfflineProgramsReadTheEngineSectionsOfANodeConfiguration) {
+  const std::string node = "local_map: {resolution_m: 0.2}\ndds: {domain_id: 7}\nmap_file: {save_path: m}\n";
+  EXPECT_DOUBLE_EQ(io::parseConfigYaml(node, "node.yaml", io::kNodeOnlySections).local_map.resolution_m, 0.2);
+  // Skipped means not read, not anything goes: typos elsewhere are still errors.
+  EXPECT_NE(errorOf(node).find("dds: unknown key"), std::string::npos);
+  try {
+    (void)io::parseConfigYaml(node + "lokal_map: {}\n", "node.yaml", io::kNodeOnlySections);
+    ADD_FAILURE() << "a typo next to skipped sections was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("lokal_map: unknown key"), std::string::npos) << e.what();
+  }
+  // The shipped node configurations load this way.
+  for (const char* name : {"mlmap_node.yaml", "mlmap_node_replay.yaml", "mlmap_node_depth.yaml"}) {
+    EXPECT_NO_THROW((void)io::loadConfigYaml(std::string(MLMAP_SOURCE_DIR "/config/") + name,
+                                             io::kNodeOnlySections))
+        << name;
+  }
+}
+
 TEST(ConfigYaml, UnknownKeysAndBadValuesAreClearErrors) {
   EXPECT_NE(errorOf("local_map: {resolutoin_m: 0.1}").find("local_map.resolutoin_m: unknown key"),
             std::string::npos);

@@ -217,12 +217,11 @@ TEST(Replay, RealsenseFramesGiveTheDemosMap) {
   const std::string dir = ::testing::TempDir() + "/mlmap_replay_frames";
   fs::remove_all(dir);
   fs::create_directories(dir);
-  // The engine sections of the DDS replay configuration: the demo's frame settings with the ESDF
-  // box cut to 2 x 2 x 1 m, which makes planning ten times cheaper and changes no voxel.
-  const std::string node_config = readText(std::string(MLMAP_SOURCE_DIR) + "/config/mlmap_node_replay.yaml");
-  ASSERT_NE(node_config.find("\ndds:"), std::string::npos);
-  mlmap::testing::writeFile(dir + "/engine.yaml", node_config.substr(0, node_config.find("\ndds:") + 1));
-  const std::string options = " --frames '" + frames + "' --config '" + dir + "/engine.yaml' --out '" + dir;
+  // The DDS replay configuration as it is (the offline programs skip its dds and map_file
+  // sections): the demo's frame settings with the ESDF box cut to 2 x 2 x 1 m, which makes
+  // planning ten times cheaper and changes no voxel.
+  const std::string config = std::string(MLMAP_SOURCE_DIR) + "/config/mlmap_node_replay.yaml";
+  const std::string options = " --frames '" + frames + "' --config '" + config + "' --out '" + dir;
   ASSERT_EQ(run(std::string(MLMAP_REPLAY_BIN) + options + "/replay'", dir + "/replay.log"), 0)
       << readText(dir + "/replay.log");
   ASSERT_EQ(run(std::string(MLMAP_DEMO_BIN) + options + "/demo'", dir + "/demo.log"), 0)
