@@ -15,9 +15,8 @@ packages=(
   libyaml-cpp-dev                      # configuration files
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev  # depth PNGs, map pictures
   libcli11-dev libspdlog-dev           # command line, logging
-  liboctomap-dev                       # OctoMap .bt export (mlmap_map_tool)
+  liboctomap-dev                       # OctoMap: .bt export (mlmap_map_tool), the side-by-side comparison
   libgtest-dev                         # tests
-  liboctomap-dev                       # side-by-side comparison with OctoMap (mlmap_compare_octomap)
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools  # DDS component (Fast DDS 2.9, ROS 2 wire types)
   cyclonedds-dev cyclonedds-tools      # cross-vendor interoperability test (ROS 2's other tier-1 DDS)
   iproute2                             # network-namespace tests
