@@ -3,7 +3,8 @@
 namespace mlmap {
 namespace {
 constexpr int kBits = 21;
-constexpr std::int64_t kBias = std::int64_t{1} << (kBits - 1);
+constexpr std::int64_t kBias = GlobalMap::kSubmapIndexLimit;
+static_assert(kBias == std::int64_t{1} << (kBits - 1));
 constexpr std::uint64_t kMask = (std::uint64_t{1} << kBits) - 1;
 }  // namespace
 

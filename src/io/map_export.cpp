@@ -2,17 +2,25 @@
 
 #include "mlmap/io/map_file.h"
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 
 namespace mlmap::io {
 namespace {
 
-// map_saver's defaults (nav2 and ROS 1 map_server trinary mode).
+// Which grid values become occupied / free pixels: map_saver's defaults.
 constexpr double kOccupiedThresh = 0.65;
 constexpr double kFreeThresh = 0.25;
+// The thresholds the YAML gives map_server for loading the pixels back. Unknown (205) reads as
+// occupancy (255 - 205) / 255 = 0.196, and map_server calls a pixel free when it is below
+// free_thresh: with 0.25 every unknown cell would load as free. ROS 1's map_saver writes 0.196
+// for this reason, and nav2's does since ros-navigation/navigation2#5278.
+constexpr double kYamlOccupiedThresh = 0.65;
+constexpr double kYamlFreeThresh = 0.196;
 constexpr std::uint8_t kPgmOccupied = 0;
 constexpr std::uint8_t kPgmFree = 254;
 constexpr std::uint8_t kPgmUnknown = 205;
@@ -51,6 +59,37 @@ std::vector<OccupiedVoxel> occupiedVoxels(const MapState& state) {
 }
 
 ProjectedGrid projectMap(const MapState& state, const ProjectedGridConfig& config) {
+  // The grid spans every global submap in the band: refuse before allocating one that a map
+  // with far-apart submaps would make enormous (an upper bound: whole submaps, band rounded out).
+  if (config.include_global && !state.global_submaps.empty()) {
+    const double res = state.local_map.resolution_m;
+    const double offset = config.relative_band ? state.T_W_B.translation().z() : 0.0;
+    const double k0 = std::floor((config.band_min_m + offset) / res);
+    const double k1 = std::ceil((config.band_max_m + offset) / res);
+    const Eigen::Vector3i cells = state.local_map.submap_cells();
+    Eigen::Vector2d lo(std::numeric_limits<double>::max(), std::numeric_limits<double>::max());
+    Eigen::Vector2d hi = -lo;
+    if (state.window.size.prod() != 0) {
+      lo = state.window.min_index.head<2>().cast<double>();
+      hi = lo + state.window.size.head<2>().cast<double>();
+    }
+    for (const auto& entry : state.global_submaps) {
+      const SubmapIndex& m = entry.first;
+      const double z_lo = static_cast<double>(m.z()) * cells.z();
+      if (z_lo + cells.z() <= k0 || z_lo >= k1) continue;
+      const Eigen::Vector2d a = m.head<2>().cast<double>().cwiseProduct(cells.head<2>().cast<double>());
+      lo = lo.cwiseMin(a);
+      hi = hi.cwiseMax(a + cells.head<2>().cast<double>());
+    }
+    const double grid_cells = hi.x() > lo.x() ? (hi.x() - lo.x()) * (hi.y() - lo.y()) : 0.0;
+    if (grid_cells > static_cast<double>(kMaxExportGridCells)) {
+      std::ostringstream m;
+      m << "the 2D grid of this map would span " << (hi.x() - lo.x()) << " x " << (hi.y() - lo.y())
+        << " cells (more than " << kMaxExportGridCells << "): its global submaps lie far apart; "
+        << "take the local window only or a narrower height band";
+      throw std::runtime_error(m.str());
+    }
+  }
   GlobalMap global(state.local_map.submap_cells(), state.local_map.resolution_m);
   for (const auto& [m, records] : state.global_submaps) global.store(m, std::vector<VoxelRecord>(records));
   ProjectedGrid grid;
@@ -124,7 +163,7 @@ std::string encodeGridYaml(const ProjectedGrid& grid, const std::string& image_n
   y << std::setprecision(9);
   y << "image: " << image_name << "\nmode: trinary\nresolution: " << grid.resolution_m
     << "\norigin: [" << grid.origin_W.x() << ", " << grid.origin_W.y() << ", 0]\nnegate: 0\n"
-    << "occupied_thresh: " << kOccupiedThresh << "\nfree_thresh: " << kFreeThresh << "\n";
+    << "occupied_thresh: " << kYamlOccupiedThresh << "\nfree_thresh: " << kYamlFreeThresh << "\n";
   return y.str();
 }
 

@@ -335,6 +335,9 @@ MapState decodeMapFile(const std::string& bytes, const std::string& source) {
     refuse(source, "global map: " + std::to_string(voxels_read) + " voxels in the submaps, the header announces " +
                        std::to_string(global_voxels));
   }
+  // Checksums prove the bytes are what was written, not that what was written is a map.
+  const std::vector<std::string> problems = mapStateProblems(state);
+  if (!problems.empty()) refuse(source, "inconsistent map: " + problems.front());
   return state;
 }
 

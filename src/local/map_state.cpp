@@ -1,5 +1,7 @@
 #include "mlmap/local/map_state.h"
 
+#include <algorithm>
+#include <cstdint>
 #include <sstream>
 
 namespace mlmap {
@@ -26,6 +28,88 @@ std::vector<std::string> mapConfigDifferences(const MapState& state, const MapCo
   compare("log_odds.clamp_max", m.clamp_max, c.clamp_max);
   compare("log_odds.occupied_threshold", m.occupied_threshold, c.occupied_threshold);
   return differences;
+}
+
+std::vector<std::string> mapStateProblems(const MapState& state) {
+  std::vector<std::string> problems;
+  auto say = [&problems](const std::ostringstream& m) { problems.push_back(m.str()); };
+  const LogOddsModel model(state.log_odds);
+  const Eigen::Vector3i submap_cells = state.local_map.submap_cells();
+  const LocalWindow& w = state.window;
+
+  // The window: empty, or the configured size on the submap grid, every value in bounds.
+  bool window_ok = true;
+  if (w.size.prod() != 0) {
+    std::ostringstream m;
+    if (w.size != state.local_map.size_cells) {
+      m << "local map window: size " << w.size.transpose() << " voxels, the map's configuration says "
+        << state.local_map.size_cells.transpose();
+    } else if (w.log_odds.size() != static_cast<std::size_t>(w.size.prod())) {
+      m << "local map window: " << w.log_odds.size() << " values for " << w.size.prod() << " voxels";
+    }
+    for (int a = 0; a < 3 && m.str().empty(); ++a) {
+      const std::int64_t lo = w.min_index[a];
+      if (lo < -kMaxAbsMapVoxelIndex || lo + w.size[a] > kMaxAbsMapVoxelIndex) {
+        m << "local map window: first voxel " << w.min_index.transpose() << " is beyond +-"
+          << kMaxAbsMapVoxelIndex;
+      } else if (((lo % submap_cells[a]) + submap_cells[a]) % submap_cells[a] != 0) {
+        m << "local map window: first voxel " << w.min_index.transpose()
+          << " is not on the submap grid (" << submap_cells.transpose() << " voxels per submap)";
+      }
+    }
+    for (std::size_t i = 0; i < w.log_odds.size() && m.str().empty(); ++i) {
+      const LogOddsQ v = w.log_odds[i];
+      if (v != kUnknownLogOdds && (v < model.clampMin() || v > model.clampMax())) {
+        m << "local map window: value " << v << " at offset " << i << " is outside the clamping bounds ["
+          << model.clampMin() << ", " << model.clampMax() << "] (units of 0.001)";
+      }
+    }
+    if (!m.str().empty()) {
+      say(m);
+      window_ok = false;
+    }
+  }
+
+  // Global submaps: in range, each once, none inside the window; records inside the submap,
+  // strictly increasing, occupied and within the clamping bound.
+  const std::int64_t submap_voxels = std::int64_t{submap_cells.x()} * submap_cells.y() * submap_cells.z();
+  std::vector<SubmapIndex> seen;
+  seen.reserve(state.global_submaps.size());
+  for (const auto& [m, records] : state.global_submaps) {
+    std::ostringstream msg;
+    for (int a = 0; a < 3 && msg.str().empty(); ++a) {
+      const std::int64_t first = std::int64_t{m[a]} * submap_cells[a];
+      if (m[a] < -GlobalMap::kSubmapIndexLimit || m[a] >= GlobalMap::kSubmapIndexLimit ||
+          first < -kMaxAbsMapVoxelIndex || first + submap_cells[a] > kMaxAbsMapVoxelIndex) {
+        msg << "global submap (" << m.transpose() << ") is out of range";
+      }
+    }
+    if (msg.str().empty() && window_ok && w.size.prod() != 0 &&
+        boxContains(w.min_index, w.size, m.cwiseProduct(submap_cells))) {
+      msg << "global submap (" << m.transpose() << ") lies inside the local window (from voxel "
+          << w.min_index.transpose() << ")";
+    }
+    for (std::size_t k = 0; k < records.size() && msg.str().empty(); ++k) {
+      const VoxelRecord& r = records[k];
+      if (r.offset >= submap_voxels || (k > 0 && r.offset <= records[k - 1].offset) ||
+          !model.isOccupied(r.log_odds) || r.log_odds > model.clampMax()) {
+        msg << "global submap (" << m.transpose() << ") record " << k << " (offset " << r.offset
+            << ", log-odds " << r.log_odds << ") is not an occupied voxel of the submap";
+      }
+    }
+    if (!msg.str().empty()) {
+      say(msg);
+      return problems;  // one bad submap is enough to refuse; the rest may be garbage too
+    }
+    seen.push_back(m);
+  }
+  std::sort(seen.begin(), seen.end(), [](const SubmapIndex& a, const SubmapIndex& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  });
+  if (std::adjacent_find(seen.begin(), seen.end()) != seen.end()) {
+    problems.push_back("a global submap is listed twice");
+  }
+  return problems;
 }
 
 }  // namespace mlmap

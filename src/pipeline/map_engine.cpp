@@ -359,48 +359,8 @@ void MapEngine::restoreState(const MapState& state) {
     errors.push_back("last stamp is not finite");
   }
   if (!isValidPose(state.T_W_B)) errors.push_back("last body pose is not a valid pose");
-  // Global records: offsets inside the submap, strictly increasing, occupied and within bounds.
-  const LogOddsModel model(config_.log_odds);
-  const std::uint32_t submap_voxels =
-      static_cast<std::uint32_t>(config_.local_map.submap_cells().prod());
-  const std::string window_problem = local_.windowProblem(state.window);
-  if (!window_problem.empty()) errors.push_back("local map window: " + window_problem);
-  // Submaps: each once, and none inside the window (the window holds those).
-  std::vector<SubmapIndex> submaps;
-  for (const auto& entry : state.global_submaps) submaps.push_back(entry.first);
-  auto less = [](const SubmapIndex& a, const SubmapIndex& b) {
-    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
-  };
-  std::sort(submaps.begin(), submaps.end(), less);
-  if (std::adjacent_find(submaps.begin(), submaps.end()) != submaps.end()) {
-    errors.push_back("a global submap is listed twice");
-  }
-  const Eigen::Vector3i submap_cells = config_.local_map.submap_cells();
-  const int n = LocalMapConfig::kSubmapsPerAxis;
-  for (const SubmapIndex& m : submaps) {
-    if (state.window.size.prod() == 0 || !window_problem.empty()) break;
-    const VoxelIndex first = m.cwiseProduct(submap_cells);
-    if (boxContains(state.window.min_index, state.window.size, first)) {
-      std::ostringstream msg;
-      msg << "global submap (" << m.transpose() << ") lies inside the local window (" << n
-          << " x " << n << " x " << n << " submaps from voxel " << state.window.min_index.transpose() << ")";
-      errors.push_back(msg.str());
-      break;
-    }
-  }
-  for (std::size_t i = 0; i < state.global_submaps.size() && errors.empty(); ++i) {
-    const auto& [m, records] = state.global_submaps[i];
-    for (std::size_t k = 0; k < records.size(); ++k) {
-      const VoxelRecord& r = records[k];
-      if (r.offset >= submap_voxels || (k > 0 && r.offset <= records[k - 1].offset) ||
-          !model.isOccupied(r.log_odds) || r.log_odds > model.clampMax()) {
-        std::ostringstream msg;
-        msg << "global submap (" << m.transpose() << ") record " << k << " (offset " << r.offset
-            << ", log-odds " << r.log_odds << ") is not an occupied voxel of the submap";
-        errors.push_back(msg.str());
-        break;
-      }
-    }
+  if (errors.empty()) {  // judged against its own configuration, which must be this one
+    for (std::string& problem : mapStateProblems(state)) errors.push_back(std::move(problem));
   }
 
   throwIfInvalid(errors, "map state");

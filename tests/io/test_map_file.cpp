@@ -263,6 +263,15 @@ TEST(MapFile, TheEngineRefusesInconsistentStatesAndKeepsItsMap) {
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
     }
     EXPECT_EQ(io::encodeMapFile(engine.exportState()), before);
+    // The same state in a file with valid checksums: the loader refuses it too, before any
+    // program (mlmap_map_tool's exports, say) could index with it.
+    try {
+      (void)io::decodeMapFile(io::encodeMapFile(s), "bad.mlmap");
+      ADD_FAILURE() << "the file was accepted: " << expected;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("bad.mlmap: inconsistent map: "), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
   };
   MapState s = smallState();
   s.global_submaps[0].second[1].offset = 1000;  // a 2 x 2 x 2 submap has 8 voxels
@@ -282,6 +291,15 @@ TEST(MapFile, TheEngineRefusesInconsistentStatesAndKeepsItsMap) {
   s = smallState();
   s.global_submaps[1].first = SubmapIndex(-1, 2, 4);  // the window's submaps: (-2..2, 1..5, 3..7)
   refused(s, "lies inside the local window");
+  s = smallState();
+  s.global_submaps[1].first = SubmapIndex(GlobalMap::kSubmapIndexLimit, 0, 0);  // would alias -limit
+  refused(s, "is out of range");
+  s = smallState();
+  s.global_submaps[0].first = SubmapIndex(-GlobalMap::kSubmapIndexLimit - 1, 0, 0);
+  refused(s, "is out of range");
+  s = smallState();
+  s.window.min_index.x() = 2147483646;  // min_index + size would overflow int
+  refused(s, "is beyond");
 }
 
 TEST(MapFile, AFailedSaveLeavesThePreviousFileAndNoTemporaryFile) {
@@ -532,9 +550,41 @@ TEST(MapExport, PgmAndYamlMatchTheGridCellByCellAsMapServerReadsThem) {
     EXPECT_NEAR(yaml["origin"][1].as<double>(), g.origin_W.y(), 1e-9);
     EXPECT_EQ(yaml["origin"][2].as<double>(), 0.0);
     EXPECT_EQ(yaml["negate"].as<int>(), 0);
-    EXPECT_EQ(yaml["occupied_thresh"].as<double>(), 0.65);
-    EXPECT_EQ(yaml["free_thresh"].as<double>(), 0.25);
+    // Load the image back as map_server does (trinary, negate 0): occ = (255 - p) / 255,
+    // occupied above occupied_thresh, free below free_thresh, unknown otherwise. Every cell must
+    // come back as the grid's own three-state reading.
+    const double occupied_thresh = yaml["occupied_thresh"].as<double>();
+    const double free_thresh = yaml["free_thresh"].as<double>();
+    for (int row = 0; row < h; ++row) {
+      for (int x = 0; x < w; ++x) {
+        const int v = g.at(x, h - 1 - row);
+        const int expected = v < 0 ? -1 : v <= 25 ? 0 : v >= 65 ? 100 : -1;
+        const double occ = (255.0 - pixels[static_cast<std::size_t>(row * w + x)]) / 255.0;
+        const int loaded = occ > occupied_thresh ? 100 : occ < free_thresh ? 0 : -1;
+        ASSERT_EQ(loaded, expected) << "cell " << x << ", " << row << " (grid value " << v << ")";
+      }
+    }
   }
+}
+
+TEST(MapExport, AGridOverFarApartSubmapsIsRefusedBeforeItIsAllocated) {
+  MapState s = smallState();
+  ProjectedGridConfig all_heights;
+  all_heights.relative_band = false;
+  all_heights.band_min_m = -1e3;
+  all_heights.band_max_m = 1e3;
+  all_heights.include_global = true;
+  EXPECT_GT(io::projectMap(s, all_heights).cells.size(), 0u);
+  // 2-voxel submaps 10,000 apart on x and y: 20,000 x 20,000 cells, over the 2^28 limit.
+  s.global_submaps.push_back({SubmapIndex(10000, 10000, 0), {{0, 850}}});
+  try {
+    (void)io::projectMap(s, all_heights);
+    ADD_FAILURE() << "a 4e8-cell grid was made";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("lie far apart"), std::string::npos) << e.what();
+  }
+  all_heights.include_global = false;  // the local window alone is fine
+  EXPECT_GT(io::projectMap(s, all_heights).cells.size(), 0u);
 }
 
 }  // namespace

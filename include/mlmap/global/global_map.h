@@ -25,6 +25,10 @@ struct VoxelRecord {
 /// Occupied voxels of retired submaps. Not thread-safe: owned by the local-global stage.
 class GlobalMap {
  public:
+  /// Submap indices are stored in 21 bits per axis: each must lie in [-kSubmapIndexLimit,
+  /// kSubmapIndexLimit).
+  static constexpr int kSubmapIndexLimit = 1 << 20;
+
   /// `submap_cells`: voxels per submap and axis; `resolution_m`: voxel size.
   GlobalMap(const Eigen::Vector3i& submap_cells, double resolution_m);
 

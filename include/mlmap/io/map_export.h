@@ -5,7 +5,8 @@
 ///   centre, float log_odds, float probability) or PCD v0.7 (binary: float x, y, z, intensity =
 ///   occupancy probability);
 /// - the 2D grid as PGM + YAML, exactly as ROS map_server / nav2 map_saver write it (trinary:
-///   occupied 0, free 254, unknown 205; thresholds 0.65 / 0.25).
+///   occupied 0, free 254, unknown 205; values >= 65 occupied, <= 25 free; the YAML's
+///   occupied_thresh / free_thresh 0.65 / 0.196 make map_server load 205 back as unknown).
 /// The OctoMap `.bt` export lives in mlmap/io/octomap_export.h (its own target, liboctomap).
 /// Every writer goes through writeFileAtomically(): a failed export leaves no partial file.
 
@@ -13,6 +14,7 @@
 #include "mlmap/local/map_state.h"
 #include "mlmap/planning/projected_grid.h"
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -29,9 +31,12 @@ struct OccupiedVoxel {
 /// then offset).
 [[nodiscard]] std::vector<OccupiedVoxel> occupiedVoxels(const MapState& state);
 
+/// Largest 2D grid projectMap() makes (cells): 2^28, a 268 MB image.
+inline constexpr std::size_t kMaxExportGridCells = std::size_t{1} << 28;
+
 /// The 2D grid of the map (ProjectedGrid rules) over the local window and, with
 /// `config.include_global`, the global map. A relative band is anchored at the map's last body
-/// height.
+/// height. Throws std::runtime_error when the grid would exceed kMaxExportGridCells.
 [[nodiscard]] ProjectedGrid projectMap(const MapState& state, const ProjectedGridConfig& config);
 
 /// The bytes of a binary little-endian PLY file of the voxel centres (see the file comment).
