@@ -38,13 +38,17 @@ std::optional<double> stampFromFileName(const std::string& file_name) {
   const std::string s = stem(file_name);
   const std::size_t dot = s.find('.');
   if (dot == std::string::npos) {
-    if (allDigits(s) && s.size() >= 16 && s.size() <= 20) {
-      // Nanoseconds: split so that the seconds keep their precision in a double.
-      const std::string sec = s.substr(0, s.size() - 9);
-      const std::string nsec = s.substr(s.size() - 9);
-      return std::strtod(sec.c_str(), nullptr) + std::strtod(nsec.c_str(), nullptr) * 1e-9;
-    }
-    return std::nullopt;
+    // Epoch stamps as integers, told apart by their length (since 2001 and for centuries):
+    // 19-20 digits are nanoseconds, 16-17 microseconds. Split so that the seconds keep their
+    // precision in a double.
+    std::size_t fraction_digits = 0;
+    if (allDigits(s) && s.size() >= 19 && s.size() <= 20) fraction_digits = 9;
+    if (allDigits(s) && s.size() >= 16 && s.size() <= 17) fraction_digits = 6;
+    if (fraction_digits == 0) return std::nullopt;
+    const std::string sec = s.substr(0, s.size() - fraction_digits);
+    const std::string fraction = s.substr(s.size() - fraction_digits);
+    return std::strtod(sec.c_str(), nullptr) +
+           std::strtod(fraction.c_str(), nullptr) * (fraction_digits == 9 ? 1e-9 : 1e-6);
   }
   if (!allDigits(s.substr(0, dot)) || !allDigits(s.substr(dot + 1))) return std::nullopt;
   return std::strtod(s.c_str(), nullptr);

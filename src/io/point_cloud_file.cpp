@@ -221,6 +221,10 @@ PointCloudFile parsePcd(const std::string& content, const std::string& source) {
                      std::to_string(fields.size()) + " fields");
   }
   if (!have_width) fail(source, "PCD header has no WIDTH line");
+  if (width > std::numeric_limits<std::uint32_t>::max() || height > std::numeric_limits<std::uint32_t>::max()) {
+    fail(source, "PCD header: WIDTH " + std::to_string(width) + " x HEIGHT " + std::to_string(height) +
+                     " is beyond 32 bits per dimension");
+  }
   if (!have_points) points = width * height;
   if (points != width * height) {
     fail(source, "PCD header: POINTS " + std::to_string(points) + " is not WIDTH x HEIGHT = " +
@@ -357,6 +361,16 @@ PointCloudFile parsePcd(const std::string& content, const std::string& source) {
     if (available - 8 < compressed) {
       fail(source, "truncated: binary_compressed data holds " + std::to_string(available - 8) +
                        " bytes of the " + std::to_string(compressed) + " the header declares");
+    }
+    if (available - 8 > compressed) {
+      fail(source, std::to_string(available - 8 - compressed) +
+                       " bytes of unexpected data after the compressed block");
+    }
+    // An LZF back reference of 3 bytes expands to at most 264: anything that claims more than 88
+    // times its compressed size is corrupt, and is refused before its buffer is allocated.
+    if (needed > std::size_t{88} * compressed) {
+      fail(source, "binary_compressed: " + std::to_string(compressed) + " bytes of LZF data cannot decode to " +
+                       std::to_string(needed) + " bytes");
     }
     std::vector<unsigned char> raw;
     if (!lzfDecompress(bytes + 8, compressed, needed, &raw)) {
@@ -508,6 +522,17 @@ PointCloudFile parsePly(const std::string& content, const std::string& source) {
     }
   }
   if (format.empty()) fail(source, "PLY header has no format line");
+  // Every item of an element with properties takes at least one byte of the body; an item of one
+  // without properties takes none, so its count could only spin.
+  for (const PlyElement& e : elements) {
+    if (e.count > 0 && e.properties.empty()) {
+      fail(source, "PLY element '" + e.name + "' has " + std::to_string(e.count) + " items but no properties");
+    }
+    if (e.count > content.size() - pos) {
+      fail(source, "truncated: PLY element '" + e.name + "' declares " + std::to_string(e.count) +
+                       " items, the body holds " + std::to_string(content.size() - pos) + " bytes");
+    }
+  }
   const PlyElement* vertex = nullptr;
   for (const PlyElement& e : elements) {
     if (e.name == "vertex") vertex = &e;

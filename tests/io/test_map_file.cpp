@@ -207,7 +207,8 @@ TEST(MapFile, WrongMagicVersionOrTrailingDataIsRefusedWithItsReason) {
   std::string png = bytes;
   png.replace(0, 8, "\x89PNG\r\n\x1a\n");
   EXPECT_NE(refusal(png).find("not an mlmap map file"), std::string::npos);
-  // Version 2 with a valid header checksum: still refused, by version.
+  // Version 2 (its header checksum no longer matches, but the version is checked first, so a
+  // newer file is reported as newer, not as corrupted).
   std::string v2 = bytes;
   v2[8] = 2;
   EXPECT_NE(refusal(v2).find("map file format version 2, this build reads version 1"), std::string::npos)

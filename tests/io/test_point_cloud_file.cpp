@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <random>
@@ -169,12 +170,23 @@ TEST(PcdReader, MalformedAndTruncatedFilesAreRefusedWithTheReason) {
   expectError([&] { (void)parsePcd("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nDATA ascii\n1 2 3\n4 5 6\n", "x.pcd"); },
               {"x.pcd", "more data"});
   // A huge declared size is refused without allocating it.
-  expectError([&] { (void)parsePcd("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 999999999999\nDATA binary\n", "big.pcd"); },
+  expectError([&] { (void)parsePcd("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 4000000000\nDATA binary\n", "big.pcd"); },
               {"big.pcd", "too large"});
-  expectError([&] { (void)parsePcd("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 999999999999\nDATA ascii\n1 2 3\n", "big2.pcd"); },
-              {"big2.pcd", "truncated", "1 of 999999999999"});
+  expectError([&] { (void)parsePcd("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 4000000000\nDATA ascii\n1 2 3\n", "big2.pcd"); },
+              {"big2.pcd", "truncated", "1 of 4000000000"});
   expectError([&] { (void)parsePly("ply\nformat binary_little_endian 1.0\nelement vertex 999999999999\nproperty float x\nproperty float y\nproperty float z\nend_header\n", "big.ply"); },
-              {"big.ply", "truncated", "vertex 0"});
+              {"big.ply", "truncated", "'vertex' declares 999999999999 items"});
+  // WIDTH x HEIGHT would wrap around 64 bits to POINTS 0 (an "empty" cloud): refused.
+  expectError([&] { (void)parsePcd("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 4294967296\nHEIGHT 4294967296\nPOINTS 0\nDATA ascii\n", "wrap.pcd"); },
+              {"wrap.pcd", "beyond 32 bits"});
+  // LZF that claims to expand 4 bytes into 4 GB is refused before the 4 GB are allocated.
+  std::string bomb = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 357913941\nDATA binary_compressed\n";
+  for (const std::uint32_t v : {std::uint32_t{4}, std::uint32_t{4294967292u}, std::uint32_t{0}}) {
+    for (int b = 0; b < 4; ++b) bomb.push_back(static_cast<char>((v >> (8 * b)) & 0xFFu));
+  }
+  expectError([&] { (void)parsePcd(bomb, "bomb.pcd"); }, {"bomb.pcd", "4 bytes of LZF data cannot decode to 4294967292"});
+  expectError([&] { (void)parsePcd(good_compressed + "xy", "tail.pcd"); },
+              {"tail.pcd", "2 bytes of unexpected data after the compressed block"});
   expectError([&] { (void)parsePcd("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nVIEWPOINT 0 0 0 2 0 0 0\nDATA ascii\n1 2 3\n", "vp.pcd"); },
               {"vp.pcd", "VIEWPOINT"});
 }
@@ -232,6 +244,9 @@ TEST(PlyReader, MalformedAndTruncatedFilesAreRefusedWithTheReason) {
               {"g.ply", "before 'end_header'"});
   expectError([&] { (void)parsePly("ply\nformat ascii 1.0\nelement vertex 1\nproperty list float float x\nend_header\n", "h.ply"); },
               {"h.ply", "not an integer type"});
+  // An element with items but nothing in them would be looped over without reading a byte.
+  expectError([&] { (void)parsePly("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nelement junk 999999999999\nend_header\n1 2 3\n", "i.ply"); },
+              {"i.ply", "'junk' has 999999999999 items but no properties"});
 }
 
 TEST(PointCloudFile, ReadsByExtensionAndNamesThePath) {

@@ -112,7 +112,9 @@ std::vector<StampedPose> posesAt(const std::vector<double>& stamps) {
 
 TEST(CloudPairing, FileNamesThatAreStampsArePairedByTimeWithInterpolation) {
   EXPECT_DOUBLE_EQ(*stampFromFileName("1305031102.175304.pcd"), 1305031102.175304);
-  EXPECT_NEAR(*stampFromFileName("1305031102175304000.ply"), 1305031102.175304, 1e-6);
+  EXPECT_NEAR(*stampFromFileName("1305031102175304000.ply"), 1305031102.175304, 1e-6);  // ns
+  EXPECT_NEAR(*stampFromFileName("1305031102175304.pcd"), 1305031102.175304, 1e-6);     // us
+  EXPECT_FALSE(stampFromFileName("130503110217530.pcd").has_value());  // 15 digits: no unit fits
   EXPECT_FALSE(stampFromFileName("000015.pcd").has_value());
   EXPECT_FALSE(stampFromFileName("scan_1.5.pcd").has_value());
   EXPECT_FALSE(stampFromFileName("1.5e3.pcd").has_value());

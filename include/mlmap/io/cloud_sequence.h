@@ -5,8 +5,9 @@
 ///
 /// Pairing rule:
 /// - **By time**, when every cloud's file name (without extension) is a time stamp: a number
-///   with a fractional part in seconds (`1305031102.175304.pcd`), or an integer of 16 or more
-///   digits in nanoseconds (`1305031102175304000.pcd`, as ROS bag exporters write). Each cloud
+///   with a fractional part in seconds (`1305031102.175304.pcd`), or an integer of 19-20
+///   digits in nanoseconds (`1305031102175304000.pcd`, as ROS bag exporters write) or of 16-17
+///   digits in microseconds (`1305031102175304.pcd`). Each cloud
 ///   gets the pose at its stamp, exactly as `mlmap_node` pairs clouds with poses
 ///   (mlmap/pipeline/pose_buffer.h): a pose with the same stamp (within 1 us), or the
 ///   interpolation (linear translation, slerp) between the two poses around it when the nearer
@@ -78,7 +79,9 @@ class CloudSequence {
   CloudSequence(const std::string& clouds_dir, const std::string& poses_path,
                 const CloudSequenceOptions& options = {});
 
+  /// Clouds that have a pose (the ones read() serves), in order.
   [[nodiscard]] std::size_t size() const { return clouds_.size(); }
+  /// How the clouds were paired with the poses.
   [[nodiscard]] CloudPairing pairing() const { return pairing_; }
   [[nodiscard]] const std::vector<PairedCloud>& clouds() const { return clouds_; }
   /// Clouds skipped for want of a pose (by time only).
