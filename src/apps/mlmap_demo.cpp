@@ -4,14 +4,12 @@
 #include "mlmap/eval/run_outputs.h"
 #include "mlmap/io/config_yaml.h"
 #include "mlmap/io/frame_directory.h"
-#include "mlmap/io/map_file.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -71,13 +69,7 @@ int main(int argc, char** argv) {
       return 2;
     }
     std::filesystem::create_directories(out_dir);
-    if (!save_map_path.empty()) {  // refuse a bad target before the flight, not after it
-      const std::filesystem::path target(save_map_path);
-      const std::filesystem::path folder = target.has_parent_path() ? target.parent_path() : ".";
-      if (!std::filesystem::is_directory(folder)) {
-        throw std::runtime_error("--save-map: folder '" + folder.string() + "' does not exist");
-      }
-    }
+    if (!save_map_path.empty()) eval::checkSaveMapTarget(save_map_path);  // before the flight
     MapEngine engine(config, [](LogLevel level, const std::string& message) {
       if (level == LogLevel::kError) {
         spdlog::error("{}", message);
@@ -130,14 +122,7 @@ int main(int argc, char** argv) {
     std::string names;
     for (const std::string& name : written) names += (names.empty() ? "" : ", ") + name;
     std::printf("\n  wrote %s/{%s}\n", out_dir.c_str(), names.c_str());
-    if (!save_map_path.empty()) {
-      const auto save_start = std::chrono::steady_clock::now();
-      io::saveMapFile(engine.exportState(), save_map_path);
-      const double save_ms =
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - save_start).count();
-      std::printf("  saved the map to %s (%ju bytes, %.1f ms)\n", save_map_path.c_str(),
-                  static_cast<std::uintmax_t>(std::filesystem::file_size(save_map_path)), save_ms);
-    }
+    if (!save_map_path.empty()) eval::saveMap(engine, save_map_path);
     return 0;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());

@@ -245,6 +245,11 @@ int main(int argc, char** argv) {
                  "awareness, local_global, planning, engine) with their median / p99, peak memory "
                  "(process RSS, engine accounting) and counters");
   app.add_option("--max-frames", max_frames, "stop after N frames (0: all)")->check(CLI::NonNegativeNumber);
+  std::string save_map_path;
+  app.add_option("--save-map", save_map_path,
+                 "also save the final map (local + global layers) to this mlmap map file; "
+                 "mlmap_map_tool converts it to PLY / PCD / PGM + YAML / OctoMap .bt, and "
+                 "mlmap_node can start from it (map_file.load_path)");
   CLI11_PARSE(app, argc, argv);
   spdlog::set_default_logger(spdlog::stderr_color_mt("mlmap"));  // stdout carries the results
   if (voxels_out.empty()) voxels_out = out_dir + "/occupied_voxels.txt";
@@ -283,6 +288,7 @@ int main(int argc, char** argv) {
       return 2;
     }
     std::filesystem::create_directories(out_dir);
+    if (!save_map_path.empty()) eval::checkSaveMapTarget(save_map_path);  // before the run
 
     FrameTimer timer;
     MapEngine engine(config,
@@ -409,6 +415,7 @@ int main(int argc, char** argv) {
     for (const std::string& name : written) names += (names.empty() ? "" : ", ") + name;
     std::printf("\n  wrote %s/{%s}\n        %s (%zu occupied voxels)\n        %s\n", out_dir.c_str(),
                 names.c_str(), voxels_out.c_str(), occupied.size(), stats_out.c_str());
+    if (!save_map_path.empty()) eval::saveMap(engine, save_map_path);
     return s.frames_mapped > 0 ? 0 : 3;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());

@@ -1,14 +1,17 @@
 #include "mlmap/eval/run_outputs.h"
 
 #include "mlmap/io/config_yaml.h"
+#include "mlmap/io/map_file.h"
 #include "mlmap/io/map_image.h"
 
 #include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -185,6 +188,22 @@ std::size_t peakRssBytes() {
   rusage usage{};
   if (getrusage(RUSAGE_SELF, &usage) != 0) return 0;
   return static_cast<std::size_t>(usage.ru_maxrss) * 1024u;  // Linux: kilobytes
+}
+
+void checkSaveMapTarget(const std::string& path) {
+  const std::filesystem::path target(path);
+  const std::filesystem::path folder = target.has_parent_path() ? target.parent_path() : ".";
+  if (!std::filesystem::is_directory(folder)) {
+    throw std::runtime_error("--save-map: folder '" + folder.string() + "' does not exist");
+  }
+}
+
+void saveMap(const MapEngine& engine, const std::string& path) {
+  const auto start = std::chrono::steady_clock::now();
+  io::saveMapFile(engine.exportState(), path);
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  std::printf("  saved the map to %s (%ju bytes, %.1f ms)\n", path.c_str(),
+              static_cast<std::uintmax_t>(std::filesystem::file_size(path)), ms);
 }
 
 }  // namespace mlmap::eval

@@ -2,6 +2,8 @@
 // occupied voxels compared with the same data mapped directly through MapEngine.
 
 #include "mlmap/eval/run_outputs.h"
+#include "mlmap/io/map_export.h"
+#include "mlmap/io/map_file.h"
 #include "mlmap/io/voxel_text.h"
 #include "mlmap/io/world_yaml.h"
 #include "mlmap/pipeline/map_engine.h"
@@ -11,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -202,8 +205,29 @@ TEST(Replay, BadInputIsRefusedWithAMessage) {
 TEST(Replay, SimulatorIsTheDefaultSource) {
   const std::string dir = ::testing::TempDir() + "/mlmap_replay_sim";
   fs::remove_all(dir);
-  ASSERT_EQ(run(std::string(MLMAP_REPLAY_BIN) + " --max-frames 5 --out '" + dir + "'", dir + ".log"), 0)
+  // A --save-map folder that does not exist is refused before the run, not after it.
+  EXPECT_NE(run(std::string(MLMAP_REPLAY_BIN) + " --max-frames 5 --out '" + dir +
+                    "' --save-map '" + dir + "/no/such/folder/map.mlmap'",
+                dir + ".log"),
+            0);
+  EXPECT_NE(readText(dir + ".log").find("does not exist"), std::string::npos) << readText(dir + ".log");
+  EXPECT_FALSE(fs::exists(dir + "/stats.json"));
+  ASSERT_EQ(run(std::string(MLMAP_REPLAY_BIN) + " --max-frames 5 --out '" + dir + "' --save-map '" +
+                    dir + "/map.mlmap'",
+                dir + ".log"),
+            0)
       << readText(dir + ".log");
+  // The saved map holds exactly the voxels of the text list.
+  std::vector<VoxelIndex> saved;
+  for (const io::OccupiedVoxel& v : io::occupiedVoxels(io::loadMapFile(dir + "/map.mlmap"))) saved.push_back(v.index);
+  std::vector<VoxelIndex> listed = io::readVoxelText(dir + "/occupied_voxels.txt");
+  const auto less = [](const VoxelIndex& a, const VoxelIndex& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  };
+  std::sort(saved.begin(), saved.end(), less);
+  std::sort(listed.begin(), listed.end(), less);
+  EXPECT_GT(saved.size(), 100u);
+  EXPECT_EQ(saved, listed);
   const std::string stats = readText(dir + "/stats.json");
   EXPECT_EQ(jsonInt(stats, "frames_mapped"), 5);
   EXPECT_NE(stats.find("\"kind\": \"simulator\""), std::string::npos);

@@ -71,6 +71,13 @@ struct MapOutputs {
 std::vector<std::string> writeMapOutputs(const MapOutputs& outputs, const EngineStats& stats,
                                          const std::vector<VoxelIndex>& occupied, double resolution_m);
 
+/// Refuses a --save-map target whose folder does not exist, before a run rather than after it.
+/// @throws std::runtime_error naming the folder.
+void checkSaveMapTarget(const std::string& path);
+/// Saves the engine's map (local + global layers, mlmap/io/map_file.h) to `path` and prints its
+/// size and the time taken. @throws std::runtime_error when it cannot be saved.
+void saveMap(const MapEngine& engine, const std::string& path);
+
 /// Prints the engine's figures (and the accuracy, when given) to stdout.
 void printSummary(const EngineStats& stats, double resolution_m, const Accuracy* accuracy);
 
