@@ -85,23 +85,6 @@ class FrameTimer {
   std::size_t peak_engine_bytes_ = 0;
 };
 
-std::string jsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
-
 TimingSummary summarize(const std::vector<FrameRecord>& frames, double FrameRecord::*field) {
   std::vector<double> values;
   for (const FrameRecord& f : frames) {
@@ -126,7 +109,7 @@ void writeStats(const std::string& path, const RunInfo& info, const MapConfig& c
   o.precision(10);
   std::size_t reader_dropped = 0;
   for (const FrameRecord& f : frames) reader_dropped += f.non_finite_dropped;
-  o << "{\n  \"source\": " << jsonString(info.source) << ",\n  \"kind\": \"" << info.kind << "\""
+  o << "{\n  \"source\": " << eval::jsonString(info.source) << ",\n  \"kind\": \"" << info.kind << "\""
     << ",\n  \"pairing\": \"" << info.pairing << "\""
     << ",\n  \"resolution_m\": " << config.local_map.resolution_m
     << ",\n  \"max_range_m\": " << config.awareness.max_range_m
@@ -162,7 +145,7 @@ void writeStats(const std::string& path, const RunInfo& info, const MapConfig& c
     const FrameRecord& f = frames[i];
     char stamp[40];
     std::snprintf(stamp, sizeof(stamp), "%.9f", f.stamp_s);  // full precision of epoch stamps
-    o << (i == 0 ? "\n" : ",\n") << "    {\"name\": " << jsonString(f.name) << ", \"stamp_s\": " << stamp
+    o << (i == 0 ? "\n" : ",\n") << "    {\"name\": " << eval::jsonString(f.name) << ", \"stamp_s\": " << stamp
       << ", \"status\": \"" << toString(f.status) << "\", \"points\": " << f.points
       << ", \"non_finite_dropped\": " << f.non_finite_dropped << ", \"read_ms\": " << f.read_ms
       << ", \"awareness_ms\": " << f.awareness_ms << ", \"local_global_ms\": " << f.local_global_ms

@@ -2,13 +2,12 @@
 // depth frames and on the shared real RealSense frames. Prints median and p99 per stage and the
 // memory by layer. Figures, not pass/fail: see README "Performance".
 
+#include "mlmap/eval/run_outputs.h"
 #include "mlmap/eval/sim_flight.h"
 #include "mlmap/io/frame_directory.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include <CLI/CLI.hpp>
-
-#include <sys/resource.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -31,12 +30,6 @@ MapConfig at(double res, Eigen::Vector3i cells) {
   c.local_map.resolution_m = res;
   c.local_map.size_cells = cells;
   return c;
-}
-
-double peakRssMb() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return static_cast<double>(usage.ru_maxrss) / 1024.0;
 }
 
 struct Row {
@@ -175,7 +168,8 @@ int main(int argc, char** argv) {
                 quantile(r.grid_ms, 0.99), quantile(r.esdf_ms, 0.5), quantile(r.esdf_ms, 0.99),
                 r.esdf_ms.size());
   }
-  std::printf("peak resident memory of the benchmark process: %.0f MB\n", peakRssMb());
+  std::printf("peak resident memory of the benchmark process: %.0f MB\n",
+              static_cast<double>(eval::peakRssBytes()) / (1024.0 * 1024.0));
   if (json != nullptr) {
     for (std::size_t i = 0; i < rows.size(); ++i) print(rows[i], json, i + 1 == rows.size());
     std::fprintf(json, "]\n");

@@ -5,6 +5,7 @@
 // the voxels of both maps for pictures). Figures, not pass/fail: see README "Side by side with
 // OctoMap". Exits non-zero when OctoMap's keys do not map to mlmap's voxel indices.
 
+#include "mlmap/eval/run_outputs.h"
 #include "mlmap/eval/sim_flight.h"
 #include "mlmap/eval/voxel_agreement.h"
 #include "mlmap/io/frame_directory.h"
@@ -354,7 +355,7 @@ CaseResult runCase(const Dataset& d, double resolution_m, const Options& o) {
     }
     progress.update(i + 1, mlmap_ms, octomap_ms);
   }
-  r.rss_peak_bytes = procStatusBytes("VmHWM");
+  r.rss_peak_bytes = eval::peakRssBytes();
   if (engine) {
     r.stats = engine->stats();
     r.mlmap_voxels = engine->occupiedVoxels();
@@ -469,15 +470,6 @@ void writeTiming(std::ostream& out, const std::vector<double>& ms) {
       << ", \"max\": " << s.max_ms << "}";
 }
 
-std::string jsonEscape(const std::string& s) {
-  std::string r;
-  for (char c : s) {
-    if (c == '"' || c == '\\') r += '\\';
-    r += c;
-  }
-  return r;
-}
-
 void writeJson(std::ostream& out, const std::vector<CaseResult>& results, const std::string& mappers) {
   out.precision(6);
   out << "{\n  \"program\": \"mlmap_compare_octomap\",\n  \"mlmap_mode\": \"synchronous (one core)\",\n"
@@ -485,8 +477,8 @@ void writeJson(std::ostream& out, const std::vector<CaseResult>& results, const 
   for (std::size_t k = 0; k < results.size(); ++k) {
     const CaseResult& r = results[k];
     const eval::VoxelAgreement& g = r.agreement;
-    out << "    {\"name\": \"" << jsonEscape(r.name) << "\", \"dataset\": \"" << r.kind
-        << "\", \"description\": \"" << jsonEscape(r.description) << "\",\n"
+    out << "    {\"name\": " << eval::jsonString(r.name) << ", \"dataset\": \"" << r.kind
+        << "\", \"description\": " << eval::jsonString(r.description) << ",\n"
         << "     \"resolution_m\": " << r.resolution_m << ", \"max_range_m\": " << r.max_range_m
         << ", \"frames\": " << r.frames << ", \"points_per_frame\": " << r.points_per_frame
         << ", \"window_cells\": [" << r.window_cells.x() << ", " << r.window_cells.y() << ", "

@@ -84,6 +84,10 @@ void printSummary(const EngineStats& stats, double resolution_m, const Accuracy*
 /// `{"median_ms": ..., "p99_ms": ..., "mean_ms": ..., "max_ms": ..., "frames": ...}`.
 [[nodiscard]] std::string toJson(const TimingSummary& timing);
 
+/// `s` as a JSON string literal, quotes included (quotes, backslashes and control characters
+/// escaped).
+[[nodiscard]] std::string jsonString(const std::string& s);
+
 /// Peak resident set size of this process so far [bytes] (getrusage), 0 when unknown.
 [[nodiscard]] std::size_t peakRssBytes();
 
