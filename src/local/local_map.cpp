@@ -1,6 +1,7 @@
 #include "mlmap/local/local_map.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -128,33 +129,43 @@ void LocalMap::retireAll(GlobalMap* global) {
   }
 }
 
-std::string LocalMap::windowProblem(const LocalWindow& window) const {
+std::string windowProblem(const LocalWindow& window, const Eigen::Vector3i& size,
+                          const Eigen::Vector3i& submap_cells, const LogOddsModel& model) {
   if (window.size.prod() == 0) return "";
   std::ostringstream m;
-  if (window.size != size_) {
-    m << "size " << window.size.transpose() << " voxels, the map has " << size_.transpose();
+  if (window.size != size) {
+    m << "size " << window.size.transpose() << " voxels, the map has " << size.transpose();
     return m.str();
   }
-  if (window.log_odds.size() != cells_.size()) {
-    m << window.log_odds.size() << " values for " << cells_.size() << " voxels";
+  if (window.log_odds.size() != static_cast<std::size_t>(size.prod())) {
+    m << window.log_odds.size() << " values for " << size.prod() << " voxels";
     return m.str();
   }
   for (int a = 0; a < 3; ++a) {
-    if (floorMod(window.min_index[a], submap_[a]) != 0) {
+    const std::int64_t lo = window.min_index[a];
+    if (lo < -kMaxAbsWindowVoxelIndex || lo + size[a] > kMaxAbsWindowVoxelIndex) {
+      m << "first voxel " << window.min_index.transpose() << " is beyond +-" << kMaxAbsWindowVoxelIndex;
+      return m.str();
+    }
+    if (((lo % submap_cells[a]) + submap_cells[a]) % submap_cells[a] != 0) {
       m << "first voxel " << window.min_index.transpose() << " is not on the submap grid ("
-        << submap_.transpose() << " voxels per submap)";
+        << submap_cells.transpose() << " voxels per submap)";
       return m.str();
     }
   }
   for (std::size_t i = 0; i < window.log_odds.size(); ++i) {
     const LogOddsQ v = window.log_odds[i];
-    if (v != kUnknownLogOdds && (v < model_.clampMin() || v > model_.clampMax())) {
+    if (v != kUnknownLogOdds && (v < model.clampMin() || v > model.clampMax())) {
       m << "value " << v << " at window offset " << i << " is outside the clamping bounds ["
-        << model_.clampMin() << ", " << model_.clampMax() << "] (units of 0.001)";
+        << model.clampMin() << ", " << model.clampMax() << "] (units of 0.001)";
       return m.str();
     }
   }
   return "";
+}
+
+std::string LocalMap::windowProblem(const LocalWindow& window) const {
+  return mlmap::windowProblem(window, size_, submap_, model_);
 }
 
 void LocalMap::restoreWindow(const LocalWindow& window) {

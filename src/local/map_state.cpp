@@ -32,43 +32,14 @@ std::vector<std::string> mapConfigDifferences(const MapState& state, const MapCo
 
 std::vector<std::string> mapStateProblems(const MapState& state) {
   std::vector<std::string> problems;
-  auto say = [&problems](const std::ostringstream& m) { problems.push_back(m.str()); };
   const LogOddsModel model(state.log_odds);
   const Eigen::Vector3i submap_cells = state.local_map.submap_cells();
   const LocalWindow& w = state.window;
 
   // The window: empty, or the configured size on the submap grid, every value in bounds.
-  bool window_ok = true;
-  if (w.size.prod() != 0) {
-    std::ostringstream m;
-    if (w.size != state.local_map.size_cells) {
-      m << "local map window: size " << w.size.transpose() << " voxels, the map's configuration says "
-        << state.local_map.size_cells.transpose();
-    } else if (w.log_odds.size() != static_cast<std::size_t>(w.size.prod())) {
-      m << "local map window: " << w.log_odds.size() << " values for " << w.size.prod() << " voxels";
-    }
-    for (int a = 0; a < 3 && m.str().empty(); ++a) {
-      const std::int64_t lo = w.min_index[a];
-      if (lo < -kMaxAbsMapVoxelIndex || lo + w.size[a] > kMaxAbsMapVoxelIndex) {
-        m << "local map window: first voxel " << w.min_index.transpose() << " is beyond +-"
-          << kMaxAbsMapVoxelIndex;
-      } else if (((lo % submap_cells[a]) + submap_cells[a]) % submap_cells[a] != 0) {
-        m << "local map window: first voxel " << w.min_index.transpose()
-          << " is not on the submap grid (" << submap_cells.transpose() << " voxels per submap)";
-      }
-    }
-    for (std::size_t i = 0; i < w.log_odds.size() && m.str().empty(); ++i) {
-      const LogOddsQ v = w.log_odds[i];
-      if (v != kUnknownLogOdds && (v < model.clampMin() || v > model.clampMax())) {
-        m << "local map window: value " << v << " at offset " << i << " is outside the clamping bounds ["
-          << model.clampMin() << ", " << model.clampMax() << "] (units of 0.001)";
-      }
-    }
-    if (!m.str().empty()) {
-      say(m);
-      window_ok = false;
-    }
-  }
+  const std::string window_problem = windowProblem(w, state.local_map.size_cells, submap_cells, model);
+  const bool window_ok = window_problem.empty();
+  if (!window_ok) problems.push_back("local map window: " + window_problem);
 
   // Global submaps: in range, each once, none inside the window; records inside the submap,
   // strictly increasing, occupied and within the clamping bound.
@@ -80,7 +51,7 @@ std::vector<std::string> mapStateProblems(const MapState& state) {
     for (int a = 0; a < 3 && msg.str().empty(); ++a) {
       const std::int64_t first = std::int64_t{m[a]} * submap_cells[a];
       if (m[a] < -GlobalMap::kSubmapIndexLimit || m[a] >= GlobalMap::kSubmapIndexLimit ||
-          first < -kMaxAbsMapVoxelIndex || first + submap_cells[a] > kMaxAbsMapVoxelIndex) {
+          first < -kMaxAbsWindowVoxelIndex || first + submap_cells[a] > kMaxAbsWindowVoxelIndex) {
         msg << "global submap (" << m.transpose() << ") is out of range";
       }
     }
@@ -98,7 +69,7 @@ std::vector<std::string> mapStateProblems(const MapState& state) {
       }
     }
     if (!msg.str().empty()) {
-      say(msg);
+      problems.push_back(msg.str());
       return problems;  // one bad submap is enough to refuse; the rest may be garbage too
     }
     seen.push_back(m);

@@ -56,6 +56,16 @@ struct LocalWindow {
   }
 };
 
+/// Largest |voxel index| a window corner may have: keeps every index sum far from int overflow.
+inline constexpr int kMaxAbsWindowVoxelIndex = 1 << 30;
+
+/// What makes `window` unfit for a local map of `size` voxels with `submap_cells` voxels per
+/// submap and `model`'s clamping bounds, or "" when it fits (an empty window always fits): a
+/// size or value count that differs, a first voxel off the submap grid or beyond
+/// kMaxAbsWindowVoxelIndex, a value outside the clamping bounds.
+[[nodiscard]] std::string windowProblem(const LocalWindow& window, const Eigen::Vector3i& size,
+                                        const Eigen::Vector3i& submap_cells, const LogOddsModel& model);
+
 /// Dense sliding voxel window. Not thread-safe: owned by the local-global stage.
 class LocalMap {
  public:
@@ -84,7 +94,8 @@ class LocalMap {
   /// clamping bounds; otherwise std::invalid_argument says what is wrong and nothing changes.
   /// Counts one state change, so that layers derived from states are rebuilt.
   void restoreWindow(const LocalWindow& window);
-  /// What restoreWindow() would refuse in `window`, or "" when it fits.
+  /// What restoreWindow() would refuse in `window`, or "" when it fits (mlmap::windowProblem()
+  /// with this map's size, submaps and model).
   [[nodiscard]] std::string windowProblem(const LocalWindow& window) const;
 
   /// True when the window has been placed and holds `index`.

@@ -52,13 +52,9 @@ struct MapState {
 [[nodiscard]] std::vector<std::string> mapConfigDifferences(const MapState& state,
                                                             const MapConfig& config);
 
-/// Largest |voxel index| a map state may hold (window corners, global voxels): keeps every index
-/// sum of the layers far from int overflow.
-inline constexpr int kMaxAbsMapVoxelIndex = 1 << 30;
-
 /// What makes `state` inconsistent in itself, judged against its own `local_map` and `log_odds`
 /// (empty when it is sound): a window of the wrong size, off the submap grid, beyond
-/// kMaxAbsMapVoxelIndex or with values outside the clamping bounds; global submaps listed twice,
+/// kMaxAbsWindowVoxelIndex or with values outside the clamping bounds; global submaps listed twice,
 /// inside the window or beyond GlobalMap::kSubmapIndexLimit; records that are not increasing
 /// occupied voxels of their submap. Every reader of saved maps checks this before using one.
 [[nodiscard]] std::vector<std::string> mapStateProblems(const MapState& state);
