@@ -23,8 +23,7 @@ constexpr std::uint32_t kTooCloseKey = 0xFFFFFFFEu;
 constexpr std::uint32_t kNonFiniteKey = 0xFFFFFFFFu;
 // A bin's shared cone stops where the bin is this many voxels wide (over-carving bound).
 constexpr double kBinWidthVoxels = 1.0;
-constexpr int kMaxBinsPerFaceSide = 256;
-constexpr std::size_t kPointBlock = AwarenessStage::kPointBlock;  // finest level 6 x 256^2 bins; 25 MB with all levels
+constexpr int kMaxBinsPerFaceSide = 256;  // finest level 6 x 256^2 bins; 25 MB with all levels
 
 std::uint32_t hashKey(std::uint32_t key) {
   key ^= key >> 16;
@@ -74,9 +73,11 @@ MLMAP_VECTOR_CLONES void classifyPoints(const PointKernel& k, const float* xs, c
     // min(1, max / |p|): exactly 1 for every point within range (and for NaN), branch-free.
     const double q = max_range / std::sqrt(r2);
     const double scale = q < 1.0 ? q : 1.0;
-    x *= scale;
-    y *= scale;
-    z *= scale;
+    // A non-finite point becomes the origin, so that the float -> int conversions below stay
+    // defined (its key says kNonFiniteKey and nothing reads its coordinates).
+    x = finite ? x * scale : 0.0;
+    y = finite ? y * scale : 0.0;
+    z = finite ? z * scale : 0.0;
     // World voxel units first, as worldPoint() computes them, then box-relative.
     const double b0 = (o0 + m0 * x + m1 * y + m2 * z) - bo0;
     const double b1 = (o1 + m3 * x + m4 * y + m5 * z) - bo1;
@@ -321,6 +322,7 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
   batch->sensor_origin_W = o_W;
   batch->resolution_m = res;
   ends_.clear();
+  // cppcheck-suppress knownConditionTrueFalse ; it does wrap after 2^32 frames
   if (++stamp_ == 0) {  // wrapped: forget every slot
     std::fill(table_.begin(), table_.end(), Slot{});
     stamp_ = 1;

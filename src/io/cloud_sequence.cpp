@@ -79,7 +79,7 @@ bool naturalLess(const std::string& a, const std::string& b) {
       ++j;
     }
   }
-  return a.size() - i < b.size() - j;
+  return i == a.size() && j < b.size();  // a ran out first (equal when both did)
 }
 
 std::vector<PairedCloud> pairCloudsWithPoses(std::vector<std::string> file_names,

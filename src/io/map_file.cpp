@@ -207,6 +207,7 @@ MapState decodeMapFile(const std::string& bytes, const std::string& source) {
                        ", this build reads version " + std::to_string(kMapFileVersion));
   }
   const auto header_bytes = r.integer<std::uint32_t>();
+  // cppcheck-suppress knownConditionTrueFalse ; refuse() throws, cppcheck misses it
   if (header_bytes != kHeaderBytes) {
     refuse(source, "corrupted header: header size " + std::to_string(header_bytes) +
                        ", version 1 headers have " + std::to_string(kHeaderBytes));

@@ -10,7 +10,6 @@
 namespace mlmap {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 AwarenessConfig smallConfig() {
   AwarenessConfig c;

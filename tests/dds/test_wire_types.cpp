@@ -117,9 +117,9 @@ const std::vector<std::size_t> kPadding = {4 + 34, 4 + 35, 4 + 41, 4 + 42, 4 + 4
 /// The same rules as code, for either byte order (checked against kSmallCloudLe).
 class CdrWriter {
  public:
-  explicit CdrWriter(bool big_endian) : big_endian_(big_endian) {
-    bytes_ = {0x00, static_cast<std::uint8_t>(big_endian ? 0x00 : 0x01), 0x00, 0x00};
-  }
+  explicit CdrWriter(bool big_endian)
+      : big_endian_(big_endian),
+        bytes_{0x00, static_cast<std::uint8_t>(big_endian ? 0x00 : 0x01), 0x00, 0x00} {}
   void octet(std::uint8_t v) { bytes_.push_back(v); }
   void u32(std::uint32_t v) {
     while ((bytes_.size() - 4) % 4 != 0) bytes_.push_back(P);

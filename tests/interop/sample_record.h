@@ -18,7 +18,7 @@ namespace mlmap::interop {
 
 class SampleRecord {
  public:
-  explicit SampleRecord(const std::string& dds_type_name) { text_ = "type " + dds_type_name + "\n"; }
+  explicit SampleRecord(const std::string& dds_type_name) : text_("type " + dds_type_name + "\n") {}
 
   void add(const char* name, std::int64_t value) { line(name, std::to_string(value)); }
   void addUnsigned(const char* name, std::uint64_t value) { line(name, std::to_string(value)); }

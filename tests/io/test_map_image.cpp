@@ -194,12 +194,12 @@ TEST(MapImage, LargeMapsAreCappedInSize) {
   VoxelList line{kRes, {}};
   for (int i = 0; i < 600; ++i) line.centers_W.push_back(center(i, 0, 0));
   MapImageGeometry g;
-  cv::Mat image = renderTopDown(line, {}, &g);
+  EXPECT_FALSE(renderTopDown(line, {}, &g).empty());
   EXPECT_EQ(g.pixels_per_voxel, 3);
   EXPECT_LE(g.map_area_px.width, kMaxMapSide_px);
 
   for (int i = 600; i < 5000; ++i) line.centers_W.push_back(center(i, i % 7, 0));
-  image = renderTopDown(line, {}, &g);
+  const cv::Mat image = renderTopDown(line, {}, &g);
   EXPECT_EQ(g.pixels_per_voxel, 0);  // several voxels per pixel
   EXPECT_LE(g.map_area_px.width, kMaxMapSide_px);
   EXPECT_LE(image.cols, kMaxMapSide_px + 400);

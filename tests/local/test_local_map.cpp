@@ -87,7 +87,11 @@ TEST(LocalMap, MatchesAWholeWorldReferenceThroughRandomFlights) {
       for (const auto& h : hits) dup = dup || h == v;
       for (const auto& f : frees) dup = dup || f == v;
       if (dup) continue;
-      (i % 3 == 0 ? hits : frees).push_back(v);
+      if (i % 3 == 0) {
+        hits.push_back(v);
+      } else {
+        frees.push_back(v);
+      }
     }
     map.integrate(makeBatch(body, hits, frees));
     for (const auto& h : hits) {

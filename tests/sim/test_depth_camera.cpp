@@ -275,6 +275,7 @@ TEST(DepthCamera, NoiseIsDeterministicPerSeedAndTime) {
   // Neighbouring pixels are uncorrelated.
   double cov = 0.0;
   double var = 0.0;
+  // cppcheck-suppress unsignedLessThanZero ; it reads "i + 1 < size", not "< 0"
   for (std::size_t i = 0; i + 1 < a.size(); ++i) {
     cov += (a[i] - 3.0) * (a[i + 1] - 3.0);
     var += (a[i] - 3.0) * (a[i] - 3.0);

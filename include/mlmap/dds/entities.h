@@ -105,6 +105,7 @@ class TakeListener : public eprosima::fastdds::dds::DataReaderListener {
       detail::deserializeFailed() = false;
       const bool taken = reader->take_next_sample(&msg, &info) ==
                          eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK;
+      // cppcheck-suppress knownConditionTrueFalse ; set by CheckedType::deserialize inside take
       if (detail::deserializeFailed()) {  // taken or not, the sample has left the history
         on_error_("cannot deserialise a sample on " + reader->get_topicdescription()->get_name() +
                   " (malformed CDR)");
