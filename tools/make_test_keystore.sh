@@ -21,23 +21,32 @@
 #                           (<keystore>/private/stranger_ca.key.pem): nobody above trusts it
 # Governance: authenticated participants only, join access control, and rtps, discovery,
 # liveliness, metadata and data protection ENCRYPT (AES-GCM-GMAC) on every topic.
+# With --protection payload: rtps and metadata protection NONE, so each sample is encrypted once
+# (data ENCRYPT) instead of three times (payload, submessage, message); discovery and liveliness
+# stay ENCRYPT. Map data is as hidden; RTPS headers (GUIDs, sequence numbers) are not.
 #
-#   tools/make_test_keystore.sh <keystore dir> [--days N]
+#   tools/make_test_keystore.sh <keystore dir> [--days N] [--protection full|payload]
 #
 # Idempotent: what exists is kept (keys are never replaced, so running it again changes nothing),
 # what is missing is made; each file is listed as "made" or "kept". The XML is signed as SROS2
 # does (S/MIME, detached, text, SHA-256). Test keys only: never commit them, never fly them.
 set -euo pipefail
-usage() { echo "usage: $0 <keystore dir> [--days N]" >&2; exit 64; }
+usage() { echo "usage: $0 <keystore dir> [--days N] [--protection full|payload]" >&2; exit 64; }
 [ $# -ge 1 ] || usage
 root=$1; shift
-days=3650
+days=3650 protection=full
 while [ $# -gt 0 ]; do
   case $1 in
     --days) days=$2; shift 2 ;;
+    --protection) protection=$2; shift 2 ;;
     *) usage ;;
   esac
 done
+case $protection in
+  full) message=ENCRYPT ;;
+  payload) message=NONE ;;
+  *) usage ;;
+esac
 command -v openssl >/dev/null || { echo "openssl is missing (apt-get install openssl)" >&2; exit 2; }
 umask 077
 mkdir -p "$root/public" "$root/private" "$root/enclaves"
@@ -125,7 +134,7 @@ make_ca "$root/private/stranger_ca.key.pem" "$root/public/stranger_ca.cert.pem" 
 
 # ---- Governance -----------------------------------------------------------------------------
 write_signed "$root/enclaves/governance.xml" "$root/enclaves/governance.p7s" \
-  "$root/private/ca.key.pem" "$root/public/ca.cert.pem" <<'EOF'
+  "$root/private/ca.key.pem" "$root/public/ca.cert.pem" <<EOF
 <?xml version="1.0" encoding="UTF-8"?>
 <dds xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance" xsi:noNamespaceSchemaLocation="http://www.omg.org/spec/DDS-SECURITY/20170901/omg_shared_ca_governance.xsd">
   <domain_access_rules>
@@ -140,7 +149,7 @@ write_signed "$root/enclaves/governance.xml" "$root/enclaves/governance.p7s" \
       <enable_join_access_control>true</enable_join_access_control>
       <discovery_protection_kind>ENCRYPT</discovery_protection_kind>
       <liveliness_protection_kind>ENCRYPT</liveliness_protection_kind>
-      <rtps_protection_kind>ENCRYPT</rtps_protection_kind>
+      <rtps_protection_kind>$message</rtps_protection_kind>
       <topic_access_rules>
         <topic_rule>
           <topic_expression>*</topic_expression>
@@ -148,7 +157,7 @@ write_signed "$root/enclaves/governance.xml" "$root/enclaves/governance.p7s" \
           <enable_liveliness_protection>true</enable_liveliness_protection>
           <enable_read_access_control>true</enable_read_access_control>
           <enable_write_access_control>true</enable_write_access_control>
-          <metadata_protection_kind>ENCRYPT</metadata_protection_kind>
+          <metadata_protection_kind>$message</metadata_protection_kind>
           <data_protection_kind>ENCRYPT</data_protection_kind>
         </topic_rule>
       </topic_access_rules>
@@ -166,10 +175,20 @@ topics() {
   local t
   for t in $1; do printf '            <topic>%s</topic>\n' "$t"; done
 }
+# rule <allow_rule|deny_rule> <publish topics> [<subscribe topics>]: for every domain 0..232
+rule() {
+  printf '      <%s>\n        <domains>\n          <id_range>\n' "$1"
+  printf '            <min>0</min>\n            <max>232</max>\n          </id_range>\n        </domains>\n'
+  printf '        <publish>\n          <topics>\n%s\n          </topics>\n        </publish>\n' "$(topics "$2")"
+  if [ -n "${3:-}" ]; then
+    printf '        <subscribe>\n          <topics>\n%s\n          </topics>\n        </subscribe>\n' "$(topics "$3")"
+  fi
+  printf '      </%s>\n' "$1"
+}
 # permissions <enclave> <cert> <publish topics> <subscribe topics> [<denied publish topics>]
 # Valid as long as the enclave's certificate (so running the script again re-signs nothing).
 permissions() {
-  local enclave=$1 publish=$3 subscribe=$4 deny=${5:-} until
+  local enclave=$1 until
   until=$(date -u -d "$(openssl x509 -in "$2" -noout -enddate | cut -d= -f2)" +%Y-%m-%dT%H:%M:%S)
   cat <<EOF
 <?xml version="1.0" encoding="UTF-8"?>
@@ -182,47 +201,9 @@ permissions() {
         <not_after>$until</not_after>
       </validity>
 EOF
-  if [ -n "$deny" ]; then
-    cat <<EOF
-      <deny_rule>
-        <domains>
-          <id_range>
-            <min>0</min>
-            <max>232</max>
-          </id_range>
-        </domains>
-        <publish>
-          <topics>
-$(topics "$deny")
-          </topics>
-        </publish>
-      </deny_rule>
-EOF
-  fi
-  cat <<EOF
-      <allow_rule>
-        <domains>
-          <id_range>
-            <min>0</min>
-            <max>232</max>
-          </id_range>
-        </domains>
-        <publish>
-          <topics>
-$(topics "$publish")
-          </topics>
-        </publish>
-        <subscribe>
-          <topics>
-$(topics "$subscribe")
-          </topics>
-        </subscribe>
-      </allow_rule>
-      <default>DENY</default>
-    </grant>
-  </permissions>
-</dds>
-EOF
+  [ -z "${5:-}" ] || rule deny_rule "$5"   # first: the first rule that matches decides
+  rule allow_rule "$3" "$4"
+  printf '      <default>DENY</default>\n    </grant>\n  </permissions>\n</dds>\n'
 }
 
 # make_enclave <enclave> <ca key> <ca cert> <ca cert name in public/> <publish> <subscribe> [<deny>]

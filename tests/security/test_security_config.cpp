@@ -4,6 +4,7 @@
 #include "mlmap/dds/node_config.h"
 #include "mlmap/dds/participant.h"
 
+#include "expect_throw.h"
 #include "scoped_env.h"
 
 #include <gtest/gtest.h>
@@ -20,6 +21,7 @@ namespace mlmap::dds {
 namespace {
 
 namespace fs = std::filesystem;
+using mlmap::testing::expectThrowWith;
 using test_support::ScopedEnv;
 
 const std::string kKeystore = MLMAP_TEST_KEYSTORE;
@@ -36,15 +38,6 @@ struct SecurityEnv {
         enclave("ROS_SECURITY_ENCLAVE_OVERRIDE", enclave_value),
         strategy("ROS_SECURITY_STRATEGY", strategy_value) {}
 };
-
-std::string errorOf(const std::string& yaml) {
-  try {
-    parseNodeConfigYaml(yaml, "node.yaml");
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
-}
 
 TEST(SecurityConfigYaml, KeysAreReadAndRoundTripAndAnUnsetEnableStaysUnset) {
   const NodeConfig c = parseNodeConfigYaml(
@@ -72,13 +65,17 @@ TEST(SecurityConfigYaml, KeysAreReadAndRoundTripAndAnUnsetEnableStaysUnset) {
 }
 
 TEST(SecurityConfigYaml, BadValuesAreErrorsNamingTheKey) {
-  EXPECT_NE(errorOf("dds: {security: {strategy: Strict}}\n").find("dds.security.strategy"), std::string::npos);
-  EXPECT_NE(errorOf("dds: {security: {enclave: mlmap/node}}\n").find("dds.security.enclave"), std::string::npos);
-  EXPECT_NE(errorOf("dds: {security: {enclave: /mlmap//node}}\n").find("dds.security.enclave"), std::string::npos);
-  EXPECT_NE(errorOf("dds: {security: {enable: maybe}}\n").find("dds.security.enable"), std::string::npos);
-  EXPECT_NE(errorOf("dds: {security: {keystor: /ks}}\n").find("dds.security.keystor: unknown key"),
-            std::string::npos);
-  EXPECT_EQ(errorOf("dds: {security: {strategy: permissive, enclave: /}}\n"), "");
+  const std::pair<const char*, const char*> cases[] = {
+      {"{strategy: Strict}", "dds.security.strategy: must be empty (ROS_SECURITY_STRATEGY), Enforce or Permissive"},
+      {"{enclave: mlmap/node}", "dds.security.enclave: not a valid enclave name"},
+      {"{enclave: /mlmap//node}", "dds.security.enclave: not a valid enclave name"},
+      {"{enable: maybe}", "dds.security.enable: cannot read"},
+      {"{keystor: /ks}", "dds.security.keystor: unknown key"}};
+  for (const auto& [security, message] : cases) {
+    expectThrowWith([&] { parseNodeConfigYaml(std::string("dds: {security: ") + security + "}\n", "node.yaml"); },
+                    {"node.yaml", message});
+  }
+  EXPECT_NO_THROW(parseNodeConfigYaml("dds: {security: {strategy: permissive, enclave: /}}\n", "n"));
 }
 
 /// The properties rmw_fastrtps sets for an enclave folder, written out by hand.
@@ -159,7 +156,8 @@ TEST(ResolveSecurity, VariablesAreReadExactlyAsRclDoesAndTheConfigWins) {
   }
   {
     const SecurityEnv env("true", kKeystore, "ground/monitor");
-    EXPECT_THROW(resolveSecurity(SecurityConfig{}), std::invalid_argument);
+    expectThrowWith<std::invalid_argument>([] { resolveSecurity(SecurityConfig{}); },
+                                           {"ROS_SECURITY_ENCLAVE_OVERRIDE", "ground/monitor"});
   }
 }
 
@@ -185,13 +183,8 @@ TEST(ResolveSecurity, AMissingFileStopsEnforceNamingItAndPermissiveRunsUnsecured
     config.keystore = keystoreWithout(name);
     config.enclave = "/ground/monitor";
     config.strategy = "Enforce";
-    try {
-      resolveSecurity(config);
-      ADD_FAILURE() << "no error without " << name;
-    } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find(std::string("ground/monitor/") + name), std::string::npos)
-          << e.what();
-    }
+    expectThrowWith<std::invalid_argument>([&] { resolveSecurity(config); },
+                                           {"Enforce", std::string("enclaves/ground/monitor/") + name});
     DdsConfig dds;
     dds.domain_id = 199;
     dds.discovery_range = "LOCALHOST";
@@ -214,20 +207,10 @@ TEST(ResolveSecurity, AMissingFileStopsEnforceNamingItAndPermissiveRunsUnsecured
   SecurityConfig config;
   config.enable = true;
   config.strategy = "Enforce";
-  try {
-    resolveSecurity(config);
-    ADD_FAILURE() << "no error without a keystore";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("ROS_SECURITY_KEYSTORE"), std::string::npos) << e.what();
-  }
+  expectThrowWith<std::invalid_argument>([&] { resolveSecurity(config); }, {"ROS_SECURITY_KEYSTORE"});
   config.keystore = kKeystore;
   config.enclave = "/no/such/enclave";
-  try {
-    resolveSecurity(config);
-    ADD_FAILURE() << "no error for a missing enclave";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("enclaves/no/such/enclave"), std::string::npos) << e.what();
-  }
+  expectThrowWith<std::invalid_argument>([&] { resolveSecurity(config); }, {"enclaves/no/such/enclave"});
   config.strategy = "Permissive";
   EXPECT_FALSE(resolveSecurity(config).enabled);
 }
