@@ -61,6 +61,7 @@ export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST   # never leave loopback (the udp
 unset FASTRTPS_DEFAULT_PROFILES_FILE ROS_SECURITY_ENABLE ROS_SECURITY_KEYSTORE ROS_SECURITY_STRATEGY \
   ROS_SECURITY_ENCLAVE_OVERRIDE
 mkdir -p "$out"
+given_keystore=$keystore
 if [ "$security" != off ] && [ -z "$keystore" ]; then
   keystore=$out/keystore_$protection
   "$repo/tools/make_test_keystore.sh" "$keystore" --protection "$protection" > "$out/keystore.log" ||
@@ -167,7 +168,9 @@ for r in "${results[@]}"; do
 done
 if [ "$security" != off ]; then
   echo
-  echo "== Cost of DDS Security (PKI-DH, access control, AES-GCM-GMAC ENCRYPT on rtps, discovery, metadata and data)"
+  what="rtps, discovery, metadata and data"; [ "$protection" = payload ] && what="discovery and data only"
+  [ -n "$given_keystore" ] && what="what the governance of $keystore says"
+  echo "== Cost of DDS Security (PKI-DH, access control, AES-GCM-GMAC ENCRYPT on $what)"
   for mode in $modes; do
     [ -n "${p50_of[$mode]:-}" ] && [ -n "${p50_of[$mode+sec]:-}" ] || continue
     awk -v m="$mode" -v a="${p50_of[$mode]}" -v b="${p50_of[$mode+sec]}" -v c="${p99_of[$mode]}" \
