@@ -19,6 +19,7 @@ PACKET_STATISTICS = 6
 
 
 def main() -> int:
+    """Capture until stopped; return the exit status."""
     interface, path, limit_s = sys.argv[1], sys.argv[2], float(sys.argv[3])
     stop = []
     signal.signal(signal.SIGTERM, lambda *_: stop.append(1))

@@ -20,8 +20,8 @@ fail() { echo "FAIL: $*"; exit 1; }
 if [ "${MLMAP_CAPTURE_IN_NETNS:-}" != 1 ]; then
   # Into a network namespace of our own: nothing from or to the host's interfaces.
   flags=-n; [ "$(id -u)" = 0 ] || flags=-rn
-  MLMAP_CAPTURE_IN_NETNS=1 exec unshare $flags bash "$0" "$@"
-  fail "unshare $flags failed (needs root or user namespaces)"
+  MLMAP_CAPTURE_IN_NETNS=1 unshare $flags bash "$0" "$@"   # unshare says why when it cannot
+  exit $?
 fi
 [ "$(ip -o link show | wc -l)" -eq 1 ] || fail "not in a fresh network namespace: $(ip -o link show)"
 ip link set lo up || fail "cannot bring lo up"
@@ -38,7 +38,11 @@ sed -e 's/^  width: 640 /  width: 160 /; s/^  height: 480 /  height: 120 /' \
 grep -q '^  width: 160 ' "$out/scenario.yaml" || fail "could not shrink the camera of default_room.yaml"
 
 pids=()
-trap 'for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done' EXIT
+cleanup() {
+  local p
+  for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done
+}
+trap cleanup EXIT
 count() {  # count <capture file> <text>: occurrences of text in the captured bytes
   "$python" -c 'import sys; print(open(sys.argv[1], "rb").read().count(sys.argv[2].encode()))' "$1" "$2"
 }
