@@ -71,9 +71,9 @@ TEST(SecurityConfigYaml, BadValuesAreErrorsNamingTheKey) {
       {"{enclave: /mlmap//node}", "dds.security.enclave: not a valid enclave name"},
       {"{enable: maybe}", "dds.security.enable: cannot read"},
       {"{keystor: /ks}", "dds.security.keystor: unknown key"}};
-  for (const auto& [security, message] : cases) {
-    expectThrowWith([&] { parseNodeConfigYaml(std::string("dds: {security: ") + security + "}\n", "node.yaml"); },
-                    {"node.yaml", message});
+  for (const auto& c : cases) {
+    const std::string yaml = std::string("dds: {security: ") + c.first + "}\n";
+    expectThrowWith([&yaml] { parseNodeConfigYaml(yaml, "node.yaml"); }, {"node.yaml", c.second});
   }
   EXPECT_NO_THROW(parseNodeConfigYaml("dds: {security: {strategy: permissive, enclave: /}}\n", "n"));
 }
