@@ -63,22 +63,18 @@ make_key() {
   say made "$1"
 }
 
+# An openssl request configuration: subject CN=<name>, the extension lines <ext> (section ext).
+request_config() {
+  printf '[req]\nprompt = no\ndistinguished_name = dn\nx509_extensions = ext\n[dn]\nCN = %s\n[ext]\n%s\n' "$1" "$2"
+}
+
 # A self-signed CA certificate: make_ca <key> <cert> <common name>
 make_ca() {
   make_key "$1"
   if [ -s "$2" ]; then say kept "$2"; return; fi
-  cat > "$tmp/ca.cnf" <<EOF
-[req]
-prompt = no
-distinguished_name = dn
-x509_extensions = ext
-[dn]
-CN = $3
-[ext]
-basicConstraints = critical, CA:true
+  request_config "$3" "basicConstraints = critical, CA:true
 keyUsage = critical, keyCertSign, cRLSign, digitalSignature
-subjectKeyIdentifier = hash
-EOF
+subjectKeyIdentifier = hash" > "$tmp/ca.cnf"
   openssl req -x509 -new -key "$1" -config "$tmp/ca.cnf" -days "$days" -sha256 -out "$2"
   say made "$2"
 }
@@ -88,16 +84,8 @@ make_identity() {
   local dir=$1 enclave=$2 ca_key=$3 ca_cert=$4
   make_key "$dir/key.pem"
   if [ -s "$dir/cert.pem" ]; then say kept "$dir/cert.pem"; return; fi
-  cat > "$tmp/id.cnf" <<EOF
-[req]
-prompt = no
-distinguished_name = dn
-[dn]
-CN = $enclave
-[ext]
-basicConstraints = critical, CA:false
-keyUsage = critical, digitalSignature, keyAgreement
-EOF
+  request_config "$enclave" "basicConstraints = critical, CA:false
+keyUsage = critical, digitalSignature, keyAgreement" > "$tmp/id.cnf"
   openssl req -new -key "$dir/key.pem" -config "$tmp/id.cnf" -out "$tmp/id.csr"
   openssl x509 -req -in "$tmp/id.csr" -CA "$ca_cert" -CAkey "$ca_key" -set_serial "0x$(openssl rand -hex 8)" \
     -days "$days" -sha256 -extfile "$tmp/id.cnf" -extensions ext -out "$dir/cert.pem" 2>/dev/null
