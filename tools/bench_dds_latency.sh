@@ -5,9 +5,12 @@
 # once over shared memory and once over UDP only, on loopback. Prints the figures against the
 # targets (no dropped frame; p50 <= engine compute median + 5 ms; p99 <= engine p99 + 15 ms).
 # Figures, not a test: only --smoke fails, when a frame sent did not reach the subscriber.
+# With --secure every mode runs twice, without and with DDS Security, and the cost of
+# encryption is printed (target: under 20 % more latency).
 #
 #   tools/bench_dds_latency.sh [--build DIR] [--out DIR] [--seconds S] [--rate HZ]
 #                              [--modes "shm udp"] [--domain ID] [--probe-cloud] [--smoke]
+#                              [--secure] [--protection full|payload] [--keystore DIR]
 #
 #   --build DIR    where the programs are (default: build-perf)
 #   --out DIR      logs, node configs, latency_<mode>.json (default: bench_output/dds_latency)
@@ -19,10 +22,17 @@
 #   --probe-cloud  the subscriber also times the clouds' own transport (adds a second reader)
 #   --smoke        check, not measure: deep queues so a loaded machine delays rather than drops,
 #                  and fail unless every frame reached the subscriber and the node mapped it all
+#   --secure       also run every mode with DDS Security (label <mode>+sec): the node as enclave
+#                  /mlmap/node, the sensor publisher as /mlmap/sensor, the subscriber as
+#                  /ground/monitor of the test keystore (governance: everything ENCRYPT)
+#   --protection P the test keystore's governance: full (default: rtps, metadata and data
+#                  ENCRYPT) or payload (data ENCRYPT only; see tools/make_test_keystore.sh)
+#   --keystore DIR the SROS2 keystore for --secure (default: made by tools/make_test_keystore.sh
+#                  --protection P in <out>/keystore_<P>)
 set -uo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 bin=$repo/build-perf out=$repo/bench_output/dds_latency seconds=25 rate=30 modes="shm udp"
-domain=135 probe=() smoke=0
+domain=135 probe=() smoke=0 security="off" keystore="" protection=full
 while [ $# -gt 0 ]; do
   case $1 in
     --build) bin=$(cd "$2" && pwd); shift 2 ;;
@@ -33,6 +43,9 @@ while [ $# -gt 0 ]; do
     --domain) domain=$2; shift 2 ;;
     --probe-cloud) probe=(--probe-cloud); shift ;;
     --smoke) smoke=1; shift ;;
+    --secure) security="off on"; shift ;;
+    --keystore) keystore=$2; shift 2 ;;
+    --protection) protection=$2; shift 2 ;;
     *) echo "unknown option $1 (see the comment at the top of $0)" >&2; exit 64 ;;
   esac
 done
@@ -45,17 +58,34 @@ require=(); [ $smoke -eq 1 ] && require=(--require-all)
 
 export ROS_DOMAIN_ID=$domain
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST   # never leave loopback (the udp mode says OFF + a loopback profile)
-unset FASTRTPS_DEFAULT_PROFILES_FILE
+unset FASTRTPS_DEFAULT_PROFILES_FILE ROS_SECURITY_ENABLE ROS_SECURITY_KEYSTORE ROS_SECURITY_STRATEGY \
+  ROS_SECURITY_ENCLAVE_OVERRIDE
 mkdir -p "$out"
+given_keystore=$keystore
+if [ "$security" != off ] && [ -z "$keystore" ]; then
+  keystore=$out/keystore_$protection
+  "$repo/tools/make_test_keystore.sh" "$keystore" --protection "$protection" > "$out/keystore.log" ||
+    { cat "$out/keystore.log"; echo "cannot make the test keystore" >&2; exit 2; }
+fi
+[ -z "$keystore" ] || keystore=$(cd "$keystore" && pwd)
 pids=()
 trap 'for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done' EXIT
 load() { cut -d' ' -f1-3 /proc/loadavg; }
 hwm_mb() { awk '/VmHWM/ { printf "%.0f", $2 / 1024 }' "/proc/$1/status" 2>/dev/null; }
 
 results=() status=0
-echo "DDS latency benchmark: $frames frames at $rate Hz per mode ($modes), domain $domain, $(nproc) cores"
-for mode in $modes; do
-  dir=$out/$mode
+echo "DDS latency benchmark: $frames frames at $rate Hz per mode ($modes; security $security), domain $domain, $(nproc) cores"
+for run in $(for m in $modes; do for s in $security; do echo "$m:$s"; done; done); do
+  mode=${run%%:*} sec=${run#*:}
+  label=$mode; [ "$sec" = on ] && label=$mode+sec
+  # Each program its own enclave (the config leaves the enclave to the environment).
+  node_env=() pub_env=() sub_env=()
+  if [ "$sec" = on ]; then
+    node_env=(ROS_SECURITY_ENCLAVE_OVERRIDE=/mlmap/node)
+    pub_env=(ROS_SECURITY_ENCLAVE_OVERRIDE=/mlmap/sensor)
+    sub_env=(ROS_SECURITY_ENCLAVE_OVERRIDE=/ground/monitor)
+  fi
+  dir=$out/$label
   rm -rf "$dir" && mkdir -p "$dir"
   cfg=$dir/node.yaml
   # Every snapshot published (local_map_hz above the frame rate); everything else as deployed.
@@ -68,20 +98,21 @@ for mode in $modes; do
              "$repo/config/dds/loopback_udp_only.xml" ;;
       *) echo "unknown mode $mode (shm, udp)" >&2; exit 64 ;;
     esac
+    [ "$sec" = on ] && printf '  security: {enable: true, keystore: %s, strategy: Enforce}\n' "$keystore"
   } > "$cfg"
   load_before=$(load)
 
-  "$bin/mlmap_node" --config "$cfg" --report-every 0 > "$dir/node.log" 2>&1 &
+  env "${node_env[@]}" "$bin/mlmap_node" --config "$cfg" --report-every 0 > "$dir/node.log" 2>&1 &
   node=$!
-  "$bin/mlmap_bench_dds_latency" --config "$cfg" --frames "$frames" --label "$mode" \
-    --json "$out/latency_$mode.json" --idle-stop 3 --duration $((seconds * 4 + 180)) "${probe[@]}" \
+  env "${sub_env[@]}" "$bin/mlmap_bench_dds_latency" --config "$cfg" --frames "$frames" --label "$label" \
+    --json "$out/latency_$label.json" --idle-stop 3 --duration $((seconds * 4 + 180)) "${probe[@]}" \
     "${require[@]}" > "$dir/bench.log" 2>&1 &
   bench=$!
   pids=("$node" "$bench")
   for _ in $(seq 200); do grep -qs '^ready' "$dir/bench.log" && break; sleep 0.1; done
   grep -q '^ready' "$dir/bench.log" || echo "warning: the subscriber did not match the node in 20 s"
 
-  "$bin/mlmap_sensor_publisher" --config "$cfg" --rate "$rate" --max-frames "$frames" --prerender \
+  env "${pub_env[@]}" "$bin/mlmap_sensor_publisher" --config "$cfg" --rate "$rate" --max-frames "$frames" --prerender \
     > "$dir/publisher.log" 2>&1 &
   pub=$!
   pids+=("$pub")
@@ -102,7 +133,7 @@ for mode in $modes; do
   pids=()
 
   echo
-  echo "== $mode: load average (1/5/15 min) before the run $load_before, at the end of streaming $load_after"
+  echo "== $label: load average (1/5/15 min) before the run $load_before, at the end of streaming $load_after"
   sed -n '/^== /,$p' "$dir/bench.log" | grep -v '^result '
   grep -E 'done:|late|error|warn' "$dir/publisher.log" | sed 's/^/publisher: /'
   grep -E 'done:|error|warn' "$dir/node.log" | sed 's/^/node: /' | head -20
@@ -111,18 +142,19 @@ for mode in $modes; do
   results+=("$line node_mb=${node_mb:-?} load=${load_before%% *}/${load_after%% *}")
   mapped=$(sed -n 's/.*done: \([0-9]*\) frames mapped.*/\1/p' "$dir/node.log")
   if [ $pub_rc -ne 0 ] || [ $node_rc -ne 0 ] || [ $bench_rc -ne 0 ]; then
-    echo "FAIL ($mode): publisher $pub_rc, node $node_rc, subscriber $bench_rc"
+    echo "FAIL ($label): publisher $pub_rc, node $node_rc, subscriber $bench_rc"
     status=1
   fi
   if [ $smoke -eq 1 ] && [ "${mapped:-0}" -ne "$frames" ]; then
-    echo "FAIL ($mode): the node mapped ${mapped:-no} frames of $frames"
+    echo "FAIL ($label): the node mapped ${mapped:-no} frames of $frames"
     status=1
   fi
 done
 
 echo
 echo "== Summary: capture -> local map at the subscriber, $frames frames of 640x480 at $rate Hz per mode"
-printf '%-5s %6s %7s %9s %8s %8s %8s %11s %11s %7s %7s  %s\n' mode sent mapped received \
+declare -A p50_of p99_of
+printf '%-8s %6s %7s %9s %8s %8s %8s %11s %11s %7s %7s  %s\n' mode sent mapped received \
   p50_ms p99_ms max_ms engine_p50 engine_p99 "p50 ok" "p99 ok" "1-min load before/after"
 for r in "${results[@]}"; do
   get() { echo "$r" | tr ' ' '\n' | sed -n "s/^$1=//p"; }
@@ -130,9 +162,23 @@ for r in "${results[@]}"; do
   p50=$(get p50) p99=$(get p99) e50=$(get engine_p50) e99=$(get engine_p99)
   ok50=$(awk -v a="$p50" -v b="$e50" 'BEGIN { print (a <= b + 5) ? "yes" : "NO" }')
   ok99=$(awk -v a="$p99" -v b="$e99" 'BEGIN { print (a <= b + 15) ? "yes" : "NO" }')
-  printf '%-5s %6s %7s %9s %8s %8s %8s %11s %11s %7s %7s  %s\n' "$mode" "$(get sent)" "$(get mapped)" \
+  printf '%-8s %6s %7s %9s %8s %8s %8s %11s %11s %7s %7s  %s\n' "$mode" "$(get sent)" "$(get mapped)" \
     "$(get received)" "$p50" "$p99" "$(get max)" "$e50" "$e99" "$ok50" "$ok99" "$(echo "$r" | sed 's/.*load=//')"
+  p50_of[$mode]=$p50 p99_of[$mode]=$p99
 done
+if [ "$security" != off ]; then
+  echo
+  what="rtps, discovery, metadata and data"; [ "$protection" = payload ] && what="discovery and data only"
+  [ -n "$given_keystore" ] && what="what the governance of $keystore says"
+  echo "== Cost of DDS Security (PKI-DH, access control, AES-GCM-GMAC ENCRYPT on $what)"
+  for mode in $modes; do
+    [ -n "${p50_of[$mode]:-}" ] && [ -n "${p50_of[$mode+sec]:-}" ] || continue
+    awk -v m="$mode" -v a="${p50_of[$mode]}" -v b="${p50_of[$mode+sec]}" -v c="${p99_of[$mode]}" \
+        -v d="${p99_of[$mode+sec]}" 'BEGIN {
+      printf "%-4s p50 %.1f -> %.1f ms (%+.0f %%), p99 %.1f -> %.1f ms (%+.0f %%); target < +20 %%: %s\n",
+        m, a, b, 100 * (b - a) / a, c, d, 100 * (d - c) / c, (b <= 1.2 * a && d <= 1.2 * c) ? "yes" : "NO" }'
+  done
+fi
 echo "targets: received = sent (no dropped frame); p50 <= engine_p50 + 5 ms; p99 <= engine_p99 + 15 ms"
 echo "(latency figures leave out the first second of stamps; the per-mode tables above have every frame)"
 echo "JSON: $out/latency_<mode>.json; logs: $out/<mode>/"

@@ -20,6 +20,7 @@ packages=(
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools  # DDS component (Fast DDS 2.9, ROS 2 wire types)
   cyclonedds-dev cyclonedds-tools      # cross-vendor interoperability test (ROS 2's other tier-1 DDS)
   iproute2                             # network-namespace tests
+  openssl python3                      # DDS Security: test keystores (tools/make_test_keystore.sh), the capture test
 )
 # The ROS 2 ground-station tools (tools/ros2, docker/): no ROS in Debian 12, so their tests run
 # the ROS-free parts under /usr/bin/python3 and lint the rest.

@@ -20,6 +20,8 @@
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
 #include "tf2_msgs/msg/TFMessage_PubSubTypes.h"
 
+#include "security_options.h"
+
 #include <CLI/CLI.hpp>
 #include <opencv2/imgproc.hpp>
 #include <spdlog/spdlog.h>
@@ -163,13 +165,16 @@ int main(int argc, char** argv) {
                  "exit 2 unless these layers arrived (topic names as in the config, e.g. mlmap/grid)")
       ->delimiter(',');
   app.add_option("--min-precision", min_precision, "exit 2 when the scored precision is lower");
+  mlmap::apps::SecurityOptions security;
+  security.add(app);
   CLI11_PARSE(app, argc, argv);
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
 
   try {
-    const mlmap::dds::NodeConfig config =
+    mlmap::dds::NodeConfig config =
         config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(config_path);
+    security.apply(&config.dds.security);
     const mlmap::dds::TopicNames& n = config.dds.topics;
     const mlmap::dds::PublishRates& r = config.dds.rates;
     const std::string& ns = config.dds.ns;

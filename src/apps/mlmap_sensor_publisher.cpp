@@ -22,6 +22,8 @@
 #include "sensor_msgs/msg/Image_PubSubTypes.h"
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
 
+#include "security_options.h"
+
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
@@ -206,13 +208,16 @@ int main(int argc, char** argv) {
   app.add_flag("--prerender", prerender,
                "render and encode every frame before streaming (benchmarks: the simulator cannot "
                "hold the rate; memory = frames x message size, 4.8 MB per 640x480 cloud)");
+  mlmap::apps::SecurityOptions security;
+  security.add(app);
   CLI11_PARSE(app, argc, argv);
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
 
   try {
-    const mlmap::dds::NodeConfig config =
+    mlmap::dds::NodeConfig config =
         config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(config_path);
+    security.apply(&config.dds.security);
     std::optional<io::Scenario> scenario;
     std::unique_ptr<io::FrameDirectory> replay;
     if (!frames_dir.empty()) {

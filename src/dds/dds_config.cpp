@@ -4,6 +4,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
@@ -83,7 +84,128 @@ void checkTopic(const char* key, const std::string& topic, std::vector<std::stri
   }
 }
 
+/// Why `enclave` is not a valid enclave name ("" when it is): "/" or an absolute ROS name.
+std::string enclaveProblem(const std::string& enclave) {
+  if (enclave == "/") return "";
+  if (enclave.empty() || enclave[0] != '/') return "must be an absolute name starting with '/'";
+  return rosNameProblem(enclave);
+}
+
+/// The value of environment variable `name`, "" when unset.
+std::string environment(const char* name) {
+  const char* value = std::getenv(name);
+  return value == nullptr ? std::string() : std::string(value);
+}
+
+bool parseStrategy(const std::string& text, SecurityStrategy* strategy) {
+  const std::string u = upper(text);
+  if (u == "ENFORCE") {
+    *strategy = SecurityStrategy::kEnforce;
+  } else if (u == "PERMISSIVE") {
+    *strategy = SecurityStrategy::kPermissive;
+  } else {
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
+
+const char* toString(SecurityStrategy strategy) {
+  return strategy == SecurityStrategy::kEnforce ? "Enforce" : "Permissive";
+}
+
+void SecurityConfig::validate(std::vector<std::string>* errors) const {
+  SecurityStrategy parsed{};
+  if (!strategy.empty() && !parseStrategy(strategy, &parsed)) {
+    errors->push_back("dds.security.strategy: must be empty (ROS_SECURITY_STRATEGY), Enforce or "
+                      "Permissive (got '" + strategy + "')");
+  }
+  if (!enclave.empty()) {
+    const std::string problem = enclaveProblem(enclave);
+    if (!problem.empty()) {
+      errors->push_back("dds.security.enclave: not a valid enclave name: " + problem + " (got '" +
+                        enclave + "')");
+    }
+  }
+  if (keystore.find_first_of("\n\r") != std::string::npos) {
+    errors->push_back("dds.security.keystore: must not contain a line break (got '" + keystore + "')");
+  }
+}
+
+SecuritySetup resolveSecurity(const SecurityConfig& config) {
+  std::vector<std::string> errors;
+  config.validate(&errors);
+  if (!errors.empty()) throw std::invalid_argument(errors.front());
+
+  SecuritySetup setup;
+  // rcl: security is on only for the exact text "true", enforced only for the exact "Enforce".
+  setup.requested = config.enable ? *config.enable : environment("ROS_SECURITY_ENABLE") == "true";
+  if (!config.strategy.empty()) {
+    parseStrategy(config.strategy, &setup.strategy);
+  } else {
+    setup.strategy = environment("ROS_SECURITY_STRATEGY") == "Enforce" ? SecurityStrategy::kEnforce
+                                                                        : SecurityStrategy::kPermissive;
+  }
+  setup.enclave = config.enclave;
+  if (setup.enclave.empty()) {
+    setup.enclave = environment("ROS_SECURITY_ENCLAVE_OVERRIDE");
+    if (setup.enclave.empty()) {
+      setup.enclave = "/";
+    } else if (const std::string problem = enclaveProblem(setup.enclave); !problem.empty()) {
+      throw std::invalid_argument("ROS_SECURITY_ENCLAVE_OVERRIDE: not a valid enclave name: " +
+                                  problem + " (got '" + setup.enclave + "')");
+    }
+  }
+  setup.keystore = config.keystore.empty() ? environment("ROS_SECURITY_KEYSTORE") : config.keystore;
+  if (!setup.requested) return setup;
+
+  // Enforce: refuse. Permissive: warn and run unsecured (rcl / rmw_fastrtps).
+  auto unusable = [&setup](const std::string& problem) {
+    if (setup.strategy == SecurityStrategy::kEnforce) {
+      throw std::invalid_argument("DDS Security (strategy Enforce): " + problem);
+    }
+    setup.warning = "DDS Security requested but " + problem +
+                    ": running WITHOUT security (strategy Permissive; set dds.security.strategy or "
+                    "ROS_SECURITY_STRATEGY to Enforce to refuse instead)";
+    return setup;
+  };
+  if (setup.keystore.empty()) {
+    return unusable("no keystore is set (dds.security.keystore or ROS_SECURITY_KEYSTORE)");
+  }
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::path dir = fs::absolute(fs::path(setup.keystore), ec) / "enclaves";
+  if (setup.enclave != "/") dir /= setup.enclave.substr(1);
+  dir = dir.lexically_normal();
+  setup.enclave_dir = dir.string();
+  if (!fs::is_directory(dir, ec)) {
+    return unusable("enclave '" + setup.enclave + "' has no folder " + setup.enclave_dir +
+                    " in keystore " + setup.keystore +
+                    " (make it with `ros2 security create_enclave` or tools/make_test_keystore.sh)");
+  }
+  std::string missing;
+  for (const char* name : kSecurityFileNames) {
+    if (!fs::is_regular_file(dir / name, ec)) missing += (missing.empty() ? "" : ", ") + (dir / name).string();
+  }
+  if (!missing.empty()) {
+    return unusable("enclave '" + setup.enclave + "' is missing " + missing);
+  }
+  auto uri = [&dir](const char* name) { return "file://" + (dir / name).string(); };
+  setup.properties = {
+      {"dds.sec.auth.plugin", "builtin.PKI-DH"},
+      {"dds.sec.auth.builtin.PKI-DH.identity_ca", uri("identity_ca.cert.pem")},
+      {"dds.sec.auth.builtin.PKI-DH.identity_certificate", uri("cert.pem")},
+      {"dds.sec.auth.builtin.PKI-DH.private_key", uri("key.pem")},
+      {"dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC"},
+      {"dds.sec.access.plugin", "builtin.Access-Permissions"},
+      {"dds.sec.access.builtin.Access-Permissions.permissions_ca", uri("permissions_ca.cert.pem")},
+      {"dds.sec.access.builtin.Access-Permissions.governance", uri("governance.p7s")},
+      {"dds.sec.access.builtin.Access-Permissions.permissions", uri("permissions.p7s")},
+  };
+  setup.enabled = true;
+  return setup;
+}
 
 bool parseDiscoveryRange(const std::string& text, DiscoveryRange* range) {
   const std::string u = upper(text);
@@ -171,6 +293,7 @@ std::vector<std::string> DdsConfig::validate() const {
     errors.push_back("dds.esdf_slice_height_m: must be a finite number (got " +
                      number(esdf_slice_height_m) + ")");
   }
+  security.validate(&errors);
   return errors;
 }
 

@@ -56,6 +56,20 @@ void readDdsSection(io::Section& top, DdsConfig* dds) {
   s.read("pose_buffer_s", &dds->pose_buffer_s);
   s.read("max_future_s", &dds->max_future_s);
   s.read("esdf_slice_height_m", &dds->esdf_slice_height_m);
+  {
+    io::Section sec(s.child("security"), "dds.security", errors);
+    SecurityConfig& c = dds->security;
+    const YAML::Node enable = sec.child("enable");
+    if (enable && !enable.IsNull()) {  // absent or empty: the environment decides
+      bool value = false;
+      const std::size_t before = errors->size();
+      sec.read("enable", &value);
+      if (errors->size() == before) c.enable = value;
+    }
+    sec.read("keystore", &c.keystore);
+    sec.read("enclave", &c.enclave);
+    sec.read("strategy", &c.strategy);
+  }
 }
 
 void readMapFileSection(io::Section& top, MapFileOptions* options) {
@@ -169,6 +183,17 @@ std::string toYaml(const NodeConfig& config) {
   number("pose_buffer_s", d.pose_buffer_s);
   number("max_future_s", d.max_future_s);
   number("esdf_slice_height_m", d.esdf_slice_height_m);
+  out << YAML::Key << "security" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "enable" << YAML::Value;
+  if (d.security.enable) {
+    out << *d.security.enable;
+  } else {
+    out << YAML::Null;  // the environment decides
+  }
+  text("keystore", d.security.keystore);
+  text("enclave", d.security.enclave);
+  text("strategy", d.security.strategy);
+  out << YAML::EndMap;
   out << YAML::EndMap;
   out << YAML::Key << "map_file" << YAML::Value << YAML::BeginMap;
   text("load_path", config.map_file.load_path);

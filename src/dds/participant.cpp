@@ -11,6 +11,7 @@
 #include <fastrtps/utils/IPLocator.h>
 
 #include <algorithm>
+#include <iostream>
 #include <stdexcept>
 #include <vector>
 
@@ -138,6 +139,26 @@ void sizeForLargeData(fdds::DomainParticipantQos* qos) {
   }
 }
 
+/// Adds the security properties of `security` to the QoS; a property the profile already sets
+/// keeps the profile's value (an XML profile can configure or refine DDS Security itself).
+void applySecurity(const SecuritySetup& security, fdds::DomainParticipantQos* qos) {
+  std::vector<frtps::Property>& properties = qos->properties().properties();
+  for (const auto& [name, value] : security.properties) {
+    const bool set_by_profile =
+        std::any_of(properties.begin(), properties.end(),
+                    [&name = name](const frtps::Property& p) { return p.name() == name; });
+    if (!set_by_profile) properties.emplace_back(name, value);
+  }
+}
+
+/// True when the QoS (from mlmap or from the profile) enables Fast DDS's security plugins.
+bool securityConfigured(const fdds::DomainParticipantQos& qos) {
+  const std::vector<frtps::Property>& properties = qos.properties().properties();
+  return std::any_of(properties.begin(), properties.end(), [](const frtps::Property& p) {
+    return p.name().rfind("dds.sec.", 0) == 0 && p.name().find(".plugin") != std::string::npos;
+  });
+}
+
 void checkDepth(int depth) {
   if (depth < 1) {
     throw std::invalid_argument("KEEP_LAST history depth must be >= 1 (got " +
@@ -158,6 +179,7 @@ ParticipantSetup participantSetup(const DdsConfig& config, const std::string& na
   try {
     setup.domain_id = resolveDomainId(config);
     setup.discovery_range = resolveDiscoveryRange(config);
+    setup.security = resolveSecurity(config.security);
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(e.what());
   }
@@ -183,21 +205,34 @@ ParticipantSetup participantSetup(const DdsConfig& config, const std::string& na
   qos.wire_protocol().builtin.readerHistoryMemoryPolicy = frtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
   qos.wire_protocol().builtin.writerHistoryMemoryPolicy = frtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
   if (qos.user_data().data_vec().empty()) {
-    const std::string enclave = "enclave=/;";
+    const std::string enclave = "enclave=" + setup.security.enclave + ";";
     qos.user_data().data_vec(std::vector<frtps::octet>(enclave.begin(), enclave.end()));
   }
+  if (setup.security.enabled) applySecurity(setup.security, &qos);
   return setup;
 }
 
 ParticipantPtr createParticipant(const DdsConfig& config, const std::string& name) {
   const ParticipantSetup setup = participantSetup(config, name);
+  // As rmw: a Permissive fallback is said, not silent.
+  if (!setup.security.warning.empty()) std::cerr << "[mlmap dds] warning: " << setup.security.warning << "\n";
   fdds::DomainParticipant* participant =
       fdds::DomainParticipantFactory::get_instance()->create_participant(
           static_cast<fdds::DomainId_t>(setup.domain_id), setup.qos);
   if (participant == nullptr) {
+    std::string security;
+    if (setup.security.enabled) {
+      security = "; DDS Security as enclave '" + setup.security.enclave + "' from " +
+                 setup.security.enclave_dir +
+                 ": check that its certificates, key, governance and permissions belong together "
+                 "and are signed by its CAs";
+    } else if (securityConfigured(setup.qos)) {
+      security = "; DDS Security as the profile's dds.sec.* properties set it";
+    }
     throw std::runtime_error("Fast DDS refused to create participant '" + name + "' on domain " +
                              std::to_string(setup.domain_id) + " with discovery range " +
-                             toString(setup.discovery_range) + " (see the Fast DDS log above)");
+                             toString(setup.discovery_range) + security +
+                             " (see the Fast DDS log above)");
   }
   return ParticipantPtr(participant);
 }

@@ -8,7 +8,9 @@
 /// default (domain 0, SUBNET). FASTRTPS_DEFAULT_PROFILES_FILE is read by Fast DDS itself; a
 /// `profiles_file` in the config is loaded on top of it.
 
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mlmap::dds {
@@ -55,6 +57,63 @@ struct PublishRates {
   double status_hz = 1.0;
 };
 
+/// ROS_SECURITY_STRATEGY: what a participant does when security is enabled but its enclave's
+/// files are missing.
+enum class SecurityStrategy {
+  kPermissive,  ///< warn and run unsecured (ROS 2's default)
+  kEnforce,     ///< refuse to start, naming the missing file
+};
+const char* toString(SecurityStrategy strategy);
+
+/// The `dds.security` section: DDS Security from an SROS2 keystore, as rmw_fastrtps applies it
+/// (authentication builtin.PKI-DH, access control builtin.Access-Permissions with signed
+/// governance and permissions, encryption builtin.AES-GCM-GMAC), so a ROS 2 node with an enclave
+/// in the same keystore is a peer. What is protected (encryption, join access control, ...) is
+/// the keystore's governance; who may publish or read which topic is the enclave's permissions.
+///
+/// Each field left unset takes the ROS 2 environment variable, read exactly as rcl does:
+/// `enable` <- ROS_SECURITY_ENABLE (only the exact text "true" enables), `keystore` <-
+/// ROS_SECURITY_KEYSTORE, `enclave` <- ROS_SECURITY_ENCLAVE_OVERRIDE (else "/", ROS 2's default
+/// enclave), `strategy` <- ROS_SECURITY_STRATEGY (only "Enforce" enforces; else Permissive).
+/// A value set here wins over the environment (as for `domain_id`).
+struct SecurityConfig {
+  std::optional<bool> enable;  ///< unset: ROS_SECURITY_ENABLE == "true"; default false
+  std::string keystore;        ///< SROS2 keystore root (holds enclaves/); "": ROS_SECURITY_KEYSTORE
+  std::string enclave;         ///< e.g. "/mlmap/node"; "": ROS_SECURITY_ENCLAVE_OVERRIDE, else "/"
+  std::string strategy;        ///< "Enforce" or "Permissive" (any case); "": ROS_SECURITY_STRATEGY
+
+  /// Problems as "dds.security.key: what is wrong (got X)", appended to `errors`: strategy empty,
+  /// Enforce or Permissive; enclave empty or an absolute ROS name ("/a/b": tokens of letters,
+  /// digits and '_'); keystore without newlines.
+  void validate(std::vector<std::string>* errors) const;
+};
+
+/// The six files of an enclave, looked up in `<keystore>/enclaves/<enclave>/` as rmw does.
+inline constexpr const char* kSecurityFileNames[] = {
+    "identity_ca.cert.pem", "cert.pem", "key.pem", "permissions_ca.cert.pem", "governance.p7s",
+    "permissions.p7s"};
+
+/// Security as resolved from a SecurityConfig and the environment (resolveSecurity()).
+struct SecuritySetup {
+  bool requested = false;   ///< enable (or ROS_SECURITY_ENABLE) asked for security
+  bool enabled = false;     ///< the participant is secured (requested and every file found)
+  SecurityStrategy strategy = SecurityStrategy::kPermissive;
+  std::string keystore;     ///< as resolved ("" when none)
+  std::string enclave = "/";  ///< as resolved; also the participant's user data "enclave=<enclave>;"
+  std::string enclave_dir;  ///< <keystore>/enclaves<enclave> (absolute)
+  /// The participant properties rmw_fastrtps sets (dds.sec.*, `file://` URIs); empty when not
+  /// enabled.
+  std::vector<std::pair<std::string, std::string>> properties;
+  /// Why a requested security is off (Permissive strategy, files missing); "" otherwise.
+  std::string warning;
+};
+
+/// Resolves `config` against the environment and finds the enclave's files. Throws
+/// std::invalid_argument naming the key or variable when a value is invalid, and, with the
+/// Enforce strategy, when the keystore is not set or an enclave file is missing (naming the
+/// file); with Permissive the same problems give a warning and an unsecured setup, as rmw.
+SecuritySetup resolveSecurity(const SecurityConfig& config);
+
 /// The `dds` section.
 struct DdsConfig {
   int domain_id = -1;              ///< -1: ROS_DOMAIN_ID, else 0. Valid: 0..232
@@ -74,13 +133,15 @@ struct DdsConfig {
   double pose_buffer_s = 2.0;      ///< poses kept for pairing
   double max_future_s = 1.0;       ///< stamps farther ahead of the newest pose are rejected
   double esdf_slice_height_m = 0.0;  ///< slice height relative to the body [m]
+  SecurityConfig security;         ///< DDS Security (SROS2 keystore); off unless enabled
 
   /// Every problem as "dds.key: what is wrong (got X)". Empty = valid. Checks: domain_id -1 or
   /// 0..232; ns and topic names valid ROS names (letters, digits, '_', tokens not starting with a
   /// digit, single '/' separators) or empty; discovery_range empty or parseable; frames
   /// non-empty, without a leading '/' or whitespace (tf2 rules); rates finite and >= 0;
   /// pose_tolerance_s, pose_buffer_s, max_future_s finite and > 0; esdf_slice_height_m finite;
-  /// participant_profile set when profiles_file is; camera_info set when depth_image is.
+  /// participant_profile set when profiles_file is; camera_info set when depth_image is;
+  /// security as SecurityConfig::validate().
   [[nodiscard]] std::vector<std::string> validate() const;
 };
 

@@ -29,7 +29,8 @@ using ParticipantPtr = std::unique_ptr<eprosima::fastdds::dds::DomainParticipant
 /// FASTRTPS_DEFAULT_PROFILES_FILE), else the factory's default participant QoS (Fast DDS's
 /// defaults, or the is_default_profile of FASTRTPS_DEFAULT_PROFILES_FILE). The QoS name becomes
 /// `name` (when not empty); discovery history memory becomes PREALLOCATED_WITH_REALLOC and the
-/// user data "enclave=/;" when the profile sets none (both as rmw_fastrtps).
+/// user data "enclave=<enclave>;" (enclave "/" unless security sets one) when the profile sets
+/// none (both as rmw_fastrtps).
 ///
 /// Discovery range:
 /// - kLocalhost: the transports are replaced by SHM + UDPv4 restricted to 127.0.0.1 (interface
@@ -46,6 +47,13 @@ using ParticipantPtr = std::unique_ptr<eprosima::fastdds::dds::DomainParticipant
 ///   participant that lists this host as a peer still finds it. (rmw_fastrtps switches
 ///   discovery off entirely instead, which also ignores the profile's peers.)
 ///
+/// DDS Security (`security`, resolveSecurity()): when enabled, the dds.sec.* properties of
+/// rmw_fastrtps are added to the QoS (a property the profile already sets keeps the profile's
+/// value), and the user data is "enclave=<enclave>;". A profile whose own `<propertiesPolicy>`
+/// sets the dds.sec.* properties is secured by Fast DDS without `security`. A Permissive
+/// fallback (files missing) is printed to stderr as a warning; with Enforce the missing file is
+/// the exception's message.
+///
 /// `large_data` raises (never lowers) the SHM segment to 16 MB and the socket buffers to 4 MB on
 /// the transports in use: Fast DDS's built-in transports (UDPv4 + SHM) are replaced by the same
 /// two, sized; a profile's own SHM / UDPv4 / UDPv6 / TCP descriptors are copied and sized (the
@@ -60,6 +68,7 @@ ParticipantPtr createParticipant(const DdsConfig& config, const std::string& nam
 struct ParticipantSetup {
   int domain_id = 0;
   DiscoveryRange discovery_range = DiscoveryRange::kSystemDefault;  ///< as resolved
+  SecuritySetup security;  ///< as resolved (its properties are in qos when enabled)
   eprosima::fastdds::dds::DomainParticipantQos qos;
 };
 /// Resolves the domain, the discovery range and the QoS exactly as createParticipant() does
