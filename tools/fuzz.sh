@@ -42,10 +42,14 @@ while [ $# -gt 0 ]; do
   esac
 done
 [ -n "$build" ] || { echo "fuzz.sh: --build DIR is required" >&2; usage >&2; exit 2; }
-[[ "$seconds" =~ ^[0-9]+$ ]] && [ "$seconds" -ge 1 ] && [ "$seconds" -le 86400 ] ||
-  { echo "fuzz.sh: --seconds must be an integer in 1..86400, got '$seconds'" >&2; exit 2; }
-[[ "$jobs" =~ ^[0-9]+$ ]] && [ "$jobs" -ge 1 ] ||
-  { echo "fuzz.sh: --jobs must be a positive integer, got '$jobs'" >&2; exit 2; }
+if ! [[ "$seconds" =~ ^[0-9]+$ ]] || [ "$seconds" -lt 1 ] || [ "$seconds" -gt 86400 ]; then
+  echo "fuzz.sh: --seconds must be an integer in 1..86400, got '$seconds'" >&2
+  exit 2
+fi
+if ! [[ "$jobs" =~ ^[0-9]+$ ]] || [ "$jobs" -lt 1 ]; then
+  echo "fuzz.sh: --jobs must be a positive integer, got '$jobs'" >&2
+  exit 2
+fi
 grep -q '^MLMAP_FUZZ:BOOL=ON' "$build/CMakeCache.txt" 2>/dev/null || {
   echo "fuzz.sh: $build is not a build tree configured with -DMLMAP_FUZZ=ON; make one with" >&2
   echo "  CC=clang CXX=clang++ cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo \\" >&2
@@ -110,7 +114,7 @@ summarize() {
     "${ft:-?}" "${corp:-?}" "${rss:-?}" "$verdict"
 }
 
-n_targets=$(echo $targets | wc -w)
+n_targets=$(echo "$targets" | wc -w)
 echo "fuzzing $n_targets targets for $seconds s each, $jobs at a time; scratch and logs in $out"
 start=$(date +%s)
 running=0
@@ -131,7 +135,9 @@ printf '%-28s %12s %9s %7s %7s %7s %8s  %s\n' target executions exec/s cov ft co
 failed=0
 for t in $targets; do
   summarize "$t"
-  [ "$(cat "$out/$t/rc")" = 0 ] && [ -z "$(find "$out/$t/artifacts" -type f | head -1)" ] || failed=1
+  if [ "$(cat "$out/$t/rc")" != 0 ] || [ -n "$(find "$out/$t/artifacts" -type f | head -1)" ]; then
+    failed=1
+  fi
 done
 echo "(cov: edges covered in the instrumented parsers; ft: libFuzzer features; ${seconds} s per target)"
 

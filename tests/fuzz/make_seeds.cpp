@@ -4,6 +4,7 @@
 /// seeds need to change; the output is committed (README "Fuzzing"):
 ///   cmake --build build-test --target mlmap_fuzz_make_seeds && build-test/tests/fuzz/mlmap_fuzz_make_seeds tests/fuzz/corpus
 
+#include "../support/small_map_state.h"
 #include "mlmap/dds/ros_conversions.h"
 #include "mlmap/io/map_file.h"
 
@@ -180,28 +181,12 @@ void poses() {
 }
 
 void mapFiles() {
-  MapConfig c;
-  c.local_map.resolution_m = 0.1;
-  c.local_map.size_cells = Eigen::Vector3i(10, 10, 10);
-  MapState s;
-  s.local_map = c.local_map;
-  s.log_odds = c.log_odds;
-  write("fuzz_map_file", "never_placed.mlmap", io::encodeMapFile(s));
-  s.window.resolution_m = 0.1;
-  s.window.model = LogOddsModel(c.log_odds);
-  s.window.min_index = VoxelIndex(-4, 2, 6);
-  s.window.size = c.local_map.size_cells;
-  s.window.log_odds.assign(1000, kUnknownLogOdds);
-  for (int i = 0; i < 1000; ++i) {
-    if (i % 9 >= 4 || i % 5 == 0) s.window.log_odds[i] = static_cast<LogOddsQ>(-2000 + (i * 37) % 5501);
-  }
-  s.global_submaps.push_back({SubmapIndex(-9, 0, 1), {{0, 850}, {5, 1700}}});
-  s.global_submaps.push_back({SubmapIndex(3, 4, 5), {{7, 3500}}});
-  s.has_last_stamp = true;
-  s.last_stamp_s = 12.5;
-  s.T_W_B.translation() = Eigen::Vector3d(-0.2, 0.5, 0.9);
-  s.frames_mapped = 42;
-  write("fuzz_map_file", "small.mlmap", io::encodeMapFile(s));
+  MapState placed = test::smallMapState();
+  write("fuzz_map_file", "small.mlmap", io::encodeMapFile(placed));
+  MapState never_placed;  // the same configuration, no window yet, no global map
+  never_placed.local_map = placed.local_map;
+  never_placed.log_odds = placed.log_odds;
+  write("fuzz_map_file", "never_placed.mlmap", io::encodeMapFile(never_placed));
 }
 
 }  // namespace
