@@ -105,9 +105,10 @@ summarize() {
   execs="$(sed -n 's/^stat::number_of_executed_units: *//p' "$dir/log" | tail -1)"
   speed="$(sed -n 's/^stat::average_exec_per_sec: *//p' "$dir/log" | tail -1)"
   rss="$(sed -n 's/^stat::peak_rss_mb: *//p' "$dir/log" | tail -1)"
-  cov="$(grep -o 'cov: [0-9]*' "$dir/log" | tail -1 | cut -d' ' -f2)"
-  ft="$(grep -o 'ft: [0-9]*' "$dir/log" | tail -1 | cut -d' ' -f2)"
-  corp="$(grep -o 'corp: [0-9]*' "$dir/log" | tail -1 | cut -d' ' -f2)"
+  # The last status line, e.g. "#52311 REDUCE cov: 812 ft: 2570 corp: 231/18Kb ...".
+  cov="$(sed -n 's/.* cov: \([0-9]*\).*/\1/p' "$dir/log" | tail -1)"
+  ft="$(sed -n 's/.* ft: \([0-9]*\).*/\1/p' "$dir/log" | tail -1)"
+  corp="$(sed -n 's/.* corp: \([0-9]*\).*/\1/p' "$dir/log" | tail -1)"
   crash="$(find "$dir/artifacts" -type f | head -1)"
   if [ "$rc" = 0 ] && [ -z "$crash" ]; then verdict="ok"; else verdict="CRASH"; fi
   printf '%-28s %12s %9s %7s %7s %7s %8s  %s\n' "$t" "${execs:-?}" "${speed:-?}" "${cov:-?}" \
