@@ -77,9 +77,13 @@ fi
 mkdir -p "$out"
 out="$(cd "$out" && pwd)"
 
-# Sanitizers stop at the first report; leaks count as crashes.
+# Sanitizers stop at the first report; leaks count as crashes. Reports name functions and lines
+# with llvm-14's symbolizer (Debian installs it without the unversioned name on the PATH).
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:symbolize=1}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}"
+if [ -z "${ASAN_SYMBOLIZER_PATH:-}" ] && [ -x /usr/lib/llvm-14/bin/llvm-symbolizer ]; then
+  export ASAN_SYMBOLIZER_PATH=/usr/lib/llvm-14/bin/llvm-symbolizer
+fi
 
 # Fuzzes one target; its log, scratch corpus and any crash file go to $out/<target>/.
 fuzz_one() {
