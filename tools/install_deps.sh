@@ -17,6 +17,7 @@ packages=(
   libcli11-dev libspdlog-dev           # command line, logging
   liboctomap-dev                       # OctoMap: .bt export (mlmap_map_tool), the side-by-side comparison
   libgtest-dev                         # tests
+  clang libclang-rt-14-dev llvm-14     # fuzzing: libFuzzer + sanitizer runtimes, llvm-symbolizer (tools/fuzz.sh)
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools  # DDS component (Fast DDS 2.9, ROS 2 wire types)
   cyclonedds-dev cyclonedds-tools      # cross-vendor interoperability test (ROS 2's other tier-1 DDS)
   iproute2                             # network-namespace tests

@@ -30,14 +30,27 @@ bool endsWith(const std::string& s, const std::string& suffix) {
          s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-/// Reads every whitespace-separated token of a text file as a finite double.
-/// `what` describes the content for error messages ("intrinsics", "pose").
-std::vector<double> readNumbers(const std::string& path, const char* what) {
+/// The whole text of a small text file; `what` describes it for error messages ("intrinsics",
+/// "pose").
+std::string readTextFile(const std::string& path, const char* what) {
   std::ifstream in(path);
   if (!in) {
     throw std::runtime_error("FrameDirectory: cannot open " + std::string(what) + " file '" + path +
                              "'");
   }
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) {
+    throw std::runtime_error("FrameDirectory: error while reading " + std::string(what) +
+                             " file '" + path + "'");
+  }
+  return text.str();
+}
+
+/// Reads every whitespace-separated token of a text file's content as a finite double.
+/// `what` describes the content for error messages ("intrinsics", "pose"), `path` names the file.
+std::vector<double> parseNumbers(const std::string& text, const std::string& path, const char* what) {
+  std::istringstream in(text);
   std::vector<double> values;
   std::string token;
   while (in >> token) {
@@ -56,15 +69,13 @@ std::vector<double> readNumbers(const std::string& path, const char* what) {
     }
     values.push_back(value);
   }
-  if (in.bad()) {
-    throw std::runtime_error("FrameDirectory: error while reading " + std::string(what) +
-                             " file '" + path + "'");
-  }
   return values;
 }
 
-PinholeIntrinsics readIntrinsicsK(const std::string& path) {
-  const std::vector<double> k = readNumbers(path, "intrinsics");
+}  // namespace
+
+PinholeIntrinsics parseIntrinsicsK(const std::string& text, const std::string& path) {
+  const std::vector<double> k = parseNumbers(text, path, "intrinsics");
   if (k.size() != 9) {
     throw std::runtime_error("FrameDirectory: intrinsics file '" + path +
                              "' must hold a 3x3 K matrix (9 numbers), found " +
@@ -91,9 +102,8 @@ PinholeIntrinsics readIntrinsicsK(const std::string& path) {
   return intrinsics;
 }
 
-/// Parses and validates a 4x4 row-major camera-to-world matrix; re-orthonormalises the rotation.
-Transform readPose(const std::string& path) {
-  const std::vector<double> m = readNumbers(path, "pose");
+Transform parsePoseMatrix(const std::string& text, const std::string& path) {
+  const std::vector<double> m = parseNumbers(text, path, "pose");
   if (m.size() != 16) {
     throw std::runtime_error("FrameDirectory: pose file '" + path +
                              "' must hold a 4x4 matrix (16 numbers), found " +
@@ -122,6 +132,8 @@ Transform readPose(const std::string& path) {
   pose.translation() = matrix.topRightCorner<3, 1>();
   return pose;
 }
+
+namespace {
 
 /// Loads an image unchanged; never throws cv::Exception (returns an empty Mat on failure).
 cv::Mat loadUnchanged(const std::string& path) {
@@ -211,7 +223,7 @@ FrameDirectory::FrameDirectory(const std::string& dir) : dir_(dir) {
     throw std::runtime_error("FrameDirectory: no intrinsics file in '" + dir +
                              "' (expected intrinsics.K.txt or camera-intrinsics.txt)");
   }
-  intrinsics_ = readIntrinsicsK(intrinsics_path);
+  intrinsics_ = parseIntrinsicsK(readTextFile(intrinsics_path, "intrinsics"), intrinsics_path);
 
   const cv::Mat first = loadDepthImage(entries_.front().depth_path);
   intrinsics_.width = first.cols;
@@ -247,7 +259,7 @@ DepthFrame FrameDirectory::read(std::size_t i) const {
   }
 
   DepthFrame frame;
-  frame.T_W_B = readPose(e.pose_path);
+  frame.T_W_B = parsePoseMatrix(readTextFile(e.pose_path, "pose"), e.pose_path);
   frame.T_B_S = Transform::Identity();
   frame.stamp_s = static_cast<double>(e.number) / kFrameDirectoryRate_hz;
   frame.encoding = DepthEncoding::kUint16Millimetres;

@@ -25,24 +25,6 @@ constexpr std::size_t kHeaderBytes = 208;
 constexpr std::size_t kSubmapHeadBytes = 16;  // 3 x int32 index + uint32 count
 constexpr std::size_t kRecordBytes = 6;       // uint32 offset + int16 log-odds
 
-// CRC-32 (IEEE 802.3, the one of zlib and PNG), table driven.
-std::uint32_t crc32(const char* data, std::size_t n) {
-  static const std::array<std::uint32_t, 256> table = [] {
-    std::array<std::uint32_t, 256> t{};
-    for (std::uint32_t i = 0; i < 256; ++i) {
-      std::uint32_t c = i;
-      for (int k = 0; k < 8; ++k) c = (c & 1u) != 0 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
-      t[i] = c;
-    }
-    return t;
-  }();
-  std::uint32_t c = 0xFFFFFFFFu;
-  for (std::size_t i = 0; i < n; ++i) {
-    c = table[(c ^ static_cast<std::uint8_t>(data[i])) & 0xFFu] ^ (c >> 8);
-  }
-  return c ^ 0xFFFFFFFFu;
-}
-
 // Little-endian writer.
 class Writer {
  public:
@@ -108,6 +90,23 @@ std::string errnoText(const std::string& step, int err) {
 }
 
 }  // namespace
+
+std::uint32_t crc32(const char* data, std::size_t n) {
+  static const std::array<std::uint32_t, 256> table = [] {
+    std::array<std::uint32_t, 256> t{};
+    for (std::uint32_t i = 0; i < 256; ++i) {
+      std::uint32_t c = i;
+      for (int k = 0; k < 8; ++k) c = (c & 1u) != 0 ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+      t[i] = c;
+    }
+    return t;
+  }();
+  std::uint32_t c = 0xFFFFFFFFu;
+  for (std::size_t i = 0; i < n; ++i) {
+    c = table[(c ^ static_cast<std::uint8_t>(data[i])) & 0xFFu] ^ (c >> 8);
+  }
+  return c ^ 0xFFFFFFFFu;
+}
 
 std::uint64_t mapConfigFingerprint(const LocalMapConfig& local_map, const LogOddsConfig& log_odds) {
   std::string bytes;

@@ -62,6 +62,13 @@ TEST(ConfigYaml, OfflineProgramsReadTheEngineSectionsOfANodeConfiguration) {
 }
 
 TEST(ConfigYaml, UnknownKeysAndBadValuesAreClearErrors) {
+  // Keys that are lists, mappings or null used to throw out of a destructor, which terminated
+  // the program (tests/fuzz/regressions/fuzz_config_yaml).
+  EXPECT_NE(errorOf("[a, b]: 1").find("(top level): a key must be plain text, not a list"),
+            std::string::npos);
+  EXPECT_NE(errorOf("local_map: {? {x: 1} : 2}").find("local_map: a key must be plain text, not a mapping"),
+            std::string::npos);
+  EXPECT_NE(errorOf("~: 1").find("a key must be plain text, not null"), std::string::npos);
   EXPECT_NE(errorOf("local_map: {resolutoin_m: 0.1}").find("local_map.resolutoin_m: unknown key"),
             std::string::npos);
   EXPECT_NE(errorOf("lokal_map: {}").find("lokal_map: unknown key"), std::string::npos);

@@ -28,6 +28,17 @@ inline constexpr std::uint16_t kNoDepthMarker_mm = 65535;
 /// Tolerance on `R^T R - I` (max abs entry) when validating the rotation of a pose file.
 inline constexpr double kPoseOrthonormalTolerance = 1e-3;
 
+/// Parses the content of an intrinsics file (`intrinsics.K.txt`): 9 finite numbers, a skew-free
+/// pinhole K `[fx 0 cx; 0 fy cy; 0 0 1]` with fx, fy > 0 (width and height are left 0).
+/// @throws std::runtime_error naming `path` and what is wrong.
+[[nodiscard]] PinholeIntrinsics parseIntrinsicsK(const std::string& text, const std::string& path);
+
+/// Parses the content of a pose file (`frame-N.pose.txt`): a 4x4 row-major camera-to-world
+/// matrix of finite numbers, last row `0 0 0 1`, a rotation within kPoseOrthonormalTolerance
+/// (re-orthonormalised).
+/// @throws std::runtime_error naming `path` and what is wrong.
+[[nodiscard]] Transform parsePoseMatrix(const std::string& text, const std::string& path);
+
 /// A directory of `frame-N.depth.png` / `frame-N.pose.txt` pairs with shared pinhole intrinsics.
 ///
 /// The constructor checks the layout (every depth image has a pose file, the intrinsics file is

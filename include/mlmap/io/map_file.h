@@ -20,6 +20,7 @@
 #include "mlmap/core/config.h"
 #include "mlmap/local/map_state.h"
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
@@ -32,6 +33,10 @@ inline constexpr std::uint32_t kMapFileVersion = 1;
 /// (and so the submap size) and the log-odds model (hit, miss, clamping bounds, threshold).
 [[nodiscard]] std::uint64_t mapConfigFingerprint(const LocalMapConfig& local_map,
                                                  const LogOddsConfig& log_odds);
+
+/// CRC-32 (IEEE 802.3, the one of zlib and PNG) of `n` bytes: the checksum of the header and of
+/// each section of a map file.
+[[nodiscard]] std::uint32_t crc32(const char* data, std::size_t n);
 
 /// The file's bytes for `state`. The same state always gives the same bytes.
 [[nodiscard]] std::string encodeMapFile(const MapState& state);

@@ -38,7 +38,16 @@ class Section {
   ~Section() {
     if (!node_ || !node_.IsMap()) return;
     for (const auto& kv : node_) {
-      const std::string key = kv.first.as<std::string>();
+      // A list, a mapping or null as a key (`[a, b]: 1`, `~: 1`) names no field;
+      // as<std::string>() would throw out of this destructor.
+      if (!kv.first.IsScalar()) {
+        errors_->push_back((path_.empty() ? "(top level)" : path_) + ": a key must be plain text, not " +
+                           (kv.first.IsSequence() ? "a list"
+                            : kv.first.IsMap()    ? "a mapping"
+                                                  : "null"));
+        continue;
+      }
+      const std::string key = kv.first.Scalar();
       if (known_.count(key) == 0) {
         std::string allowed;
         for (const std::string& k : known_) allowed += (allowed.empty() ? "" : ", ") + k;
