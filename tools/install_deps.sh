@@ -18,6 +18,7 @@ packages=(
   liboctomap-dev                       # OctoMap: .bt export (mlmap_map_tool), the side-by-side comparison
   libgtest-dev                         # tests
   clang libclang-rt-14-dev llvm-14     # fuzzing: libFuzzer + sanitizer runtimes, llvm-symbolizer (tools/fuzz.sh)
+  clang-tidy cppcheck                  # static analysis (tools/lint.sh)
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools  # DDS component (Fast DDS 2.9, ROS 2 wire types)
   cyclonedds-dev cyclonedds-tools      # cross-vendor interoperability test (ROS 2's other tier-1 DDS)
   iproute2                             # network-namespace tests

@@ -29,7 +29,7 @@ echo "== 1. the whole suite under AddressSanitizer + UndefinedBehaviorSanitizer 
 # asserts stay on (no NDEBUG).
 CC=clang-14 CXX=clang++-14 cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only" -DMLMAP_WERROR=ON \
-  -DMLMAP_BUILD_TESTS=ON -DMLMAP_SANITIZE=address,undefined >/dev/null
+  -DMLMAP_BUILD_TESTS=ON -DMLMAP_SANITIZE=address,undefined -DMLMAP_FUZZ=ON >/dev/null
 cmake --build build-asan -j2
 endPart "build, clang + ASan + UBSan"
 # new_delete_type_mismatch=0: Fast DDS 2.9 deletes its StatisticsWriterImpl / StatisticsReaderImpl
@@ -50,6 +50,10 @@ cmake -S . -B build-tsan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMLMAP_WERROR=ON -DM
 cmake --build build-tsan -j2 --target mlmap_concurrency_tests
 TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" build-tsan/tests/mlmap_concurrency_tests
 endPart "build + run, gcc + TSan"
+
+echo "== 3. fuzzing: every target for a short, bounded time (README: Fuzzing)"
+bash tools/fuzz.sh --build build-asan --no-build --seconds 15 --jobs 2
+endPart "libFuzzer, 15 s per target"
 
 echo "== 4. static analysis"
 bash tools/lint.sh --build build-asan
