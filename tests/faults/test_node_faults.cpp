@@ -406,8 +406,8 @@ class GroundStation {
         [](auto&) {});
     grid_ = std::make_unique<TakeListener<nav_msgs::OccupancyGrid_>>(counting(&grids), [](auto&) {});
     const TopicNames& t = config.dds.topics;
-    createReader<sensor_msgs::PointCloud2_PubSubType>(subscriber, "rt/" + t.local_map, reliableReaderQos(),
-                                                      local_.get());
+    local_reader_ = createReader<sensor_msgs::PointCloud2_PubSubType>(subscriber, "rt/" + t.local_map,
+                                                                      reliableReaderQos(), local_.get());
     createReader<sensor_msgs::PointCloud2_PubSubType>(subscriber, "rt/" + t.global_map,
                                                       reliableReaderQos(true), global_.get());
     createReader<nav_msgs::OccupancyGrid_PubSubType>(subscriber, "rt/" + t.grid, reliableReaderQos(true),
@@ -415,18 +415,28 @@ class GroundStation {
   }
   ~GroundStation() { participant_.reset(); }  // readers before their listeners
 
+  /// Waits until the node's local map writer matched (the local map is volatile: what goes out
+  /// before that is not for this station).
+  bool matched() const {
+    const bool ok = waitFor([&] { return test_support::readerMatched(local_reader_); });
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));  // and the writer this reader
+    return ok;
+  }
+
   std::atomic<int> local_maps{0}, global_maps{0}, grids{0}, global_points{-1};
 
  private:
   std::unique_ptr<TakeListener<sensor_msgs::PointCloud2_>> local_, global_;
   std::unique_ptr<TakeListener<nav_msgs::OccupancyGrid_>> grid_;
   ParticipantPtr participant_;
+  fdds::DataReader* local_reader_ = nullptr;
 };
 
 TEST(NodeFaults, SubscriberThatLeavesAndReturnsGetsTheLayersAgainAndMappingNeverWaits) {
   NodeConfig config = lidarNodeConfig(205);
   config.map.local_map.size_cells = Eigen::Vector3i(45, 45, 25);  // 9 m: flying 8 m retires submaps
   config.dds.rates.global_map_hz = 10.0;
+  config.dds.rates.local_map_hz = 100.0;  // every frame's local map goes out
   MappingNode node(config);
   Vehicle vehicle(205, config);
   ASSERT_TRUE(vehicle.matched());
@@ -439,6 +449,7 @@ TEST(NodeFaults, SubscriberThatLeavesAndReturnsGetsTheLayersAgainAndMappingNever
     }
   };
   auto ground = std::make_unique<GroundStation>(config);
+  ASSERT_TRUE(ground->matched());
   fly(10);
   ASSERT_TRUE(waitFor([&] { return ground->local_maps > 0 && ground->global_maps > 0; }));
   ground.reset();  // the ground station leaves (its participant is gone)
@@ -454,6 +465,7 @@ TEST(NodeFaults, SubscriberThatLeavesAndReturnsGetsTheLayersAgainAndMappingNever
   EXPECT_GT(ground->global_points, 0);
   EXPECT_LE(ground->global_points, static_cast<int>(node.engineStats().global_voxels));
   EXPECT_EQ(ground->local_maps, 0) << "the local map is volatile: nothing before a new frame";
+  ASSERT_TRUE(ground->matched());
   fly(5);
   ASSERT_TRUE(waitFor([&] { return ground->local_maps > 0; })) << "the local map did not come back";
   EXPECT_EQ(node.counters().frames_handover_dropped, 0u);
