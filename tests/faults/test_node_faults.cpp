@@ -105,17 +105,7 @@ class Vehicle {
   }
 
   void pose(double stamp_s, const Transform& T_W_B) {
-    geometry_msgs::PoseStamped_ msg;
-    msg.header_().stamp_(toRosTime(stamp_s));
-    msg.header_().frame_id_("map");
-    const Eigen::Quaterniond q(T_W_B.linear());
-    msg.pose_().position_().x_(T_W_B.translation().x());
-    msg.pose_().position_().y_(T_W_B.translation().y());
-    msg.pose_().position_().z_(T_W_B.translation().z());
-    msg.pose_().orientation_().x_(q.x());
-    msg.pose_().orientation_().y_(q.y());
-    msg.pose_().orientation_().z_(q.z());
-    msg.pose_().orientation_().w_(q.w());
+    geometry_msgs::PoseStamped_ msg = toPoseStamped(T_W_B, stamp_s, "map");
     ASSERT_TRUE(pose_->write(&msg));
   }
 
@@ -152,6 +142,18 @@ Eigen::Vector3d mappedAt(const MappingNode& node) {
   const std::shared_ptr<const MapSnapshot> snap = node.snapshot();
   if (!snap) return Eigen::Vector3d::Constant(std::nan(""));
   return snap->T_W_B().translation();
+}
+
+/// Flies `frames` frames from (t0_s, x0_m), 0.1 s and 0.1 m apart along x at `yaw_rad`; each must
+/// be mapped, at its own pose, before the next goes out. `n` counts the frames mapped so far.
+void flyMapped(Vehicle& vehicle, const MappingNode& node, double t0_s, double x0_m, int frames,
+               std::uint64_t* n, double yaw_rad = 0.0) {
+  for (int k = 0; k < frames; ++k) {
+    const Transform T = bodyAt(x0_m + 0.1 * k, yaw_rad);
+    vehicle.frame(t0_s + 0.1 * k, T);
+    ASSERT_TRUE(mapped(node, ++*n)) << "frame " << k << " from t = " << t0_s << " s not mapped";
+    EXPECT_NEAR((mappedAt(node) - T.translation()).norm(), 0.0, 1e-9);
+  }
 }
 
 /// Every frame the node took is accounted for once: mapped, refused or dropped for its pose. (The
@@ -263,10 +265,7 @@ TEST(NodeFaults, PoseJumpIsMappedAtTheNewPoseAndNothingIsSmearedBetween) {
     Vehicle vehicle(202, config);
     ASSERT_TRUE(vehicle.matched());
     std::uint64_t n = 0;
-    for (int k = 0; k < 5; ++k) {
-      vehicle.frame(30.0 + 0.1 * k, bodyAt(0.1 * k));
-      ASSERT_TRUE(mapped(node, ++n));
-    }
+    flyMapped(vehicle, node, 30.0, 0.0, 5, &n);
     // The odometry relocalises: 40 m and a quarter turn within 20 ms. A cloud stamped between
     // the two poses would be interpolated half-way (20 m, where nothing is): it is dropped.
     vehicle.pose(30.5, bodyAt(0.5));
@@ -275,12 +274,7 @@ TEST(NodeFaults, PoseJumpIsMappedAtTheNewPoseAndNothingIsSmearedBetween) {
     ASSERT_TRUE(waitFor([&] { return node.counters().frames_across_pose_jump == 1; }))
         << "a cloud between the two poses of a jump was not dropped";
     // After the jump: mapped at the new pose.
-    for (int k = 0; k < 5; ++k) {
-      const Transform T = bodyAt(kRoomB_x_m + 0.1 * k, M_PI / 2);
-      vehicle.frame(30.6 + 0.1 * k, T);
-      ASSERT_TRUE(mapped(node, ++n));
-      EXPECT_NEAR((mappedAt(node) - T.translation()).norm(), 0.0, 1e-9);
-    }
+    flyMapped(vehicle, node, 30.6, kRoomB_x_m, 5, &n, M_PI / 2);
     EXPECT_EQ(node.counters().frames_without_pose, 0u);
     expectEveryCloudAccountedFor(node);
   }  // stop(): saves the whole map, local and global layers
@@ -305,10 +299,7 @@ TEST(NodeFaults, BackwardPosesAreRejectedCountedAndMappingResumes) {
   Vehicle vehicle(203, config);
   ASSERT_TRUE(vehicle.matched());
   std::uint64_t n = 0;
-  for (int k = 0; k < 5; ++k) {
-    vehicle.frame(40.0 + 0.1 * k, bodyAt(0.1 * k));
-    ASSERT_TRUE(mapped(node, ++n));
-  }
+  flyMapped(vehicle, node, 40.0, 0.0, 5, &n);
   // The odometry replays 20 poses of the past, somewhere else.
   for (int k = 1; k <= 20; ++k) vehicle.pose(40.4 - 0.02 * k, bodyAt(5.0));
   ASSERT_TRUE(waitFor([&] { return node.counters().poses_rejected == 20; }));
@@ -319,11 +310,7 @@ TEST(NodeFaults, BackwardPosesAreRejectedCountedAndMappingResumes) {
     return c.frames_engine_rejected + c.frames_without_pose == 1;
   }));
   // The odometry goes forward again: mapping resumes with the right poses.
-  for (int k = 5; k < 10; ++k) {
-    vehicle.frame(40.0 + 0.1 * k, bodyAt(0.1 * k));
-    ASSERT_TRUE(mapped(node, ++n)) << "mapping did not resume";
-    EXPECT_NEAR(mappedAt(node).x(), 0.1 * k, 1e-9);
-  }
+  flyMapped(vehicle, node, 40.5, 0.5, 5, &n);
   EXPECT_EQ(node.counters().poses_rejected, 20u);
   expectEveryCloudAccountedFor(node);
 }
@@ -521,13 +508,12 @@ TEST(PoseBufferFaults, FramesBetweenTheTwoPosesOfAJumpAreNotInterpolated) {
   PoseBufferConfig bad;
   bad.max_speed_mps = 0.0;
   bad.max_rotation_rate_dps = std::nan("");
-  try {
-    PoseBuffer refused(bad);
-    FAIL() << "a pose buffer with bad jump limits was built";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("max_speed_mps"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("max_rotation_rate_dps"), std::string::npos) << e.what();
-  }
+  std::vector<std::string> errors;
+  bad.validate(&errors);
+  ASSERT_EQ(errors.size(), 2u);
+  EXPECT_EQ(errors[0].rfind("max_speed_mps:", 0), 0u) << errors[0];
+  EXPECT_EQ(errors[1].rfind("max_rotation_rate_dps:", 0), 0u) << errors[1];
+  EXPECT_THROW(PoseBuffer{bad}, std::invalid_argument);
 }
 
 }  // namespace
