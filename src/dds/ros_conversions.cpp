@@ -470,7 +470,8 @@ void setRigid(const Transform& T, XyzMsg* t_msg, QuaternionMsg* q_msg) {
 }
 }  // namespace
 
-geometry_msgs::PoseStamped_ toPoseStamped(const Transform& T_W_B, double stamp_s, const std::string& frame_id) {
+geometry_msgs::PoseStamped_ toPoseStamped(const Transform& T_W_B, double stamp_s,
+                                          const std::string& frame_id) {
   geometry_msgs::PoseStamped_ msg;
   msg.header_(makeHeader(stamp_s, frame_id));
   setRigid(T_W_B, &msg.pose_().position_(), &msg.pose_().orientation_());
