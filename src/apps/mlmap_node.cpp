@@ -85,10 +85,17 @@ int main(int argc, char** argv) {
     const EngineStats s = node.engineStats();
     const mlmap::dds::NodeCounters c = node.counters();
     spdlog::info("done: {} frames mapped ({} dropped, {} rejected by the engine, {} without pose, "
-                 "{} malformed inputs, {} poses rejected); {} messages published",
+                 "{} across a pose jump, {} malformed inputs, {} poses rejected); {} messages published; "
+                 "{} map saves, {} failed",
                  s.frames_mapped, s.frames_dropped + c.frames_handover_dropped,
                  c.frames_engine_rejected, c.frames_without_pose + c.frames_future,
-                 c.inputs_malformed, c.poses_rejected, c.messages_published);
+                 c.frames_across_pose_jump, c.inputs_malformed, c.poses_rejected, c.messages_published,
+                 c.map_saves, c.map_saves_failed);
+    if (!config.map_file.save_path.empty() && c.last_map_save_failed) {
+      // The map of this run is lost unless a supervisor notices: say so in the exit status.
+      spdlog::error("the map was not saved to '{}' at shutdown (see above)", config.map_file.save_path);
+      return 1;
+    }
     return 0;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());

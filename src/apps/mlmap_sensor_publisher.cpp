@@ -160,22 +160,6 @@ bool waitForReaders(const std::vector<fdds::DataWriter*>& writers, double timeou
   }
 }
 
-mlmap::dds::geometry_msgs::PoseStamped_ poseMessage(const Transform& T_W_B, double stamp_s,
-                                             const std::string& frame_id) {
-  mlmap::dds::geometry_msgs::PoseStamped_ msg;
-  msg.header_().stamp_(mlmap::dds::toRosTime(stamp_s));
-  msg.header_().frame_id_(frame_id);
-  const Eigen::Quaterniond q(T_W_B.linear());
-  msg.pose_().position_().x_(T_W_B.translation().x());
-  msg.pose_().position_().y_(T_W_B.translation().y());
-  msg.pose_().position_().z_(T_W_B.translation().z());
-  msg.pose_().orientation_().x_(q.x());
-  msg.pose_().orientation_().y_(q.y());
-  msg.pose_().orientation_().z_(q.z());
-  msg.pose_().orientation_().w_(q.w());
-  return msg;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -327,7 +311,7 @@ int main(int argc, char** argv) {
     double max_late_ms = 0.0;
     constexpr double kLate_ms = 5.0;
     auto publishPose = [&](const Transform& T_W_B, double stamp_s) {
-      mlmap::dds::geometry_msgs::PoseStamped_ pose = poseMessage(T_W_B, stamp_s, world);
+      mlmap::dds::geometry_msgs::PoseStamped_ pose = mlmap::dds::toPoseStamped(T_W_B, stamp_s, world);
       pose_writer->write(&pose);
     };
     for (int i = 0; i < frames && !g_stop; ++i) {

@@ -46,6 +46,7 @@ enum Reason : int {
   kReasonMalformed,
   kReasonNoPose,
   kReasonFuture,
+  kReasonJump,
   kReasonPose,
   kReasonNoInfo,
   kReasonHandover,
@@ -280,6 +281,11 @@ struct MappingNode::Impl {
       const auto start = Clock::now();
       const MapState state = engine->exportState();
       io::saveMapFile(state, path);
+      {
+        std::lock_guard<std::mutex> lock(counters_mutex);
+        ++counters.map_saves;
+        counters.last_map_save_failed = false;
+      }
       std::ostringstream m;
       m << std::fixed << std::setprecision(1) << why << ": saved the map to '" << path << "' in "
         << secondsSince(start) * 1e3 << " ms ("
@@ -287,7 +293,13 @@ struct MappingNode::Impl {
         << " global voxels)";
       logAlways(LogLevel::kInfo, m.str());
     } catch (const std::exception& e) {
-      logAlways(LogLevel::kError, std::string(why) + ": map not saved: " + e.what());
+      {
+        std::lock_guard<std::mutex> lock(counters_mutex);
+        ++counters.map_saves_failed;
+        counters.last_map_save_failed = true;
+      }
+      logAlways(LogLevel::kError, std::string(why) + ": map not saved (the previous file, if any, is "
+                                                     "unchanged): " + e.what());
     }
   }
 
@@ -421,16 +433,24 @@ struct MappingNode::Impl {
   }
 
   void addPose(double stamp_s, const Transform& T_W_B) {
+    const std::uint64_t restarts = poses.counters().restarts;
     const PoseBuffer::AddResult result = poses.add(stamp_s, T_W_B);
     if (result != PoseBuffer::AddResult::kAdded) {
       count(&NodeCounters::poses_rejected);
       const char* why = result == PoseBuffer::AddResult::kOutOfOrder ? "not newer than the last pose"
-                        : result == PoseBuffer::AddResult::kFuture   ? "far ahead of the last pose"
-                                                                     : "not a valid pose";
+                        : result == PoseBuffer::AddResult::kFuture
+                            ? "far ahead of the last pose (used if the next pose confirms it)"
+                            : "not a valid pose";
       std::ostringstream m;
       m << "rejected a pose stamped " << std::fixed << stamp_s << ": " << why;
       log.log(LogLevel::kWarning, kReasonPose, m.str());
       return;
+    }
+    if (poses.counters().restarts > restarts) {
+      std::ostringstream m;
+      m << "the pose stream resumed after a pause: pairing restarts from the poses stamped "
+        << std::fixed << poses.oldestStamp() << " and " << stamp_s;
+      logAlways(LogLevel::kWarning, m.str());
     }
     // Frames waiting for this pose, in stamp order.
     while (!pending.empty()) {
@@ -456,6 +476,13 @@ struct MappingNode::Impl {
                                              : &NodeCounters::frames_engine_rejected);
     } else if (found == PoseBuffer::LookupResult::kNoPose) {
       noPose(stamp_s);
+    } else if (found == PoseBuffer::LookupResult::kAcrossJump) {
+      count(&NodeCounters::frames_across_pose_jump);
+      std::ostringstream m;
+      m << "dropped a frame stamped " << std::fixed << stamp_s
+        << ": the pose stream jumps around it (faster than " << poses.config().max_speed_mps
+        << " m/s or " << poses.config().max_rotation_rate_dps << " deg/s), not interpolated";
+      log.log(LogLevel::kWarning, kReasonJump, m.str());
     }
     return found;
   }
@@ -660,7 +687,8 @@ struct MappingNode::Impl {
     m.frames_rejected_(s.rejected_invalid_pose + s.rejected_out_of_order + s.rejected_empty +
                        s.rejected_bad_image);
     m.clouds_malformed_(c.inputs_malformed);
-    m.clouds_without_pose_(c.frames_without_pose + c.frames_future + c.images_without_info);
+    m.clouds_without_pose_(c.frames_without_pose + c.frames_future + c.frames_across_pose_jump +
+                           c.images_without_info);
     m.poses_rejected_(c.poses_rejected);
     m.points_rejected_(s.points.rejected_non_finite + s.points.rejected_too_close);
     m.awareness_median_ms_(s.awareness.median_ms);
@@ -738,6 +766,8 @@ void MappingNode::stop() { impl_->stop(); }
 NodeCounters MappingNode::counters() const { return impl_->snapshotCounters(); }
 
 EngineStats MappingNode::engineStats() const { return impl_->engine->stats(); }
+
+std::shared_ptr<const MapSnapshot> MappingNode::snapshot() const { return impl_->engine->snapshot(); }
 
 int MappingNode::domainId() const { return impl_->domain_id; }
 

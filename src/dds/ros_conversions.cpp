@@ -454,21 +454,37 @@ DecodeStatus decodePose(const nav_msgs::Odometry_& msg, double* stamp_s, Transfo
   return decodePoseFields(msg.header_().stamp_(), msg.pose_().pose_(), stamp_s, T_W_B);
 }
 
+namespace {
+/// Writes T's translation and (normalised) rotation into a ROS Point / Vector3 and Quaternion.
+template <typename XyzMsg, typename QuaternionMsg>
+void setRigid(const Transform& T, XyzMsg* t_msg, QuaternionMsg* q_msg) {
+  const Eigen::Vector3d t = T.translation();
+  t_msg->x_(t.x());
+  t_msg->y_(t.y());
+  t_msg->z_(t.z());
+  const Eigen::Quaterniond q = Eigen::Quaterniond(T.linear()).normalized();
+  q_msg->x_(q.x());
+  q_msg->y_(q.y());
+  q_msg->z_(q.z());
+  q_msg->w_(q.w());
+}
+}  // namespace
+
+geometry_msgs::PoseStamped_ toPoseStamped(const Transform& T_W_B, double stamp_s,
+                                          const std::string& frame_id) {
+  geometry_msgs::PoseStamped_ msg;
+  msg.header_(makeHeader(stamp_s, frame_id));
+  setRigid(T_W_B, &msg.pose_().position_(), &msg.pose_().orientation_());
+  return msg;
+}
+
 geometry_msgs::TransformStamped_ toTransformStamped(const Transform& T_parent_child, double stamp_s,
                                                     const std::string& parent_frame,
                                                     const std::string& child_frame) {
   geometry_msgs::TransformStamped_ msg;
   msg.header_(makeHeader(stamp_s, parent_frame));
   msg.child_frame_id_(child_frame);
-  const Eigen::Vector3d t = T_parent_child.translation();
-  msg.transform_().translation_().x_(t.x());
-  msg.transform_().translation_().y_(t.y());
-  msg.transform_().translation_().z_(t.z());
-  const Eigen::Quaterniond q = Eigen::Quaterniond(T_parent_child.linear()).normalized();
-  msg.transform_().rotation_().x_(q.x());
-  msg.transform_().rotation_().y_(q.y());
-  msg.transform_().rotation_().z_(q.z());
-  msg.transform_().rotation_().w_(q.w());
+  setRigid(T_parent_child, &msg.transform_().translation_(), &msg.transform_().rotation_());
   return msg;
 }
 

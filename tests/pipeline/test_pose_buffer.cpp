@@ -15,12 +15,20 @@ Transform pose(double x, double yaw_rad) {
   return T;
 }
 
+/// pose() moves 2.4 m per unit of x: these tests fly at hundreds of m/s, which the default
+/// PoseBufferConfig takes for a jump (tests/faults checks that limit).
+PoseBufferConfig fastVehicle() {
+  PoseBufferConfig config;
+  config.max_speed_mps = 1e4;
+  return config;
+}
+
 double yawOf(const Transform& T) {
   return std::atan2(T.linear()(1, 0), T.linear()(0, 0));
 }
 
 TEST(PoseBuffer, ExactStampsAndInterpolationBetweenNeighbours) {
-  PoseBuffer buffer(PoseBufferConfig{});
+  PoseBuffer buffer(fastVehicle());
   ASSERT_EQ(buffer.add(10.0, pose(0.0, 0.0)), PoseBuffer::AddResult::kAdded);
   ASSERT_EQ(buffer.add(10.04, pose(4.0, 0.4)), PoseBuffer::AddResult::kAdded);
   ASSERT_EQ(buffer.add(10.08, pose(8.0, 0.8)), PoseBuffer::AddResult::kAdded);
@@ -42,7 +50,7 @@ TEST(PoseBuffer, ExactStampsAndInterpolationBetweenNeighbours) {
 }
 
 TEST(PoseBuffer, NewerThanEveryPoseIsPendingNeverExtrapolated) {
-  PoseBuffer buffer(PoseBufferConfig{});
+  PoseBuffer buffer(fastVehicle());
   Transform T = pose(123.0, 0.0);
   const Transform untouched = T;
   EXPECT_EQ(buffer.lookup(1.0, &T), PoseBuffer::LookupResult::kPending);  // no pose yet

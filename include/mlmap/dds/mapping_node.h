@@ -33,11 +33,15 @@ struct NodeCounters {
   std::uint64_t images_without_info = 0;  ///< depth image before any valid CameraInfo
   std::uint64_t frames_without_pose = 0;  ///< no pose within the tolerance (or none came in time)
   std::uint64_t frames_future = 0;        ///< stamp more than max_future_s after the newest pose
+  std::uint64_t frames_across_pose_jump = 0;  ///< between two poses of a jump: not interpolated
   std::uint64_t frames_handover_dropped = 0;  ///< hand-over queue full: oldest frame dropped
   std::uint64_t poses_rejected = 0;       ///< out of order, far future, or invalid (PoseBuffer)
   std::uint64_t frames_submitted = 0;     ///< frames given to the engine
   std::uint64_t frames_engine_rejected = 0;  ///< refused by the engine (see EngineStats)
   std::uint64_t messages_published = 0;   ///< all outputs together
+  std::uint64_t map_saves = 0;            ///< map files written (map_file.save_path)
+  std::uint64_t map_saves_failed = 0;     ///< saves that failed (the previous file is kept)
+  bool last_map_save_failed = false;      ///< the latest save failed (after stop(): the final one)
 };
 
 /// Runs the mapping node until destroyed (or stop()).
@@ -56,6 +60,8 @@ class MappingNode {
 
   [[nodiscard]] NodeCounters counters() const;
   [[nodiscard]] EngineStats engineStats() const;
+  /// The engine's latest snapshot (what the layers are published from); any thread, any time.
+  [[nodiscard]] std::shared_ptr<const MapSnapshot> snapshot() const;
   /// The domain the participant joined.
   [[nodiscard]] int domainId() const;
 

@@ -98,6 +98,10 @@ DecodeStatus decodeDepthImage(const sensor_msgs::Image_& image, const sensor_msg
 DecodeStatus decodePose(const geometry_msgs::PoseStamped_& msg, double* stamp_s, Transform* T_W_B);
 DecodeStatus decodePose(const nav_msgs::Odometry_& msg, double* stamp_s, Transform* T_W_B);
 
+/// A PoseStamped carrying T_W_B in `frame_id` (decodePose()'s inverse; the quaternion normalised).
+geometry_msgs::PoseStamped_ toPoseStamped(const Transform& T_W_B, double stamp_s,
+                                          const std::string& frame_id);
+
 /// A TransformStamped parent -> child carrying T_parent_child.
 geometry_msgs::TransformStamped_ toTransformStamped(const Transform& T_parent_child, double stamp_s,
                                                     const std::string& parent_frame,
