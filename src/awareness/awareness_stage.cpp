@@ -192,7 +192,8 @@ void AwarenessStage::Source::fill(std::size_t first, std::size_t len, float* xs,
     const std::size_t pixel = first + done;
     const std::size_t u0 = pixel % width;
     const std::size_t seg = std::min(len - done, width - u0);
-    const float ray_y = (static_cast<float>(pixel / width) - cy) * inv_fy;
+    const std::size_t v = pixel / width;  // image row
+    const float ray_y = (static_cast<float>(v) - cy) * inv_fy;
     const float* rx = ray_x->data() + u0;
     float* X = xs + done;
     float* Y = ys + done;
@@ -532,7 +533,7 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
         const std::size_t iu = (i / n) % n;
         const std::size_t iv = i % n;
         const std::size_t pn = n / 2;
-        parent_reach = levels_[static_cast<std::size_t>(level + 1)][(face * pn + iu / 2) * pn + iv / 2].reach;
+        parent_reach = levels_[static_cast<std::size_t>(level) + 1][(face * pn + iu / 2) * pn + iv / 2].reach;
       }
       if (bin.reach > parent_reach) carveCone(o, bin.box, parent_reach / bin.reach, &free);
     }

@@ -203,6 +203,10 @@ SecuritySetup resolveSecurity(const SecurityConfig& config) {
       {"dds.sec.access.builtin.Access-Permissions.governance", uri("governance.p7s")},
       {"dds.sec.access.builtin.Access-Permissions.permissions", uri("permissions.p7s")},
   };
+  // A revocation list, when the enclave has one (as rmw_fastrtps: revoked identities are refused).
+  if (fs::is_regular_file(dir / "crl.pem", ec)) {
+    setup.properties.push_back({"dds.sec.auth.builtin.PKI-DH.identity_crl", uri("crl.pem")});
+  }
   setup.enabled = true;
   return setup;
 }

@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <system_error>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -86,7 +87,7 @@ void writeFingerprintFields(Writer& w, const LocalMapConfig& local_map, const Lo
 }
 
 std::string errnoText(const std::string& step, int err) {
-  return step + ": " + std::strerror(err);
+  return step + ": " + std::generic_category().message(err);  // strerror is not thread-safe
 }
 
 }  // namespace

@@ -96,7 +96,7 @@ std::string formatNumber(double value, int decimals) {
   char buffer[64];
   std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, value);
   std::string text = buffer;
-  if (text.rfind("-", 0) == 0 && text.find_first_not_of("-0.") == std::string::npos) {
+  if (text.rfind('-', 0) == 0 && text.find_first_not_of("-0.") == std::string::npos) {
     text.erase(0, 1);  // no "-0.0"
   }
   return text;

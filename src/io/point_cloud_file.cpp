@@ -167,7 +167,7 @@ PointCloudFile parsePcd(const std::string& content, const std::string& source) {
     ++line_no;
     const std::vector<std::string> w = splitWords(line);
     if (w.empty() || w[0][0] == '#') continue;
-    const std::string key = w[0];
+    const std::string& key = w[0];
     const std::vector<std::string> args(w.begin() + 1, w.end());
     const std::string where = "PCD header line " + std::to_string(line_no) + " (" + key + ")";
     if (key == "VERSION") {

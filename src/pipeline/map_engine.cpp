@@ -52,7 +52,7 @@ void MapEngine::Samples::add(double v) {
 }
 
 double sortedQuantile(const std::vector<double>& sorted, double q) {
-  const auto i = static_cast<std::size_t>(q * static_cast<double>(sorted.size() - 1) + 0.5);
+  const auto i = static_cast<std::size_t>(std::lround(q * static_cast<double>(sorted.size() - 1)));
   return sorted[std::min(i, sorted.size() - 1)];
 }
 

@@ -157,6 +157,11 @@ class Peer {
   fdds::DataWriter* cloud = nullptr;
   fdds::DataWriter* pose = nullptr;
 
+  // The readers (deleted with the participant) go before the listeners they call.
+  ~Peer() { participant_.reset(); }
+  Peer(const Peer&) = delete;
+  Peer& operator=(const Peer&) = delete;
+
  private:
   ParticipantPtr participant_;
   TakeListener<sensor_msgs::PointCloud2_> local_listener_;

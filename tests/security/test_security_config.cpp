@@ -215,6 +215,23 @@ TEST(ResolveSecurity, AMissingFileStopsEnforceNamingItAndPermissiveRunsUnsecured
   EXPECT_FALSE(resolveSecurity(config).enabled);
 }
 
+TEST(ResolveSecurity, ARevocationListInTheEnclaveIsPassedOnAsRmwFastrtpsDoes) {
+  const SecurityEnv env;
+  SecurityConfig config;
+  config.enable = true;
+  config.keystore = keystoreWithout("none");  // a complete copy of /ground/monitor
+  config.enclave = "/ground/monitor";
+  const fs::path dir = fs::path(config.keystore) / "enclaves/ground/monitor";
+  EXPECT_EQ(resolveSecurity(config).properties.size(), rmwProperties(dir.string()).size());
+  fs::copy_file(dir / "identity_ca.cert.pem", dir / "crl.pem");  // any file: only passed on here
+  const SecuritySetup s = resolveSecurity(config);
+  auto expected = rmwProperties(fs::absolute(dir).lexically_normal().string());
+  expected.emplace_back("dds.sec.auth.builtin.PKI-DH.identity_crl",
+                        "file://" + fs::absolute(dir / "crl.pem").lexically_normal().string());
+  EXPECT_EQ(s.properties, expected);
+  fs::remove_all(config.keystore);
+}
+
 TEST(ResolveSecurity, AProfilesOwnSecurityPropertiesAreKept) {
   const SecurityEnv env;
   const fs::path xml = fs::temp_directory_path() / "mlmap_security_profile_keeps.xml";
