@@ -162,7 +162,8 @@ std::vector<std::string> MapConfig::validate() const {
     const double offset_voxels = std::ceil(sensor.translation_B_m.norm() / res) + 1.0;
     double box_voxels = 1.0;
     for (int a = 0; a < 3; ++a) {
-      const double submap = local_map.size_cells[a] / LocalMapConfig::kSubmapsPerAxis;
+      const int submap_cells = local_map.size_cells[a] / LocalMapConfig::kSubmapsPerAxis;  // exact
+      const double submap = submap_cells;
       box_voxels *= 2.0 * std::min(range_voxels, 3.0 * submap + offset_voxels) + 1.0;
     }
     constexpr double kMaxScratchVoxels = 268435456.0;  // 2^28: a 32 MB bitset

@@ -93,7 +93,7 @@ std::string enclaveProblem(const std::string& enclave) {
 
 /// The value of environment variable `name`, "" when unset.
 std::string environment(const char* name) {
-  const char* value = std::getenv(name);
+  const char* value = std::getenv(name);  // NOLINT(concurrency-mt-unsafe): nothing here sets the environment
   return value == nullptr ? std::string() : std::string(value);
 }
 
@@ -320,7 +320,7 @@ std::string ddsTopicName(const std::string& ns, const std::string& name) {
 
 int resolveDomainId(const DdsConfig& config) {
   if (config.domain_id >= 0) return config.domain_id;
-  const char* env = std::getenv("ROS_DOMAIN_ID");
+  const char* env = std::getenv("ROS_DOMAIN_ID");  // NOLINT(concurrency-mt-unsafe): as above
   if (env == nullptr || *env == '\0') return 0;  // ROS 2 treats an empty value as unset
   errno = 0;
   char* end = nullptr;
@@ -342,7 +342,7 @@ DiscoveryRange resolveDiscoveryRange(const DdsConfig& config) {
     }
     return range;
   }
-  const char* env = std::getenv("ROS_AUTOMATIC_DISCOVERY_RANGE");
+  const char* env = std::getenv("ROS_AUTOMATIC_DISCOVERY_RANGE");  // NOLINT(concurrency-mt-unsafe): as above
   if (env == nullptr || *env == '\0') return DiscoveryRange::kSystemDefault;
   if (!parseDiscoveryRange(env, &range)) {
     throw std::invalid_argument(std::string("ROS_AUTOMATIC_DISCOVERY_RANGE must be LOCALHOST, "

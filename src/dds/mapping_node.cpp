@@ -748,9 +748,9 @@ struct MappingNode::Impl {
   }
 };
 
-MappingNode::MappingNode(const NodeConfig& config, LogSink log)
+MappingNode::MappingNode(const NodeConfig& config, const LogSink& log)
     : impl_((throwIfInvalid(config.dds.validate(), "dds configuration"),
-             std::make_unique<Impl>(config, std::move(log)))) {
+             std::make_unique<Impl>(config, log))) {
   try {
     impl_->setUp();
   } catch (...) {

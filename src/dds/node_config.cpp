@@ -64,6 +64,7 @@ void readDdsSection(io::Section& top, DdsConfig* dds) {
       bool value = false;
       const std::size_t before = errors->size();
       sec.read("enable", &value);
+      // cppcheck-suppress knownConditionTrueFalse ; sec.read appends to *errors on a bad value
       if (errors->size() == before) c.enable = value;
     }
     sec.read("keystore", &c.keystore);

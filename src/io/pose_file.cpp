@@ -107,7 +107,7 @@ int columnRole(std::string name, double* time_scale) {
       }
     }
   }
-  if (!unit.empty() && unit != "m" && unit != "") return -1;
+  if (!unit.empty() && unit != "m") return -1;
   if (name.size() > 2 && name.compare(name.size() - 2, 2, "_m") == 0) name.resize(name.size() - 2);
   static const char* kPositionPrefixes[] = {"", "t", "p", "pos_", "position_", "p_", "t_"};
   static const char* kRotationPrefixes[] = {"q", "q_", "rot_", "orientation_", "quat_"};

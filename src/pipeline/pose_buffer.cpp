@@ -56,7 +56,6 @@ PoseBuffer::AddResult PoseBuffer::add(double stamp_s, const Transform& T_W_B) {
         // Two poses agree: the stream resumed after a pause. Nothing spans the pause.
         poses_.clear();
         poses_.push_back(held_);
-        has_held_ = false;
         ++counters_.poses_added;
         ++counters_.restarts;
       } else {

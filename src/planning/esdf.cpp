@@ -170,7 +170,7 @@ inline void evaluateRuns(Line line, const std::int32_t* runs, int run_count, int
     const int end = runs[r + 1];
     int p = runs[r];
     while (p < end) {
-      const Key two_p = static_cast<Key>(2 * p);
+      const Key two_p = 2 * static_cast<Key>(p);
       Key best = keys[k] - two_p * sites[k];
       for (;;) {
         const Key next = keys[k + 1] - two_p * sites[k + 1];
@@ -324,8 +324,8 @@ bool EsdfMap::compute(const OccupancyBox& box) {
   while (std::int64_t{cap_d_} * cap_d_ > cap_sq_) --cap_d_;
   if (2 * static_cast<std::size_t>(inf_) + 1 <= kMaxLookupEntries) {
     metres_table_.resize(2 * static_cast<std::size_t>(inf_) + 1);
-    for (std::int32_t v = -inf_; v <= inf_; ++v) {
-      metres_table_[static_cast<std::size_t>(v + inf_)] = slowMetres(v);
+    for (std::size_t i = 0; i < metres_table_.size(); ++i) {
+      metres_table_[i] = slowMetres(static_cast<std::int32_t>(i) - inf_);
     }
   } else {
     metres_table_.clear();

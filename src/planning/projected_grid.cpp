@@ -47,7 +47,7 @@ void projectToGrid(const LocalWindow& window, const GlobalMap* global,
   Eigen::Vector2i hi = lo + window.size.head<2>();  // exclusive
   const bool use_global = config.include_global && global != nullptr;
   if (use_global) {
-    const Eigen::Vector3i cells = global->submapCells();
+    const Eigen::Vector3i& cells = global->submapCells();
     global->forEachSubmap([&](const SubmapIndex& m, const std::vector<VoxelRecord>&) {
       const int z_lo = m.z() * cells.z();
       if (z_lo + cells.z() <= k0 || z_lo >= k1) return;

@@ -27,7 +27,7 @@ Transform opticalToBody() {
   return T_B_S;
 }
 
-DepthCamera::DepthCamera(DepthCameraModel model) : model_(std::move(model)) {}
+DepthCamera::DepthCamera(const DepthCameraModel& model) : model_(model) {}
 
 void DepthCamera::render(const World& world, const Transform& T_W_S, double time_s,
                          DepthFrame* frame) const {

@@ -41,7 +41,7 @@ void LidarModel::validate(std::vector<std::string>* errors) const {
           "must be finite and >= 0", noise_sigma_m, errors);
 }
 
-Lidar::Lidar(LidarModel model) : model_(model) {
+Lidar::Lidar(const LidarModel& model) : model_(model) {
   std::vector<std::string> errors;
   model_.validate(&errors);
   if (!errors.empty()) {

@@ -61,7 +61,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::size_t bytes_per_pixel = mm ? 2 : 4;
   const bool swap = image.is_bigendian_() != 0;
   for (std::size_t x = 0; x < image.width_(); ++x) {
-    std::uint8_t expected[4];
+    std::uint8_t expected[4] = {};
     for (std::size_t b = 0; b < bytes_per_pixel; ++b) {
       const std::size_t from = swap ? bytes_per_pixel - 1 - b : b;
       expected[b] = image.data_()[x * bytes_per_pixel + from];

@@ -93,6 +93,7 @@ std::vector<std::pair<std::string, std::string>> rmwProperties(const std::string
 }
 
 TEST(ResolveSecurity, TheRos2VariablesAloneSecureAParticipantAsRmwFastrtps) {
+  // cppcheck-suppress unreadVariable ; it sets the variables for its scope
   const SecurityEnv env("true", kKeystore, "/mlmap/node", "Enforce");
   const SecuritySetup s = resolveSecurity(SecurityConfig{});
   EXPECT_TRUE(s.requested);

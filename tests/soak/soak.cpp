@@ -120,6 +120,7 @@ double pathLength_m() { return lapPath(1.0).length_m(); }
 struct Sample {
   int frame = 0;
   std::size_t rss = 0;
+  // cppcheck-suppress unusedStructMember ; read by the plot's lambdas
   MemoryUsage memory;
 };
 

@@ -68,7 +68,7 @@ class AwarenessMap {
   [[nodiscard]] const AwarenessConfig& config() const { return config_; }
   [[nodiscard]] const Eigen::Vector3d& origin_W() const { return origin_W_; }
   /// Counts of cells by state (for tests and status).
-  [[nodiscard]] std::size_t count(Occupancy state) const;
+  [[nodiscard]] std::size_t count(Occupancy wanted) const;
   /// Bytes held.
   [[nodiscard]] std::size_t memoryBytes() const;
 

@@ -53,7 +53,7 @@ class CheckedType : public PubSubType {
 template <typename PubSubType>
 std::string registerType(eprosima::fastdds::dds::DomainParticipant* participant) {
   eprosima::fastdds::dds::TypeSupport type(new CheckedType<PubSubType>());
-  const std::string name = type.get_type_name();
+  std::string name = type.get_type_name();
   if (participant->find_type(name).empty() &&
       type.register_type(participant) != eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
     throw std::runtime_error("cannot register DDS type " + name);

@@ -49,7 +49,7 @@ class MappingNode {
  public:
   /// Creates the participant, the engine, the readers and writers, publishes rt/tf_static and
   /// starts the threads. Throws std::invalid_argument (bad config) or std::runtime_error (DDS).
-  explicit MappingNode(const NodeConfig& config, LogSink log = {});
+  explicit MappingNode(const NodeConfig& config, const LogSink& log = {});
   ~MappingNode();
   MappingNode(const MappingNode&) = delete;
   MappingNode& operator=(const MappingNode&) = delete;

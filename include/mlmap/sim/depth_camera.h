@@ -28,7 +28,7 @@ struct DepthCameraModel {
 class DepthCamera {
  public:
   /// Creates a camera with the given model.
-  explicit DepthCamera(DepthCameraModel model = {});
+  explicit DepthCamera(const DepthCameraModel& model = {});
 
   /// The camera model.
   [[nodiscard]] const DepthCameraModel& model() const { return model_; }

@@ -42,7 +42,7 @@ struct LidarModel {
 class Lidar {
  public:
   /// Throws std::invalid_argument listing every problem when `model` is not valid.
-  explicit Lidar(LidarModel model = {});
+  explicit Lidar(const LidarModel& model = {});
 
   /// The LiDAR model.
   [[nodiscard]] const LidarModel& model() const { return model_; }
