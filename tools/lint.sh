@@ -7,7 +7,7 @@
 # analyzer (clang-analyzer-*, about three times the time). Exits non-zero on any finding.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-build=build-asan
+build="build-asan"
 run_cppcheck=1
 run_tidy=1
 tidy_checks=()
@@ -45,10 +45,11 @@ if [ "$run_tidy" = 1 ]; then
     # The library and program sources (tests are cppcheck's; generated IDL code is not ours).
     mapfile -t files < <(git ls-files 'src/*.cpp')
   fi
+  mapfile -t files < <(realpath -- "${files[@]}")  # compile_commands.json has absolute paths
   echo "== clang-tidy $(clang-tidy --version | sed -n 's/.*version \([0-9.]*\).*/\1/p'): ${#files[@]} files"
   start=$SECONDS
   # run-clang-tidy runs one clang-tidy per file in parallel; -quiet keeps only findings.
-  run-clang-tidy -quiet -j "$jobs" -p "$build" "${tidy_checks[@]}" "${files[@]/#/$PWD/}" >"$build/clang-tidy.log" 2>&1 ||
+  run-clang-tidy -quiet -j "$jobs" -p "$build" "${tidy_checks[@]}" "${files[@]}" >"$build/clang-tidy.log" 2>&1 ||
     status=1
   grep -E '(warning|error):' "$build/clang-tidy.log" | sort -u || true
   echo "   clang-tidy: $((SECONDS - start)) s (full log: $build/clang-tidy.log)"

@@ -13,7 +13,7 @@ export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST   # never leave loopback
 unset FASTRTPS_DEFAULT_PROFILES_FILE
 readonly stop_bound_s=10
 rm -rf "$out" && mkdir -p "$out"
-publisher= node=
+publisher='' node=''
 cleanup() { for p in $node $publisher; do kill "$p" 2>/dev/null; done; }
 trap cleanup EXIT
 fail() { for f in "$out"/*.log; do echo "== $f"; cat "$f"; done; echo "FAIL: $*"; exit 1; }
