@@ -2,10 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <set>
 #include <tuple>
+#include <vector>
 
 namespace mlmap {
 namespace {
@@ -113,10 +115,21 @@ TEST(AwarenessMap, RaysClearNothingBeyondTheirCone) {
           const double r = (hc.rho + 0.001 + 0.998 * a / 20.0) * config.rho_cell_m;
           const double zz = (hc.z - config.z_cells_below + 0.001 + 0.998 * b / 20.0) * config.z_cell_m;
           const Eigen::Vector3d target(r * std::cos(phi), r * std::sin(phi), zz);
-          const int steps = static_cast<int>(target.norm() / 0.002) + 1;
-          for (int i = 1; i <= steps; ++i) {
+          // The ray from the origin to the target, cut where it crosses a rho or z cell border
+          // (rho and z grow linearly along it); each piece's midpoint names a reached cell.
+          std::vector<double> cuts = {0.0, 1.0};
+          for (double border = config.rho_cell_m; border < r; border += config.rho_cell_m) {
+            cuts.push_back(border / r);
+          }
+          for (double border = 0.0; std::abs(border) < std::abs(zz);
+               border += std::copysign(config.z_cell_m, zz)) {
+            cuts.push_back(border / zz);
+          }
+          std::sort(cuts.begin(), cuts.end());
+          for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
             AwarenessCell c;
-            if (map.cellOf(target * (static_cast<double>(i) / steps), &c)) reached.insert({c.rho, c.phi, c.z});
+            const double t = 0.5 * (cuts[i] + cuts[i + 1]);
+            if (cuts[i + 1] - cuts[i] > 1e-9 && map.cellOf(target * t, &c)) reached.insert({c.rho, c.phi, c.z});
           }
         }
       }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <vector>
 
 namespace mlmap {
 namespace {
@@ -67,13 +68,19 @@ bool bruteSegmentFree(const LocalWindow& w, const Eigen::Vector3d& a_W, const Ei
 
 bool bruteBoxFree(const LocalWindow& w, const Eigen::Vector3d& min_W, const Eigen::Vector3d& max_W,
                   UnknownAs unknown) {
+  // A voxel overlaps the box when its interval overlaps the box's on every axis: list the
+  // overlapping indices of each axis over the whole test range, then visit their product.
   const double r = w.resolution_m;
-  for (int x = -40; x < 40; ++x) {
-    for (int y = -40; y < 40; ++y) {
-      for (int z = -40; z < 40; ++z) {
-        const bool overlaps = x * r < max_W.x() && (x + 1) * r > min_W.x() && y * r < max_W.y() &&
-                              (y + 1) * r > min_W.y() && z * r < max_W.z() && (z + 1) * r > min_W.z();
-        if (overlaps && blocks(w, VoxelIndex(x, y, z), unknown)) return false;
+  std::vector<int> overlapping[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int i = -40; i < 40; ++i) {
+      if (i * r < max_W[axis] && (i + 1) * r > min_W[axis]) overlapping[axis].push_back(i);
+    }
+  }
+  for (const int x : overlapping[0]) {
+    for (const int y : overlapping[1]) {
+      for (const int z : overlapping[2]) {
+        if (blocks(w, VoxelIndex(x, y, z), unknown)) return false;
       }
     }
   }
