@@ -3,7 +3,8 @@
 # joined by a veth pair: multicast discovery between them as on a vehicle's network, and the link
 # from the vehicle limited to 10 Mbit/s (tc tbf: this kernel has no netem).
 #   netns_ground_link.sh <bin dir> <out dir> <domain id>
-# Onboard namespace: mlmap_sensor_publisher (10 Hz, shared memory to the node) -> mlmap_node.
+# Onboard namespace: mlmap_sensor_publisher (10 Hz, a 160 x 120 camera: the clouds stay onboard;
+# shared memory to the node) -> mlmap_node.
 # Ground namespace (UDP only: nothing can bypass the link through shared memory), mlmap_inspect as
 # the bridge's stand-in:
 #   late     joins 4 s into the flight, leaves cleanly 7 s later: every layer must have crossed;
@@ -69,13 +70,14 @@ cfg="$out/node.yaml" ground_cfg="$out/ground.yaml"
 # delays frames rather than dropping them.
 printf 'local_map: {size_cells: [45, 45, 25]}\npipeline: {input_queue_capacity: 64}\n' > "$cfg"
 cp "$cfg" "$ground_cfg"
+bash "$here/../support/small_camera_scenario.sh" "$out/scenario.yaml" || exit 1   # clouds stay onboard
 printf 'dds:\n  profiles_file: %s\n  participant_profile: mlmap_udp_only\n' \
   "$here/../../config/dds/udp_only.xml" >> "$ground_cfg"
 ground_inspect=(nsenter -t "$ground" -n "$bin/mlmap_inspect" --config "$ground_cfg" --as-bridge)
 nsenter -t "$on" -n "$bin/mlmap_node" --config "$cfg" --report-every 0 > "$out/node.log" 2>&1 &
 node=$!; pids+=("$node")
 nsenter -t "$on" -n "$bin/mlmap_sensor_publisher" --config "$cfg" --rate $rate_hz \
-  --max-frames $frames > "$out/publisher.log" 2>&1 &
+  --scenario "$out/scenario.yaml" --max-frames $frames > "$out/publisher.log" 2>&1 &
 publisher=$!; pids+=("$publisher")
 sleep 4
 "${ground_inspect[@]}" --out "$out/late" --duration 7 --expect-all > "$out/late.log" 2>&1 &

@@ -9,7 +9,7 @@ python_dirs=(tools/ros2 tests/ros2)
 shell_scripts=(docker/run_integration_test.sh docker/ground_entrypoint.sh tests/ros2/lint.sh)
 # The project's other scripts: warnings and errors (quoting, word splitting), not style.
 other_scripts=(tools/*.sh tests/dds/*.sh tests/interop/*.sh tests/integration/*.sh tests/faults/*.sh
-               tests/security/*.sh tests/benchmarks/*.sh .ci/run)
+               tests/security/*.sh tests/benchmarks/*.sh tests/support/*.sh .ci/run)
 # (build, install and log: what a colcon build inside tools/ros2 would leave)
 /usr/bin/python3 -m flake8 --max-line-length 99 --extend-exclude build,install,log \
   "${python_dirs[@]}"
