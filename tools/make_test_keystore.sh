@@ -24,14 +24,18 @@
 # With --protection payload: rtps and metadata protection NONE, so each sample is encrypted once
 # (data ENCRYPT) instead of three times (payload, submessage, message); discovery and liveliness
 # stay ENCRYPT. Map data is as hidden; RTPS headers (GUIDs, sequence numbers) are not.
+# With --protection link: what crosses the radio link (map layers, tf, poses, status) as with
+# `payload`, but the raw sensor streams (rt/*cloud, rt/*image*, rt/*camera_info), which stay on
+# the vehicle, are signed instead of encrypted (metadata SIGN, data NONE): authenticated peers
+# with write permission only, no forged or altered samples, but their content is not hidden.
 #
-#   tools/make_test_keystore.sh <keystore dir> [--days N] [--protection full|payload]
+#   tools/make_test_keystore.sh <keystore dir> [--days N] [--protection full|payload|link]
 #
 # Idempotent: what exists is kept (keys are never replaced, so running it again changes nothing),
 # what is missing is made; each file is listed as "made" or "kept". The XML is signed as SROS2
 # does (S/MIME, detached, text, SHA-256). Test keys only: never commit them, never fly them.
 set -euo pipefail
-usage() { echo "usage: $0 <keystore dir> [--days N] [--protection full|payload]" >&2; exit 64; }
+usage() { echo "usage: $0 <keystore dir> [--days N] [--protection full|payload|link]" >&2; exit 64; }
 [ $# -ge 1 ] || usage
 root=$1; shift
 days=3650 protection=full
@@ -44,9 +48,31 @@ while [ $# -gt 0 ]; do
 done
 case $protection in
   full) message=ENCRYPT ;;
-  payload) message=NONE ;;
+  payload|link) message=NONE ;;
   *) usage ;;
 esac
+# topic_rule <expression> <metadata protection> <data protection>: read and write access control on.
+topic_rule() {
+  cat <<EOF
+        <topic_rule>
+          <topic_expression>$1</topic_expression>
+          <enable_discovery_protection>true</enable_discovery_protection>
+          <enable_liveliness_protection>true</enable_liveliness_protection>
+          <enable_read_access_control>true</enable_read_access_control>
+          <enable_write_access_control>true</enable_write_access_control>
+          <metadata_protection_kind>$2</metadata_protection_kind>
+          <data_protection_kind>$3</data_protection_kind>
+        </topic_rule>
+EOF
+}
+# The first rule whose expression matches a topic decides.
+topic_rules=""
+if [ "$protection" = link ]; then
+  for onboard in 'rt/*cloud' 'rt/*image*' 'rt/*camera_info'; do
+    topic_rules+=$(topic_rule "$onboard" SIGN NONE)$'\n'
+  done
+fi
+topic_rules+=$(topic_rule '*' "$message" ENCRYPT)
 command -v openssl >/dev/null || { echo "openssl is missing (apt-get install openssl)" >&2; exit 2; }
 umask 077
 mkdir -p "$root/public" "$root/private" "$root/enclaves"
@@ -139,15 +165,7 @@ write_signed "$root/enclaves/governance.xml" "$root/enclaves/governance.p7s" \
       <liveliness_protection_kind>ENCRYPT</liveliness_protection_kind>
       <rtps_protection_kind>$message</rtps_protection_kind>
       <topic_access_rules>
-        <topic_rule>
-          <topic_expression>*</topic_expression>
-          <enable_discovery_protection>true</enable_discovery_protection>
-          <enable_liveliness_protection>true</enable_liveliness_protection>
-          <enable_read_access_control>true</enable_read_access_control>
-          <enable_write_access_control>true</enable_write_access_control>
-          <metadata_protection_kind>$message</metadata_protection_kind>
-          <data_protection_kind>ENCRYPT</data_protection_kind>
-        </topic_rule>
+$topic_rules
       </topic_access_rules>
     </domain_rule>
   </domain_access_rules>

@@ -1,12 +1,16 @@
 #!/usr/bin/env bash
 # Does encryption hide the map on the wire? mlmap_sensor_publisher -> mlmap_node ->
 # mlmap_inspect in a network namespace of their own (only `lo`), UDP only (no shared memory, so
-# every byte crosses lo), while an AF_PACKET capture (capture_lo.py) records all of lo. Run twice:
+# every byte crosses lo), while an AF_PACKET capture (capture_lo.py) records all of lo. Three runs:
 #   plain    no security: the captured bytes MUST contain the markers (else the test is blind);
 #   secured  enclaves of the test keystore (governance: rtps, discovery, metadata and data
-#            ENCRYPT): the layers must still arrive, and the markers must not be in the bytes.
-# Markers: the world frame id (in the header of every map layer, tf and pose: user data only)
-# and the topic namespace (in discovery data: the endpoints' topic names).
+#            ENCRYPT): the layers must still arrive, and no marker may be in the bytes;
+#   link     the same enclaves under make_test_keystore.sh --protection link: the layers must
+#            arrive, the world frame and topic names stay hidden, and the clouds (signed only,
+#            as documented) show their sensor frame id.
+# Markers: the world frame id (in the header of every map layer, tf and pose), the sensor frame id
+# (in every cloud's header, and tf_static) and the topic namespace (in discovery data: the
+# endpoints' topic names).
 #   capture_plaintext.sh <bin dir> <keystore> <out dir> <domain id>
 # Needs a network namespace: root (unshare -n) or unprivileged user namespaces (unshare -rn).
 set -uo pipefail
@@ -14,7 +18,7 @@ bin=$1 keystore=$2 out=$3 domain=$4
 here=$(cd "$(dirname "$0")" && pwd)
 repo=$(cd "$here/../.." && pwd)
 python=${MLMAP_SYSTEM_PYTHON:-/usr/bin/python3}
-frame_marker=mlmapPlaintextMarkerFrame ns_marker=mlmapmarkerns
+frame_marker=mlmapPlaintextMarkerFrame ns_marker=mlmapmarkerns sensor_marker=mlmapSensorMarkerFrame
 fail() { echo "FAIL: $*"; exit 1; }
 
 if [ "${MLMAP_CAPTURE_IN_NETNS:-}" != 1 ]; then
@@ -31,11 +35,7 @@ unset FASTRTPS_DEFAULT_PROFILES_FILE ROS_AUTOMATIC_DISCOVERY_RANGE ROS_SECURITY_
   ROS_SECURITY_KEYSTORE ROS_SECURITY_ENCLAVE_OVERRIDE ROS_SECURITY_STRATEGY
 
 # A 160 x 120 camera: enough map, little traffic, so the capture keeps up (drops are reported).
-sed -e 's/^  width: 640 /  width: 160 /; s/^  height: 480 /  height: 120 /' \
-    -e 's/^  fx: 385.0 /  fx: 96.25 /; s/^  fy: 385.0 /  fy: 96.25 /' \
-    -e 's/^  cx: 319.5 /  cx: 79.5  /; s/^  cy: 239.5 /  cy: 59.5  /' \
-    "$repo/config/worlds/default_room.yaml" > "$out/scenario.yaml"
-grep -q '^  width: 160 ' "$out/scenario.yaml" || fail "could not shrink the camera of default_room.yaml"
+bash "$here/../support/small_camera_scenario.sh" "$out/scenario.yaml" || fail "no small-camera scenario"
 
 pids=()
 cleanup() {
@@ -51,10 +51,10 @@ run() {  # run <name> <security yaml lines>
   local name=$1 dir=$out/$1
   mkdir -p "$dir"
   printf 'local_map: {size_cells: [45, 45, 25]}\npipeline: {input_queue_capacity: 64}\n' > "$dir/node.yaml"
-  printf 'dds:\n  ns: %s\n  world_frame: %s\n  discovery_range: "OFF"\n  profiles_file: %s\n  participant_profile: mlmap_loopback_udp_only\n%s' \
-    "$ns_marker" "$frame_marker" "$repo/config/dds/loopback_udp_only.xml" "$2" >> "$dir/node.yaml"
+  printf 'dds:\n  ns: %s\n  world_frame: %s\n  sensor_frame: %s\n  discovery_range: "OFF"\n  profiles_file: %s\n  participant_profile: mlmap_loopback_udp_only\n%s' \
+    "$ns_marker" "$frame_marker" "$sensor_marker" "$repo/config/dds/loopback_udp_only.xml" "$2" >> "$dir/node.yaml"
   local sensor=() ground=()
-  [ "$name" = secured ] && sensor=(--enclave /mlmap/sensor) ground=(--enclave /ground/monitor)
+  [ "$name" != plain ] && sensor=(--enclave /mlmap/sensor) ground=(--enclave /ground/monitor)
 
   "$python" "$here/capture_lo.py" lo "$dir/lo.capture" 120 > "$dir/capture.log" 2>&1 &
   local capture=$!; pids+=("$capture")
@@ -77,20 +77,31 @@ run() {  # run <name> <security yaml lines>
   [ $pub_rc -eq 0 ] && [ $node_rc -eq 0 ] || fail "$name: publisher $pub_rc, node $node_rc"
   [ $inspect_rc -eq 0 ] || fail "$name: the ground station did not receive the layers (inspector $inspect_rc)"
   frames=$(count "$dir/lo.capture" "$frame_marker") names=$(count "$dir/lo.capture" "$ns_marker")
+  sensors=$(count "$dir/lo.capture" "$sensor_marker")
   bytes=$(stat -c %s "$dir/lo.capture")
   # Frames the kernel dropped were not searched: a few are tolerated, not a blind capture.
   read -r captured dropped < <(sed -n 's/^captured \([0-9]*\) frames, .* \([0-9]*\) dropped.*/\1 \2/p' "$dir/capture.log")
   [ -n "${dropped:-}" ] && [ "$dropped" -le $((captured / 20)) ] ||
     fail "$name: the capture missed too much (${dropped:-?} frames dropped, ${captured:-?} captured)"
-  echo "$name: $bytes bytes captured on lo; '$frame_marker' $frames times, '$ns_marker' $names times"
+  echo "$name: $bytes bytes captured on lo; '$frame_marker' $frames times, '$ns_marker' $names times, '$sensor_marker' $sensors times"
 }
 
 run plain ""
 [ "$frames" -gt 0 ] || fail "plain: the frame id marker is not in the captured bytes: the capture sees nothing"
 [ "$names" -gt 0 ] || fail "plain: the namespace marker is not in the captured bytes"
+[ "$sensors" -gt 0 ] || fail "plain: the sensor frame marker is not in the captured bytes"
 plain_bytes=$bytes
 run secured "$(printf '  security: {enable: true, keystore: %s, enclave: /mlmap/node, strategy: Enforce}\n' "$keystore")"
 [ "$bytes" -gt $((plain_bytes / 2)) ] || fail "secured: far less traffic captured than in the plain run"
 [ "$frames" -eq 0 ] || fail "secured: the map's frame id crossed lo in plaintext ($frames times)"
 [ "$names" -eq 0 ] || fail "secured: topic names crossed lo in plaintext ($names times)"
-echo "PASS: with encryption no marker in $bytes captured bytes; without it they were in plaintext"
+[ "$sensors" -eq 0 ] || fail "secured: the clouds' sensor frame id crossed lo in plaintext ($sensors times)"
+secured_bytes=$bytes
+bash "$repo/tools/make_test_keystore.sh" "$out/keystore_link" --protection link > "$out/keystore_link.log" ||
+  fail "cannot make the link keystore: $(tail -n 5 "$out/keystore_link.log")"
+run link "$(printf '  security: {enable: true, keystore: %s, enclave: /mlmap/node, strategy: Enforce}\n' "$out/keystore_link")"
+[ "$frames" -eq 0 ] || fail "link: the map's frame id crossed lo in plaintext ($frames times)"
+[ "$names" -eq 0 ] || fail "link: topic names crossed lo in plaintext ($names times)"
+[ "$sensors" -gt 0 ] || fail "link: the clouds are signed only, yet their sensor frame id is not in the bytes"
+echo "PASS: full encryption hid every marker in $secured_bytes captured bytes; the link governance"
+echo "hid the map and the topic names but not the (signed) clouds; without security all were in plaintext"
