@@ -10,7 +10,8 @@
 #
 #   tools/bench_dds_latency.sh [--build DIR] [--out DIR] [--seconds S] [--rate HZ]
 #                              [--modes "shm udp"] [--domain ID] [--probe-cloud] [--smoke]
-#                              [--secure] [--protection full|payload|link] [--keystore DIR]
+#                              [--secure] [--protection full|payload|link|link-signed]
+#                              [--keystore DIR]
 #
 #   --build DIR    where the programs are (default: build-perf)
 #   --out DIR      logs, node configs, latency_<mode>.json (default: bench_output/dds_latency)
@@ -26,8 +27,9 @@
 #                  /mlmap/node, the sensor publisher as /mlmap/sensor, the subscriber as
 #                  /ground/monitor of the test keystore (governance: everything ENCRYPT)
 #   --protection P the test keystore's governance: full (default: rtps, metadata and data
-#                  ENCRYPT), payload (data ENCRYPT only) or link (data ENCRYPT only, and the
-#                  on-vehicle sensor streams signed, not encrypted; see tools/make_test_keystore.sh)
+#                  ENCRYPT), payload (data ENCRYPT only), link (data ENCRYPT only, the onboard
+#                  sensor streams access control only) or link-signed (those signed); see
+#                  tools/make_test_keystore.sh
 #   --keystore DIR the SROS2 keystore for --secure (default: made by tools/make_test_keystore.sh
 #                  --protection P in <out>/keystore_<P>)
 set -uo pipefail
@@ -171,7 +173,8 @@ if [ "$security" != off ]; then
   echo
   case $protection in
     payload) what="discovery and data only" ;;
-    link) what="discovery and the data of the link topics; clouds and images signed only" ;;
+    link) what="discovery and the data of the link topics; clouds and images access control only" ;;
+    link-signed) what="discovery and the data of the link topics; clouds and images signed only" ;;
     *) what="rtps, discovery, metadata and data" ;;
   esac
   [ -n "$given_keystore" ] && what="what the governance of $keystore says"

@@ -25,17 +25,20 @@
 # (data ENCRYPT) instead of three times (payload, submessage, message); discovery and liveliness
 # stay ENCRYPT. Map data is as hidden; RTPS headers (GUIDs, sequence numbers) are not.
 # With --protection link: what crosses the radio link (map layers, tf, poses, status) as with
-# `payload`, but the raw sensor streams (rt/*cloud, rt/*image*, rt/*camera_info), which stay on
-# the vehicle, are signed instead of encrypted (metadata SIGN, data NONE): authenticated peers
-# with write permission only, no forged or altered samples, but their content is not hidden.
+# `payload`, but the raw sensor streams (rt/*cloud, rt/*image*, rt/*camera_info), which go from
+# the driver to the node on the vehicle's computer, are neither encrypted nor signed (metadata
+# and data NONE): only authenticated peers with the permission discover, read or write them, but
+# a forged packet sent to the node's port would not be detected. With --protection link-signed
+# they are signed (metadata SIGN): no forged or altered samples, for sensors on another computer
+# of the vehicle's network; it costs more (README, Cost of encryption).
 #
-#   tools/make_test_keystore.sh <keystore dir> [--days N] [--protection full|payload|link]
+#   tools/make_test_keystore.sh <keystore dir> [--days N] [--protection full|payload|link|link-signed]
 #
 # Idempotent: what exists is kept (keys are never replaced, so running it again changes nothing),
 # what is missing is made; each file is listed as "made" or "kept". The XML is signed as SROS2
 # does (S/MIME, detached, text, SHA-256). Test keys only: never commit them, never fly them.
 set -euo pipefail
-usage() { echo "usage: $0 <keystore dir> [--days N] [--protection full|payload|link]" >&2; exit 64; }
+usage() { echo "usage: $0 <keystore dir> [--days N] [--protection full|payload|link|link-signed]" >&2; exit 64; }
 [ $# -ge 1 ] || usage
 root=$1; shift
 days=3650 protection=full
@@ -48,7 +51,7 @@ while [ $# -gt 0 ]; do
 done
 case $protection in
   full) message=ENCRYPT ;;
-  payload|link) message=NONE ;;
+  payload|link|link-signed) message=NONE ;;
   *) usage ;;
 esac
 # topic_rule <expression> <metadata protection> <data protection>: read and write access control on.
@@ -67,9 +70,10 @@ EOF
 }
 # The first rule whose expression matches a topic decides.
 topic_rules=""
-if [ "$protection" = link ]; then
-  for onboard in 'rt/*cloud' 'rt/*image*' 'rt/*camera_info'; do
-    topic_rules+=$(topic_rule "$onboard" SIGN NONE)$'\n'
+case $protection in link) onboard=NONE ;; link-signed) onboard=SIGN ;; *) onboard="" ;; esac
+if [ -n "$onboard" ]; then
+  for topic in 'rt/*cloud' 'rt/*image*' 'rt/*camera_info'; do
+    topic_rules+=$(topic_rule "$topic" "$onboard" NONE)$'\n'
   done
 fi
 topic_rules+=$(topic_rule '*' "$message" ENCRYPT)

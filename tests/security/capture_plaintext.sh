@@ -6,8 +6,8 @@
 #   secured  enclaves of the test keystore (governance: rtps, discovery, metadata and data
 #            ENCRYPT): the layers must still arrive, and no marker may be in the bytes;
 #   link     the same enclaves under make_test_keystore.sh --protection link: the layers must
-#            arrive, the world frame and topic names stay hidden, and the clouds (signed only,
-#            as documented) show their sensor frame id.
+#            arrive, the world frame and topic names stay hidden, and the clouds (not encrypted,
+#            as documented: they stay on the vehicle) show their sensor frame id.
 # Markers: the world frame id (in the header of every map layer, tf and pose), the sensor frame id
 # (in every cloud's header, and tf_static) and the topic namespace (in discovery data: the
 # endpoints' topic names).
@@ -102,6 +102,6 @@ bash "$repo/tools/make_test_keystore.sh" "$out/keystore_link" --protection link 
 run link "$(printf '  security: {enable: true, keystore: %s, enclave: /mlmap/node, strategy: Enforce}\n' "$out/keystore_link")"
 [ "$frames" -eq 0 ] || fail "link: the map's frame id crossed lo in plaintext ($frames times)"
 [ "$names" -eq 0 ] || fail "link: topic names crossed lo in plaintext ($names times)"
-[ "$sensors" -gt 0 ] || fail "link: the clouds are signed only, yet their sensor frame id is not in the bytes"
+[ "$sensors" -gt 0 ] || fail "link: the clouds are not encrypted, yet their sensor frame id is not in the bytes"
 echo "PASS: full encryption hid every marker in $secured_bytes captured bytes; the link governance"
-echo "hid the map and the topic names but not the (signed) clouds; without security all were in plaintext"
+echo "hid the map and the topic names but not the clouds; without security all were in plaintext"
