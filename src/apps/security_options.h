@@ -31,7 +31,7 @@ struct SecurityOptions {
                    "DDS Security: Enforce (refuse to start without the enclave's files) or "
                    "Permissive (warn, run unsecured) (default: dds.security.strategy, else "
                    "ROS_SECURITY_STRATEGY)")
-        ->check(CLI::IsMember({"Enforce", "Permissive"}));
+        ->transform(CLI::IsMember({"Enforce", "Permissive"}, CLI::ignore_case));  // any case, as the YAML
   }
 
   /// Writes the options given into `security` (the command line wins over the file).

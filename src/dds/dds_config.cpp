@@ -111,10 +111,6 @@ bool parseStrategy(const std::string& text, SecurityStrategy* strategy) {
 
 }  // namespace
 
-const char* toString(SecurityStrategy strategy) {
-  return strategy == SecurityStrategy::kEnforce ? "Enforce" : "Permissive";
-}
-
 void SecurityConfig::validate(std::vector<std::string>* errors) const {
   SecurityStrategy parsed{};
   if (!strategy.empty() && !parseStrategy(strategy, &parsed)) {
@@ -207,7 +203,6 @@ SecuritySetup resolveSecurity(const SecurityConfig& config) {
   if (fs::is_regular_file(dir / "crl.pem", ec)) {
     setup.properties.push_back({"dds.sec.auth.builtin.PKI-DH.identity_crl", uri("crl.pem")});
   }
-  setup.enabled = true;
   return setup;
 }
 
@@ -320,8 +315,9 @@ std::string ddsTopicName(const std::string& ns, const std::string& name) {
 
 int resolveDomainId(const DdsConfig& config) {
   if (config.domain_id >= 0) return config.domain_id;
-  const char* env = std::getenv("ROS_DOMAIN_ID");  // NOLINT(concurrency-mt-unsafe): as above
-  if (env == nullptr || *env == '\0') return 0;  // ROS 2 treats an empty value as unset
+  const std::string text = environment("ROS_DOMAIN_ID");
+  if (text.empty()) return 0;  // ROS 2 treats an empty value as unset
+  const char* env = text.c_str();
   errno = 0;
   char* end = nullptr;
   const long value = std::strtol(env, &end, 10);
@@ -342,8 +338,8 @@ DiscoveryRange resolveDiscoveryRange(const DdsConfig& config) {
     }
     return range;
   }
-  const char* env = std::getenv("ROS_AUTOMATIC_DISCOVERY_RANGE");  // NOLINT(concurrency-mt-unsafe): as above
-  if (env == nullptr || *env == '\0') return DiscoveryRange::kSystemDefault;
+  const std::string env = environment("ROS_AUTOMATIC_DISCOVERY_RANGE");
+  if (env.empty()) return DiscoveryRange::kSystemDefault;
   if (!parseDiscoveryRange(env, &range)) {
     throw std::invalid_argument(std::string("ROS_AUTOMATIC_DISCOVERY_RANGE must be LOCALHOST, "
                                             "SUBNET, OFF or SYSTEM_DEFAULT (got '") + env + "')");

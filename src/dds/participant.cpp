@@ -208,7 +208,7 @@ ParticipantSetup participantSetup(const DdsConfig& config, const std::string& na
     const std::string enclave = "enclave=" + setup.security.enclave + ";";
     qos.user_data().data_vec(std::vector<frtps::octet>(enclave.begin(), enclave.end()));
   }
-  if (setup.security.enabled) applySecurity(setup.security, &qos);
+  if (setup.security.enabled()) applySecurity(setup.security, &qos);
   return setup;
 }
 
@@ -221,7 +221,7 @@ ParticipantPtr createParticipant(const DdsConfig& config, const std::string& nam
           static_cast<fdds::DomainId_t>(setup.domain_id), setup.qos);
   if (participant == nullptr) {
     std::string security;
-    if (setup.security.enabled) {
+    if (setup.security.enabled()) {
       security = "; DDS Security as enclave '" + setup.security.enclave + "' from " +
                  setup.security.enclave_dir +
                  ": check that its certificates, key, governance and permissions belong together "

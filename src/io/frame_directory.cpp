@@ -1,5 +1,7 @@
 #include "mlmap/io/frame_directory.h"
 
+#include "mlmap/io/point_cloud_file.h"
+
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -8,7 +10,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
@@ -28,23 +29,6 @@ constexpr double kFixedEntryTolerance = 1e-6;
 bool endsWith(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() &&
          s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-/// The whole text of a small text file; `what` describes it for error messages ("intrinsics",
-/// "pose").
-std::string readTextFile(const std::string& path, const char* what) {
-  std::ifstream in(path);
-  if (!in) {
-    throw std::runtime_error("FrameDirectory: cannot open " + std::string(what) + " file '" + path +
-                             "'");
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) {
-    throw std::runtime_error("FrameDirectory: error while reading " + std::string(what) +
-                             " file '" + path + "'");
-  }
-  return text.str();
 }
 
 /// Reads every whitespace-separated token of a text file's content as a finite double.
@@ -223,7 +207,7 @@ FrameDirectory::FrameDirectory(const std::string& dir) : dir_(dir) {
     throw std::runtime_error("FrameDirectory: no intrinsics file in '" + dir +
                              "' (expected intrinsics.K.txt or camera-intrinsics.txt)");
   }
-  intrinsics_ = parseIntrinsicsK(readTextFile(intrinsics_path, "intrinsics"), intrinsics_path);
+  intrinsics_ = parseIntrinsicsK(readFileBytes(intrinsics_path), intrinsics_path);
 
   const cv::Mat first = loadDepthImage(entries_.front().depth_path);
   intrinsics_.width = first.cols;
@@ -259,7 +243,7 @@ DepthFrame FrameDirectory::read(std::size_t i) const {
   }
 
   DepthFrame frame;
-  frame.T_W_B = parsePoseMatrix(readTextFile(e.pose_path, "pose"), e.pose_path);
+  frame.T_W_B = parsePoseMatrix(readFileBytes(e.pose_path), e.pose_path);
   frame.T_B_S = Transform::Identity();
   frame.stamp_s = static_cast<double>(e.number) / kFrameDirectoryRate_hz;
   frame.encoding = DepthEncoding::kUint16Millimetres;

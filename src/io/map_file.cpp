@@ -87,7 +87,7 @@ void writeFingerprintFields(Writer& w, const LocalMapConfig& local_map, const Lo
 }
 
 std::string errnoText(const std::string& step, int err) {
-  return step + ": " + std::generic_category().message(err);  // strerror is not thread-safe
+  return step + ": " + std::generic_category().message(err);  // not strerror: clang-tidy concurrency-mt-unsafe
 }
 
 }  // namespace

@@ -31,6 +31,7 @@ inline DdsConfig localhostConfig(int domain_id) {
   DdsConfig config;
   config.domain_id = domain_id;
   config.discovery_range = "LOCALHOST";
+  config.security.enable = false;  // not ROS_SECURITY_ENABLE of the shell running the tests
   return config;
 }
 

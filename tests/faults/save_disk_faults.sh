@@ -21,7 +21,8 @@ if [ -z "${MLMAP_IN_MOUNT_NS:-}" ]; then
 fi
 export ROS_DOMAIN_ID=$domain
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST   # never leave loopback
-unset FASTRTPS_DEFAULT_PROFILES_FILE
+unset FASTRTPS_DEFAULT_PROFILES_FILE ROS_SECURITY_ENABLE ROS_SECURITY_KEYSTORE ROS_SECURITY_STRATEGY \
+  ROS_SECURITY_ENCLAVE_OVERRIDE   # a secured shell must not change what these tests check
 rm -rf "$out" && mkdir -p "$out/disk"
 mount -t tmpfs -o size=1m tmpfs "$out/disk" || { echo "SKIP: cannot mount a tmpfs here"; exit 77; }
 map=$out/disk/map.mlmap

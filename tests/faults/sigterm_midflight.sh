@@ -10,7 +10,8 @@ set -uo pipefail
 bin=$1 out=$2
 export ROS_DOMAIN_ID=$3
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST   # never leave loopback
-unset FASTRTPS_DEFAULT_PROFILES_FILE
+unset FASTRTPS_DEFAULT_PROFILES_FILE ROS_SECURITY_ENABLE ROS_SECURITY_KEYSTORE ROS_SECURITY_STRATEGY \
+  ROS_SECURITY_ENCLAVE_OVERRIDE   # a secured shell must not change what these tests check
 readonly stop_bound_s=10
 rm -rf "$out" && mkdir -p "$out"
 publisher='' node=''

@@ -72,6 +72,9 @@ void decodeOne(const std::string& bytes) {
   } catch (const std::runtime_error&) {
     return;  // the documented answer to bad input
   }
+  // A file the loader accepts already matches its checks: if the offsets above drifted from
+  // src/io/map_file.cpp, patching would change it (and the fuzzer would stop passing the header).
+  requireThat(withMatchingChecks(bytes) == bytes, "withMatchingChecks() is out of date with src/io/map_file.cpp");
   const std::string encoded = mlmap::io::encodeMapFile(state);
   const mlmap::MapState again = mlmap::io::decodeMapFile(encoded, "encoded.mlmap");
   requireThat(mlmap::io::encodeMapFile(again) == encoded, "decode(encode(map)) is not the same map");

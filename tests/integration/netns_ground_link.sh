@@ -18,7 +18,8 @@ set -uo pipefail
 bin=$1 out=$2
 export ROS_DOMAIN_ID=$3
 export ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET   # multicast discovery, inside the namespaces only
-unset FASTRTPS_DEFAULT_PROFILES_FILE
+unset FASTRTPS_DEFAULT_PROFILES_FILE ROS_SECURITY_ENABLE ROS_SECURITY_KEYSTORE ROS_SECURITY_STRATEGY \
+  ROS_SECURITY_ENCLAVE_OVERRIDE   # a secured shell must not change what these tests check
 here=$(cd "$(dirname "$0")" && pwd)
 frames=250 rate_hz=10
 [ "$(id -u)" = 0 ] || { echo "FAIL: needs root for network namespaces"; exit 1; }

@@ -11,7 +11,8 @@ talker=$1 peer=$2 cyclone_xml=$3 out=$4
 export ROS_DOMAIN_ID=$5
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST   # Fast DDS: never leave loopback
 export CYCLONEDDS_URI=file://$cyclone_xml       # Cyclone: the same, with unicast discovery
-unset FASTRTPS_DEFAULT_PROFILES_FILE
+unset FASTRTPS_DEFAULT_PROFILES_FILE ROS_SECURITY_ENABLE ROS_SECURITY_KEYSTORE ROS_SECURITY_STRATEGY \
+  ROS_SECURITY_ENCLAVE_OVERRIDE   # a secured shell must not change what these tests check
 rm -rf "$out" && mkdir -p "$out/sent" "$out/received"
 fail() { echo "FAIL: $*"; exit 1; }
 start=$(date +%s%N)

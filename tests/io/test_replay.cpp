@@ -10,6 +10,7 @@
 #include "mlmap/sim/depth_camera.h"
 
 #include "cloud_file_writers.h"
+#include "../support/small_flight.h"
 
 #include <gtest/gtest.h>
 
@@ -69,7 +70,7 @@ TEST(Replay, SimulatedCloudsWithTumPosesMapLikeTheEngineDirectly) {
   // the camera frame (NaN where the camera saw nothing); the poses are the body's, the camera's
   // mounting is the extrinsic.
   io::Scenario scenario = io::defaultScenario();
-  scenario.camera.intrinsics = {96.25, 96.25, 79.5, 59.5, 160, 120};
+  scenario.camera.intrinsics = test::quarterCamera();
   const sim::DepthCamera camera(scenario.camera);
   MapConfig config;
   eval::setResolution(&config, 0.1);

@@ -3,6 +3,8 @@
 
 #include "mlmap/eval/sim_flight.h"
 
+#include "../support/small_flight.h"
+
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -15,7 +17,7 @@ TEST(PlanningConcurrency, PlannerThreadsQueryWhileTheMapSlides) {
   io::Scenario scenario = io::defaultScenario();
   // A 160 x 120 camera (same field of view): the races are between mapping and queries, and
   // rendering 640 x 480 frames under ThreadSanitizer would take most of the test's time.
-  scenario.camera.intrinsics = {96.25, 96.25, 79.5, 59.5, 160, 120};
+  scenario.camera.intrinsics = test::quarterCamera();
   MapConfig config;
   config.pipeline.threaded = true;
   config.pipeline.input_queue_capacity = 1000;

@@ -43,8 +43,8 @@ cleanup() {
   for p in "${pids[@]}"; do kill "$p" 2>/dev/null; done
 }
 trap cleanup EXIT
-count() {  # count <capture file> <text>: occurrences of text in the captured bytes
-  "$python" -c 'import sys; print(open(sys.argv[1], "rb").read().count(sys.argv[2].encode()))' "$1" "$2"
+count() {  # count <capture file> <text>...: occurrences of each text in the captured bytes
+  "$python" -c 'import sys; b = open(sys.argv[1], "rb").read(); print(*(b.count(t.encode()) for t in sys.argv[2:]))' "$@"
 }
 
 run() {  # run <name> <security yaml lines>
@@ -76,8 +76,7 @@ run() {  # run <name> <security yaml lines>
   for f in publisher node inspect capture; do echo "== $name: $f"; tail -n 12 "$dir/$f.log"; done
   [ $pub_rc -eq 0 ] && [ $node_rc -eq 0 ] || fail "$name: publisher $pub_rc, node $node_rc"
   [ $inspect_rc -eq 0 ] || fail "$name: the ground station did not receive the layers (inspector $inspect_rc)"
-  frames=$(count "$dir/lo.capture" "$frame_marker") names=$(count "$dir/lo.capture" "$ns_marker")
-  sensors=$(count "$dir/lo.capture" "$sensor_marker")
+  read -r frames names sensors < <(count "$dir/lo.capture" "$frame_marker" "$ns_marker" "$sensor_marker")
   bytes=$(stat -c %s "$dir/lo.capture")
   # Frames the kernel dropped were not searched: a few are tolerated, not a blind capture.
   read -r captured dropped < <(sed -n 's/^captured \([0-9]*\) frames, .* \([0-9]*\) dropped.*/\1 \2/p' "$dir/capture.log")

@@ -97,7 +97,7 @@ TEST(ResolveSecurity, TheRos2VariablesAloneSecureAParticipantAsRmwFastrtps) {
   const SecurityEnv env("true", kKeystore, "/mlmap/node", "Enforce");
   const SecuritySetup s = resolveSecurity(SecurityConfig{});
   EXPECT_TRUE(s.requested);
-  EXPECT_TRUE(s.enabled);
+  EXPECT_TRUE(s.enabled());
   EXPECT_EQ(s.strategy, SecurityStrategy::kEnforce);
   EXPECT_EQ(s.enclave, "/mlmap/node");
   const std::string dir = (fs::absolute(kKeystore) / "enclaves/mlmap/node").lexically_normal().string();
@@ -133,7 +133,7 @@ TEST(ResolveSecurity, VariablesAreReadExactlyAsRclDoesAndTheConfigWins) {
     const SecurityEnv env;  // nothing set: unsecured, enclave "/"
     const SecuritySetup s = resolveSecurity(SecurityConfig{});
     EXPECT_FALSE(s.requested);
-    EXPECT_FALSE(s.enabled);
+    EXPECT_FALSE(s.enabled());
     EXPECT_EQ(s.enclave, "/");
     DdsConfig dds;
     dds.domain_id = 199;
@@ -149,7 +149,7 @@ TEST(ResolveSecurity, VariablesAreReadExactlyAsRclDoesAndTheConfigWins) {
     config.enclave = "/ground/monitor";
     config.strategy = "Enforce";
     const SecuritySetup s = resolveSecurity(config);
-    EXPECT_TRUE(s.enabled);
+    EXPECT_TRUE(s.enabled());
     EXPECT_EQ(s.enclave, "/ground/monitor");
     EXPECT_EQ(s.strategy, SecurityStrategy::kEnforce);
     config.enable = false;
@@ -195,10 +195,11 @@ TEST(ResolveSecurity, AMissingFileStopsEnforceNamingItAndPermissiveRunsUnsecured
     dds.security.strategy = "Permissive";
     const ParticipantSetup setup = participantSetup(dds, "permissive");
     EXPECT_TRUE(setup.security.requested);
-    EXPECT_FALSE(setup.security.enabled);
-    EXPECT_NE(setup.security.warning.find(name), std::string::npos) << setup.security.warning;
+    EXPECT_FALSE(setup.security.enabled());
+    // The missing file's path (the keystore's folder name also holds `name`).
+    EXPECT_NE(setup.security.warning.find(std::string("enclaves/ground/monitor/") + name),
+              std::string::npos) << setup.security.warning;
     EXPECT_NE(setup.security.warning.find("WITHOUT security"), std::string::npos);
-    EXPECT_TRUE(setup.security.properties.empty());
     EXPECT_EQ(eprosima::fastrtps::rtps::PropertyPolicyHelper::find_property(setup.qos.properties(),
                                                                             "dds.sec.auth.plugin"),
               nullptr);
@@ -213,7 +214,7 @@ TEST(ResolveSecurity, AMissingFileStopsEnforceNamingItAndPermissiveRunsUnsecured
   config.enclave = "/no/such/enclave";
   expectThrowWith<std::invalid_argument>([&] { resolveSecurity(config); }, {"enclaves/no/such/enclave"});
   config.strategy = "Permissive";
-  EXPECT_FALSE(resolveSecurity(config).enabled);
+  EXPECT_FALSE(resolveSecurity(config).enabled());
 }
 
 TEST(ResolveSecurity, ARevocationListInTheEnclaveIsPassedOnAsRmwFastrtpsDoes) {

@@ -9,4 +9,6 @@ sed -e 's/^  width: 640 /  width: 160 /; s/^  height: 480 /  height: 120 /' \
     -e 's/^  fx: 385.0 /  fx: 96.25 /; s/^  fy: 385.0 /  fy: 96.25 /' \
     -e 's/^  cx: 319.5 /  cx: 79.5  /; s/^  cy: 239.5 /  cy: 59.5  /' \
     "$repo/config/worlds/default_room.yaml" > "$1"
-grep -q '^  width: 160 ' "$1" || { echo "could not shrink the camera of default_room.yaml" >&2; exit 1; }
+# Every one of the six lines must have been replaced (else the field of view would change).
+[ "$(grep -cE '^  (width: 160|height: 120|fx: 96.25|fy: 96.25|cx: 79.5|cy: 59.5) ' "$1")" -eq 6 ] ||
+  { echo "could not shrink the camera of default_room.yaml (its camera lines changed?)" >&2; exit 1; }

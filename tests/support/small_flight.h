@@ -18,9 +18,13 @@ inline MapConfig smallWindowConfig() {
   return c;
 }
 
+/// The default camera at a quarter of its size (160 x 120, same field of view), for tests whose
+/// subject is not the image (tests/support/small_camera_scenario.sh writes the same for YAML).
+inline PinholeIntrinsics quarterCamera() { return {96.25, 96.25, 79.5, 59.5, 160, 120}; }
+
 inline io::Scenario cheapScenario() {
   io::Scenario s = io::defaultScenario();
-  s.camera.intrinsics = PinholeIntrinsics{96.25, 96.25, 79.5, 59.5, 160, 120};
+  s.camera.intrinsics = quarterCamera();
   s.frame_rate_hz = 2.5;
   return s;
 }

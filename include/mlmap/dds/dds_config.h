@@ -63,7 +63,6 @@ enum class SecurityStrategy {
   kPermissive,  ///< warn and run unsecured (ROS 2's default)
   kEnforce,     ///< refuse to start, naming the missing file
 };
-const char* toString(SecurityStrategy strategy);
 
 /// The `dds.security` section: DDS Security from an SROS2 keystore, as rmw_fastrtps applies it
 /// (authentication builtin.PKI-DH, access control builtin.Access-Permissions with signed
@@ -96,7 +95,6 @@ inline constexpr const char* kSecurityFileNames[] = {
 /// Security as resolved from a SecurityConfig and the environment (resolveSecurity()).
 struct SecuritySetup {
   bool requested = false;   ///< enable (or ROS_SECURITY_ENABLE) asked for security
-  bool enabled = false;     ///< the participant is secured (requested and every file found)
   SecurityStrategy strategy = SecurityStrategy::kPermissive;
   std::string keystore;     ///< as resolved ("" when none)
   std::string enclave = "/";  ///< as resolved; also the participant's user data "enclave=<enclave>;"
@@ -106,6 +104,8 @@ struct SecuritySetup {
   std::vector<std::pair<std::string, std::string>> properties;
   /// Why a requested security is off (Permissive strategy, files missing); "" otherwise.
   std::string warning;
+  /// The participant is secured (requested and every file found).
+  [[nodiscard]] bool enabled() const { return !properties.empty(); }
 };
 
 /// Resolves `config` against the environment and finds the enclave's files. Throws
