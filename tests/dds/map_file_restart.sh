@@ -11,6 +11,7 @@
 #    message, and the file is not overwritten.
 set -uo pipefail
 bin=$1 out=$2
+here=$(cd "$(dirname "$0")" && pwd)
 export ROS_DOMAIN_ID=$3
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST   # never leave loopback
 unset FASTRTPS_DEFAULT_PROFILES_FILE ROS_SECURITY_ENABLE ROS_SECURITY_KEYSTORE ROS_SECURITY_STRATEGY \
@@ -24,12 +25,16 @@ printf "${engine}map_file: {save_path: %s/first.mlmap, save_period_s: 0.5}\n" "$
 printf "${engine}map_file: {load_path: %s/first.mlmap, save_path: %s/second.mlmap}\n" "$out" "$out" \
   > "$out/load.yaml"
 
+# The subject is the file, not the image: a 160 x 120 camera, and prerendered frames, so that a
+# loaded machine delays the flight instead of sending bursts the node's input would drop.
+bash "$here/../support/small_camera_scenario.sh" "$out/scenario.yaml" || fail "no small-camera scenario"
+
 # ---- 1. map, SIGTERM, saved -------------------------------------------------------------------
 "$bin/mlmap_node" --config "$out/save.yaml" --report-every 0 > "$out/node1.log" 2>&1 &
 node=$!
 trap 'kill $node 2>/dev/null' EXIT
 "$bin/mlmap_sensor_publisher" --config "$out/save.yaml" --mode cloud --max-frames 40 --rate 20 \
-  --speed 4 > "$out/publisher.log" 2>&1 || fail "publisher"
+  --speed 4 --prerender --scenario "$out/scenario.yaml" > "$out/publisher.log" 2>&1 || fail "publisher"
 sleep 1
 kill -TERM $node
 wait $node || fail "node 1 exited with an error"

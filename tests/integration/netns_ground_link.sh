@@ -77,9 +77,17 @@ printf 'dds:\n  profiles_file: %s\n  participant_profile: mlmap_udp_only\n' \
 ground_inspect=(nsenter -t "$ground" -n "$bin/mlmap_inspect" --config "$ground_cfg" --as-bridge)
 nsenter -t "$on" -n "$bin/mlmap_node" --config "$cfg" --report-every 0 > "$out/node.log" 2>&1 &
 node=$!; pids+=("$node")
-nsenter -t "$on" -n "$bin/mlmap_sensor_publisher" --config "$cfg" --rate $rate_hz \
+# Prerendered: a simulator falling behind on a loaded machine would send frames in bursts, which
+# the node's input rightly drops (counted) and this test would take for a disturbed mapping.
+nsenter -t "$on" -n "$bin/mlmap_sensor_publisher" --config "$cfg" --rate $rate_hz --prerender \
   --scenario "$out/scenario.yaml" --max-frames $frames > "$out/publisher.log" 2>&1 &
 publisher=$!; pids+=("$publisher")
+for _ in $(seq 1200); do   # the timeline below starts when the streaming does
+  grep -q 'publishing clouds' "$out/publisher.log" && break
+  kill -0 $publisher 2>/dev/null || break
+  sleep 0.1
+done
+grep -q 'publishing clouds' "$out/publisher.log" || { cat "$out/publisher.log"; echo "FAIL: the publisher did not start"; exit 1; }
 sleep 4
 "${ground_inspect[@]}" --out "$out/late" --duration 7 --expect-all > "$out/late.log" 2>&1 &
 late=$!; pids+=("$late")
