@@ -1,5 +1,6 @@
 #include "mlmap/dds/mapping_node.h"
 
+#include "mlmap/dds/cloud_sample.h"
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/ros_conversions.h"
 #include "mlmap/io/map_export.h"
@@ -12,7 +13,6 @@
 #include "nav_msgs/msg/Odometry_PubSubTypes.h"
 #include "sensor_msgs/msg/CameraInfo_PubSubTypes.h"
 #include "sensor_msgs/msg/Image_PubSubTypes.h"
-#include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
 #include "tf2_msgs/msg/TFMessage_PubSubTypes.h"
 
 
@@ -75,7 +75,7 @@ struct RateGate {
 
 struct MappingNode::Impl {
   // Messages as the listeners hand them over.
-  using Input = std::variant<sensor_msgs::PointCloud2_, sensor_msgs::Image_, sensor_msgs::CameraInfo_,
+  using Input = std::variant<CloudSample, sensor_msgs::Image_, sensor_msgs::CameraInfo_,
                              geometry_msgs::PoseStamped_, nav_msgs::Odometry_>;
   using Frame = std::variant<PointCloudFrame, DepthFrame>;
   struct Pending {
@@ -208,7 +208,7 @@ struct MappingNode::Impl {
       throw std::runtime_error("cannot create the DDS publisher / subscriber");
     }
 
-    using CloudType = sensor_msgs::PointCloud2_PubSubType;
+    using CloudType = CloudSamplePubSubType;  // one PointCloud2 type per participant
     using TfType = ::tf2_msgs::msg::dds_::TFMessage_PubSubType;
     const TopicNames& n = config.dds.topics;
     const PublishRates& r = config.dds.rates;
@@ -223,7 +223,7 @@ struct MappingNode::Impl {
     esdf_block_writer = makeWriter<mlmap_msgs::VoxelBlock_PubSubType>(publisher, when(r.esdf_hz, n.esdf_block), reliableWriterQos(2));
     status_writer = makeWriter<mlmap_msgs::Status_PubSubType>(publisher, when(r.status_hz, n.status), reliableWriterQos(10));
 
-    makeReader<sensor_msgs::PointCloud2_PubSubType, sensor_msgs::PointCloud2_>(subscriber, n.cloud);
+    makeReader<CloudType, CloudSample>(subscriber, n.cloud);
     makeReader<geometry_msgs::PoseStamped_PubSubType, geometry_msgs::PoseStamped_>(subscriber, n.pose);
     makeReader<nav_msgs::Odometry_PubSubType, nav_msgs::Odometry_>(subscriber, n.odometry);
     makeReader<sensor_msgs::Image_PubSubType, sensor_msgs::Image_>(subscriber, n.depth_image);
@@ -315,7 +315,7 @@ struct MappingNode::Impl {
 
   // ---- Listener threads: hand over only ----------------------------------------------------
   void handOver(Input&& input) {
-    const bool is_frame = std::holds_alternative<sensor_msgs::PointCloud2_>(input) ||
+    const bool is_frame = std::holds_alternative<CloudSample>(input) ||
                           std::holds_alternative<sensor_msgs::Image_>(input);
     bool dropped = false;
     {
@@ -324,7 +324,7 @@ struct MappingNode::Impl {
       if (is_frame) {
         if (queued_frames >= kMaxQueuedFrames) {
           for (auto it = inputs.begin(); it != inputs.end(); ++it) {
-            if (std::holds_alternative<sensor_msgs::PointCloud2_>(*it) ||
+            if (std::holds_alternative<CloudSample>(*it) ||
                 std::holds_alternative<sensor_msgs::Image_>(*it)) {
               inputs.erase(it);
               --queued_frames;
@@ -364,7 +364,7 @@ struct MappingNode::Impl {
         }
         input = std::move(inputs.front());
         inputs.pop_front();
-        if (std::holds_alternative<sensor_msgs::PointCloud2_>(input) ||
+        if (std::holds_alternative<CloudSample>(input) ||
             std::holds_alternative<sensor_msgs::Image_>(input)) {
           --queued_frames;
         }
@@ -384,14 +384,14 @@ struct MappingNode::Impl {
                 (status.detail.empty() ? "" : " (" + status.detail + ")"));
   }
 
-  void handle(sensor_msgs::PointCloud2_& msg) {
+  void handle(CloudSample& msg) {
     count(&NodeCounters::clouds_received);
     if (msg.header_().stamp_().nanosec_() >= 1000000000u) {
       return malformed("PointCloud2", DecodeStatus{DecodeError::kBadStamp, "nanosec >= 1e9"});
     }
+    if (!msg.status.ok()) return malformed("PointCloud2", msg.status);  // decoded when taken
     PointCloudFrame frame;
-    const DecodeStatus status = decodePointCloud2(msg, &frame.points_S);
-    if (!status.ok()) return malformed("PointCloud2", status);
+    frame.points_S = std::move(msg.points_S);
     frame.stamp_s = toSeconds(msg.header_().stamp_());
     frame.T_B_S = T_B_S;
     place(Frame(std::move(frame)));

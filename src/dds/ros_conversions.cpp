@@ -222,6 +222,11 @@ const char* toString(DecodeError error) {
 
 DecodeStatus decodePointCloud2(const sensor_msgs::PointCloud2_& msg,
                                std::vector<Eigen::Vector3f>* points_S) {
+  return decodePointCloud2(msg, msg.data_().data(), msg.data_().size(), points_S);
+}
+
+DecodeStatus decodePointCloud2(const sensor_msgs::PointCloud2_& msg, const std::uint8_t* data,
+                               std::size_t data_size, std::vector<Eigen::Vector3f>* points_S) {
   points_S->clear();
   static constexpr const char* kAxisNames[3] = {"x", "y", "z"};
 
@@ -287,7 +292,6 @@ DecodeStatus decodePointCloud2(const sensor_msgs::PointCloud2_& msg,
   }
   // ROS defines data as exactly height rows of row_step bytes; anything else means the sender's
   // sizes are wrong, and guessing which one is right would read garbage.
-  const std::uint64_t data_size = msg.data_().size();
   if (data_size != height * row_step) {
     return fail(DecodeError::kBadLayout, "data size " + str(data_size) + " != height " +
                                              str(height) + " * row_step " + str(row_step));
@@ -303,9 +307,9 @@ DecodeStatus decodePointCloud2(const sensor_msgs::PointCloud2_& msg,
   points_S->resize(static_cast<std::size_t>(width * height));
   if (points_S->empty()) return {};
   if (layout.swap) {
-    dispatchDecode<true>(layout, msg.data_().data(), points_S->data());
+    dispatchDecode<true>(layout, data, points_S->data());
   } else {
-    dispatchDecode<false>(layout, msg.data_().data(), points_S->data());
+    dispatchDecode<false>(layout, data, points_S->data());
   }
   return {};
 }

@@ -3,6 +3,9 @@
 // test has its own domain id (150..169), so parallel test processes never meet.
 #include "mlmap/dds/participant.h"
 
+#include "mlmap/dds/cloud_sample.h"
+#include "mlmap/dds/entities.h"
+
 #include "dds_test_support.h"
 #include "scoped_env.h"
 
@@ -39,7 +42,7 @@ namespace fdds = eprosima::fastdds::dds;
 namespace frtps = eprosima::fastrtps::rtps;
 using eprosima::fastdds::rtps::SharedMemTransportDescriptor;
 using eprosima::fastdds::rtps::UDPv4TransportDescriptor;
-using sensor_msgs::msg::dds_::PointCloud2_;
+using ::sensor_msgs::msg::dds_::PointCloud2_;
 using test_support::kDiscoveryTimeout;
 using test_support::localhostConfig;
 using test_support::readerMatched;
@@ -96,7 +99,7 @@ bool isLoopbackOnly(const frtps::LocatorList_t& locators) {
 
 fdds::DataWriter* makeWriter(fdds::DomainParticipant* participant, const std::string& topic,
                              const fdds::DataWriterQos& qos) {
-  fdds::TypeSupport type(new sensor_msgs::msg::dds_::PointCloud2_PubSubType());
+  fdds::TypeSupport type(new ::sensor_msgs::msg::dds_::PointCloud2_PubSubType());
   type.register_type(participant);
   fdds::Topic* t = participant->create_topic(topic, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
   fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
@@ -106,7 +109,7 @@ fdds::DataWriter* makeWriter(fdds::DomainParticipant* participant, const std::st
 
 fdds::DataReader* makeReader(fdds::DomainParticipant* participant, const std::string& topic,
                              const fdds::DataReaderQos& qos) {
-  fdds::TypeSupport type(new sensor_msgs::msg::dds_::PointCloud2_PubSubType());
+  fdds::TypeSupport type(new ::sensor_msgs::msg::dds_::PointCloud2_PubSubType());
   type.register_type(participant);
   fdds::Topic* t = participant->create_topic(topic, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
   fdds::Subscriber* subscriber = participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
@@ -124,7 +127,7 @@ PointCloud2_ makeCloud(std::uint32_t points, std::uint32_t seed, std::int32_t st
   cloud.width_(points);
   const char* names[] = {"x", "y", "z", "intensity"};
   for (std::uint32_t i = 0; i < 4; ++i) {
-    sensor_msgs::msg::dds_::PointField_ field;
+    ::sensor_msgs::msg::dds_::PointField_ field;
     field.name_(names[i]);
     field.offset_(4 * i);
     field.datatype_(7);  // FLOAT32
@@ -454,6 +457,22 @@ TEST(Participant, OffAddsNoPeersAndNoMulticastSoTwoParticipantsNeverMeet) {
   // The same pair finds itself within this window when discovery works (LOCALHOST test below).
   EXPECT_FALSE(waitFor([&] { return writerMatched(writer) || readerMatched(reader); },
                        std::chrono::milliseconds(1500)));
+}
+
+TEST(Participant, OneTypeNameHasOneImplementationPerParticipant) {
+  // mlmap_node reads clouds as CloudSample: a writer registering the generated PointCloud2 type in
+  // the same participant would hand CloudSample's deserialize() plain messages, or the reverse.
+  DdsConfig config = localhostConfig(161);
+  config.discovery_range = "OFF";
+  const ParticipantPtr participant = createParticipant(config, "types");
+  const std::string name = registerType<CloudSamplePubSubType>(participant.get());
+  EXPECT_EQ(name, "sensor_msgs::msg::dds_::PointCloud2_");
+  EXPECT_EQ(registerType<CloudSamplePubSubType>(participant.get()), name);  // again: fine
+  EXPECT_THROW(registerType<::sensor_msgs::msg::dds_::PointCloud2_PubSubType>(participant.get()),
+               std::runtime_error);
+  const ParticipantPtr other = createParticipant(config, "types_other");
+  registerType<::sensor_msgs::msg::dds_::PointCloud2_PubSubType>(other.get());
+  EXPECT_THROW(registerType<CloudSamplePubSubType>(other.get()), std::runtime_error);
 }
 
 // ---- Data over the transports --------------------------------------------------------------

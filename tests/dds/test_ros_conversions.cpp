@@ -14,7 +14,11 @@
 #include <string>
 #include <vector>
 
+#include "mlmap/dds/cloud_sample.h"
+#include "mlmap/dds/entities.h"
 #include "mlmap/dds/ros_conversions.h"
+
+#include <fastdds/rtps/common/SerializedPayload.h>
 
 namespace mlmap::dds {
 namespace {
@@ -472,6 +476,91 @@ TEST(DecodePointCloud2, AbsurdSizesAreRejectedWithoutAllocating) {
   expectRejected(msg, DecodeError::kBadLayout, "row_step 0 < width 268435456 * point_step 16");
   msg = makeCloud({{"x", 0}, {"y", 4}, {"z", 8}}, 256, 1u << 20, 16, 4096, false, 0);
   expectRejected(msg, DecodeError::kBadLayout, "data size 0 != height 1048576 * row_step 4096");
+}
+
+// ---- The node's PointCloud2 type: decoded in place, as decodePointCloud2() decodes -------------
+
+/// `msg` serialised by the generated type (its first `keep` bytes, all when 0), then taken as
+/// the node takes it: CheckedType<CloudSamplePubSubType>. Returns its deserialize()'s verdict.
+bool takeAsNode(const sensor_msgs::PointCloud2_& msg, CloudSample* sample, std::size_t keep = 0) {
+  sensor_msgs::PointCloud2_PubSubType generated;
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(generated.getSerializedSizeProvider(
+      const_cast<sensor_msgs::PointCloud2_*>(&msg))());
+  EXPECT_TRUE(generated.serialize(const_cast<sensor_msgs::PointCloud2_*>(&msg), &payload));
+  if (keep > 0) payload.length = static_cast<std::uint32_t>(keep);
+  CheckedType<CloudSamplePubSubType> type;
+  return type.deserialize(&payload, sample);
+}
+
+/// The sample holds `msg` without data_, and decodePointCloud2(msg)'s points and status.
+::testing::AssertionResult sameAsReference(const CloudSample& sample,
+                                           const sensor_msgs::PointCloud2_& msg) {
+  std::vector<Eigen::Vector3f> points;
+  const DecodeStatus status = decodePointCloud2(msg, &points);
+  if (sample.status.error != status.error || sample.status.detail != status.detail) {
+    return ::testing::AssertionFailure() << "status '" << sample.status.detail << "', want '"
+                                         << status.detail << "'";
+  }
+  if (sample.points_S.size() != points.size()) {
+    return ::testing::AssertionFailure() << sample.points_S.size() << " points, want " << points.size();
+  }
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    ::testing::AssertionResult same = samePoint(sample.points_S[i], points[i]);
+    if (!same) return same << " at point " << i;
+  }
+  sensor_msgs::PointCloud2_ without_data = msg;
+  without_data.data_().clear();
+  if (!(static_cast<const sensor_msgs::PointCloud2_&>(sample) == without_data)) {
+    return ::testing::AssertionFailure() << "the fields other than data_ differ";
+  }
+  return ::testing::AssertionSuccess();
+}
+
+TEST(CloudSampleType, DecodesRandomLayoutsInPlaceAsTheReferenceDoes) {
+  std::mt19937 rng(20261122);
+  CloudSample sample;  // reused, as TakeListener's are not: stale points must not survive
+  for (int trial = 0; trial < 300; ++trial) {
+    const RandomCloud c = makeRandomCloud(&rng);
+    ASSERT_TRUE(takeAsNode(c.msg, &sample)) << "trial " << trial;
+    ASSERT_TRUE(sample.status.ok()) << "trial " << trial << ": " << sample.status.detail;
+    ASSERT_TRUE(sameAsReference(sample, c.msg)) << "trial " << trial;
+  }
+}
+
+TEST(CloudSampleType, ReportsTheReferenceDecodeErrors) {
+  std::vector<sensor_msgs::PointCloud2_> bad;
+  bad.push_back(validOrganisedCloud());
+  bad.back().data_().resize(103);
+  bad.push_back(validOrganisedCloud());
+  bad.back().row_step_(47);
+  bad.push_back(validOrganisedCloud());
+  bad.back().point_step_(0);
+  bad.push_back(makeCloud({{"x", 0}, {"y", 2}, {"z", 8}}, 2, 1, 16, 32, false, 32));
+  bad.push_back(makeCloud({{"y", 4}, {"z", 8}}, 1, 1, 12, 12, false, 12));
+  bad.push_back(makeCloud({{"x", 0, kInt16}, {"y", 4}, {"z", 8}}, 1, 1, 12, 12, false, 12));
+  bad.push_back(makeCloud({{"x", 0}, {"y", 4}, {"z", 8}}, 256, 1u << 20, 16, 4096, false, 0));
+  std::mt19937 rng(5);
+  CloudSample sample;
+  for (std::size_t i = 0; i < bad.size(); ++i) {
+    ASSERT_TRUE(takeAsNode(makeRandomCloud(&rng).msg, &sample));  // leaves points behind
+    ASSERT_TRUE(takeAsNode(bad[i], &sample)) << "case " << i;      // valid CDR, bad layout
+    EXPECT_FALSE(sample.status.ok()) << "case " << i;
+    EXPECT_TRUE(sample.points_S.empty()) << "case " << i;
+    EXPECT_TRUE(sameAsReference(sample, bad[i])) << "case " << i;
+  }
+}
+
+TEST(CloudSampleType, RefusesEveryTruncatedPayloadAsTheGeneratedTypeDoes) {
+  const sensor_msgs::PointCloud2_ msg = validOrganisedCloud();
+  sensor_msgs::PointCloud2_PubSubType generated;
+  const std::size_t full = generated.getSerializedSizeProvider(
+      const_cast<sensor_msgs::PointCloud2_*>(&msg))();
+  CloudSample sample;
+  for (std::size_t keep = 1; keep < full; ++keep) {
+    EXPECT_FALSE(takeAsNode(msg, &sample, keep)) << keep << " of " << full << " bytes";
+  }
+  ASSERT_TRUE(takeAsNode(msg, &sample, full));
+  EXPECT_TRUE(sameAsReference(sample, msg));
 }
 
 // ---- Encoding -----------------------------------------------------------------------------------

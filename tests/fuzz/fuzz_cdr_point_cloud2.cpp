@@ -2,11 +2,14 @@
 /// Fuzz target: a sensor_msgs/PointCloud2 sample as raw CDR bytes, deserialised as mlmap_node
 /// does (cdr_payload.h), then decodePointCloud2(). Checks what decodePointCloud2() documents: on
 /// success width * height points, each all finite or all NaN, and the same points again after
-/// encodePointCloud2() -> decodePointCloud2(); on error no points.
+/// encodePointCloud2() -> decodePointCloud2(); on error no points. The node's own type
+/// (CloudSamplePubSubType, decoding in place) must agree with that reference exactly: the same
+/// samples refused, the same decode errors, the same points.
 
 #include "cdr_payload.h"
 #include "fuzz_support.h"
 
+#include "mlmap/dds/cloud_sample.h"
 #include "mlmap/dds/ros_conversions.h"
 
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
@@ -35,11 +38,23 @@ bool sameBits(const std::vector<Eigen::Vector3f>& a, const std::vector<Eigen::Ve
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   PointCloud2 msg;
-  if (!mlmap::fuzz::deserializeAsNodeDoes<PointCloud2Type>(data, size, &msg)) {
-    return 0;  // dropped and counted as malformed CDR
-  }
+  const bool accepted = mlmap::fuzz::deserializeAsNodeDoes<PointCloud2Type>(data, size, &msg);
+  mlmap::dds::CloudSample sample;
+  sample.points_S = {Eigen::Vector3f::Zero()};  // reused memory
+  const bool sample_accepted =
+      mlmap::fuzz::deserializeAsNodeDoes<mlmap::dds::CloudSamplePubSubType>(data, size, &sample);
+  requireThat(sample_accepted == accepted,
+              "CloudSamplePubSubType and the generated type disagree on the CDR");
+  if (!accepted) return 0;  // dropped and counted as malformed CDR
   std::vector<Eigen::Vector3f> points_S = {Eigen::Vector3f::Ones()};  // reused memory
   const mlmap::dds::DecodeStatus status = mlmap::dds::decodePointCloud2(msg, &points_S);
+  requireThat(sample.status.error == status.error && sample.status.detail == status.detail,
+              "CloudSample's decode status differs from decodePointCloud2()'s");
+  requireThat(sameBits(sample.points_S, points_S), "CloudSample's points differ");
+  requireThat(sample.header_().frame_id_() == msg.header_().frame_id_() &&
+                  sample.width_() == msg.width_() && sample.is_dense_() == msg.is_dense_() &&
+                  sample.data_().empty(),
+              "CloudSample's fields differ from the generated type's");
   if (!status.ok()) {
     requireThat(points_S.empty(), "decodePointCloud2: points left after an error");
     requireThat(!status.detail.empty(), "decodePointCloud2: an error without a detail");

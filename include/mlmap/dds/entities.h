@@ -49,13 +49,21 @@ class CheckedType : public PubSubType {
 
 /// Registers the generated type `PubSubType` (as a CheckedType) with the participant, once, and
 /// returns its DDS type name, e.g. "sensor_msgs::msg::dds_::PointCloud2_". Throws
-/// std::runtime_error on failure.
+/// std::runtime_error on failure, and when the name is registered with another implementation
+/// (e.g. the generated PointCloud2 type and CloudSamplePubSubType in one participant: samples
+/// would reach the wrong one).
 template <typename PubSubType>
 std::string registerType(eprosima::fastdds::dds::DomainParticipant* participant) {
   eprosima::fastdds::dds::TypeSupport type(new CheckedType<PubSubType>());
   std::string name = type.get_type_name();
-  if (participant->find_type(name).empty() &&
-      type.register_type(participant) != eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
+  const eprosima::fastdds::dds::TypeSupport found = participant->find_type(name);
+  if (!found.empty()) {
+    if (dynamic_cast<const CheckedType<PubSubType>*>(found.get()) == nullptr) {
+      throw std::runtime_error("DDS type " + name + " is registered with another implementation");
+    }
+    return name;
+  }
+  if (type.register_type(participant) != eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
     throw std::runtime_error("cannot register DDS type " + name);
   }
   return name;

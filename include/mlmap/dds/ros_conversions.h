@@ -74,6 +74,10 @@ struct DecodeStatus {
 /// On error `points_S` is left empty.
 DecodeStatus decodePointCloud2(const sensor_msgs::PointCloud2_& msg,
                                std::vector<Eigen::Vector3f>* points_S);
+/// The same with the point bytes elsewhere: the fields of `msg` other than data_ (not read)
+/// describe the `data_size` bytes at `data`, e.g. still inside the received sample.
+DecodeStatus decodePointCloud2(const sensor_msgs::PointCloud2_& msg, const std::uint8_t* data,
+                               std::size_t data_size, std::vector<Eigen::Vector3f>* points_S);
 
 /// A PointCloud2 of float32 x, y, z (and `intensity` when `intensity` is not null, one value per
 /// point), unorganised (height 1), little endian, point_step 12 (16 with intensity); is_dense
