@@ -31,6 +31,7 @@ SubmapIndex GlobalMap::unpack(std::uint64_t key) {
 }
 
 void GlobalMap::store(const SubmapIndex& submap, std::vector<VoxelRecord>&& records) {
+  ++modifications_;
   const std::uint64_t key = pack(submap);
   auto it = submaps_.find(key);
   if (it != submaps_.end()) {
@@ -52,6 +53,7 @@ void GlobalMap::store(const SubmapIndex& submap, std::vector<VoxelRecord>&& reco
 bool GlobalMap::take(const SubmapIndex& submap, std::vector<VoxelRecord>* records) {
   auto it = submaps_.find(pack(submap));
   if (it == submaps_.end()) return false;
+  ++modifications_;
   voxel_count_ -= it->second.size();
   *records = std::move(it->second);
   submaps_.erase(it);
@@ -77,6 +79,7 @@ std::size_t GlobalMap::memoryBytes() const {
 namespace mlmap {
 
 void GlobalMap::clear() {
+  ++modifications_;
   submaps_.clear();
   voxel_count_ = 0;
 }

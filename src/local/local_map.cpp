@@ -20,7 +20,15 @@ LocalMap::LocalMap(const LocalMapConfig& config, const LogOddsConfig& log_odds)
       submap_(config.submap_cells()),
       cells_(static_cast<std::size_t>(size_.x()) * static_cast<std::size_t>(size_.y()) *
                  static_cast<std::size_t>(size_.z()),
-             kUnknownLogOdds) {}
+             kUnknownLogOdds),
+      submap_changed_at_(static_cast<std::size_t>(LocalMapConfig::kSubmapsPerAxis) *
+                             LocalMapConfig::kSubmapsPerAxis * LocalMapConfig::kSubmapsPerAxis,
+                         0),
+      submap_of_torus_z_(static_cast<std::size_t>(size_.z())) {
+  for (int z = 0; z < size_.z(); ++z) {
+    submap_of_torus_z_[static_cast<std::size_t>(z)] = static_cast<std::uint8_t>(z / submap_.z());
+  }
+}
 
 SubmapIndex LocalMap::submapOf(const VoxelIndex& index) const {
   SubmapIndex m;
@@ -71,10 +79,12 @@ void LocalMap::retireSubmap(const SubmapIndex& m, GlobalMap* global) {
     }
   }
   global->store(m, std::vector<VoxelRecord>(scratch_.begin(), scratch_.end()));
+  submap_changed_at_[submapSlot(m)] = ++change_clock_;
   ++counters_.submaps_retired;
 }
 
 void LocalMap::restoreSubmap(const SubmapIndex& m, GlobalMap* global) {
+  submap_changed_at_[submapSlot(m)] = ++change_clock_;  // entered the window, restored or not
   if (!global->take(m, &scratch_)) return;
   const int n = LocalMapConfig::kSubmapsPerAxis;
   const Eigen::Vector3i t0(floorMod(m.x(), n) * submap_.x(), floorMod(m.y(), n) * submap_.y(),
@@ -177,6 +187,7 @@ void LocalMap::restoreWindow(const LocalWindow& window) {
     center_ = SubmapIndex::Zero();
     min_index_ = VoxelIndex::Zero();
     ++counters_.state_changes;
+    std::fill(submap_changed_at_.begin(), submap_changed_at_.end(), ++change_clock_);
     return;
   }
   min_index_ = window.min_index;
@@ -194,6 +205,7 @@ void LocalMap::restoreWindow(const LocalWindow& window) {
     }
   }
   ++counters_.state_changes;
+  std::fill(submap_changed_at_.begin(), submap_changed_at_.end(), ++change_clock_);
 }
 
 void LocalMap::recenter(const Eigen::Vector3d& body_W, GlobalMap* global) {
@@ -250,12 +262,15 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
     counters_.outside_window += batch.hits.size() + batch.free_count;
     return;
   }
+  const std::uint64_t now = ++change_clock_;
   for (const HitMeasurement& h : batch.hits) {
     if (contains(h.index)) {
       LogOddsQ& v = cells_[slot(h.index)];
+      const LogOddsQ old = v;
       const Occupancy before = model_.state(v);
       model_.hit(v);
       counters_.state_changes += before != model_.state(v) ? 1 : 0;
+      if (v != old) submap_changed_at_[submapSlot(submapOf(h.index))] = now;
       ++counters_.hits_applied;
     } else {
       ++counters_.outside_window;
@@ -283,10 +298,17 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
         }
         continue;
       }
-      LogOddsQ* column = cells_.data() + (static_cast<std::size_t>(floorMod(gx, size_.x())) *
+      const int sx = floorMod(gx, size_.x());
+      const int sy = floorMod(gy, size_.y());
+      LogOddsQ* column = cells_.data() + (static_cast<std::size_t>(sx) *
                                               static_cast<std::size_t>(size_.y()) +
-                                          static_cast<std::size_t>(floorMod(gy, size_.y()))) *
+                                          static_cast<std::size_t>(sy)) *
                                              static_cast<std::size_t>(size_.z());
+      // The column's submaps in submap_changed_at_ (torus slot x, y; z per voxel).
+      std::uint64_t* column_changed_at =
+          submap_changed_at_.data() +
+          static_cast<std::size_t>((sx / submap_.x() * LocalMapConfig::kSubmapsPerAxis + sy / submap_.y()) *
+                                   LocalMapConfig::kSubmapsPerAxis);
       for (std::size_t w = 0; w < words_per_row; ++w) {
         std::uint64_t bits = row[w];
         while (bits != 0) {
@@ -296,10 +318,13 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
             ++counters_.outside_window;
             continue;
           }
-          LogOddsQ& v = column[floorMod(origin.z() + k, size_.z())];
+          const int tz = floorMod(origin.z() + k, size_.z());
+          LogOddsQ& v = column[tz];
+          const LogOddsQ old = v;
           const Occupancy before = model_.state(v);
           model_.miss(v);
           changes += before != model_.state(v) ? 1 : 0;
+          if (v != old) column_changed_at[submap_of_torus_z_[static_cast<std::size_t>(tz)]] = now;
           ++applied;
         }
       }

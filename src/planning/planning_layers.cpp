@@ -1,6 +1,7 @@
 #include "mlmap/planning/planning_layers.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <utility>
@@ -77,28 +78,73 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
   const std::uint64_t changes = local.counters().state_changes;
   const Eigen::Vector3d body_W = T_W_B.translation();
 
-  // 2D grid: rebuilt when a state changed, the window moved or the band's layers moved. The
-  // global map only changes when submaps are retired or restored, which moves the window.
+  // 2D grid: rebuilt whole when the window or the band's layers moved, or when the global map it
+  // includes changed (submaps retired or restored, which moves the window, or a loaded map);
+  // otherwise only the columns of the band's submaps whose values changed since the last grid
+  // are projected again.
   double grid_ms = -1.0;
   const ProjectedGridConfig& gc = config_.projected_grid;
   if (gc.enabled) {
+    const Clock::time_point grid_start = Clock::now();
     const double res = window->resolution_m;
     const double offset = gc.relative_band ? body_W.z() : 0.0;
     int band_k0 = 0;
     int band_k1 = 0;
     bandLayers(gc.band_min_m + offset, gc.band_max_m + offset, res, &band_k0, &band_k1);
-    if (grid_ == nullptr || changes != grid_changes_ || window->min_index != grid_window_min_ ||
-        band_k0 != grid_band_k0_ || band_k1 != grid_band_k1_) {
-      const Clock::time_point grid_start = Clock::now();
+    const int window_z0 = window->min_index.z();
+    const int window_z1 = window_z0 + window->size.z();
+    // With the global map included, a band reaching beyond the window adds retired voxels above
+    // or below the window's columns: those columns then do not depend on the window alone.
+    const bool columns_from_window =
+        !gc.include_global || (band_k0 >= window_z0 && band_k1 <= window_z1);
+    const bool global_changed = gc.include_global && global.modifications() != grid_global_;
+    const bool rebuild = grid_ == nullptr || window->min_index != grid_window_min_ ||
+                         band_k0 != grid_band_k0_ || band_k1 != grid_band_k1_ ||
+                         !columns_from_window || global_changed;
+    if (rebuild) {
       const std::shared_ptr<ProjectedGrid> grid = reuse(&grid_pool_);
       projectToGrid(*window, &global, gc, body_W.z(), grid.get());
       grid_ = grid;
-      grid_changes_ = changes;
       grid_window_min_ = window->min_index;
       grid_band_k0_ = band_k0;
       grid_band_k1_ = band_k1;
+      grid_global_ = global.modifications();
       grid_ms = msSince(grid_start);
+      ++grid_rebuilds_;
+    } else if (window->size.prod() > 0) {
+      // Submap columns (x, y) with a changed submap in the band's layers.
+      constexpr int n = LocalMapConfig::kSubmapsPerAxis;
+      const Eigen::Vector3i cells = local.config().submap_cells();
+      const SubmapIndex first = local.submapOf(window->min_index);
+      std::array<bool, n * n> dirty{};
+      bool any = false;
+      for (int sz = 0; sz < n; ++sz) {
+        const int z_lo = window_z0 + sz * cells.z();
+        if (z_lo + cells.z() <= band_k0 || z_lo >= band_k1) continue;
+        for (int sx = 0; sx < n; ++sx) {
+          for (int sy = 0; sy < n; ++sy) {
+            if (local.submapChangedAt(first + SubmapIndex(sx, sy, sz)) > grid_clock_) {
+              dirty[static_cast<std::size_t>(sx * n + sy)] = true;
+              any = true;
+            }
+          }
+        }
+      }
+      if (any) {
+        const std::shared_ptr<ProjectedGrid> grid = reuse(&grid_pool_);
+        *grid = *grid_;  // the published grid stays as it is; the copy is patched
+        for (int sx = 0; sx < n; ++sx) {
+          for (int sy = 0; sy < n; ++sy) {
+            if (!dirty[static_cast<std::size_t>(sx * n + sy)]) continue;
+            const Eigen::Vector2i begin(sx * cells.x(), sy * cells.y());
+            reprojectWindowColumns(*window, gc, begin, begin + cells.head<2>(), grid.get());
+          }
+        }
+        grid_ = grid;
+        grid_ms = msSince(grid_start);
+      }
     }
+    grid_clock_ = local.changeClock();
   }
 
   // ESDF: due when something changed and the rate allows.
@@ -150,6 +196,7 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
   ++stats_.snapshots;
   stats_.last_snapshot_ms = snapshot_ms;
   stats_.max_snapshot_ms = std::max(stats_.max_snapshot_ms, snapshot_ms);
+  stats_.grid_rebuilds = grid_rebuilds_;
   if (grid_ms >= 0.0) {
     ++stats_.grid_updates;
     stats_.last_grid_ms = grid_ms;

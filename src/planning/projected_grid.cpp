@@ -11,6 +11,40 @@ std::int8_t scaledProbability(LogOddsQ v) {
   return static_cast<std::int8_t>(std::lround(100.0 * probabilityFromLogOdds(dequantizeLogOdds(v))));
 }
 
+
+/// Writes into `out` (whose cell (0, 0) is world column `lo`) the value of the window columns
+/// [begin, end) (window-relative x, y) from the band's layers [k0, k1) of the window: unknown
+/// where none of them was observed.
+void projectWindowColumns(const LocalWindow& window, const ProjectedGridConfig& config, int k0,
+                          int k1, const Eigen::Vector2i& begin, const Eigen::Vector2i& end,
+                          const Eigen::Vector2i& lo, ProjectedGrid* out) {
+  // Per column, the band's layers are a contiguous run of the z-fastest copy.
+  const int z0 = std::max(k0, window.min_index.z()) - window.min_index.z();
+  const int z1 = std::min(k1, window.min_index.z() + window.size.z()) - window.min_index.z();
+  const LogOddsModel& model = window.model;
+  const std::size_t nz = static_cast<std::size_t>(window.size.z());
+  for (int x = begin.x(); x < end.x(); ++x) {
+    for (int y = begin.y(); y < end.y(); ++y) {
+      const LogOddsQ* column =
+          window.log_odds.data() +
+          (static_cast<std::size_t>(x) * static_cast<std::size_t>(window.size.y()) +
+           static_cast<std::size_t>(y)) * nz;
+      LogOddsQ highest = kUnknownLogOdds;  // the unknown value is the smallest
+      for (int z = z0; z < z1; ++z) highest = std::max(highest, column[z]);
+      std::int8_t value = ProjectedGrid::kUnknown;
+      if (highest != kUnknownLogOdds) {
+        value = config.probability_values
+                    ? scaledProbability(highest)
+                    : (model.isOccupied(highest) ? ProjectedGrid::kOccupied : ProjectedGrid::kFree);
+      }
+      const int gx = window.min_index.x() + x - lo.x();
+      const int gy = window.min_index.y() + y - lo.y();
+      out->cells[static_cast<std::size_t>(gy) * static_cast<std::size_t>(out->width) +
+                 static_cast<std::size_t>(gx)] = value;
+    }
+  }
+}
+
 }  // namespace
 
 void bandLayers(double z_min_m, double z_max_m, double resolution_m, int* k0, int* k1) {
@@ -67,32 +101,8 @@ void projectToGrid(const LocalWindow& window, const GlobalMap* global,
   out->cells.assign(static_cast<std::size_t>(out->width) * static_cast<std::size_t>(out->height),
                     ProjectedGrid::kUnknown);
 
-  // The window: per column, the band's layers are a contiguous run of the z-fastest copy.
-  const int z0 = std::max(k0, window.min_index.z()) - window.min_index.z();
-  const int z1 = std::min(k1, window.min_index.z() + window.size.z()) - window.min_index.z();
-  if (z0 < z1) {
-    const LogOddsModel& model = window.model;
-    const std::size_t nz = static_cast<std::size_t>(window.size.z());
-    for (int x = 0; x < window.size.x(); ++x) {
-      for (int y = 0; y < window.size.y(); ++y) {
-        const LogOddsQ* column =
-            window.log_odds.data() +
-            (static_cast<std::size_t>(x) * static_cast<std::size_t>(window.size.y()) +
-             static_cast<std::size_t>(y)) * nz;
-        LogOddsQ highest = kUnknownLogOdds;  // the unknown value is the smallest
-        for (int z = z0; z < z1; ++z) highest = std::max(highest, column[z]);
-        if (highest == kUnknownLogOdds) continue;
-        const std::int8_t value =
-            config.probability_values
-                ? scaledProbability(highest)
-                : (model.isOccupied(highest) ? ProjectedGrid::kOccupied : ProjectedGrid::kFree);
-        const int gx = window.min_index.x() + x - lo.x();
-        const int gy = window.min_index.y() + y - lo.y();
-        out->cells[static_cast<std::size_t>(gy) * static_cast<std::size_t>(out->width) +
-                   static_cast<std::size_t>(gx)] = value;
-      }
-    }
-  }
+  projectWindowColumns(window, config, k0, k1, Eigen::Vector2i::Zero(), window.size.head<2>(), lo,
+                       out);
 
   // Retired submaps keep only occupied voxels: they can only raise a cell to occupied.
   if (use_global) {
@@ -107,6 +117,18 @@ void projectToGrid(const LocalWindow& window, const GlobalMap* global,
       out->cells[i] = std::max(out->cells[i], value);
     });
   }
+}
+
+void reprojectWindowColumns(const LocalWindow& window, const ProjectedGridConfig& config,
+                            const Eigen::Vector2i& begin, const Eigen::Vector2i& end,
+                            ProjectedGrid* grid) {
+  int k0 = 0;
+  int k1 = 0;
+  bandLayers(grid->band_min_z_m, grid->band_max_z_m, grid->resolution_m, &k0, &k1);
+  const Eigen::Vector2i lo(static_cast<int>(std::lround(grid->origin_W.x() / grid->resolution_m)),
+                           static_cast<int>(std::lround(grid->origin_W.y() / grid->resolution_m)));
+  projectWindowColumns(window, config, k0, k1, begin.cwiseMax(0), end.cwiseMin(window.size.head<2>()),
+                       lo, grid);
 }
 
 }  // namespace mlmap

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
 #include <random>
 
@@ -138,6 +139,68 @@ TEST(LocalMap, MatchesAWholeWorldReferenceThroughRandomFlights) {
   EXPECT_GT(compared, 300u);
   EXPECT_GT(map.counters().shifts, 50u);
   EXPECT_EQ(map.counters().resets, 1u);
+}
+
+// The change stamps name exactly the submaps whose stored values changed, or that entered the
+// window, since the clock was read: what incremental readers (the 2D grid) rely on.
+TEST(LocalMap, SubmapChangeStampsNameExactlyTheSubmapsThatChanged) {
+  const LocalMapConfig config = smallMap();
+  LocalMap map(config, LogOddsConfig{});
+  GlobalMap global(config.submap_cells(), config.resolution_m);
+  const Eigen::Vector3i cells = config.submap_cells();
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> offset(-6, 6);
+  std::uniform_real_distribution<double> step(-0.8, 0.8);
+  Eigen::Vector3d body(0.5, 0.5, 0.5);
+  LocalWindow before;
+  LocalWindow after;
+  std::size_t stamped = 0;
+  std::size_t unstamped = 0;
+  for (int frame = 0; frame < 300; ++frame) {
+    const std::uint64_t clock = map.changeClock();
+    map.copyWindow(&before);
+    body += Eigen::Vector3d(step(rng), step(rng), 0.3 * step(rng));
+    map.recenter(body, &global);
+    std::vector<VoxelIndex> hits;
+    std::vector<VoxelIndex> frees;
+    const VoxelIndex b = voxelIndexOf(body, 1.0);
+    // Few updates, some of them misses on saturated free voxels: those change nothing.
+    for (int i = 0; i < 6; ++i) {
+      const VoxelIndex v = b + VoxelIndex(offset(rng), offset(rng), offset(rng) / 3);
+      if (std::find(hits.begin(), hits.end(), v) != hits.end() ||
+          std::find(frees.begin(), frees.end(), v) != frees.end()) {
+        continue;
+      }
+      (i == 0 ? hits : frees).push_back(v);
+    }
+    if (frame % 5 == 0) {
+      for (int i = 0; i < 12; ++i) frees.push_back(b + VoxelIndex(10 + i, 0, 0));  // outside
+    }
+    map.integrate(makeBatch(body, hits, frees));
+    map.copyWindow(&after);
+    const SubmapIndex first = map.submapOf(after.min_index);
+    for (int sx = 0; sx < LocalMapConfig::kSubmapsPerAxis; ++sx) {
+      for (int sy = 0; sy < LocalMapConfig::kSubmapsPerAxis; ++sy) {
+        for (int sz = 0; sz < LocalMapConfig::kSubmapsPerAxis; ++sz) {
+          const SubmapIndex m = first + SubmapIndex(sx, sy, sz);
+          const VoxelIndex m0 = m.cwiseProduct(cells);
+          bool changed = before.size.prod() == 0 || !before.contains(m0);  // entered the window
+          for (int x = 0; x < cells.x() && !changed; ++x)
+            for (int y = 0; y < cells.y() && !changed; ++y)
+              for (int z = 0; z < cells.z() && !changed; ++z) {
+                const VoxelIndex g = m0 + VoxelIndex(x, y, z);
+                changed = before.at(g) != after.at(g);
+              }
+          ASSERT_EQ(map.submapChangedAt(m) > clock, changed)
+              << "frame " << frame << ", submap " << m.transpose();
+          (changed ? stamped : unstamped) += 1;
+        }
+      }
+    }
+  }
+  EXPECT_GT(stamped, 1000u);
+  EXPECT_GT(unstamped, 10000u);
+  EXPECT_GT(map.counters().shifts, 20u);
 }
 
 TEST(LocalMap, RecycledSubmapsStartUnknownAfterAShift) {

@@ -3,6 +3,8 @@
 #include "mlmap/eval/sim_flight.h"
 #include "mlmap/io/frame_directory.h"
 
+#include "../support/small_flight.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -372,6 +374,72 @@ TEST(MapEngine, SnapshotHoldsTheWindowItsGridAndItsEsdf) {
   EsdfMap reference(config.esdf);
   ASSERT_TRUE(reference.compute(box));
   EXPECT_EQ(snap->esdf()->distances(), reference.distances());
+}
+
+// The 2D grid is rebuilt whole only when the window or the band moves and otherwise updated in
+// the columns of the changed submaps; after every frame it equals a direct projection of the
+// snapshot's window: state and probability values (a hit on an occupied voxel changes only the
+// latter), relative and absolute bands, and the global map's voxels above and below the window.
+TEST(MapEngine, IncrementalGridEqualsADirectProjectionAfterEveryFrame) {
+  struct Case {
+    const char* name;
+    bool probability_values;
+    bool relative_band;
+    bool include_global;
+    double band_min_m;
+    double band_max_m;
+  };
+  const Case cases[] = {{"state values, relative band", false, true, false, -0.3, 0.3},
+                        {"probability values, relative band", true, true, false, -0.3, 0.3},
+                        {"state values, absolute band", false, false, true, 0.3, 1.1},
+                        {"probability values, band beyond the window", true, false, true, -2.0, 6.0}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    MapConfig config = test::smallWindowConfig();
+    config.esdf.enabled = false;
+    config.projected_grid.probability_values = c.probability_values;
+    config.projected_grid.relative_band = c.relative_band;
+    config.projected_grid.include_global = c.include_global;
+    config.projected_grid.band_min_m = c.band_min_m;
+    config.projected_grid.band_max_m = c.band_max_m;
+    MapEngine engine(config);
+    const io::Scenario scenario = test::cheapScenario();
+    eval::FlightOptions options;
+    options.max_frames = 60;
+    std::size_t known_cells = 0;
+    options.progress = [&](int done, int) {
+      const auto snap = engine.snapshot();
+      ASSERT_EQ(snap->frame(), static_cast<std::uint64_t>(done));
+      ProjectedGrid direct;
+      projectToGrid(snap->window(), &engine.globalMap(), config.projected_grid,
+                    snap->T_W_B().translation().z(), &direct);
+      const ProjectedGrid& grid = snap->grid();
+      ASSERT_EQ(grid.origin_W, direct.origin_W) << "frame " << done;
+      ASSERT_EQ(grid.width, direct.width) << "frame " << done;
+      ASSERT_EQ(grid.height, direct.height) << "frame " << done;
+      for (std::size_t i = 0; i < direct.cells.size(); ++i) {
+        ASSERT_EQ(grid.cells[i], direct.cells[i]) << "frame " << done << ", cell " << i;
+        known_cells += direct.cells[i] != ProjectedGrid::kUnknown;
+      }
+    };
+    ASSERT_EQ(eval::flyScenario(scenario, engine, options).frames, 60);
+    const PlanningStats stats = engine.stats().planning;
+    EXPECT_GT(known_cells, 10000u);
+    EXPECT_GT(stats.grid_rebuilds, 5u);  // the window slides
+    if (c.band_max_m < 6.0) {
+      EXPECT_GT(stats.grid_updates, stats.grid_rebuilds + 10) << "updated in part";
+    } else {
+      EXPECT_EQ(stats.grid_updates, stats.grid_rebuilds) << "depends on the global map";
+    }
+    if (!c.include_global) continue;
+    // A loaded map whose window lies where the current one does, with another global map: the
+    // grid follows the new global map too.
+    MapState state = engine.exportState();
+    ASSERT_GT(state.globalVoxelCount(), 0u);
+    state.global_submaps.clear();
+    engine.restoreState(state);
+    options.progress(60, 60);
+  }
 }
 
 // The ESDF is recomputed at most at its rate (frame stamps) and the skips are counted.

@@ -66,6 +66,9 @@ class GlobalMap {
   }
 
   [[nodiscard]] std::size_t submapCount() const { return submaps_.size(); }
+  /// Number of store(), successful take() and clear() calls so far: equal values mean an
+  /// unchanged map (for readers that cache something derived from it).
+  [[nodiscard]] std::uint64_t modifications() const { return modifications_; }
   [[nodiscard]] std::size_t voxelCount() const { return voxel_count_; }
   /// Bytes held: records plus an estimate of the hash map's own nodes and buckets.
   [[nodiscard]] std::size_t memoryBytes() const;
@@ -81,6 +84,7 @@ class GlobalMap {
   double resolution_m_;
   std::unordered_map<std::uint64_t, std::vector<VoxelRecord>> submaps_;
   std::size_t voxel_count_ = 0;
+  std::uint64_t modifications_ = 0;
 };
 
 }  // namespace mlmap

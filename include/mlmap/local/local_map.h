@@ -128,6 +128,16 @@ class LocalMap {
   [[nodiscard]] bool placed() const { return placed_; }
   [[nodiscard]] const LocalMapConfig& config() const { return config_; }
   [[nodiscard]] const LocalMapCounters& counters() const { return counters_; }
+
+  /// The change clock: advanced by every call that can change voxel values (integrate(),
+  /// re-centring, restoreWindow()). A reader that built something from the window when the clock
+  /// read `c` needs to redo the submaps m with submapChangedAt(m) > c, and only those.
+  [[nodiscard]] std::uint64_t changeClock() const { return change_clock_; }
+  /// The change clock at the last change of a stored value (log-odds, not only state) of submap
+  /// `m`, or at its entry into the window; `m` must be a submap of the window.
+  [[nodiscard]] std::uint64_t submapChangedAt(const SubmapIndex& m) const {
+    return submap_changed_at_[submapSlot(m)];
+  }
   /// Bytes held by the voxel storage (2 bytes per voxel).
   [[nodiscard]] std::size_t memoryBytes() const { return cells_.capacity() * sizeof(LogOddsQ); }
   /// Bytes per voxel of the active area.
@@ -144,6 +154,12 @@ class LocalMap {
                static_cast<std::size_t>(size_.z()) +
            static_cast<std::size_t>(floorMod(g.z(), size_.z()));
   }
+  /// Slot of submap m in submap_changed_at_ (its torus position, m mod 5 per axis).
+  [[nodiscard]] static std::size_t submapSlot(const SubmapIndex& m) {
+    constexpr int n = LocalMapConfig::kSubmapsPerAxis;
+    return static_cast<std::size_t>((floorMod(m.x(), n) * n + floorMod(m.y(), n)) * n +
+                                    floorMod(m.z(), n));
+  }
   void moveCenter(const SubmapIndex& new_center, GlobalMap* global);
   void retireSubmap(const SubmapIndex& m, GlobalMap* global);
   void restoreSubmap(const SubmapIndex& m, GlobalMap* global);
@@ -158,6 +174,9 @@ class LocalMap {
   VoxelIndex min_index_ = VoxelIndex::Zero();
   LocalMapCounters counters_;
   std::vector<VoxelRecord> scratch_;
+  std::uint64_t change_clock_ = 0;
+  std::vector<std::uint64_t> submap_changed_at_;  // per torus submap slot, see submapSlot()
+  std::vector<std::uint8_t> submap_of_torus_z_;   // torus z -> submap slot z (no division per voxel)
 };
 
 }  // namespace mlmap

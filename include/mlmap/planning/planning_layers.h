@@ -26,7 +26,8 @@ namespace mlmap {
 /// Costs and counts of the planning layers. Times in ms per update.
 struct PlanningStats {
   std::uint64_t snapshots = 0;           ///< snapshots published
-  std::uint64_t grid_updates = 0;        ///< 2D grid rebuilt
+  std::uint64_t grid_updates = 0;        ///< 2D grid changed (rebuilt or updated in part)
+  std::uint64_t grid_rebuilds = 0;       ///< of those, rebuilt whole (window or band moved)
   std::uint64_t esdf_updates = 0;        ///< ESDF recomputed
   std::uint64_t esdf_unchanged = 0;      ///< skipped: no state change in the window, box still
   std::uint64_t esdf_rate_limited = 0;   ///< skipped: sooner than 1 / esdf.max_rate_hz
@@ -87,7 +88,9 @@ class PlanningLayers {
   std::vector<std::shared_ptr<LocalWindow>> window_pool_;
   std::vector<std::shared_ptr<ProjectedGrid>> grid_pool_;
   std::shared_ptr<const ProjectedGrid> grid_;
-  std::uint64_t grid_changes_ = ~std::uint64_t{0};
+  std::uint64_t grid_clock_ = 0;  // the local map's change clock when grid_ was made
+  std::uint64_t grid_rebuilds_ = 0;
+  std::uint64_t grid_global_ = 0;  // the global map's modifications() when grid_ was made
   VoxelIndex grid_window_min_ = VoxelIndex::Zero();
   int grid_band_k0_ = 0;
   int grid_band_k1_ = 0;

@@ -51,10 +51,20 @@ void bandLayers(double z_min_m, double z_max_m, double resolution_m, int* k0, in
 /// Builds the grid of the local window (and, when configured, of the global map's occupied voxels
 /// in the band) into `out`, reusing its memory. `body_z_m` anchors a relative band.
 ///
-/// The local part reads only the band's voxels of the window (a few layers), so it is rebuilt
-/// whole each time; with `include_global` the grid grows to the global map's extent, whose
-/// occupied voxels in the band are added on top.
+/// The local part reads only the band's voxels of the window (a few layers); with
+/// `include_global` the grid grows to the global map's extent, whose occupied voxels in the band
+/// are added on top. PlanningLayers rebuilds it whole only when the window or the band moved, and
+/// otherwise updates the columns of the submaps that changed (reprojectWindowColumns()).
 void projectToGrid(const LocalWindow& window, const GlobalMap* global,
                    const ProjectedGridConfig& config, double body_z_m, ProjectedGrid* out);
+
+/// Recomputes the cells of the window columns [begin, end) (window-relative x, y; clipped to
+/// the window) of `grid` from `window`, for an incremental update after only those columns
+/// changed. `grid` must come from projectToGrid() with the same config, a window at the same
+/// place and the same band, and its cells over the window must depend on the window alone:
+/// true unless the global map is included and the band reaches beyond the window's z range.
+void reprojectWindowColumns(const LocalWindow& window, const ProjectedGridConfig& config,
+                            const Eigen::Vector2i& begin, const Eigen::Vector2i& end,
+                            ProjectedGrid* grid);
 
 }  // namespace mlmap
