@@ -24,6 +24,7 @@ LocalMap::LocalMap(const LocalMapConfig& config, const LogOddsConfig& log_odds)
       submap_changed_at_(static_cast<std::size_t>(LocalMapConfig::kSubmapsPerAxis) *
                              LocalMapConfig::kSubmapsPerAxis * LocalMapConfig::kSubmapsPerAxis,
                          0),
+      submap_state_changed_at_(submap_changed_at_.size(), 0),
       submap_of_torus_z_(static_cast<std::size_t>(size_.z())) {
   for (int z = 0; z < size_.z(); ++z) {
     submap_of_torus_z_[static_cast<std::size_t>(z)] = static_cast<std::uint8_t>(z / submap_.z());
@@ -79,12 +80,22 @@ void LocalMap::retireSubmap(const SubmapIndex& m, GlobalMap* global) {
     }
   }
   global->store(m, std::vector<VoxelRecord>(scratch_.begin(), scratch_.end()));
-  submap_changed_at_[submapSlot(m)] = ++change_clock_;
+  stampSubmap(submapSlot(m), ++change_clock_);
   ++counters_.submaps_retired;
 }
 
+void LocalMap::stampSubmap(std::size_t slot, std::uint64_t clock) {
+  submap_changed_at_[slot] = clock;
+  submap_state_changed_at_[slot] = clock;
+}
+
+void LocalMap::stampAllSubmaps() {
+  const std::uint64_t clock = ++change_clock_;
+  for (std::size_t m = 0; m < submap_changed_at_.size(); ++m) stampSubmap(m, clock);
+}
+
 void LocalMap::restoreSubmap(const SubmapIndex& m, GlobalMap* global) {
-  submap_changed_at_[submapSlot(m)] = ++change_clock_;  // entered the window, restored or not
+  stampSubmap(submapSlot(m), ++change_clock_);  // entered the window, restored or not
   if (!global->take(m, &scratch_)) return;
   const int n = LocalMapConfig::kSubmapsPerAxis;
   const Eigen::Vector3i t0(floorMod(m.x(), n) * submap_.x(), floorMod(m.y(), n) * submap_.y(),
@@ -187,7 +198,7 @@ void LocalMap::restoreWindow(const LocalWindow& window) {
     center_ = SubmapIndex::Zero();
     min_index_ = VoxelIndex::Zero();
     ++counters_.state_changes;
-    std::fill(submap_changed_at_.begin(), submap_changed_at_.end(), ++change_clock_);
+    stampAllSubmaps();
     return;
   }
   min_index_ = window.min_index;
@@ -205,7 +216,7 @@ void LocalMap::restoreWindow(const LocalWindow& window) {
     }
   }
   ++counters_.state_changes;
-  std::fill(submap_changed_at_.begin(), submap_changed_at_.end(), ++change_clock_);
+  stampAllSubmaps();
 }
 
 void LocalMap::recenter(const Eigen::Vector3d& body_W, GlobalMap* global) {
@@ -269,8 +280,13 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
       const LogOddsQ old = v;
       const Occupancy before = model_.state(v);
       model_.hit(v);
-      counters_.state_changes += before != model_.state(v) ? 1 : 0;
-      if (v != old) submap_changed_at_[submapSlot(submapOf(h.index))] = now;
+      const bool state_changed = before != model_.state(v);
+      counters_.state_changes += state_changed ? 1 : 0;
+      if (v != old) {
+        const std::size_t m = submapSlot(submapOf(h.index));
+        submap_changed_at_[m] = now;
+        if (state_changed) submap_state_changed_at_[m] = now;
+      }
       ++counters_.hits_applied;
     } else {
       ++counters_.outside_window;
@@ -304,11 +320,12 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
                                               static_cast<std::size_t>(size_.y()) +
                                           static_cast<std::size_t>(sy)) *
                                              static_cast<std::size_t>(size_.z());
-      // The column's submaps in submap_changed_at_ (torus slot x, y; z per voxel).
-      std::uint64_t* column_changed_at =
-          submap_changed_at_.data() +
-          static_cast<std::size_t>((sx / submap_.x() * LocalMapConfig::kSubmapsPerAxis + sy / submap_.y()) *
-                                   LocalMapConfig::kSubmapsPerAxis);
+      // The column's submaps in the stamp arrays (torus slot x, y; z per voxel).
+      const std::size_t column_submaps = static_cast<std::size_t>(
+          (sx / submap_.x() * LocalMapConfig::kSubmapsPerAxis + sy / submap_.y()) *
+          LocalMapConfig::kSubmapsPerAxis);
+      std::uint64_t* column_changed_at = submap_changed_at_.data() + column_submaps;
+      std::uint64_t* column_state_changed_at = submap_state_changed_at_.data() + column_submaps;
       for (std::size_t w = 0; w < words_per_row; ++w) {
         std::uint64_t bits = row[w];
         while (bits != 0) {
@@ -323,8 +340,14 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
           const LogOddsQ old = v;
           const Occupancy before = model_.state(v);
           model_.miss(v);
-          changes += before != model_.state(v) ? 1 : 0;
-          if (v != old) column_changed_at[submap_of_torus_z_[static_cast<std::size_t>(tz)]] = now;
+          if (v != old) {
+            const std::size_t m = submap_of_torus_z_[static_cast<std::size_t>(tz)];
+            column_changed_at[m] = now;
+            if (before != model_.state(v)) {
+              column_state_changed_at[m] = now;
+              ++changes;
+            }
+          }
           ++applied;
         }
       }

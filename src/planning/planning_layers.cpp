@@ -75,7 +75,6 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
   const std::shared_ptr<LocalWindow> window = reuse(&window_pool_);
   local.copyWindow(window.get());
   const double copy_ms = msSince(start);
-  const std::uint64_t changes = local.counters().state_changes;
   const Eigen::Vector3d body_W = T_W_B.translation();
 
   // 2D grid: rebuilt whole when the window or the band's layers moved, or when the global map it
@@ -154,13 +153,25 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
   if (config_.esdf.enabled && window->size.prod() > 0) {
     Eigen::Vector3i size;
     const VoxelIndex box_min = esdfBoxMin(*window, body_W, &size);
-    unchanged = changes == esdf_changes_ && box_min == esdf_box_min_;
+    // Unchanged: the box is where it was and no voxel state inside it changed (submaps of the
+    // box with a later state stamp than the last ESDF's).
+    unchanged = box_min == esdf_box_min_ && size == esdf_box_size_;
+    if (unchanged) {
+      const SubmapIndex m0 = local.submapOf(box_min);
+      const SubmapIndex m1 = local.submapOf(box_min + size - VoxelIndex::Ones());
+      for (int x = m0.x(); x <= m1.x() && unchanged; ++x)
+        for (int y = m0.y(); y <= m1.y() && unchanged; ++y)
+          for (int z = m0.z(); z <= m1.z() && unchanged; ++z) {
+            unchanged = local.submapStateChangedAt(SubmapIndex(x, y, z)) <= esdf_clock_;
+          }
+    }
     rate_limited = !unchanged && config_.esdf.max_rate_hz > 0.0 &&
                    stamp_s - esdf_stamp_s_ < 1.0 / config_.esdf.max_rate_hz;
     if (!unchanged && !rate_limited) {
       esdf_due = true;
-      esdf_changes_ = changes;
+      esdf_clock_ = local.changeClock();
       esdf_box_min_ = box_min;
+      esdf_box_size_ = size;
       esdf_stamp_s_ = stamp_s;
     }
   }

@@ -141,8 +141,9 @@ TEST(LocalMap, MatchesAWholeWorldReferenceThroughRandomFlights) {
   EXPECT_EQ(map.counters().resets, 1u);
 }
 
-// The change stamps name exactly the submaps whose stored values changed, or that entered the
-// window, since the clock was read: what incremental readers (the 2D grid) rely on.
+// The change stamps name exactly the submaps whose stored values (states) changed, or that
+// entered the window, since the clock was read: what incremental readers (the 2D grid, the ESDF)
+// rely on.
 TEST(LocalMap, SubmapChangeStampsNameExactlyTheSubmapsThatChanged) {
   const LocalMapConfig config = smallMap();
   LocalMap map(config, LogOddsConfig{});
@@ -156,6 +157,7 @@ TEST(LocalMap, SubmapChangeStampsNameExactlyTheSubmapsThatChanged) {
   LocalWindow after;
   std::size_t stamped = 0;
   std::size_t unstamped = 0;
+  std::size_t value_only = 0;  // log-odds changed, states did not
   for (int frame = 0; frame < 300; ++frame) {
     const std::uint64_t clock = map.changeClock();
     map.copyWindow(&before);
@@ -184,22 +186,30 @@ TEST(LocalMap, SubmapChangeStampsNameExactlyTheSubmapsThatChanged) {
         for (int sz = 0; sz < LocalMapConfig::kSubmapsPerAxis; ++sz) {
           const SubmapIndex m = first + SubmapIndex(sx, sy, sz);
           const VoxelIndex m0 = m.cwiseProduct(cells);
-          bool changed = before.size.prod() == 0 || !before.contains(m0);  // entered the window
-          for (int x = 0; x < cells.x() && !changed; ++x)
-            for (int y = 0; y < cells.y() && !changed; ++y)
-              for (int z = 0; z < cells.z() && !changed; ++z) {
+          const bool entered = before.size.prod() == 0 || !before.contains(m0);
+          bool changed = entered;
+          bool state_changed = entered;
+          for (int x = 0; x < cells.x(); ++x)
+            for (int y = 0; y < cells.y(); ++y)
+              for (int z = 0; z < cells.z(); ++z) {
                 const VoxelIndex g = m0 + VoxelIndex(x, y, z);
-                changed = before.at(g) != after.at(g);
+                if (entered) continue;
+                changed = changed || before.at(g) != after.at(g);
+                state_changed = state_changed || before.state(g) != after.state(g);
               }
           ASSERT_EQ(map.submapChangedAt(m) > clock, changed)
               << "frame " << frame << ", submap " << m.transpose();
+          ASSERT_EQ(map.submapStateChangedAt(m) > clock, state_changed)
+              << "frame " << frame << ", submap " << m.transpose();
           (changed ? stamped : unstamped) += 1;
+          value_only += changed && !state_changed ? 1 : 0;
         }
       }
     }
   }
   EXPECT_GT(stamped, 1000u);
   EXPECT_GT(unstamped, 10000u);
+  EXPECT_GT(value_only, 50u);
   EXPECT_GT(map.counters().shifts, 20u);
 }
 

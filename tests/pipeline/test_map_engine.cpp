@@ -2,6 +2,7 @@
 
 #include "mlmap/eval/sim_flight.h"
 #include "mlmap/io/frame_directory.h"
+#include "mlmap/planning/planning_layers.h"
 
 #include "../support/small_flight.h"
 
@@ -440,6 +441,53 @@ TEST(MapEngine, IncrementalGridEqualsADirectProjectionAfterEveryFrame) {
     engine.restoreState(state);
     options.progress(60, 60);
   }
+}
+
+// With a box smaller than the window, the ESDF is recomputed when a voxel state inside its box
+// changed, and not for changes elsewhere in the window or for log-odds changes that keep states.
+TEST(PlanningLayers, EsdfIsRecomputedOnlyWhenAStateInsideItsBoxChanged) {
+  MapConfig config;
+  config.local_map.resolution_m = 0.2;
+  config.local_map.size_cells = {25, 25, 15};  // 5 x 5 x 3 m
+  config.esdf.box_size_m = {1.0, 1.0, 1.0};    // 5 x 5 x 5 voxels around the body
+  config.esdf.max_rate_hz = 0.0;
+  config.projected_grid.enabled = false;
+  LocalMap local(config.local_map, config.log_odds);
+  GlobalMap global(config.local_map.submap_cells(), config.local_map.resolution_m);
+  PlanningLayers layers(config, /*own_thread=*/false);
+  Transform T_W_B = Transform::Identity();
+  T_W_B.translation() = Eigen::Vector3d(0.1, 0.1, 0.1);
+  local.recenter(T_W_B.translation(), &global);
+  std::uint64_t frame = 0;
+  auto apply = [&](const std::vector<VoxelIndex>& hits, const std::vector<VoxelIndex>& frees) {
+    MeasurementBatch batch;
+    batch.free.reset(local.minIndex(), config.local_map.size_cells);
+    for (const VoxelIndex& h : hits) batch.hits.push_back({h, h.cast<double>() * 0.2});
+    for (const VoxelIndex& f : frees) {
+      const VoxelIndex r = f - local.minIndex();
+      batch.free.testAndSet(r.x(), r.y(), r.z());
+      ++batch.free_count;
+    }
+    local.integrate(batch);
+    ++frame;
+    layers.update(local, global, frame, 0.1 * static_cast<double>(frame), T_W_B);
+    return layers.stats();
+  };
+  const VoxelIndex inside(1, 0, 0);   // in the 5^3 box around the body's voxel (0, 0, 0)
+  const VoxelIndex outside(9, 9, 0);  // in the window, far from the box
+  PlanningStats s = apply({inside}, {});
+  EXPECT_EQ(s.esdf_updates, 1u);
+  s = apply({}, {outside});  // unknown -> free, outside the box
+  EXPECT_EQ(s.esdf_updates, 1u);
+  EXPECT_EQ(s.esdf_unchanged, 1u);
+  s = apply({inside}, {});  // occupied stays occupied, higher log-odds
+  EXPECT_EQ(s.esdf_updates, 1u);
+  EXPECT_EQ(s.esdf_unchanged, 2u);
+  s = apply({}, {inside + VoxelIndex(0, 1, 0)});  // unknown -> free, inside
+  EXPECT_EQ(s.esdf_updates, 2u);
+  ASSERT_NE(layers.snapshot()->esdf(), nullptr);
+  EXPECT_EQ(layers.snapshot()->esdfFrame(), frame);
+  EXPECT_EQ(layers.snapshot()->esdf()->size(), Eigen::Vector3i(5, 5, 5));
 }
 
 // The ESDF is recomputed at most at its rate (frame stamps) and the skips are counted.

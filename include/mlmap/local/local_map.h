@@ -92,7 +92,7 @@ class LocalMap {
   /// the map), e.g. when a saved map is loaded. Its size must equal the configured size, its
   /// first voxel must lie on the submap grid and every value must be unknown or within the
   /// clamping bounds; otherwise std::invalid_argument says what is wrong and nothing changes.
-  /// Counts one state change, so that layers derived from states are rebuilt.
+  /// Counts one state change and stamps every submap, so that derived layers are rebuilt.
   void restoreWindow(const LocalWindow& window);
   /// What restoreWindow() would refuse in `window`, or "" when it fits (mlmap::windowProblem()
   /// with this map's size, submaps and model).
@@ -138,6 +138,11 @@ class LocalMap {
   [[nodiscard]] std::uint64_t submapChangedAt(const SubmapIndex& m) const {
     return submap_changed_at_[submapSlot(m)];
   }
+  /// The same for changes of a voxel's state (unknown / free / occupied), for readers derived
+  /// from states only (the ESDF): never later than submapChangedAt(m).
+  [[nodiscard]] std::uint64_t submapStateChangedAt(const SubmapIndex& m) const {
+    return submap_state_changed_at_[submapSlot(m)];
+  }
   /// Bytes held by the voxel storage (2 bytes per voxel).
   [[nodiscard]] std::size_t memoryBytes() const { return cells_.capacity() * sizeof(LogOddsQ); }
   /// Bytes per voxel of the active area.
@@ -160,6 +165,9 @@ class LocalMap {
     return static_cast<std::size_t>((floorMod(m.x(), n) * n + floorMod(m.y(), n)) * n +
                                     floorMod(m.z(), n));
   }
+  /// Stamps submap slot `slot` (values and states) with `clock`; every slot with a new clock.
+  void stampSubmap(std::size_t slot, std::uint64_t clock);
+  void stampAllSubmaps();
   void moveCenter(const SubmapIndex& new_center, GlobalMap* global);
   void retireSubmap(const SubmapIndex& m, GlobalMap* global);
   void restoreSubmap(const SubmapIndex& m, GlobalMap* global);
@@ -175,7 +183,8 @@ class LocalMap {
   LocalMapCounters counters_;
   std::vector<VoxelRecord> scratch_;
   std::uint64_t change_clock_ = 0;
-  std::vector<std::uint64_t> submap_changed_at_;  // per torus submap slot, see submapSlot()
+  std::vector<std::uint64_t> submap_changed_at_;        // per torus submap slot, see submapSlot()
+  std::vector<std::uint64_t> submap_state_changed_at_;  // the same for state changes
   std::vector<std::uint8_t> submap_of_torus_z_;   // torus z -> submap slot z (no division per voxel)
 };
 

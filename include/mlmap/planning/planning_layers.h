@@ -4,8 +4,8 @@
 /// and publishes it as MapSnapshot objects. Owned by the engine; update() runs on the local-global
 /// stage, snapshot() on any thread.
 ///
-/// The ESDF is recomputed only when a voxel state changed in the window or the box moved, and at
-/// most at esdf.max_rate_hz (stamps of the frames). With `own_thread` it is computed on a planning
+/// The ESDF is recomputed only when a voxel state changed inside its box or the box moved, and
+/// at most at esdf.max_rate_hz (stamps of the frames). With `own_thread` it is computed on a planning
 /// thread of its own so that mapping never waits for it; a frame that finds the thread busy
 /// replaces the one waiting (latest only, counted). Otherwise it runs inside update().
 
@@ -29,7 +29,7 @@ struct PlanningStats {
   std::uint64_t grid_updates = 0;        ///< 2D grid changed (rebuilt or updated in part)
   std::uint64_t grid_rebuilds = 0;       ///< of those, rebuilt whole (window or band moved)
   std::uint64_t esdf_updates = 0;        ///< ESDF recomputed
-  std::uint64_t esdf_unchanged = 0;      ///< skipped: no state change in the window, box still
+  std::uint64_t esdf_unchanged = 0;      ///< skipped: no state change in the box, box still
   std::uint64_t esdf_rate_limited = 0;   ///< skipped: sooner than 1 / esdf.max_rate_hz
   std::uint64_t esdf_superseded = 0;     ///< planning thread busy: a newer frame took its place
   double last_snapshot_ms = 0.0;         ///< copying the window and publishing
@@ -94,8 +94,9 @@ class PlanningLayers {
   VoxelIndex grid_window_min_ = VoxelIndex::Zero();
   int grid_band_k0_ = 0;
   int grid_band_k1_ = 0;
-  std::uint64_t esdf_changes_ = ~std::uint64_t{0};
+  std::uint64_t esdf_clock_ = 0;  // the local map's change clock when the last ESDF was due
   VoxelIndex esdf_box_min_ = VoxelIndex::Zero();
+  Eigen::Vector3i esdf_box_size_ = Eigen::Vector3i::Zero();  // zero: no ESDF yet
   double esdf_stamp_s_ = -1e300;
 
   // ESDF computation (planning thread, or the local-global stage without one).
