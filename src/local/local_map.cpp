@@ -360,6 +360,7 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
 void LocalMap::copyWindow(LocalWindow* out) const {
   out->resolution_m = config_.resolution_m;
   out->model = model_;
+  out->change_clock = change_clock_;
   if (!placed_) {
     out->min_index = VoxelIndex::Zero();
     out->size = Eigen::Vector3i::Zero();
@@ -383,6 +384,52 @@ void LocalMap::copyWindow(LocalWindow* out) const {
       dst += nz;
     }
   }
+}
+
+int LocalMap::updateWindowCopy(LocalWindow* out) const {
+  constexpr int n = LocalMapConfig::kSubmapsPerAxis;
+  const bool same_place = placed_ && out->change_clock != 0 && out->min_index == min_index_ &&
+                          out->size == size_ && out->resolution_m == config_.resolution_m &&
+                          out->log_odds.size() == static_cast<std::size_t>(size_.prod());
+  if (!same_place) {
+    copyWindow(out);
+    return placed_ ? n * n * n : 0;
+  }
+  out->model = model_;
+  const std::size_t ny = static_cast<std::size_t>(size_.y());
+  const std::size_t nz = static_cast<std::size_t>(size_.z());
+  const std::size_t run = static_cast<std::size_t>(submap_.z());
+  const SubmapIndex first = submapOf(min_index_);
+  int copied = 0;
+  for (int bx = 0; bx < n; ++bx) {
+    for (int by = 0; by < n; ++by) {
+      for (int bz = 0; bz < n; ++bz) {
+        const SubmapIndex m = first + SubmapIndex(bx, by, bz);
+        if (submap_changed_at_[submapSlot(m)] <= out->change_clock) continue;
+        ++copied;
+        // The submap's first voxel in the copy (box order) and in the torus; its z run is
+        // contiguous in both.
+        const Eigen::Vector3i b0 = Eigen::Vector3i(bx, by, bz).cwiseProduct(submap_);
+        const Eigen::Vector3i t0(floorMod(m.x(), n) * submap_.x(), floorMod(m.y(), n) * submap_.y(),
+                                 floorMod(m.z(), n) * submap_.z());
+        for (int x = 0; x < submap_.x(); ++x) {
+          for (int y = 0; y < submap_.y(); ++y) {
+            const LogOddsQ* src =
+                cells_.data() + (static_cast<std::size_t>(t0.x() + x) * ny +
+                                 static_cast<std::size_t>(t0.y() + y)) * nz +
+                static_cast<std::size_t>(t0.z());
+            LogOddsQ* dst = out->log_odds.data() +
+                            (static_cast<std::size_t>(b0.x() + x) * ny +
+                             static_cast<std::size_t>(b0.y() + y)) * nz +
+                            static_cast<std::size_t>(b0.z());
+            std::copy(src, src + run, dst);
+          }
+        }
+      }
+    }
+  }
+  out->change_clock = change_clock_;
+  return copied;
 }
 
 }  // namespace mlmap

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <map>
 #include <random>
 
@@ -211,6 +212,49 @@ TEST(LocalMap, SubmapChangeStampsNameExactlyTheSubmapsThatChanged) {
   EXPECT_GT(unstamped, 10000u);
   EXPECT_GT(value_only, 50u);
   EXPECT_GT(map.counters().shifts, 20u);
+}
+
+// A pooled copy brought up to date with updateWindowCopy() equals a full copy after every frame,
+// whichever earlier frame it was made at, while copying only the changed submaps.
+TEST(LocalMap, UpdatedWindowCopiesEqualFullCopies) {
+  const LocalMapConfig config = smallMap();
+  LocalMap map(config, LogOddsConfig{});
+  GlobalMap global(config.submap_cells(), config.resolution_m);
+  std::mt19937 rng(12);
+  std::uniform_int_distribution<int> offset(-6, 6);
+  std::uniform_real_distribution<double> step(-0.25, 0.25);  // a shift every few frames
+  Eigen::Vector3d body(0.5, 0.5, 0.5);
+  std::vector<LocalWindow> pool(3);  // used in turn, as snapshot buffers are
+  LocalWindow full;
+  long copied = 0;
+  const int frames = 300;
+  for (int frame = 0; frame < frames; ++frame) {
+    body += Eigen::Vector3d(step(rng), step(rng), 0.3 * step(rng));
+    if (frame == 150) body += Eigen::Vector3d(30.0, 0.0, 0.0);  // a jump: the window is replaced
+    map.recenter(body, &global);
+    std::vector<VoxelIndex> hits;
+    std::vector<VoxelIndex> frees;
+    const VoxelIndex b = voxelIndexOf(body, 1.0);
+    for (int i = 0; i < 4; ++i) {
+      const VoxelIndex v = b + VoxelIndex(offset(rng), offset(rng), offset(rng) / 3);
+      if (std::find(hits.begin(), hits.end(), v) != hits.end() ||
+          std::find(frees.begin(), frees.end(), v) != frees.end()) {
+        continue;
+      }
+      (i == 0 ? hits : frees).push_back(v);
+    }
+    map.integrate(makeBatch(body, hits, frees));
+    LocalWindow& copy = pool[static_cast<std::size_t>(frame % 3)];
+    copied += map.updateWindowCopy(&copy);
+    map.copyWindow(&full);
+    ASSERT_EQ(copy.min_index, full.min_index) << "frame " << frame;
+    ASSERT_EQ(copy.size, full.size) << "frame " << frame;
+    ASSERT_EQ(copy.change_clock, full.change_clock) << "frame " << frame;
+    ASSERT_TRUE(copy.log_odds == full.log_odds) << "frame " << frame;
+  }
+  std::printf("%ld submaps copied in %d updates (%ld for full copies)\n", copied, frames, frames * 125L);
+  EXPECT_GT(map.counters().shifts, 20u);
+  EXPECT_LT(copied, frames * 125 / 3) << "mostly incremental copies";
 }
 
 TEST(LocalMap, RecycledSubmapsStartUnknownAfterAShift) {

@@ -43,6 +43,9 @@ struct LocalWindow {
   double resolution_m = 0.2;                       ///< voxel edge
   LogOddsModel model{LogOddsConfig{}};             ///< thresholds of the map it was copied from
   std::vector<LogOddsQ> log_odds;                  ///< stored log-odds, see above
+  /// LocalMap::changeClock() of the map when it was copied (what LocalMap::updateWindowCopy()
+  /// builds on); 0 for a window that is not such a copy.
+  std::uint64_t change_clock = 0;
 
   /// True when the world voxel lies in the window.
   [[nodiscard]] bool contains(const VoxelIndex& g) const { return boxContains(min_index, size, g); }
@@ -84,6 +87,11 @@ class LocalMap {
   /// Copies the window into `out` in box order (reusing its memory). An unplaced map gives an
   /// empty window.
   void copyWindow(LocalWindow* out) const;
+  /// The same result as copyWindow(), for an `out` that holds an earlier copy of this map's
+  /// window (from copyWindow() or updateWindowCopy(), e.g. a pooled snapshot buffer): when the
+  /// window has not moved since, only the submaps changed after `out->change_clock` are copied.
+  /// Any other `out` gets a full copy. Returns the number of submaps copied.
+  int updateWindowCopy(LocalWindow* out) const;
 
   /// Retires every submap to `global` (e.g. before saving a complete map); the window stays.
   void retireAll(GlobalMap* global);
