@@ -33,6 +33,22 @@ MeasurementBatch makeBatch(const Eigen::Vector3d& body, const std::vector<VoxelI
   return b;
 }
 
+/// Up to `n` distinct voxels within 6 voxels of the body (z within 2): the first a hit, the
+/// others misses.
+void fewUpdatesAround(const Eigen::Vector3d& body, int n, std::mt19937& rng,
+                      std::vector<VoxelIndex>* hits, std::vector<VoxelIndex>* frees) {
+  std::uniform_int_distribution<int> offset(-6, 6);
+  const VoxelIndex b = voxelIndexOf(body, 1.0);
+  for (int i = 0; i < n; ++i) {
+    const VoxelIndex v = b + VoxelIndex(offset(rng), offset(rng), offset(rng) / 3);
+    if (std::find(hits->begin(), hits->end(), v) != hits->end() ||
+        std::find(frees->begin(), frees->end(), v) != frees->end()) {
+      continue;
+    }
+    (i == 0 ? hits : frees)->push_back(v);
+  }
+}
+
 TEST(LogOdds, SaturatesAndReadsThreeStates) {
   LogOddsConfig c;
   const LogOddsModel model(c);
@@ -151,7 +167,6 @@ TEST(LocalMap, SubmapChangeStampsNameExactlyTheSubmapsThatChanged) {
   GlobalMap global(config.submap_cells(), config.resolution_m);
   const Eigen::Vector3i cells = config.submap_cells();
   std::mt19937 rng(11);
-  std::uniform_int_distribution<int> offset(-6, 6);
   std::uniform_real_distribution<double> step(-0.8, 0.8);
   Eigen::Vector3d body(0.5, 0.5, 0.5);
   LocalWindow before;
@@ -166,16 +181,9 @@ TEST(LocalMap, SubmapChangeStampsNameExactlyTheSubmapsThatChanged) {
     map.recenter(body, &global);
     std::vector<VoxelIndex> hits;
     std::vector<VoxelIndex> frees;
-    const VoxelIndex b = voxelIndexOf(body, 1.0);
     // Few updates, some of them misses on saturated free voxels: those change nothing.
-    for (int i = 0; i < 6; ++i) {
-      const VoxelIndex v = b + VoxelIndex(offset(rng), offset(rng), offset(rng) / 3);
-      if (std::find(hits.begin(), hits.end(), v) != hits.end() ||
-          std::find(frees.begin(), frees.end(), v) != frees.end()) {
-        continue;
-      }
-      (i == 0 ? hits : frees).push_back(v);
-    }
+    fewUpdatesAround(body, 6, rng, &hits, &frees);
+    const VoxelIndex b = voxelIndexOf(body, 1.0);
     if (frame % 5 == 0) {
       for (int i = 0; i < 12; ++i) frees.push_back(b + VoxelIndex(10 + i, 0, 0));  // outside
     }
@@ -221,7 +229,6 @@ TEST(LocalMap, UpdatedWindowCopiesEqualFullCopies) {
   LocalMap map(config, LogOddsConfig{});
   GlobalMap global(config.submap_cells(), config.resolution_m);
   std::mt19937 rng(12);
-  std::uniform_int_distribution<int> offset(-6, 6);
   std::uniform_real_distribution<double> step(-0.25, 0.25);  // a shift every few frames
   Eigen::Vector3d body(0.5, 0.5, 0.5);
   std::vector<LocalWindow> pool(3);  // used in turn, as snapshot buffers are
@@ -234,15 +241,7 @@ TEST(LocalMap, UpdatedWindowCopiesEqualFullCopies) {
     map.recenter(body, &global);
     std::vector<VoxelIndex> hits;
     std::vector<VoxelIndex> frees;
-    const VoxelIndex b = voxelIndexOf(body, 1.0);
-    for (int i = 0; i < 4; ++i) {
-      const VoxelIndex v = b + VoxelIndex(offset(rng), offset(rng), offset(rng) / 3);
-      if (std::find(hits.begin(), hits.end(), v) != hits.end() ||
-          std::find(frees.begin(), frees.end(), v) != frees.end()) {
-        continue;
-      }
-      (i == 0 ? hits : frees).push_back(v);
-    }
+    fewUpdatesAround(body, 4, rng, &hits, &frees);
     map.integrate(makeBatch(body, hits, frees));
     LocalWindow& copy = pool[static_cast<std::size_t>(frame % 3)];
     copied += map.updateWindowCopy(&copy);
