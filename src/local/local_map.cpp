@@ -321,9 +321,10 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
                                           static_cast<std::size_t>(sy)) *
                                              static_cast<std::size_t>(size_.z());
       // The column's submaps in the stamp arrays (torus slot x, y; z per voxel).
-      const std::size_t column_submaps = static_cast<std::size_t>(
-          (sx / submap_.x() * LocalMapConfig::kSubmapsPerAxis + sy / submap_.y()) *
-          LocalMapConfig::kSubmapsPerAxis);
+      constexpr auto kStride = static_cast<std::size_t>(LocalMapConfig::kSubmapsPerAxis);
+      const std::size_t column_submaps =
+          (static_cast<std::size_t>(sx / submap_.x()) * kStride +
+           static_cast<std::size_t>(sy / submap_.y())) * kStride;
       std::uint64_t* column_changed_at = submap_changed_at_.data() + column_submaps;
       std::uint64_t* column_state_changed_at = submap_state_changed_at_.data() + column_submaps;
       for (std::size_t w = 0; w < words_per_row; ++w) {
@@ -387,13 +388,13 @@ void LocalMap::copyWindow(LocalWindow* out) const {
 }
 
 int LocalMap::updateWindowCopy(LocalWindow* out) const {
-  constexpr int n = LocalMapConfig::kSubmapsPerAxis;
+  constexpr int kN = LocalMapConfig::kSubmapsPerAxis;
   const bool same_place = placed_ && out->change_clock != 0 && out->min_index == min_index_ &&
                           out->size == size_ && out->resolution_m == config_.resolution_m &&
                           out->log_odds.size() == static_cast<std::size_t>(size_.prod());
   if (!same_place) {
     copyWindow(out);
-    return placed_ ? n * n * n : 0;
+    return placed_ ? kN * kN * kN : 0;
   }
   out->model = model_;
   const std::size_t ny = static_cast<std::size_t>(size_.y());
@@ -401,17 +402,17 @@ int LocalMap::updateWindowCopy(LocalWindow* out) const {
   const std::size_t run = static_cast<std::size_t>(submap_.z());
   const SubmapIndex first = submapOf(min_index_);
   int copied = 0;
-  for (int bx = 0; bx < n; ++bx) {
-    for (int by = 0; by < n; ++by) {
-      for (int bz = 0; bz < n; ++bz) {
+  for (int bx = 0; bx < kN; ++bx) {
+    for (int by = 0; by < kN; ++by) {
+      for (int bz = 0; bz < kN; ++bz) {
         const SubmapIndex m = first + SubmapIndex(bx, by, bz);
         if (submap_changed_at_[submapSlot(m)] <= out->change_clock) continue;
         ++copied;
         // The submap's first voxel in the copy (box order) and in the torus; its z run is
         // contiguous in both.
         const Eigen::Vector3i b0 = Eigen::Vector3i(bx, by, bz).cwiseProduct(submap_);
-        const Eigen::Vector3i t0(floorMod(m.x(), n) * submap_.x(), floorMod(m.y(), n) * submap_.y(),
-                                 floorMod(m.z(), n) * submap_.z());
+        const Eigen::Vector3i t0(floorMod(m.x(), kN) * submap_.x(), floorMod(m.y(), kN) * submap_.y(),
+                                 floorMod(m.z(), kN) * submap_.z());
         for (int x = 0; x < submap_.x(); ++x) {
           for (int y = 0; y < submap_.y(); ++y) {
             const LogOddsQ* src =

@@ -112,18 +112,18 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
       ++grid_rebuilds_;
     } else if (window->size.prod() > 0) {
       // Submap columns (x, y) with a changed submap in the band's layers.
-      constexpr int n = LocalMapConfig::kSubmapsPerAxis;
+      constexpr int kN = LocalMapConfig::kSubmapsPerAxis;
       const Eigen::Vector3i cells = local.config().submap_cells();
       const SubmapIndex first = local.submapOf(window->min_index);
-      std::array<bool, n * n> dirty{};
+      std::array<std::array<bool, kN>, kN> dirty{};  // [x][y]
       bool any = false;
-      for (int sz = 0; sz < n; ++sz) {
+      for (int sz = 0; sz < kN; ++sz) {
         const int z_lo = window_z0 + sz * cells.z();
         if (z_lo + cells.z() <= band_k0 || z_lo >= band_k1) continue;
-        for (int sx = 0; sx < n; ++sx) {
-          for (int sy = 0; sy < n; ++sy) {
+        for (int sx = 0; sx < kN; ++sx) {
+          for (int sy = 0; sy < kN; ++sy) {
             if (local.submapChangedAt(first + SubmapIndex(sx, sy, sz)) > grid_clock_) {
-              dirty[static_cast<std::size_t>(sx * n + sy)] = true;
+              dirty[static_cast<std::size_t>(sx)][static_cast<std::size_t>(sy)] = true;
               any = true;
             }
           }
@@ -132,9 +132,9 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
       if (any) {
         const std::shared_ptr<ProjectedGrid> grid = reuse(&grid_pool_);
         *grid = *grid_;  // the published grid stays as it is; the copy is patched
-        for (int sx = 0; sx < n; ++sx) {
-          for (int sy = 0; sy < n; ++sy) {
-            if (!dirty[static_cast<std::size_t>(sx * n + sy)]) continue;
+        for (int sx = 0; sx < kN; ++sx) {
+          for (int sy = 0; sy < kN; ++sy) {
+            if (!dirty[static_cast<std::size_t>(sx)][static_cast<std::size_t>(sy)]) continue;
             const Eigen::Vector2i begin(sx * cells.x(), sy * cells.y());
             reprojectWindowColumns(*window, gc, begin, begin + cells.head<2>(), grid.get());
           }

@@ -169,9 +169,10 @@ class LocalMap {
   }
   /// Slot of submap m in submap_changed_at_ (its torus position, m mod 5 per axis).
   [[nodiscard]] static std::size_t submapSlot(const SubmapIndex& m) {
-    constexpr int n = LocalMapConfig::kSubmapsPerAxis;
-    return static_cast<std::size_t>((floorMod(m.x(), n) * n + floorMod(m.y(), n)) * n +
-                                    floorMod(m.z(), n));
+    constexpr int kN = LocalMapConfig::kSubmapsPerAxis;
+    const auto slot = [](int v) { return static_cast<std::size_t>(floorMod(v, kN)); };
+    constexpr auto kStride = static_cast<std::size_t>(kN);
+    return (slot(m.x()) * kStride + slot(m.y())) * kStride + slot(m.z());
   }
   /// Stamps submap slot `slot` (values and states) with `clock`; every slot with a new clock.
   void stampSubmap(std::size_t slot, std::uint64_t clock);
