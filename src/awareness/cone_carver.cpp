@@ -6,12 +6,75 @@
 namespace mlmap {
 namespace {
 constexpr double kEdgeEpsilon = 1e-9;  // a cone only touching a voxel face does not mark it
+constexpr std::uint64_t kAllBits = ~std::uint64_t{0};
+
+// Sets bits z0..z1 (z0 <= z1) of a z row: a word at a time, as most sections are a few voxels.
+inline void markRun(std::uint64_t* row, int z0, int z1) {
+  const int w0 = z0 >> 6;
+  const int w1 = z1 >> 6;
+  const std::uint64_t first = kAllBits << (z0 & 63);
+  const std::uint64_t last = kAllBits >> (63 - (z1 & 63));
+  if (w0 == w1) {
+    row[w0] |= first & last;
+    return;
+  }
+  row[w0] |= first;
+  for (int w = w0 + 1; w < w1; ++w) row[w] = kAllBits;
+  row[w1] |= last;
+}
+
+// The cone's walk along its dominant axis A; b = A + 1 and c = A + 2 (mod 3) are the section's
+// axes. The section's extent on b and c at parameter s is o + s * [lo, hi], so for slab i it
+// spans the extents at the s range where the cone overlaps the slab.
+struct Walk {
+  double oa, ob, oc;
+  double lo_b, hi_b, lo_c, hi_c;
+  double inv_na, inv_fa;  // 1 / near face, 1 / far face offset along A
+  double off_lo, off_hi;  // slab i overlaps s in [(i + off_lo - oa) / fa, (i + off_hi - oa) / na]
+  double s0;
+  int dim_b, dim_c;
+};
+
+// Marks slabs i_begin..i_end (inside the box along A). Templated on A so that each slab's
+// rectangle maps to whole z runs (or, along z, to one bit per row) with no per-voxel index math.
+template <int A>
+void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std::size_t stride_x,
+               std::size_t stride_y) {
+  for (int i = i_begin; i <= i_end; ++i) {
+    const double s_lo = std::max((static_cast<double>(i) + w.off_lo - w.oa) * w.inv_fa, w.s0);
+    const double s_hi = std::min((static_cast<double>(i) + w.off_hi - w.oa) * w.inv_na, 1.0);
+    if (!(s_lo <= s_hi)) continue;
+    const double b_lo = w.ob + std::min(s_lo * w.lo_b, s_hi * w.lo_b);
+    const double b_hi = w.ob + std::max(s_lo * w.hi_b, s_hi * w.hi_b);
+    const double c_lo = w.oc + std::min(s_lo * w.lo_c, s_hi * w.lo_c);
+    const double c_hi = w.oc + std::max(s_lo * w.hi_c, s_hi * w.hi_c);
+    const int j0 = std::max(floorToInt(b_lo + kEdgeEpsilon), 0);
+    const int j1 = std::min(ceilToInt(b_hi - kEdgeEpsilon) - 1, w.dim_b - 1);
+    const int k0 = std::max(floorToInt(c_lo + kEdgeEpsilon), 0);
+    const int k1 = std::min(ceilToInt(c_hi - kEdgeEpsilon) - 1, w.dim_c - 1);
+    if (j0 > j1 || k0 > k1) continue;
+    const std::size_t ui = static_cast<std::size_t>(i);
+    if constexpr (A == 0) {  // b = y, c = z
+      std::uint64_t* row = words + ui * stride_x + static_cast<std::size_t>(j0) * stride_y;
+      for (int j = j0; j <= j1; ++j, row += stride_y) markRun(row, k0, k1);
+    } else if constexpr (A == 1) {  // b = z, c = x
+      std::uint64_t* row = words + static_cast<std::size_t>(k0) * stride_x + ui * stride_y;
+      for (int k = k0; k <= k1; ++k, row += stride_x) markRun(row, j0, j1);
+    } else {  // b = x, c = y: one bit of each row
+      const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+      std::uint64_t* column = words + (ui >> 6) + static_cast<std::size_t>(j0) * stride_x;
+      for (int j = j0; j <= j1; ++j, column += stride_x) {
+        std::uint64_t* word = column + static_cast<std::size_t>(k0) * stride_y;
+        for (int k = k0; k <= k1; ++k, word += stride_y) *word |= bit;
+      }
+    }
+  }
+}
 }  // namespace
 
 std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
                       VoxelBitset* free) {
   const Eigen::Vector3i& dims = free->dims();
-  std::size_t slabs = 0;
   // Per axis, the section at s spans [o + s * lo, o + s * hi].
   const Eigen::Vector3d lo = box.min.cast<double>() - origin;
   const Eigen::Vector3d hi = box.max.cast<double>() - origin;
@@ -26,74 +89,51 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
       a = k;
     }
   }
-  uint64_t* words = free->data();
-  auto mark = [&](int x, int y, int z) {
-    words[free->rowWord(x, y) + static_cast<std::size_t>(z >> 6)] |= uint64_t{1} << (z & 63);
-  };
+  std::uint64_t* words = free->data();
+  const std::size_t stride_y = free->wordsPerRow();
+  const std::size_t stride_x = stride_y * static_cast<std::size_t>(dims.y());
   if (a < 0) {
     // The origin lies inside the box: the cone is the box's hull with the origin; mark the
     // voxels of the box (a sensor inside an end voxel).
     const Eigen::Vector3i v0 = box.min.array().floor().cast<int>().max(0);
     const Eigen::Vector3i v1 = box.max.array().floor().cast<int>().min(dims.array() - 1);
+    if (v0.z() > v1.z()) return 1;
     for (int x = v0.x(); x <= v1.x(); ++x)
-      for (int y = v0.y(); y <= v1.y(); ++y)
-        for (int z = v0.z(); z <= v1.z(); ++z) mark(x, y, z);
+      for (int y = v0.y(); y <= v1.y(); ++y) markRun(words + free->rowWord(x, y), v0.z(), v1.z());
     return 1;
   }
   const int b = (a + 1) % 3;
   const int c = (a + 2) % 3;
-  const double oa = origin[a];
-  const double ob = origin[b];
-  const double oc = origin[c];
   const bool forward = lo[a] > 0.0;
   // Along a the extent is monotonic in s: near face `na`, far face `fa` (both same sign).
   const double na = forward ? lo[a] : hi[a];
   const double fa = forward ? hi[a] : lo[a];
-  const double inv_na = 1.0 / na;
-  const double inv_fa = 1.0 / fa;
-  const int step = forward ? 1 : -1;
-  const double s0 = std::max(s_min, 0.0);
-  int i = floorToInt(oa + s0 * na);
-  const int i_last = floorToInt(oa + fa - (forward ? kEdgeEpsilon : -kEdgeEpsilon));
-  int xyz[3];
-  for (;; i += step) {
-    const bool last = i == i_last;
-    ++slabs;
-    if (i >= 0 && i < dims[a]) {
-      // s range in which the extent along a overlaps slab [i, i + 1].
-      double s_lo;
-      double s_hi;
-      if (forward) {
-        s_lo = (i - oa) * inv_fa;
-        s_hi = (i + 1 - oa) * inv_na;
-      } else {
-        s_lo = (i + 1 - oa) * inv_fa;
-        s_hi = (i - oa) * inv_na;
-      }
-      s_lo = std::max(s_lo, s0);
-      s_hi = std::min(s_hi, 1.0);
-      if (s_lo <= s_hi) {
-        const double b_lo = ob + std::min(s_lo * lo[b], s_hi * lo[b]);
-        const double b_hi = ob + std::max(s_lo * hi[b], s_hi * hi[b]);
-        const double c_lo = oc + std::min(s_lo * lo[c], s_hi * lo[c]);
-        const double c_hi = oc + std::max(s_lo * hi[c], s_hi * hi[c]);
-        const int j0 = std::max(floorToInt(b_lo + kEdgeEpsilon), 0);
-        const int j1 = std::min(ceilToInt(b_hi - kEdgeEpsilon) - 1, dims[b] - 1);
-        const int k0 = std::max(floorToInt(c_lo + kEdgeEpsilon), 0);
-        const int k1 = std::min(ceilToInt(c_hi - kEdgeEpsilon) - 1, dims[c] - 1);
-        xyz[a] = i;
-        for (int j = j0; j <= j1; ++j) {
-          xyz[b] = j;
-          for (int k = k0; k <= k1; ++k) {
-            xyz[c] = k;
-            mark(xyz[0], xyz[1], xyz[2]);
-          }
-        }
-      }
-    }
-    if (last) break;
-    if ((forward && i > i_last) || (!forward && i < i_last)) break;  // s_min beyond the end
-  }
+  Walk w{};
+  w.oa = origin[a];
+  w.ob = origin[b];
+  w.oc = origin[c];
+  w.lo_b = lo[b];
+  w.hi_b = hi[b];
+  w.lo_c = lo[c];
+  w.hi_c = hi[c];
+  w.inv_na = 1.0 / na;
+  w.inv_fa = 1.0 / fa;
+  w.off_lo = forward ? 0.0 : 1.0;
+  w.off_hi = forward ? 1.0 : 0.0;
+  w.s0 = std::max(s_min, 0.0);
+  w.dim_b = dims[b];
+  w.dim_c = dims[c];
+  // Slabs from the one holding s0 to the one holding the far face; at least the first (when s0
+  // lies beyond the far face).
+  const int i_first = floorToInt(w.oa + w.s0 * na);
+  const int i_last = floorToInt(w.oa + fa - (forward ? kEdgeEpsilon : -kEdgeEpsilon));
+  const int i_far = forward ? std::max(i_last, i_first) : std::min(i_last, i_first);
+  const std::size_t slabs = static_cast<std::size_t>(std::abs(i_far - i_first)) + 1;
+  const int i_begin = std::max(std::min(i_first, i_far), 0);
+  const int i_end = std::min(std::max(i_first, i_far), dims[a] - 1);
+  if (a == 0) walkSlabs<0>(w, i_begin, i_end, words, stride_x, stride_y);
+  if (a == 1) walkSlabs<1>(w, i_begin, i_end, words, stride_x, stride_y);
+  if (a == 2) walkSlabs<2>(w, i_begin, i_end, words, stride_x, stride_y);
   return slabs;
 }
 
