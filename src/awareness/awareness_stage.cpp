@@ -21,8 +21,11 @@ constexpr std::uint32_t kOutsideCutKey = 0xFFFFFFFCu;  // kOutsideHitKey - 1
 constexpr std::uint32_t kOutsideHitKey = 0xFFFFFFFDu;
 constexpr std::uint32_t kTooCloseKey = 0xFFFFFFFEu;
 constexpr std::uint32_t kNonFiniteKey = 0xFFFFFFFFu;
-// A bin's shared cone stops where the bin is this many voxels wide (over-carving bound).
-constexpr double kBinWidthVoxels = 1.0;
+// A bin's shared cone stops where the bin is this many voxels wide. Thinner bins overlap more:
+// a voxel lies in about ((1 + w) / w)^2 cones of width w, so one voxel wide made every free voxel
+// about six times; two voxels wide cut the carving cost by a third at 0.1 m for 1.09-1.11x
+// over-carving instead of 1.08x (three voxels wide exceed the 1.15x bound).
+constexpr double kBinWidthVoxels = 2.0;
 constexpr int kMaxBinsPerFaceSide = 256;  // finest level 6 x 256^2 bins; 25 MB with all levels
 
 std::uint32_t hashKey(std::uint32_t key) {

@@ -101,8 +101,8 @@ class AwarenessStage {
   };
   std::vector<Slot> table_;
   std::uint32_t stamp_ = 0;
-  // Level 0: bins about one voxel wide at the maximum range; level L: 2^L times wider, covering
-  // the distances where they are still about a voxel wide.
+  // Level 0: bins about two voxels wide at the maximum range; level L: 2^L times wider, covering
+  // the distances where they are still about two voxels wide.
   std::vector<std::vector<Bin>> levels_;
   std::vector<std::vector<std::uint32_t>> touched_;
   int bins_per_face_side_ = 0;  // at level 0, a power of two
