@@ -368,8 +368,8 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
     w[2] = ow_z + m20 * x + m21 * y + m22 * z;
     return r2;
   };
-  keys_.resize(count);
-  box_coords_.resize(count);
+  keys_.resize(kPointBlock);
+  box_coords_.resize(kPointBlock);
   PointKernel kernel;
   kernel.m = {m00, m01, m02, m10, m11, m12, m20, m21, m22};
   kernel.o = {ow_x, ow_y, ow_z};
@@ -377,17 +377,10 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
   kernel.dims = {dim_x, dim_y, dim_z};
   kernel.min_range2 = min_range2;
   kernel.max_range = max_range;
-  for (std::size_t first = 0; first < count; first += kPointBlock) {
-    const std::size_t len = std::min(kPointBlock, count - first);
-    float* xs = block_xyz_.data();
-    float* ys = xs + kPointBlock;
-    float* zs = ys + kPointBlock;
-    source.fill(first, len, xs, ys, zs);
-    classifyPoints(kernel, xs, ys, zs, len, keys_.data() + first,
-                   box_coords_[first].data());
-  }
-  // Pass 2. The current run of points in one voxel (depth images give runs along a row) keeps its
-  // box in registers and merges it into the voxel's entry when the run ends.
+  // Pass 2 groups the runs of equal keys into end voxels. The current run of points in one voxel
+  // (depth images give runs along a row) keeps its box in registers and merges it into the
+  // voxel's entry when the run ends. Both passes go block by block, so a block's keys and
+  // coordinates are still in the cache when pass 2 reads them.
   std::uint32_t last_key = 0xFFFFFFFFu;
   End* last = nullptr;
   Eigen::Array4f run_min = Eigen::Array4f::Zero();
@@ -403,42 +396,51 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
     return Eigen::Vector3d(w[0] * res, w[1] * res, w[2] * res);
   };
   outside_.clear();
-  for (std::size_t idx = 0; idx < count; ++idx) {
-    const std::uint32_t key = keys_[idx];
-    const Eigen::Array4f v = Eigen::Array4f::Map(box_coords_[idx].data());
-    if (key >= kOutsideCutKey) {
-      if (key == kNonFiniteKey) {
-        ++c.rejected_non_finite;
-      } else if (key == kTooCloseKey) {
-        ++c.rejected_too_close;
-      } else {
-        // Beyond what the local map can hold; the awareness map and the carving still use it.
-        End e;
-        e.voxel = Eigen::Vector3i::Constant(-1);
-        e.points = {v.head<3>().matrix(), v.head<3>().matrix()};
-        e.p_W = worldPoint(idx);
-        e.cut = key == kOutsideCutKey;
-        c.beyond_max_range += e.cut ? 1 : 0;
-        outside_.push_back(e);
+  for (std::size_t first = 0; first < count; first += kPointBlock) {
+    const std::size_t len = std::min(kPointBlock, count - first);
+    float* xs = block_xyz_.data();
+    float* ys = xs + kPointBlock;
+    float* zs = ys + kPointBlock;
+    source.fill(first, len, xs, ys, zs);
+    classifyPoints(kernel, xs, ys, zs, len, keys_.data(), box_coords_[0].data());
+    for (std::size_t i = 0; i < len; ++i) {
+      const std::size_t idx = first + i;
+      const std::uint32_t key = keys_[i];
+      const Eigen::Array4f v = Eigen::Array4f::Map(box_coords_[i].data());
+      if (key >= kOutsideCutKey) {
+        if (key == kNonFiniteKey) {
+          ++c.rejected_non_finite;
+        } else if (key == kTooCloseKey) {
+          ++c.rejected_too_close;
+        } else {
+          // Beyond what the local map can hold; the awareness map and the carving still use it.
+          End e;
+          e.voxel = Eigen::Vector3i::Constant(-1);
+          e.points = {v.head<3>().matrix(), v.head<3>().matrix()};
+          e.p_W = worldPoint(idx);
+          e.cut = key == kOutsideCutKey;
+          c.beyond_max_range += e.cut ? 1 : 0;
+          outside_.push_back(e);
+        }
+        continue;
       }
-      continue;
+      if (key != last_key) {
+        flush_run();
+        const bool cut = (key & kCutFlag) != 0;
+        const std::uint32_t voxel = key & ~kCutFlag;
+        const Eigen::Vector3i iv(static_cast<int>(voxel / (dim_y * dim_z)),
+                                 static_cast<int>((voxel / dim_z) % dim_y),
+                                 static_cast<int>(voxel % dim_z));
+        last = &ends_[findOrAddEnd(voxel, cut, iv)];
+        last_key = key;
+        if (last->points.min.x() > last->points.max.x()) last->p_W = worldPoint(idx);  // first point
+        run_min = run_max = v;
+      } else {
+        run_min = run_min.min(v);
+        run_max = run_max.max(v);
+      }
+      c.beyond_max_range += (key & kCutFlag) ? 1 : 0;
     }
-    if (key != last_key) {
-      flush_run();
-      const bool cut = (key & kCutFlag) != 0;
-      const std::uint32_t voxel = key & ~kCutFlag;
-      const Eigen::Vector3i iv(static_cast<int>(voxel / (dim_y * dim_z)),
-                               static_cast<int>((voxel / dim_z) % dim_y),
-                               static_cast<int>(voxel % dim_z));
-      last = &ends_[findOrAddEnd(voxel, cut, iv)];
-      last_key = key;
-      if (last->points.min.x() > last->points.max.x()) last->p_W = worldPoint(idx);  // first point
-      run_min = run_max = v;
-    } else {
-      run_min = run_min.min(v);
-      run_max = run_max.max(v);
-    }
-    c.beyond_max_range += (key & kCutFlag) ? 1 : 0;
   }
   flush_run();
 
