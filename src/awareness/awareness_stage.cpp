@@ -9,8 +9,10 @@
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && \
     !defined(__SANITIZE_THREAD__)
 #define MLMAP_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#define MLMAP_POPCNT_CLONES __attribute__((target_clones("popcnt", "default")))
 #else
 #define MLMAP_VECTOR_CLONES
+#define MLMAP_POPCNT_CLONES
 #endif
 
 namespace mlmap {
@@ -99,6 +101,17 @@ MLMAP_VECTOR_CLONES void classifyPoints(const PointKernel& k, const float* xs, c
     coords[4 * i + 2] = static_cast<float>(b2);
     coords[4 * i + 3] = 0.0f;
   }
+}
+
+// VoxelBitset::count() with the popcnt instruction where the CPU has it: the portable build
+// calls libgcc's __popcountdi2 for every word (2 M instructions per frame at 0.1 m).
+MLMAP_POPCNT_CLONES std::size_t countBits(const VoxelBitset& bits) {
+  const std::size_t words = static_cast<std::size_t>(bits.dims().x()) *
+                            static_cast<std::size_t>(bits.dims().y()) * bits.wordsPerRow();
+  const std::uint64_t* w = bits.data();
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < words; ++i) n += static_cast<std::size_t>(__builtin_popcountll(w[i]));
+  return n;
 }
 
 double distanceToBox(const Eigen::Vector3d& o, const VoxelSpaceBox& b) {
@@ -465,7 +478,7 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
   map_.endFrame();
 
   carve(origin_vox, batch);
-  batch->free_count = batch->free.count();
+  batch->free_count = countBits(batch->free);
   c.hit_voxels = batch->hits.size();
   c.free_voxels = batch->free_count;
 }
