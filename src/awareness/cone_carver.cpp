@@ -8,27 +8,37 @@ namespace {
 constexpr double kEdgeEpsilon = 1e-9;  // a cone only touching a voxel face does not mark it
 constexpr std::uint64_t kAllBits = ~std::uint64_t{0};
 
-// Sets bits z0..z1 (z0 <= z1) of a z row: a word at a time, as most sections are a few voxels.
-inline void markRun(std::uint64_t* row, int z0, int z1) {
+// Sets bits z0..z1 (z0 <= z1) of a z row that spans several words (out of line: rare, and its
+// loop would take the registers of the slab walk).
+[[gnu::noinline]] void markLongRun(std::uint64_t* row, int z0, int z1) {
   const int w0 = z0 >> 6;
   const int w1 = z1 >> 6;
-  const std::uint64_t first = kAllBits << (z0 & 63);
-  const std::uint64_t last = kAllBits >> (63 - (z1 & 63));
-  if (w0 == w1) {
-    row[w0] |= first & last;
+  row[w0] |= kAllBits << (z0 & 63);
+  for (int w = w0 + 1; w < w1; ++w) row[w] = kAllBits;
+  row[w1] |= kAllBits >> (63 - (z1 & 63));
+}
+
+// Sets bits z0..z1 of `rows` rows `stride` words apart.
+inline void markRuns(std::uint64_t* row, std::size_t stride, int rows, int z0, int z1) {
+  const int w0 = z0 >> 6;
+  if (w0 != (z1 >> 6)) {
+    for (int r = 0; r < rows; ++r, row += stride) markLongRun(row, z0, z1);
     return;
   }
-  row[w0] |= first;
-  for (int w = w0 + 1; w < w1; ++w) row[w] = kAllBits;
-  row[w1] |= last;
+  const std::uint64_t mask = (kAllBits << (z0 & 63)) & (kAllBits >> (63 - (z1 & 63)));
+  row += w0;
+  for (int r = 0; r < rows; ++r, row += stride) *row |= mask;
 }
 
 // The cone's walk along its dominant axis A; b = A + 1 and c = A + 2 (mod 3) are the section's
-// axes. The section's extent on b and c at parameter s is o + s * [lo, hi], so for slab i it
-// spans the extents at the s range where the cone overlaps the slab.
+// axes. The section's extent on b and c at parameter s is o + s * [lo, hi], so for slab i, which
+// the cone overlaps for s in [s_lo, s_hi], the low bound on b is o_b + min(s_lo lo_b, s_hi lo_b):
+// s_lo lo_b when lo_b >= 0, else s_hi lo_b (rounding is monotonic, so this is the same double).
+// Which s each bound takes is fixed per cone: `pick` indexes {s_lo, s_hi}.
 struct Walk {
   double oa, ob, oc;
   double lo_b, hi_b, lo_c, hi_c;
+  int pick_lo_b, pick_hi_b, pick_lo_c, pick_hi_c;
   double inv_na, inv_fa;  // 1 / near face, 1 / far face offset along A
   double off_lo, off_hi;  // slab i overlaps s in [(i + off_lo - oa) / fa, (i + off_hi - oa) / na]
   double s0;
@@ -41,13 +51,14 @@ template <int A>
 void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std::size_t stride_x,
                std::size_t stride_y) {
   for (int i = i_begin; i <= i_end; ++i) {
-    const double s_lo = std::max((static_cast<double>(i) + w.off_lo - w.oa) * w.inv_fa, w.s0);
-    const double s_hi = std::min((static_cast<double>(i) + w.off_hi - w.oa) * w.inv_na, 1.0);
-    if (!(s_lo <= s_hi)) continue;
-    const double b_lo = w.ob + std::min(s_lo * w.lo_b, s_hi * w.lo_b);
-    const double b_hi = w.ob + std::max(s_lo * w.hi_b, s_hi * w.hi_b);
-    const double c_lo = w.oc + std::min(s_lo * w.lo_c, s_hi * w.lo_c);
-    const double c_hi = w.oc + std::max(s_lo * w.hi_c, s_hi * w.hi_c);
+    double s[2];
+    s[0] = std::max((static_cast<double>(i) + w.off_lo - w.oa) * w.inv_fa, w.s0);
+    s[1] = std::min((static_cast<double>(i) + w.off_hi - w.oa) * w.inv_na, 1.0);
+    if (!(s[0] <= s[1])) continue;
+    const double b_lo = w.ob + s[w.pick_lo_b] * w.lo_b;
+    const double b_hi = w.ob + s[w.pick_hi_b] * w.hi_b;
+    const double c_lo = w.oc + s[w.pick_lo_c] * w.lo_c;
+    const double c_hi = w.oc + s[w.pick_hi_c] * w.hi_c;
     const int j0 = std::max(floorToInt(b_lo + kEdgeEpsilon), 0);
     const int j1 = std::min(ceilToInt(b_hi - kEdgeEpsilon) - 1, w.dim_b - 1);
     const int k0 = std::max(floorToInt(c_lo + kEdgeEpsilon), 0);
@@ -55,11 +66,11 @@ void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std:
     if (j0 > j1 || k0 > k1) continue;
     const std::size_t ui = static_cast<std::size_t>(i);
     if constexpr (A == 0) {  // b = y, c = z
-      std::uint64_t* row = words + ui * stride_x + static_cast<std::size_t>(j0) * stride_y;
-      for (int j = j0; j <= j1; ++j, row += stride_y) markRun(row, k0, k1);
+      markRuns(words + ui * stride_x + static_cast<std::size_t>(j0) * stride_y, stride_y,
+               j1 - j0 + 1, k0, k1);
     } else if constexpr (A == 1) {  // b = z, c = x
-      std::uint64_t* row = words + static_cast<std::size_t>(k0) * stride_x + ui * stride_y;
-      for (int k = k0; k <= k1; ++k, row += stride_x) markRun(row, j0, j1);
+      markRuns(words + static_cast<std::size_t>(k0) * stride_x + ui * stride_y, stride_x,
+               k1 - k0 + 1, j0, j1);
     } else {  // b = x, c = y: one bit of each row
       const std::uint64_t bit = std::uint64_t{1} << (i & 63);
       std::uint64_t* column = words + (ui >> 6) + static_cast<std::size_t>(j0) * stride_x;
@@ -97,9 +108,9 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
     // voxels of the box (a sensor inside an end voxel).
     const Eigen::Vector3i v0 = box.min.array().floor().cast<int>().max(0);
     const Eigen::Vector3i v1 = box.max.array().floor().cast<int>().min(dims.array() - 1);
-    if (v0.z() > v1.z()) return 1;
+    if (v0.y() > v1.y() || v0.z() > v1.z()) return 1;
     for (int x = v0.x(); x <= v1.x(); ++x)
-      for (int y = v0.y(); y <= v1.y(); ++y) markRun(words + free->rowWord(x, y), v0.z(), v1.z());
+      markRuns(words + free->rowWord(x, v0.y()), stride_y, v1.y() - v0.y() + 1, v0.z(), v1.z());
     return 1;
   }
   const int b = (a + 1) % 3;
@@ -116,6 +127,10 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
   w.hi_b = hi[b];
   w.lo_c = lo[c];
   w.hi_c = hi[c];
+  w.pick_lo_b = lo[b] < 0.0 ? 1 : 0;
+  w.pick_hi_b = hi[b] < 0.0 ? 0 : 1;
+  w.pick_lo_c = lo[c] < 0.0 ? 1 : 0;
+  w.pick_hi_c = hi[c] < 0.0 ? 0 : 1;
   w.inv_na = 1.0 / na;
   w.inv_fa = 1.0 / fa;
   w.off_lo = forward ? 0.0 : 1.0;
