@@ -23,6 +23,8 @@ constexpr std::uint32_t kOutsideCutKey = 0xFFFFFFFCu;  // kOutsideHitKey - 1
 constexpr std::uint32_t kOutsideHitKey = 0xFFFFFFFDu;
 constexpr std::uint32_t kTooCloseKey = 0xFFFFFFFEu;
 constexpr std::uint32_t kNonFiniteKey = 0xFFFFFFFFu;
+// Matches no key: box keys stay below it (the box holds far fewer than 2^31 voxels).
+constexpr std::uint32_t kNoRunKey = kOutsideCutKey - 1;
 // A bin's shared cone stops where the bin is this many voxels wide. Thinner bins overlap more:
 // a voxel lies in about ((1 + w) / w)^2 cones of width w, so one voxel wide made every free voxel
 // about six times; two voxels wide cut the carving cost by a third at 0.1 m for 1.09-1.11x
@@ -151,8 +153,7 @@ std::size_t AwarenessStage::binIndex(int level, const End& e) const {
          static_cast<std::size_t>(e.iv >> level);
 }
 
-std::uint32_t AwarenessStage::findOrAddEnd(std::uint32_t key, bool cut, const Eigen::Vector3i& voxel) {
-  const std::uint32_t full_key = key | (cut ? kCutFlag : 0u);
+std::uint32_t AwarenessStage::findOrAddEnd(std::uint32_t full_key) {
   if (2 * (ends_.size() + 1) > table_.size()) {
     // Grow and re-insert this frame's ends.
     std::vector<Slot> bigger(table_.size() * 2);
@@ -175,9 +176,15 @@ std::uint32_t AwarenessStage::findOrAddEnd(std::uint32_t key, bool cut, const Ei
     Slot& slot = table_[h];
     if (slot.stamp != stamp_) {
       slot = {stamp_, full_key, static_cast<std::uint32_t>(ends_.size())};
+      // Decoded here, once per end voxel rather than once per run of points (three divisions).
+      const std::uint32_t voxel = full_key & ~kCutFlag;
+      const std::uint32_t dim_y = static_cast<std::uint32_t>(box_dims_.y());
+      const std::uint32_t dim_z = static_cast<std::uint32_t>(box_dims_.z());
       End e;
-      e.voxel = voxel;
-      e.cut = cut;
+      e.voxel = Eigen::Vector3i(static_cast<int>(voxel / (dim_y * dim_z)),
+                                static_cast<int>((voxel / dim_z) % dim_y),
+                                static_cast<int>(voxel % dim_z));
+      e.cut = (full_key & kCutFlag) != 0;
       e.points.min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
       e.points.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
       ends_.push_back(e);
@@ -394,21 +401,19 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
   // (depth images give runs along a row) keeps its box in registers and merges it into the
   // voxel's entry when the run ends. Both passes go block by block, so a block's keys and
   // coordinates are still in the cache when pass 2 reads them.
-  std::uint32_t last_key = 0xFFFFFFFFu;
+  std::uint32_t last_key = kNoRunKey;
   End* last = nullptr;
+  std::uint64_t last_cut = 0;  // 1 when the current run's rays are cut at the maximum range
   Eigen::Array4f run_min = Eigen::Array4f::Zero();
   Eigen::Array4f run_max = Eigen::Array4f::Zero();
-  auto flush_run = [&]() {
-    if (last == nullptr) return;
-    last->points.min = last->points.min.cwiseMin(run_min.head<3>().matrix());
-    last->points.max = last->points.max.cwiseMax(run_max.head<3>().matrix());
-  };
   auto worldPoint = [&](std::size_t idx) {
     double w[3] = {0.0, 0.0, 0.0};
     toVoxelUnits(source.point(idx), w);
     return Eigen::Vector3d(w[0] * res, w[1] * res, w[2] * res);
   };
   outside_.clear();
+  const std::uint32_t* keys = keys_.data();
+  const std::array<float, 4>* coords = box_coords_.data();
   for (std::size_t first = 0; first < count; first += kPointBlock) {
     const std::size_t len = std::min(kPointBlock, count - first);
     float* xs = block_xyz_.data();
@@ -416,10 +421,28 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
     float* zs = ys + kPointBlock;
     source.fill(first, len, xs, ys, zs);
     classifyPoints(kernel, xs, ys, zs, len, keys_.data(), box_coords_[0].data());
-    for (std::size_t i = 0; i < len; ++i) {
+    std::size_t i = 0;
+    while (i < len) {
+      if (keys[i] == last_key) {
+        // The run goes on (most points): only its box grows, in registers.
+        Eigen::Array4f lo = run_min;
+        Eigen::Array4f hi = run_max;
+        const std::size_t run_first = i;
+        do {
+          const Eigen::Array4f v = Eigen::Array4f::Map(coords[i].data());
+          lo = lo.min(v);
+          hi = hi.max(v);
+          ++i;
+        } while (i < len && keys[i] == last_key);
+        run_min = lo;
+        run_max = hi;
+        c.beyond_max_range += last_cut * (i - run_first);
+        continue;
+      }
       const std::size_t idx = first + i;
-      const std::uint32_t key = keys_[i];
-      const Eigen::Array4f v = Eigen::Array4f::Map(box_coords_[i].data());
+      const std::uint32_t key = keys[i];
+      const Eigen::Array4f v = Eigen::Array4f::Map(coords[i].data());
+      ++i;
       if (key >= kOutsideCutKey) {
         if (key == kNonFiniteKey) {
           ++c.rejected_non_finite;
@@ -437,25 +460,23 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
         }
         continue;
       }
-      if (key != last_key) {
-        flush_run();
-        const bool cut = (key & kCutFlag) != 0;
-        const std::uint32_t voxel = key & ~kCutFlag;
-        const Eigen::Vector3i iv(static_cast<int>(voxel / (dim_y * dim_z)),
-                                 static_cast<int>((voxel / dim_z) % dim_y),
-                                 static_cast<int>(voxel % dim_z));
-        last = &ends_[findOrAddEnd(voxel, cut, iv)];
-        last_key = key;
-        if (last->points.min.x() > last->points.max.x()) last->p_W = worldPoint(idx);  // first point
-        run_min = run_max = v;
-      } else {
-        run_min = run_min.min(v);
-        run_max = run_max.max(v);
+      // A new run: merge the last one into its voxel's entry.
+      if (last != nullptr) {
+        last->points.min = last->points.min.cwiseMin(run_min.head<3>().matrix());
+        last->points.max = last->points.max.cwiseMax(run_max.head<3>().matrix());
       }
-      c.beyond_max_range += (key & kCutFlag) ? 1 : 0;
+      last = &ends_[findOrAddEnd(key)];
+      last_key = key;
+      last_cut = key >> 31;  // kCutFlag
+      if (last->points.min.x() > last->points.max.x()) last->p_W = worldPoint(idx);  // first point
+      run_min = run_max = v;
+      c.beyond_max_range += last_cut;
     }
   }
-  flush_run();
+  if (last != nullptr) {
+    last->points.min = last->points.min.cwiseMin(run_min.head<3>().matrix());
+    last->points.max = last->points.max.cwiseMax(run_max.head<3>().matrix());
+  }
 
   // Occupied list (unique voxels).
   for (const End& e : ends_) {

@@ -84,7 +84,8 @@ class AwarenessStage {
     double reach = 0.0;           // distance this bin's cone covers: min(near, level reach)
     VoxelSpaceBox box{};          // hull of the members' boxes scaled to `reach`
   };
-  std::uint32_t findOrAddEnd(std::uint32_t key, bool cut, const Eigen::Vector3i& voxel);
+  /// The entry of a box key (voxel index | kCutFlag), added when new.
+  std::uint32_t findOrAddEnd(std::uint32_t key);
   [[nodiscard]] std::size_t binIndex(int level, const End& e) const;
   void carve(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch);
 
