@@ -147,11 +147,6 @@ AwarenessStage::AwarenessStage(const MapConfig& config)
   }
 }
 
-std::size_t AwarenessStage::binIndex(int level, const End& e) const {
-  const std::size_t n = static_cast<std::size_t>(bins_per_face_side_ >> level);
-  return (static_cast<std::size_t>(e.face) * n + static_cast<std::size_t>(e.iu >> level)) * n +
-         static_cast<std::size_t>(e.iv >> level);
-}
 
 std::uint32_t AwarenessStage::findOrAddEnd(std::uint32_t full_key) {
   if (2 * (ends_.size() + 1) > table_.size()) {
@@ -507,8 +502,23 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
 void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
   VoxelBitset& free = batch->free;
   ends_.insert(ends_.end(), outside_.begin(), outside_.end());  // hits are listed already
-  // Direction of every end on the finest level, and its distance.
+  // Bin index on level L with n = 2^lg bins per face side: (face n + iu) n + iv.
   const int n0 = bins_per_face_side_;
+  int lg0 = 0;
+  while ((1 << lg0) < n0) ++lg0;
+  auto parentOf = [&](int level, std::uint32_t i) {
+    const int lg = lg0 - level;
+    const std::uint32_t mask = (1u << lg) - 1u;
+    const std::uint32_t face = i >> (2 * lg);
+    const std::uint32_t iu = (i >> lg) & mask;
+    const std::uint32_t iv = i & mask;
+    return (face << (2 * (lg - 1))) | ((iu >> 1) << (lg - 1)) | (iv >> 1);
+  };
+  const int level_count = static_cast<int>(levels_.size());
+  // Direction of every end on the finest level, its distance, and the nearest member of every
+  // finest bin.
+  std::vector<Bin>& finest = levels_[0];
+  touched_[0].clear();
   for (End& e : ends_) {
     const Eigen::Vector3d d = 0.5 * (e.points.min + e.points.max).cast<double>() - o;
     const Eigen::Vector3d m = d.cwiseAbs();
@@ -516,70 +526,99 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
     if (m.y() > m[axis]) axis = 1;
     if (m.z() > m[axis]) axis = 2;
     const double inv = 1.0 / std::max(m[axis], 1e-12);
-    e.face = axis * 2 + (d[axis] < 0.0 ? 1 : 0);
-    e.iu = std::clamp(static_cast<int>((d[(axis + 1) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
-    e.iv = std::clamp(static_cast<int>((d[(axis + 2) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
+    const int face = axis * 2 + (d[axis] < 0.0 ? 1 : 0);
+    const int iu = std::clamp(static_cast<int>((d[(axis + 1) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
+    const int iv = std::clamp(static_cast<int>((d[(axis + 2) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
+    e.bin = static_cast<std::uint32_t>((face * n0 + iu) * n0 + iv);
     e.near = distanceToBox(o, e.points);
+    Bin& bin = finest[e.bin];
+    if (bin.stamp != stamp_) {
+      bin.stamp = stamp_;
+      bin.near = e.near;
+      touched_[0].push_back(e.bin);
+    } else {
+      bin.near = std::min(bin.near, e.near);
+    }
   }
-  const int level_count = static_cast<int>(levels_.size());
-  // Nearest member and reach of every bin, coarse to fine; reach never shrinks towards the fine
-  // end of a chain because the nearest member and the level reach both grow.
-  for (int level = 0; level < level_count; ++level) {
+  // Nearest member of the coarser bins, from their children; then every bin's reach. Reach never
+  // shrinks towards the fine end of a chain because the nearest member and the level reach both
+  // grow.
+  for (int level = 1; level < level_count; ++level) {
     std::vector<Bin>& bins = levels_[static_cast<std::size_t>(level)];
+    const std::vector<Bin>& children = levels_[static_cast<std::size_t>(level) - 1];
     std::vector<std::uint32_t>& touched = touched_[static_cast<std::size_t>(level)];
     touched.clear();
-    for (const End& e : ends_) {
-      const std::size_t i = binIndex(level, e);
+    for (std::uint32_t c : touched_[static_cast<std::size_t>(level) - 1]) {
+      const std::uint32_t i = parentOf(level - 1, c);
       Bin& bin = bins[i];
       if (bin.stamp != stamp_) {
         bin.stamp = stamp_;
-        bin.near = e.near;
-        bin.box.min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
-        bin.box.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
-        touched.push_back(static_cast<std::uint32_t>(i));
+        bin.near = children[c].near;
+        touched.push_back(i);
       } else {
-        bin.near = std::min(bin.near, e.near);
+        bin.near = std::min(bin.near, children[c].near);
       }
     }
+  }
+  for (int level = 0; level < level_count; ++level) {
+    std::vector<Bin>& bins = levels_[static_cast<std::size_t>(level)];
     const double level_reach = 0.5 * kBinWidthVoxels * (n0 >> level);
-    for (std::uint32_t i : touched) bins[i].reach = std::min(bins[i].near, level_reach);
+    for (std::uint32_t i : touched_[static_cast<std::size_t>(level)]) {
+      Bin& bin = bins[i];
+      bin.reach = std::min(bin.near, level_reach);
+      bin.box.min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+      bin.box.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
+    }
   }
   // Each bin carves the part of its members' rays between its parent's reach and its own: the
   // members' point boxes scaled so that their nearest point lies at the bin's reach. In the ray
   // parameter u of a member (point = o + u (p - o)), the parent covers u <= parent_reach / near
   // and the bin continues from there to reach / near, so the chain leaves no gap.
   const Eigen::Vector3f of = o.cast<float>();
-  for (int level = level_count - 1; level >= 0; --level) {
+  for (const End& e : ends_) {
+    if (!(e.near > 0.0)) continue;
+    Bin& bin = finest[e.bin];
+    const float lambda = static_cast<float>(bin.reach / e.near);
+    bin.box.min = bin.box.min.cwiseMin(of + lambda * (e.points.min - of));
+    bin.box.max = bin.box.max.cwiseMax(of + lambda * (e.points.max - of));
+  }
+  // Scaling about o commutes with the hull, so a coarser bin's box is the hull of its children's
+  // boxes scaled from their reach to its own (in double, rounded outwards to float).
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  for (int level = 1; level < level_count; ++level) {
     std::vector<Bin>& bins = levels_[static_cast<std::size_t>(level)];
-    for (const End& e : ends_) {
-      Bin& bin = bins[binIndex(level, e)];
-      if (!(e.near > 0.0)) continue;
-      const float lambda = static_cast<float>(bin.reach / e.near);
-      bin.box.min = bin.box.min.cwiseMin(of + lambda * (e.points.min - of));
-      bin.box.max = bin.box.max.cwiseMax(of + lambda * (e.points.max - of));
+    const std::vector<Bin>& children = levels_[static_cast<std::size_t>(level) - 1];
+    for (std::uint32_t c : touched_[static_cast<std::size_t>(level) - 1]) {
+      const Bin& child = children[c];
+      Bin& bin = bins[parentOf(level - 1, c)];
+      if (!(bin.reach > 0.0) || child.box.min.x() > child.box.max.x()) continue;
+      const double f = bin.reach / child.reach;  // in (0, 1]: child.reach >= bin.reach > 0
+      for (int k = 0; k < 3; ++k) {
+        const double lo = o[k] + f * (child.box.min[k] - o[k]);
+        const double hi = o[k] + f * (child.box.max[k] - o[k]);
+        float lo_f = static_cast<float>(lo);
+        float hi_f = static_cast<float>(hi);
+        if (lo_f > lo) lo_f = std::nextafter(lo_f, -kInf);
+        if (hi_f < hi) hi_f = std::nextafter(hi_f, kInf);
+        bin.box.min[k] = std::min(bin.box.min[k], lo_f);
+        bin.box.max[k] = std::max(bin.box.max[k], hi_f);
+      }
     }
   }
   for (int level = level_count - 1; level >= 0; --level) {
     const std::vector<Bin>& bins = levels_[static_cast<std::size_t>(level)];
+    const std::vector<Bin>* parents =
+        level + 1 < level_count ? &levels_[static_cast<std::size_t>(level) + 1] : nullptr;
     for (std::uint32_t i : touched_[static_cast<std::size_t>(level)]) {
       const Bin& bin = bins[i];
       if (!(bin.reach > 0.0) || bin.box.min.x() > bin.box.max.x()) continue;
-      double parent_reach = 0.0;
-      if (level + 1 < level_count) {
-        // Parent index: halve the in-face coordinates.
-        const std::size_t n = static_cast<std::size_t>(n0 >> level);
-        const std::size_t face = i / (n * n);
-        const std::size_t iu = (i / n) % n;
-        const std::size_t iv = i % n;
-        const std::size_t pn = n / 2;
-        parent_reach = levels_[static_cast<std::size_t>(level) + 1][(face * pn + iu / 2) * pn + iv / 2].reach;
-      }
+      const double parent_reach = parents != nullptr ? (*parents)[parentOf(level, i)].reach : 0.0;
       if (bin.reach > parent_reach) carveCone(o, bin.box, parent_reach / bin.reach, &free);
     }
   }
   // Each member carves the rest of its own cone.
   for (const End& e : ends_) {
-    const double s_min = e.near > 0.0 ? levels_[0][binIndex(0, e)].reach / e.near : 0.0;
+    const double s_min = e.near > 0.0 ? finest[e.bin].reach / e.near : 0.0;
     carveCone(o, e.points, s_min, &free);
   }
   // A hit wins over a miss.

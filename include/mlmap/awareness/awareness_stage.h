@@ -72,9 +72,7 @@ class AwarenessStage {
     VoxelSpaceBox points{};       // bounding box of the frame's points in it (voxel units)
     Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  // first point
     bool cut = false;             // rays cut at max_range_m (free end) rather than hits
-    int face = 0;                 // direction: cube-map face and finest bin on it
-    int iu = 0;
-    int iv = 0;
+    std::uint32_t bin = 0;        // direction: its bin on the finest level
     double near = 0.0;            // distance from the sensor to `points` (voxel units)
   };
   /// Rays bundled by direction (a cube-map bin of one level): the shared part of their cones.
@@ -86,7 +84,6 @@ class AwarenessStage {
   };
   /// The entry of a box key (voxel index | kCutFlag), added when new.
   std::uint32_t findOrAddEnd(std::uint32_t key);
-  [[nodiscard]] std::size_t binIndex(int level, const End& e) const;
   void carve(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch);
 
   MapConfig config_;
