@@ -616,9 +616,13 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
       if (bin.reach > parent_reach) carveCone(o, bin.box, parent_reach / bin.reach, &free);
     }
   }
-  // Each member carves the rest of its own cone.
+  // Each member carves the rest of its own cone. The nearest member of its bin has nothing left
+  // but its point box, which lies in its own voxel, so a hit there needs no carving (it wins
+  // anyway). Only the float rounding of the box can put a face of it on the next voxel's
+  // boundary, and the walk then marked that voxel, which the ray does not reach.
   for (const End& e : ends_) {
     const double s_min = e.near > 0.0 ? finest[e.bin].reach / e.near : 0.0;
+    if (s_min >= 1.0 && !e.cut) continue;
     carveCone(o, e.points, s_min, &free);
   }
   // A hit wins over a miss.
