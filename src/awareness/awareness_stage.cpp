@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <numeric>
 
 // Hot loops get an AVX2 clone next to the portable one, picked at load time (GCC ifunc).
@@ -116,6 +117,24 @@ MLMAP_POPCNT_CLONES std::size_t countBits(const VoxelBitset& bits) {
   return n;
 }
 
+// Depth pixels with data, in metres, as points on their rays (backProject()'s arithmetic).
+inline float depthMetres(std::uint16_t millimetres) {
+  return static_cast<float>(millimetres) * 0.001f;
+}
+inline float depthMetres(float metres) { return metres; }
+template <typename Raw>
+void convertPixels(const Raw* __restrict raw, const float* __restrict rx, float ray_y,
+                   std::size_t count, std::uint32_t index0, float* __restrict xs,
+                   float* __restrict ys, float* __restrict zs, std::uint32_t* __restrict index) {
+  for (std::size_t k = 0; k < count; ++k) {
+    const float z = depthMetres(raw[k]);
+    xs[k] = rx[k] * z;
+    ys[k] = ray_y * z;
+    zs[k] = z;
+    index[k] = index0 + static_cast<std::uint32_t>(k);
+  }
+}
+
 double distanceToBox(const Eigen::Vector3d& o, const VoxelSpaceBox& b) {
   const Eigen::Vector3d d = (b.min.cast<double>() - o).cwiseMax(o - b.max.cast<double>()).cwiseMax(0.0);
   return d.norm();
@@ -190,22 +209,37 @@ std::uint32_t AwarenessStage::findOrAddEnd(std::uint32_t full_key) {
   }
 }
 
-void AwarenessStage::Source::fill(std::size_t first, std::size_t len, float* xs, float* ys,
-                                  float* zs) const {
+std::size_t AwarenessStage::Source::fill(std::size_t first, std::size_t len, float* xs, float* ys,
+                                         float* zs, std::uint32_t* index) const {
   if (depth == nullptr) {
     for (std::size_t i = 0; i < len; ++i) {
       const Eigen::Vector3f& p = points[indices != nullptr ? indices[first + i] : first + i];
       xs[i] = p.x();
       ys[i] = p.y();
       zs[i] = p.z();
+      index[i] = static_cast<std::uint32_t>(first + i);
     }
-    return;
+    return len;
   }
-  // Depth pixels, row segment by row segment; pixels without data become NaN points (counted as
-  // non-finite, as backProject() counts them).
+  // Depth pixels, row segment by row segment. Pixels without data are left out (a quarter of a
+  // simulated frame: the point loop need not classify them); the runs of pixels with data in
+  // between are converted in loops the compiler vectorises.
   const std::size_t width = static_cast<std::size_t>(depth->intrinsics.width);
-  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   std::size_t done = 0;
+  std::size_t n = 0;
+  auto copyRuns = [&](const auto* raw, std::size_t seg, auto valid, const float* rx, float ray_y,
+                      std::uint32_t index0) {
+    std::size_t i = 0;
+    while (i < seg) {
+      while (i < seg && !valid(raw[i])) ++i;
+      std::size_t end = i;
+      while (end < seg && valid(raw[end])) ++end;
+      convertPixels(raw + i, rx + i, ray_y, end - i, index0 + static_cast<std::uint32_t>(i),
+                    xs + n, ys + n, zs + n, index + n);
+      n += end - i;
+      i = end;
+    }
+  };
   while (done < len) {
     const std::size_t pixel = first + done;
     const std::size_t u0 = pixel % width;
@@ -213,35 +247,31 @@ void AwarenessStage::Source::fill(std::size_t first, std::size_t len, float* xs,
     const std::size_t v = pixel / width;  // image row
     const float ray_y = (static_cast<float>(v) - cy) * inv_fy;
     const float* rx = ray_x->data() + u0;
-    float* X = xs + done;
-    float* Y = ys + done;
-    float* Z = zs + done;
+    const std::uint32_t index0 = static_cast<std::uint32_t>(pixel);
     if (depth->encoding == DepthEncoding::kUint16Millimetres) {
-      const std::uint16_t* raw = depth->depth_mm.data() + pixel;
-      for (std::size_t i = 0; i < seg; ++i) {
-        const bool valid = (raw[i] != 0) & (raw[i] != 0xFFFF);
-        const float z = valid ? static_cast<float>(raw[i]) * 0.001f : kNaN;
-        X[i] = rx[i] * z;
-        Y[i] = ray_y * z;
-        Z[i] = z;
-      }
+      // Neither 0 nor 0xFFFF, in one comparison.
+      copyRuns(depth->depth_mm.data() + pixel, seg,
+               [](std::uint16_t r) { return static_cast<std::uint16_t>(r - 1u) < 0xFFFEu; }, rx,
+               ray_y, index0);
     } else {
-      const float* raw = depth->depth_m.data() + pixel;
-      for (std::size_t i = 0; i < seg; ++i) {
-        const bool valid = (raw[i] > 0.0f) & (raw[i] <= std::numeric_limits<float>::max());
-        const float z = valid ? raw[i] : kNaN;
-        X[i] = rx[i] * z;
-        Y[i] = ray_y * z;
-        Z[i] = z;
-      }
+      // 0 < r <= FLT_MAX (no NaN, no infinity), in one comparison of the bits.
+      copyRuns(depth->depth_m.data() + pixel, seg,
+               [](float r) {
+                 std::uint32_t bits = 0;
+                 std::memcpy(&bits, &r, sizeof bits);
+                 return bits - 1u < 0x7F7FFFFFu;
+               },
+               rx, ray_y, index0);
     }
     done += seg;
   }
+  return n;
 }
 
 Eigen::Vector3f AwarenessStage::Source::point(std::size_t i) const {
   float p[3];
-  fill(i, 1, &p[0], &p[1], &p[2]);
+  std::uint32_t index = 0;
+  fill(i, 1, &p[0], &p[1], &p[2], &index);
   return {p[0], p[1], p[2]};
 }
 
@@ -414,10 +444,12 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
     float* xs = block_xyz_.data();
     float* ys = xs + kPointBlock;
     float* zs = ys + kPointBlock;
-    source.fill(first, len, xs, ys, zs);
-    classifyPoints(kernel, xs, ys, zs, len, keys_.data(), box_coords_[0].data());
+    const std::uint32_t* index = block_index_.data();
+    const std::size_t n = source.fill(first, len, xs, ys, zs, block_index_.data());
+    c.rejected_non_finite += len - n;  // depth pixels without data
+    classifyPoints(kernel, xs, ys, zs, n, keys_.data(), box_coords_[0].data());
     std::size_t i = 0;
-    while (i < len) {
+    while (i < n) {
       if (keys[i] == last_key) {
         // The run goes on (most points): only its box grows, in registers.
         Eigen::Array4f lo = run_min;
@@ -428,13 +460,13 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
           lo = lo.min(v);
           hi = hi.max(v);
           ++i;
-        } while (i < len && keys[i] == last_key);
+        } while (i < n && keys[i] == last_key);
         run_min = lo;
         run_max = hi;
         c.beyond_max_range += last_cut * (i - run_first);
         continue;
       }
-      const std::size_t idx = first + i;
+      const std::size_t idx = index[i];
       const std::uint32_t key = keys[i];
       const Eigen::Array4f v = Eigen::Array4f::Map(coords[i].data());
       ++i;
@@ -642,7 +674,7 @@ std::size_t AwarenessStage::memoryBytes() const {
          outside_.capacity() * sizeof(End) +
          table_.capacity() * sizeof(Slot) +
          sample_indices_.capacity() * sizeof(std::uint32_t) +
-         keys_.capacity() * sizeof(std::uint32_t) + box_coords_.capacity() * sizeof(box_coords_[0]) + block_xyz_.capacity() * sizeof(float);
+         (keys_.capacity() + block_index_.capacity()) * sizeof(std::uint32_t) + box_coords_.capacity() * sizeof(box_coords_[0]) + block_xyz_.capacity() * sizeof(float);
 }
 
 }  // namespace mlmap
