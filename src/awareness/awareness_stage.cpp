@@ -492,7 +492,9 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
         last->points.min = last->points.min.cwiseMin(run_min.head<3>().matrix());
         last->points.max = last->points.max.cwiseMax(run_max.head<3>().matrix());
       }
-      last = &ends_[findOrAddEnd(key)];
+      // The table's first probe, inline: most runs continue a voxel of an earlier row.
+      const Slot& slot = table_[hashKey(key) & static_cast<std::uint32_t>(table_.size() - 1)];
+      last = &ends_[slot.stamp == stamp_ && slot.key == key ? slot.end : findOrAddEnd(key)];
       last_key = key;
       last_cut = key >> 31;  // kCutFlag
       if (last->points.min.x() > last->points.max.x()) last->p_W = worldPoint(idx);  // first point
