@@ -124,14 +124,13 @@ inline float depthMetres(std::uint16_t millimetres) {
 inline float depthMetres(float metres) { return metres; }
 template <typename Raw>
 void convertPixels(const Raw* __restrict raw, const float* __restrict rx, float ray_y,
-                   std::size_t count, std::uint32_t index0, float* __restrict xs,
-                   float* __restrict ys, float* __restrict zs, std::uint32_t* __restrict index) {
+                   std::size_t count, float* __restrict xs, float* __restrict ys,
+                   float* __restrict zs) {
   for (std::size_t k = 0; k < count; ++k) {
     const float z = depthMetres(raw[k]);
     xs[k] = rx[k] * z;
     ys[k] = ray_y * z;
     zs[k] = z;
-    index[k] = index0 + static_cast<std::uint32_t>(k);
   }
 }
 
@@ -224,14 +223,13 @@ std::uint32_t AwarenessStage::findOrAddEnd(std::uint32_t full_key) {
 }
 
 std::size_t AwarenessStage::Source::fill(std::size_t first, std::size_t len, float* xs, float* ys,
-                                         float* zs, std::uint32_t* index) const {
+                                         float* zs) const {
   if (depth == nullptr) {
     for (std::size_t i = 0; i < len; ++i) {
       const Eigen::Vector3f& p = points[indices != nullptr ? indices[first + i] : first + i];
       xs[i] = p.x();
       ys[i] = p.y();
       zs[i] = p.z();
-      index[i] = static_cast<std::uint32_t>(first + i);
     }
     return len;
   }
@@ -241,15 +239,13 @@ std::size_t AwarenessStage::Source::fill(std::size_t first, std::size_t len, flo
   const std::size_t width = static_cast<std::size_t>(depth->intrinsics.width);
   std::size_t done = 0;
   std::size_t n = 0;
-  auto copyRuns = [&](const auto* raw, std::size_t seg, auto valid, const float* rx, float ray_y,
-                      std::uint32_t index0) {
+  auto copyRuns = [&](const auto* raw, std::size_t seg, auto valid, const float* rx, float ray_y) {
     std::size_t i = 0;
     while (i < seg) {
       while (i < seg && !valid(raw[i])) ++i;
       std::size_t end = i;
       while (end < seg && valid(raw[end])) ++end;
-      convertPixels(raw + i, rx + i, ray_y, end - i, index0 + static_cast<std::uint32_t>(i),
-                    xs + n, ys + n, zs + n, index + n);
+      convertPixels(raw + i, rx + i, ray_y, end - i, xs + n, ys + n, zs + n);
       n += end - i;
       i = end;
     }
@@ -261,12 +257,11 @@ std::size_t AwarenessStage::Source::fill(std::size_t first, std::size_t len, flo
     const std::size_t v = pixel / width;  // image row
     const float ray_y = (static_cast<float>(v) - cy) * inv_fy;
     const float* rx = ray_x->data() + u0;
-    const std::uint32_t index0 = static_cast<std::uint32_t>(pixel);
     if (depth->encoding == DepthEncoding::kUint16Millimetres) {
       // Neither 0 nor 0xFFFF, in one comparison.
       copyRuns(depth->depth_mm.data() + pixel, seg,
                [](std::uint16_t r) { return static_cast<std::uint16_t>(r - 1u) < 0xFFFEu; }, rx,
-               ray_y, index0);
+               ray_y);
     } else {
       // 0 < r <= FLT_MAX (no NaN, no infinity), in one comparison of the bits.
       copyRuns(depth->depth_m.data() + pixel, seg,
@@ -275,18 +270,11 @@ std::size_t AwarenessStage::Source::fill(std::size_t first, std::size_t len, flo
                  std::memcpy(&bits, &r, sizeof bits);
                  return bits - 1u < 0x7F7FFFFFu;
                },
-               rx, ray_y, index0);
+               rx, ray_y);
     }
     done += seg;
   }
   return n;
-}
-
-Eigen::Vector3f AwarenessStage::Source::point(std::size_t i) const {
-  float p[3];
-  std::uint32_t index = 0;
-  fill(i, 1, &p[0], &p[1], &p[2], &index);
-  return {p[0], p[1], p[2]};
 }
 
 void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* batch,
@@ -445,9 +433,13 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
   std::uint64_t last_cut = 0;  // 1 when the current run's rays are cut at the maximum range
   Eigen::Array4f run_min = Eigen::Array4f::Zero();
   Eigen::Array4f run_max = Eigen::Array4f::Zero();
-  auto worldPoint = [&](std::size_t idx) {
+  // The world point of a block's point, from its sensor-frame coordinates in the block.
+  float* xs = block_xyz_.data();
+  float* ys = xs + kPointBlock;
+  float* zs = ys + kPointBlock;
+  auto worldPoint = [&](std::size_t i) {
     double w[3] = {0.0, 0.0, 0.0};
-    toVoxelUnits(source.point(idx), w);
+    toVoxelUnits(Eigen::Vector3f(xs[i], ys[i], zs[i]), w);
     return Eigen::Vector3d(w[0] * res, w[1] * res, w[2] * res);
   };
   outside_.clear();
@@ -455,11 +447,7 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
   const std::array<float, 4>* coords = box_coords_.data();
   for (std::size_t first = 0; first < count; first += kPointBlock) {
     const std::size_t len = std::min(kPointBlock, count - first);
-    float* xs = block_xyz_.data();
-    float* ys = xs + kPointBlock;
-    float* zs = ys + kPointBlock;
-    const std::uint32_t* index = block_index_.data();
-    const std::size_t n = source.fill(first, len, xs, ys, zs, block_index_.data());
+    const std::size_t n = source.fill(first, len, xs, ys, zs);
     c.rejected_non_finite += len - n;  // depth pixels without data
     classifyPoints(kernel, xs, ys, zs, n, keys_.data(), box_coords_[0].data());
     std::size_t i = 0;
@@ -480,10 +468,9 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
         c.beyond_max_range += last_cut * (i - run_first);
         continue;
       }
-      const std::size_t idx = index[i];
-      const std::uint32_t key = keys[i];
-      const Eigen::Array4f v = Eigen::Array4f::Map(coords[i].data());
-      ++i;
+      const std::size_t at = i++;
+      const std::uint32_t key = keys[at];
+      const Eigen::Array4f v = Eigen::Array4f::Map(coords[at].data());
       if (key >= kOutsideCutKey) {
         if (key == kNonFiniteKey) {
           ++c.rejected_non_finite;
@@ -494,7 +481,7 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
           End e;
           e.voxel = Eigen::Vector3i::Constant(-1);
           e.points = {v.head<3>().matrix(), v.head<3>().matrix()};
-          e.p_W = worldPoint(idx);
+          e.p_W = worldPoint(at);
           e.cut = key == kOutsideCutKey;
           c.beyond_max_range += e.cut ? 1 : 0;
           outside_.push_back(e);
@@ -511,7 +498,7 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
       last = &ends_[slot.stamp == stamp_ && slot.key == key ? slot.end : findOrAddEnd(key)];
       last_key = key;
       last_cut = key >> 31;  // kCutFlag
-      if (last->points.min.x() > last->points.max.x()) last->p_W = worldPoint(idx);  // first point
+      if (last->points.min.x() > last->points.max.x()) last->p_W = worldPoint(at);  // first point
       run_min = run_max = v;
       c.beyond_max_range += last_cut;
     }
@@ -685,7 +672,7 @@ std::size_t AwarenessStage::memoryBytes() const {
          outside_.capacity() * sizeof(End) +
          table_.capacity() * sizeof(Slot) +
          sample_indices_.capacity() * sizeof(std::uint32_t) +
-         (keys_.capacity() + block_index_.capacity()) * sizeof(std::uint32_t) + box_coords_.capacity() * sizeof(box_coords_[0]) + block_xyz_.capacity() * sizeof(float);
+         keys_.capacity() * sizeof(std::uint32_t) + box_coords_.capacity() * sizeof(box_coords_[0]) + block_xyz_.capacity() * sizeof(float);
 }
 
 }  // namespace mlmap

@@ -62,10 +62,8 @@ class AwarenessStage {
     float inv_fy = 0.0f;
     float cy = 0.0f;
     /// Points first .. first + len - 1, less the depth pixels without data: returns how many it
-    /// wrote, with the source position of each in `index`.
-    std::size_t fill(std::size_t first, std::size_t len, float* xs, float* ys, float* zs,
-                     std::uint32_t* index) const;
-    [[nodiscard]] Eigen::Vector3f point(std::size_t i) const;
+    /// wrote.
+    std::size_t fill(std::size_t first, std::size_t len, float* xs, float* ys, float* zs) const;
   };
   void processSource(const Source& source, double stamp_s, const Transform& T_W_B,
                      const Transform& T_B_S, MeasurementBatch* batch, PointCounters* counters);
@@ -113,7 +111,6 @@ class AwarenessStage {
   std::vector<std::uint32_t> keys_;  // per point of a block: box voxel key, or why it has none
   std::vector<std::array<float, 4>> box_coords_;  // per point of a block: box-relative, 0
   std::vector<float> block_xyz_ = std::vector<float>(3 * kPointBlock);  // one block, x | y | z
-  std::vector<std::uint32_t> block_index_ = std::vector<std::uint32_t>(kPointBlock);  // its points' positions
   std::mt19937 rng_;
 };
 
