@@ -240,11 +240,23 @@ std::size_t AwarenessStage::Source::fill(std::size_t first, std::size_t len, flo
   std::size_t done = 0;
   std::size_t n = 0;
   auto copyRuns = [&](const auto* raw, std::size_t seg, auto valid, const float* rx, float ray_y) {
+    // The end of the run of pixels from `at` whose validity is `want`: 32 at a time while all
+    // of them agree (a branch-free count the compiler vectorises; 8 at a time it does not),
+    // then one by one.
+    auto runEnd = [&](std::size_t at, bool want) {
+      constexpr std::size_t kStep = 32;
+      for (; at + kStep <= seg; at += kStep) {
+        int agree = 0;
+        for (std::size_t k = 0; k < kStep; ++k) agree += valid(raw[at + k]) == want ? 1 : 0;
+        if (agree != static_cast<int>(kStep)) break;
+      }
+      while (at < seg && valid(raw[at]) == want) ++at;
+      return at;
+    };
     std::size_t i = 0;
     while (i < seg) {
-      while (i < seg && !valid(raw[i])) ++i;
-      std::size_t end = i;
-      while (end < seg && valid(raw[end])) ++end;
+      i = runEnd(i, false);
+      const std::size_t end = runEnd(i, true);
       convertPixels(raw + i, rx + i, ray_y, end - i, xs + n, ys + n, zs + n);
       n += end - i;
       i = end;
