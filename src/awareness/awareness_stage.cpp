@@ -179,7 +179,6 @@ AwarenessStage::AwarenessStage(const MapConfig& config)
   }
 }
 
-
 std::uint32_t AwarenessStage::findOrAddEnd(std::uint32_t full_key) {
   if (2 * (ends_.size() + 1) > table_.size()) {
     // Grow and re-insert this frame's ends.
