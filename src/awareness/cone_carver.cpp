@@ -30,19 +30,35 @@ inline void markRuns(std::uint64_t* row, std::size_t stride, int rows, int z0, i
   for (int r = 0; r < rows; ++r, row += stride) *row |= mask;
 }
 
+// Two doubles (an SSE2 / NEON register, as GCC and Clang vector extensions), with the selects
+// written as bit masks so that both compilers keep them in the vector unit.
+using V2 = double __attribute__((vector_size(16)));
+using M2 = long long __attribute__((vector_size(16)));
+using I2 = int __attribute__((vector_size(8)));
+
+inline V2 select(M2 mask, V2 a, V2 b) { return (V2)((mask & (M2)a) | (~mask & (M2)b)); }
+inline V2 vmin(V2 a, V2 b) { return select(b < a, b, a); }  // std::min per lane
+inline V2 vmax(V2 a, V2 b) { return select(a < b, b, a); }  // std::max per lane
+// floorToInt per lane (|x| < 2^31), as doubles.
+inline V2 vfloor(V2 x) {
+  const V2 t = __builtin_convertvector(__builtin_convertvector(x, I2), V2);
+  const V2 one = {1.0, 1.0};
+  return t - (V2)((x < t) & (M2)one);
+}
+
 // The cone's walk along its dominant axis A; b = A + 1 and c = A + 2 (mod 3) are the section's
 // axes. The section's extent on b and c at parameter s is o + s * [lo, hi], so for slab i, which
-// the cone overlaps for s in [s_lo, s_hi], the low bound on b is o_b + min(s_lo lo_b, s_hi lo_b):
-// s_lo lo_b when lo_b >= 0, else s_hi lo_b (rounding is monotonic, so this is the same double).
-// Which s each bound takes is fixed per cone: `pick` indexes {s_lo, s_hi}.
+// the cone overlaps for s in [s_lo, s_hi], the bounds on b are o_b + min(s_lo lo_b, s_hi lo_b)
+// and o_b + max(s_lo hi_b, s_hi hi_b), and likewise on c. The lanes hold (b, c); the high
+// bounds are kept negated, so that they too take a minimum and a floor: ceil(x - e) =
+// -floor(-x + e), and negation is exact, so the lanes give the voxels of the scalar formulas.
 struct Walk {
-  double oa, ob, oc;
-  double lo_b, hi_b, lo_c, hi_c;
-  int pick_lo_b, pick_hi_b, pick_lo_c, pick_hi_c;
+  double oa;
   double inv_na, inv_fa;  // 1 / near face, 1 / far face offset along A
   double off_lo, off_hi;  // slab i overlaps s in [(i + off_lo - oa) / fa, (i + off_hi - oa) / na]
   double s0;
-  int dim_b, dim_c;
+  V2 base_lo, coef_lo, limit_lo;  // (o_b, o_c), (lo_b, lo_c), (0, 0)
+  V2 base_hi, coef_hi, limit_hi;  // (-o_b, -o_c), (-hi_b, -hi_c), (-dim_b, -dim_c)
 };
 
 // Marks slabs i_begin..i_end (inside the box along A). Templated on A so that each slab's
@@ -50,19 +66,21 @@ struct Walk {
 template <int A>
 void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std::size_t stride_x,
                std::size_t stride_y) {
+  const V2 eps = {kEdgeEpsilon, kEdgeEpsilon};
   for (int i = i_begin; i <= i_end; ++i) {
-    double s[2];
-    s[0] = std::max((static_cast<double>(i) + w.off_lo - w.oa) * w.inv_fa, w.s0);
-    s[1] = std::min((static_cast<double>(i) + w.off_hi - w.oa) * w.inv_na, 1.0);
-    if (!(s[0] <= s[1])) continue;
-    const double b_lo = w.ob + s[w.pick_lo_b] * w.lo_b;
-    const double b_hi = w.ob + s[w.pick_hi_b] * w.hi_b;
-    const double c_lo = w.oc + s[w.pick_lo_c] * w.lo_c;
-    const double c_hi = w.oc + s[w.pick_hi_c] * w.hi_c;
-    const int j0 = std::max(floorToInt(b_lo + kEdgeEpsilon), 0);
-    const int j1 = std::min(ceilToInt(b_hi - kEdgeEpsilon) - 1, w.dim_b - 1);
-    const int k0 = std::max(floorToInt(c_lo + kEdgeEpsilon), 0);
-    const int k1 = std::min(ceilToInt(c_hi - kEdgeEpsilon) - 1, w.dim_c - 1);
+    const double s_lo = std::max((static_cast<double>(i) + w.off_lo - w.oa) * w.inv_fa, w.s0);
+    const double s_hi = std::min((static_cast<double>(i) + w.off_hi - w.oa) * w.inv_na, 1.0);
+    if (!(s_lo <= s_hi)) continue;
+    const V2 lo_s = {s_lo, s_lo};
+    const V2 hi_s = {s_hi, s_hi};
+    const V2 low = vmax(vfloor(w.base_lo + vmin(lo_s * w.coef_lo, hi_s * w.coef_lo) + eps), w.limit_lo);
+    const V2 high = vmax(vfloor(w.base_hi + vmin(lo_s * w.coef_hi, hi_s * w.coef_hi) + eps), w.limit_hi);
+    const I2 first = __builtin_convertvector(low, I2);
+    const I2 last = -__builtin_convertvector(high, I2) - 1;
+    const int j0 = first[0];
+    const int k0 = first[1];
+    const int j1 = last[0];
+    const int k1 = last[1];
     if (j0 > j1 || k0 > k1) continue;
     const std::size_t ui = static_cast<std::size_t>(i);
     if constexpr (A == 0) {  // b = y, c = z
@@ -121,23 +139,17 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
   const double fa = forward ? hi[a] : lo[a];
   Walk w{};
   w.oa = origin[a];
-  w.ob = origin[b];
-  w.oc = origin[c];
-  w.lo_b = lo[b];
-  w.hi_b = hi[b];
-  w.lo_c = lo[c];
-  w.hi_c = hi[c];
-  w.pick_lo_b = lo[b] < 0.0 ? 1 : 0;
-  w.pick_hi_b = hi[b] < 0.0 ? 0 : 1;
-  w.pick_lo_c = lo[c] < 0.0 ? 1 : 0;
-  w.pick_hi_c = hi[c] < 0.0 ? 0 : 1;
   w.inv_na = 1.0 / na;
   w.inv_fa = 1.0 / fa;
   w.off_lo = forward ? 0.0 : 1.0;
   w.off_hi = forward ? 1.0 : 0.0;
   w.s0 = std::max(s_min, 0.0);
-  w.dim_b = dims[b];
-  w.dim_c = dims[c];
+  w.base_lo = V2{origin[b], origin[c]};
+  w.coef_lo = V2{lo[b], lo[c]};
+  w.limit_lo = V2{0.0, 0.0};
+  w.base_hi = V2{-origin[b], -origin[c]};
+  w.coef_hi = V2{-hi[b], -hi[c]};
+  w.limit_hi = V2{-static_cast<double>(dims[b]), -static_cast<double>(dims[c])};
   // Slabs from the one holding s0 to the one holding the far face; at least the first (when s0
   // lies beyond the far face).
   const int i_first = floorToInt(w.oa + w.s0 * na);
