@@ -6,12 +6,104 @@
 namespace mlmap {
 namespace {
 constexpr double kEdgeEpsilon = 1e-9;  // a cone only touching a voxel face does not mark it
+constexpr std::uint64_t kAllBits = ~std::uint64_t{0};
+
+// Sets bits z0..z1 (z0 <= z1) of a z row that spans several words (out of line: rare, and its
+// loop would take the registers of the slab walk).
+[[gnu::noinline]] void markLongRun(std::uint64_t* row, int z0, int z1) {
+  const int w0 = z0 >> 6;
+  const int w1 = z1 >> 6;
+  row[w0] |= kAllBits << (z0 & 63);
+  for (int w = w0 + 1; w < w1; ++w) row[w] = kAllBits;
+  row[w1] |= kAllBits >> (63 - (z1 & 63));
+}
+
+// Sets bits z0..z1 of `rows` rows `stride` words apart.
+inline void markRuns(std::uint64_t* row, std::size_t stride, int rows, int z0, int z1) {
+  const int w0 = z0 >> 6;
+  if (w0 != (z1 >> 6)) {
+    for (int r = 0; r < rows; ++r, row += stride) markLongRun(row, z0, z1);
+    return;
+  }
+  const std::uint64_t mask = (kAllBits << (z0 & 63)) & (kAllBits >> (63 - (z1 & 63)));
+  row += w0;
+  for (int r = 0; r < rows; ++r, row += stride) *row |= mask;
+}
+
+// Two doubles (an SSE2 / NEON register, as GCC and Clang vector extensions), with the selects
+// written as bit masks so that both compilers keep them in the vector unit.
+using V2 = double __attribute__((vector_size(16)));
+using M2 = long long __attribute__((vector_size(16)));
+using I2 = int __attribute__((vector_size(8)));
+
+inline V2 select(M2 mask, V2 a, V2 b) { return (V2)((mask & (M2)a) | (~mask & (M2)b)); }
+inline V2 vmin(V2 a, V2 b) { return select(b < a, b, a); }  // std::min per lane
+inline V2 vmax(V2 a, V2 b) { return select(a < b, b, a); }  // std::max per lane
+// floorToInt per lane (|x| < 2^31), as doubles.
+inline V2 vfloor(V2 x) {
+  const V2 t = __builtin_convertvector(__builtin_convertvector(x, I2), V2);
+  const V2 one = {1.0, 1.0};
+  return t - (V2)((x < t) & (M2)one);
+}
+
+// The cone's walk along its dominant axis A; b = A + 1 and c = A + 2 (mod 3) are the section's
+// axes. The section's extent on b and c at parameter s is o + s * [lo, hi], so for slab i, which
+// the cone overlaps for s in [s_lo, s_hi], the bounds on b are o_b + min(s_lo lo_b, s_hi lo_b)
+// and o_b + max(s_lo hi_b, s_hi hi_b), and likewise on c. The lanes hold (b, c); the high
+// bounds are kept negated, so that they too take a minimum and a floor: ceil(x - e) =
+// -floor(-x + e), and negation is exact, so the lanes give the voxels of the scalar formulas.
+struct Walk {
+  double oa;
+  double inv_na, inv_fa;  // 1 / near face, 1 / far face offset along A
+  double off_lo, off_hi;  // slab i overlaps s in [(i + off_lo - oa) / fa, (i + off_hi - oa) / na]
+  double s0;
+  V2 base_lo, coef_lo, limit_lo;  // (o_b, o_c), (lo_b, lo_c), (0, 0)
+  V2 base_hi, coef_hi, limit_hi;  // (-o_b, -o_c), (-hi_b, -hi_c), (-dim_b, -dim_c)
+};
+
+// Marks slabs i_begin..i_end (inside the box along A). Templated on A so that each slab's
+// rectangle maps to whole z runs (or, along z, to one bit per row) with no per-voxel index math.
+template <int A>
+void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std::size_t stride_x,
+               std::size_t stride_y) {
+  const V2 eps = {kEdgeEpsilon, kEdgeEpsilon};
+  for (int i = i_begin; i <= i_end; ++i) {
+    const double s_lo = std::max((static_cast<double>(i) + w.off_lo - w.oa) * w.inv_fa, w.s0);
+    const double s_hi = std::min((static_cast<double>(i) + w.off_hi - w.oa) * w.inv_na, 1.0);
+    if (!(s_lo <= s_hi)) continue;
+    const V2 lo_s = {s_lo, s_lo};
+    const V2 hi_s = {s_hi, s_hi};
+    const V2 low = vmax(vfloor(w.base_lo + vmin(lo_s * w.coef_lo, hi_s * w.coef_lo) + eps), w.limit_lo);
+    const V2 high = vmax(vfloor(w.base_hi + vmin(lo_s * w.coef_hi, hi_s * w.coef_hi) + eps), w.limit_hi);
+    const I2 first = __builtin_convertvector(low, I2);
+    const I2 last = -__builtin_convertvector(high, I2) - 1;
+    const int j0 = first[0];
+    const int k0 = first[1];
+    const int j1 = last[0];
+    const int k1 = last[1];
+    if (j0 > j1 || k0 > k1) continue;
+    const std::size_t ui = static_cast<std::size_t>(i);
+    if constexpr (A == 0) {  // b = y, c = z
+      markRuns(words + ui * stride_x + static_cast<std::size_t>(j0) * stride_y, stride_y,
+               j1 - j0 + 1, k0, k1);
+    } else if constexpr (A == 1) {  // b = z, c = x
+      markRuns(words + static_cast<std::size_t>(k0) * stride_x + ui * stride_y, stride_x,
+               k1 - k0 + 1, j0, j1);
+    } else {  // b = x, c = y: one bit of each row
+      const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+      std::uint64_t* column = words + (ui >> 6) + static_cast<std::size_t>(j0) * stride_x;
+      for (int j = j0; j <= j1; ++j, column += stride_x) {
+        std::uint64_t* word = column + static_cast<std::size_t>(k0) * stride_y;
+        for (int k = k0; k <= k1; ++k, word += stride_y) *word |= bit;
+      }
+    }
+  }
+}
 }  // namespace
 
 std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
                       VoxelBitset* free) {
   const Eigen::Vector3i& dims = free->dims();
-  std::size_t slabs = 0;
   // Per axis, the section at s spans [o + s * lo, o + s * hi].
   const Eigen::Vector3d lo = box.min.cast<double>() - origin;
   const Eigen::Vector3d hi = box.max.cast<double>() - origin;
@@ -26,74 +118,49 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
       a = k;
     }
   }
-  uint64_t* words = free->data();
-  auto mark = [&](int x, int y, int z) {
-    words[free->rowWord(x, y) + static_cast<std::size_t>(z >> 6)] |= uint64_t{1} << (z & 63);
-  };
+  std::uint64_t* words = free->data();
+  const std::size_t stride_y = free->wordsPerRow();
+  const std::size_t stride_x = stride_y * static_cast<std::size_t>(dims.y());
   if (a < 0) {
     // The origin lies inside the box: the cone is the box's hull with the origin; mark the
     // voxels of the box (a sensor inside an end voxel).
     const Eigen::Vector3i v0 = box.min.array().floor().cast<int>().max(0);
     const Eigen::Vector3i v1 = box.max.array().floor().cast<int>().min(dims.array() - 1);
+    if (v0.y() > v1.y() || v0.z() > v1.z()) return 1;
     for (int x = v0.x(); x <= v1.x(); ++x)
-      for (int y = v0.y(); y <= v1.y(); ++y)
-        for (int z = v0.z(); z <= v1.z(); ++z) mark(x, y, z);
+      markRuns(words + free->rowWord(x, v0.y()), stride_y, v1.y() - v0.y() + 1, v0.z(), v1.z());
     return 1;
   }
   const int b = (a + 1) % 3;
   const int c = (a + 2) % 3;
-  const double oa = origin[a];
-  const double ob = origin[b];
-  const double oc = origin[c];
   const bool forward = lo[a] > 0.0;
   // Along a the extent is monotonic in s: near face `na`, far face `fa` (both same sign).
   const double na = forward ? lo[a] : hi[a];
   const double fa = forward ? hi[a] : lo[a];
-  const double inv_na = 1.0 / na;
-  const double inv_fa = 1.0 / fa;
-  const int step = forward ? 1 : -1;
-  const double s0 = std::max(s_min, 0.0);
-  int i = floorToInt(oa + s0 * na);
-  const int i_last = floorToInt(oa + fa - (forward ? kEdgeEpsilon : -kEdgeEpsilon));
-  int xyz[3];
-  for (;; i += step) {
-    const bool last = i == i_last;
-    ++slabs;
-    if (i >= 0 && i < dims[a]) {
-      // s range in which the extent along a overlaps slab [i, i + 1].
-      double s_lo;
-      double s_hi;
-      if (forward) {
-        s_lo = (i - oa) * inv_fa;
-        s_hi = (i + 1 - oa) * inv_na;
-      } else {
-        s_lo = (i + 1 - oa) * inv_fa;
-        s_hi = (i - oa) * inv_na;
-      }
-      s_lo = std::max(s_lo, s0);
-      s_hi = std::min(s_hi, 1.0);
-      if (s_lo <= s_hi) {
-        const double b_lo = ob + std::min(s_lo * lo[b], s_hi * lo[b]);
-        const double b_hi = ob + std::max(s_lo * hi[b], s_hi * hi[b]);
-        const double c_lo = oc + std::min(s_lo * lo[c], s_hi * lo[c]);
-        const double c_hi = oc + std::max(s_lo * hi[c], s_hi * hi[c]);
-        const int j0 = std::max(floorToInt(b_lo + kEdgeEpsilon), 0);
-        const int j1 = std::min(ceilToInt(b_hi - kEdgeEpsilon) - 1, dims[b] - 1);
-        const int k0 = std::max(floorToInt(c_lo + kEdgeEpsilon), 0);
-        const int k1 = std::min(ceilToInt(c_hi - kEdgeEpsilon) - 1, dims[c] - 1);
-        xyz[a] = i;
-        for (int j = j0; j <= j1; ++j) {
-          xyz[b] = j;
-          for (int k = k0; k <= k1; ++k) {
-            xyz[c] = k;
-            mark(xyz[0], xyz[1], xyz[2]);
-          }
-        }
-      }
-    }
-    if (last) break;
-    if ((forward && i > i_last) || (!forward && i < i_last)) break;  // s_min beyond the end
-  }
+  Walk w{};
+  w.oa = origin[a];
+  w.inv_na = 1.0 / na;
+  w.inv_fa = 1.0 / fa;
+  w.off_lo = forward ? 0.0 : 1.0;
+  w.off_hi = forward ? 1.0 : 0.0;
+  w.s0 = std::max(s_min, 0.0);
+  w.base_lo = V2{origin[b], origin[c]};
+  w.coef_lo = V2{lo[b], lo[c]};
+  w.limit_lo = V2{0.0, 0.0};
+  w.base_hi = V2{-origin[b], -origin[c]};
+  w.coef_hi = V2{-hi[b], -hi[c]};
+  w.limit_hi = V2{-static_cast<double>(dims[b]), -static_cast<double>(dims[c])};
+  // Slabs from the one holding s0 to the one holding the far face; at least the first (when s0
+  // lies beyond the far face).
+  const int i_first = floorToInt(w.oa + w.s0 * na);
+  const int i_last = floorToInt(w.oa + fa - (forward ? kEdgeEpsilon : -kEdgeEpsilon));
+  const int i_far = forward ? std::max(i_last, i_first) : std::min(i_last, i_first);
+  const std::size_t slabs = static_cast<std::size_t>(std::abs(i_far - i_first)) + 1;
+  const int i_begin = std::max(std::min(i_first, i_far), 0);
+  const int i_end = std::min(std::max(i_first, i_far), dims[a] - 1);
+  if (a == 0) walkSlabs<0>(w, i_begin, i_end, words, stride_x, stride_y);
+  if (a == 1) walkSlabs<1>(w, i_begin, i_end, words, stride_x, stride_y);
+  if (a == 2) walkSlabs<2>(w, i_begin, i_end, words, stride_x, stride_y);
   return slabs;
 }
 

@@ -61,8 +61,9 @@ class AwarenessStage {
     const std::vector<float>* ray_x = nullptr; // (u - cx) / fx per column
     float inv_fy = 0.0f;
     float cy = 0.0f;
-    void fill(std::size_t first, std::size_t len, float* xs, float* ys, float* zs) const;
-    [[nodiscard]] Eigen::Vector3f point(std::size_t i) const;
+    /// Points first .. first + len - 1, less the depth pixels without data: returns how many it
+    /// wrote.
+    std::size_t fill(std::size_t first, std::size_t len, float* xs, float* ys, float* zs) const;
   };
   void processSource(const Source& source, double stamp_s, const Transform& T_W_B,
                      const Transform& T_B_S, MeasurementBatch* batch, PointCounters* counters);
@@ -72,9 +73,7 @@ class AwarenessStage {
     VoxelSpaceBox points{};       // bounding box of the frame's points in it (voxel units)
     Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  // first point
     bool cut = false;             // rays cut at max_range_m (free end) rather than hits
-    int face = 0;                 // direction: cube-map face and finest bin on it
-    int iu = 0;
-    int iv = 0;
+    std::uint32_t bin = 0;        // direction: its bin on the finest level
     double near = 0.0;            // distance from the sensor to `points` (voxel units)
   };
   /// Rays bundled by direction (a cube-map bin of one level): the shared part of their cones.
@@ -84,8 +83,8 @@ class AwarenessStage {
     double reach = 0.0;           // distance this bin's cone covers: min(near, level reach)
     VoxelSpaceBox box{};          // hull of the members' boxes scaled to `reach`
   };
-  std::uint32_t findOrAddEnd(std::uint32_t key, bool cut, const Eigen::Vector3i& voxel);
-  [[nodiscard]] std::size_t binIndex(int level, const End& e) const;
+  /// The entry of a box key (voxel index | kCutFlag), added when new.
+  std::uint32_t findOrAddEnd(std::uint32_t key);
   void carve(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch);
 
   MapConfig config_;
@@ -101,16 +100,16 @@ class AwarenessStage {
   };
   std::vector<Slot> table_;
   std::uint32_t stamp_ = 0;
-  // Level 0: bins about one voxel wide at the maximum range; level L: 2^L times wider, covering
-  // the distances where they are still about a voxel wide.
+  // Level 0: bins about two voxels wide at the maximum range; level L: 2^L times wider, covering
+  // the distances where they are still about two voxels wide.
   std::vector<std::vector<Bin>> levels_;
   std::vector<std::vector<std::uint32_t>> touched_;
   int bins_per_face_side_ = 0;  // at level 0, a power of two
   std::vector<std::uint32_t> sample_indices_;
   std::vector<float> ray_x_;                   // depth images: (u - cx) / fx per column
   std::vector<Eigen::Vector3f> depth_points_;  // depth images with sub-sampling: the cloud
-  std::vector<std::uint32_t> keys_;            // per point: box voxel key, or why it has none
-  std::vector<std::array<float, 4>> box_coords_;  // per point: box-relative voxel units, 0
+  std::vector<std::uint32_t> keys_;  // per point of a block: box voxel key, or why it has none
+  std::vector<std::array<float, 4>> box_coords_;  // per point of a block: box-relative, 0
   std::vector<float> block_xyz_ = std::vector<float>(3 * kPointBlock);  // one block, x | y | z
   std::mt19937 rng_;
 };
