@@ -292,30 +292,31 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
       ++counters_.outside_window;
     }
   }
-  // Free set: walk the bitset row by row; the torus index along z advances with the bit index.
+  // Free set: only the rows and z words of the bitset that overlap the window are read (what
+  // lies outside is batch.free_count minus what was applied here). Along z, a bit's torus index
+  // is its offset from the window's first layer, wrapped once: no division per voxel.
   const VoxelBitset& free = batch.free;
   const VoxelIndex& origin = free.origin();
   const Eigen::Vector3i& dims = free.dims();
-  const std::size_t words_per_row = free.wordsPerRow();
-  const int z_first = std::max(0, min_index_.z() - origin.z());              // box-relative
-  const int z_end = std::min(dims.z(), min_index_.z() + size_.z() - origin.z());
+  const Eigen::Vector3i first = (min_index_ - origin).cwiseMax(0);                   // box-relative
+  const Eigen::Vector3i end = (min_index_ + size_ - origin).cwiseMin(dims);         // exclusive
+  const int split = floorMod(min_index_.z(), size_.z());  // torus z of the window's first layer
+  const int to_window_z = origin.z() - min_index_.z();    // bit k is window layer k + to_window_z
+  auto zMask = [&](int w) {  // the bits of word w in [first.z, end.z)
+    const int lo = std::max(first.z() - 64 * w, 0);
+    const int hi = std::min(end.z() - 64 * w, 64);
+    const std::uint64_t below_hi = hi >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << hi) - 1;
+    return below_hi & ~((std::uint64_t{1} << lo) - 1);
+  };
   std::uint64_t applied = 0;
   std::uint64_t changes = 0;
-  for (int i = 0; i < dims.x(); ++i) {
-    const int gx = origin.x() + i;
-    const bool x_in = gx >= min_index_.x() && gx < min_index_.x() + size_.x();
-    for (int j = 0; j < dims.y(); ++j) {
+  const int w_first = first.z() / 64;
+  const int w_end = end.z() > first.z() ? (end.z() + 63) / 64 : w_first;  // none: no overlap
+  for (int i = first.x(); i < end.x(); ++i) {
+    const int sx = floorMod(origin.x() + i, size_.x());
+    for (int j = first.y(); j < end.y(); ++j) {
       const std::uint64_t* row = free.data() + free.rowWord(i, j);
-      const int gy = origin.y() + j;
-      const bool inside = x_in && gy >= min_index_.y() && gy < min_index_.y() + size_.y();
-      if (!inside) {
-        for (std::size_t w = 0; w < words_per_row; ++w) {
-          counters_.outside_window += static_cast<std::uint64_t>(__builtin_popcountll(row[w]));
-        }
-        continue;
-      }
-      const int sx = floorMod(gx, size_.x());
-      const int sy = floorMod(gy, size_.y());
+      const int sy = floorMod(origin.y() + j, size_.y());
       LogOddsQ* column = cells_.data() + (static_cast<std::size_t>(sx) *
                                               static_cast<std::size_t>(size_.y()) +
                                           static_cast<std::size_t>(sy)) *
@@ -327,16 +328,12 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
            static_cast<std::size_t>(sy / submap_.y())) * kStride;
       std::uint64_t* column_changed_at = submap_changed_at_.data() + column_submaps;
       std::uint64_t* column_state_changed_at = submap_state_changed_at_.data() + column_submaps;
-      for (std::size_t w = 0; w < words_per_row; ++w) {
-        std::uint64_t bits = row[w];
+      for (int w = w_first; w < w_end; ++w) {
+        std::uint64_t bits = row[w] & zMask(w);
         while (bits != 0) {
-          const int k = static_cast<int>(w * 64) + __builtin_ctzll(bits);
+          int tz = split + 64 * w + __builtin_ctzll(bits) + to_window_z;
           bits &= bits - 1;
-          if (k < z_first || k >= z_end) {
-            ++counters_.outside_window;
-            continue;
-          }
-          const int tz = floorMod(origin.z() + k, size_.z());
+          if (tz >= size_.z()) tz -= size_.z();
           LogOddsQ& v = column[tz];
           const LogOddsQ old = v;
           const Occupancy before = model_.state(v);
@@ -354,6 +351,7 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
       }
     }
   }
+  counters_.outside_window += batch.free_count > applied ? batch.free_count - applied : 0;
   counters_.misses_applied += applied;
   counters_.state_changes += changes;
 }

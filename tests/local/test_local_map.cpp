@@ -83,6 +83,7 @@ TEST(LocalMap, MatchesAWholeWorldReferenceThroughRandomFlights) {
   std::uniform_int_distribution<int> offset(-6, 6);
   std::uniform_real_distribution<double> step(-1.5, 1.5);
   Eigen::Vector3d body(0.5, 0.5, 0.5);
+  std::uint64_t outside = 0;  // measurements outside the window
   for (int frame = 0; frame < 400; ++frame) {
     body += Eigen::Vector3d(step(rng), step(rng), 0.3 * step(rng));
     if (frame == 200) body += Eigen::Vector3d(40.0, 0.0, 0.0);  // a jump: whole-window reset
@@ -112,6 +113,8 @@ TEST(LocalMap, MatchesAWholeWorldReferenceThroughRandomFlights) {
       }
     }
     map.integrate(makeBatch(body, hits, frees));
+    for (const auto& v : hits) outside += map.contains(v) ? 0 : 1;
+    for (const auto& v : frees) outside += map.contains(v) ? 0 : 1;
     for (const auto& h : hits) {
       if (!map.contains(h)) continue;
       auto [it, inserted] = reference.emplace(test::key(h), kUnknownLogOdds);
@@ -153,6 +156,8 @@ TEST(LocalMap, MatchesAWholeWorldReferenceThroughRandomFlights) {
         }
       }
   EXPECT_EQ(stored.size() + known_in_window, reference.size());
+  EXPECT_EQ(map.counters().outside_window, outside);
+  EXPECT_GT(outside, 1000u);
   EXPECT_GT(compared, 300u);
   EXPECT_GT(map.counters().shifts, 50u);
   EXPECT_EQ(map.counters().resets, 1u);
