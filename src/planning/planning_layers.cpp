@@ -73,7 +73,7 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
                             double stamp_s, const Transform& T_W_B) {
   const Clock::time_point start = Clock::now();
   const std::shared_ptr<LocalWindow> window = reuse(&window_pool_);
-  local.updateWindowCopy(window.get());  // a pooled buffer: only the submaps changed since it was filled
+  local.updateWindowCopy(window.get());  // pooled: only the submaps changed since it was filled
   const double copy_ms = msSince(start);
   const Eigen::Vector3d body_W = T_W_B.translation();
 
