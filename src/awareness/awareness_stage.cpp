@@ -426,8 +426,6 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
     w[2] = ow_z + m20 * x + m21 * y + m22 * z;
     return r2;
   };
-  keys_.resize(kPointBlock);
-  box_coords_.resize(kPointBlock);
   PointKernel kernel;
   kernel.m = {m00, m01, m02, m10, m11, m12, m20, m21, m22};
   kernel.o = {ow_x, ow_y, ow_z};
@@ -444,6 +442,11 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
   std::uint64_t last_cut = 0;  // 1 when the current run's rays are cut at the maximum range
   Eigen::Array4f run_min = Eigen::Array4f::Zero();
   Eigen::Array4f run_max = Eigen::Array4f::Zero();
+  auto mergeRun = [&]() {
+    if (last == nullptr) return;
+    last->points.min = last->points.min.cwiseMin(run_min.head<3>().matrix());
+    last->points.max = last->points.max.cwiseMax(run_max.head<3>().matrix());
+  };
   // The world point of a block's point, from its sensor-frame coordinates in the block.
   float* xs = block_xyz_.data();
   float* ys = xs + kPointBlock;
@@ -499,11 +502,7 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
         }
         continue;
       }
-      // A new run: merge the last one into its voxel's entry.
-      if (last != nullptr) {
-        last->points.min = last->points.min.cwiseMin(run_min.head<3>().matrix());
-        last->points.max = last->points.max.cwiseMax(run_max.head<3>().matrix());
-      }
+      mergeRun();  // a new run: the last one into its voxel's entry
       // The table's first probe, inline: most runs continue a voxel of an earlier row.
       const Slot& slot = table_[hashKey(key) & static_cast<std::uint32_t>(table_.size() - 1)];
       last = &ends_[slot.stamp == stamp_ && slot.key == key ? slot.end : findOrAddEnd(key)];
@@ -514,10 +513,7 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
       c.beyond_max_range += last_cut;
     }
   }
-  if (last != nullptr) {
-    last->points.min = last->points.min.cwiseMin(run_min.head<3>().matrix());
-    last->points.max = last->points.max.cwiseMax(run_max.head<3>().matrix());
-  }
+  mergeRun();
 
   // Occupied list (unique voxels).
   for (const End& e : ends_) {

@@ -197,7 +197,6 @@ void LocalMap::restoreWindow(const LocalWindow& window) {
     placed_ = false;
     center_ = SubmapIndex::Zero();
     min_index_ = VoxelIndex::Zero();
-    ++counters_.state_changes;
     stampAllSubmaps();
     return;
   }
@@ -215,7 +214,6 @@ void LocalMap::restoreWindow(const LocalWindow& window) {
       }
     }
   }
-  ++counters_.state_changes;
   stampAllSubmaps();
 }
 
@@ -280,12 +278,10 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
       const LogOddsQ old = v;
       const Occupancy before = model_.state(v);
       model_.hit(v);
-      const bool state_changed = before != model_.state(v);
-      counters_.state_changes += state_changed ? 1 : 0;
       if (v != old) {
         const std::size_t m = submapSlot(submapOf(h.index));
         submap_changed_at_[m] = now;
-        if (state_changed) submap_state_changed_at_[m] = now;
+        if (before != model_.state(v)) submap_state_changed_at_[m] = now;
       }
       ++counters_.hits_applied;
     } else {
@@ -309,7 +305,6 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
     return below_hi & ~((std::uint64_t{1} << lo) - 1);
   };
   std::uint64_t applied = 0;
-  std::uint64_t changes = 0;
   const int w_first = first.z() / 64;
   const int w_end = end.z() > first.z() ? (end.z() + 63) / 64 : w_first;  // none: no overlap
   for (int i = first.x(); i < end.x(); ++i) {
@@ -341,10 +336,7 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
           if (v != old) {
             const std::size_t m = submap_of_torus_z_[static_cast<std::size_t>(tz)];
             column_changed_at[m] = now;
-            if (before != model_.state(v)) {
-              column_state_changed_at[m] = now;
-              ++changes;
-            }
+            if (before != model_.state(v)) column_state_changed_at[m] = now;
           }
           ++applied;
         }
@@ -353,7 +345,6 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
   }
   counters_.outside_window += batch.free_count > applied ? batch.free_count - applied : 0;
   counters_.misses_applied += applied;
-  counters_.state_changes += changes;
 }
 
 void LocalMap::copyWindow(LocalWindow* out) const {

@@ -108,8 +108,9 @@ class AwarenessStage {
   std::vector<std::uint32_t> sample_indices_;
   std::vector<float> ray_x_;                   // depth images: (u - cx) / fx per column
   std::vector<Eigen::Vector3f> depth_points_;  // depth images with sub-sampling: the cloud
-  std::vector<std::uint32_t> keys_;  // per point of a block: box voxel key, or why it has none
-  std::vector<std::array<float, 4>> box_coords_;  // per point of a block: box-relative, 0
+  // Per point of a block: box voxel key (or why it has none), box-relative coordinates and 0.
+  std::vector<std::uint32_t> keys_ = std::vector<std::uint32_t>(kPointBlock);
+  std::vector<std::array<float, 4>> box_coords_ = std::vector<std::array<float, 4>>(kPointBlock);
   std::vector<float> block_xyz_ = std::vector<float>(3 * kPointBlock);  // one block, x | y | z
   std::mt19937 rng_;
 };

@@ -29,9 +29,6 @@ struct LocalMapCounters {
   std::uint64_t resets = 0;               ///< jumps too far for a shift: whole window retired
   std::uint64_t submaps_retired = 0;      ///< submaps handed to the global map
   std::uint64_t submaps_restored = 0;     ///< submaps taken back from the global map
-  /// Updates that changed a voxel's state (unknown / free / occupied): what planning layers
-  /// derived from states (ESDF, 2D grid) need to know to skip a recomputation.
-  std::uint64_t state_changes = 0;
 };
 
 /// A copy of the local map's window in box order, for readers on other threads (planning
@@ -100,7 +97,7 @@ class LocalMap {
   /// the map), e.g. when a saved map is loaded. Its size must equal the configured size, its
   /// first voxel must lie on the submap grid and every value must be unknown or within the
   /// clamping bounds; otherwise std::invalid_argument says what is wrong and nothing changes.
-  /// Counts one state change and stamps every submap, so that derived layers are rebuilt.
+  /// Stamps every submap (see submapChangedAt()), so that derived layers are rebuilt.
   void restoreWindow(const LocalWindow& window);
   /// What restoreWindow() would refuse in `window`, or "" when it fits (mlmap::windowProblem()
   /// with this map's size, submaps and model).
