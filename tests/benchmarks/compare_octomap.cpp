@@ -79,6 +79,7 @@ struct Options {
   std::string realsense_dir = MLMAP_SHARED_DATA_DIR "/realsense_tabletop";
   std::string building_yaml = MLMAP_SOURCE_DIR "/config/worlds/building.yaml";
   int frames = 0;          // 0: each dataset's default
+  double stream_hz = 0.0;  // simulated flights: frames as a sensor at this rate streams them; 0: spread
   double max_range_m = 0;  // 0: each dataset's default
   std::string mappers = "both";
   std::string out_dir;
@@ -118,9 +119,16 @@ Dataset makeDataset(const std::string& kind, const Options& o) {
   auto scenario = std::make_shared<io::Scenario>(building ? io::loadScenarioYaml(o.building_yaml)
                                                           : io::defaultScenario());
   const int total = eval::frameCount(*scenario);
-  // Defaults: the building walk whole; 60 frames (depth) or 30 scans (LiDAR) over the room flight.
-  const int n = framesOr(o.frames, building ? total : std::min(total, lidar ? 30 : 60));
+  // With --stream-hz: frames `step` camera frames apart from the start, as a sensor streams them.
+  const int step = o.stream_hz > 0.0
+                       ? std::max(1, static_cast<int>(std::lround(scenario->frame_rate_hz / o.stream_hz)))
+                       : 0;
+  const int available = step > 0 ? (total - 1) / step + 1 : total;
+  // Defaults: a walk or a stream whole; spread, 60 frames (depth) or 30 scans (LiDAR).
+  const int n = framesOr(o.frames, building || step > 0 ? available : std::min(available, lidar ? 30 : 60));
   d.frames = n;
+  // The camera frame of the i-th frame of the case.
+  const auto source = [n, total, step](int i) { return step > 0 ? i * step : (i * total) / n; };
   d.window_z_m = 7.5;
   d.scenario = scenario;
   if (lidar) {
@@ -129,8 +137,8 @@ Dataset makeDataset(const std::string& kind, const Options& o) {
     auto sensor = std::make_shared<sim::Lidar>();
     d.description = std::string(building ? "building walk" : "default room flight") +
                     ", simulated LiDAR 128 x 640 rays, 45 deg vertical, 30 m";
-    d.frame = [scenario, sensor, n, total, T_B_S = d.T_B_S](int i) {
-      const double t = eval::frameTime(*scenario, (i * total) / n);
+    d.frame = [scenario, sensor, source, T_B_S = d.T_B_S](int i) {
+      const double t = eval::frameTime(*scenario, source(i));
       Frame f;
       f.cloud.T_W_B = scenario->trajectory.poseAt(t);
       f.cloud.T_B_S = T_B_S;
@@ -144,8 +152,8 @@ Dataset makeDataset(const std::string& kind, const Options& o) {
     auto camera = std::make_shared<sim::DepthCamera>(scenario->camera);
     d.description = std::string(building ? "building walk" : "default room flight") +
                     ", simulated 640x480 depth camera";
-    d.frame = [scenario, camera, n, total, T_B_S = d.T_B_S](int i) {
-      const double t = eval::frameTime(*scenario, (i * total) / n);
+    d.frame = [scenario, camera, source, T_B_S = d.T_B_S](int i) {
+      const double t = eval::frameTime(*scenario, source(i));
       Frame f;
       f.is_depth = true;
       f.depth.T_W_B = scenario->trajectory.poseAt(t);
@@ -156,6 +164,10 @@ Dataset makeDataset(const std::string& kind, const Options& o) {
     };
   }
   if (building) d.description += " (" + o.building_yaml + ")";
+  char spacing[96];
+  std::snprintf(spacing, sizeof(spacing), step > 0 ? "; frames streamed at %.3g Hz" : "; frames spread over the flight",
+                scenario->frame_rate_hz / std::max(step, 1));
+  d.description += spacing;
   return d;
 }
 
@@ -420,6 +432,10 @@ void printCase(const CaseResult& r) {
               mb(r.octomap_peak_bytes), mb(r.octomap_bytes.empty() ? 0 : r.octomap_bytes.back()),
               mb(r.rss_peak_bytes), mb(r.rss_before_bytes));
   if (r.ran_mlmap) {
+    std::printf("   mlmap stages, median / p99 [ms]: awareness %.2f / %.2f, local-global %.2f / %.2f "
+                "(the engine's recent frames)\n",
+                r.stats.awareness.median_ms, r.stats.awareness.p99_ms, r.stats.local_global.median_ms,
+                r.stats.local_global.p99_ms);
     std::printf("   mlmap memory by layer [MB]: awareness %.1f, local %.1f, global %.1f, planning %.1f;"
                 " measurements outside the window (dropped): %llu\n",
                 mb(r.stats.memory.awareness_bytes), mb(r.stats.memory.local_bytes),
@@ -557,7 +573,14 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->capture_default_str();
   app.add_option("--frames", o.frames,
-                 "frames per case, spread evenly (0: realsense all 50, depth 60, lidar 30, building all)")
+                 "frames per case, spread evenly or the first ones of a stream (0: realsense all 50, "
+                 "depth 60, lidar 30, building all; with --stream-hz the whole flight)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--stream-hz", o.stream_hz,
+                 "simulated datasets: the frames as a sensor streaming at this rate gives them, "
+                 "from the start of the flight (0: spread evenly over the whole flight, so the "
+                 "vehicle moves metres between frames)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_option("--max-range", o.max_range_m,
