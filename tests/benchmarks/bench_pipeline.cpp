@@ -101,8 +101,12 @@ int main(int argc, char** argv) {
   std::string real_dir = MLMAP_SHARED_DATA_DIR "/realsense_tabletop";
   std::string json_path;
   std::string only;
+  bool stream = false;
   app.add_option("--frames", frame_count, "simulated frames (spread over the default flight)")
       ->check(CLI::Range(1, 10000))->capture_default_str();
+  app.add_flag("--stream", stream,
+               "every frame of the flight in order, as the camera streams them (631 at 10 Hz), "
+               "instead of --frames spread over it (where the vehicle moves 1 m between frames)");
   app.add_option("--repeats", repeats, "passes over the frames")->check(CLI::Range(1, 100))->capture_default_str();
   app.add_option("--real", real_dir, "RGB-D frame folder ('' to skip)")->capture_default_str();
   app.add_option("--json", json_path, "also write the figures as JSON");
@@ -115,6 +119,7 @@ int main(int argc, char** argv) {
   const Transform T_B_S = SensorConfig{}.T_B_S();
   std::vector<DepthFrame> sim_frames;
   const int total = eval::frameCount(scenario);
+  if (stream) frame_count = total;
   for (int i = 0; i < frame_count; ++i) {
     const double t = eval::frameTime(scenario, (i * total) / frame_count);
     DepthFrame f;
