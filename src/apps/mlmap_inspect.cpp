@@ -75,6 +75,8 @@ struct Received {
     ++t.messages;
     t.bytes += bytes;
     t.last_points = points;
+    // A zero stamp is ROS's "no time" (the node's status before its first mapped frame): no age.
+    if (stamp.sec_() == 0 && stamp.nanosec_() == 0) return;
     t.age_ms.push_back(1e3 * (mlmap::dds::wallClockNow_s() - mlmap::dds::toSeconds(stamp)));
   }
 };
@@ -321,11 +323,13 @@ int main(int argc, char** argv) {
     for (const auto& [name, t] : rx.topics) {
       const TimingSummary age = summarizeTimings(t.age_ms);
       const double span = std::chrono::duration<double>(t.last - t.first).count();
-      spdlog::info("{:28} {:6} messages {:8.2f} Hz {:9.1f} kB/msg, last {} points/cells, age at "
-                   "arrival median {:.1f} ms, p99 {:.1f} ms",
+      const std::string age_text =
+          t.age_ms.empty() ? std::string("no stamped message")
+                           : fmt::format("age at arrival median {:.1f} ms, p99 {:.1f} ms", age.median_ms, age.p99_ms);
+      spdlog::info("{:28} {:6} messages {:8.2f} Hz {:9.1f} kB/msg, last {} points/cells, {}",
                    name, t.messages, span > 0 ? static_cast<double>(t.messages - 1) / span : 0.0,
                    static_cast<double>(t.bytes) / 1e3 / static_cast<double>(t.messages), t.last_points,
-                   age.median_ms, age.p99_ms);
+                   age_text);
     }
     for (const std::string& name : missing) spdlog::warn("{:28} nothing received", name);
     for (const std::string& name : missing_listed) spdlog::error("{:28} expected, nothing received", name);
