@@ -2,7 +2,8 @@
 # ctest mlmap_compare_octomap_smoke: the OctoMap comparison on a few frames of every dataset,
 # then the plot script on its output. Fails when a mapper did not run, when OctoMap's keys do
 # not map to mlmap's voxel indices (the program exits non-zero), when the two maps disagree
-# even within one cell, when a chart is missing, or when a bad --cases is not refused.
+# even within one cell, when --stream-hz does not give consecutive frames, when a chart is
+# missing, or when a bad --cases is not refused.
 # Usage: compare_octomap_smoke.sh BUILD_DIR SOURCE_DIR WORK_DIR
 set -euo pipefail
 build=$1 source=$2 work=$3
@@ -30,6 +31,17 @@ for c in cases:
         assert t['mlmap_right'] > 0.95 * a['mlmap_voxels'], (name, t)
         assert t['octomap_right'] > 0.95 * a['octomap_voxels'], (name, t)
 print('compare.json: 4 cases, keys and agreement checked')
+PY
+# --stream-hz: consecutive frames at the sensor's rate from the start of the flight, not spread.
+"$build/mlmap_compare_octomap" --cases depth:0.3 --stream-hz 10 --frames 3 --mappers mlmap \
+  --out "$work/stream" --quiet > "$work/stream.txt"
+/usr/bin/python3 - "$work/stream/compare.json" <<'PY'
+import json, sys
+c = json.load(open(sys.argv[1]))['cases'][0]
+assert c['frames'] == 3 and 'streamed at 10 Hz' in c['description'], c['description']
+path = c['path_m']
+assert path[0] == 0.0 and all(0.0 < b - a < 0.5 for a, b in zip(path, path[1:])), path
+print('--stream-hz: 3 consecutive frames, path', path)
 PY
 /usr/bin/python3 "$source/tools/plot_octomap_comparison.py" "$work/results" --out "$work/png"
 for png in octomap_time octomap_memory octomap_agreement octomap_diff_realsense_0.05 \
