@@ -164,10 +164,13 @@ Dataset makeDataset(const std::string& kind, const Options& o) {
     };
   }
   if (building) d.description += " (" + o.building_yaml + ")";
-  char spacing[96];
-  std::snprintf(spacing, sizeof(spacing), step > 0 ? "; frames streamed at %.3g Hz" : "; frames spread over the flight",
-                scenario->frame_rate_hz / std::max(step, 1));
-  d.description += spacing;
+  std::ostringstream spacing;
+  if (step > 0) {
+    spacing << "; frames streamed at " << scenario->frame_rate_hz / step << " Hz";
+  } else {
+    spacing << (n == total ? "; every frame" : "; frames spread over the flight");
+  }
+  d.description += spacing.str();
   return d;
 }
 
@@ -579,8 +582,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--stream-hz", o.stream_hz,
                  "simulated datasets: the frames as a sensor streaming at this rate gives them, "
-                 "from the start of the flight (0: spread evenly over the whole flight, so the "
-                 "vehicle moves metres between frames)")
+                 "from the start of the flight, at most the scenario's frame rate (0: spread evenly "
+                 "over the whole flight, so the vehicle moves metres between frames)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_option("--max-range", o.max_range_m,
