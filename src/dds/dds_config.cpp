@@ -288,6 +288,8 @@ std::vector<std::string> DdsConfig::validate() const {
   checkPositive("pose_tolerance_s", pose_tolerance_s, &errors);
   checkPositive("pose_buffer_s", pose_buffer_s, &errors);
   checkPositive("max_future_s", max_future_s, &errors);
+  checkPositive("max_pose_speed_mps", max_pose_speed_mps, &errors);
+  checkPositive("max_pose_rotation_rate_dps", max_pose_rotation_rate_dps, &errors);
   if (!std::isfinite(esdf_slice_height_m)) {
     errors.push_back("dds.esdf_slice_height_m: must be a finite number (got " +
                      number(esdf_slice_height_m) + ")");

@@ -28,6 +28,16 @@
 #include <variant>
 
 namespace mlmap::dds {
+
+PoseBufferConfig poseBufferConfig(const DdsConfig& dds) {
+  PoseBufferConfig config;
+  config.tolerance_s = dds.pose_tolerance_s;
+  config.horizon_s = dds.pose_buffer_s;
+  config.max_future_s = dds.max_future_s;
+  config.max_speed_mps = dds.max_pose_speed_mps;
+  config.max_rotation_rate_dps = dds.max_pose_rotation_rate_dps;
+  return config;
+}
 namespace fdds = eprosima::fastdds::dds;
 namespace {
 
@@ -152,7 +162,7 @@ struct MappingNode::Impl {
       : config(c),
         sink(sink_in),
         log(sink_in, kReasonCount),
-        poses(PoseBufferConfig{c.dds.pose_tolerance_s, c.dds.pose_buffer_s, c.dds.max_future_s}),
+        poses(poseBufferConfig(c.dds)),
         T_B_S(c.map.sensor.T_B_S()),
         awareness_copy_gate(c.dds.rates.awareness_hz),
         global_copy_gate(c.dds.rates.global_map_hz) {}

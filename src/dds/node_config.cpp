@@ -55,6 +55,8 @@ void readDdsSection(io::Section& top, DdsConfig* dds) {
   s.read("pose_tolerance_s", &dds->pose_tolerance_s);
   s.read("pose_buffer_s", &dds->pose_buffer_s);
   s.read("max_future_s", &dds->max_future_s);
+  s.read("max_pose_speed_mps", &dds->max_pose_speed_mps);
+  s.read("max_pose_rotation_rate_dps", &dds->max_pose_rotation_rate_dps);
   s.read("esdf_slice_height_m", &dds->esdf_slice_height_m);
   {
     io::Section sec(s.child("security"), "dds.security", errors);
@@ -183,6 +185,8 @@ std::string toYaml(const NodeConfig& config) {
   number("pose_tolerance_s", d.pose_tolerance_s);
   number("pose_buffer_s", d.pose_buffer_s);
   number("max_future_s", d.max_future_s);
+  number("max_pose_speed_mps", d.max_pose_speed_mps);
+  number("max_pose_rotation_rate_dps", d.max_pose_rotation_rate_dps);
   number("esdf_slice_height_m", d.esdf_slice_height_m);
   out << YAML::Key << "security" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "enable" << YAML::Value;

@@ -1,5 +1,7 @@
 #include "mlmap/dds/node_config.h"
 
+#include "mlmap/dds/mapping_node.h"
+
 #include "mlmap/io/config_yaml.h"
 #include "mlmap/io/yaml_section.h"
 
@@ -68,6 +70,8 @@ dds:
   pose_tolerance_s: 0.02
   pose_buffer_s: 3.5
   max_future_s: 0.5
+  max_pose_speed_mps: 12.5
+  max_pose_rotation_rate_dps: 720
   esdf_slice_height_m: -0.25
 )",
                                            "all.yaml");
@@ -103,6 +107,8 @@ dds:
   EXPECT_DOUBLE_EQ(d.pose_tolerance_s, 0.02);
   EXPECT_DOUBLE_EQ(d.pose_buffer_s, 3.5);
   EXPECT_DOUBLE_EQ(d.max_future_s, 0.5);
+  EXPECT_DOUBLE_EQ(d.max_pose_speed_mps, 12.5);
+  EXPECT_DOUBLE_EQ(d.max_pose_rotation_rate_dps, 720.0);
   EXPECT_DOUBLE_EQ(d.esdf_slice_height_m, -0.25);
 }
 
@@ -142,8 +148,35 @@ TEST(NodeConfigYaml, BadValuesAreValidated) {
   EXPECT_TRUE(contains(errorOf("dds: {topics: {cloud: 'a b'}}"), "dds.topics.cloud"));
   EXPECT_TRUE(contains(errorOf("dds: {rates: {esdf_hz: -1}}"), "dds.rates.esdf_hz"));
   EXPECT_TRUE(contains(errorOf("dds: {pose_tolerance_s: .nan}"), "dds.pose_tolerance_s"));
+  EXPECT_TRUE(contains(errorOf("dds: {max_pose_speed_mps: 0}"), "dds.max_pose_speed_mps"));
+  EXPECT_TRUE(contains(errorOf("dds: {max_pose_rotation_rate_dps: -5}"), "dds.max_pose_rotation_rate_dps"));
   EXPECT_TRUE(contains(errorOf("a: b: c"), "not valid YAML"));
   EXPECT_THROW(loadNodeConfigYaml("/nonexistent/mlmap_node.yaml"), std::runtime_error);
+}
+
+TEST(NodeConfigYaml, PoseKeysReachTheNodesPosePairing) {
+  const NodeConfig c = parseNodeConfigYaml(
+      "dds: {pose_tolerance_s: 0.03, pose_buffer_s: 3.5, max_future_s: 0.5, "
+      "max_pose_speed_mps: 12.5, max_pose_rotation_rate_dps: 720}",
+      "poses.yaml");
+  const PoseBufferConfig p = poseBufferConfig(c.dds);
+  EXPECT_DOUBLE_EQ(p.tolerance_s, 0.03);
+  EXPECT_DOUBLE_EQ(p.horizon_s, 3.5);
+  EXPECT_DOUBLE_EQ(p.max_future_s, 0.5);
+  EXPECT_DOUBLE_EQ(p.max_speed_mps, 12.5);
+  EXPECT_DOUBLE_EQ(p.max_rotation_rate_dps, 720.0);
+  // 1 m in 0.04 s (25 m/s): a flight with the default limit, a jump with 12.5 m/s.
+  auto across = [](const PoseBufferConfig& config) {
+    PoseBuffer buffer(config);
+    Transform moved = Transform::Identity();
+    moved.translation().x() = 1.0;
+    buffer.add(1.0, Transform::Identity());
+    buffer.add(1.04, moved);
+    Transform T;
+    return buffer.lookup(1.02, &T);
+  };
+  EXPECT_EQ(across(poseBufferConfig(DdsConfig{})), PoseBuffer::LookupResult::kFound);
+  EXPECT_EQ(across(p), PoseBuffer::LookupResult::kAcrossJump);
 }
 
 TEST(NodeConfigYaml, EngineAndDdsProblemsAreReportedTogether) {

@@ -132,6 +132,10 @@ struct DdsConfig {
   double pose_tolerance_s = 0.05;  ///< a cloud needs a pose within this of its stamp
   double pose_buffer_s = 2.0;      ///< poses kept for pairing
   double max_future_s = 1.0;       ///< stamps farther ahead of the newest pose are rejected
+  /// Two consecutive poses implying a faster motion are a jump (a relocalisation, an odometry
+  /// reset), not a flight: no cloud stamped between them is mapped [m/s]. Far above a multirotor.
+  double max_pose_speed_mps = 50.0;
+  double max_pose_rotation_rate_dps = 1800.0;  ///< the same for the rotation between them [deg/s]
   double esdf_slice_height_m = 0.0;  ///< slice height relative to the body [m]
   SecurityConfig security;         ///< DDS Security (SROS2 keystore); off unless enabled
 
@@ -139,7 +143,8 @@ struct DdsConfig {
   /// 0..232; ns and topic names valid ROS names (letters, digits, '_', tokens not starting with a
   /// digit, single '/' separators) or empty; discovery_range empty or parseable; frames
   /// non-empty, without a leading '/' or whitespace (tf2 rules); rates finite and >= 0;
-  /// pose_tolerance_s, pose_buffer_s, max_future_s finite and > 0; esdf_slice_height_m finite;
+  /// pose_tolerance_s, pose_buffer_s, max_future_s, max_pose_speed_mps,
+  /// max_pose_rotation_rate_dps finite and > 0; esdf_slice_height_m finite;
   /// participant_profile set when profiles_file is; camera_info set when depth_image is;
   /// security as SecurityConfig::validate().
   [[nodiscard]] std::vector<std::string> validate() const;

@@ -44,6 +44,10 @@ struct NodeCounters {
   bool last_map_save_failed = false;      ///< the latest save failed (after stop(): the final one)
 };
 
+/// The node's pairing of clouds and depth images with poses, from the `dds` section:
+/// pose_tolerance_s, pose_buffer_s, max_future_s and the pose-jump limits.
+PoseBufferConfig poseBufferConfig(const DdsConfig& dds);
+
 /// Runs the mapping node until destroyed (or stop()).
 class MappingNode {
  public:
