@@ -38,6 +38,7 @@ PoseBufferConfig poseBufferConfig(const DdsConfig& dds) {
   config.max_rotation_rate_dps = dds.max_pose_rotation_rate_dps;
   return config;
 }
+
 namespace fdds = eprosima::fastdds::dds;
 namespace {
 
