@@ -102,11 +102,13 @@ int main(int argc, char** argv) {
   std::string json_path;
   std::string only;
   bool stream = false;
-  app.add_option("--frames", frame_count, "simulated frames (spread over the default flight)")
-      ->check(CLI::Range(1, 10000))->capture_default_str();
+  CLI::Option* frames_option =
+      app.add_option("--frames", frame_count, "simulated frames (spread over the default flight)")
+          ->check(CLI::Range(1, 10000))->capture_default_str();
   app.add_flag("--stream", stream,
                "every frame of the flight in order, as the camera streams them (631 at 10 Hz), "
-               "instead of --frames spread over it (where the vehicle moves 1 m between frames)");
+               "instead of --frames spread over it (where the vehicle moves 1 m between frames)")
+      ->excludes(frames_option);
   app.add_option("--repeats", repeats, "passes over the frames")->check(CLI::Range(1, 100))->capture_default_str();
   app.add_option("--real", real_dir, "RGB-D frame folder ('' to skip)")->capture_default_str();
   app.add_option("--json", json_path, "also write the figures as JSON");

@@ -1,5 +1,5 @@
 // Faults at the mapping node's inputs and outputs, in process, over DDS on loopback (domains
-// 200..205): the sensor stream stops and resumes; the pose stream lags, jumps and goes backwards;
+// 200..205, 208): the sensor stream stops and resumes; the pose stream lags, jumps and goes backwards;
 // clouds arrive faster than the engine maps; a subscriber leaves and returns. Each test asserts
 // the behaviour README "Soak and fault tests" documents. The vehicle is a sparse simulated LiDAR
 // (the sensor frame is the body frame) in two rooms 40 m apart.
@@ -291,6 +291,24 @@ TEST(NodeFaults, PoseJumpIsMappedAtTheNewPoseAndNothingIsSmearedBetween) {
   EXPECT_GT(room_b, 100u) << "room B after the jump";
   EXPECT_EQ(between, 0u) << "voxels were mapped between the rooms: a frame was smeared across the jump";
   std::filesystem::remove_all(dir);
+}
+
+TEST(NodeFaults, PoseJumpLimitsComeFromTheConfiguration) {
+  NodeConfig config = lidarNodeConfig(208);
+  config.dds.max_pose_speed_mps = 5.0;  // default 50
+  MappingNode node(config);
+  Vehicle vehicle(208, config);
+  ASSERT_TRUE(vehicle.matched());
+  std::uint64_t n = 0;
+  flyMapped(vehicle, node, 30.0, 0.0, 5, &n);
+  // 0.5 m in 20 ms: 25 m/s, a flight under the default limit, a jump under this one.
+  vehicle.pose(30.5, bodyAt(0.5));
+  vehicle.pose(30.52, bodyAt(1.0));
+  vehicle.cloud(vehicle.scan(30.51, bodyAt(0.75)));
+  ASSERT_TRUE(waitFor([&] { return node.counters().frames_across_pose_jump == 1; }))
+      << "dds.max_pose_speed_mps was not applied: the cloud was interpolated";
+  flyMapped(vehicle, node, 30.6, 1.1, 3, &n);
+  expectEveryCloudAccountedFor(node);
 }
 
 TEST(NodeFaults, BackwardPosesAreRejectedCountedAndMappingResumes) {
