@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace mlmap {
 namespace {
@@ -298,15 +299,17 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
   const Eigen::Vector3i end = (min_index_ + size_ - origin).cwiseMin(dims);         // exclusive
   const int split = floorMod(min_index_.z(), size_.z());  // torus z of the window's first layer
   const int to_window_z = origin.z() - min_index_.z();    // bit k is window layer k + to_window_z
-  auto zMask = [&](int w) {  // the bits of word w in [first.z, end.z)
-    const int lo = std::max(first.z() - 64 * w, 0);
-    const int hi = std::min(end.z() - 64 * w, 64);
-    const std::uint64_t below_hi = hi >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << hi) - 1;
-    return below_hi & ~((std::uint64_t{1} << lo) - 1);
-  };
   std::uint64_t applied = 0;
   const int w_first = first.z() / 64;
   const int w_end = end.z() > first.z() ? (end.z() + 63) / 64 : w_first;  // none: no overlap
+  // The bits of each of those words in [first.z, end.z): the same for every row.
+  std::vector<std::uint64_t> z_mask(static_cast<std::size_t>(w_end - w_first));
+  for (int w = w_first; w < w_end; ++w) {
+    const int lo = std::max(first.z() - 64 * w, 0);
+    const int hi = std::min(end.z() - 64 * w, 64);
+    const std::uint64_t below_hi = hi >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << hi) - 1;
+    z_mask[static_cast<std::size_t>(w - w_first)] = below_hi & ~((std::uint64_t{1} << lo) - 1);
+  }
   for (int i = first.x(); i < end.x(); ++i) {
     const int sx = floorMod(origin.x() + i, size_.x());
     for (int j = first.y(); j < end.y(); ++j) {
@@ -324,7 +327,7 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
       std::uint64_t* column_changed_at = submap_changed_at_.data() + column_submaps;
       std::uint64_t* column_state_changed_at = submap_state_changed_at_.data() + column_submaps;
       for (int w = w_first; w < w_end; ++w) {
-        std::uint64_t bits = row[w] & zMask(w);
+        std::uint64_t bits = row[w] & z_mask[static_cast<std::size_t>(w - w_first)];
         while (bits != 0) {
           int tz = split + 64 * w + __builtin_ctzll(bits) + to_window_z;
           bits &= bits - 1;
