@@ -31,7 +31,7 @@ constexpr std::uint32_t kNoRunKey = kOutsideCutKey - 1;
 // about six times; two voxels wide cut the carving cost by a third at 0.1 m for 1.09-1.11x
 // over-carving instead of 1.08x (three voxels wide exceed the 1.15x bound).
 constexpr double kBinWidthVoxels = 2.0;
-constexpr int kMaxBinsPerFaceSide = 256;  // finest level 6 x 256^2 bins; 25 MB with all levels
+constexpr int kMaxBinsPerFaceSide = 256;  // finest level 6 x 256^2 bins; slots 4 MB with all levels
 
 std::uint32_t hashKey(std::uint32_t key) {
   key ^= key >> 16;
@@ -174,8 +174,8 @@ AwarenessStage::AwarenessStage(const MapConfig& config)
   while (n < kMaxBinsPerFaceSide && n < 2.0 * range_voxels / kBinWidthVoxels) n *= 2;
   bins_per_face_side_ = n;
   for (; n >= 1; n /= 2) {
-    levels_.emplace_back(6u * static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
-    touched_.emplace_back();
+    slots_.emplace_back(6u * static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
+    bins_.emplace_back();
   }
 }
 
@@ -387,6 +387,7 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
   // cppcheck-suppress knownConditionTrueFalse ; it does wrap after 2^32 frames
   if (++stamp_ == 0) {  // wrapped: forget every slot
     std::fill(table_.begin(), table_.end(), Slot{});
+    for (std::vector<BinSlot>& slots : slots_) std::fill(slots.begin(), slots.end(), BinSlot{});
     stamp_ = 1;
   }
 
@@ -556,11 +557,28 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
     const std::uint32_t iv = i & mask;
     return (face << (2 * (lg - 1))) | ((iu >> 1) << (lg - 1)) | (iv >> 1);
   };
-  const int level_count = static_cast<int>(levels_.size());
+  const int level_count = static_cast<int>(bins_.size());
+  // A bin met for the first time this frame: a new entry of its level, empty box.
+  auto findOrAddBin = [&](int level, std::uint32_t index, double near) {
+    BinSlot& slot = slots_[static_cast<std::size_t>(level)][index];
+    std::vector<Bin>& bins = bins_[static_cast<std::size_t>(level)];
+    if (slot.stamp != stamp_) {
+      slot = {stamp_, static_cast<std::uint32_t>(bins.size())};
+      Bin bin;
+      bin.index = index;
+      bin.near = near;
+      bin.box.min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+      bin.box.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
+      bins.push_back(bin);
+    } else {
+      Bin& bin = bins[slot.bin];
+      bin.near = std::min(bin.near, near);
+    }
+    return slot.bin;
+  };
+  for (std::vector<Bin>& bins : bins_) bins.clear();
   // Direction of every end on the finest level, its distance, and the nearest member of every
   // finest bin.
-  std::vector<Bin>& finest = levels_[0];
-  touched_[0].clear();
   for (End& e : ends_) {
     const Eigen::Vector3d d = 0.5 * (e.points.min + e.points.max).cast<double>() - o;
     const Eigen::Vector3d m = d.cwiseAbs();
@@ -571,51 +589,29 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
     const int face = axis * 2 + (d[axis] < 0.0 ? 1 : 0);
     const int iu = std::clamp(static_cast<int>((d[(axis + 1) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
     const int iv = std::clamp(static_cast<int>((d[(axis + 2) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
-    e.bin = static_cast<std::uint32_t>((face * n0 + iu) * n0 + iv);
     e.near = distanceToBox(o, e.points);
-    Bin& bin = finest[e.bin];
-    if (bin.stamp != stamp_) {
-      bin.stamp = stamp_;
-      bin.near = e.near;
-      touched_[0].push_back(e.bin);
-    } else {
-      bin.near = std::min(bin.near, e.near);
-    }
+    e.bin = findOrAddBin(0, static_cast<std::uint32_t>((face * n0 + iu) * n0 + iv), e.near);
   }
-  // Nearest member of the coarser bins, from their children; then every bin's reach. Reach never
-  // shrinks towards the fine end of a chain because the nearest member and the level reach both
-  // grow.
+  // Nearest member of the coarser bins, from their children (a level's bins grow while its
+  // children are read, so by index); then every bin's reach. Reach never shrinks towards the
+  // fine end of a chain because the nearest member and the level reach both grow.
   for (int level = 1; level < level_count; ++level) {
-    std::vector<Bin>& bins = levels_[static_cast<std::size_t>(level)];
-    const std::vector<Bin>& children = levels_[static_cast<std::size_t>(level) - 1];
-    std::vector<std::uint32_t>& touched = touched_[static_cast<std::size_t>(level)];
-    touched.clear();
-    for (std::uint32_t c : touched_[static_cast<std::size_t>(level) - 1]) {
-      const std::uint32_t i = parentOf(level - 1, c);
-      Bin& bin = bins[i];
-      if (bin.stamp != stamp_) {
-        bin.stamp = stamp_;
-        bin.near = children[c].near;
-        touched.push_back(i);
-      } else {
-        bin.near = std::min(bin.near, children[c].near);
-      }
+    std::vector<Bin>& children = bins_[static_cast<std::size_t>(level) - 1];
+    for (Bin& child : children) {
+      child.parent = findOrAddBin(level, parentOf(level - 1, child.index), child.near);
     }
   }
   for (int level = 0; level < level_count; ++level) {
-    std::vector<Bin>& bins = levels_[static_cast<std::size_t>(level)];
     const double level_reach = 0.5 * kBinWidthVoxels * (n0 >> level);
-    for (std::uint32_t i : touched_[static_cast<std::size_t>(level)]) {
-      Bin& bin = bins[i];
+    for (Bin& bin : bins_[static_cast<std::size_t>(level)]) {
       bin.reach = std::min(bin.near, level_reach);
-      bin.box.min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
-      bin.box.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
     }
   }
   // Each bin carves the part of its members' rays between its parent's reach and its own: the
   // members' point boxes scaled so that their nearest point lies at the bin's reach. In the ray
   // parameter u of a member (point = o + u (p - o)), the parent covers u <= parent_reach / near
   // and the bin continues from there to reach / near, so the chain leaves no gap.
+  std::vector<Bin>& finest = bins_[0];
   const Eigen::Vector3f of = o.cast<float>();
   for (const End& e : ends_) {
     if (!(e.near > 0.0)) continue;
@@ -627,11 +623,9 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
   // Scaling about o commutes with the hull, so a coarser bin's box is the hull of its children's
   // boxes scaled from their reach to its own (in double, rounded outwards to float).
   for (int level = 1; level < level_count; ++level) {
-    std::vector<Bin>& bins = levels_[static_cast<std::size_t>(level)];
-    const std::vector<Bin>& children = levels_[static_cast<std::size_t>(level) - 1];
-    for (std::uint32_t c : touched_[static_cast<std::size_t>(level) - 1]) {
-      const Bin& child = children[c];
-      Bin& bin = bins[parentOf(level - 1, c)];
+    std::vector<Bin>& bins = bins_[static_cast<std::size_t>(level)];
+    for (const Bin& child : bins_[static_cast<std::size_t>(level) - 1]) {
+      Bin& bin = bins[child.parent];
       if (!(bin.reach > 0.0) || child.box.min.x() > child.box.max.x()) continue;
       const double f = bin.reach / child.reach;  // in (0, 1]: child.reach >= bin.reach > 0
       for (int k = 0; k < 3; ++k) {
@@ -643,13 +637,11 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
     }
   }
   for (int level = level_count - 1; level >= 0; --level) {
-    const std::vector<Bin>& bins = levels_[static_cast<std::size_t>(level)];
     const std::vector<Bin>* parents =
-        level + 1 < level_count ? &levels_[static_cast<std::size_t>(level) + 1] : nullptr;
-    for (std::uint32_t i : touched_[static_cast<std::size_t>(level)]) {
-      const Bin& bin = bins[i];
+        level + 1 < level_count ? &bins_[static_cast<std::size_t>(level) + 1] : nullptr;
+    for (const Bin& bin : bins_[static_cast<std::size_t>(level)]) {
       if (!(bin.reach > 0.0) || bin.box.min.x() > bin.box.max.x()) continue;
-      const double parent_reach = parents != nullptr ? (*parents)[parentOf(level, i)].reach : 0.0;
+      const double parent_reach = parents != nullptr ? (*parents)[bin.parent].reach : 0.0;
       if (bin.reach > parent_reach) carveCone(o, bin.box, parent_reach / bin.reach, &free);
     }
   }
@@ -672,8 +664,8 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
 
 std::size_t AwarenessStage::memoryBytes() const {
   std::size_t bins = 0;
-  for (std::size_t l = 0; l < levels_.size(); ++l) {
-    bins += levels_[l].capacity() * sizeof(Bin) + touched_[l].capacity() * sizeof(std::uint32_t);
+  for (std::size_t l = 0; l < slots_.size(); ++l) {
+    bins += slots_[l].capacity() * sizeof(BinSlot) + bins_[l].capacity() * sizeof(Bin);
   }
   return bins + map_.memoryBytes() + ends_.capacity() * sizeof(End) +
          outside_.capacity() * sizeof(End) +

@@ -73,15 +73,21 @@ class AwarenessStage {
     VoxelSpaceBox points{};       // bounding box of the frame's points in it (voxel units)
     Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  // first point
     bool cut = false;             // rays cut at max_range_m (free end) rather than hits
-    std::uint32_t bin = 0;        // direction: its bin on the finest level
+    std::uint32_t bin = 0;        // direction: its bin on the finest level (index in bins_[0])
     double near = 0.0;            // distance from the sensor to `points` (voxel units)
   };
   /// Rays bundled by direction (a cube-map bin of one level): the shared part of their cones.
   struct Bin {
-    std::uint32_t stamp = 0;
+    std::uint32_t index = 0;      // on its level: (face n + iu) n + iv with n bins per face side
+    std::uint32_t parent = 0;     // its parent's index in the next level's bins_
     double near = 0.0;            // nearest member distance (voxel units)
     double reach = 0.0;           // distance this bin's cone covers: min(near, level reach)
     VoxelSpaceBox box{};          // hull of the members' boxes scaled to `reach`
+  };
+  /// Where a bin of a level is in this frame's bins_ of that level (valid when stamped).
+  struct BinSlot {
+    std::uint32_t stamp = 0;
+    std::uint32_t bin = 0;
   };
   /// The entry of a box key (voxel index | kCutFlag), added when new.
   std::uint32_t findOrAddEnd(std::uint32_t key);
@@ -101,9 +107,12 @@ class AwarenessStage {
   std::vector<Slot> table_;
   std::uint32_t stamp_ = 0;
   // Level 0: bins about two voxels wide at the maximum range; level L: 2^L times wider, covering
-  // the distances where they are still about two voxels wide.
-  std::vector<std::vector<Bin>> levels_;
-  std::vector<std::vector<std::uint32_t>> touched_;
+  // the distances where they are still about two voxels wide. Per level, a slot for every bin
+  // and this frame's bins with members, densely in the order they were met: the passes over the
+  // bins then read memory in order rather than all over the levels (19 MB of bins for a 30 m
+  // LiDAR at 0.1 m, where almost every ray has a finest bin of its own).
+  std::vector<std::vector<BinSlot>> slots_;
+  std::vector<std::vector<Bin>> bins_;
   int bins_per_face_side_ = 0;  // at level 0, a power of two
   std::vector<std::uint32_t> sample_indices_;
   std::vector<float> ray_x_;                   // depth images: (u - cx) / fx per column
