@@ -310,11 +310,17 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
     const std::uint64_t below_hi = hi >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << hi) - 1;
     z_mask[static_cast<std::size_t>(w - w_first)] = below_hi & ~((std::uint64_t{1} << lo) - 1);
   }
+  // The torus y of the first row, and its submap: stepped per row (no division per row).
+  const int sy_first = floorMod(origin.y() + first.y(), size_.y());
   for (int i = first.x(); i < end.x(); ++i) {
     const int sx = floorMod(origin.x() + i, size_.x());
+    int sy = sy_first - 1;
     for (int j = first.y(); j < end.y(); ++j) {
+      if (++sy == size_.y()) sy = 0;
       const std::uint64_t* row = free.data() + free.rowWord(i, j);
-      const int sy = floorMod(origin.y() + j, size_.y());
+      std::uint64_t any = 0;
+      for (int w = w_first; w < w_end; ++w) any |= row[w];
+      if (any == 0) continue;  // most rows of a frame: nothing seen free there
       LogOddsQ* column = cells_.data() + (static_cast<std::size_t>(sx) *
                                               static_cast<std::size_t>(size_.y()) +
                                           static_cast<std::size_t>(sy)) *
