@@ -8,11 +8,83 @@
 #include <string>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace mlmap {
 namespace {
 constexpr int kHalfWindow = LocalMapConfig::kSubmapsPerAxis / 2;  // 2 submaps on each side
 constexpr int kMaxShiftsPerCall = 8;
 }  // namespace
+
+void LocalMap::missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint64_t now,
+                       std::uint64_t* changed_at, std::uint64_t* state_changed_at) const {
+  const int nz = size_.z();
+  // One voxel, the rule as written (what the eight-lane step below must equal).
+  auto missOne = [&](int t) {
+    LogOddsQ& v = column[t];
+    const LogOddsQ old = v;
+    const Occupancy before = model_.state(v);
+    model_.miss(v);
+    if (v != old) {
+      const std::size_t m = submap_of_torus_z_[static_cast<std::size_t>(t)];
+      changed_at[m] = now;
+      if (before != model_.state(v)) state_changed_at[m] = now;
+    }
+  };
+#if defined(__SSE2__)
+  // Eight voxels at a time (a run of free voxels in a column is usually longer: 20 per word on
+  // a LiDAR frame), as long as all eight lie in the column.
+  const __m128i lane_bits = _mm_setr_epi16(1, 2, 4, 8, 16, 32, 64, 128);
+  const __m128i unknown = _mm_set1_epi16(kUnknownLogOdds);
+  const __m128i miss = _mm_set1_epi16(model_.missStep());
+  const __m128i lo = _mm_set1_epi16(model_.clampMin());
+  const __m128i hi = _mm_set1_epi16(model_.clampMax());
+  const __m128i occupied = _mm_set1_epi16(model_.occupiedThreshold());
+  const __m128i zero = _mm_setzero_si128();
+  while (bits != 0) {
+    const int k = __builtin_ctzll(bits);
+    const int t = base + k;
+    if (t + 8 > nz) {
+      missOne(t);
+      bits &= bits - 1;
+      continue;
+    }
+    const int lanes = static_cast<int>((bits >> k) & 0xFFu);
+    bits &= ~(std::uint64_t{0xFF} << k);
+    LogOddsQ* p = column + t;
+    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+    const __m128i selected =
+        _mm_cmpeq_epi16(_mm_and_si128(_mm_set1_epi16(static_cast<short>(lanes)), lane_bits), lane_bits);
+    const __m128i was_unknown = _mm_cmpeq_epi16(v, unknown);
+    // Unknown counts as 0; a saturating sum, so that the clamps see what the int sum would be.
+    const __m128i updated =
+        _mm_min_epi16(_mm_max_epi16(_mm_adds_epi16(_mm_andnot_si128(was_unknown, v), miss), lo), hi);
+    const __m128i out = _mm_or_si128(_mm_and_si128(selected, updated), _mm_andnot_si128(selected, v));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(p), out);
+    const __m128i changed = _mm_andnot_si128(_mm_cmpeq_epi16(out, v), selected);
+    int changed8 = _mm_movemask_epi8(_mm_packs_epi16(changed, zero));
+    if (changed8 == 0) continue;  // all saturated already: the common case in mapped space
+    // Unknown -> known, or across the occupied threshold (unknown is never above it).
+    const __m128i crossed = _mm_xor_si128(_mm_cmpgt_epi16(v, occupied), _mm_cmpgt_epi16(out, occupied));
+    const int state8 =
+        _mm_movemask_epi8(_mm_packs_epi16(_mm_and_si128(changed, _mm_or_si128(was_unknown, crossed)), zero));
+    while (changed8 != 0) {
+      const int b = __builtin_ctz(static_cast<unsigned>(changed8));
+      changed8 &= changed8 - 1;
+      const std::size_t m = submap_of_torus_z_[static_cast<std::size_t>(t + b)];
+      changed_at[m] = now;
+      if ((state8 >> b) & 1) state_changed_at[m] = now;
+    }
+  }
+#else
+  while (bits != 0) {
+    missOne(base + __builtin_ctzll(bits));
+    bits &= bits - 1;
+  }
+#endif
+}
 
 LocalMap::LocalMap(const LocalMapConfig& config, const LogOddsConfig& log_odds)
     : config_(config),
@@ -310,7 +382,7 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
     const std::uint64_t below_hi = hi >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << hi) - 1;
     z_mask[static_cast<std::size_t>(w - w_first)] = below_hi & ~((std::uint64_t{1} << lo) - 1);
   }
-  // The torus y of the first row, and its submap: stepped per row (no division per row).
+  // The torus y of the first row, stepped per row (no division per row).
   const int sy_first = floorMod(origin.y() + first.y(), size_.y());
   for (int i = first.x(); i < end.x(); ++i) {
     const int sx = floorMod(origin.x() + i, size_.x());
@@ -333,22 +405,18 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
       std::uint64_t* column_changed_at = submap_changed_at_.data() + column_submaps;
       std::uint64_t* column_state_changed_at = submap_state_changed_at_.data() + column_submaps;
       for (int w = w_first; w < w_end; ++w) {
-        std::uint64_t bits = row[w] & z_mask[static_cast<std::size_t>(w - w_first)];
-        while (bits != 0) {
-          int tz = split + 64 * w + __builtin_ctzll(bits) + to_window_z;
-          bits &= bits - 1;
-          if (tz >= size_.z()) tz -= size_.z();
-          LogOddsQ& v = column[tz];
-          const LogOddsQ old = v;
-          const Occupancy before = model_.state(v);
-          model_.miss(v);
-          if (v != old) {
-            const std::size_t m = submap_of_torus_z_[static_cast<std::size_t>(tz)];
-            column_changed_at[m] = now;
-            if (before != model_.state(v)) column_state_changed_at[m] = now;
-          }
-          ++applied;
-        }
+        const std::uint64_t bits = row[w] & z_mask[static_cast<std::size_t>(w - w_first)];
+        if (bits == 0) continue;
+        applied += static_cast<std::uint64_t>(__builtin_popcountll(bits));
+        // Bit k is torus z base + k, or base + k - nz past the wrap (bits outside the window
+        // are masked out, so every set bit lands in [0, nz)).
+        const int base = split + 64 * w + to_window_z;
+        const int wrap = size_.z() - base;  // the first bit past the wrap
+        const std::uint64_t before_wrap =
+            wrap >= 64 ? bits : wrap <= 0 ? 0 : bits & ((std::uint64_t{1} << wrap) - 1);
+        missRun(column, base, before_wrap, now, column_changed_at, column_state_changed_at);
+        missRun(column, base - size_.z(), bits & ~before_wrap, now, column_changed_at,
+                column_state_changed_at);
       }
     }
   }

@@ -50,6 +50,10 @@ class LogOddsModel {
     return v > occupied_ ? Occupancy::kOccupied : Occupancy::kFree;
   }
   [[nodiscard]] bool isOccupied(LogOddsQ v) const { return v != kUnknownLogOdds && v > occupied_; }
+  /// The stored change of a miss, and the occupied threshold (a stored value above it is
+  /// occupied): for updates that apply the rule to many voxels at once.
+  [[nodiscard]] LogOddsQ missStep() const { return miss_; }
+  [[nodiscard]] LogOddsQ occupiedThreshold() const { return occupied_; }
   [[nodiscard]] LogOddsQ clampMin() const { return min_; }
   [[nodiscard]] LogOddsQ clampMax() const { return max_; }
 

@@ -174,6 +174,11 @@ class LocalMap {
   /// Stamps submap slot `slot` (values and states) with `clock`; every slot with a new clock.
   void stampSubmap(std::size_t slot, std::uint64_t clock);
   void stampAllSubmaps();
+  /// Applies a miss to column[base + k] for each set bit k of `bits` (all within the column),
+  /// stamping the submaps (`changed_at`, `state_changed_at`: the column's stamps) whose values
+  /// or states changed.
+  void missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint64_t now,
+               std::uint64_t* changed_at, std::uint64_t* state_changed_at) const;
   void moveCenter(const SubmapIndex& new_center, GlobalMap* global);
   void retireSubmap(const SubmapIndex& m, GlobalMap* global);
   void restoreSubmap(const SubmapIndex& m, GlobalMap* global);
