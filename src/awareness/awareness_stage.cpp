@@ -59,9 +59,14 @@ inline int floorToIntVec(double x) {  // floorToInt in a form the vectoriser tak
   return x < static_cast<double>(i) ? i - 1 : i;
 }
 
-MLMAP_VECTOR_CLONES void classifyPoints(const PointKernel& k, const float* xs, const float* ys,
-                                        const float* zs, std::size_t n, std::uint32_t* keys,
-                                        float* coords) {
+// kMayCut false: every point of the block is known to be finite and within the maximum range
+// (the common depth-camera block), so the square root and division that cut the others are left
+// out; the results are the same bits.
+template <bool kMayCut>
+[[gnu::always_inline]] inline void classifyPointsImpl(const PointKernel& k, const float* xs,
+                                                     const float* ys, const float* zs,
+                                                     std::size_t n, std::uint32_t* keys,
+                                                     float* coords) {
   // Locals, so that the compiler knows the stores below do not change them.
   const double m0 = k.m[0], m1 = k.m[1], m2 = k.m[2], m3 = k.m[3], m4 = k.m[4], m5 = k.m[5];
   const double m6 = k.m[6], m7 = k.m[7], m8 = k.m[8];
@@ -76,16 +81,20 @@ MLMAP_VECTOR_CLONES void classifyPoints(const PointKernel& k, const float* xs, c
     double y = ys[i];
     double z = zs[i];
     const double r2 = x * x + y * y + z * z;
-    const bool finite = r2 <= std::numeric_limits<double>::max();  // false for NaN and Inf
-    const bool cut = r2 > max_range2;
-    // min(1, max / |p|): exactly 1 for every point within range (and for NaN), branch-free.
-    const double q = max_range / std::sqrt(r2);
-    const double scale = q < 1.0 ? q : 1.0;
-    // A non-finite point becomes the origin, so that the float -> int conversions below stay
-    // defined (its key says kNonFiniteKey and nothing reads its coordinates).
-    x = finite ? x * scale : 0.0;
-    y = finite ? y * scale : 0.0;
-    z = finite ? z * scale : 0.0;
+    bool finite = true;
+    bool cut = false;
+    if constexpr (kMayCut) {
+      finite = r2 <= std::numeric_limits<double>::max();  // false for NaN and Inf
+      cut = r2 > max_range2;
+      // min(1, max / |p|): exactly 1 for every point within range (and for NaN), branch-free.
+      const double q = max_range / std::sqrt(r2);
+      const double scale = q < 1.0 ? q : 1.0;
+      // A non-finite point becomes the origin, so that the float -> int conversions below stay
+      // defined (its key says kNonFiniteKey and nothing reads its coordinates).
+      x = finite ? x * scale : 0.0;
+      y = finite ? y * scale : 0.0;
+      z = finite ? z * scale : 0.0;
+    }
     // World voxel units first, as worldPoint() computes them, then box-relative.
     const double b0 = (o0 + m0 * x + m1 * y + m2 * z) - bo0;
     const double b1 = (o1 + m3 * x + m4 * y + m5 * z) - bo1;
@@ -103,6 +112,29 @@ MLMAP_VECTOR_CLONES void classifyPoints(const PointKernel& k, const float* xs, c
     coords[4 * i + 1] = static_cast<float>(b1);
     coords[4 * i + 2] = static_cast<float>(b2);
     coords[4 * i + 3] = 0.0f;
+  }
+}
+
+// Whether every point is finite and within the maximum range (NaN fails the comparison).
+MLMAP_VECTOR_CLONES bool allWithinRange(const float* xs, const float* ys, const float* zs,
+                                        std::size_t n, double max_range2) {
+  int beyond = 0;  // an OR reduction, which the compiler vectorises
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = xs[i];
+    const double y = ys[i];
+    const double z = zs[i];
+    beyond |= x * x + y * y + z * z <= max_range2 ? 0 : 1;
+  }
+  return beyond == 0;
+}
+
+MLMAP_VECTOR_CLONES void classifyPoints(const PointKernel& k, const float* xs, const float* ys,
+                                        const float* zs, std::size_t n, std::uint32_t* keys,
+                                        float* coords) {
+  if (allWithinRange(xs, ys, zs, n, k.max_range * k.max_range)) {
+    classifyPointsImpl<false>(k, xs, ys, zs, n, keys, coords);
+  } else {
+    classifyPointsImpl<true>(k, xs, ys, zs, n, keys, coords);
   }
 }
 
