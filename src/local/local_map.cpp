@@ -18,9 +18,10 @@ constexpr int kHalfWindow = LocalMapConfig::kSubmapsPerAxis / 2;  // 2 submaps o
 constexpr int kMaxShiftsPerCall = 8;
 }  // namespace
 
-void LocalMap::missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint64_t now,
+bool LocalMap::missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint64_t now,
                        std::uint64_t* changed_at, std::uint64_t* state_changed_at) const {
   const int nz = size_.z();
+  bool any_changed = false;
   // One voxel, the rule as written (what the eight-lane step below must equal).
   auto missOne = [&](int t) {
     LogOddsQ& v = column[t];
@@ -31,6 +32,7 @@ void LocalMap::missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint
       const std::size_t m = submap_of_torus_z_[static_cast<std::size_t>(t)];
       changed_at[m] = now;
       if (before != model_.state(v)) state_changed_at[m] = now;
+      any_changed = true;
     }
   };
 #if defined(__SSE2__)
@@ -66,6 +68,7 @@ void LocalMap::missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint
     const __m128i changed = _mm_andnot_si128(_mm_cmpeq_epi16(out, v), selected);
     int changed8 = _mm_movemask_epi8(_mm_packs_epi16(changed, zero));
     if (changed8 == 0) continue;  // all saturated already: the common case in mapped space
+    any_changed = true;
     // Unknown -> known, or across the occupied threshold (unknown is never above it).
     const __m128i crossed = _mm_xor_si128(_mm_cmpgt_epi16(v, occupied), _mm_cmpgt_epi16(out, occupied));
     const int state8 =
@@ -84,6 +87,7 @@ void LocalMap::missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint
     bits &= bits - 1;
   }
 #endif
+  return any_changed;
 }
 
 LocalMap::LocalMap(const LocalMapConfig& config, const LogOddsConfig& log_odds)
@@ -98,6 +102,7 @@ LocalMap::LocalMap(const LocalMapConfig& config, const LogOddsConfig& log_odds)
                              LocalMapConfig::kSubmapsPerAxis * LocalMapConfig::kSubmapsPerAxis,
                          0),
       submap_state_changed_at_(submap_changed_at_.size(), 0),
+      column_changed_at_(static_cast<std::size_t>(size_.x()) * static_cast<std::size_t>(size_.y()), 0),
       submap_of_torus_z_(static_cast<std::size_t>(size_.z())) {
   for (int z = 0; z < size_.z(); ++z) {
     submap_of_torus_z_[static_cast<std::size_t>(z)] = static_cast<std::uint8_t>(z / submap_.z());
@@ -160,11 +165,22 @@ void LocalMap::retireSubmap(const SubmapIndex& m, GlobalMap* global) {
 void LocalMap::stampSubmap(std::size_t slot, std::uint64_t clock) {
   submap_changed_at_[slot] = clock;
   submap_state_changed_at_[slot] = clock;
+  // Its columns too (whole torus columns: a copy then takes the other submaps above and below).
+  constexpr auto kN = static_cast<std::size_t>(LocalMapConfig::kSubmapsPerAxis);
+  const std::size_t x0 = slot / (kN * kN) * static_cast<std::size_t>(submap_.x());
+  const std::size_t y0 = slot / kN % kN * static_cast<std::size_t>(submap_.y());
+  const std::size_t ny = static_cast<std::size_t>(size_.y());
+  for (std::size_t x = x0; x < x0 + static_cast<std::size_t>(submap_.x()); ++x) {
+    std::uint64_t* row = column_changed_at_.data() + x * ny + y0;
+    std::fill(row, row + submap_.y(), clock);
+  }
 }
 
 void LocalMap::stampAllSubmaps() {
   const std::uint64_t clock = ++change_clock_;
-  for (std::size_t m = 0; m < submap_changed_at_.size(); ++m) stampSubmap(m, clock);
+  std::fill(submap_changed_at_.begin(), submap_changed_at_.end(), clock);
+  std::fill(submap_state_changed_at_.begin(), submap_state_changed_at_.end(), clock);
+  std::fill(column_changed_at_.begin(), column_changed_at_.end(), clock);
 }
 
 void LocalMap::restoreSubmap(const SubmapIndex& m, GlobalMap* global) {
@@ -347,7 +363,8 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
   const std::uint64_t now = ++change_clock_;
   for (const HitMeasurement& h : batch.hits) {
     if (contains(h.index)) {
-      LogOddsQ& v = cells_[slot(h.index)];
+      const std::size_t cell = slot(h.index);
+      LogOddsQ& v = cells_[cell];
       const LogOddsQ old = v;
       const Occupancy before = model_.state(v);
       model_.hit(v);
@@ -355,6 +372,7 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
         const std::size_t m = submapSlot(submapOf(h.index));
         submap_changed_at_[m] = now;
         if (before != model_.state(v)) submap_state_changed_at_[m] = now;
+        column_changed_at_[cell / static_cast<std::size_t>(size_.z())] = now;
       }
       ++counters_.hits_applied;
     } else {
@@ -393,17 +411,18 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
       std::uint64_t any = 0;
       for (int w = w_first; w < w_end; ++w) any |= row[w];
       if (any == 0) continue;  // most rows of a frame: nothing seen free there
-      LogOddsQ* column = cells_.data() + (static_cast<std::size_t>(sx) *
-                                              static_cast<std::size_t>(size_.y()) +
-                                          static_cast<std::size_t>(sy)) *
-                                             static_cast<std::size_t>(size_.z());
+      const std::size_t torus_column =
+          static_cast<std::size_t>(sx) * static_cast<std::size_t>(size_.y()) +
+          static_cast<std::size_t>(sy);
+      LogOddsQ* column = cells_.data() + torus_column * static_cast<std::size_t>(size_.z());
       // The column's submaps in the stamp arrays (torus slot x, y; z per voxel).
       constexpr auto kStride = static_cast<std::size_t>(LocalMapConfig::kSubmapsPerAxis);
       const std::size_t column_submaps =
           (static_cast<std::size_t>(sx / submap_.x()) * kStride +
            static_cast<std::size_t>(sy / submap_.y())) * kStride;
-      std::uint64_t* column_changed_at = submap_changed_at_.data() + column_submaps;
-      std::uint64_t* column_state_changed_at = submap_state_changed_at_.data() + column_submaps;
+      std::uint64_t* submaps_changed_at = submap_changed_at_.data() + column_submaps;
+      std::uint64_t* submaps_state_changed_at = submap_state_changed_at_.data() + column_submaps;
+      bool column_changed = false;
       for (int w = w_first; w < w_end; ++w) {
         const std::uint64_t bits = row[w] & z_mask[static_cast<std::size_t>(w - w_first)];
         if (bits == 0) continue;
@@ -414,10 +433,12 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
         const int wrap = size_.z() - base;  // the first bit past the wrap
         const std::uint64_t before_wrap =
             wrap >= 64 ? bits : wrap <= 0 ? 0 : bits & ((std::uint64_t{1} << wrap) - 1);
-        missRun(column, base, before_wrap, now, column_changed_at, column_state_changed_at);
-        missRun(column, base - size_.z(), bits & ~before_wrap, now, column_changed_at,
-                column_state_changed_at);
+        column_changed |= missRun(column, base, before_wrap, now, submaps_changed_at,
+                                  submaps_state_changed_at);
+        column_changed |= missRun(column, base - size_.z(), bits & ~before_wrap, now,
+                                  submaps_changed_at, submaps_state_changed_at);
       }
+      if (column_changed) column_changed_at_[torus_column] = now;
     }
   }
   counters_.outside_window += batch.free_count > applied ? batch.free_count - applied : 0;
@@ -454,45 +475,30 @@ void LocalMap::copyWindow(LocalWindow* out) const {
 }
 
 int LocalMap::updateWindowCopy(LocalWindow* out) const {
-  constexpr int kN = LocalMapConfig::kSubmapsPerAxis;
   const bool same_place = placed_ && out->change_clock != 0 && out->min_index == min_index_ &&
                           out->size == size_ && out->resolution_m == config_.resolution_m &&
                           out->log_odds.size() == static_cast<std::size_t>(size_.prod());
   if (!same_place) {
     copyWindow(out);
-    return placed_ ? kN * kN * kN : 0;
+    return placed_ ? size_.x() * size_.y() : 0;
   }
   out->model = model_;
   const std::size_t ny = static_cast<std::size_t>(size_.y());
   const std::size_t nz = static_cast<std::size_t>(size_.z());
-  const std::size_t run = static_cast<std::size_t>(submap_.z());
-  const SubmapIndex first = submapOf(min_index_);
+  // Each torus column is the window's z row rotated by (min z mod nz), as in copyWindow().
+  const std::size_t split = static_cast<std::size_t>(floorMod(min_index_.z(), size_.z()));
   int copied = 0;
-  for (int bx = 0; bx < kN; ++bx) {
-    for (int by = 0; by < kN; ++by) {
-      for (int bz = 0; bz < kN; ++bz) {
-        const SubmapIndex m = first + SubmapIndex(bx, by, bz);
-        if (submap_changed_at_[submapSlot(m)] <= out->change_clock) continue;
-        ++copied;
-        // The submap's first voxel in the copy (box order) and in the torus; its z run is
-        // contiguous in both.
-        const Eigen::Vector3i b0 = Eigen::Vector3i(bx, by, bz).cwiseProduct(submap_);
-        const Eigen::Vector3i t0(floorMod(m.x(), kN) * submap_.x(), floorMod(m.y(), kN) * submap_.y(),
-                                 floorMod(m.z(), kN) * submap_.z());
-        for (int x = 0; x < submap_.x(); ++x) {
-          for (int y = 0; y < submap_.y(); ++y) {
-            const LogOddsQ* src =
-                cells_.data() + (static_cast<std::size_t>(t0.x() + x) * ny +
-                                 static_cast<std::size_t>(t0.y() + y)) * nz +
-                static_cast<std::size_t>(t0.z());
-            LogOddsQ* dst = out->log_odds.data() +
-                            (static_cast<std::size_t>(b0.x() + x) * ny +
-                             static_cast<std::size_t>(b0.y() + y)) * nz +
-                            static_cast<std::size_t>(b0.z());
-            std::copy(src, src + run, dst);
-          }
-        }
-      }
+  for (int x = 0; x < size_.x(); ++x) {
+    const std::size_t sx = static_cast<std::size_t>(floorMod(min_index_.x() + x, size_.x()));
+    for (int y = 0; y < size_.y(); ++y) {
+      const std::size_t sy = static_cast<std::size_t>(floorMod(min_index_.y() + y, size_.y()));
+      if (column_changed_at_[sx * ny + sy] <= out->change_clock) continue;
+      ++copied;
+      const LogOddsQ* column = cells_.data() + (sx * ny + sy) * nz;
+      LogOddsQ* dst = out->log_odds.data() +
+                      (static_cast<std::size_t>(x) * ny + static_cast<std::size_t>(y)) * nz;
+      std::copy(column + split, column + nz, dst);
+      std::copy(column, column + split, dst + (nz - split));
     }
   }
   out->change_clock = change_clock_;

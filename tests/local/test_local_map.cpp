@@ -283,10 +283,10 @@ TEST(LocalMap, SubmapChangeStampsNameExactlyTheSubmapsThatChanged) {
 }
 
 // A pooled copy brought up to date with updateWindowCopy() equals a full copy after every frame,
-// whichever earlier frame it was made at, while copying only the changed submaps.
-TEST(LocalMap, UpdatedWindowCopiesEqualFullCopies) {
-  const LocalMapConfig config = smallMap();
-  LocalMap map(config, LogOddsConfig{});
+// whichever earlier frame it was made at, while copying only the changed columns.
+void checkUpdatedWindowCopiesThroughAFlight(const FlightShape& shape) {
+  const LocalMapConfig& config = shape.config;
+  LocalMap map(config, shape.log_odds);
   GlobalMap global(config.submap_cells(), config.resolution_m);
   std::mt19937 rng(12);
   std::uniform_real_distribution<double> step(-0.25, 0.25);  // a shift every few frames
@@ -301,7 +301,7 @@ TEST(LocalMap, UpdatedWindowCopiesEqualFullCopies) {
     map.recenter(body, &global);
     std::vector<VoxelIndex> hits;
     std::vector<VoxelIndex> frees;
-    fewUpdatesAround(body, 4, 1, rng, &hits, &frees);
+    fewUpdatesAround(body, 4, shape.z_run_max, rng, &hits, &frees);
     map.integrate(makeBatch(body, hits, frees));
     LocalWindow& copy = pool[static_cast<std::size_t>(frame % 3)];
     copied += map.updateWindowCopy(&copy);
@@ -311,9 +311,18 @@ TEST(LocalMap, UpdatedWindowCopiesEqualFullCopies) {
     ASSERT_EQ(copy.change_clock, full.change_clock) << "frame " << frame;
     ASSERT_TRUE(copy.log_odds == full.log_odds) << "frame " << frame;
   }
-  std::printf("%ld submaps copied in %d updates (%ld for full copies)\n", copied, frames, frames * 125L);
+  const long columns = static_cast<long>(config.size_cells.x()) * config.size_cells.y();
+  std::printf("%ld columns copied in %d updates (%ld for full copies)\n", copied, frames,
+              frames * columns);
   EXPECT_GT(map.counters().shifts, 20u);
-  EXPECT_LT(copied, frames * 125 / 3) << "mostly incremental copies";
+  EXPECT_LT(copied, frames * columns / 3) << "mostly incremental copies";
+}
+
+TEST(LocalMap, UpdatedWindowCopiesEqualFullCopies) {
+  for (const FlightShape& shape : flightShapes()) {
+    SCOPED_TRACE(shape.name);
+    checkUpdatedWindowCopiesThroughAFlight(shape);
+  }
 }
 
 TEST(LocalMap, RecycledSubmapsStartUnknownAfterAShift) {

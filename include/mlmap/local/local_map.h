@@ -86,8 +86,10 @@ class LocalMap {
   void copyWindow(LocalWindow* out) const;
   /// The same result as copyWindow(), for an `out` that holds an earlier copy of this map's
   /// window (from copyWindow() or updateWindowCopy(), e.g. a pooled snapshot buffer): when the
-  /// window has not moved since, only the submaps changed after `out->change_clock` are copied.
-  /// Any other `out` gets a full copy. Returns the number of submaps copied.
+  /// window has not moved since, only the voxel columns (all of z at one x, y) changed after
+  /// `out->change_clock` are copied: a few percent of the window per frame, where a 360-degree
+  /// scan changes some voxels in nearly every submap. Any other `out` gets a full copy. Returns
+  /// the number of columns copied.
   int updateWindowCopy(LocalWindow* out) const;
 
   /// Retires every submap to `global` (e.g. before saving a complete map); the window stays.
@@ -148,8 +150,11 @@ class LocalMap {
   [[nodiscard]] std::uint64_t submapStateChangedAt(const SubmapIndex& m) const {
     return submap_state_changed_at_[submapSlot(m)];
   }
-  /// Bytes held by the voxel storage (2 bytes per voxel).
-  [[nodiscard]] std::size_t memoryBytes() const { return cells_.capacity() * sizeof(LogOddsQ); }
+  /// Bytes held by the voxel storage (2 bytes per voxel) and the change stamps of its columns.
+  [[nodiscard]] std::size_t memoryBytes() const {
+    return cells_.capacity() * sizeof(LogOddsQ) +
+           column_changed_at_.capacity() * sizeof(std::uint64_t);
+  }
   /// Bytes per voxel of the active area.
   static constexpr std::size_t kBytesPerVoxel = sizeof(LogOddsQ);
 
@@ -176,8 +181,8 @@ class LocalMap {
   void stampAllSubmaps();
   /// Applies a miss to column[base + k] for each set bit k of `bits` (all within the column),
   /// stamping the submaps (`changed_at`, `state_changed_at`: the column's stamps) whose values
-  /// or states changed.
-  void missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint64_t now,
+  /// or states changed. Returns whether any value changed.
+  bool missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint64_t now,
                std::uint64_t* changed_at, std::uint64_t* state_changed_at) const;
   void moveCenter(const SubmapIndex& new_center, GlobalMap* global);
   void retireSubmap(const SubmapIndex& m, GlobalMap* global);
@@ -196,6 +201,7 @@ class LocalMap {
   std::uint64_t change_clock_ = 0;
   std::vector<std::uint64_t> submap_changed_at_;        // per torus submap slot, see submapSlot()
   std::vector<std::uint64_t> submap_state_changed_at_;  // the same for state changes
+  std::vector<std::uint64_t> column_changed_at_;  // per torus column x, y: last value change
   std::vector<std::uint8_t> submap_of_torus_z_;   // torus z -> submap slot z (no division per voxel)
 };
 
