@@ -590,7 +590,8 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
     return (face << (2 * (lg - 1))) | ((iu >> 1) << (lg - 1)) | (iv >> 1);
   };
   const int level_count = static_cast<int>(bins_.size());
-  // A bin met for the first time this frame: a new entry of its level, empty box.
+  // The index of a bin in this frame's bins of its level: added (empty box) when met for the
+  // first time, its nearest member updated otherwise.
   auto findOrAddBin = [&](int level, std::uint32_t index, double near) {
     BinSlot& slot = slots_[static_cast<std::size_t>(level)][index];
     std::vector<Bin>& bins = bins_[static_cast<std::size_t>(level)];
@@ -624,9 +625,9 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
     e.near = distanceToBox(o, e.points);
     e.bin = findOrAddBin(0, static_cast<std::uint32_t>((face * n0 + iu) * n0 + iv), e.near);
   }
-  // Nearest member of the coarser bins, from their children (a level's bins grow while its
-  // children are read, so by index); then every bin's reach. Reach never shrinks towards the
-  // fine end of a chain because the nearest member and the level reach both grow.
+  // Nearest member of the coarser bins, from their children; then every bin's reach. Reach never
+  // shrinks towards the fine end of a chain because the nearest member and the level reach both
+  // grow.
   for (int level = 1; level < level_count; ++level) {
     std::vector<Bin>& children = bins_[static_cast<std::size_t>(level) - 1];
     for (Bin& child : children) {
