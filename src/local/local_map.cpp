@@ -462,15 +462,20 @@ void LocalMap::copyWindow(LocalWindow* out) const {
   // Each torus column is the window's z row rotated by (min z mod nz): two contiguous copies.
   const std::size_t split = static_cast<std::size_t>(floorMod(min_index_.z(), size_.z()));
   LogOddsQ* dst = out->log_odds.data();
-  for (int x = 0; x < size_.x(); ++x) {
-    const std::size_t sx = static_cast<std::size_t>(floorMod(min_index_.x() + x, size_.x()));
-    for (int y = 0; y < size_.y(); ++y) {
-      const std::size_t sy = static_cast<std::size_t>(floorMod(min_index_.y() + y, size_.y()));
-      const LogOddsQ* column = cells_.data() + (sx * static_cast<std::size_t>(size_.y()) + sy) * nz;
+  const std::size_t nx = static_cast<std::size_t>(size_.x());
+  const std::size_t ny = static_cast<std::size_t>(size_.y());
+  const std::size_t sy_first = static_cast<std::size_t>(floorMod(min_index_.y(), size_.y()));
+  std::size_t sx = static_cast<std::size_t>(floorMod(min_index_.x(), size_.x()));
+  for (std::size_t x = 0; x < nx; ++x) {
+    std::size_t sy = sy_first;
+    for (std::size_t y = 0; y < ny; ++y) {
+      const LogOddsQ* column = cells_.data() + (sx * ny + sy) * nz;
       std::copy(column + split, column + nz, dst);
       std::copy(column, column + split, dst + (nz - split));
       dst += nz;
+      if (++sy == ny) sy = 0;
     }
+    if (++sx == nx) sx = 0;
   }
 }
 
@@ -488,18 +493,23 @@ int LocalMap::updateWindowCopy(LocalWindow* out) const {
   // Each torus column is the window's z row rotated by (min z mod nz), as in copyWindow().
   const std::size_t split = static_cast<std::size_t>(floorMod(min_index_.z(), size_.z()));
   int copied = 0;
-  for (int x = 0; x < size_.x(); ++x) {
-    const std::size_t sx = static_cast<std::size_t>(floorMod(min_index_.x() + x, size_.x()));
-    for (int y = 0; y < size_.y(); ++y) {
-      const std::size_t sy = static_cast<std::size_t>(floorMod(min_index_.y() + y, size_.y()));
-      if (column_changed_at_[sx * ny + sy] <= out->change_clock) continue;
-      ++copied;
-      const LogOddsQ* column = cells_.data() + (sx * ny + sy) * nz;
-      LogOddsQ* dst = out->log_odds.data() +
-                      (static_cast<std::size_t>(x) * ny + static_cast<std::size_t>(y)) * nz;
-      std::copy(column + split, column + nz, dst);
-      std::copy(column, column + split, dst + (nz - split));
+  // Torus x and y stepped per column, not divided (a window has up to half a million columns).
+  const std::size_t nx = static_cast<std::size_t>(size_.x());
+  const std::size_t sy_first = static_cast<std::size_t>(floorMod(min_index_.y(), size_.y()));
+  std::size_t sx = static_cast<std::size_t>(floorMod(min_index_.x(), size_.x()));
+  for (std::size_t x = 0; x < nx; ++x) {
+    std::size_t sy = sy_first;
+    for (std::size_t y = 0; y < ny; ++y) {
+      if (column_changed_at_[sx * ny + sy] > out->change_clock) {
+        ++copied;
+        const LogOddsQ* column = cells_.data() + (sx * ny + sy) * nz;
+        LogOddsQ* dst = out->log_odds.data() + (x * ny + y) * nz;
+        std::copy(column + split, column + nz, dst);
+        std::copy(column, column + split, dst + (nz - split));
+      }
+      if (++sy == ny) sy = 0;
     }
+    if (++sx == nx) sx = 0;
   }
   out->change_clock = change_clock_;
   return copied;
