@@ -612,6 +612,9 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
   for (std::vector<Bin>& bins : bins_) bins.clear();
   // Direction of every end on the finest level, its distance, and the nearest member of every
   // finest bin.
+  // First every end's bin on the finest level (in e.bin for now), then the bins' entries: the
+  // slots of the ends a few ahead are fetched meanwhile (a LiDAR's rays mostly have a finest
+  // bin of their own, all over the 3 MB of slots).
   for (End& e : ends_) {
     const Eigen::Vector3d d = 0.5 * (e.points.min + e.points.max).cast<double>() - o;
     const Eigen::Vector3d m = d.cwiseAbs();
@@ -623,7 +626,13 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
     const int iu = std::clamp(static_cast<int>((d[(axis + 1) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
     const int iv = std::clamp(static_cast<int>((d[(axis + 2) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
     e.near = distanceToBox(o, e.points);
-    e.bin = findOrAddBin(0, static_cast<std::uint32_t>((face * n0 + iu) * n0 + iv), e.near);
+    e.bin = static_cast<std::uint32_t>((face * n0 + iu) * n0 + iv);
+  }
+  constexpr std::size_t kPrefetchAhead = 16;
+  for (std::size_t i = 0; i < ends_.size(); ++i) {
+    if (i + kPrefetchAhead < ends_.size()) __builtin_prefetch(&slots_[0][ends_[i + kPrefetchAhead].bin]);
+    End& e = ends_[i];
+    e.bin = findOrAddBin(0, e.bin, e.near);
   }
   // Nearest member of the coarser bins, from their children; then every bin's reach. Reach never
   // shrinks towards the fine end of a chain because the nearest member and the level reach both
