@@ -1,6 +1,7 @@
 #include "mlmap/local/local_map.h"
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <sstream>
@@ -361,9 +362,25 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
     return;
   }
   const std::uint64_t now = ++change_clock_;
-  for (const HitMeasurement& h : batch.hits) {
-    if (contains(h.index)) {
-      const std::size_t cell = slot(h.index);
+  // Hits in chunks: first the chunk's cells, fetched meanwhile (a LiDAR's hits are spread all
+  // over the window), then their updates.
+  constexpr std::size_t kChunk = 32;
+  constexpr std::size_t kOutside = ~std::size_t{0};
+  std::array<std::size_t, kChunk> cells{};
+  for (std::size_t first = 0; first < batch.hits.size(); first += kChunk) {
+    const std::size_t n = std::min(kChunk, batch.hits.size() - first);
+    for (std::size_t i = 0; i < n; ++i) {
+      const VoxelIndex& g = batch.hits[first + i].index;
+      cells[i] = contains(g) ? slot(g) : kOutside;
+      if (cells[i] != kOutside) __builtin_prefetch(&cells_[cells[i]]);
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const HitMeasurement& h = batch.hits[first + i];
+      const std::size_t cell = cells[i];
+      if (cell == kOutside) {
+        ++counters_.outside_window;
+        continue;
+      }
       LogOddsQ& v = cells_[cell];
       const LogOddsQ old = v;
       const Occupancy before = model_.state(v);
@@ -375,8 +392,6 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
         column_changed_at_[cell / static_cast<std::size_t>(size_.z())] = now;
       }
       ++counters_.hits_applied;
-    } else {
-      ++counters_.outside_window;
     }
   }
   // Free set: only the rows and z words of the bitset that overlap the window are read (what
