@@ -472,26 +472,8 @@ void LocalMap::copyWindow(LocalWindow* out) const {
   }
   out->min_index = min_index_;
   out->size = size_;
-  const std::size_t nz = static_cast<std::size_t>(size_.z());
   out->log_odds.resize(static_cast<std::size_t>(size_.prod()));
-  // Each torus column is the window's z row rotated by (min z mod nz): two contiguous copies.
-  const std::size_t split = static_cast<std::size_t>(floorMod(min_index_.z(), size_.z()));
-  LogOddsQ* dst = out->log_odds.data();
-  const std::size_t nx = static_cast<std::size_t>(size_.x());
-  const std::size_t ny = static_cast<std::size_t>(size_.y());
-  const std::size_t sy_first = static_cast<std::size_t>(floorMod(min_index_.y(), size_.y()));
-  std::size_t sx = static_cast<std::size_t>(floorMod(min_index_.x(), size_.x()));
-  for (std::size_t x = 0; x < nx; ++x) {
-    std::size_t sy = sy_first;
-    for (std::size_t y = 0; y < ny; ++y) {
-      const LogOddsQ* column = cells_.data() + (sx * ny + sy) * nz;
-      std::copy(column + split, column + nz, dst);
-      std::copy(column, column + split, dst + (nz - split));
-      dst += nz;
-      if (++sy == ny) sy = 0;
-    }
-    if (++sx == nx) sx = 0;
-  }
+  copyColumns(out, /*all=*/true, 0);
 }
 
 int LocalMap::updateWindowCopy(LocalWindow* out) const {
@@ -503,19 +485,25 @@ int LocalMap::updateWindowCopy(LocalWindow* out) const {
     return placed_ ? size_.x() * size_.y() : 0;
   }
   out->model = model_;
+  const int copied = copyColumns(out, /*all=*/false, out->change_clock);
+  out->change_clock = change_clock_;
+  return copied;
+}
+
+int LocalMap::copyColumns(LocalWindow* out, bool all, std::uint64_t changed_after) const {
+  const std::size_t nx = static_cast<std::size_t>(size_.x());
   const std::size_t ny = static_cast<std::size_t>(size_.y());
   const std::size_t nz = static_cast<std::size_t>(size_.z());
-  // Each torus column is the window's z row rotated by (min z mod nz), as in copyWindow().
+  // Each torus column is the window's z row rotated by (min z mod nz): two contiguous copies.
   const std::size_t split = static_cast<std::size_t>(floorMod(min_index_.z(), size_.z()));
-  int copied = 0;
   // Torus x and y stepped per column, not divided (a window has up to half a million columns).
-  const std::size_t nx = static_cast<std::size_t>(size_.x());
   const std::size_t sy_first = static_cast<std::size_t>(floorMod(min_index_.y(), size_.y()));
   std::size_t sx = static_cast<std::size_t>(floorMod(min_index_.x(), size_.x()));
+  int copied = 0;
   for (std::size_t x = 0; x < nx; ++x) {
     std::size_t sy = sy_first;
     for (std::size_t y = 0; y < ny; ++y) {
-      if (column_changed_at_[sx * ny + sy] > out->change_clock) {
+      if (all || column_changed_at_[sx * ny + sy] > changed_after) {
         ++copied;
         const LogOddsQ* column = cells_.data() + (sx * ny + sy) * nz;
         LogOddsQ* dst = out->log_odds.data() + (x * ny + y) * nz;
@@ -526,7 +514,6 @@ int LocalMap::updateWindowCopy(LocalWindow* out) const {
     }
     if (++sx == nx) sx = 0;
   }
-  out->change_clock = change_clock_;
   return copied;
 }
 

@@ -179,6 +179,9 @@ class LocalMap {
   /// Stamps submap slot `slot` (values and states) with `clock`; every slot with a new clock.
   void stampSubmap(std::size_t slot, std::uint64_t clock);
   void stampAllSubmaps();
+  /// Copies into `out` (placed and sized like the window) every column of the window, or with
+  /// `all` false those changed after `changed_after`. Returns the number of columns copied.
+  int copyColumns(LocalWindow* out, bool all, std::uint64_t changed_after) const;
   /// Applies a miss to column[base + k] for each set bit k of `bits` (all within the column),
   /// stamping the submaps (`changed_at`, `state_changed_at`: the column's stamps) whose values
   /// or states changed. Returns whether any value changed.
