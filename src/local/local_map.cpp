@@ -145,13 +145,18 @@ void LocalMap::retireSubmap(const SubmapIndex& m, GlobalMap* global) {
   const Eigen::Vector3i t0(floorMod(m.x(), n) * submap_.x(), floorMod(m.y(), n) * submap_.y(),
                            floorMod(m.z(), n) * submap_.z());
   std::uint32_t offset = 0;
+  // The submap's part of a column is a short run (15 voxels at 0.1 m) one column (150 bytes)
+  // after the last: fetched a few columns ahead, as the hardware does not for such strides.
+  constexpr int kAhead = 8;
+  const std::size_t nz = static_cast<std::size_t>(size_.z());
   for (int x = 0; x < submap_.x(); ++x) {
     for (int y = 0; y < submap_.y(); ++y) {
       LogOddsQ* row = cells_.data() +
                       (static_cast<std::size_t>(t0.x() + x) * static_cast<std::size_t>(size_.y()) +
                        static_cast<std::size_t>(t0.y() + y)) *
-                          static_cast<std::size_t>(size_.z()) +
+                          nz +
                       static_cast<std::size_t>(t0.z());
+      if (y + kAhead < submap_.y()) __builtin_prefetch(row + kAhead * nz, 1);
       for (int z = 0; z < submap_.z(); ++z, ++offset) {
         if (model_.isOccupied(row[z])) scratch_.push_back({offset, row[z]});
         row[z] = kUnknownLogOdds;
