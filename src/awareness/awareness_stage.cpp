@@ -62,7 +62,8 @@ inline int floorToIntVec(double x) {  // floorToInt in a form the vectoriser tak
 
 // kMayCut false: every point of the block is known to be finite and within the maximum range
 // (the common depth-camera block), so the square root and division that cut the others are left
-// out; the results are the same bits.
+// out (the two comparisons stay: cheap, and the same code for both); the results are the same
+// bits.
 template <bool kMayCut>
 [[gnu::always_inline]] inline void classifyPointsImpl(const PointKernel& k, const float* xs,
                                                      const float* ys, const float* zs,
@@ -82,11 +83,9 @@ template <bool kMayCut>
     double y = ys[i];
     double z = zs[i];
     const double r2 = x * x + y * y + z * z;
-    bool finite = true;
-    bool cut = false;
+    const bool finite = r2 <= std::numeric_limits<double>::max();  // false for NaN and Inf
+    const bool cut = r2 > max_range2;
     if constexpr (kMayCut) {
-      finite = r2 <= std::numeric_limits<double>::max();  // false for NaN and Inf
-      cut = r2 > max_range2;
       // min(1, max / |p|): exactly 1 for every point within range (and for NaN), branch-free.
       const double q = max_range / std::sqrt(r2);
       const double scale = q < 1.0 ? q : 1.0;

@@ -77,7 +77,7 @@ bool LocalMap::missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint
     while (changed8 != 0) {
       const int b = __builtin_ctz(static_cast<unsigned>(changed8));
       changed8 &= changed8 - 1;
-      const std::size_t m = submap_of_torus_z_[static_cast<std::size_t>(t + b)];
+      const std::size_t m = submap_of_torus_z_[static_cast<std::size_t>(t) + static_cast<std::size_t>(b)];
       changed_at[m] = now;
       if ((state8 >> b) & 1) state_changed_at[m] = now;
     }

@@ -30,9 +30,10 @@ VoxelIndex randomOffset(std::mt19937& rng) {
   return {x, y, z};
 }
 
-/// A step of the body: x and y from `step`, z from `z_step`, drawn in that order.
-Eigen::Vector3d randomStep(std::uniform_real_distribution<double>& step,
-                           std::uniform_real_distribution<double>& z_step, std::mt19937& rng) {
+/// A step of the body: x and y within +-xy_m, z within +-z_m, drawn in that order.
+Eigen::Vector3d randomStep(double xy_m, double z_m, std::mt19937& rng) {
+  std::uniform_real_distribution<double> step(-xy_m, xy_m);
+  std::uniform_real_distribution<double> z_step(-z_m, z_m);
   const double x = step(rng);
   const double y = step(rng);
   const double z = z_step(rng);
@@ -136,12 +137,10 @@ void flyAgainstAWholeWorldReference(const FlightShape& shape) {
   std::map<test::Key, LogOddsQ> reference;  // what a perfect sliding map + global store keeps
   std::mt19937 rng(5);
   std::uniform_int_distribution<int> run(1, shape.z_run_max);
-  std::uniform_real_distribution<double> step(-1.5, 1.5);
-  std::uniform_real_distribution<double> z_step(-shape.z_step_m, shape.z_step_m);
   Eigen::Vector3d body(0.5, 0.5, 0.5);
   std::uint64_t outside = 0;  // measurements outside the window
   for (int frame = 0; frame < 400; ++frame) {
-    body += randomStep(step, z_step, rng);
+    body += randomStep(1.5, shape.z_step_m, rng);
     if (frame == 200) body += Eigen::Vector3d(40.0, 0.0, 0.0);  // a jump: whole-window reset
     if (frame > 300) body *= 0.9;                            // fly back home
     map.recenter(body, &global);
@@ -236,8 +235,6 @@ void checkChangeStampsThroughAFlight(const FlightShape& shape) {
   GlobalMap global(config.submap_cells(), config.resolution_m);
   const Eigen::Vector3i cells = config.submap_cells();
   std::mt19937 rng(11);
-  std::uniform_real_distribution<double> step(-0.8, 0.8);
-  std::uniform_real_distribution<double> z_step(-0.5 * shape.z_step_m, 0.5 * shape.z_step_m);
   Eigen::Vector3d body(0.5, 0.5, 0.5);
   LocalWindow before;
   LocalWindow after;
@@ -247,7 +244,7 @@ void checkChangeStampsThroughAFlight(const FlightShape& shape) {
   for (int frame = 0; frame < 300; ++frame) {
     const std::uint64_t clock = map.changeClock();
     map.copyWindow(&before);
-    body += randomStep(step, z_step, rng);
+    body += randomStep(0.8, 0.5 * shape.z_step_m, rng);
     map.recenter(body, &global);
     std::vector<VoxelIndex> hits;
     std::vector<VoxelIndex> frees;
@@ -306,8 +303,6 @@ void checkUpdatedWindowCopiesThroughAFlight(const FlightShape& shape) {
   LocalMap map(config, shape.log_odds);
   GlobalMap global(config.submap_cells(), config.resolution_m);
   std::mt19937 rng(12);
-  std::uniform_real_distribution<double> step(-0.25, 0.25);  // a shift every few frames
-  std::uniform_real_distribution<double> z_step(-0.075, 0.075);
   Eigen::Vector3d body(0.5, 0.5, 0.5);
   std::vector<LocalWindow> pool(3);  // used in turn, as snapshot buffers are
   LocalWindow full;
@@ -316,7 +311,7 @@ void checkUpdatedWindowCopiesThroughAFlight(const FlightShape& shape) {
   long incremental = 0;  // updates in place (the window had not moved since the buffer's copy)
   const int frames = 300;
   for (int frame = 0; frame < frames; ++frame) {
-    body += randomStep(step, z_step, rng);
+    body += randomStep(0.25, 0.075, rng);  // a shift every few frames
     if (frame == 150) body += Eigen::Vector3d(30.0, 0.0, 0.0);  // a jump: the window is replaced
     map.recenter(body, &global);
     std::vector<VoxelIndex> hits;
