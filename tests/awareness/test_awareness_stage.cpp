@@ -1,6 +1,7 @@
 #include "mlmap/awareness/awareness_stage.h"
 
 #include "../support/reference.h"
+#include "../support/random_draws.h"
 
 #include <gtest/gtest.h>
 
@@ -25,7 +26,7 @@ PointCloudFrame randomCloud(std::mt19937& rng, int n, double max_r) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::uniform_real_distribution<double> r(0.2, max_r);
   for (int i = 0; i < n; ++i) {
-    Eigen::Vector3d d(u(rng), u(rng), u(rng));
+    Eigen::Vector3d d = test::draw3(u, rng);
     if (d.norm() < 1e-3) continue;
     f.points_S.push_back((d.normalized() * r(rng)).cast<float>());
   }

@@ -1,6 +1,7 @@
 #include "mlmap/awareness/cone_carver.h"
 
 #include "../support/reference.h"
+#include "../support/random_draws.h"
 
 #include <gtest/gtest.h>
 
@@ -21,12 +22,11 @@ TEST(ConeCarver, MarksEveryVoxelAnyRayIntoTheEndVoxelCrosses) {
   int checked_voxels = 0;
   for (int trial = 0; trial < 300; ++trial) {
     free.reset(VoxelIndex::Zero(), Eigen::Vector3i::Constant(kBox));
-    Eigen::Vector3d origin(coord(rng), coord(rng), coord(rng));
+    Eigen::Vector3d origin = test::draw3(coord, rng);
     // Degenerate cases first: axis-aligned rays, origins on voxel corners, short rays.
     if (trial == 0) origin = {10.0, 10.0, 10.0};
     if (trial == 1) origin = {10.5, 10.5, 10.5};
-    Eigen::Vector3i end(static_cast<int>(coord(rng)), static_cast<int>(coord(rng)),
-                          static_cast<int>(coord(rng)));
+    Eigen::Vector3i end = test::draw3(coord, rng).cast<int>();
     if (trial == 0) end = {30, 10, 10};
     if (trial == 1) end = {10, 10, 30};
     if (trial == 2) end = origin.cast<int>() + Eigen::Vector3i(1, 0, 0);
@@ -38,7 +38,7 @@ TEST(ConeCarver, MarksEveryVoxelAnyRayIntoTheEndVoxelCrosses) {
       targets.push_back(end.cast<double>() + corner * (1.0 - 1e-9));
     }
     for (int r = 0; r < 20; ++r) {
-      targets.push_back(end.cast<double>() + Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
+      targets.push_back(end.cast<double>() + test::draw3(unit, rng));
     }
     for (const Eigen::Vector3d& target : targets) {
       for (const test::Key& k : test::referenceRayVoxels(origin, target, 1.0)) {
@@ -60,15 +60,15 @@ TEST(ConeCarver, TailFromSMinCoversTheRestOfEveryRayIntoTheBox) {
   VoxelBitset free;
   for (int trial = 0; trial < 200; ++trial) {
     free.reset(VoxelIndex::Zero(), Eigen::Vector3i::Constant(kBox));
-    const Eigen::Vector3d origin(coord(rng), coord(rng), coord(rng));
-    const Eigen::Vector3d corner(coord(rng), coord(rng), coord(rng));
-    const Eigen::Vector3d size(0.5 * unit(rng), 0.5 * unit(rng), 0.5 * unit(rng));
+    const Eigen::Vector3d origin = test::draw3(coord, rng);
+    const Eigen::Vector3d corner = test::draw3(coord, rng);
+    const Eigen::Vector3d size = 0.5 * test::draw3(unit, rng);
     const VoxelSpaceBox box{corner.cast<float>(), (corner + size).cast<float>()};
     const double s_min = 0.5 * unit(rng);
     carveCone(origin, box, s_min, &free);
     std::size_t tail_voxels = 0;
     for (int r = 0; r < 20; ++r) {
-      const Eigen::Vector3d p = corner + size.cwiseProduct(Eigen::Vector3d(unit(rng), unit(rng), unit(rng)));
+      const Eigen::Vector3d p = corner + size.cwiseProduct(test::draw3(unit, rng));
       for (const test::Key& k : test::referenceRayVoxels(origin + s_min * (p - origin), p, 1.0)) {
         const VoxelIndex v = test::index(k);
         ++tail_voxels;
@@ -95,14 +95,13 @@ TEST(ConeCarver, CarvesLittleMoreThanTheRays) {
   double worst_distance = 0.0;
   for (int trial = 0; trial < 80; ++trial) {
     free.reset(VoxelIndex::Zero(), Eigen::Vector3i::Constant(kBox));
-    const Eigen::Vector3d origin(coord(rng), coord(rng), coord(rng));
-    const Eigen::Vector3i end(static_cast<int>(coord(rng)), static_cast<int>(coord(rng)),
-                              static_cast<int>(coord(rng)));
+    const Eigen::Vector3d origin = test::draw3(coord, rng);
+    const Eigen::Vector3i end = test::draw3(coord, rng).cast<int>();
     const Eigen::Vector3d c = end.cast<double>().array() + 0.5;
     carveCone(origin, end, &free);
     std::set<test::Key> crossed;  // what dense rays into the end voxel cross
     for (int r = 0; r < 150; ++r) {
-      const Eigen::Vector3d target = end.cast<double>() + Eigen::Vector3d(unit(rng), unit(rng), unit(rng));
+      const Eigen::Vector3d target = end.cast<double>() + test::draw3(unit, rng);
       for (const auto& k : test::referenceRayVoxels(origin, target, 1.0, 0.01)) crossed.insert(k);
     }
     crossed_total += crossed.size();

@@ -6,6 +6,7 @@
 
 #include "mlmap/planning/esdf.h"
 #include "mlmap/sim/world.h"
+#include "../support/random_draws.h"
 
 #include <CLI/CLI.hpp>
 
@@ -106,13 +107,12 @@ Row run(const std::string& name, const OccupancyBox& box, UnknownAs unknown_as, 
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::vector<Eigen::Vector3d> random_points(1 << 16);
   for (Eigen::Vector3d& p : random_points) {
-    p = lo + Eigen::Vector3d(u(rng), u(rng), u(rng)).cwiseProduct(extent) * 0.999999;
+    p = lo + test::draw3(u, rng).cwiseProduct(extent) * 0.999999;
   }
   std::vector<Eigen::Vector3d> path_points;
   while (path_points.size() < random_points.size()) {
-    const Eigen::Vector3d start = lo + Eigen::Vector3d(u(rng), u(rng), u(rng)).cwiseProduct(extent);
-    const Eigen::Vector3d dir =
-        Eigen::Vector3d(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized();
+    const Eigen::Vector3d start = lo + test::draw3(u, rng).cwiseProduct(extent);
+    const Eigen::Vector3d dir = (test::draw3(u, rng) - Eigen::Vector3d::Constant(0.5)).normalized();
     for (int i = 0; i < 40 && path_points.size() < random_points.size(); ++i) {
       path_points.push_back(start + dir * (0.05 * i));
     }

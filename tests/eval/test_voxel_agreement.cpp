@@ -1,4 +1,5 @@
 #include "mlmap/eval/voxel_agreement.h"
+#include "../support/random_draws.h"
 
 #include <gtest/gtest.h>
 
@@ -48,8 +49,8 @@ TEST(VoxelAgreement, MatchesABruteForceOnRandomSets) {
   std::uniform_int_distribution<int> coord(-6, 6);
   for (int trial = 0; trial < 20; ++trial) {
     std::vector<VoxelIndex> a, b;
-    for (int i = 0; i < 150; ++i) a.emplace_back(coord(rng), coord(rng), coord(rng));
-    for (int i = 0; i < 120; ++i) b.emplace_back(coord(rng), coord(rng), coord(rng));
+    for (int i = 0; i < 150; ++i) a.push_back(test::draw3(coord, rng));
+    for (int i = 0; i < 120; ++i) b.push_back(test::draw3(coord, rng));
     const VoxelSet sa(a.begin(), a.end()), sb(b.begin(), b.end());
     std::size_t inter = 0, ma = 0, mb = 0;
     auto near = [](const VoxelIndex& p, const VoxelSet& s) {

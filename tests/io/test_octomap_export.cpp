@@ -2,6 +2,7 @@
 
 #include "../support/small_flight.h"
 #include "mlmap/io/octomap_export.h"
+#include "../support/random_draws.h"
 
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
@@ -24,7 +25,7 @@ TEST(OctomapExport, OctomapKeysAreFloorOfCoordinateOverResolutionLikeMlmapVoxels
   for (double res : {0.2, 0.1, 0.05, 0.02}) {
     octomap::OcTree tree(res);
     for (int i = 0; i < 20000; ++i) {
-      Eigen::Vector3d p(coordinate(rng), coordinate(rng), coordinate(rng));
+      Eigen::Vector3d p = test::draw3(coordinate, rng);
       if (i % 4 == 0) p = (p / res).array().round().matrix() * res;  // on cell borders too
       const VoxelIndex g = voxelIndexOf(p, res);
       const octomap::OcTreeKey key = tree.coordToKey(p.x(), p.y(), p.z());

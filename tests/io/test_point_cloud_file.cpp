@@ -2,6 +2,7 @@
 
 #include "../support/expect_throw.h"
 #include "cloud_file_writers.h"
+#include "../support/random_draws.h"
 
 #include <gtest/gtest.h>
 
@@ -31,7 +32,7 @@ std::vector<Eigen::Vector3d> samplePoints() {
   std::uniform_real_distribution<double> u(-40.0, 40.0);
   std::vector<Eigen::Vector3d> p;
   for (int i = 0; i < 60; ++i) {
-    p.emplace_back(u(rng), u(rng), u(rng) * 0.1);
+    p.push_back(test::draw3(u, rng).cwiseProduct(Eigen::Vector3d(1.0, 1.0, 0.1)));
     if (i % 9 == 4) p.back().y() = kNaN;
   }
   return p;

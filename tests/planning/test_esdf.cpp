@@ -1,4 +1,5 @@
 #include "mlmap/planning/esdf.h"
+#include "../support/random_draws.h"
 
 #include <gtest/gtest.h>
 
@@ -401,7 +402,8 @@ TEST(Esdf, GradientMatchesFiniteDifferences) {
     Eigen::Vector3d p;
     for (int a = 0; a < 3; ++a) {
       std::uniform_int_distribution<int> cell(-1, box.size[a] - 1);
-      const double u = cell(rng) + frac(rng);
+      const int whole = cell(rng);
+      const double u = whole + frac(rng);
       if (u < -0.45 || u > box.size[a] - 0.55) {
         p[a] = std::numeric_limits<double>::quiet_NaN();
         continue;
@@ -439,7 +441,7 @@ TEST(Esdf, BorderHalfCellsHoldTheBorderValue) {
   for (int i = 0; i < 300; ++i) {
     const int axis = i % 3;
     const bool upper = (i / 3) % 2 == 1;
-    Eigen::Vector3d p = lo + Eigen::Vector3d(u(rng), u(rng), u(rng)).cwiseProduct(hi - lo);
+    Eigen::Vector3d p = lo + test::draw3(u, rng).cwiseProduct(hi - lo);
     p[axis] = upper ? hi[axis] - half(rng) * res : lo[axis] + half(rng) * res;
     Eigen::Vector3d on_plane = p;
     on_plane[axis] = upper ? hi[axis] - 0.5 * res : lo[axis] + 0.5 * res;

@@ -1,4 +1,5 @@
 #include "mlmap/planning/map_snapshot.h"
+#include "../support/random_draws.h"
 
 #include <gtest/gtest.h>
 
@@ -98,10 +99,11 @@ TEST(MapSnapshot, SegmentChecksMatchBruteForce) {
   std::uniform_real_distribution<double> len(0.0, 1.0);
   int free_count[2] = {0, 0};
   for (int i = 0; i < 4000; ++i) {
-    const Eigen::Vector3d a(x(rng), y(rng), z(rng));
+    const Eigen::Vector3d a = test::draw3(x, y, z, rng);
     // Short and long segments, some axis-aligned.
-    Eigen::Vector3d b(x(rng), y(rng), z(rng));
-    b = a + (b - a) * len(rng) * len(rng);
+    Eigen::Vector3d b = test::draw3(x, y, z, rng);
+    const double stretch = len(rng);
+    b = a + (b - a) * stretch * len(rng);
     if (i % 10 == 0) b.y() = a.y();
     if (i % 20 == 0) b.z() = a.z();
     for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
@@ -126,8 +128,8 @@ TEST(MapSnapshot, BoxChecksMatchBruteForce) {
   std::uniform_real_distribution<double> half(0.01, 0.35);
   int free_count = 0;
   for (int i = 0; i < 1500; ++i) {
-    const Eigen::Vector3d centre(c(rng), 0.6 * c(rng), 0.4 * c(rng));
-    const Eigen::Vector3d h(half(rng), half(rng), half(rng));
+    const Eigen::Vector3d centre = test::draw3(c, rng).cwiseProduct(Eigen::Vector3d(1.0, 0.6, 0.4));
+    const Eigen::Vector3d h = test::draw3(half, rng);
     for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
       const bool expected = bruteBoxFree(*window, centre - h, centre + h, policy);
       ASSERT_EQ(snap.isBoxFree(centre - h, centre + h, policy), expected)

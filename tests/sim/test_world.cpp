@@ -1,4 +1,5 @@
 #include "mlmap/sim/world.h"
+#include "../support/random_draws.h"
 
 #include <gtest/gtest.h>
 
@@ -43,8 +44,7 @@ RayStats compareWithBruteForce(const World& world, const Eigen::AlignedBox3d& aa
   const Vector3d lo = aabb.min() - margin;
   const Vector3d hi = aabb.max() + margin;
   auto sample = [&](const Vector3d& a, const Vector3d& b) {
-    return Vector3d(a.x() + unit(rng) * (b.x() - a.x()), a.y() + unit(rng) * (b.y() - a.y()),
-                    a.z() + unit(rng) * (b.z() - a.z()));
+    return Vector3d(a + test::draw3(unit, rng).cwiseProduct(b - a));
   };
   RayStats stats;
   while (stats.rays < num_rays) {
@@ -152,9 +152,9 @@ TEST(WorldRaycast, DefaultRoomMatchesBruteForce) {
   const int kRays = 150;
   const double time_s = 10.0;  // the person is in the room
   for (int i = 0; i < kRays;) {
-    const Vector3d o(ux(rng), uy(rng), uz(rng));
+    const Vector3d o = test::draw3(ux, uy, uz, rng);
     if (world.isOccupiedAt(o, time_s)) continue;
-    const Vector3d d = Vector3d(n(rng), n(rng), 0.3 * n(rng)).normalized();
+    const Vector3d d = test::draw3(n, rng).cwiseProduct(Vector3d(1.0, 1.0, 0.3)).normalized();
     ++i;
     double t_ref = 0.0;
     double t_hit = 0.0;
@@ -282,10 +282,10 @@ TEST(WorldRaycast, CandidatesGiveTheSameHits) {
   RayCandidates candidates;
   int hits = 0;
   for (int bundle = 0; bundle < 60; ++bundle) {
-    const Vector3d o(1 + 28 * unit(rng), 1 + 18 * unit(rng), 0.2 + 3.5 * unit(rng));
+    const Vector3d o = Vector3d(1.0, 1.0, 0.2) + test::draw3(unit, rng).cwiseProduct(Vector3d(28.0, 18.0, 3.5));
     const double time_s = 16.0 * unit(rng);
     // A random pyramid: an axis with two orthogonal spreads.
-    const Vector3d axis = Vector3d(n(rng), n(rng), 0.3 * n(rng)).normalized();
+    const Vector3d axis = test::draw3(n, rng).cwiseProduct(Vector3d(1.0, 1.0, 0.3)).normalized();
     const Vector3d side = axis.unitOrthogonal();
     const Vector3d up = axis.cross(side);
     const double a = 0.02 + 0.3 * unit(rng);
