@@ -51,6 +51,9 @@ constexpr double kPoseWait_s = 0.5;            // wall time a frame may wait for
 // only serves the rate gates (status, a gated layer whose period ran out) and the ESDF the
 // planning thread republishes.
 constexpr std::chrono::milliseconds kPublishPoll{20};
+// On shutdown, how long the reliable writers may wait for their readers to acknowledge the final
+// state (a lost sample is repaired only while the participant lives).
+constexpr std::chrono::milliseconds kShutdownAckWait{2000};
 
 // Log reasons (one line per reason and second).
 enum Reason : int {
@@ -583,6 +586,27 @@ struct MappingNode::Impl {
     publish_cv.notify_one();
   }
 
+  /// Gives the readers up to kShutdownAckWait in all to acknowledge what was written, so that a
+  /// final state lost on the way is sent again before the participant goes (on a loaded machine
+  /// the end-to-end test once received no global map at all: 1 run in 6 with the static analysis
+  /// beside it, none in 8 with this wait).
+  void waitForAcknowledgments() {
+    const Clock::time_point deadline = Clock::now() + kShutdownAckWait;
+    for (fdds::DataWriter* w : {global_writer, grid_writer, local_writer, status_writer, tf_writer,
+                                tf_static_writer, awareness_writer, esdf_block_writer, esdf_slice_writer}) {
+      if (w == nullptr) continue;
+      const auto left = std::chrono::duration_cast<std::chrono::nanoseconds>(deadline - Clock::now());
+      if (left.count() <= 0) break;
+      const auto s = std::chrono::duration_cast<std::chrono::seconds>(left);
+      if (w->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(
+              static_cast<std::int32_t>(s.count()), static_cast<std::uint32_t>((left - s).count()))) !=
+          eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
+        log.log(LogLevel::kWarning, kReasonDds,
+                "shutdown: " + w->get_topic()->get_name() + " not acknowledged by every reader in time");
+      }
+    }
+  }
+
   // ---- Publishing thread -------------------------------------------------------------------
   void write(fdds::DataWriter* writer, void* msg) {
     if (writer == nullptr) return;
@@ -753,6 +777,7 @@ struct MappingNode::Impl {
     }
     publish_cv.notify_all();
     if (publish_thread.joinable()) publish_thread.join();  // publishes the final state once
+    waitForAcknowledgments();
     // Readers first (their listeners die with us), then everything else.
     participant.reset();
     listeners.clear();

@@ -89,7 +89,8 @@ inline constexpr std::uint32_t kLocalhostMaxInitialPeersRange = 32;
 /// ROS 2 "sensor data" QoS: BEST_EFFORT, VOLATILE, KEEP_LAST depth (5).
 eprosima::fastdds::dds::DataReaderQos sensorReaderQos(int depth = 5);
 /// ROS 2 default QoS for a writer: RELIABLE, VOLATILE, KEEP_LAST depth (10), synchronous publish
-/// mode, PREALLOCATED_WITH_REALLOC history memory (as rmw_fastrtps).
+/// mode, PREALLOCATED_WITH_REALLOC history memory (as rmw_fastrtps); heartbeats every 0.1 s
+/// instead of Fast DDS's 3 s, so that a lost sample is repaired quickly.
 eprosima::fastdds::dds::DataWriterQos reliableWriterQos(int depth = 10);
 /// Latched ("map") writer: RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 1 (late joiners get the last one).
 eprosima::fastdds::dds::DataWriterQos latchedWriterQos();
