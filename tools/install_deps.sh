@@ -10,7 +10,7 @@ case "${1:-}" in
 esac
 
 packages=(
-  g++ make cmake ninja-build           # toolchain (Ninja: the test command's trees, 11 % faster than make)
+  g++ make cmake ninja-build           # toolchain (Ninja builds the test command's trees)
   libeigen3-dev                        # mapping core
   libyaml-cpp-dev                      # configuration files
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev  # depth PNGs, map pictures
