@@ -1,29 +1,30 @@
 #include "mlmap/awareness/awareness_stage.h"
 
+#include "mlmap/awareness/point_kernel.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
 #include <numeric>
 
-// Hot loops get an AVX2 clone next to the portable one, picked at load time (GCC ifunc).
+// countBits() gets a popcnt clone next to the portable one, picked at load time (GCC ifunc).
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && \
     !defined(__SANITIZE_THREAD__)
-#define MLMAP_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
 #define MLMAP_POPCNT_CLONES __attribute__((target_clones("popcnt", "default")))
 #else
-#define MLMAP_VECTOR_CLONES
 #define MLMAP_POPCNT_CLONES
 #endif
 
 namespace mlmap {
 namespace {
-constexpr std::uint32_t kCutFlag = 0x80000000u;
-// Keys of points that are not in a box voxel (box keys stay far below these).
-constexpr std::uint32_t kOutsideCutKey = 0xFFFFFFFCu;  // kOutsideHitKey - 1
-constexpr std::uint32_t kOutsideHitKey = 0xFFFFFFFDu;
-constexpr std::uint32_t kTooCloseKey = 0xFFFFFFFEu;
-constexpr std::uint32_t kNonFiniteKey = 0xFFFFFFFFu;
+// The point kernel's keys, by shorter names.
+constexpr std::uint32_t kCutFlag = kPointCutFlag;
+constexpr std::uint32_t kOutsideCutKey = kPointOutsideCutKey;
+constexpr std::uint32_t kTooCloseKey = kPointTooCloseKey;
+constexpr std::uint32_t kNonFiniteKey = kPointNonFiniteKey;
+static_assert(kPointOutsideCutKey + 1 == kPointOutsideHitKey && kPointOutsideHitKey + 1 == kTooCloseKey &&
+              kTooCloseKey + 1 == kNonFiniteKey, "the point loop tests key >= kOutsideCutKey");
 // Matches no key: box keys stay below it (the box holds far fewer than 2^31 voxels).
 constexpr std::uint32_t kNoRunKey = kOutsideCutKey - 1;
 // A bin's shared cone stops where the bin is this many voxels wide. Thinner bins overlap more:
@@ -41,101 +42,6 @@ std::uint32_t hashKey(std::uint32_t key) {
   key *= 0x846ca68bu;
   key ^= key >> 16;
   return key;
-}
-
-// Pass 1 of the point loop on a block of points in structure-of-arrays form: world voxel units
-// w = o + M p (rays beyond the maximum range cut there), the box voxel key or why there is none,
-// and the box-relative coordinates (x, y, z, 0). Straight-line code the compiler vectorises.
-struct PointKernel {
-  std::array<double, 9> m{};           // R_W_S / resolution, row-major
-  std::array<double, 3> o{};           // sensor origin in world voxel units
-  std::array<double, 3> box_origin{};  // scratch box origin (world voxel index)
-  std::array<std::uint32_t, 3> dims{};
-  double min_range2 = 0.0;
-  double max_range = 0.0;
-};
-
-inline int floorToIntVec(double x) {  // floorToInt in a form the vectoriser takes
-  const int i = static_cast<int>(x);
-  return x < static_cast<double>(i) ? i - 1 : i;
-}
-
-// kMayCut false: every point of the block is known to be finite and within the maximum range
-// (the common depth-camera block), so the square root and division that cut the others are left
-// out (the two comparisons stay: cheap, and the same code for both); the results are the same
-// bits.
-template <bool kMayCut>
-[[gnu::always_inline]] inline void classifyPointsImpl(const PointKernel& k, const float* xs,
-                                                     const float* ys, const float* zs,
-                                                     std::size_t n, std::uint32_t* keys,
-                                                     float* coords) {
-  // Locals, so that the compiler knows the stores below do not change them.
-  const double m0 = k.m[0], m1 = k.m[1], m2 = k.m[2], m3 = k.m[3], m4 = k.m[4], m5 = k.m[5];
-  const double m6 = k.m[6], m7 = k.m[7], m8 = k.m[8];
-  const double o0 = k.o[0], o1 = k.o[1], o2 = k.o[2];
-  const double bo0 = k.box_origin[0], bo1 = k.box_origin[1], bo2 = k.box_origin[2];
-  const std::uint32_t d0 = k.dims[0], d1 = k.dims[1], d2 = k.dims[2];
-  const double max_range = k.max_range;
-  const double max_range2 = max_range * max_range;
-  const double min_range2 = k.min_range2;
-  for (std::size_t i = 0; i < n; ++i) {
-    double x = xs[i];
-    double y = ys[i];
-    double z = zs[i];
-    const double r2 = x * x + y * y + z * z;
-    const bool finite = r2 <= std::numeric_limits<double>::max();  // false for NaN and Inf
-    const bool cut = r2 > max_range2;
-    if constexpr (kMayCut) {
-      // min(1, max / |p|): exactly 1 for every point within range (and for NaN), branch-free.
-      const double q = max_range / std::sqrt(r2);
-      const double scale = q < 1.0 ? q : 1.0;
-      // A non-finite point becomes the origin, so that the float -> int conversions below stay
-      // defined (its key says kNonFiniteKey and nothing reads its coordinates).
-      x = finite ? x * scale : 0.0;
-      y = finite ? y * scale : 0.0;
-      z = finite ? z * scale : 0.0;
-    }
-    // World voxel units first, as worldPoint() computes them, then box-relative.
-    const double b0 = (o0 + m0 * x + m1 * y + m2 * z) - bo0;
-    const double b1 = (o1 + m3 * x + m4 * y + m5 * z) - bo1;
-    const double b2 = (o2 + m6 * x + m7 * y + m8 * z) - bo2;
-    const std::uint32_t ix = static_cast<std::uint32_t>(floorToIntVec(b0));
-    const std::uint32_t iy = static_cast<std::uint32_t>(floorToIntVec(b1));
-    const std::uint32_t iz = static_cast<std::uint32_t>(floorToIntVec(b2));
-    const bool inside = (ix < d0) & (iy < d1) & (iz < d2);
-    const std::uint32_t cut_flag = cut ? kCutFlag : 0u;
-    const std::uint32_t voxel = ((ix * d1 + iy) * d2 + iz) | cut_flag;
-    const std::uint32_t outside = kOutsideHitKey - (cut ? 1u : 0u);  // kOutsideCutKey when cut
-    const std::uint32_t valid = r2 <= min_range2 ? kTooCloseKey : inside ? voxel : outside;
-    keys[i] = finite ? valid : kNonFiniteKey;
-    coords[4 * i + 0] = static_cast<float>(b0);
-    coords[4 * i + 1] = static_cast<float>(b1);
-    coords[4 * i + 2] = static_cast<float>(b2);
-    coords[4 * i + 3] = 0.0f;
-  }
-}
-
-// Whether every point is finite and within the maximum range (NaN fails the comparison).
-MLMAP_VECTOR_CLONES bool allWithinRange(const float* xs, const float* ys, const float* zs,
-                                        std::size_t n, double max_range2) {
-  int beyond = 0;  // an OR reduction, which the compiler vectorises
-  for (std::size_t i = 0; i < n; ++i) {
-    const double x = xs[i];
-    const double y = ys[i];
-    const double z = zs[i];
-    beyond |= x * x + y * y + z * z <= max_range2 ? 0 : 1;
-  }
-  return beyond == 0;
-}
-
-MLMAP_VECTOR_CLONES void classifyPoints(const PointKernel& k, const float* xs, const float* ys,
-                                        const float* zs, std::size_t n, std::uint32_t* keys,
-                                        float* coords) {
-  if (allWithinRange(xs, ys, zs, n, k.max_range * k.max_range)) {
-    classifyPointsImpl<false>(k, xs, ys, zs, n, keys, coords);
-  } else {
-    classifyPointsImpl<true>(k, xs, ys, zs, n, keys, coords);
-  }
 }
 
 // VoxelBitset::count() with the popcnt instruction where the CPU has it: the portable build

@@ -1,0 +1,238 @@
+#include "mlmap/awareness/point_kernel.h"
+
+#include <cmath>
+#include <limits>
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define MLMAP_HAVE_AVX2_KERNEL 1
+#include <immintrin.h>
+#endif
+
+// The portable kernel's support check gets an AVX2 clone next to the portable one, picked at load
+// time (GCC ifunc).
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && \
+    !defined(__SANITIZE_THREAD__)
+#define MLMAP_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define MLMAP_VECTOR_CLONES
+#endif
+
+namespace mlmap {
+namespace {
+
+inline int floorToIntVec(double x) {  // floorToInt in a form the vectoriser takes
+  const int i = static_cast<int>(x);
+  return x < static_cast<double>(i) ? i - 1 : i;
+}
+
+// kMayCut false: every point of the block is known to be finite and within the maximum range
+// (the common depth-camera block), so the square root and division that cut the others are left
+// out (the two comparisons stay: cheap, and the same code for both); the results are the same
+// bits.
+template <bool kMayCut>
+[[gnu::always_inline]] inline void classifyPointsImpl(const PointKernel& k, const float* xs,
+                                                     const float* ys, const float* zs,
+                                                     std::size_t n, std::uint32_t* keys,
+                                                     float* coords) {
+  // Locals, so that the compiler knows the stores below do not change them.
+  const double m0 = k.m[0], m1 = k.m[1], m2 = k.m[2], m3 = k.m[3], m4 = k.m[4], m5 = k.m[5];
+  const double m6 = k.m[6], m7 = k.m[7], m8 = k.m[8];
+  const double o0 = k.o[0], o1 = k.o[1], o2 = k.o[2];
+  const double bo0 = k.box_origin[0], bo1 = k.box_origin[1], bo2 = k.box_origin[2];
+  const std::uint32_t d0 = k.dims[0], d1 = k.dims[1], d2 = k.dims[2];
+  const double max_range = k.max_range;
+  const double max_range2 = max_range * max_range;
+  const double min_range2 = k.min_range2;
+  for (std::size_t i = 0; i < n; ++i) {
+    double x = xs[i];
+    double y = ys[i];
+    double z = zs[i];
+    const double r2 = x * x + y * y + z * z;
+    const bool finite = r2 <= std::numeric_limits<double>::max();  // false for NaN and Inf
+    const bool cut = r2 > max_range2;
+    if constexpr (kMayCut) {
+      // min(1, max / |p|): exactly 1 for every point within range (and for NaN), branch-free.
+      const double q = max_range / std::sqrt(r2);
+      const double scale = q < 1.0 ? q : 1.0;
+      // A non-finite point becomes the origin, so that the float -> int conversions below stay
+      // defined (its key says kPointNonFiniteKey and nothing reads its coordinates).
+      x = finite ? x * scale : 0.0;
+      y = finite ? y * scale : 0.0;
+      z = finite ? z * scale : 0.0;
+    }
+    // World voxel units first, as the awareness stage's worldPoint() computes them, then
+    // box-relative.
+    const double b0 = (o0 + m0 * x + m1 * y + m2 * z) - bo0;
+    const double b1 = (o1 + m3 * x + m4 * y + m5 * z) - bo1;
+    const double b2 = (o2 + m6 * x + m7 * y + m8 * z) - bo2;
+    const std::uint32_t ix = static_cast<std::uint32_t>(floorToIntVec(b0));
+    const std::uint32_t iy = static_cast<std::uint32_t>(floorToIntVec(b1));
+    const std::uint32_t iz = static_cast<std::uint32_t>(floorToIntVec(b2));
+    const bool inside = (ix < d0) & (iy < d1) & (iz < d2);
+    const std::uint32_t cut_flag = cut ? kPointCutFlag : 0u;
+    const std::uint32_t voxel = ((ix * d1 + iy) * d2 + iz) | cut_flag;
+    // kPointOutsideCutKey when cut.
+    const std::uint32_t outside = kPointOutsideHitKey - (cut ? 1u : 0u);
+    const std::uint32_t valid = r2 <= min_range2 ? kPointTooCloseKey : inside ? voxel : outside;
+    keys[i] = finite ? valid : kPointNonFiniteKey;
+    coords[4 * i + 0] = static_cast<float>(b0);
+    coords[4 * i + 1] = static_cast<float>(b1);
+    coords[4 * i + 2] = static_cast<float>(b2);
+    coords[4 * i + 3] = 0.0f;
+  }
+}
+
+// Whether every point is finite and within the maximum range (NaN fails the comparison).
+MLMAP_VECTOR_CLONES bool allWithinRange(const float* xs, const float* ys, const float* zs,
+                                        std::size_t n, double max_range2) {
+  int beyond = 0;  // an OR reduction, which the compiler vectorises
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = xs[i];
+    const double y = ys[i];
+    const double z = zs[i];
+    beyond |= x * x + y * y + z * z <= max_range2 ? 0 : 1;
+  }
+  return beyond == 0;
+}
+
+void classifyPointsPortable(const PointKernel& k, const float* xs, const float* ys,
+                            const float* zs, std::size_t n, std::uint32_t* keys, float* coords) {
+  if (allWithinRange(xs, ys, zs, n, k.max_range * k.max_range)) {
+    classifyPointsImpl<false>(k, xs, ys, zs, n, keys, coords);
+  } else {
+    classifyPointsImpl<true>(k, xs, ys, zs, n, keys, coords);
+  }
+}
+
+#ifdef MLMAP_HAVE_AVX2_KERNEL
+#define MLMAP_AVX2 __attribute__((target("avx2"), always_inline)) inline
+
+// 64-bit lane masks to 32-bit lane masks.
+MLMAP_AVX2 __m128i lanes32(__m256d mask) {
+  const __m256i even_first = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
+  return _mm256_castsi256_si128(
+      _mm256_permutevar8x32_epi32(_mm256_castpd_si256(mask), even_first));
+}
+
+// floorToIntVec for four lanes (the same integer for every double within the int range).
+MLMAP_AVX2 __m128i floorToInt4(__m256d b) { return _mm256_cvttpd_epi32(_mm256_floor_pd(b)); }
+
+// Unsigned i < d for d < 2^31: i >= 0 and i < d, signed.
+MLMAP_AVX2 __m128i below(__m128i i, __m128i d) {
+  return _mm_and_si128(_mm_cmpgt_epi32(d, i), _mm_cmpgt_epi32(i, _mm_set1_epi32(-1)));
+}
+
+// o + m_a x + m_b y + m_c z - box origin, added left to right as classifyPointsImpl does.
+MLMAP_AVX2 __m256d boxUnits(__m256d o, __m256d ma, __m256d mb, __m256d mc, __m256d bo, __m256d x,
+                            __m256d y, __m256d z) {
+  const __m256d w = _mm256_add_pd(
+      _mm256_add_pd(_mm256_add_pd(o, _mm256_mul_pd(ma, x)), _mm256_mul_pd(mb, y)),
+      _mm256_mul_pd(mc, z));
+  return _mm256_sub_pd(w, bo);
+}
+
+// classifyPointsImpl, four points at a time. The square root and the division run only for a
+// group with a point to cut or a non-finite one: whole image regions have none, and every other
+// point's scale is exactly 1, so both ways give the same bits.
+__attribute__((target("avx2"))) void classifyPointsAvx2(const PointKernel& k, const float* xs,
+                                                        const float* ys, const float* zs,
+                                                        std::size_t n, std::uint32_t* keys,
+                                                        float* coords) {
+  const __m256d m0 = _mm256_set1_pd(k.m[0]), m1 = _mm256_set1_pd(k.m[1]), m2 = _mm256_set1_pd(k.m[2]);
+  const __m256d m3 = _mm256_set1_pd(k.m[3]), m4 = _mm256_set1_pd(k.m[4]), m5 = _mm256_set1_pd(k.m[5]);
+  const __m256d m6 = _mm256_set1_pd(k.m[6]), m7 = _mm256_set1_pd(k.m[7]), m8 = _mm256_set1_pd(k.m[8]);
+  const __m256d o0 = _mm256_set1_pd(k.o[0]), o1 = _mm256_set1_pd(k.o[1]), o2 = _mm256_set1_pd(k.o[2]);
+  const __m256d bo0 = _mm256_set1_pd(k.box_origin[0]);
+  const __m256d bo1 = _mm256_set1_pd(k.box_origin[1]);
+  const __m256d bo2 = _mm256_set1_pd(k.box_origin[2]);
+  const __m256d max_range = _mm256_set1_pd(k.max_range);
+  const __m256d max_range2 = _mm256_set1_pd(k.max_range * k.max_range);
+  const __m256d min_range2 = _mm256_set1_pd(k.min_range2);
+  const __m256d largest = _mm256_set1_pd(std::numeric_limits<double>::max());
+  const __m256d one = _mm256_set1_pd(1.0);
+  const __m128i d0 = _mm_set1_epi32(static_cast<int>(k.dims[0]));
+  const __m128i d1 = _mm_set1_epi32(static_cast<int>(k.dims[1]));
+  const __m128i d2 = _mm_set1_epi32(static_cast<int>(k.dims[2]));
+  const __m128i cut_flag = _mm_set1_epi32(static_cast<int>(kPointCutFlag));
+  const __m128i outside_hit = _mm_set1_epi32(static_cast<int>(kPointOutsideHitKey));
+  const __m128i too_close_key = _mm_set1_epi32(static_cast<int>(kPointTooCloseKey));
+  const __m128i non_finite_key = _mm_set1_epi32(static_cast<int>(kPointNonFiniteKey));
+  std::size_t i = 0;
+  for (; i + 4 <= n; i += 4) {
+    __m256d x = _mm256_cvtps_pd(_mm_loadu_ps(xs + i));
+    __m256d y = _mm256_cvtps_pd(_mm_loadu_ps(ys + i));
+    __m256d z = _mm256_cvtps_pd(_mm_loadu_ps(zs + i));
+    const __m256d r2 = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)),
+                                     _mm256_mul_pd(z, z));
+    const __m256d finite = _mm256_cmp_pd(r2, largest, _CMP_LE_OQ);
+    const __m256d cut = _mm256_cmp_pd(r2, max_range2, _CMP_GT_OQ);
+    if (_mm256_movemask_pd(_mm256_andnot_pd(cut, finite)) != 0xF) {
+      const __m256d q = _mm256_div_pd(max_range, _mm256_sqrt_pd(r2));
+      const __m256d scale = _mm256_blendv_pd(one, q, _mm256_cmp_pd(q, one, _CMP_LT_OQ));
+      x = _mm256_and_pd(finite, _mm256_mul_pd(x, scale));
+      y = _mm256_and_pd(finite, _mm256_mul_pd(y, scale));
+      z = _mm256_and_pd(finite, _mm256_mul_pd(z, scale));
+    }
+    const __m256d b0 = boxUnits(o0, m0, m1, m2, bo0, x, y, z);
+    const __m256d b1 = boxUnits(o1, m3, m4, m5, bo1, x, y, z);
+    const __m256d b2 = boxUnits(o2, m6, m7, m8, bo2, x, y, z);
+    const __m128i ix = floorToInt4(b0);
+    const __m128i iy = floorToInt4(b1);
+    const __m128i iz = floorToInt4(b2);
+    const __m128i inside = _mm_and_si128(_mm_and_si128(below(ix, d0), below(iy, d1)), below(iz, d2));
+    const __m128i cut32 = lanes32(cut);
+    const __m128i voxel = _mm_or_si128(
+        _mm_add_epi32(_mm_mullo_epi32(_mm_add_epi32(_mm_mullo_epi32(ix, d1), iy), d2), iz),
+        _mm_and_si128(cut32, cut_flag));
+    const __m128i outside = _mm_add_epi32(outside_hit, cut32);  // the all-ones mask is -1
+    __m128i key = _mm_blendv_epi8(outside, voxel, inside);
+    key = _mm_blendv_epi8(key, too_close_key, lanes32(_mm256_cmp_pd(r2, min_range2, _CMP_LE_OQ)));
+    key = _mm_blendv_epi8(non_finite_key, key, lanes32(finite));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(keys + i), key);
+    // Rounded to nearest, as static_cast<float>; then four (x, y, z, 0) rows.
+    __m128 c0 = _mm256_cvtpd_ps(b0);
+    __m128 c1 = _mm256_cvtpd_ps(b1);
+    __m128 c2 = _mm256_cvtpd_ps(b2);
+    __m128 c3 = _mm_setzero_ps();
+    _MM_TRANSPOSE4_PS(c0, c1, c2, c3);
+    _mm_storeu_ps(coords + 4 * i, c0);
+    _mm_storeu_ps(coords + 4 * i + 4, c1);
+    _mm_storeu_ps(coords + 4 * i + 8, c2);
+    _mm_storeu_ps(coords + 4 * i + 12, c3);
+  }
+  classifyPointsImpl<true>(k, xs + i, ys + i, zs + i, n - i, keys + i, coords + 4 * i);
+}
+#undef MLMAP_AVX2
+#endif
+
+const bool kAvx2Supported = [] {
+#ifdef MLMAP_HAVE_AVX2_KERNEL
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2") != 0;
+#else
+  return false;
+#endif
+}();
+
+}  // namespace
+
+bool pointKernelAvx2Supported() { return kAvx2Supported; }
+
+void classifyPoints(const PointKernel& kernel, const float* xs, const float* ys, const float* zs,
+                    std::size_t n, std::uint32_t* keys, float* coords, PointKernelIsa isa) {
+#ifdef MLMAP_HAVE_AVX2_KERNEL
+  if (isa == PointKernelIsa::kAvx2) {
+    classifyPointsAvx2(kernel, xs, ys, zs, n, keys, coords);
+    return;
+  }
+#endif
+  classifyPointsPortable(kernel, xs, ys, zs, n, keys, coords);
+}
+
+void classifyPoints(const PointKernel& kernel, const float* xs, const float* ys, const float* zs,
+                    std::size_t n, std::uint32_t* keys, float* coords) {
+  classifyPoints(kernel, xs, ys, zs, n, keys, coords,
+                 kAvx2Supported ? PointKernelIsa::kAvx2 : PointKernelIsa::kPortable);
+}
+
+}  // namespace mlmap

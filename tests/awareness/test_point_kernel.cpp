@@ -1,0 +1,213 @@
+#include "mlmap/awareness/point_kernel.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace mlmap {
+namespace {
+
+// What the kernel promises for one point, written out branch by branch (the kernels are
+// branch-free and vectorised).
+void referencePoint(const PointKernel& k, float xf, float yf, float zf, std::uint32_t* key,
+                    float coord[4]) {
+  double p[3] = {xf, yf, zf};
+  const double r2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
+  const bool finite = std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]) &&
+                      std::isfinite(r2);
+  const bool cut = finite && r2 > k.max_range * k.max_range;
+  if (!finite) {
+    p[0] = p[1] = p[2] = 0.0;  // documented: a non-finite point gets the origin's coordinates
+  } else if (cut) {
+    const double scale = k.max_range / std::sqrt(r2);
+    for (double& c : p) c *= scale;
+  }
+  double b[3];
+  std::int64_t index[3];
+  for (int a = 0; a < 3; ++a) {
+    b[a] = (k.o[a] + k.m[3 * a] * p[0] + k.m[3 * a + 1] * p[1] + k.m[3 * a + 2] * p[2]) -
+           k.box_origin[a];
+    index[a] = static_cast<std::int64_t>(std::floor(b[a]));
+    coord[a] = static_cast<float>(b[a]);
+  }
+  coord[3] = 0.0f;
+  bool inside = true;
+  for (int a = 0; a < 3; ++a) inside = inside && index[a] >= 0 && index[a] < k.dims[a];
+  if (!finite) {
+    *key = kPointNonFiniteKey;
+  } else if (r2 <= k.min_range2) {
+    *key = kPointTooCloseKey;
+  } else if (!inside) {
+    *key = cut ? kPointOutsideCutKey : kPointOutsideHitKey;
+  } else {
+    *key = static_cast<std::uint32_t>((index[0] * k.dims[1] + index[1]) * k.dims[2] + index[2]) |
+           (cut ? kPointCutFlag : 0u);
+  }
+}
+
+struct Block {
+  std::vector<float> xs, ys, zs;
+  void add(float x, float y, float z) {
+    xs.push_back(x);
+    ys.push_back(y);
+    zs.push_back(z);
+  }
+};
+
+PointKernel randomKernel(std::mt19937& rng, double resolution_m) {
+  std::uniform_real_distribution<double> angle(-3.2, 3.2);
+  std::uniform_real_distribution<double> position(-50.0, 50.0);
+  const Eigen::Matrix3d R =
+      (Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitZ()) *
+       Eigen::AngleAxisd(angle(rng) / 4.0, Eigen::Vector3d::UnitY()) *
+       Eigen::AngleAxisd(angle(rng) / 4.0, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
+  PointKernel k;
+  const Eigen::Matrix3d M = R / resolution_m;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) k.m[static_cast<std::size_t>(3 * r + c)] = M(r, c);
+  }
+  k.max_range = 6.0;
+  k.min_range2 = 0.1 * 0.1;
+  // The awareness stage's box: the sensor voxel +- the range.
+  const int half = static_cast<int>(std::ceil(k.max_range / resolution_m)) + 1;
+  for (std::size_t a = 0; a < 3; ++a) {
+    k.o[a] = position(rng) / resolution_m;
+    k.box_origin[a] = std::floor(k.o[a]) - half;
+    k.dims[a] = static_cast<std::uint32_t>(2 * half + 1) - (a == 2 ? 20u : 0u);  // z: shorter
+  }
+  return k;
+}
+
+// Points of every kind: within range, beyond it, within the minimum range, zero, NaN, Inf,
+// absurd, and points whose world coordinate lies on a voxel face (as simulated walls do).
+Block randomBlock(std::mt19937& rng, const PointKernel& k, std::size_t n) {
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> kind(0, 19);
+  std::uniform_int_distribution<int> cell(-40, 40);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  Block b;
+  while (b.xs.size() < n) {
+    const float x = 6.5f * u(rng);
+    const float y = 6.5f * u(rng);
+    const float z = 6.5f * u(rng);
+    switch (kind(rng)) {
+      case 0: b.add(nan, y, z); break;
+      case 1: b.add(x, -inf, z); break;
+      case 2: b.add(0.0f, 0.0f, 0.0f); break;
+      case 3: b.add(0.05f * x, 0.05f * y, 0.05f * z); break;  // within the minimum range
+      case 4: b.add(1e30f * x, y, z); break;                  // absurd: cut at the range
+      case 5: b.add(3e38f, -3e38f, 1.0f); break;              // the largest floats: cut
+      case 6: {
+        // A point whose first world coordinate is an integer in voxel units: on a face.
+        const Eigen::Matrix3d M = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(k.m.data());
+        Eigen::Vector3d w(std::floor(k.o[0]) + cell(rng), k.o[1] + y, k.o[2] + z);
+        const Eigen::Vector3d p = M.inverse() * (w - Eigen::Vector3d(k.o[0], k.o[1], k.o[2]));
+        b.add(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+        break;
+      }
+      default: b.add(x, y, z); break;  // within and beyond the range
+    }
+  }
+  return b;
+}
+
+void expectSameBits(const std::vector<std::uint32_t>& keys_a, const std::vector<float>& coords_a,
+                    const std::vector<std::uint32_t>& keys_b, const std::vector<float>& coords_b,
+                    const Block& block, const char* what) {
+  ASSERT_EQ(keys_a.size(), keys_b.size());
+  for (std::size_t i = 0; i < keys_a.size(); ++i) {
+    ASSERT_EQ(keys_a[i], keys_b[i]) << what << ": point " << i << " (" << block.xs[i] << ", "
+                                    << block.ys[i] << ", " << block.zs[i] << ")";
+    ASSERT_EQ(0, std::memcmp(&coords_a[4 * i], &coords_b[4 * i], 4 * sizeof(float)))
+        << what << ": point " << i << " (" << block.xs[i] << ", " << block.ys[i] << ", "
+        << block.zs[i] << ") coordinates " << coords_a[4 * i] << " " << coords_a[4 * i + 1]
+        << " " << coords_a[4 * i + 2] << " against " << coords_b[4 * i] << " "
+        << coords_b[4 * i + 1] << " " << coords_b[4 * i + 2];
+  }
+}
+
+// Every implementation this machine runs gives, point for point, the reference's key and
+// coordinates, bit for bit; in blocks of every length (the AVX2 kernel's 4-point groups and its
+// tail), mixed kinds and blocks that are all within range (the portable kernel's fast branch).
+TEST(PointKernel, EveryImplementationMatchesTheReferenceBitForBit) {
+  std::vector<PointKernelIsa> isas = {PointKernelIsa::kPortable};
+  if (pointKernelAvx2Supported()) isas.push_back(PointKernelIsa::kAvx2);
+  std::mt19937 rng(42);
+  std::size_t checked = 0;
+  std::size_t kinds[5] = {0, 0, 0, 0, 0};  // box voxel, cut box voxel, outside, too close, bad
+  for (int trial = 0; trial < 300; ++trial) {
+    const double resolution_m = trial % 2 == 0 ? 0.1 : 0.2;
+    const PointKernel k = randomKernel(rng, resolution_m);
+    const std::size_t n = static_cast<std::size_t>(trial % 37) + (trial % 3 == 0 ? 1000 : 0);
+    Block block = randomBlock(rng, k, n);
+    if (trial % 5 == 0) {  // all within range: no cut, no bad point
+      for (std::size_t i = 0; i < n; ++i) {
+        const float s = 0.4f;
+        block.xs[i] = std::isfinite(block.xs[i]) ? std::fmod(block.xs[i], 2.0f) * s + 0.5f : 1.0f;
+        block.ys[i] = std::isfinite(block.ys[i]) ? std::fmod(block.ys[i], 2.0f) * s : 0.0f;
+        block.zs[i] = std::isfinite(block.zs[i]) ? std::fmod(block.zs[i], 2.0f) * s : 0.0f;
+      }
+    }
+    std::vector<std::uint32_t> want_keys(n);
+    std::vector<float> want_coords(4 * n);
+    for (std::size_t i = 0; i < n; ++i) {
+      referencePoint(k, block.xs[i], block.ys[i], block.zs[i], &want_keys[i], &want_coords[4 * i]);
+      const std::uint32_t key = want_keys[i];
+      ++kinds[key == kPointNonFiniteKey               ? 4
+              : key == kPointTooCloseKey              ? 3
+              : key >= kPointOutsideCutKey            ? 2
+              : (key & kPointCutFlag) != 0            ? 1
+                                                      : 0];
+    }
+    for (const PointKernelIsa isa : isas) {
+      std::vector<std::uint32_t> keys(n, 0x12345678u);
+      std::vector<float> coords(4 * n, -7.0f);
+      classifyPoints(k, block.xs.data(), block.ys.data(), block.zs.data(), n, keys.data(),
+                     coords.data(), isa);
+      expectSameBits(keys, coords, want_keys, want_coords, block,
+                     isa == PointKernelIsa::kAvx2 ? "AVX2" : "portable");
+      if (HasFatalFailure()) return;
+      checked += n;
+    }
+  }
+  // The cases were all there.
+  for (const std::size_t count : kinds) EXPECT_GT(count, 500u);
+  std::printf("%zu points checked (%zu in box voxels, %zu cut there, %zu outside the box, %zu too "
+              "close, %zu non-finite); AVX2 kernel %s\n",
+              checked, kinds[0], kinds[1], kinds[2], kinds[3], kinds[4],
+              pointKernelAvx2Supported() ? "checked" : "not run (this CPU has no AVX2)");
+}
+
+// Points on voxel faces fall where the double arithmetic puts them, in both kernels: the
+// coordinates of a face point are exact integers or within rounding of one.
+TEST(PointKernel, FacePointsAreKeyedAsTheirCoordinates) {
+  std::mt19937 rng(7);
+  const PointKernel k = randomKernel(rng, 0.2);
+  Block block = randomBlock(rng, k, 4000);
+  std::vector<std::uint32_t> keys(block.xs.size());
+  std::vector<float> coords(4 * block.xs.size());
+  classifyPoints(k, block.xs.data(), block.ys.data(), block.zs.data(), block.xs.size(),
+                 keys.data(), coords.data());
+  std::size_t on_face = 0;
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    if (keys[i] >= kPointOutsideCutKey || (keys[i] & kPointCutFlag) != 0) continue;
+    const std::uint32_t ix = keys[i] / (k.dims[1] * k.dims[2]);
+    const float x = coords[4 * i];
+    if (std::abs(x - std::round(x)) < 1e-4f) ++on_face;
+    // The float coordinate may round onto the next face, never further.
+    EXPECT_GE(x, static_cast<float>(ix)) << i;
+    EXPECT_LE(x, static_cast<float>(ix + 1)) << i;
+  }
+  EXPECT_GT(on_face, 100u);
+}
+
+}  // namespace
+}  // namespace mlmap
