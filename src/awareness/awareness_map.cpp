@@ -5,7 +5,12 @@
 
 namespace mlmap {
 namespace {
+constexpr double kPi = 3.14159265358979323846;
 constexpr double kTwoPi = 6.28318530717958647692;
+// A direction at least this far from a sector boundary (as a fraction of its length: radians)
+// is in the sector the boundary test says, whatever the rounding of atan2, the division and the
+// boundary directions (each about 1e-16).
+constexpr double kBoundaryMargin = 1e-12;
 // Boundary slack so that a cone merely touching a cell edge does not clear it.
 constexpr double kEdgeEpsilon = 1e-9;
 }  // namespace
@@ -15,7 +20,46 @@ AwarenessMap::AwarenessMap(const AwarenessConfig& config)
       phi_cell_rad_(config.phi_cell_rad()),
       cells_(static_cast<std::size_t>(config.rho_cells) * static_cast<std::size_t>(config.phi_cells) *
                  static_cast<std::size_t>(config.z_cells),
-             0) {}
+             0) {
+  for (int i = 0; i <= config.phi_cells; ++i) {
+    const double theta = i * phi_cell_rad_;
+    boundary_cos_.push_back(std::cos(theta));
+    boundary_sin_.push_back(std::sin(theta));
+  }
+}
+
+int AwarenessMap::phiIndex(double dx, double dy, double rho) const {
+  if (rho > 0.0) {
+    // An estimate within a few 1e-5 rad (atan on [0, 1] by a cubic in a^2, then the octant)...
+    const double ax = std::abs(dx);
+    const double ay = std::abs(dy);
+    const double a = std::min(ax, ay) / std::max(ax, ay);
+    const double s = a * a;
+    double phi = ((-0.0464964749 * s + 0.15931422) * s - 0.327622764) * s * a + a;
+    if (ay > ax) phi = 0.5 * kPi - phi;
+    if (dx < 0.0) phi = kPi - phi;
+    if (dy < 0.0) phi = kTwoPi - phi;
+    int i = std::min(static_cast<int>(phi / phi_cell_rad_), config_.phi_cells - 1);
+    // ...then the sector by the side of its two boundaries the direction lies on (one step to a
+    // neighbour when the estimate was next to a boundary). Sectors span at most 90 degrees.
+    const double margin = kBoundaryMargin * rho;
+    for (int step = 0; step < 2; ++step) {
+      const std::size_t k = static_cast<std::size_t>(i);
+      const double past_lo = boundary_cos_[k] * dy - boundary_sin_[k] * dx;
+      const double past_hi = boundary_cos_[k + 1] * dy - boundary_sin_[k + 1] * dx;
+      if (past_lo > margin && past_hi < -margin) return i;
+      if (std::abs(past_lo) <= margin || std::abs(past_hi) <= margin) break;  // on a boundary
+      i = past_lo < 0.0 ? (i == 0 ? config_.phi_cells - 1 : i - 1)
+                        : (i + 1 == config_.phi_cells ? 0 : i + 1);
+    }
+  }
+  // On a boundary (or at the axis): atan2 decides, as it always did.
+  double phi = std::atan2(dy, dx);
+  if (phi < 0.0) phi += kTwoPi;
+  int phi_index = static_cast<int>(phi / phi_cell_rad_);
+  if (phi_index >= config_.phi_cells) phi_index -= config_.phi_cells;  // phi == 2 pi - eps rounding
+  return phi_index;
+}
 
 bool AwarenessMap::cellOf(const Eigen::Vector3d& p_W, AwarenessCell* cell) const {
   const Eigen::Vector3d d = p_W - origin_W_;
@@ -25,12 +69,8 @@ bool AwarenessMap::cellOf(const Eigen::Vector3d& p_W, AwarenessCell* cell) const
   if (!(rho_index < config_.rho_cells) || !(z_index >= 0.0) || !(z_index < config_.z_cells)) {
     return false;
   }
-  double phi = std::atan2(d.y(), d.x());
-  if (phi < 0.0) phi += kTwoPi;
-  int phi_index = static_cast<int>(phi / phi_cell_rad_);
-  if (phi_index >= config_.phi_cells) phi_index -= config_.phi_cells;  // phi == 2 pi - eps rounding
   cell->rho = static_cast<int>(rho_index);
-  cell->phi = phi_index;
+  cell->phi = phiIndex(d.x(), d.y(), rho);
   cell->z = static_cast<int>(z_index);
   return true;
 }
@@ -241,7 +281,8 @@ std::size_t AwarenessMap::count(Occupancy wanted) const {
 std::size_t AwarenessMap::memoryBytes() const {
   return cells_.capacity() + (carried_.capacity() + hits_.capacity()) * sizeof(Carried) +
          hit_cells_.capacity() * sizeof(AwarenessCell) +
-         occupied_points_.capacity() * sizeof(Eigen::Vector3d);
+         occupied_points_.capacity() * sizeof(Eigen::Vector3d) +
+         (boundary_cos_.capacity() + boundary_sin_.capacity()) * sizeof(double);
 }
 
 }  // namespace mlmap

@@ -25,6 +25,56 @@ AwarenessConfig smallConfig() {
   return c;
 }
 
+// The sector as cellOf() computed it with atan2 alone (before the boundary test).
+int referencePhiIndex(const AwarenessConfig& c, double dx, double dy) {
+  double phi = std::atan2(dy, dx);
+  if (phi < 0.0) phi += 2.0 * 3.14159265358979323846;
+  int i = static_cast<int>(phi / c.phi_cell_rad());
+  if (i >= c.phi_cells) i -= c.phi_cells;
+  return i;
+}
+
+// cellOf() finds the sector by the side of the sector boundaries a direction lies on (atan2 only
+// next to a boundary): the same sector as atan2 for random directions, for directions on the
+// boundaries and a hair either side of them, on the axes, and for every sector count.
+TEST(AwarenessMap, SectorOfADirectionIsAtan2s) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> angle(-4.0, 4.0);
+  std::uniform_real_distribution<double> radius(1e-6, 9.0);
+  std::size_t checked = 0;
+  for (const int phi_cells : {4, 7, 90, 180, 360, 4096}) {
+    AwarenessConfig c = smallConfig();
+    c.phi_cells = phi_cells;
+    AwarenessMap map(c);  // origin at 0
+    auto expectSame = [&](double dx, double dy) {
+      AwarenessCell cell;
+      if (!map.cellOf(Eigen::Vector3d(dx, dy, 0.05), &cell)) return;
+      ASSERT_EQ(cell.phi, referencePhiIndex(c, dx, dy))
+          << phi_cells << " sectors, direction (" << dx << ", " << dy << ")";
+      ++checked;
+    };
+    for (int i = 0; i < 20000; ++i) {
+      const double a = angle(rng);
+      const double r = radius(rng);
+      expectSame(r * std::cos(a), r * std::sin(a));
+    }
+    for (int k = 0; k <= phi_cells; ++k) {
+      const double theta = k * c.phi_cell_rad();
+      for (const double off : {0.0, 1e-15, -1e-15, 1e-12, -1e-12, 1e-9, -1e-9, 1e-6, -1e-6}) {
+        for (const double r : {1e-6, 0.5, 5.9}) {
+          expectSame(r * std::cos(theta + off), r * std::sin(theta + off));
+        }
+      }
+    }
+    for (const double r : {0.0, 1e-300, 1.0}) {
+      for (const double sx : {1.0, -1.0, 0.0}) {
+        for (const double sy : {1.0, -1.0, 0.0, -0.0}) expectSame(sx * r, sy * r);
+      }
+    }
+  }
+  EXPECT_GT(checked, 150000u);
+}
+
 // Slow reference: walk the 3D segment from the origin to the hit in 1 mm steps; every cell a
 // sample falls in must be free, except cells hit in this frame.
 void expectRayCleared(const AwarenessMap& map, const Eigen::Vector3d& from,

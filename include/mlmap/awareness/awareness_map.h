@@ -85,6 +85,9 @@ class AwarenessMap {
                static_cast<std::size_t>(config_.z_cells) +
            static_cast<std::size_t>(z);
   }
+  /// floor(atan2(dy, dx) in [0, 2 pi) / sector width): the sector of a direction, by its side of
+  /// the sector boundaries (atan2 only within rounding of a boundary). `rho` = |(dx, dy)|.
+  [[nodiscard]] int phiIndex(double dx, double dy, double rho) const;
   void walkCone(const AwarenessCell& end);
   void clearRange(int phi, int rho, double z_lo, double z_hi);
   void insertSlopes(double lo, double hi);
@@ -92,6 +95,8 @@ class AwarenessMap {
 
   AwarenessConfig config_;
   double phi_cell_rad_;
+  std::vector<double> boundary_cos_;  // direction of sector boundary i (i = 0 .. phi_cells)
+  std::vector<double> boundary_sin_;
   Eigen::Vector3d origin_W_ = Eigen::Vector3d::Zero();
   std::vector<std::uint8_t> cells_;
   struct Carried {
