@@ -30,7 +30,7 @@ void referencePoint(const PointKernel& k, float xf, float yf, float zf, std::uin
   }
   double b[3];
   std::int64_t index[3];
-  for (int a = 0; a < 3; ++a) {
+  for (std::size_t a = 0; a < 3; ++a) {
     b[a] = (k.o[a] + k.m[3 * a] * p[0] + k.m[3 * a + 1] * p[1] + k.m[3 * a + 2] * p[2]) -
            k.box_origin[a];
     index[a] = static_cast<std::int64_t>(std::floor(b[a]));
@@ -70,8 +70,8 @@ PointKernel randomKernel(std::mt19937& rng, double resolution_m) {
           .toRotationMatrix();
   PointKernel k;
   const Eigen::Matrix3d M = R / resolution_m;
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) k.m[static_cast<std::size_t>(3 * r + c)] = M(r, c);
+  for (Eigen::Index r = 0; r < 3; ++r) {
+    for (Eigen::Index c = 0; c < 3; ++c) k.m[static_cast<std::size_t>(3 * r + c)] = M(r, c);
   }
   k.max_range = 6.0;
   k.min_range2 = 0.1 * 0.1;
@@ -119,6 +119,12 @@ Block randomBlock(std::mt19937& rng, const PointKernel& k, std::size_t n) {
   return b;
 }
 
+std::uint32_t bitsOf(float f) {
+  std::uint32_t bits = 0;
+  std::memcpy(&bits, &f, sizeof bits);
+  return bits;
+}
+
 void expectSameBits(const std::vector<std::uint32_t>& keys_a, const std::vector<float>& coords_a,
                     const std::vector<std::uint32_t>& keys_b, const std::vector<float>& coords_b,
                     const Block& block, const char* what) {
@@ -126,7 +132,9 @@ void expectSameBits(const std::vector<std::uint32_t>& keys_a, const std::vector<
   for (std::size_t i = 0; i < keys_a.size(); ++i) {
     ASSERT_EQ(keys_a[i], keys_b[i]) << what << ": point " << i << " (" << block.xs[i] << ", "
                                     << block.ys[i] << ", " << block.zs[i] << ")";
-    ASSERT_EQ(0, std::memcmp(&coords_a[4 * i], &coords_b[4 * i], 4 * sizeof(float)))
+    bool same = true;
+    for (std::size_t j = 4 * i; j < 4 * i + 4; ++j) same = same && bitsOf(coords_a[j]) == bitsOf(coords_b[j]);
+    ASSERT_TRUE(same)
         << what << ": point " << i << " (" << block.xs[i] << ", " << block.ys[i] << ", "
         << block.zs[i] << ") coordinates " << coords_a[4 * i] << " " << coords_a[4 * i + 1]
         << " " << coords_a[4 * i + 2] << " against " << coords_b[4 * i] << " "
