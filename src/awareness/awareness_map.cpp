@@ -30,7 +30,8 @@ AwarenessMap::AwarenessMap(const AwarenessConfig& config)
 
 int AwarenessMap::phiIndex(double dx, double dy, double rho) const {
   if (rho > 0.0) {
-    // An estimate within a few 1e-5 rad (atan on [0, 1] by a cubic in a^2, then the octant)...
+    // An estimate within 2e-4 rad (atan on [0, 1] by a cubic in a^2, then the octant; sectors are
+    // at least 1.5e-3 rad wide)...
     const double ax = std::abs(dx);
     const double ay = std::abs(dy);
     const double a = std::min(ax, ay) / std::max(ax, ay);

@@ -23,8 +23,9 @@ constexpr std::uint32_t kCutFlag = kPointCutFlag;
 constexpr std::uint32_t kOutsideCutKey = kPointOutsideCutKey;
 constexpr std::uint32_t kTooCloseKey = kPointTooCloseKey;
 constexpr std::uint32_t kNonFiniteKey = kPointNonFiniteKey;
-static_assert(kPointOutsideCutKey + 1 == kPointOutsideHitKey && kPointOutsideHitKey + 1 == kTooCloseKey &&
-              kTooCloseKey + 1 == kNonFiniteKey, "the point loop tests key >= kOutsideCutKey");
+static_assert(kOutsideCutKey + 1 == kPointOutsideHitKey && kPointOutsideHitKey + 1 == kTooCloseKey &&
+                  kTooCloseKey + 1 == kNonFiniteKey,
+              "the point loop tells the keys that are no box voxel by key >= kOutsideCutKey");
 // Matches no key: box keys stay below it (the box holds far fewer than 2^31 voxels).
 constexpr std::uint32_t kNoRunKey = kOutsideCutKey - 1;
 // A bin's shared cone stops where the bin is this many voxels wide. Thinner bins overlap more:

@@ -138,10 +138,18 @@ __attribute__((target("avx2"))) void classifyPointsAvx2(const PointKernel& k, co
                                                         const float* ys, const float* zs,
                                                         std::size_t n, std::uint32_t* keys,
                                                         float* coords) {
-  const __m256d m0 = _mm256_set1_pd(k.m[0]), m1 = _mm256_set1_pd(k.m[1]), m2 = _mm256_set1_pd(k.m[2]);
-  const __m256d m3 = _mm256_set1_pd(k.m[3]), m4 = _mm256_set1_pd(k.m[4]), m5 = _mm256_set1_pd(k.m[5]);
-  const __m256d m6 = _mm256_set1_pd(k.m[6]), m7 = _mm256_set1_pd(k.m[7]), m8 = _mm256_set1_pd(k.m[8]);
-  const __m256d o0 = _mm256_set1_pd(k.o[0]), o1 = _mm256_set1_pd(k.o[1]), o2 = _mm256_set1_pd(k.o[2]);
+  const __m256d m0 = _mm256_set1_pd(k.m[0]);
+  const __m256d m1 = _mm256_set1_pd(k.m[1]);
+  const __m256d m2 = _mm256_set1_pd(k.m[2]);
+  const __m256d m3 = _mm256_set1_pd(k.m[3]);
+  const __m256d m4 = _mm256_set1_pd(k.m[4]);
+  const __m256d m5 = _mm256_set1_pd(k.m[5]);
+  const __m256d m6 = _mm256_set1_pd(k.m[6]);
+  const __m256d m7 = _mm256_set1_pd(k.m[7]);
+  const __m256d m8 = _mm256_set1_pd(k.m[8]);
+  const __m256d o0 = _mm256_set1_pd(k.o[0]);
+  const __m256d o1 = _mm256_set1_pd(k.o[1]);
+  const __m256d o2 = _mm256_set1_pd(k.o[2]);
   const __m256d bo0 = _mm256_set1_pd(k.box_origin[0]);
   const __m256d bo1 = _mm256_set1_pd(k.box_origin[1]);
   const __m256d bo2 = _mm256_set1_pd(k.box_origin[2]);
@@ -179,7 +187,8 @@ __attribute__((target("avx2"))) void classifyPointsAvx2(const PointKernel& k, co
     const __m128i ix = floorToInt4(b0);
     const __m128i iy = floorToInt4(b1);
     const __m128i iz = floorToInt4(b2);
-    const __m128i inside = _mm_and_si128(_mm_and_si128(below(ix, d0), below(iy, d1)), below(iz, d2));
+    const __m128i inside =
+        _mm_and_si128(_mm_and_si128(below(ix, d0), below(iy, d1)), below(iz, d2));
     const __m128i cut32 = lanes32(cut);
     const __m128i voxel = _mm_or_si128(
         _mm_add_epi32(_mm_mullo_epi32(_mm_add_epi32(_mm_mullo_epi32(ix, d1), iy), d2), iz),

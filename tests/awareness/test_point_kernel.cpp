@@ -107,7 +107,8 @@ Block randomBlock(std::mt19937& rng, const PointKernel& k, std::size_t n) {
       case 5: b.add(3e38f, -3e38f, 1.0f); break;              // the largest floats: cut
       case 6: {
         // A point whose first world coordinate is an integer in voxel units: on a face.
-        const Eigen::Matrix3d M = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(k.m.data());
+        using RowMajor3d = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
+        const Eigen::Matrix3d M = Eigen::Map<const RowMajor3d>(k.m.data());
         Eigen::Vector3d w(std::floor(k.o[0]) + cell(rng), k.o[1] + y, k.o[2] + z);
         const Eigen::Vector3d p = M.inverse() * (w - Eigen::Vector3d(k.o[0], k.o[1], k.o[2]));
         b.add(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
@@ -133,7 +134,9 @@ void expectSameBits(const std::vector<std::uint32_t>& keys_a, const std::vector<
     ASSERT_EQ(keys_a[i], keys_b[i]) << what << ": point " << i << " (" << block.xs[i] << ", "
                                     << block.ys[i] << ", " << block.zs[i] << ")";
     bool same = true;
-    for (std::size_t j = 4 * i; j < 4 * i + 4; ++j) same = same && bitsOf(coords_a[j]) == bitsOf(coords_b[j]);
+    for (std::size_t j = 4 * i; j < 4 * i + 4; ++j) {
+      same = same && bitsOf(coords_a[j]) == bitsOf(coords_b[j]);
+    }
     ASSERT_TRUE(same)
         << what << ": point " << i << " (" << block.xs[i] << ", " << block.ys[i] << ", "
         << block.zs[i] << ") coordinates " << coords_a[4 * i] << " " << coords_a[4 * i + 1]

@@ -2,8 +2,8 @@
 /// @file
 /// The awareness stage's per-point kernel (pass 1 of its point loop): sensor-frame points, in
 /// blocks of structure-of-arrays form, to the key of the scratch-box voxel they fall in (or why
-/// there is none) and their box-relative coordinates. Public for its tests and benchmarks; the
-/// awareness stage is its only user.
+/// there is none) and their box-relative coordinates. Public for its tests; the awareness stage
+/// is its only user.
 ///
 /// Two implementations give the same bits: a portable one (plain C++ the compiler vectorises)
 /// and, on x86-64 CPUs that have it, an AVX2 one (the same IEEE operations in the same order,
