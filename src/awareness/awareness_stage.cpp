@@ -18,16 +18,12 @@
 
 namespace mlmap {
 namespace {
-// The point kernel's keys, by shorter names.
-constexpr std::uint32_t kCutFlag = kPointCutFlag;
-constexpr std::uint32_t kOutsideCutKey = kPointOutsideCutKey;
-constexpr std::uint32_t kTooCloseKey = kPointTooCloseKey;
-constexpr std::uint32_t kNonFiniteKey = kPointNonFiniteKey;
-static_assert(kOutsideCutKey + 1 == kPointOutsideHitKey && kPointOutsideHitKey + 1 == kTooCloseKey &&
-                  kTooCloseKey + 1 == kNonFiniteKey,
-              "the point loop tells the keys that are no box voxel by key >= kOutsideCutKey");
+static_assert(kPointOutsideCutKey + 1 == kPointOutsideHitKey &&
+                  kPointOutsideHitKey + 1 == kPointTooCloseKey &&
+                  kPointTooCloseKey + 1 == kPointNonFiniteKey,
+              "the point loop tells the keys that are no box voxel by key >= kPointOutsideCutKey");
 // Matches no key: box keys stay below it (the box holds far fewer than 2^31 voxels).
-constexpr std::uint32_t kNoRunKey = kOutsideCutKey - 1;
+constexpr std::uint32_t kNoRunKey = kPointOutsideCutKey - 1;
 // A bin's shared cone stops where the bin is this many voxels wide. Thinner bins overlap more:
 // a voxel lies in about ((1 + w) / w)^2 cones of width w, so one voxel wide made every free voxel
 // about six times; two voxels wide cut the carving cost by a third at 0.1 m for 1.09-1.11x
@@ -128,7 +124,7 @@ std::uint32_t AwarenessStage::findOrAddEnd(std::uint32_t full_key) {
       const std::uint32_t k =
           static_cast<std::uint32_t>((static_cast<std::size_t>(v.x()) * box_dims_.y() + v.y()) *
                                          box_dims_.z() + v.z()) |
-          (ends_[e].cut ? kCutFlag : 0u);
+          (ends_[e].cut ? kPointCutFlag : 0u);
       std::uint32_t h = hashKey(k) & mask;
       while (bigger[h].stamp == stamp_) h = (h + 1) & mask;
       bigger[h] = {stamp_, k, e};
@@ -142,14 +138,14 @@ std::uint32_t AwarenessStage::findOrAddEnd(std::uint32_t full_key) {
     if (slot.stamp != stamp_) {
       slot = {stamp_, full_key, static_cast<std::uint32_t>(ends_.size())};
       // Decoded here, once per end voxel rather than once per run of points (three divisions).
-      const std::uint32_t voxel = full_key & ~kCutFlag;
+      const std::uint32_t voxel = full_key & ~kPointCutFlag;
       const std::uint32_t dim_y = static_cast<std::uint32_t>(box_dims_.y());
       const std::uint32_t dim_z = static_cast<std::uint32_t>(box_dims_.z());
       End e;
       e.voxel = Eigen::Vector3i(static_cast<int>(voxel / (dim_y * dim_z)),
                                 static_cast<int>((voxel / dim_z) % dim_y),
                                 static_cast<int>(voxel % dim_z));
-      e.cut = (full_key & kCutFlag) != 0;
+      e.cut = (full_key & kPointCutFlag) != 0;
       e.points.min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
       e.points.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
       ends_.push_back(e);
@@ -425,10 +421,10 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
       const std::size_t at = i++;
       const std::uint32_t key = keys[at];
       const Eigen::Array4f v = Eigen::Array4f::Map(coords[at].data());
-      if (key >= kOutsideCutKey) {
-        if (key == kNonFiniteKey) {
+      if (key >= kPointOutsideCutKey) {
+        if (key == kPointNonFiniteKey) {
           ++c.rejected_non_finite;
-        } else if (key == kTooCloseKey) {
+        } else if (key == kPointTooCloseKey) {
           ++c.rejected_too_close;
         } else {
           // Beyond what the local map can hold; the awareness map and the carving still use it.
@@ -436,7 +432,7 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
           e.voxel = Eigen::Vector3i::Constant(-1);
           e.points = {v.head<3>().matrix(), v.head<3>().matrix()};
           e.p_W = worldPoint(at);
-          e.cut = key == kOutsideCutKey;
+          e.cut = key == kPointOutsideCutKey;
           c.beyond_max_range += e.cut ? 1 : 0;
           outside_.push_back(e);
         }
@@ -450,7 +446,7 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
       const Slot& slot = table_[hashKey(key) & mask];
       last = &ends_[slot.stamp == stamp_ && slot.key == key ? slot.end : findOrAddEnd(key)];
       last_key = key;
-      last_cut = key >> 31;  // kCutFlag
+      last_cut = key >> 31;  // kPointCutFlag
       if (last->points.min.x() > last->points.max.x()) last->p_W = worldPoint(at);  // first point
       run_min = run_max = v;
       c.beyond_max_range += last_cut;

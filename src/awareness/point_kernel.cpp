@@ -8,15 +8,6 @@
 #include <immintrin.h>
 #endif
 
-// The portable kernel's support check gets an AVX2 clone next to the portable one, picked at load
-// time (GCC ifunc).
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && \
-    !defined(__SANITIZE_THREAD__)
-#define MLMAP_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define MLMAP_VECTOR_CLONES
-#endif
-
 namespace mlmap {
 namespace {
 
@@ -82,9 +73,10 @@ template <bool kMayCut>
   }
 }
 
-// Whether every point is finite and within the maximum range (NaN fails the comparison).
-MLMAP_VECTOR_CLONES bool allWithinRange(const float* xs, const float* ys, const float* zs,
-                                        std::size_t n, double max_range2) {
+// Whether every point is finite and within the maximum range (NaN fails the comparison). No
+// AVX2 clone: a CPU with AVX2 runs classifyPointsAvx2 instead.
+bool allWithinRange(const float* xs, const float* ys, const float* zs,
+                    std::size_t n, double max_range2) {
   int beyond = 0;  // an OR reduction, which the compiler vectorises
   for (std::size_t i = 0; i < n; ++i) {
     const double x = xs[i];
