@@ -8,7 +8,12 @@
 // (tools/bench_dds_latency.sh). --speed maps flight time onto those stamps (flight time = speed
 // x wall time), poses included, so faster flights stay consistent. --prerender renders and
 // encodes every frame before streaming, so a slow simulator cannot delay the frames.
+//
+// Clouds are offered with data-sharing unless dds.data_sharing is false: a same-host mlmap_node
+// then reads them in this process's shared memory (see createDataSharingCloudWriter()). Exit
+// status 1 when a frame could not be written.
 
+#include "mlmap/dds/cloud_sample.h"
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/node_config.h"
 #include "mlmap/dds/participant.h"
@@ -218,35 +223,6 @@ int main(int argc, char** argv) {
       throw std::runtime_error("the configuration disables the " + mode + " or pose topic");
     }
 
-    mlmap::dds::ParticipantPtr participant = mlmap::dds::createParticipant(config.dds, "mlmap_sensor_publisher");
-    fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
-    const auto ns = config.dds.ns;
-    // Sensor drivers and odometry publish best-effort (ROS 2 sensor data QoS; PX4 does too), and
-    // mlmap_node reads best-effort: that is what its readers get from this writer. The writer
-    // offers RELIABLE (KEEP_LAST 5, so it never blocks) because Fast DDS 2.9.1's best-effort
-    // writers do not drop a same-host reader's UDP locator when shared memory reaches it
-    // (eProsima/Fast-DDS#3655, fixed after 2.9.1; Jazzy's 2.14 has the fix): every 4.9 MB cloud
-    // crossed loopback UDP too, which doubled its transport cost in the latency benchmark.
-    const fdds::DataWriterQos sensor_qos = mlmap::dds::reliableWriterQos(5);
-    fdds::DataWriter* sensor_writer =
-        depth_mode ? mlmap::dds::createWriter<mlmap::dds::sensor_msgs::Image_PubSubType>(publisher, mlmap::dds::ddsTopicName(ns, sensor_topic), sensor_qos)
-                   : mlmap::dds::createWriter<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(publisher, mlmap::dds::ddsTopicName(ns, sensor_topic), sensor_qos);
-    fdds::DataWriter* info_writer =
-        depth_mode ? mlmap::dds::createWriter<mlmap::dds::sensor_msgs::CameraInfo_PubSubType>(publisher, mlmap::dds::ddsTopicName(ns, topics.camera_info), sensor_qos)
-                   : nullptr;
-    fdds::DataWriter* pose_writer = mlmap::dds::createWriter<mlmap::dds::geometry_msgs::PoseStamped_PubSubType>(
-        publisher, mlmap::dds::ddsTopicName(ns, topics.pose), sensor_qos);
-
-    // Wait for the mapping node (matching is asynchronous; frames sent before it are lost). A
-    // writer can see its match before the reader has matched it: a short grace period after.
-    std::vector<fdds::DataWriter*> writers = {sensor_writer, pose_writer};
-    if (info_writer != nullptr) writers.push_back(info_writer);
-    const bool matched = waitForReaders(writers, wait_s);
-    if (matched) std::this_thread::sleep_for(std::chrono::milliseconds(250));
-    fdds::PublicationMatchedStatus sensor_matched;
-    sensor_writer->get_publication_matched_status(sensor_matched);
-    if (!matched) spdlog::warn("not every topic has a subscriber after {} s: publishing anyway", wait_s);
-
     const int available = replay ? static_cast<int>(replay->size())
                                  : static_cast<int>(std::floor(scenario->trajectory.duration_s() * rate_hz)) + 1;
     const int frames = max_frames > 0 ? std::min(max_frames, available) : available;
@@ -281,6 +257,47 @@ int main(int argc, char** argv) {
       }
       return prepared;
     };
+    mlmap::dds::ParticipantPtr participant = mlmap::dds::createParticipant(config.dds, "mlmap_sensor_publisher");
+    fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+    const auto ns = config.dds.ns;
+    // Sensor drivers and odometry publish best-effort (ROS 2 sensor data QoS; PX4 does too), and
+    // mlmap_node reads best-effort: that is what its readers get from this writer. The writer
+    // offers RELIABLE (KEEP_LAST 5, so it never blocks) because Fast DDS 2.9.1's best-effort
+    // writers do not drop a same-host reader's UDP locator when shared memory reaches it
+    // (eProsima/Fast-DDS#3655, fixed after 2.9.1; Jazzy's 2.14 has the fix): every 4.9 MB cloud
+    // crossed loopback UDP too, which doubled its transport cost in the latency benchmark.
+    const fdds::DataWriterQos sensor_qos = mlmap::dds::reliableWriterQos(5);
+    const std::string sensor_dds_topic = mlmap::dds::ddsTopicName(ns, sensor_topic);
+    fdds::DataWriter* sensor_writer = nullptr;
+    std::uint32_t cloud_bytes = 0;  // every cloud's serialised size, with data-sharing
+    if (depth_mode) {
+      sensor_writer = mlmap::dds::createWriter<mlmap::dds::sensor_msgs::Image_PubSubType>(publisher, sensor_dds_topic, sensor_qos);
+    } else if (config.dds.data_sharing) {
+      // Every cloud has the size of the first (one camera): the writer's slots get that size.
+      PreparedFrame first = prepare(0);
+      mlmap::dds::sensor_msgs::PointCloud2_PubSubType plain;
+      cloud_bytes = plain.getSerializedSizeProvider(&*first.cloud)();
+      sensor_writer = mlmap::dds::createDataSharingCloudWriter(publisher, sensor_dds_topic, sensor_qos, cloud_bytes);
+      spdlog::info("clouds of {:.2f} MB offered with data-sharing (dds.data_sharing)", cloud_bytes / 1e6);
+    } else {
+      sensor_writer = mlmap::dds::createWriter<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(publisher, sensor_dds_topic, sensor_qos);
+    }
+    fdds::DataWriter* info_writer =
+        depth_mode ? mlmap::dds::createWriter<mlmap::dds::sensor_msgs::CameraInfo_PubSubType>(publisher, mlmap::dds::ddsTopicName(ns, topics.camera_info), sensor_qos)
+                   : nullptr;
+    fdds::DataWriter* pose_writer = mlmap::dds::createWriter<mlmap::dds::geometry_msgs::PoseStamped_PubSubType>(
+        publisher, mlmap::dds::ddsTopicName(ns, topics.pose), sensor_qos);
+
+    // Wait for the mapping node (matching is asynchronous; frames sent before it are lost). A
+    // writer can see its match before the reader has matched it: a short grace period after.
+    std::vector<fdds::DataWriter*> writers = {sensor_writer, pose_writer};
+    if (info_writer != nullptr) writers.push_back(info_writer);
+    const bool matched = waitForReaders(writers, wait_s);
+    if (matched) std::this_thread::sleep_for(std::chrono::milliseconds(250));
+    fdds::PublicationMatchedStatus sensor_matched;
+    sensor_writer->get_publication_matched_status(sensor_matched);
+    if (!matched) spdlog::warn("not every topic has a subscriber after {} s: publishing anyway", wait_s);
+
     std::vector<PreparedFrame> prerendered;
     if (prerender) {
       const auto render_start = Clock::now();
@@ -307,7 +324,7 @@ int main(int argc, char** argv) {
     const double wall0_s = mlmap::dds::wallClockNow_s();
     const double pose_period_s = 1.0 / pose_rate_hz;
     long pose_k = 0;
-    int sent = 0, late = 0;
+    int sent = 0, late = 0, failed = 0;
     double max_late_ms = 0.0;
     constexpr double kLate_ms = 5.0;
     auto publishPose = [&](const Transform& T_W_B, double stamp_s) {
@@ -335,13 +352,21 @@ int main(int argc, char** argv) {
         }
       }
       frame.setStamp(stamp_s);
+      bool written = true;
       if (depth_mode) {
-        info_writer->write(&*frame.info);
-        sensor_writer->write(&*frame.image);
+        const bool info_written = info_writer->write(&*frame.info);
+        written = sensor_writer->write(&*frame.image) && info_written;
       } else {
-        sensor_writer->write(&*frame.cloud);
+        written = sensor_writer->write(&*frame.cloud);
       }
-      ++sent;
+      if (written) {
+        ++sent;
+      } else if (failed++ == 0) {
+        spdlog::error("frame {}: the DDS write failed{}", i,
+                      cloud_bytes > 0 ? " (data-sharing: a cloud larger than the first, or every "
+                                        "slot still held by a reader that has not taken it)"
+                                      : "");
+      }
       if (frames >= 10 && (i + 1) % (frames / 10) == 0) {
         spdlog::info("{} / {} frames published", i + 1, frames);
       }
@@ -349,13 +374,14 @@ int main(int argc, char** argv) {
     if (late > 0) {
       spdlog::warn("{} of {} frames left more than {} ms after their capture time (max {:.1f} ms; "
                    "their latency includes it): {}",
-                   late, sent, kLate_ms, max_late_ms,
+                   late, sent + failed, kLate_ms, max_late_ms,
                    prerender ? "the machine is busy" : "the simulator is slower than --rate (try --prerender)");
     }
+    if (failed > 0) spdlog::error("{} of {} frames could not be written", failed, sent + failed);
     std::this_thread::sleep_for(std::chrono::milliseconds(300));  // let the last samples leave
     spdlog::info("done: {} frames published; at most {:.2f} ms after their capture time", sent,
                  max_late_ms);
-    return 0;
+    return failed > 0 ? 1 : 0;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 1;

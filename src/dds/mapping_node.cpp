@@ -194,7 +194,9 @@ struct MappingNode::Impl {
           count(&NodeCounters::inputs_malformed);
           log.log(LogLevel::kWarning, kReasonMalformed, what);
         });
-    createReader<PubSubType>(subscriber, topic(name), sensorReaderQos(), listener.get());
+    fdds::DataReaderQos qos = sensorReaderQos();
+    if (!config.dds.data_sharing) qos.data_sharing().off();
+    createReader<PubSubType>(subscriber, topic(name), qos, listener.get());
     listeners.push_back(std::move(listener));
   }
 

@@ -23,6 +23,7 @@ void readDdsSection(io::Section& top, DdsConfig* dds) {
   s.read("profiles_file", &dds->profiles_file);
   s.read("participant_profile", &dds->participant_profile);
   s.read("large_data", &dds->large_data);
+  s.read("data_sharing", &dds->data_sharing);
   s.read("world_frame", &dds->world_frame);
   s.read("body_frame", &dds->body_frame);
   s.read("sensor_frame", &dds->sensor_frame);
@@ -157,6 +158,7 @@ std::string toYaml(const NodeConfig& config) {
   text("profiles_file", d.profiles_file);
   text("participant_profile", d.participant_profile);
   out << YAML::Key << "large_data" << YAML::Value << d.large_data;
+  out << YAML::Key << "data_sharing" << YAML::Value << d.data_sharing;
   text("world_frame", d.world_frame);
   text("body_frame", d.body_frame);
   text("sensor_frame", d.sensor_frame);

@@ -238,6 +238,11 @@ ParticipantPtr createParticipant(const DdsConfig& config, const std::string& nam
   return ParticipantPtr(participant);
 }
 
+// Payloads sized by each sample, reused. Not PREALLOCATED_WITH_REALLOC (rmw_fastrtps's choice):
+// Fast DDS 2.9 turns that into PREALLOCATED, payloads of the type's size bound and larger samples
+// dropped, for a type that says it is bounded, as CloudSamplePubSubType does.
+constexpr auto kHistoryMemory = frtps::DYNAMIC_REUSABLE_MEMORY_MODE;
+
 fdds::DataReaderQos sensorReaderQos(int depth) {
   checkDepth(depth);
   fdds::DataReaderQos qos = fdds::DATAREADER_QOS_DEFAULT;
@@ -245,7 +250,7 @@ fdds::DataReaderQos sensorReaderQos(int depth) {
   qos.durability().kind = fdds::VOLATILE_DURABILITY_QOS;
   qos.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
   qos.history().depth = depth;
-  qos.endpoint().history_memory_policy = frtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  qos.endpoint().history_memory_policy = kHistoryMemory;
   return qos;
 }
 
@@ -257,7 +262,10 @@ fdds::DataWriterQos reliableWriterQos(int depth) {
   qos.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
   qos.history().depth = depth;
   qos.publish_mode().kind = fdds::SYNCHRONOUS_PUBLISH_MODE;
-  qos.endpoint().history_memory_policy = frtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  qos.endpoint().history_memory_policy = kHistoryMemory;
+  // A data-sharing writer keeps its samples in fixed slots of the type's size bound, and
+  // CloudSamplePubSubType's bound is no real one (see there): a map layer would not fit.
+  qos.data_sharing().off();
   // A lost sample is repaired when a reader answers the writer's heartbeat; Fast DDS's default
   // period is 3 s, so a map layer lost once on a loaded machine stayed missing for seconds, or
   // for good when the node stopped first. Fast DDS sends periodic heartbeats only while a sample

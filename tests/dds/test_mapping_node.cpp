@@ -1,6 +1,7 @@
 // The mapping node's input side over DDS: malformed samples (bad CDR, bad layouts, bad values,
 // bad poses, bad stamps) are rejected and counted while good frames keep being mapped.
 // Participants on loopback only (DiscoveryRange::kLocalhost), domains 170..189.
+#include "mlmap/dds/cloud_sample.h"
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/mapping_node.h"
 #include "mlmap/dds/participant.h"
@@ -13,6 +14,10 @@
 #include "nav_msgs/msg/Odometry_PubSubTypes.h"
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
 
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/rtps/transport/test_UDPv4TransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
+#include <fastrtps/xmlparser/XMLProfileManager.h>
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -118,18 +123,49 @@ TEST(TakeListener, PayloadsFastCdrCannotParseAreCountedOnceAndTheNextSampleArriv
 
 // ---- The node ------------------------------------------------------------------------------
 
+/// How SensorSide publishes.
+struct SensorOptions {
+  /// > 0: the clouds' writer offers data-sharing (createDataSharingCloudWriter), as
+  /// mlmap_sensor_publisher's does, for clouds of up to this many bytes.
+  std::uint32_t data_sharing_cloud_bytes = 0;
+  /// The sensor's one transport (UDPv4 on 127.0.0.1) drops every DATA_FRAG it would send: a
+  /// sample larger than a fragment reaches no reader through it.
+  bool transport_drops_fragments = false;
+  double wall_step_m = 0.05;  ///< spacing of the wall's points (0.005: 0.45 MB clouds)
+};
+
+/// The sensor side's main participant: the test's LOCALHOST one, or the same with only a UDPv4
+/// transport that drops DATA_FRAG submessages (Fast DDS's test transport), on 127.0.0.1.
+ParticipantPtr sensorParticipant(int domain_id, bool drop_fragments) {
+  if (!drop_fragments) return createParticipant(localhostConfig(domain_id), "sensor_side");
+  ParticipantSetup setup = participantSetup(localhostConfig(domain_id), "sensor_side");
+  auto udp = std::make_shared<eprosima::fastdds::rtps::test_UDPv4TransportDescriptor>();
+  udp->dropDataFragMessagesPercentage = 100;
+  udp->maxInitialPeersRange = kLocalhostMaxInitialPeersRange;
+  setup.qos.transport().use_builtin_transports = false;
+  setup.qos.transport().user_transports = {udp};
+  eprosima::fastrtps::rtps::Locator_t loopback;
+  eprosima::fastrtps::rtps::IPLocator::setIPv4(loopback, "127.0.0.1");
+  setup.qos.wire_protocol().default_unicast_locator_list.push_back(loopback);
+  return ParticipantPtr(fdds::DomainParticipantFactory::get_instance()->create_participant(
+      static_cast<fdds::DomainId_t>(setup.domain_id), setup.qos));
+}
+
 /// A vehicle hovering at (0, 0, 1) facing +x, a wall at x = 3 m: stamped poses and clouds as a
 /// sensor driver and an odometry source would publish them to a MappingNode.
 class SensorSide {
  public:
-  SensorSide(int domain_id, const NodeConfig& node_config)
+  SensorSide(int domain_id, const NodeConfig& node_config, const SensorOptions& options = {})
       : config_(node_config),
-        participant_(createParticipant(localhostConfig(domain_id), "sensor_side")),
+        participant_(sensorParticipant(domain_id, options.transport_drops_fragments)),
         raw_participant_(createParticipant(localhostConfig(domain_id), "raw_sensor_side")) {
     fdds::Publisher* publisher = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
     const TopicNames& topics = config_.dds.topics;
-    cloud_ = createWriter<sensor_msgs::PointCloud2_PubSubType>(publisher, "rt/" + topics.cloud,
-                                                               reliableWriterQos(50));
+    cloud_ = options.data_sharing_cloud_bytes > 0
+                 ? createDataSharingCloudWriter(publisher, "rt/" + topics.cloud, reliableWriterQos(50),
+                                                options.data_sharing_cloud_bytes)
+                 : createWriter<sensor_msgs::PointCloud2_PubSubType>(publisher, "rt/" + topics.cloud,
+                                                                     reliableWriterQos(50));
     if (!topics.pose.empty()) {
       pose_ = createWriter<geometry_msgs::PoseStamped_PubSubType>(publisher, "rt/" + topics.pose,
                                                                   reliableWriterQos(50));
@@ -141,8 +177,9 @@ class SensorSide {
     raw_cloud_ = rawWriter(raw_participant_.get(), "rt/" + topics.cloud, kCloudType);
     T_W_B_.translation() = Eigen::Vector3d(0.0, 0.0, 1.0);
     const Transform T_S_W = (T_W_B_ * config_.map.sensor.T_B_S()).inverse();
-    for (double y = -1.0; y <= 1.0; y += 0.05) {
-      for (double z = 0.5; z <= 1.5; z += 0.05) {
+    const double step = options.wall_step_m;
+    for (double y = -1.0; y <= 1.0; y += step) {
+      for (double z = 0.5; z <= 1.5; z += step) {
         wall_S_.push_back((T_S_W * Eigen::Vector3d(3.0, y, z)).cast<float>());
       }
     }
@@ -389,6 +426,64 @@ TEST(MappingNodeInput, OdometryInsteadOfPoseStampedPairsAndMaps) {
   EXPECT_EQ(node.counters().poses_received, 6u);
   EXPECT_EQ(node.engineStats().frames_mapped, 3u);
   EXPECT_GT(node.engineStats().points.hit_voxels, 0u);
+}
+
+/// Fast DDS's delivery between participants of one process, which bypasses transports and
+/// data-sharing alike, switched off while it lives (set before the participants are made).
+class NoIntraprocessDelivery {
+ public:
+  NoIntraprocessDelivery() : saved_(eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings()) {
+    eprosima::fastrtps::LibrarySettingsAttributes off = saved_;
+    off.intraprocess_delivery = eprosima::fastrtps::INTRAPROCESS_OFF;
+    eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(off);
+  }
+  ~NoIntraprocessDelivery() { eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(saved_); }
+  NoIntraprocessDelivery(const NoIntraprocessDelivery&) = delete;
+  NoIntraprocessDelivery& operator=(const NoIntraprocessDelivery&) = delete;
+
+ private:
+  eprosima::fastrtps::LibrarySettingsAttributes saved_;
+};
+
+// mlmap_sensor_publisher's cloud writer offers data-sharing. Here the sensor's one transport
+// drops every DATA_FRAG it sends, so its 0.45 MB clouds (many fragments) reach the node only by
+// data-sharing: with dds.data_sharing true every frame is mapped; with false no cloud arrives,
+// while the poses (one small DATA each) still do. (Delivery within the process is off, as
+// between mlmap_sensor_publisher and mlmap_node.)
+TEST(MappingNodeInput, CloudsOfADataSharingWriterAreReadInItsMemoryUnlessDataSharingIsOff) {
+  const NoIntraprocessDelivery between_processes;
+  for (const bool data_sharing : {true, false}) {
+    SCOPED_TRACE(data_sharing ? "dds.data_sharing true" : "dds.data_sharing false");
+    const int domain_id = data_sharing ? 174 : 175;
+    NodeConfig config = nodeConfig(domain_id);
+    config.dds.data_sharing = data_sharing;
+    MappingNode node(config);
+    SensorOptions options;
+    options.wall_step_m = 0.005;
+    options.transport_drops_fragments = true;
+    {
+      const SensorSide sizing(domain_id, config, options);
+      sensor_msgs::PointCloud2_ msg = sizing.wallCloud(0.0);
+      options.data_sharing_cloud_bytes = sensor_msgs::PointCloud2_PubSubType().getSerializedSizeProvider(&msg)();
+    }
+    ASSERT_GT(options.data_sharing_cloud_bytes, 400'000u) << "the cloud must span many fragments";
+    SensorSide sensor(domain_id, config, options);
+    ASSERT_TRUE(sensor.matched());
+    for (int k = 0; k < 3; ++k) {
+      sensor.frame(400.0 + 0.1 * k);
+      if (data_sharing) {
+        ASSERT_TRUE(mapped(node, static_cast<std::uint64_t>(k) + 1));
+      }
+    }
+    ASSERT_TRUE(counted(node, &NodeCounters::poses_received, 6));
+    if (data_sharing) {
+      EXPECT_EQ(node.counters().clouds_received, 3u);
+      EXPECT_GT(node.engineStats().points.hit_voxels, 0u);
+    } else {
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+      EXPECT_EQ(node.counters().clouds_received, 0u) << "the transport was to drop every cloud";
+    }
+  }
 }
 
 }  // namespace

@@ -560,13 +560,17 @@ TEST(Participant, DomainAndRangeFromTheEnvironmentAreTheOnesUsed) {
 
 // ---- QoS presets ---------------------------------------------------------------------------
 
+// Also the two deliberate differences from rmw_fastrtps: DYNAMIC_REUSABLE history memory (not
+// PREALLOCATED_WITH_REALLOC, which Fast DDS fixes to the size bound that CloudSamplePubSubType
+// claims) and writers that never offer data-sharing (their slots would have that size too).
 TEST(QosPresets, MatchRos2AndRmwFastrtps) {
   const fdds::DataReaderQos sensor = sensorReaderQos();
   EXPECT_EQ(sensor.reliability().kind, fdds::BEST_EFFORT_RELIABILITY_QOS);
   EXPECT_EQ(sensor.durability().kind, fdds::VOLATILE_DURABILITY_QOS);
   EXPECT_EQ(sensor.history().kind, fdds::KEEP_LAST_HISTORY_QOS);
   EXPECT_EQ(sensor.history().depth, 5);
-  EXPECT_EQ(sensor.endpoint().history_memory_policy, frtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE);
+  EXPECT_EQ(sensor.endpoint().history_memory_policy, frtps::DYNAMIC_REUSABLE_MEMORY_MODE);
+  EXPECT_EQ(sensor.data_sharing().kind(), fdds::AUTO);
 
   const fdds::DataWriterQos writer = reliableWriterQos();
   EXPECT_EQ(writer.reliability().kind, fdds::RELIABLE_RELIABILITY_QOS);
@@ -574,7 +578,8 @@ TEST(QosPresets, MatchRos2AndRmwFastrtps) {
   EXPECT_EQ(writer.history().kind, fdds::KEEP_LAST_HISTORY_QOS);
   EXPECT_EQ(writer.history().depth, 10);
   EXPECT_EQ(writer.publish_mode().kind, fdds::SYNCHRONOUS_PUBLISH_MODE);
-  EXPECT_EQ(writer.endpoint().history_memory_policy, frtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE);
+  EXPECT_EQ(writer.endpoint().history_memory_policy, frtps::DYNAMIC_REUSABLE_MEMORY_MODE);
+  EXPECT_EQ(writer.data_sharing().kind(), fdds::OFF);
   EXPECT_EQ(reliableWriterQos(3).history().depth, 3);
 
   const fdds::DataWriterQos latched = latchedWriterQos();
@@ -583,12 +588,13 @@ TEST(QosPresets, MatchRos2AndRmwFastrtps) {
   EXPECT_EQ(latched.history().kind, fdds::KEEP_LAST_HISTORY_QOS);
   EXPECT_EQ(latched.history().depth, 1);
   EXPECT_EQ(latched.publish_mode().kind, fdds::SYNCHRONOUS_PUBLISH_MODE);
+  EXPECT_EQ(latched.data_sharing().kind(), fdds::OFF);
 
   const fdds::DataReaderQos reader = reliableReaderQos();
   EXPECT_EQ(reader.reliability().kind, fdds::RELIABLE_RELIABILITY_QOS);
   EXPECT_EQ(reader.durability().kind, fdds::VOLATILE_DURABILITY_QOS);
   EXPECT_EQ(reader.history().depth, 10);
-  EXPECT_EQ(reader.endpoint().history_memory_policy, frtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE);
+  EXPECT_EQ(reader.endpoint().history_memory_policy, frtps::DYNAMIC_REUSABLE_MEMORY_MODE);
   const fdds::DataReaderQos latched_reader = reliableReaderQos(true, 1);
   EXPECT_EQ(latched_reader.durability().kind, fdds::TRANSIENT_LOCAL_DURABILITY_QOS);
   EXPECT_EQ(latched_reader.history().depth, 1);

@@ -51,7 +51,9 @@ run() {  # run <name> <security yaml lines>
   local name=$1 dir=$out/$1
   mkdir -p "$dir"
   printf 'local_map: {size_cells: [45, 45, 25]}\npipeline: {input_queue_capacity: 64}\n' > "$dir/node.yaml"
-  printf 'dds:\n  ns: %s\n  world_frame: %s\n  sensor_frame: %s\n  discovery_range: "OFF"\n  profiles_file: %s\n  participant_profile: mlmap_loopback_udp_only\n%s' \
+  # data_sharing off: the clouds must cross the wire that is captured (with security on, Fast DDS
+  # would not use data-sharing anyway).
+  printf 'dds:\n  ns: %s\n  world_frame: %s\n  sensor_frame: %s\n  data_sharing: false\n  discovery_range: "OFF"\n  profiles_file: %s\n  participant_profile: mlmap_loopback_udp_only\n%s' \
     "$ns_marker" "$frame_marker" "$sensor_marker" "$repo/config/dds/loopback_udp_only.xml" "$2" >> "$dir/node.yaml"
   local sensor=() ground=()
   [ "$name" != plain ] && sensor=(--enclave /mlmap/sensor) ground=(--enclave /ground/monitor)

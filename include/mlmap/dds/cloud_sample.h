@@ -9,8 +9,13 @@
 
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
 
+#include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/Publisher.hpp>
+#include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
+
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace mlmap::dds {
@@ -27,6 +32,13 @@ struct CloudSample : sensor_msgs::PointCloud2_ {
 /// participant that reads clouds as CloudSample. serialize() takes any PointCloud2_ (a
 /// CloudSample is one); deserialize() and createData() need / make a CloudSample. Register it
 /// for every PointCloud2 topic of that participant (registerType() refuses a mix).
+///
+/// It says it is bounded, which it is not: Fast DDS 2.9 lets a reader use data-sharing (read a
+/// same-host writer's samples in the writer's shared memory, with no transport copies) only for
+/// a type that says so, and checks nothing else of it. The claim would cost where Fast DDS
+/// preallocates payloads (PREALLOCATED or PREALLOCATED_WITH_REALLOC history memory: payloads of
+/// the type's size bound, far below a sensor's cloud, and larger samples dropped), so the QoS
+/// helpers of participant.h use DYNAMIC_REUSABLE and no data-sharing writer.
 class CloudSamplePubSubType : public sensor_msgs::PointCloud2_PubSubType {
  public:
   /// Reads the message's fields as the generated type does, except data_: its bytes are
@@ -35,6 +47,19 @@ class CloudSamplePubSubType : public sensor_msgs::PointCloud2_PubSubType {
   bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t* payload, void* data) override;
   void* createData() override;
   void deleteData(void* data) override;
+  bool is_bounded() const override { return true; }
 };
+
+/// A writer of PointCloud2 samples of up to `max_bytes` serialised (encapsulation included: the
+/// generated type's getSerializedSizeProvider()) on `dds_topic`, which offers data-sharing: a
+/// same-host reader that accepts it (mlmap_node unless dds.data_sharing is false) reads each
+/// cloud in this writer's shared-memory history, with none of the transports' copies; any other
+/// reader gets it through the transports. Registers its own PointCloud2 type (bounded by
+/// max_bytes), so the participant must hold no other PointCloud2 type. `qos` as for any writer;
+/// its history's depth + 1 slots of max_bytes are allocated in shared memory up front, and a
+/// larger sample fails to write. Throws std::runtime_error when Fast DDS refuses an entity.
+eprosima::fastdds::dds::DataWriter* createDataSharingCloudWriter(
+    eprosima::fastdds::dds::Publisher* publisher, const std::string& dds_topic,
+    eprosima::fastdds::dds::DataWriterQos qos, std::uint32_t max_bytes);
 
 }  // namespace mlmap::dds

@@ -124,6 +124,10 @@ struct DdsConfig {
   std::string participant_profile; ///< participant profile to use, from profiles_file or from
                                    ///< FASTRTPS_DEFAULT_PROFILES_FILE ("": the factory default)
   bool large_data = true;          ///< 16 MB shared-memory segment, 4 MB socket buffers (multi-MB clouds)
+  /// Clouds from a same-host Fast DDS writer that offers data-sharing (mlmap_sensor_publisher
+  /// does) are read from its history in shared memory, not through a transport; the publisher
+  /// follows this key too. Other writers (a ROS 2 driver) reach the node as before.
+  bool data_sharing = true;
   std::string world_frame = "map";         ///< frame_id of the maps and parent of rt/tf
   std::string body_frame = "base_link";    ///< child of rt/tf, parent of the sensor on rt/tf_static
   std::string sensor_frame = "camera_depth_optical_frame";  ///< child on rt/tf_static

@@ -82,15 +82,16 @@ inline constexpr std::uint32_t kLargeDataSocketBufferBytes = 4u * 1024u * 1024u;
 /// Participants per host that find each other with kLocalhost (ports tried per initial peer).
 inline constexpr std::uint32_t kLocalhostMaxInitialPeersRange = 32;
 
-// The QoS helpers throw std::invalid_argument for depth < 1. Every one uses
-// PREALLOCATED_WITH_REALLOC history memory, so samples larger than the type's bounded estimate
-// (every PointCloud2 of a real sensor) fit.
+// The QoS helpers throw std::invalid_argument for depth < 1. Every one uses DYNAMIC_REUSABLE
+// history memory (payloads sized by each sample, then reused), so samples of any size fit, also
+// of a type that claims a size bound (CloudSamplePubSubType).
 
-/// ROS 2 "sensor data" QoS: BEST_EFFORT, VOLATILE, KEEP_LAST depth (5).
+/// ROS 2 "sensor data" QoS: BEST_EFFORT, VOLATILE, KEEP_LAST depth (5); data-sharing AUTO (used
+/// with a same-host writer that offers it, for a type that says it is bounded).
 eprosima::fastdds::dds::DataReaderQos sensorReaderQos(int depth = 5);
 /// ROS 2 default QoS for a writer: RELIABLE, VOLATILE, KEEP_LAST depth (10), synchronous publish
-/// mode, PREALLOCATED_WITH_REALLOC history memory (as rmw_fastrtps); heartbeats every 0.1 s
-/// instead of Fast DDS's 3 s, so that a lost sample is repaired quickly.
+/// mode, no data-sharing; heartbeats every 0.1 s instead of Fast DDS's 3 s, so that a lost sample
+/// is repaired quickly.
 eprosima::fastdds::dds::DataWriterQos reliableWriterQos(int depth = 10);
 /// Latched ("map") writer: RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 1 (late joiners get the last one).
 eprosima::fastdds::dds::DataWriterQos latchedWriterQos();
