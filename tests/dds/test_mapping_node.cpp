@@ -125,9 +125,9 @@ TEST(TakeListener, PayloadsFastCdrCannotParseAreCountedOnceAndTheNextSampleArriv
 
 /// How SensorSide publishes.
 struct SensorOptions {
-  /// > 0: the clouds' writer offers data-sharing (createDataSharingCloudWriter), as
-  /// mlmap_sensor_publisher's does, for clouds of up to this many bytes.
-  std::uint32_t data_sharing_cloud_bytes = 0;
+  /// The clouds' writer offers data-sharing (createDataSharingCloudWriter, bounded by the wall
+  /// cloud's size), as mlmap_sensor_publisher's does.
+  bool data_sharing = false;
   /// The sensor's one transport (UDPv4 on 127.0.0.1) drops every DATA_FRAG it would send: a
   /// sample larger than a fragment reaches no reader through it.
   bool transport_drops_fragments = false;
@@ -159,13 +159,25 @@ class SensorSide {
       : config_(node_config),
         participant_(sensorParticipant(domain_id, options.transport_drops_fragments)),
         raw_participant_(createParticipant(localhostConfig(domain_id), "raw_sensor_side")) {
+    T_W_B_.translation() = Eigen::Vector3d(0.0, 0.0, 1.0);
+    const Transform T_S_W = (T_W_B_ * config_.map.sensor.T_B_S()).inverse();
+    const double step = options.wall_step_m;
+    for (double y = -1.0; y <= 1.0; y += step) {
+      for (double z = 0.5; z <= 1.5; z += step) {
+        wall_S_.push_back((T_S_W * Eigen::Vector3d(3.0, y, z)).cast<float>());
+      }
+    }
     fdds::Publisher* publisher = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
     const TopicNames& topics = config_.dds.topics;
-    cloud_ = options.data_sharing_cloud_bytes > 0
-                 ? createDataSharingCloudWriter(publisher, "rt/" + topics.cloud, reliableWriterQos(50),
-                                                options.data_sharing_cloud_bytes)
-                 : createWriter<sensor_msgs::PointCloud2_PubSubType>(publisher, "rt/" + topics.cloud,
-                                                                     reliableWriterQos(50));
+    if (options.data_sharing) {
+      sensor_msgs::PointCloud2_ msg = wallCloud(0.0);  // every wall cloud has this size
+      cloud_bytes_ = sensor_msgs::PointCloud2_PubSubType().getSerializedSizeProvider(&msg)();
+      cloud_ = createDataSharingCloudWriter(publisher, "rt/" + topics.cloud, reliableWriterQos(50),
+                                            cloud_bytes_);
+    } else {
+      cloud_ = createWriter<sensor_msgs::PointCloud2_PubSubType>(publisher, "rt/" + topics.cloud,
+                                                                 reliableWriterQos(50));
+    }
     if (!topics.pose.empty()) {
       pose_ = createWriter<geometry_msgs::PoseStamped_PubSubType>(publisher, "rt/" + topics.pose,
                                                                   reliableWriterQos(50));
@@ -175,15 +187,10 @@ class SensorSide {
                                                               reliableWriterQos(50));
     }
     raw_cloud_ = rawWriter(raw_participant_.get(), "rt/" + topics.cloud, kCloudType);
-    T_W_B_.translation() = Eigen::Vector3d(0.0, 0.0, 1.0);
-    const Transform T_S_W = (T_W_B_ * config_.map.sensor.T_B_S()).inverse();
-    const double step = options.wall_step_m;
-    for (double y = -1.0; y <= 1.0; y += step) {
-      for (double z = 0.5; z <= 1.5; z += step) {
-        wall_S_.push_back((T_S_W * Eigen::Vector3d(3.0, y, z)).cast<float>());
-      }
-    }
   }
+
+  /// Serialised size of the data-sharing writer's clouds (0 without data-sharing) [bytes].
+  [[nodiscard]] std::uint32_t cloudBytes() const { return cloud_bytes_; }
 
   /// Waits until the node's readers matched every writer.
   bool matched() const {
@@ -245,6 +252,7 @@ class SensorSide {
   fdds::DataWriter* pose_ = nullptr;
   fdds::DataWriter* odometry_ = nullptr;
   fdds::DataWriter* raw_cloud_ = nullptr;
+  std::uint32_t cloud_bytes_ = 0;
   Transform T_W_B_ = Transform::Identity();
   std::vector<Eigen::Vector3f> wall_S_;
 };
@@ -325,7 +333,8 @@ TEST(MappingNodeInput, MalformedCloudsAreRejectedCountedLoggedOnceAndGoodFramesS
   sensor.rawCloud(truncated);
   sensor.rawCloud(cloudBytes(static_cast<std::int32_t>(t_s), 9));
   ASSERT_TRUE(counted(node, &NodeCounters::inputs_malformed, broken.size() + 2))
-      << "malformed clouds counted: " << node.counters().inputs_malformed;
+      << "malformed clouds counted: " << node.counters().inputs_malformed << " (clouds received: "
+      << node.counters().clouds_received << ")";
 
   // Non-finite points are not a malformed cloud: the frame is mapped, the points are counted.
   t_s += 0.1;
@@ -459,23 +468,31 @@ TEST(MappingNodeInput, CloudsOfADataSharingWriterAreReadInItsMemoryUnlessDataSha
     config.dds.data_sharing = data_sharing;
     MappingNode node(config);
     SensorOptions options;
-    options.wall_step_m = 0.005;
+    options.data_sharing = true;
     options.transport_drops_fragments = true;
-    {
-      const SensorSide sizing(domain_id, config, options);
-      sensor_msgs::PointCloud2_ msg = sizing.wallCloud(0.0);
-      options.data_sharing_cloud_bytes = sensor_msgs::PointCloud2_PubSubType().getSerializedSizeProvider(&msg)();
-    }
-    ASSERT_GT(options.data_sharing_cloud_bytes, 400'000u) << "the cloud must span many fragments";
+    options.wall_step_m = 0.005;
     SensorSide sensor(domain_id, config, options);
+    ASSERT_GT(sensor.cloudBytes(), 400'000u) << "the cloud must span many fragments";
     ASSERT_TRUE(sensor.matched());
-    for (int k = 0; k < 3; ++k) {
-      sensor.frame(400.0 + 0.1 * k);
-      if (data_sharing) {
-        ASSERT_TRUE(mapped(node, static_cast<std::uint64_t>(k) + 1));
+    int sent = 0;
+    auto nextFrame = [&] { sensor.frame(400.0 + 0.1 * sent++); };
+    if (data_sharing) {
+      // The node's reader may match the writer a moment after the writer matched it (it maps the
+      // writer's history first), and a cloud written before that is not for it (VOLATILE): the
+      // first frame goes out again until one is mapped. Every later one must be.
+      for (int attempt = 0; attempt < 5 && node.engineStats().frames_mapped == 0; ++attempt) {
+        nextFrame();
+        waitFor([&] { return node.engineStats().frames_mapped > 0; }, std::chrono::seconds(2));
       }
+      ASSERT_TRUE(mapped(node, 1));
+      for (std::uint64_t k = 2; k <= 3; ++k) {
+        nextFrame();
+        ASSERT_TRUE(mapped(node, k));
+      }
+    } else {
+      for (int k = 0; k < 3; ++k) nextFrame();
     }
-    ASSERT_TRUE(counted(node, &NodeCounters::poses_received, 6));
+    ASSERT_TRUE(counted(node, &NodeCounters::poses_received, 2u * static_cast<std::uint64_t>(sent)));
     if (data_sharing) {
       EXPECT_EQ(node.counters().clouds_received, 3u);
       EXPECT_GT(node.engineStats().points.hit_voxels, 0u);
