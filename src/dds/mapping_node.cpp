@@ -193,6 +193,17 @@ struct MappingNode::Impl {
         [this](const std::string& what) {
           count(&NodeCounters::inputs_malformed);
           log.log(LogLevel::kWarning, kReasonMalformed, what);
+        },
+        [this, dds_topic = topic(name)](int now, int change) {
+          {
+            std::lock_guard<std::mutex> lock(counters_mutex);
+            std::uint64_t& level = counters.publishers_matched;
+            level = change > 0 ? level + 1 : (level > 0 ? level - 1 : 0);
+          }
+          if (sink) {  // rare (discovery), so never rate-limited
+            sink(LogLevel::kInfo, dds_topic + ": a publisher " + (change > 0 ? "matched" : "left") +
+                                      " (" + std::to_string(now) + " now)");
+          }
         });
     fdds::DataReaderQos qos = sensorReaderQos();
     if (!config.dds.data_sharing) qos.data_sharing().off();

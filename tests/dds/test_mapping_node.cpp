@@ -192,13 +192,18 @@ class SensorSide {
   /// Serialised size of the data-sharing writer's clouds (0 without data-sharing) [bytes].
   [[nodiscard]] std::uint32_t cloudBytes() const { return cloud_bytes_; }
 
-  /// Waits until the node's readers matched every writer.
-  bool matched() const {
+  /// Waits until every writer matched the node's reader and every reader of the node matched its
+  /// writer: the node's inputs are BEST_EFFORT, so a sample that arrives before the reader knows
+  /// its writer is lost for good.
+  bool matched(const MappingNode& node) const {
     return waitFor([&] {
+      std::uint64_t writers = 0;
       for (fdds::DataWriter* w : {cloud_, pose_, odometry_, raw_cloud_}) {
-        if (w != nullptr && !writerMatched(w)) return false;
+        if (w == nullptr) continue;
+        if (!writerMatched(w)) return false;
+        ++writers;
       }
-      return true;
+      return node.counters().publishers_matched == writers;
     });
   }
 
@@ -297,7 +302,7 @@ TEST(MappingNodeInput, MalformedCloudsAreRejectedCountedLoggedOnceAndGoodFramesS
   CapturedLog log;
   MappingNode node(config, log.sink());
   SensorSide sensor(171, config);
-  ASSERT_TRUE(sensor.matched()) << "the node's readers did not match";
+  ASSERT_TRUE(sensor.matched(node)) << "the node's readers did not match";
 
   double t_s = 100.0;
   sensor.frame(t_s);
@@ -372,7 +377,7 @@ TEST(MappingNodeInput, BadPosesAndStampsAreRejectedAndCountedAndMappingResumesWi
   CapturedLog log;
   MappingNode node(config, log.sink());
   SensorSide sensor(172, config);
-  ASSERT_TRUE(sensor.matched());
+  ASSERT_TRUE(sensor.matched(node));
   double t_s = 200.0;
   sensor.frame(t_s);
   ASSERT_TRUE(mapped(node, 1));
@@ -427,7 +432,7 @@ TEST(MappingNodeInput, OdometryInsteadOfPoseStampedPairsAndMaps) {
   config.dds.topics.odometry = "odom";
   MappingNode node(config);
   SensorSide sensor(173, config);
-  ASSERT_TRUE(sensor.matched());
+  ASSERT_TRUE(sensor.matched(node));
   for (int k = 0; k < 3; ++k) {
     sensor.frame(300.0 + 0.1 * k);
     ASSERT_TRUE(mapped(node, static_cast<std::uint64_t>(k) + 1));
@@ -435,6 +440,23 @@ TEST(MappingNodeInput, OdometryInsteadOfPoseStampedPairsAndMaps) {
   EXPECT_EQ(node.counters().poses_received, 6u);
   EXPECT_EQ(node.engineStats().frames_mapped, 3u);
   EXPECT_GT(node.engineStats().points.hit_voxels, 0u);
+}
+
+TEST(MappingNodeInput, PublishersAreCountedAndLoggedAsTheyMatchAndLeave) {
+  const NodeConfig config = nodeConfig(176);
+  CapturedLog log;
+  MappingNode node(config, log.sink());
+  EXPECT_EQ(node.counters().publishers_matched, 0u);
+  {
+    SensorSide sensor(176, config);  // cloud, pose and raw cloud writers
+    ASSERT_TRUE(sensor.matched(node));
+    EXPECT_EQ(log.count(": a publisher matched ("), 3);
+    EXPECT_EQ(log.count("rt/cloud: a publisher matched (2 now)"), 1);
+    EXPECT_EQ(log.count("rt/pose: a publisher matched (1 now)"), 1);
+  }
+  ASSERT_TRUE(counted(node, &NodeCounters::publishers_matched, 0)) << "the sensor's writers are gone";
+  EXPECT_EQ(log.count(": a publisher left ("), 3);
+  EXPECT_EQ(log.count("rt/cloud: a publisher left (0 now)"), 1);
 }
 
 /// Fast DDS's delivery between participants of one process, which bypasses transports and
@@ -473,19 +495,11 @@ TEST(MappingNodeInput, CloudsOfADataSharingWriterAreReadInItsMemoryUnlessDataSha
     options.wall_step_m = 0.005;
     SensorSide sensor(domain_id, config, options);
     ASSERT_GT(sensor.cloudBytes(), 400'000u) << "the cloud must span many fragments";
-    ASSERT_TRUE(sensor.matched());
+    ASSERT_TRUE(sensor.matched(node));
     int sent = 0;
     auto nextFrame = [&] { sensor.frame(400.0 + 0.1 * sent++); };
     if (data_sharing) {
-      // The node's reader may match the writer a moment after the writer matched it (it maps the
-      // writer's history first), and a cloud written before that is not for it (VOLATILE): the
-      // first frame goes out again until one is mapped. Every later one must be.
-      for (int attempt = 0; attempt < 5 && node.engineStats().frames_mapped == 0; ++attempt) {
-        nextFrame();
-        waitFor([&] { return node.engineStats().frames_mapped > 0; }, std::chrono::seconds(2));
-      }
-      ASSERT_TRUE(mapped(node, 1));
-      for (std::uint64_t k = 2; k <= 3; ++k) {
+      for (std::uint64_t k = 1; k <= 3; ++k) {
         nextFrame();
         ASSERT_TRUE(mapped(node, k));
       }

@@ -95,13 +95,12 @@ class Vehicle {
                                                                 reliableWriterQos(200));
   }
 
-  /// Waits until the node's readers matched both writers. The writers learn of the readers first;
-  /// the node's BEST_EFFORT readers drop what comes before they learnt of the writers, so wait a
-  /// little longer (a loaded machine, discovery on loopback).
-  bool matched() const {
-    const bool ok = waitFor([&] { return writerMatched(cloud_) && writerMatched(pose_); });
-    std::this_thread::sleep_for(std::chrono::milliseconds(500));
-    return ok;
+  /// Waits until both writers and the node's readers matched each other, on both sides: the
+  /// node's BEST_EFFORT readers drop what comes before they learnt of the writers.
+  bool matched(const MappingNode& node) const {
+    return waitFor([&] {
+      return writerMatched(cloud_) && writerMatched(pose_) && node.counters().publishers_matched == 2;
+    });
   }
 
   void pose(double stamp_s, const Transform& T_W_B) {
@@ -176,7 +175,7 @@ TEST(NodeFaults, SensorStreamStopsAndResumesWithoutStalePairing) {
   const NodeConfig config = lidarNodeConfig(200);
   MappingNode node(config);
   Vehicle vehicle(200, config);
-  ASSERT_TRUE(vehicle.matched());
+  ASSERT_TRUE(vehicle.matched(node));
   // The vehicle flies along x at 0.5 m/s; poses at 50 Hz, clouds at 10 Hz between two poses.
   auto x_at = [](double t_s) { return 0.5 * (t_s - 10.0); };
   std::uint64_t n = 0;
@@ -225,7 +224,7 @@ TEST(NodeFaults, LaggingPosesMakeCloudsWaitAndTooLatePosesDropThem) {
   const NodeConfig config = lidarNodeConfig(201);
   MappingNode node(config);
   Vehicle vehicle(201, config);
-  ASSERT_TRUE(vehicle.matched());
+  ASSERT_TRUE(vehicle.matched(node));
   vehicle.frame(20.0, bodyAt(0.0));
   ASSERT_TRUE(mapped(node, 1));
 
@@ -263,7 +262,7 @@ TEST(NodeFaults, PoseJumpIsMappedAtTheNewPoseAndNothingIsSmearedBetween) {
   {
     MappingNode node(config);
     Vehicle vehicle(202, config);
-    ASSERT_TRUE(vehicle.matched());
+    ASSERT_TRUE(vehicle.matched(node));
     std::uint64_t n = 0;
     flyMapped(vehicle, node, 30.0, 0.0, 5, &n);
     // The odometry relocalises: 40 m and a quarter turn within 20 ms. A cloud stamped between
@@ -298,7 +297,7 @@ TEST(NodeFaults, PoseJumpLimitsComeFromTheConfiguration) {
   config.dds.max_pose_speed_mps = 5.0;  // default 50
   MappingNode node(config);
   Vehicle vehicle(208, config);
-  ASSERT_TRUE(vehicle.matched());
+  ASSERT_TRUE(vehicle.matched(node));
   std::uint64_t n = 0;
   flyMapped(vehicle, node, 30.0, 0.0, 5, &n);
   // 0.5 m in 20 ms: 25 m/s, a flight under the default limit, a jump under this one.
@@ -315,7 +314,7 @@ TEST(NodeFaults, BackwardPosesAreRejectedCountedAndMappingResumes) {
   const NodeConfig config = lidarNodeConfig(203);
   MappingNode node(config);
   Vehicle vehicle(203, config);
-  ASSERT_TRUE(vehicle.matched());
+  ASSERT_TRUE(vehicle.matched(node));
   std::uint64_t n = 0;
   flyMapped(vehicle, node, 40.0, 0.0, 5, &n);
   // The odometry replays 20 poses of the past, somewhere else.
@@ -339,7 +338,7 @@ TEST(NodeFaults, CloudsFasterThanTheEngineAreDroppedOldestFirstAndNeverQueueUp) 
   config.map.local_map.size_cells = Eigen::Vector3i(190, 190, 70);
   MappingNode node(config);
   Vehicle vehicle(204, config, 64, 1024);  // 65,536 rays: each frame costs the engine milliseconds
-  ASSERT_TRUE(vehicle.matched());
+  ASSERT_TRUE(vehicle.matched(node));
   // Hovering in room A; the same scan over and over, each with its stamp and pose.
   const Transform T = bodyAt(0.0);
   sensor_msgs::PointCloud2_ scan = vehicle.scan(0.0, T);
@@ -444,7 +443,7 @@ TEST(NodeFaults, SubscriberThatLeavesAndReturnsGetsTheLayersAgainAndMappingNever
   config.dds.rates.local_map_hz = 100.0;  // every frame's local map goes out
   MappingNode node(config);
   Vehicle vehicle(205, config);
-  ASSERT_TRUE(vehicle.matched());
+  ASSERT_TRUE(vehicle.matched(node));
   std::uint64_t n = 0;
   double t = 50.0;
   auto fly = [&](int frames) {

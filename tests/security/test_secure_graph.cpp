@@ -213,6 +213,7 @@ TEST(SecureGraph, OnlyPermittedPeersReadTheLayersAndOnlyTheSensorFeedsTheNode) {
   NodeCounters c = node.counters();
   EXPECT_EQ(c.clouds_received, 0u) << "a cloud of an unauthorised peer reached the node";
   EXPECT_EQ(c.poses_received, 0u) << "a pose of an unauthorised peer reached the node";
+  EXPECT_EQ(c.publishers_matched, 0u) << "the node's readers matched a writer of an unauthorised peer";
   for (Peer* p : {&nobody, &stranger}) {
     EXPECT_EQ(p->matchedWriters(), 0);
     EXPECT_EQ(p->matchedReaders(), 0);

@@ -100,12 +100,18 @@ eprosima::fastdds::dds::DataWriter* createWriter(eprosima::fastdds::dds::Publish
 
 /// Takes every sample of a reader and hands it to `sink` (on Fast DDS's listener thread: keep
 /// `sink` short). A payload that fails to deserialise (the reader's type must come from
-/// registerType(), see CheckedType) is reported to `on_error` and dropped.
+/// registerType(), see CheckedType) is reported to `on_error` and dropped. `on_matched`, if
+/// given, hears each change of the publishers the reader matches: (publishers now, +1 or -1).
 template <typename Msg>
 class TakeListener : public eprosima::fastdds::dds::DataReaderListener {
  public:
-  TakeListener(std::function<void(Msg&&)> sink, std::function<void(const std::string&)> on_error)
-      : sink_(std::move(sink)), on_error_(std::move(on_error)) {}
+  TakeListener(std::function<void(Msg&&)> sink, std::function<void(const std::string&)> on_error,
+               std::function<void(int, int)> on_matched = {})
+      : sink_(std::move(sink)), on_error_(std::move(on_error)), on_matched_(std::move(on_matched)) {}
+  void on_subscription_matched(eprosima::fastdds::dds::DataReader*,
+                               const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
+    if (on_matched_) on_matched_(status.current_count, status.current_count_change);
+  }
   void on_data_available(eprosima::fastdds::dds::DataReader* reader) override {
     for (;;) {
       Msg msg;
@@ -127,6 +133,7 @@ class TakeListener : public eprosima::fastdds::dds::DataReaderListener {
  private:
   std::function<void(Msg&&)> sink_;
   std::function<void(const std::string&)> on_error_;
+  std::function<void(int, int)> on_matched_;
 };
 
 /// A reader of `PubSubType` on `dds_topic` whose samples go to `listener` (which must outlive

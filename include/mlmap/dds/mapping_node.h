@@ -42,6 +42,9 @@ struct NodeCounters {
   std::uint64_t map_saves = 0;            ///< map files written (map_file.save_path)
   std::uint64_t map_saves_failed = 0;     ///< saves that failed (the previous file is kept)
   bool last_map_save_failed = false;      ///< the latest save failed (after stop(): the final one)
+  /// Publishers the input readers match now, all input topics together (a level, not a count
+  /// of events). Each change is logged: a sensor or odometry source that never matches shows.
+  std::uint64_t publishers_matched = 0;
 };
 
 /// The node's pairing of clouds and depth images with poses, from the `dds` section:
