@@ -194,12 +194,17 @@ struct MappingNode::Impl {
           count(&NodeCounters::inputs_malformed);
           log.log(LogLevel::kWarning, kReasonMalformed, what);
         },
-        [this, dds_topic = topic(name)](int now, int change) {
+        // This reader's own count, so that the total follows current_count exactly.
+        [this, dds_topic = topic(name), mine = std::int64_t{0}](int now, int) mutable {
+          std::int64_t change = 0;
           {
             std::lock_guard<std::mutex> lock(counters_mutex);
-            std::uint64_t& level = counters.publishers_matched;
-            level = change > 0 ? level + 1 : (level > 0 ? level - 1 : 0);
+            change = now - mine;
+            mine = now;
+            counters.publishers_matched =
+                static_cast<std::uint64_t>(static_cast<std::int64_t>(counters.publishers_matched) + change);
           }
+          if (change == 0) return;
           if (sink) {  // rare (discovery), so never rate-limited
             sink(LogLevel::kInfo, dds_topic + ": a publisher " + (change > 0 ? "matched" : "left") +
                                       " (" + std::to_string(now) + " now)");

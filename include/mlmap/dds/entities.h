@@ -101,7 +101,8 @@ eprosima::fastdds::dds::DataWriter* createWriter(eprosima::fastdds::dds::Publish
 /// Takes every sample of a reader and hands it to `sink` (on Fast DDS's listener thread: keep
 /// `sink` short). A payload that fails to deserialise (the reader's type must come from
 /// registerType(), see CheckedType) is reported to `on_error` and dropped. `on_matched`, if
-/// given, hears each change of the publishers the reader matches: (publishers now, +1 or -1).
+/// given, hears each change of the publishers the reader matches: (current_count,
+/// current_count_change) of Fast DDS's SubscriptionMatchedStatus.
 template <typename Msg>
 class TakeListener : public eprosima::fastdds::dds::DataReaderListener {
  public:
