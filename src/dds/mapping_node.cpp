@@ -66,7 +66,48 @@ enum Reason : int {
   kReasonHandover,
   kReasonEngine,
   kReasonDds,
+  kReasonQos,
   kReasonCount
+};
+
+/// A QoS policy's name as DDS (and ROS 2's QoS messages) spell it.
+std::string qosPolicyName(fdds::QosPolicyId_t id) {
+  switch (id) {
+    case fdds::DURABILITY_QOS_POLICY_ID: return "DURABILITY";
+    case fdds::PRESENTATION_QOS_POLICY_ID: return "PRESENTATION";
+    case fdds::DEADLINE_QOS_POLICY_ID: return "DEADLINE";
+    case fdds::LATENCYBUDGET_QOS_POLICY_ID: return "LATENCY_BUDGET";
+    case fdds::OWNERSHIP_QOS_POLICY_ID: return "OWNERSHIP";
+    case fdds::LIVELINESS_QOS_POLICY_ID: return "LIVELINESS";
+    case fdds::RELIABILITY_QOS_POLICY_ID: return "RELIABILITY";
+    case fdds::DESTINATIONORDER_QOS_POLICY_ID: return "DESTINATION_ORDER";
+    case fdds::DATAREPRESENTATION_QOS_POLICY_ID: return "DATA_REPRESENTATION";
+    case fdds::DISABLEPOSITIVEACKS_QOS_POLICY_ID: return "DISABLE_POSITIVE_ACKS";
+    default: return "QoS policy " + std::to_string(static_cast<int>(id));
+  }
+}
+
+/// Reports each subscriber that a writer cannot serve because it requests more than the writer
+/// offers (e.g. TRANSIENT_LOCAL of a VOLATILE layer): DDS then matches nothing and says nothing,
+/// and the subscriber just never receives.
+class IncompatibleQosListener : public fdds::DataWriterListener {
+ public:
+  explicit IncompatibleQosListener(std::function<void(const std::string&)> report)
+      : report_(std::move(report)) {}
+  void on_offered_incompatible_qos(fdds::DataWriter* writer,
+                                   const fdds::OfferedIncompatibleQosStatus& status) override {
+    std::string offered;
+    if (status.last_policy_id == fdds::DURABILITY_QOS_POLICY_ID) {
+      offered = writer->get_qos().durability().kind == fdds::VOLATILE_DURABILITY_QOS
+                    ? ", this writer offers VOLATILE"
+                    : ", this writer offers TRANSIENT_LOCAL";
+    }
+    report_(writer->get_topic()->get_name() + ": a subscriber requests a QoS this writer does not offer (" +
+            qosPolicyName(status.last_policy_id) + offered + "); it receives nothing");
+  }
+
+ private:
+  std::function<void(const std::string&)> report_;
 };
 
 double secondsSince(Clock::time_point t) {
@@ -115,6 +156,10 @@ struct MappingNode::Impl {
 
   // Listeners must outlive their readers: declared before the participant is reset.
   std::vector<std::unique_ptr<fdds::DataReaderListener>> listeners;
+  IncompatibleQosListener writer_listener{[this](const std::string& what) {
+    count(&NodeCounters::subscribers_incompatible);
+    log.log(LogLevel::kWarning, kReasonQos, what);
+  }};
   fdds::DataWriter* tf_writer = nullptr;
   fdds::DataWriter* tf_static_writer = nullptr;
   fdds::DataWriter* awareness_writer = nullptr;
@@ -182,7 +227,7 @@ struct MappingNode::Impl {
   template <typename PubSubType>
   fdds::DataWriter* makeWriter(fdds::Publisher* publisher, const std::string& name,
                                const fdds::DataWriterQos& qos) {
-    return name.empty() ? nullptr : createWriter<PubSubType>(publisher, topic(name), qos);
+    return name.empty() ? nullptr : createWriter<PubSubType>(publisher, topic(name), qos, &writer_listener);
   }
 
   template <typename PubSubType, typename Msg>

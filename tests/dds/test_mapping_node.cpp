@@ -38,6 +38,7 @@ using sensor_msgs::PointCloud2_;
 using test_support::CdrBytes;
 using test_support::localhostConfig;
 using test_support::waitFor;
+using test_support::readerMatched;
 using test_support::writerMatched;
 using test_support::RawBytes;
 using test_support::RawType;
@@ -457,6 +458,30 @@ TEST(MappingNodeInput, PublishersAreCountedAndLoggedAsTheyMatchAndLeave) {
   ASSERT_TRUE(counted(node, &NodeCounters::publishers_matched, 0)) << "the sensor's writers are gone";
   EXPECT_EQ(log.count(": a publisher left ("), 3);
   EXPECT_EQ(log.count("rt/cloud: a publisher left (0 now)"), 1);
+}
+
+// A subscriber asking for more than a layer's writer offers (here TRANSIENT_LOCAL of the
+// VOLATILE local map, as a map display may) gets nothing from DDS and no error: the node says so.
+TEST(MappingNodeOutput, SubscribersWithIncompatibleQosAreLoggedWithThePolicyAndCounted) {
+  const NodeConfig config = nodeConfig(177);
+  CapturedLog log;
+  MappingNode node(config, log.sink());
+  const ParticipantPtr ground = createParticipant(localhostConfig(177), "ground");
+  fdds::Subscriber* subscriber = ground->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+  TakeListener<PointCloud2_> ignore([](PointCloud2_&&) {}, [](const std::string&) {});
+  const std::string topic = "rt/" + config.dds.topics.local_map;
+  fdds::DataReader* volatile_reader = createReader<sensor_msgs::PointCloud2_PubSubType>(
+      subscriber, topic, reliableReaderQos(false), &ignore);
+  fdds::DataReader* latched_reader = createReader<sensor_msgs::PointCloud2_PubSubType>(
+      subscriber, topic, reliableReaderQos(true), &ignore);
+  ASSERT_TRUE(waitFor([&] { return readerMatched(volatile_reader); }));
+  ASSERT_TRUE(counted(node, &NodeCounters::subscribers_incompatible, 1));
+  EXPECT_FALSE(readerMatched(latched_reader));
+  EXPECT_EQ(log.count(topic + ": a subscriber requests a QoS this writer does not offer "
+                              "(DURABILITY, this writer offers VOLATILE); it receives nothing"),
+            1);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(node.counters().subscribers_incompatible, 1u) << "only the TRANSIENT_LOCAL reader";
 }
 
 /// Fast DDS's delivery between participants of one process, which bypasses transports and

@@ -5,6 +5,7 @@
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
+#include <fastdds/dds/publisher/DataWriterListener.hpp>
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
 #include <fastdds/dds/subscriber/DataReaderListener.hpp>
@@ -86,14 +87,16 @@ eprosima::fastdds::dds::Topic* findOrCreateTopic(eprosima::fastdds::dds::DomainP
   return topic;
 }
 
-/// A writer of `PubSubType` on `dds_topic`. Throws std::runtime_error on failure.
+/// A writer of `PubSubType` on `dds_topic`, with `listener` (which must outlive the writer) if
+/// given. Throws std::runtime_error on failure.
 template <typename PubSubType>
 eprosima::fastdds::dds::DataWriter* createWriter(eprosima::fastdds::dds::Publisher* publisher,
                                                  const std::string& dds_topic,
-                                                 const eprosima::fastdds::dds::DataWriterQos& qos) {
+                                                 const eprosima::fastdds::dds::DataWriterQos& qos,
+                                                 eprosima::fastdds::dds::DataWriterListener* listener = nullptr) {
   auto* participant = const_cast<eprosima::fastdds::dds::DomainParticipant*>(publisher->get_participant());
   eprosima::fastdds::dds::DataWriter* writer =
-      publisher->create_datawriter(findOrCreateTopic<PubSubType>(participant, dds_topic), qos);
+      publisher->create_datawriter(findOrCreateTopic<PubSubType>(participant, dds_topic), qos, listener);
   if (writer == nullptr) throw std::runtime_error("cannot create a writer on " + dds_topic);
   return writer;
 }

@@ -45,6 +45,9 @@ struct NodeCounters {
   /// Publishers the input readers match now, all input topics together (a level, not a count
   /// of events). Each change is logged: a sensor or odometry source that never matches shows.
   std::uint64_t publishers_matched = 0;
+  /// Subscribers of the node's outputs that request a QoS their writer does not offer (each
+  /// logged with the policy): they receive nothing.
+  std::uint64_t subscribers_incompatible = 0;
 };
 
 /// The node's pairing of clouds and depth images with poses, from the `dds` section:
