@@ -154,7 +154,7 @@ struct MappingNode::Impl {
   PoseBuffer poses;
   Transform T_B_S;
 
-  // Listeners must outlive their readers: declared before the participant is reset.
+  // Listeners must outlive their readers and writers: the participant is reset in stop().
   std::vector<std::unique_ptr<fdds::DataReaderListener>> listeners;
   IncompatibleQosListener writer_listener{[this](const std::string& what) {
     count(&NodeCounters::subscribers_incompatible);
@@ -240,7 +240,7 @@ struct MappingNode::Impl {
           log.log(LogLevel::kWarning, kReasonMalformed, what);
         },
         // This reader's own count, so that the total follows current_count exactly.
-        [this, dds_topic = topic(name), mine = std::int64_t{0}](int now, int) mutable {
+        [this, dds_topic = topic(name), mine = std::int64_t{0}](int now) mutable {
           std::int64_t change = 0;
           {
             std::lock_guard<std::mutex> lock(counters_mutex);

@@ -104,17 +104,16 @@ eprosima::fastdds::dds::DataWriter* createWriter(eprosima::fastdds::dds::Publish
 /// Takes every sample of a reader and hands it to `sink` (on Fast DDS's listener thread: keep
 /// `sink` short). A payload that fails to deserialise (the reader's type must come from
 /// registerType(), see CheckedType) is reported to `on_error` and dropped. `on_matched`, if
-/// given, hears each change of the publishers the reader matches: (current_count,
-/// current_count_change) of Fast DDS's SubscriptionMatchedStatus.
+/// given, hears the number of publishers the reader matches each time it changes.
 template <typename Msg>
 class TakeListener : public eprosima::fastdds::dds::DataReaderListener {
  public:
   TakeListener(std::function<void(Msg&&)> sink, std::function<void(const std::string&)> on_error,
-               std::function<void(int, int)> on_matched = {})
+               std::function<void(int)> on_matched = {})
       : sink_(std::move(sink)), on_error_(std::move(on_error)), on_matched_(std::move(on_matched)) {}
   void on_subscription_matched(eprosima::fastdds::dds::DataReader*,
                                const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
-    if (on_matched_) on_matched_(status.current_count, status.current_count_change);
+    if (on_matched_) on_matched_(status.current_count);
   }
   void on_data_available(eprosima::fastdds::dds::DataReader* reader) override {
     for (;;) {
@@ -137,7 +136,7 @@ class TakeListener : public eprosima::fastdds::dds::DataReaderListener {
  private:
   std::function<void(Msg&&)> sink_;
   std::function<void(const std::string&)> on_error_;
-  std::function<void(int, int)> on_matched_;
+  std::function<void(int)> on_matched_;
 };
 
 /// A reader of `PubSubType` on `dds_topic` whose samples go to `listener` (which must outlive
