@@ -69,21 +69,6 @@ void convertPixels(const Raw* __restrict raw, const float* __restrict rx, float 
   }
 }
 
-// The largest float not above x (finite, within the float range): x rounded, and one step down
-// when that rounded up (std::nextafter without the libm call). Without branches: rounding goes
-// up for about half of the values, a branch the CPU cannot predict. In sign and magnitude one
-// step toward -infinity is bits - 1 for a positive float and bits + 1 for a negative one; a
-// float that rounded up to zero is -0 (x < 0), whose bits + 1 are -denorm_min.
-inline float floatBelow(double x) {
-  float f = static_cast<float>(x);
-  std::uint32_t bits = 0;
-  std::memcpy(&bits, &f, sizeof bits);
-  const std::uint32_t up = static_cast<double>(f) > x ? 1u : 0u;
-  bits += up * (2u * (bits >> 31) - 1u);  // + 0, or -1 / +1 (unsigned wrap-around)
-  std::memcpy(&f, &bits, sizeof bits);
-  return f;
-}
-
 double distanceToBox(const Eigen::Vector3d& o, const VoxelSpaceBox& b) {
   const Eigen::Vector3d d = (b.min.cast<double>() - o).cwiseMax(o - b.max.cast<double>()).cwiseMax(0.0);
   return d.norm();

@@ -179,23 +179,17 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
   // Unclamped slab i: s_lo = i / fa + (off_lo - oa) / fa and s_hi = i / na + (off_hi - oa) / na.
   // The section's low bound on an axis takes s_lo where lo >= 0 (its minimum over [s_lo, s_hi]),
   // s_hi otherwise; the high bound s_hi where hi >= 0, s_lo otherwise.
-  const double lo_at0 = (w.off_lo - w.oa) * w.inv_fa;
-  const double hi_at0 = (w.off_hi - w.oa) * w.inv_na;
-  auto affine = [&](double edge, bool take_s_lo, double e, double* at0, double* slope) {
-    *at0 = edge * (take_s_lo ? lo_at0 : hi_at0) + e;
-    *slope = edge * (take_s_lo ? w.inv_fa : w.inv_na);
-  };
+  const double s_lo_at0 = (w.off_lo - w.oa) * w.inv_fa;
+  const double s_hi_at0 = (w.off_hi - w.oa) * w.inv_na;
   const int bc[2] = {b, c};
   for (int lane = 0; lane < 2; ++lane) {
     const int k = bc[lane];
-    double at0 = 0.0;
-    double slope = 0.0;
-    affine(lo[k], lo[k] >= 0.0, kEdgeEpsilon, &at0, &slope);
-    w.first_at0[lane] = origin[k] + at0;
-    w.first_slope[lane] = slope;
-    affine(hi[k], hi[k] < 0.0, -kEdgeEpsilon, &at0, &slope);
-    w.last_at0[lane] = origin[k] + at0;
-    w.last_slope[lane] = slope;
+    const bool lo_takes_s_lo = lo[k] >= 0.0;
+    const bool hi_takes_s_lo = hi[k] < 0.0;
+    w.first_at0[lane] = origin[k] + (lo[k] * (lo_takes_s_lo ? s_lo_at0 : s_hi_at0) + kEdgeEpsilon);
+    w.first_slope[lane] = lo[k] * (lo_takes_s_lo ? w.inv_fa : w.inv_na);
+    w.last_at0[lane] = origin[k] + (hi[k] * (hi_takes_s_lo ? s_lo_at0 : s_hi_at0) - kEdgeEpsilon);
+    w.last_slope[lane] = hi[k] * (hi_takes_s_lo ? w.inv_fa : w.inv_na);
     w.last_limit[lane] = static_cast<double>(dims[k]) - 0.5;
   }
   // Slabs from the one holding s0 to the one holding the far face; at least the first (when s0

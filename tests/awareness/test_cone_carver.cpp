@@ -5,8 +5,11 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
+#include <vector>
 
 namespace mlmap {
 namespace {
@@ -119,6 +122,35 @@ TEST(ConeCarver, CarvesLittleMoreThanTheRays) {
               marked_total, crossed_total, ratio, worst_distance);
   EXPECT_LT(ratio, 1.6);
   EXPECT_LT(worst_distance, 2.5);
+}
+
+// The reference: the float nearest to x, one step toward -infinity when that lies above x.
+float referenceFloatBelow(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+}
+
+TEST(ConeCarver, FloatBelowIsTheLargestFloatNotAboveItsArgument) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> coord(-300.0, 300.0);
+  std::uniform_real_distribution<double> tiny(-1e-40, 1e-40);  // around zero, denormals
+  std::vector<double> xs = {0.0, -0.0, 1.0, -1.0, 0.5, -0.5, 1e-50, -1e-50, 3.0000001, -3.0000001,
+                            std::numeric_limits<float>::max(), -std::numeric_limits<float>::max() + 1e20};
+  for (int i = 0; i < 20000; ++i) xs.push_back(coord(rng));
+  for (int i = 0; i < 2000; ++i) xs.push_back(tiny(rng));
+  int stepped = 0;
+  for (const double x : xs) {
+    const float below = floatBelow(x);
+    ASSERT_EQ(std::signbit(below), std::signbit(referenceFloatBelow(x))) << "x = " << x;
+    ASSERT_EQ(below, referenceFloatBelow(x)) << "x = " << x;
+    ASSERT_LE(static_cast<double>(below), x);
+    ASSERT_GT(static_cast<double>(std::nextafter(below, std::numeric_limits<float>::infinity())), x);
+    stepped += static_cast<double>(static_cast<float>(x)) > x ? 1 : 0;
+  }
+  // Both ways of rounding were exercised, on both signs.
+  EXPECT_GT(stepped, 5000);
+  EXPECT_LT(stepped, static_cast<int>(xs.size()) - 5000);
+  EXPECT_EQ(floatBelow(-1e-50), -std::numeric_limits<float>::denorm_min());
 }
 
 }  // namespace

@@ -13,6 +13,9 @@
 
 #include "mlmap/core/voxel_bitset.h"
 
+#include <cstdint>
+#include <cstring>
+
 namespace mlmap {
 
 /// An axis-aligned box in box-relative voxel units.
@@ -20,6 +23,23 @@ struct VoxelSpaceBox {
   Eigen::Vector3f min;
   Eigen::Vector3f max;
 };
+
+/// The largest float not above `x` (finite, within the float range), for rounding a box computed
+/// in double outwards to a VoxelSpaceBox: -floatBelow(-x) is the smallest float not below x.
+/// std::nextafter toward -infinity where the rounded value lies above x, without the libm call
+/// and without a branch (rounding goes up for about half of the values, a branch the CPU cannot
+/// predict). In sign and magnitude one step toward -infinity is bits - 1 for a positive float
+/// and bits + 1 for a negative one; a float that rounded up to zero is -0 (x < 0), whose
+/// bits + 1 are -denorm_min.
+inline float floatBelow(double x) {
+  float f = static_cast<float>(x);
+  std::uint32_t bits = 0;
+  std::memcpy(&bits, &f, sizeof bits);
+  const std::uint32_t up = static_cast<double>(f) > x ? 1u : 0u;
+  bits += up * (2u * (bits >> 31) - 1u);  // + 0, or -1 / +1 (unsigned wrap-around)
+  std::memcpy(&f, &bits, sizeof bits);
+  return f;
+}
 
 /// Marks in `free` every voxel that the part s in [s_min, 1] of the cone from `origin` to `box`
 /// overlaps (voxels outside the bitset's box are skipped). Returns the number of slabs walked.
