@@ -2,15 +2,16 @@
 # The DDS latency benchmark: mlmap_sensor_publisher streams 640 x 480 organised clouds (307,200
 # points x 16 B = 4.9 MB) at 30 Hz to mlmap_node, and mlmap_bench_dds_latency measures, at a
 # subscriber of the local-map layer, capture -> local map latency (p50, p99) and dropped frames,
-# once with data-sharing, once over the shared-memory transport and once over UDP only, on
-# loopback. Prints the figures against the targets (no dropped frame; p50 <= engine compute
-# median + 5 ms; p99 <= engine p99 + 15 ms).
+# once with data-sharing (the default), once over UDP only (as from a ROS 2 driver) and once over
+# the shared-memory transport (dds.shared_memory, off by default), on loopback. Prints the
+# figures against the targets (no dropped frame; p50 <= engine compute median + 5 ms; p99 <=
+# engine p99 + 15 ms).
 # Figures, not a test: only --smoke fails, when a frame sent did not reach the subscriber.
 # With --secure every mode runs twice, without and with DDS Security, and the cost of
 # encryption is printed (target: under 20 % more latency).
 #
 #   tools/bench_dds_latency.sh [--build DIR] [--out DIR] [--seconds S] [--rate HZ]
-#                              [--modes "datasharing shm udp"] [--domain ID] [--probe-cloud] [--smoke]
+#                              [--modes "datasharing udp shm"] [--domain ID] [--probe-cloud] [--smoke]
 #                              [--secure] [--protection full|payload|link|link-signed]
 #                              [--keystore DIR]
 #
@@ -18,12 +19,13 @@
 #   --out DIR      logs, node configs, latency_<mode>.json (default: bench_output/dds_latency)
 #   --seconds S    seconds of streaming per mode (default 25)
 #   --rate HZ      frames per second (default 30)
-#   --modes LIST   datasharing: the default configuration (LOCALHOST: SHM with a 16 MB segment +
-#                    UDP 127.0.0.1; the clouds by data-sharing, the rest through the transports);
-#                  shm: the same with dds.data_sharing false (the clouds through the SHM transport,
-#                    as from a ROS 2 driver);
-#                  udp: config/dds/loopback_udp_only.xml (UDPv4 on 127.0.0.1 only, 4 MB buffers),
-#                    dds.data_sharing false
+#   --modes LIST   datasharing: the default configuration (LOCALHOST: UDPv4 on 127.0.0.1 with 4 MB
+#                    buffers; the clouds by data-sharing, the rest through UDP);
+#                  udp: the same with dds.data_sharing false (the clouds through UDP, as from a
+#                    ROS 2 driver);
+#                  shm: dds.shared_memory true (+ the SHM transport, 16 MB segment) and
+#                    dds.data_sharing false (the clouds through the SHM transport; only between
+#                    Fast DDS 2.9 peers)
 #   --domain ID    DDS domain of every run, one after the other (default 135; keep to 135..139)
 #   --probe-cloud  the subscriber also times the clouds' own transport (adds a second reader)
 #   --smoke        check, not measure: deep queues so a loaded machine delays rather than drops,
@@ -39,7 +41,7 @@
 #                  --protection P in <out>/keystore_<P>)
 set -uo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
-bin=$repo/build-perf out=$repo/bench_output/dds_latency seconds=25 rate=30 modes="datasharing shm udp"
+bin=$repo/build-perf out=$repo/bench_output/dds_latency seconds=25 rate=30 modes="datasharing udp shm"
 domain=135 probe=() smoke=0 security="off" keystore="" protection=full
 while [ $# -gt 0 ]; do
   case $1 in
@@ -65,7 +67,7 @@ frames=$(awk -v s="$seconds" -v r="$rate" 'BEGIN { printf "%d", s * r }')
 require=(); [ $smoke -eq 1 ] && require=(--require-all)
 
 export ROS_DOMAIN_ID=$domain
-export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST   # never leave loopback (the udp mode says OFF + a loopback profile)
+export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST   # never leave loopback
 unset FASTRTPS_DEFAULT_PROFILES_FILE ROS_SECURITY_ENABLE ROS_SECURITY_KEYSTORE ROS_SECURITY_STRATEGY \
   ROS_SECURITY_ENCLAVE_OVERRIDE
 mkdir -p "$out"
@@ -102,9 +104,8 @@ for run in $(for m in $modes; do for s in $security; do echo "$m:$s"; done; done
     printf 'dds:\n  rates: {local_map_hz: 100.0, status_hz: 2.0}\n'
     case $mode in
       datasharing) ;;
-      shm) printf '  data_sharing: false\n' ;;
-      udp) printf '  data_sharing: false\n  discovery_range: "OFF"\n  profiles_file: %s\n  participant_profile: mlmap_loopback_udp_only\n' \
-             "$repo/config/dds/loopback_udp_only.xml" ;;
+      udp) printf '  data_sharing: false\n' ;;
+      shm) printf '  data_sharing: false\n  shared_memory: true\n' ;;
       *) echo "unknown mode $mode (datasharing, shm, udp)" >&2; exit 64 ;;
     esac
     [ "$sec" = on ] && printf '  security: {enable: true, keystore: %s, strategy: Enforce}\n' "$keystore"

@@ -1,5 +1,7 @@
 #include "mlmap/dds/cloud_sample.h"
 
+#include "mlmap/dds/participant.h"
+
 #include <fastcdr/Cdr.h>
 #include <fastcdr/FastBuffer.h>
 #include <fastcdr/exceptions/NotEnoughMemoryException.h>
@@ -7,6 +9,7 @@
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
 #include <stdexcept>
+#include <vector>
 
 namespace mlmap::dds {
 
@@ -67,7 +70,7 @@ eprosima::fastdds::dds::DataWriter* createDataSharingCloudWriter(
   }
   fdds::Topic* topic = participant->create_topic(dds_topic, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
   if (topic == nullptr) throw std::runtime_error("cannot create topic " + dds_topic);
-  qos.data_sharing().automatic();
+  qos.data_sharing().automatic(std::vector<std::uint16_t>{dataSharingDomainId()});  // with mlmap's readers only
   // Data-sharing needs preallocated history slots (the shared pool).
   qos.endpoint().history_memory_policy = eprosima::fastrtps::rtps::PREALLOCATED_MEMORY_MODE;
   fdds::DataWriter* writer = publisher->create_datawriter(topic, qos);

@@ -23,6 +23,7 @@ void readDdsSection(io::Section& top, DdsConfig* dds) {
   s.read("profiles_file", &dds->profiles_file);
   s.read("participant_profile", &dds->participant_profile);
   s.read("large_data", &dds->large_data);
+  s.read("shared_memory", &dds->shared_memory);
   s.read("data_sharing", &dds->data_sharing);
   s.read("world_frame", &dds->world_frame);
   s.read("body_frame", &dds->body_frame);
@@ -158,6 +159,7 @@ std::string toYaml(const NodeConfig& config) {
   text("profiles_file", d.profiles_file);
   text("participant_profile", d.participant_profile);
   out << YAML::Key << "large_data" << YAML::Value << d.large_data;
+  out << YAML::Key << "shared_memory" << YAML::Value << d.shared_memory;
   out << YAML::Key << "data_sharing" << YAML::Value << d.data_sharing;
   text("world_frame", d.world_frame);
   text("body_frame", d.body_frame);

@@ -8,6 +8,7 @@
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/UDPv6TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+#include <fastrtps/config.h>
 #include <fastrtps/utils/IPLocator.h>
 
 #include <algorithm>
@@ -63,11 +64,20 @@ fdds::DomainParticipantQos baseQos(const DdsConfig& config) {
   return qos;
 }
 
-void useLoopbackOnly(fdds::DomainParticipantQos* qos) {
+/// Fast DDS 2.9's built-in UDPv4 transport as an explicit descriptor, with the participant-level
+/// socket buffer sizes that apply only to the built-in one.
+TransportPtr builtinUdp(const fdds::TransportConfigQos& transport) {
+  auto udp = std::make_shared<UDPv4TransportDescriptor>();
+  udp->sendBufferSize = transport.send_socket_buffer_size;
+  udp->receiveBufferSize = transport.listen_socket_buffer_size;
+  return udp;
+}
+
+void useLoopbackOnly(bool shared_memory, fdds::DomainParticipantQos* qos) {
   fdds::TransportConfigQos& transport = qos->transport();
   transport.use_builtin_transports = false;
   transport.user_transports.clear();
-  transport.user_transports.push_back(std::make_shared<SharedMemTransportDescriptor>());
+  if (shared_memory) transport.user_transports.push_back(std::make_shared<SharedMemTransportDescriptor>());
   auto udp = std::make_shared<UDPv4TransportDescriptor>();
   udp->interfaceWhiteList = {kLoopbackAddress};
   udp->maxInitialPeersRange = kLocalhostMaxInitialPeersRange;
@@ -80,7 +90,42 @@ void useLoopbackOnly(fdds::DomainParticipantQos* qos) {
   wire.builtin.initialPeersList.clear();
   wire.builtin.initialPeersList.push_back(loopbackLocator());
   wire.default_multicast_locator_list.clear();
-  wire.default_unicast_locator_list.clear();  // Fast DDS picks one per transport: SHM + 127.0.0.1
+  wire.default_unicast_locator_list.clear();  // Fast DDS picks one per transport
+}
+
+/// Makes the built-in transports explicit (UDPv4, plus SHM with `shared_memory`) so that they can
+/// be sized and so that no SHM transport comes in unasked; without `shared_memory`, removes the
+/// SHM transports a profile lists. Returns what was removed, for the log ("" for nothing).
+/// Throws std::runtime_error when no transport is left.
+std::string withSharedMemoryOnlyIfAsked(bool shared_memory, const std::string& profile,
+                                        fdds::DomainParticipantQos* qos) {
+  fdds::TransportConfigQos& transport = qos->transport();
+  if (transport.use_builtin_transports) {
+    transport.user_transports.insert(transport.user_transports.begin(), builtinUdp(transport));
+    if (shared_memory) {
+      transport.user_transports.insert(transport.user_transports.begin(),
+                                        std::make_shared<SharedMemTransportDescriptor>());
+    }
+    transport.use_builtin_transports = false;
+    return "";
+  }
+  if (shared_memory) return "";
+  std::vector<TransportPtr>& listed = transport.user_transports;
+  const auto is_shm = [](const TransportPtr& t) {
+    return std::dynamic_pointer_cast<SharedMemTransportDescriptor>(t) != nullptr;
+  };
+  const std::size_t removed = static_cast<std::size_t>(std::count_if(listed.begin(), listed.end(), is_shm));
+  if (removed == 0) return "";
+  listed.erase(std::remove_if(listed.begin(), listed.end(), is_shm), listed.end());
+  if (listed.empty()) {
+    throw std::runtime_error(
+        profile + ": its only transport is shared memory, which dds.shared_memory "
+        "(false) leaves out: add a UDP transport to the profile, or set dds.shared_memory: true "
+        "when every Fast DDS peer on this host is version 2.9");
+  }
+  return profile + ": its shared-memory transport is left out (dds.shared_memory is false: a "
+         "peer of another Fast DDS version on this host could crash this process through it); "
+         "its other transports are used";
 }
 
 void withoutAutomaticDiscovery(fdds::DomainParticipantQos* qos) {
@@ -124,18 +169,7 @@ TransportPtr sizedForLargeData(const TransportPtr& descriptor) {
 }
 
 void sizeForLargeData(fdds::DomainParticipantQos* qos) {
-  fdds::TransportConfigQos& transport = qos->transport();
-  if (transport.use_builtin_transports) {
-    // Fast DDS 2.9's built-in transports are UDPv4 + SHM; make them explicit so they can be
-    // sized. The participant-level socket sizes apply only to the built-in UDPv4: carry them.
-    auto udp = std::make_shared<UDPv4TransportDescriptor>();
-    udp->sendBufferSize = transport.send_socket_buffer_size;
-    udp->receiveBufferSize = transport.listen_socket_buffer_size;
-    transport.user_transports.insert(transport.user_transports.begin(),
-                                      {std::make_shared<SharedMemTransportDescriptor>(), udp});
-    transport.use_builtin_transports = false;
-  }
-  for (TransportPtr& descriptor : transport.user_transports) {
+  for (TransportPtr& descriptor : qos->transport().user_transports) {
     descriptor = sizedForLargeData(descriptor);
   }
 }
@@ -169,6 +203,17 @@ void checkDepth(int depth) {
 
 }  // namespace
 
+std::uint16_t dataSharingDomainId() {
+  // FNV-1a of the version text, folded to 16 bits; never 0 (Fast DDS's automatic id of a host
+  // whose MAC address reads as zero).
+  std::uint32_t hash = 2166136261u;
+  for (const char c : std::string("mlmap data-sharing, Fast DDS ") + FASTRTPS_VERSION_STR) {
+    hash = (hash ^ static_cast<std::uint8_t>(c)) * 16777619u;
+  }
+  const auto id = static_cast<std::uint16_t>((hash >> 16) ^ (hash & 0xffffu));
+  return id == 0 ? 1 : id;
+}
+
 void ParticipantDeleter::operator()(fdds::DomainParticipant* participant) const {
   if (participant == nullptr) return;
   participant->delete_contained_entities();
@@ -190,7 +235,7 @@ ParticipantSetup participantSetup(const DdsConfig& config, const std::string& na
 
   switch (setup.discovery_range) {
     case DiscoveryRange::kLocalhost:
-      useLoopbackOnly(&qos);
+      useLoopbackOnly(config.shared_memory, &qos);
       break;
     case DiscoveryRange::kOff:
       withoutAutomaticDiscovery(&qos);
@@ -199,6 +244,11 @@ ParticipantSetup participantSetup(const DdsConfig& config, const std::string& na
     case DiscoveryRange::kSystemDefault:
       break;  // the profile's (or Fast DDS's) transports and multicast discovery
   }
+  const std::string profile = config.participant_profile.empty()
+                                  ? std::string("the default participant profile")
+                                  : "participant profile '" + config.participant_profile + "'";
+  const std::string removed = withSharedMemoryOnlyIfAsked(config.shared_memory, profile, &qos);
+  if (!removed.empty()) setup.warnings.push_back(removed);
   if (config.large_data) sizeForLargeData(&qos);
 
   // As rmw_fastrtps: discovery data of participants with many endpoints can exceed the
@@ -217,6 +267,7 @@ ParticipantPtr createParticipant(const DdsConfig& config, const std::string& nam
   const ParticipantSetup setup = participantSetup(config, name);
   // As rmw: a Permissive fallback is said, not silent.
   if (!setup.security.warning.empty()) std::cerr << "[mlmap dds] warning: " << setup.security.warning << "\n";
+  for (const std::string& warning : setup.warnings) std::cerr << "[mlmap dds] warning: " << warning << "\n";
   fdds::DomainParticipant* participant =
       fdds::DomainParticipantFactory::get_instance()->create_participant(
           static_cast<fdds::DomainId_t>(setup.domain_id), setup.qos);
@@ -251,6 +302,7 @@ fdds::DataReaderQos sensorReaderQos(int depth) {
   qos.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
   qos.history().depth = depth;
   qos.endpoint().history_memory_policy = kHistoryMemory;
+  qos.data_sharing().automatic(std::vector<std::uint16_t>{dataSharingDomainId()});  // with mlmap's writers only
   return qos;
 }
 

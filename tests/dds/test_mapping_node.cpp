@@ -11,10 +11,12 @@
 #include "raw_type.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
+#include "mlmap_msgs/msg/Status_PubSubTypes.h"
 #include "nav_msgs/msg/Odometry_PubSubTypes.h"
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/rtps/transport/test_UDPv4TransportDescriptor.h>
 #include <fastrtps/utils/IPLocator.h>
 #include <fastrtps/xmlparser/XMLProfileManager.h>
@@ -26,7 +28,10 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <map>
 #include <mutex>
+#include <sstream>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -133,12 +138,20 @@ struct SensorOptions {
   /// sample larger than a fragment reaches no reader through it.
   bool transport_drops_fragments = false;
   double wall_step_m = 0.05;  ///< spacing of the wall's points (0.005: 0.45 MB clouds)
+  /// The sensor's participant also has the SHM transport (dds.shared_memory), as a ROS 2 Jazzy
+  /// node on its default rmw_fastrtps_cpp with ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST.
+  bool shared_memory = false;
 };
 
 /// The sensor side's main participant: the test's LOCALHOST one, or the same with only a UDPv4
 /// transport that drops DATA_FRAG submessages (Fast DDS's test transport), on 127.0.0.1.
-ParticipantPtr sensorParticipant(int domain_id, bool drop_fragments) {
-  if (!drop_fragments) return createParticipant(localhostConfig(domain_id), "sensor_side");
+ParticipantPtr sensorParticipant(int domain_id, const SensorOptions& options) {
+  const bool drop_fragments = options.transport_drops_fragments;
+  if (!drop_fragments) {
+    DdsConfig config = localhostConfig(domain_id);
+    config.shared_memory = options.shared_memory;
+    return createParticipant(config, "sensor_side");
+  }
   ParticipantSetup setup = participantSetup(localhostConfig(domain_id), "sensor_side");
   auto udp = std::make_shared<eprosima::fastdds::rtps::test_UDPv4TransportDescriptor>();
   udp->dropDataFragMessagesPercentage = 100;
@@ -158,7 +171,7 @@ class SensorSide {
  public:
   SensorSide(int domain_id, const NodeConfig& node_config, const SensorOptions& options = {})
       : config_(node_config),
-        participant_(sensorParticipant(domain_id, options.transport_drops_fragments)),
+        participant_(sensorParticipant(domain_id, options)),
         raw_participant_(createParticipant(localhostConfig(domain_id), "raw_sensor_side")) {
     T_W_B_.translation() = Eigen::Vector3d(0.0, 0.0, 1.0);
     const Transform T_S_W = (T_W_B_ * config_.map.sensor.T_B_S()).inverse();
@@ -536,6 +549,120 @@ TEST(MappingNodeInput, CloudsOfADataSharingWriterAreReadInItsMemoryUnlessDataSha
       EXPECT_EQ(node.counters().clouds_received, 0u) << "the transport was to drop every cloud";
     }
   }
+}
+
+// ---- A foreign participant on the same host ------------------------------------------------
+
+/// What a participant learns of the others through discovery: each one's announced locators and
+/// the data-sharing its readers and writers announce.
+class DiscoveryLog : public fdds::DomainParticipantListener {
+ public:
+  struct Peer {
+    std::vector<eprosima::fastrtps::rtps::Locator_t> locators;  ///< default + metatraffic unicast
+    std::vector<fdds::DataSharingQosPolicy> data_sharing;        ///< of each endpoint
+    std::vector<std::string> topics;                              ///< of each endpoint
+  };
+
+  void on_participant_discovery(fdds::DomainParticipant*,
+                                eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
+    if (info.status != eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERED_PARTICIPANT) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    Peer& peer = peers_[prefixOf(info.info.m_guid)];
+    for (const auto* list : {&info.info.default_locators, &info.info.metatraffic_locators}) {
+      for (const auto& l : list->unicast) peer.locators.push_back(l);
+      for (const auto& l : list->multicast) peer.locators.push_back(l);
+    }
+    names_[info.info.m_participantName.to_string()] = prefixOf(info.info.m_guid);
+  }
+  void on_subscriber_discovery(fdds::DomainParticipant*,
+                               eprosima::fastrtps::rtps::ReaderDiscoveryInfo&& info) override {
+    endpoint(info.info.guid(), info.info.topicName().to_string(), info.info.m_qos.data_sharing);
+  }
+  void on_publisher_discovery(fdds::DomainParticipant*,
+                              eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override {
+    endpoint(info.info.guid(), info.info.topicName().to_string(), info.info.m_qos.data_sharing);
+  }
+
+  /// The participant named `name` as discovered so far (empty when it was not).
+  Peer peer(const std::string& name) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto found = names_.find(name);
+    return found == names_.end() ? Peer{} : peers_[found->second];
+  }
+
+ private:
+  static std::string prefixOf(const eprosima::fastrtps::rtps::GUID_t& guid) {
+    std::ostringstream text;
+    text << guid.guidPrefix;
+    return text.str();
+  }
+  void endpoint(const eprosima::fastrtps::rtps::GUID_t& guid, const std::string& topic,
+                const fdds::DataSharingQosPolicy& data_sharing) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    Peer& peer = peers_[prefixOf(guid)];
+    peer.data_sharing.push_back(data_sharing);
+    peer.topics.push_back(topic);
+  }
+
+  std::mutex mutex_;
+  std::map<std::string, std::string> names_;  ///< participant name -> GUID prefix
+  std::map<std::string, Peer> peers_;         ///< by GUID prefix
+};
+
+// A ROS 2 Jazzy node on its default rmw (Fast DDS 2.14) announces shared-memory locators and
+// data-sharing in its host's automatic domain; Fast DDS 2.9 aborts when it opens a 2.14 segment.
+// Here the foreign participants are Fast DDS 2.9 set up as that node (SHM + UDPv4 on 127.0.0.1):
+// the node must offer them UDP locators only, announce data-sharing in mlmap's own domain alone,
+// and exchange samples with them both ways (over UDP, the one transport both sides have).
+TEST(ForeignPeer, IsOfferedNoSharedMemoryAndSamplesCrossBothWays) {
+  const NoIntraprocessDelivery between_processes;
+  constexpr int kDomain = 180;
+  const NodeConfig config = nodeConfig(kDomain);
+  ASSERT_FALSE(config.dds.shared_memory) << "the default";
+  DiscoveryLog discovered;
+  DdsConfig foreign_config = localhostConfig(kDomain);
+  foreign_config.shared_memory = true;
+  const ParticipantSetup foreign_setup = participantSetup(foreign_config, "ros2_monitor");
+  ParticipantPtr monitor(fdds::DomainParticipantFactory::get_instance()->create_participant(
+      kDomain, foreign_setup.qos, &discovered, fdds::StatusMask::none()));
+  ASSERT_TRUE(monitor);
+  fdds::Subscriber* subscriber = monitor->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+  std::atomic<int> statuses{0};
+  TakeListener<mlmap_msgs::Status_> status_listener([&](mlmap_msgs::Status_&&) { ++statuses; },
+                                                    [](const std::string&) {});
+  createReader<mlmap_msgs::Status_PubSubType>(subscriber, "rt/" + config.dds.topics.status,
+                                              reliableReaderQos(), &status_listener);
+
+  MappingNode node(config);
+  SensorOptions options;
+  options.shared_memory = true;
+  SensorSide sensor(kDomain, config, options);
+  ASSERT_TRUE(sensor.matched(node));
+  for (std::uint64_t k = 1; k <= 3; ++k) {
+    sensor.frame(500.0 + 0.1 * static_cast<double>(k));
+    ASSERT_TRUE(mapped(node, k)) << "a frame from a participant with shared memory was not mapped";
+  }
+  ASSERT_TRUE(waitFor([&] { return statuses > 0; })) << "no status reached the foreign reader";
+
+  const DiscoveryLog::Peer peer = discovered.peer("mlmap_node");
+  ASSERT_FALSE(peer.locators.empty()) << "the node was not discovered";
+  for (const eprosima::fastrtps::rtps::Locator_t& l : peer.locators) {
+    EXPECT_EQ(l.kind, LOCATOR_KIND_UDPv4) << "the node offers a locator of kind " << l.kind
+                                          << " (" << LOCATOR_KIND_SHM << " is shared memory)";
+  }
+  ASSERT_TRUE(waitFor([&] { return discovered.peer("mlmap_node").topics.size() >= 3; }));
+  const DiscoveryLog::Peer endpoints = discovered.peer("mlmap_node");
+  int sharing = 0;
+  for (std::size_t i = 0; i < endpoints.topics.size(); ++i) {
+    const fdds::DataSharingQosPolicy& d = endpoints.data_sharing[i];
+    // Fast DDS 2.9 announces no data-sharing parameter for an endpoint without it, which the
+    // receiving side reads as its default: AUTO with no domain (no data-sharing with anyone).
+    if (d.kind() == fdds::OFF || d.domain_ids().empty()) continue;
+    ++sharing;
+    EXPECT_EQ(d.domain_ids(), std::vector<std::uint64_t>{dataSharingDomainId()})
+        << endpoints.topics[i] << " announces data-sharing outside mlmap's domain";
+  }
+  EXPECT_GE(sharing, 1) << "the cloud reader accepts data-sharing from mlmap's publisher";
 }
 
 }  // namespace

@@ -36,6 +36,7 @@ TEST(NodeConfigYaml, EmptyDocumentGivesTheDefaultsOfBothParts) {
   EXPECT_EQ(c.dds.topics.grid, "mlmap/grid");
   EXPECT_DOUBLE_EQ(c.dds.rates.awareness_hz, 10.0);
   EXPECT_TRUE(c.dds.large_data);
+  EXPECT_FALSE(c.dds.shared_memory);
   EXPECT_TRUE(c.dds.data_sharing);
   EXPECT_TRUE(sameConfig(parseNodeConfigYaml(""), NodeConfig{}));
   EXPECT_TRUE(sameConfig(parseNodeConfigYaml("dds:\n"), NodeConfig{}));
@@ -51,6 +52,7 @@ dds:
   profiles_file: /etc/mlmap/profiles.xml
   participant_profile: mine
   large_data: false
+  shared_memory: true
   data_sharing: false
   world_frame: odom
   body_frame: fcu
@@ -85,6 +87,7 @@ dds:
   EXPECT_EQ(d.profiles_file, "/etc/mlmap/profiles.xml");
   EXPECT_EQ(d.participant_profile, "mine");
   EXPECT_FALSE(d.large_data);
+  EXPECT_TRUE(d.shared_memory);
   EXPECT_FALSE(d.data_sharing);
   EXPECT_EQ(d.world_frame, "odom");
   EXPECT_EQ(d.body_frame, "fcu");
@@ -206,6 +209,7 @@ TEST(NodeConfigYaml, PrintedConfigReadsBackIdentically) {
   c.dds.profiles_file = "/opt/profiles: x.xml";
   c.dds.participant_profile = "true";
   c.dds.large_data = false;
+  c.dds.shared_memory = true;
   c.dds.data_sharing = false;
   c.dds.world_frame = "odom";
   c.dds.topics.cloud = "";

@@ -313,20 +313,17 @@ TEST(ShippedProfiles, MissingFileOrProfileIsAClearError) {
 
 // ---- Discovery range and large data --------------------------------------------------------
 
-TEST(ParticipantSetup, LocalhostUsesSharedMemoryAndLoopbackUdpOnly) {
+TEST(ParticipantSetup, LocalhostUsesLoopbackUdpOnlyAndSharedMemoryOnlyWhenAsked) {
   const ParticipantSetup setup = participantSetup(localhostConfig(152), "test");
   EXPECT_EQ(setup.discovery_range, DiscoveryRange::kLocalhost);
   const auto& qos = setup.qos;
   EXPECT_FALSE(qos.transport().use_builtin_transports);
-  EXPECT_EQ(qos.transport().user_transports.size(), 2u);
+  ASSERT_EQ(qos.transport().user_transports.size(), 1u) << "no SHM unless dds.shared_memory";
   const auto udp = onlyTransport<UDPv4TransportDescriptor>(qos);
   ASSERT_NE(udp, nullptr);
   EXPECT_EQ(udp->interfaceWhiteList, std::vector<std::string>{"127.0.0.1"});
   EXPECT_EQ(udp->maxInitialPeersRange, kLocalhostMaxInitialPeersRange);
   EXPECT_EQ(udp->receiveBufferSize, kLargeDataSocketBufferBytes);  // large_data defaults to true
-  const auto shm = onlyTransport<SharedMemTransportDescriptor>(qos);
-  ASSERT_NE(shm, nullptr);
-  EXPECT_EQ(shm->segment_size(), kLargeDataShmSegmentBytes);
   const auto& builtin = qos.wire_protocol().builtin;
   EXPECT_TRUE(builtin.metatrafficMulticastLocatorList.empty());
   EXPECT_TRUE(qos.wire_protocol().default_multicast_locator_list.empty());
@@ -334,28 +331,44 @@ TEST(ParticipantSetup, LocalhostUsesSharedMemoryAndLoopbackUdpOnly) {
   ASSERT_EQ(builtin.initialPeersList.size(), 1u);
   EXPECT_TRUE(isLoopbackOnly(builtin.initialPeersList));
   EXPECT_EQ(qos.name().to_string(), "test");
+  EXPECT_TRUE(setup.warnings.empty());
 
-  DdsConfig small = localhostConfig(152);
-  small.large_data = false;
-  const ParticipantSetup plain = participantSetup(small, "test");
+  DdsConfig with_shm = localhostConfig(152);
+  with_shm.shared_memory = true;
+  const ParticipantSetup shm_setup = participantSetup(with_shm, "test");
+  EXPECT_EQ(shm_setup.qos.transport().user_transports.size(), 2u);
+  const auto shm = onlyTransport<SharedMemTransportDescriptor>(shm_setup.qos);
+  ASSERT_NE(shm, nullptr);
+  EXPECT_EQ(shm->segment_size(), kLargeDataShmSegmentBytes);
+  ASSERT_NE(onlyTransport<UDPv4TransportDescriptor>(shm_setup.qos), nullptr);
+
+  with_shm.large_data = false;
+  const ParticipantSetup plain = participantSetup(with_shm, "test");
   const auto plain_shm = onlyTransport<SharedMemTransportDescriptor>(plain.qos);
   ASSERT_NE(plain_shm, nullptr);
   EXPECT_EQ(plain_shm->segment_size(), SharedMemTransportDescriptor().segment_size());
   EXPECT_EQ(onlyTransport<UDPv4TransportDescriptor>(plain.qos)->receiveBufferSize, 0u);
 }
 
-TEST(ParticipantSetup, SubnetKeepsTheTransportsAndLargeDataSizesThem) {
+TEST(ParticipantSetup, SubnetUsesFastDdsUdpWithoutSharedMemoryUnlessAskedAndLargeDataSizesIt) {
   DdsConfig config;
   config.domain_id = 153;
   config.discovery_range = "SUBNET";
   config.large_data = false;
   const ParticipantSetup plain = participantSetup(config, "test");
-  EXPECT_TRUE(plain.qos.transport().use_builtin_transports);
-  EXPECT_TRUE(plain.qos.transport().user_transports.empty());
+  // Fast DDS's built-in transports are UDPv4 + SHM: the same UDPv4 alone, every interface.
+  EXPECT_FALSE(plain.qos.transport().use_builtin_transports);
+  ASSERT_EQ(plain.qos.transport().user_transports.size(), 1u);
+  const auto plain_udp = onlyTransport<UDPv4TransportDescriptor>(plain.qos);
+  ASSERT_NE(plain_udp, nullptr);
+  EXPECT_TRUE(plain_udp->interfaceWhiteList.empty());
+  EXPECT_EQ(plain_udp->receiveBufferSize, 0u);  // the OS default, as the built-in one
   EXPECT_TRUE(plain.qos.wire_protocol().builtin.initialPeersList.empty());
+  EXPECT_TRUE(plain.warnings.empty()) << "nothing the user asked for was left out";
 
-  // Built-in transports become the same two transports, sized.
+  // Asked for: the built-in pair, sized.
   config.large_data = true;
+  config.shared_memory = true;
   const ParticipantSetup sized = participantSetup(config, "test");
   EXPECT_FALSE(sized.qos.transport().use_builtin_transports);
   EXPECT_EQ(sized.qos.transport().user_transports.size(), 2u);
@@ -387,6 +400,12 @@ const char kTestProfiles[] = R"(<?xml version="1.0" encoding="UTF-8"?>
         <interfaceWhiteList><address>127.0.0.1</address></interfaceWhiteList>
       </transport_descriptor>
     </transport_descriptors>
+    <participant profile_name="mlmap_test_shm_only">
+      <rtps>
+        <useBuiltinTransports>false</useBuiltinTransports>
+        <userTransports><transport_id>test_shm_1mb</transport_id></userTransports>
+      </rtps>
+    </participant>
     <participant profile_name="mlmap_test_loopback_no_peers">
       <rtps>
         <useBuiltinTransports>false</useBuiltinTransports>
@@ -415,6 +434,7 @@ TEST(ParticipantSetup, LargeDataRaisesAProfilesSizesOnACopyAndNeverLowersThem) {
   config.discovery_range = "OFF";  // no multicast: this participant sends nothing at all
   config.participant_profile = "mlmap_test_loopback_no_peers";
   config.large_data = true;
+  config.shared_memory = true;  // the profile's SHM transport is kept
   const ParticipantSetup setup = participantSetup(config, "test");
   const auto shm = onlyTransport<SharedMemTransportDescriptor>(setup.qos);
   ASSERT_NE(shm, nullptr);
@@ -431,6 +451,37 @@ TEST(ParticipantSetup, LargeDataRaisesAProfilesSizesOnACopyAndNeverLowersThem) {
   // And a participant accepts the sized transports.
   const ParticipantPtr participant = createParticipant(config, "test");
   EXPECT_TRUE(participant);
+}
+
+TEST(ParticipantSetup, AProfilesSharedMemoryIsLeftOutUnlessAskedAndThatIsSaid) {
+  ASSERT_TRUE(loadTestProfiles());
+  DdsConfig config;
+  config.domain_id = 154;
+  config.discovery_range = "OFF";
+  config.participant_profile = "mlmap_test_loopback_no_peers";
+  const ParticipantSetup setup = participantSetup(config, "test");
+  ASSERT_EQ(setup.qos.transport().user_transports.size(), 1u);
+  const auto udp = onlyTransport<UDPv4TransportDescriptor>(setup.qos);
+  ASSERT_NE(udp, nullptr);
+  EXPECT_EQ(udp->interfaceWhiteList, std::vector<std::string>{"127.0.0.1"});
+  ASSERT_EQ(setup.warnings.size(), 1u);
+  EXPECT_NE(setup.warnings[0].find("'mlmap_test_loopback_no_peers'"), std::string::npos) << setup.warnings[0];
+  EXPECT_NE(setup.warnings[0].find("dds.shared_memory"), std::string::npos) << setup.warnings[0];
+  const ParticipantPtr participant = createParticipant(config, "test");
+  EXPECT_TRUE(participant);
+
+  // A profile with shared memory alone would leave no transport: a clear error instead.
+  config.participant_profile = "mlmap_test_shm_only";
+  try {
+    participantSetup(config, "test");
+    ADD_FAILURE() << "a participant without any transport was set up";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("'mlmap_test_shm_only'"), std::string::npos) << what;
+    EXPECT_NE(what.find("dds.shared_memory: true"), std::string::npos) << what;
+  }
+  config.shared_memory = true;
+  EXPECT_NE(onlyTransport<SharedMemTransportDescriptor>(participantSetup(config, "test").qos), nullptr);
 }
 
 TEST(Participant, OffAddsNoPeersAndNoMulticastSoTwoParticipantsNeverMeet) {
@@ -571,6 +622,11 @@ TEST(QosPresets, MatchRos2AndRmwFastrtps) {
   EXPECT_EQ(sensor.history().depth, 5);
   EXPECT_EQ(sensor.endpoint().history_memory_policy, frtps::DYNAMIC_REUSABLE_MEMORY_MODE);
   EXPECT_EQ(sensor.data_sharing().kind(), fdds::AUTO);
+  // Only with mlmap's own writers: never Fast DDS's automatic id (the host's MAC in the upper 48
+  // bits), which every other same-host Fast DDS endpoint announces.
+  EXPECT_EQ(sensor.data_sharing().domain_ids(), std::vector<std::uint64_t>{dataSharingDomainId()});
+  EXPECT_NE(dataSharingDomainId(), 0u);
+  EXPECT_EQ(reliableReaderQos(true).data_sharing().domain_ids(), sensor.data_sharing().domain_ids());
 
   const fdds::DataWriterQos writer = reliableWriterQos();
   EXPECT_EQ(writer.reliability().kind, fdds::RELIABLE_RELIABILITY_QOS);

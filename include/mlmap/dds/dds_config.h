@@ -18,7 +18,7 @@ namespace mlmap::dds {
 /// ROS_AUTOMATIC_DISCOVERY_RANGE.
 enum class DiscoveryRange {
   kSystemDefault,  ///< not set anywhere: SUBNET
-  kLocalhost,      ///< SHM + UDPv4 on 127.0.0.1 only, unicast discovery to 127.0.0.1 (no multicast)
+  kLocalhost,      ///< UDPv4 on 127.0.0.1 only, unicast discovery to 127.0.0.1 (no multicast)
   kSubnet,         ///< Fast DDS built-in transports, multicast discovery (a vehicle LAN)
   kOff,            ///< no automatic discovery: no multicast, and only the profile's own initial
                    ///< peers are contacted (none added); peers that list this host still find it
@@ -123,7 +123,12 @@ struct DdsConfig {
                                    ///< participant_profile (its is_default_profile is not used)
   std::string participant_profile; ///< participant profile to use, from profiles_file or from
                                    ///< FASTRTPS_DEFAULT_PROFILES_FILE ("": the factory default)
-  bool large_data = true;          ///< 16 MB shared-memory segment, 4 MB socket buffers (multi-MB clouds)
+  bool large_data = true;          ///< 4 MB socket buffers (16 MB SHM segment) for multi-MB clouds
+  /// Fast DDS's shared-memory transport. Off: UDP only towards every participant, so that no
+  /// other process on the host (a ROS 2 Jazzy node on Fast DDS 2.14, whose segments Fast DDS 2.9
+  /// cannot read) can crash this one; mlmap's own clouds still go by data-sharing. On: only where
+  /// every Fast DDS participant on the host is version 2.9 (see createParticipant()).
+  bool shared_memory = false;
   /// Clouds from a same-host Fast DDS writer that offers data-sharing (mlmap_sensor_publisher
   /// does) are read from its history in shared memory, not through a transport; the publisher
   /// follows this key too. Other writers (a ROS 2 driver) reach the node as before.

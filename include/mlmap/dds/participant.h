@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace mlmap::dds {
 
@@ -32,20 +33,33 @@ using ParticipantPtr = std::unique_ptr<eprosima::fastdds::dds::DomainParticipant
 /// user data "enclave=<enclave>;" (enclave "/" unless security sets one) when the profile sets
 /// none (both as rmw_fastrtps).
 ///
+/// Shared memory (`shared_memory`, false by default): Fast DDS 2.x sends through its SHM
+/// transport to every peer on the same host that announces SHM locators, and does not fall back
+/// to UDP when that fails; Fast DDS 2.9 aborts in Boost.Interprocess when it opens a segment made
+/// by Fast DDS 2.14 (ROS 2 Jazzy's rmw_fastrtps_cpp). So by default the participant has no SHM
+/// transport at all: it announces UDP locators only and never maps another process's transport
+/// segment. Fast DDS's built-in transports become an explicit UDPv4 transport, and SHM
+/// transports of a profile are left out (ParticipantSetup::warnings says so; a profile with SHM
+/// alone is an error). mlmap's own fast path between its processes is data-sharing, which only
+/// mlmap's endpoints of the same Fast DDS version accept (dataSharingDomainId()). With
+/// `shared_memory` true the SHM transport is used as Fast DDS does (for a host where every Fast
+/// DDS participant is 2.9).
+///
 /// Discovery range:
-/// - kLocalhost: the transports are replaced by SHM + UDPv4 restricted to 127.0.0.1 (interface
-///   white list, maxInitialPeersRange 32), no multicast locators, metatraffic unicast on
-///   127.0.0.1 and the initial peers exactly {127.0.0.1}: up to 32 participants on the host find
-///   each other, nothing leaves the host. The profile's user-data locators are dropped too
-///   (Fast DDS then listens on SHM + 127.0.0.1); its other settings (discovery protocol,
-///   discovery servers, ...) stay. Stricter than rmw_fastrtps, which keeps the built-in
+/// - kLocalhost: the transports are replaced by UDPv4 restricted to 127.0.0.1 (interface white
+///   list, maxInitialPeersRange 32; plus SHM with `shared_memory`), no multicast locators,
+///   metatraffic unicast on 127.0.0.1 and the initial peers exactly {127.0.0.1}: up to 32
+///   participants on the host find each other, nothing leaves the host. The profile's user-data
+///   locators are dropped too (Fast DDS then listens on 127.0.0.1); its other settings (discovery
+///   protocol, discovery servers, ...) stay. Stricter than rmw_fastrtps, which keeps the built-in
 ///   transports and only confines discovery.
-/// - kSubnet / kSystemDefault: the profile's transports and discovery are left as they are.
-/// - kOff: the profile's transports stay; multicast locators (discovery and user data) are
-///   removed and nothing is added to the initial peers, so the participant only announces itself
-///   to the profile's own initial peers (none by default): it finds nobody by itself, but a
-///   participant that lists this host as a peer still finds it. (rmw_fastrtps switches
-///   discovery off entirely instead, which also ignores the profile's peers.)
+/// - kSubnet / kSystemDefault: the profile's transports and discovery are left as they are (but
+///   for shared memory, above).
+/// - kOff: the profile's transports stay (but for shared memory); multicast locators (discovery
+///   and user data) are removed and nothing is added to the initial peers, so the participant
+///   only announces itself to the profile's own initial peers (none by default): it finds nobody
+///   by itself, but a participant that lists this host as a peer still finds it. (rmw_fastrtps
+///   switches discovery off entirely instead, which also ignores the profile's peers.)
 ///
 /// DDS Security (`security`, resolveSecurity()): when enabled, the dds.sec.* properties of
 /// rmw_fastrtps are added to the QoS (a property the profile already sets keeps the profile's
@@ -55,9 +69,8 @@ using ParticipantPtr = std::unique_ptr<eprosima::fastdds::dds::DomainParticipant
 /// the exception's message.
 ///
 /// `large_data` raises (never lowers) the SHM segment to 16 MB and the socket buffers to 4 MB on
-/// the transports in use: Fast DDS's built-in transports (UDPv4 + SHM) are replaced by the same
-/// two, sized; a profile's own SHM / UDPv4 / UDPv6 / TCP descriptors are copied and sized (the
-/// profile itself is not modified); other transports are left alone. Over SHM the sender's
+/// the transports in use: SHM / UDPv4 / UDPv6 / TCP descriptors are copied and sized (a profile
+/// itself is not modified); other transports are left alone. Over SHM the sender's
 /// segment decides, over UDP the receiver's buffer (bounded by net.core.rmem_max).
 ///
 /// Throws std::runtime_error with the reason when the profiles file, the profile or the
@@ -70,10 +83,20 @@ struct ParticipantSetup {
   DiscoveryRange discovery_range = DiscoveryRange::kSystemDefault;  ///< as resolved
   SecuritySetup security;  ///< as resolved (its properties are in qos when enabled)
   eprosima::fastdds::dds::DomainParticipantQos qos;
+  /// What createParticipant() prints as warnings (a profile's transport left out).
+  std::vector<std::string> warnings;
 };
 /// Resolves the domain, the discovery range and the QoS exactly as createParticipant() does
 /// (loading `profiles_file` when set). Throws std::runtime_error like it.
 ParticipantSetup participantSetup(const DdsConfig& config, const std::string& name);
+
+/// The data-sharing domain of mlmap's endpoints: a readers' and a writer's data-sharing is used
+/// only when they list a common domain id, and Fast DDS's automatic id is the host's MAC address
+/// in the upper 48 bits of 64 (low 16 bits zero). mlmap's readers and writers list only this
+/// nonzero 16-bit id, derived from the Fast DDS version mlmap is built with, so that data-sharing
+/// happens between mlmap endpoints built with the same Fast DDS and never with another process's
+/// (whose segments may have another format); those are served through the transports.
+std::uint16_t dataSharingDomainId();
 
 /// Segment size of the SHM transport with `large_data` [bytes].
 inline constexpr std::uint32_t kLargeDataShmSegmentBytes = 16u * 1024u * 1024u;
@@ -86,8 +109,9 @@ inline constexpr std::uint32_t kLocalhostMaxInitialPeersRange = 32;
 // history memory (payloads sized by each sample, then reused), so samples of any size fit, also
 // of a type that claims a size bound (CloudSamplePubSubType).
 
-/// ROS 2 "sensor data" QoS: BEST_EFFORT, VOLATILE, KEEP_LAST depth (5); data-sharing AUTO (used
-/// with a same-host writer that offers it, for a type that says it is bounded).
+/// ROS 2 "sensor data" QoS: BEST_EFFORT, VOLATILE, KEEP_LAST depth (5); data-sharing AUTO in
+/// mlmap's domain (dataSharingDomainId(): used with a same-host mlmap writer that offers it, for a
+/// type that says it is bounded).
 eprosima::fastdds::dds::DataReaderQos sensorReaderQos(int depth = 5);
 /// ROS 2 default QoS for a writer: RELIABLE, VOLATILE, KEEP_LAST depth (10), synchronous publish
 /// mode, no data-sharing; heartbeats every 0.1 s instead of Fast DDS's 3 s, so that a lost sample
