@@ -1,25 +1,35 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages mlmap needs, only those that are missing (apt-get, through sudo
 # when not root). Safe to run again: it does nothing when everything is there.
-#   bash tools/install_deps.sh            everything: build, tests, ground-station tools' tests
-#   bash tools/install_deps.sh --onboard  without the ground-station tools (docker/onboard.Dockerfile)
+#   bash tools/install_deps.sh             everything: build, tests, ground-station tools' tests
+#   bash tools/install_deps.sh --programs  the programs without their tests (docker/sim.Dockerfile)
+#   bash tools/install_deps.sh --onboard   mlmap_node alone (docker/onboard.Dockerfile): no OpenCV,
+#                                          no OctoMap (cmake -DMLMAP_BUILD_APPS=OFF)
 set -euo pipefail
 case "${1:-}" in
-  "" | --onboard) ;;
-  *) echo "usage: $0 [--onboard]" >&2; exit 2 ;;
+  "" | --programs | --onboard) ;;
+  *) echo "usage: $0 [--programs | --onboard]" >&2; exit 2 ;;
 esac
 
+# mlmap_node: the core, the configuration, map files and the DDS component.
 packages=(
   g++ make cmake ninja-build           # toolchain (Ninja builds the test command's trees)
   libeigen3-dev                        # mapping core
   libyaml-cpp-dev                      # configuration files
-  libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev  # depth PNGs, map pictures
   libcli11-dev libspdlog-dev           # command line, logging
+  libfastrtps-dev libfastcdr-dev fastddsgen  # DDS component (Fast DDS 2.9, ROS 2 wire types)
+)
+# The offline programs (demo, replay, map tool, sensor publisher, inspector, benchmarks).
+programs=(
+  libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev  # depth PNGs, map pictures
   liboctomap-dev                       # OctoMap: .bt export (mlmap_map_tool), the side-by-side comparison
+  fastdds-tools                        # `fastdds discovery` (config/dds/discovery_server_client.xml)
+)
+# The tests and their tools.
+test_tools=(
   libgtest-dev                         # tests
   clang libclang-rt-14-dev llvm-14     # fuzzing: libFuzzer + sanitizer runtimes, llvm-symbolizer (tools/fuzz.sh)
   clang-tidy cppcheck                  # static analysis (tools/lint.sh)
-  libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools  # DDS component (Fast DDS 2.9, ROS 2 wire types)
   cyclonedds-dev cyclonedds-tools      # cross-vendor interoperability test (ROS 2's other tier-1 DDS)
   iproute2                             # network-namespace tests
   openssl python3                      # DDS Security: test keystores (tools/make_test_keystore.sh), the capture test
@@ -32,12 +42,13 @@ ground_tools=(
   python3-catkin-pkg python3-setuptools  # package.xml checks
   colcon python3-colcon-ros python3-colcon-package-information  # colcon discovery (list) and install
   python3-flake8 pydocstyle shellcheck  # lint (the ament flake8 / pep257 rules)
+  python3-matplotlib                   # the charts of the OctoMap comparison (tools/plot_octomap_comparison.py)
 )
-# Off board too: the charts of the OctoMap comparison (tools/plot_octomap_comparison.py).
-ground_tools+=(python3-matplotlib)
-if [ "${1:-}" != --onboard ]; then
-  packages+=("${ground_tools[@]}")
-fi
+case "${1:-}" in
+  --onboard) ;;
+  --programs) packages+=("${programs[@]}") ;;
+  *) packages+=("${programs[@]}" "${test_tools[@]}" "${ground_tools[@]}") ;;
+esac
 
 missing=()
 for p in "${packages[@]}"; do

@@ -2,8 +2,8 @@
 // frames) and writes pictures of the map, its accuracy against ground truth, timings and memory.
 
 #include "mlmap/eval/run_outputs.h"
-#include "mlmap/io/config_yaml.h"
-#include "mlmap/io/frame_directory.h"
+#include "mlmap/config/config_yaml.h"
+#include "mlmap/datasets/frame_directory.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include <CLI/CLI.hpp>

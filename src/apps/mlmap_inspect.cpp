@@ -10,8 +10,8 @@
 #include "mlmap/dds/participant.h"
 #include "mlmap/dds/ros_conversions.h"
 #include "mlmap/eval/sim_flight.h"
-#include "mlmap/io/map_image.h"
-#include "mlmap/io/world_yaml.h"
+#include "mlmap/pictures/map_image.h"
+#include "mlmap/datasets/world_yaml.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include "mlmap_msgs/msg/Status_PubSubTypes.h"

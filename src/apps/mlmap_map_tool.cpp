@@ -1,9 +1,11 @@
 // mlmap_map_tool: reads a saved mlmap map file and converts it to the formats other tools open
 // (PLY, PCD, PGM + YAML for map_server / nav2, OctoMap .bt), or prints what it holds.
 
-#include "mlmap/io/map_export.h"
-#include "mlmap/io/map_file.h"
-#include "mlmap/io/octomap_export.h"
+#include "mlmap/map_io/map_export.h"
+#include "mlmap/map_io/map_file.h"
+#if MLMAP_HAVE_OCTOMAP
+#include "mlmap/map_io/octomap_export.h"
+#endif
 #include "mlmap/pipeline/map_engine.h"
 
 #include <CLI/CLI.hpp>
@@ -65,6 +67,12 @@ int main(int argc, char** argv) {
     std::cerr << "nothing to do: give --info, --ply, --pcd, --grid or --bt (see --help)\n";
     return 2;
   }
+#if !MLMAP_HAVE_OCTOMAP
+  if (!bt_path.empty()) {
+    std::cerr << "--bt: this build has no OctoMap (install liboctomap-dev and build again)\n";
+    return 2;
+  }
+#endif
   if (!band.empty() && !(band[0] < band[1])) {
     std::cerr << "--band: MIN must be below MAX\n";
     return 2;
@@ -139,11 +147,13 @@ int main(int argc, char** argv) {
                   grid.band_min_z_m, grid.band_max_z_m);
     }
     if (!bt_path.empty()) {
+#if MLMAP_HAVE_OCTOMAP
       const io::OctomapExportCounts c = io::writeOctomapBinary(state, bt_path);
       reportFile("OctoMap", bt_path, c.occupied);
       std::printf("  %zu occupied, %zu free voxels", c.occupied, c.free);
       if (c.out_of_range > 0) std::printf(", %zu beyond OctoMap's key range left out", c.out_of_range);
       std::printf("\n");
+#endif
     }
     return 0;
   } catch (const std::exception& e) {

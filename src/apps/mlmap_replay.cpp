@@ -3,9 +3,9 @@
 // the occupied voxels as text and per-frame statistics as JSON.
 
 #include "mlmap/eval/run_outputs.h"
-#include "mlmap/io/cloud_sequence.h"
-#include "mlmap/io/frame_directory.h"
-#include "mlmap/io/voxel_text.h"
+#include "mlmap/datasets/cloud_sequence.h"
+#include "mlmap/datasets/frame_directory.h"
+#include "mlmap/map_io/voxel_text.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include <CLI/CLI.hpp>

@@ -14,12 +14,13 @@
 // status 1 when a frame could not be written.
 
 #include "mlmap/dds/cloud_sample.h"
+#include "mlmap/dds/cloud_writer.h"
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/node_config.h"
 #include "mlmap/dds/participant.h"
 #include "mlmap/dds/ros_conversions.h"
-#include "mlmap/io/frame_directory.h"
-#include "mlmap/io/world_yaml.h"
+#include "mlmap/datasets/frame_directory.h"
+#include "mlmap/datasets/world_yaml.h"
 #include "mlmap/sim/depth_camera.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"

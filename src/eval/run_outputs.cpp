@@ -1,8 +1,8 @@
 #include "mlmap/eval/run_outputs.h"
 
-#include "mlmap/io/config_yaml.h"
-#include "mlmap/io/map_file.h"
-#include "mlmap/io/map_image.h"
+#include "mlmap/config/config_yaml.h"
+#include "mlmap/map_io/map_file.h"
+#include "mlmap/pictures/map_image.h"
 
 #include <sys/resource.h>
 #include <unistd.h>

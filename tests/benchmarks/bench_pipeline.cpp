@@ -4,7 +4,7 @@
 
 #include "mlmap/eval/run_outputs.h"
 #include "mlmap/eval/sim_flight.h"
-#include "mlmap/io/frame_directory.h"
+#include "mlmap/datasets/frame_directory.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include <CLI/CLI.hpp>

@@ -8,8 +8,8 @@
 #include "mlmap/eval/run_outputs.h"
 #include "mlmap/eval/sim_flight.h"
 #include "mlmap/eval/voxel_agreement.h"
-#include "mlmap/io/frame_directory.h"
-#include "mlmap/io/world_yaml.h"
+#include "mlmap/datasets/frame_directory.h"
+#include "mlmap/datasets/world_yaml.h"
 #include "mlmap/pipeline/map_engine.h"
 #include "mlmap/sim/lidar.h"
 

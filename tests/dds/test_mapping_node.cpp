@@ -2,6 +2,7 @@
 // bad poses, bad stamps) are rejected and counted while good frames keep being mapped.
 // Participants on loopback only (DiscoveryRange::kLocalhost), domains 170..189.
 #include "mlmap/dds/cloud_sample.h"
+#include "mlmap/dds/cloud_writer.h"
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/mapping_node.h"
 #include "mlmap/dds/participant.h"

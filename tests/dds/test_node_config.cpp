@@ -2,8 +2,8 @@
 
 #include "mlmap/dds/mapping_node.h"
 
-#include "mlmap/io/config_yaml.h"
-#include "mlmap/io/yaml_section.h"
+#include "mlmap/config/config_yaml.h"
+#include "mlmap/config/yaml_section.h"
 
 #include <gtest/gtest.h>
 

@@ -7,8 +7,8 @@
 #include "mlmap/dds/mapping_node.h"
 #include "mlmap/dds/participant.h"
 #include "mlmap/dds/ros_conversions.h"
-#include "mlmap/io/map_export.h"
-#include "mlmap/io/map_file.h"
+#include "mlmap/map_io/map_export.h"
+#include "mlmap/map_io/map_file.h"
 #include "mlmap/sim/lidar.h"
 #include "mlmap/sim/world.h"
 

@@ -5,7 +5,7 @@
 
 #include "fuzz_support.h"
 
-#include "mlmap/io/config_yaml.h"
+#include "mlmap/config/config_yaml.h"
 
 #include <stdexcept>
 

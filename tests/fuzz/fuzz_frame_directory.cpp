@@ -5,7 +5,7 @@
 
 #include "fuzz_support.h"
 
-#include "mlmap/io/frame_directory.h"
+#include "mlmap/datasets/frame_directory.h"
 
 #include <cmath>
 #include <stdexcept>

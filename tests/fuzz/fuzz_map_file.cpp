@@ -3,13 +3,13 @@
 ///
 /// Checksums and the configuration fingerprint stop almost every mutation at the header, so the
 /// input is decoded twice: as it is, and with the file size, fingerprint and the three CRC-32s
-/// rewritten to match its content (the layout of include/mlmap/io/map_file.h), which lets the
+/// rewritten to match its content (the layout of include/mlmap/map_io/map_file.h), which lets the
 /// fuzzer reach the sections. A map that decodes must encode to bytes that decode to the same map
 /// (the body pose to rounding).
 
 #include "fuzz_support.h"
 
-#include "mlmap/io/map_file.h"
+#include "mlmap/map_io/map_file.h"
 
 #include <cstring>
 #include <stdexcept>
@@ -74,8 +74,8 @@ void decodeOne(const std::string& bytes) {
     return;  // the documented answer to bad input
   }
   // A file the loader accepts already matches its checks: if the offsets above drifted from
-  // src/io/map_file.cpp, patching would change it (and the fuzzer would stop passing the header).
-  requireThat(withMatchingChecks(bytes) == bytes, "withMatchingChecks() is out of date with src/io/map_file.cpp");
+  // src/map_io/map_file.cpp, patching would change it (and the fuzzer would stop passing the header).
+  requireThat(withMatchingChecks(bytes) == bytes, "withMatchingChecks() is out of date with src/map_io/map_file.cpp");
   const std::string encoded = mlmap::io::encodeMapFile(state);
   mlmap::MapState again = mlmap::io::decodeMapFile(encoded, "encoded.mlmap");
   // The pose is stored as a quaternion and held as a rotation matrix: matrix -> quaternion ->

@@ -7,8 +7,8 @@
 
 #include "fuzz_support.h"
 
-#include "mlmap/io/cloud_sequence.h"
-#include "mlmap/io/pose_file.h"
+#include "mlmap/datasets/cloud_sequence.h"
+#include "mlmap/datasets/pose_file.h"
 
 #include <cmath>
 #include <sstream>

@@ -4,7 +4,7 @@
 
 #include "fuzz_support.h"
 
-#include "mlmap/io/world_yaml.h"
+#include "mlmap/datasets/world_yaml.h"
 
 #include <cmath>
 #include <stdexcept>

@@ -6,7 +6,7 @@
 
 #include "../support/small_map_state.h"
 #include "mlmap/dds/ros_conversions.h"
-#include "mlmap/io/map_file.h"
+#include "mlmap/map_io/map_file.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
 #include "nav_msgs/msg/Odometry_PubSubTypes.h"

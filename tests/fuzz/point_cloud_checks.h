@@ -4,7 +4,7 @@
 
 #include "fuzz_support.h"
 
-#include "mlmap/io/point_cloud_file.h"
+#include "mlmap/datasets/point_cloud_file.h"
 
 namespace mlmap::fuzz {
 

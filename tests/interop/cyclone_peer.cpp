@@ -17,7 +17,7 @@
 // config/dds/cyclone_loopback.xml): the peer refuses Cyclone's default multicast discovery.
 
 #include "mlmap/core/config.h"
-#include "mlmap/io/world_yaml.h"
+#include "mlmap/datasets/world_yaml.h"
 #include "mlmap/sim/depth_camera.h"
 
 #include "sample_record.h"

@@ -1,7 +1,7 @@
 #include "mlmap/pipeline/map_engine.h"
 
 #include "mlmap/eval/sim_flight.h"
-#include "mlmap/io/frame_directory.h"
+#include "mlmap/datasets/frame_directory.h"
 #include "mlmap/planning/planning_layers.h"
 
 #include "../support/small_flight.h"

@@ -221,18 +221,20 @@ def test_the_profile_is_udp_only_and_in_both_images_at_the_same_path():
     participant = root.find('.//f:participant', ns)
     assert participant.get('is_default_profile') == 'true'
     assert participant.find('.//f:useBuiltinTransports', ns).text == 'false'
-    onboard, ground = _dockerfile('onboard.Dockerfile'), _dockerfile('ground.Dockerfile')
-    assert ('WORKDIR', '/opt/mlmap') in onboard and ('COPY', 'config ./config') in onboard
+    ground = _dockerfile('ground.Dockerfile')
+    for image in ('onboard.Dockerfile', 'sim.Dockerfile'):
+        mlmap = _dockerfile(image)
+        assert ('WORKDIR', '/opt/mlmap') in mlmap and ('COPY', 'config ./config') in mlmap, image
     assert ('COPY', 'config/dds/udp_only.xml /opt/mlmap/config/dds/udp_only.xml') in ground
 
 
-def test_onboard_image_builds_like_tools_demo_sh():
+def test_sim_image_builds_like_tools_demo_sh():
     """Debian 12, Debian packages through install_deps.sh, and demo.sh's configure and build."""
-    onboard = _dockerfile('onboard.Dockerfile')
-    assert onboard[0] == ('FROM', 'debian:12')
-    runs = ' && '.join(args for keyword, args in onboard if keyword == 'RUN')
-    assert 'bash tools/install_deps.sh --onboard' in runs
-    assert '--onboard)' in (REPO / 'tools' / 'install_deps.sh').read_text()
+    sim = _dockerfile('sim.Dockerfile')
+    assert sim[0] == ('FROM', 'debian:12')
+    runs = ' && '.join(args for keyword, args in sim if keyword == 'RUN')
+    assert 'bash tools/install_deps.sh --programs' in runs
+    assert '--programs)' in (REPO / 'tools' / 'install_deps.sh').read_text()
     demo = (REPO / 'tools' / 'demo.sh').read_text()
     for command in ('cmake -S . -B build', 'cmake --build build'):
         in_demo = re.search(re.escape(command) + r'[^\n>]*', demo).group(0).split()
@@ -240,15 +242,44 @@ def test_onboard_image_builds_like_tools_demo_sh():
         assert in_image == in_demo, command
 
 
-def test_onboard_image_copies_everything_cmake_reads():
-    """Each top-level folder CMakeLists.txt names (src/, idl, cmake, ...) is copied in."""
-    cmake = (REPO / 'CMakeLists.txt').read_text()
-    used = set(re.findall(r'(?:PROJECT_SOURCE_DIR\}/|[\s(])(cmake|idl|include|src|tests)\b[/)]',
-                          cmake))
+def test_onboard_image_builds_mlmap_node_alone_without_opencv_or_octomap():
+    """The onboard image installs and builds only what mlmap_node needs."""
+    onboard = _dockerfile('onboard.Dockerfile')
+    assert onboard[0] == ('FROM', 'debian:12')
+    runs = ' && '.join(args for keyword, args in onboard if keyword == 'RUN')
+    assert 'bash tools/install_deps.sh --onboard' in runs
+    assert '-DMLMAP_BUILD_APPS=OFF' in runs and '-DMLMAP_BUILD_TESTS=OFF' in runs
+    assert re.search(r'cmake --build build -j2 --target mlmap_node\b', runs)
+    assert dict(onboard)['CMD'].startswith('["mlmap_node"')
+    # What --onboard installs: bash's own expansion of the script's lists, not a copy of them.
+    script = (REPO / 'tools' / 'install_deps.sh').read_text()
+    listing = script[:script.index('missing=()')] + 'printf "%s\\n" "${packages[@]}"\n'
+    onboard_packages = subprocess.run(['bash', '-c', listing, 'install_deps', '--onboard'],
+                                      check=True, capture_output=True, text=True).stdout.split()
+    everything = subprocess.run(['bash', '-c', listing, 'install_deps'], check=True,
+                                capture_output=True, text=True).stdout.split()
+    assert 'libfastrtps-dev' in onboard_packages and 'libyaml-cpp-dev' in onboard_packages
+    assert not [p for p in onboard_packages if 'opencv' in p or 'octomap' in p]
+    assert set(onboard_packages) < set(everything)
+
+
+def _cmake_folders() -> set:
+    """Top-level folders that the CMakeLists.txt files read (src/, idl, cmake, ...)."""
+    used = set()
+    for cmake in [REPO / 'CMakeLists.txt', *REPO.glob('src/**/CMakeLists.txt')]:
+        pattern = r'(?:PROJECT_SOURCE_DIR\}/|[\s(])(cmake|idl|include|src|tests)\b[/)]'
+        used |= set(re.findall(pattern, cmake.read_text()))
+    return used
+
+
+def test_images_copy_everything_cmake_reads():
+    """Each top-level folder the CMakeLists.txt files name is copied into both mlmap images
+    (tests/ only where the benchmarks are built)."""
+    used = _cmake_folders()
     assert {'cmake', 'idl', 'include', 'src', 'tests'} <= used
-    copied = {args.split()[0] for keyword, args in _dockerfile('onboard.Dockerfile')
-              if keyword == 'COPY'}
-    assert used | {'CMakeLists.txt', 'config'} <= copied
+    for image, needed in (('onboard.Dockerfile', used - {'tests'}), ('sim.Dockerfile', used)):
+        copied = {args.split()[0] for keyword, args in _dockerfile(image) if keyword == 'COPY'}
+        assert needed | {'CMakeLists.txt', 'config'} <= copied, image
 
 
 def test_ground_image_builds_tests_and_runs_the_bridge():

@@ -16,7 +16,7 @@
 // of memory over frames. LeakSanitizer / valgrind see the exit: run it under them for leaks.
 
 #include "mlmap/eval/run_outputs.h"
-#include "mlmap/io/map_image.h"
+#include "mlmap/pictures/map_image.h"
 #include "mlmap/pipeline/map_engine.h"
 #include "mlmap/sim/lidar.h"
 #include "mlmap/sim/trajectory.h"

@@ -4,7 +4,7 @@
 // 5 x 5 x 3 m window at 0.2 m so that a few dozen frames slide the window and fill the global map.
 
 #include "mlmap/eval/sim_flight.h"
-#include "mlmap/io/world_yaml.h"
+#include "mlmap/datasets/world_yaml.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include <gtest/gtest.h>

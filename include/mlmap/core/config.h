@@ -2,7 +2,7 @@
 /// @file
 /// Typed configuration of the mapping engine. Every default is the paper's configuration
 /// (performance run of Section VI-F and Table 1/2); `validate()` explains every bad value.
-/// The YAML loader (mlmap/io/config_yaml.h) fills these structs; the core never parses files.
+/// The YAML loader (mlmap/config/config_yaml.h) fills these structs; the core never parses files.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

@@ -16,7 +16,7 @@
 #include "mlmap/dds/node_config.h"
 #include "mlmap/dds/participant.h"
 #include "mlmap/pipeline/map_engine.h"
-#include "mlmap/pipeline/pose_buffer.h"
+#include "mlmap/core/pose_buffer.h"
 
 #include <atomic>
 #include <cstdint>

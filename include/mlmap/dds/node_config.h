@@ -18,7 +18,7 @@
 namespace mlmap::dds {
 
 /// The `map_file:` section: start from a saved map, save it on shutdown (and periodically).
-/// Files are mlmap map files (mlmap/io/map_file.h); mlmap_map_tool converts them.
+/// Files are mlmap map files (mlmap/map_io/map_file.h); mlmap_map_tool converts them.
 struct MapFileOptions {
   /// Map loaded at start ("" = start empty). Its configuration fingerprint (resolution, window
   /// size, log-odds model) must match the engine sections, else the node refuses to start.

@@ -28,8 +28,8 @@ class ProgressBar {
 /// The kind of data a run maps; it picks the engine defaults of runConfig().
 enum class DataKind {
   kSimulator,       ///< the simulated depth camera (camera mounted as `sensor:` says)
-  kFrameDirectory,  ///< RGB-D frames whose poses are the camera's (mlmap/io/frame_directory.h)
-  kPointClouds,     ///< point-cloud files with poses (mlmap/io/cloud_sequence.h)
+  kFrameDirectory,  ///< RGB-D frames whose poses are the camera's (mlmap/datasets/frame_directory.h)
+  kPointClouds,     ///< point-cloud files with poses (mlmap/datasets/cloud_sequence.h)
 };
 
 /// Sets the voxel size and keeps the local map near the paper's 19 x 19 x 7 m (<= 250 cells).
@@ -74,7 +74,7 @@ std::vector<std::string> writeMapOutputs(const MapOutputs& outputs, const Engine
 /// Refuses a --save-map target whose folder does not exist, before a run rather than after it.
 /// @throws std::runtime_error naming the folder.
 void checkSaveMapTarget(const std::string& path);
-/// Saves the engine's map (local + global layers, mlmap/io/map_file.h) to `path` and prints its
+/// Saves the engine's map (local + global layers, mlmap/map_io/map_file.h) to `path` and prints its
 /// size and the time taken. @throws std::runtime_error when it cannot be saved.
 void saveMap(const MapEngine& engine, const std::string& path);
 

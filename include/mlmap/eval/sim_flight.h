@@ -3,7 +3,7 @@
 /// Flying the engine through a simulated scenario and scoring the map against ground truth.
 /// Shared by the demo, the benchmark and the tests.
 
-#include "mlmap/io/world_yaml.h"
+#include "mlmap/datasets/world_yaml.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include <functional>

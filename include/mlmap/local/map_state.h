@@ -2,7 +2,7 @@
 /// @file
 /// The complete state of a map (local and global layers) as plain data: what the engine exports
 /// for saving and takes back when a saved map is loaded (MapEngine::exportState / restoreState).
-/// The file format that holds it lives in the io layer (mlmap/io/map_file.h).
+/// The file format that holds it lives in the io layer (mlmap/map_io/map_file.h).
 
 #include "mlmap/core/config.h"
 #include "mlmap/global/global_map.h"

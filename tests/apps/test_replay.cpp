@@ -1,0 +1,266 @@
+// mlmap_replay end to end: recorded data written by the test, replayed by the program, and the
+// occupied voxels compared with the same data mapped directly through MapEngine.
+
+#include "mlmap/eval/run_outputs.h"
+#include "mlmap/map_io/map_export.h"
+#include "mlmap/map_io/map_file.h"
+#include "mlmap/map_io/voxel_text.h"
+#include "mlmap/datasets/world_yaml.h"
+#include "mlmap/pipeline/map_engine.h"
+#include "mlmap/sim/depth_camera.h"
+
+#include "../support/cloud_file_writers.h"
+#include "../support/small_flight.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#if !defined(MLMAP_REPLAY_BIN) || !defined(MLMAP_DEMO_BIN) || !defined(MLMAP_SHARED_DATA_DIR) || \
+    !defined(MLMAP_SOURCE_DIR)
+#error "MLMAP_REPLAY_BIN, MLMAP_DEMO_BIN, MLMAP_SHARED_DATA_DIR and MLMAP_SOURCE_DIR must be defined"
+#endif
+
+namespace mlmap {
+namespace {
+
+namespace fs = std::filesystem;
+using mlmap::testing::fmt;
+
+std::string readText(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// Runs a command, its output going to `log`; returns its exit status.
+int run(const std::string& command, const std::string& log) {
+  const int rc = std::system((command + " > '" + log + "' 2>&1").c_str());
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+/// The integer value of `"key": N` in a JSON text (first occurrence), or -1.
+long jsonInt(const std::string& json, const std::string& key) {
+  const std::size_t at = json.find("\"" + key + "\": ");
+  if (at == std::string::npos) return -1;
+  return std::strtol(json.c_str() + at + key.size() + 4, nullptr, 10);
+}
+
+/// "x y z qx qy qz qw" of `T`, and the pose the same seven numbers make (what a reader builds).
+std::string xyzQuat(const Transform& T, Transform* as_read) {
+  const Eigen::Quaterniond q(T.linear());
+  const Eigen::Vector3d t = T.translation();
+  EXPECT_TRUE(makePose(t, q, as_read));  // %.17g round-trips every double exactly
+  return fmt(t.x()) + " " + fmt(t.y()) + " " + fmt(t.z()) + " " + fmt(q.x()) + " " + fmt(q.y()) + " " +
+         fmt(q.z()) + " " + fmt(q.w());
+}
+
+TEST(Replay, SimulatedCloudsWithTumPosesMapLikeTheEngineDirectly) {
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_clouds";
+  fs::remove_all(dir);
+  fs::create_directories(dir + "/clouds");
+  // A 10-frame stretch of the demo's flight, from a 160 x 120 camera, as organised clouds in
+  // the camera frame (NaN where the camera saw nothing); the poses are the body's, the camera's
+  // mounting is the extrinsic.
+  io::Scenario scenario = io::defaultScenario();
+  scenario.camera.intrinsics = test::quarterCamera();
+  const sim::DepthCamera camera(scenario.camera);
+  MapConfig config;
+  eval::setResolution(&config, 0.1);
+  config.awareness.max_range_m = 8.0;
+  Transform T_B_S_read;
+  const std::string extrinsic = xyzQuat(config.sensor.T_B_S(), &T_B_S_read);
+  MapEngine reference(config);
+  std::ofstream tum(dir + "/poses.tum");
+  tum << "# timestamp tx ty tz qx qy qz qw\n";
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::size_t nan_points = 0;
+  for (int i = 0; i < 10; ++i) {
+    const double t = 20.0 + 0.1 * i;
+    DepthFrame depth;
+    const Transform T_W_B = scenario.trajectory.poseAt(t);
+    camera.render(scenario.world, T_W_B * T_B_S_read, t, &depth);
+    char stamp[32];
+    std::snprintf(stamp, sizeof(stamp), "%.6f", 1000.0 + t);  // a file name that is a stamp
+    PointCloudFrame frame;
+    frame.stamp_s = std::strtod(stamp, nullptr);
+    tum << stamp << " " << xyzQuat(T_W_B, &frame.T_W_B) << "\n";
+    frame.T_B_S = T_B_S_read;
+    std::vector<Eigen::Vector3d> organised;
+    const PinholeIntrinsics& K = depth.intrinsics;
+    for (int v = 0; v < K.height; ++v) {
+      for (int u = 0; u < K.width; ++u) {
+        const float z = depth.depth_m[static_cast<std::size_t>(v * K.width + u)];
+        Eigen::Vector3f p(nan, nan, nan);
+        if (z > 0.0f) {
+          p = Eigen::Vector3f(static_cast<float>((u - K.cx) / K.fx) * z,
+                              static_cast<float>((v - K.cy) / K.fy) * z, z);
+          frame.points_S.push_back(p);
+        } else {
+          ++nan_points;
+        }
+        organised.push_back(p.cast<double>());
+      }
+    }
+    mlmap::testing::PcdOptions o;
+    o.height = static_cast<std::uint32_t>(K.height);
+    o.data = i % 3 == 0 ? mlmap::testing::PcdData::kAscii
+             : i % 3 == 1 ? mlmap::testing::PcdData::kBinary
+                          : mlmap::testing::PcdData::kBinaryCompressed;
+    if (i == 9) {
+      mlmap::testing::writeFile(dir + "/clouds/" + stamp + ".ply",
+                                mlmap::testing::makePly(organised, mlmap::testing::PlyFormat::kBinaryBigEndian, false));
+    } else {
+      mlmap::testing::writeFile(dir + "/clouds/" + stamp + ".pcd", mlmap::testing::makePcd(organised, o));
+    }
+    ASSERT_EQ(reference.submit(std::move(frame)), FrameStatus::kAccepted);
+  }
+  tum.close();
+  ASSERT_GT(nan_points, 0u);
+
+  const std::string out = dir + "/out";
+  const std::string command = std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir + "/clouds' --poses '" + dir +
+                              "/poses.tum' --extrinsic '" + extrinsic +
+                              "' --resolution 0.1 --max-range 8 --out '" + out + "' --voxels-out '" + dir +
+                              "/voxels.txt' --stats-out '" + dir + "/stats.json'";
+  ASSERT_EQ(run(command, dir + "/replay.log"), 0) << readText(dir + "/replay.log");
+
+  const std::vector<VoxelIndex> replayed = io::readVoxelText(dir + "/voxels.txt");
+  const std::vector<VoxelIndex> direct = io::sortedUnique(reference.occupiedVoxels());
+  EXPECT_GT(direct.size(), 500u);
+  EXPECT_EQ(replayed, direct);  // same voxels, sorted, one per line
+  const std::string stats = readText(dir + "/stats.json");
+  EXPECT_EQ(jsonInt(stats, "frames_mapped"), 10);
+  EXPECT_EQ(jsonInt(stats, "non_finite_dropped_by_reader"), static_cast<long>(nan_points));
+  EXPECT_EQ(jsonInt(stats, "occupied_voxels"), static_cast<long>(direct.size()));
+  EXPECT_NE(stats.find("\"pairing\": \"by time"), std::string::npos);
+  EXPECT_NE(stats.find("\"local_global_ms\": "), std::string::npos);
+  EXPECT_GT(jsonInt(stats, "peak_rss"), 0);
+  for (const char* f : {"map_top.png", "map_side.png", "report.json"}) {
+    EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
+  }
+}
+
+TEST(Replay, VoxelIndicesAreFloorOfCoordinateOverResolution) {
+  // Two walls at x = +2.05 and x = -2.05 seen from the origin, one PLY cloud paired by order:
+  // every occupied voxel must be ix = floor(2.05 / 0.1) = 20 or floor(-2.05 / 0.1) = -21.
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_grid";
+  fs::remove_all(dir);
+  fs::create_directories(dir + "/clouds");
+  std::vector<Eigen::Vector3d> points;
+  for (int j = -10; j <= 10; ++j) {
+    for (int k = -5; k <= 5; ++k) {
+      points.emplace_back(2.05, 0.1 * j + 0.05, 0.1 * k + 0.05);
+      points.emplace_back(-2.05, 0.1 * j + 0.05, 0.1 * k + 0.05);
+    }
+  }
+  mlmap::testing::writeFile(dir + "/clouds/scan_a.ply",
+                            mlmap::testing::makePly(points, mlmap::testing::PlyFormat::kAscii, true));
+  mlmap::testing::writeFile(dir + "/poses.csv", "t,x,y,z,qx,qy,qz,qw\n1,0,0,0,0,0,0,1\n");
+  const std::string command = std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir + "/clouds' --poses '" + dir +
+                              "/poses.csv' --resolution 0.1 --out '" + dir + "/out'";
+  ASSERT_EQ(run(command, dir + "/replay.log"), 0) << readText(dir + "/replay.log");
+  const std::vector<VoxelIndex> voxels = io::readVoxelText(dir + "/out/occupied_voxels.txt");
+  ASSERT_GT(voxels.size(), 100u);
+  std::size_t negative = 0;
+  for (const VoxelIndex& v : voxels) {
+    EXPECT_TRUE(v.x() == 20 || v.x() == -21) << v.transpose();
+    EXPECT_TRUE(v.y() >= -10 && v.y() <= 10) << v.transpose();
+    negative += v.x() < 0 ? 1 : 0;
+  }
+  EXPECT_GT(negative, 50u);
+  EXPECT_EQ(readText(dir + "/out/occupied_voxels.txt").rfind("# mlmap occupied voxels: ix iy iz", 0), 0u);
+}
+
+TEST(Replay, BadInputIsRefusedWithAMessage) {
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_bad";
+  fs::remove_all(dir);
+  fs::create_directories(dir + "/clouds");
+  mlmap::testing::writeFile(dir + "/clouds/a.pcd", "VERSION 0.7\nFIELDS x y\n");
+  mlmap::testing::writeFile(dir + "/poses.txt", "0 0 0 0 0 0 0 1\n");
+  const std::string bin = MLMAP_REPLAY_BIN;
+  const std::string base = bin + " --out '" + dir + "/out' --clouds '" + dir + "/clouds' --poses '" + dir + "/poses.txt'";
+  EXPECT_NE(run(base, dir + "/a.log"), 0);
+  EXPECT_NE(readText(dir + "/a.log").find(dir + "/clouds/a.pcd: PCD header ends before its DATA line"),
+            std::string::npos)
+      << readText(dir + "/a.log");
+  EXPECT_NE(run(base + " --extrinsic '0 0 0 0 0 0'", dir + "/b.log"), 0);
+  EXPECT_NE(readText(dir + "/b.log").find("expected 7 numbers"), std::string::npos) << readText(dir + "/b.log");
+  EXPECT_NE(run(bin + " --clouds '" + dir + "/clouds'", dir + "/c.log"), 0);  // --poses missing
+  EXPECT_NE(readText(dir + "/c.log").find("--poses"), std::string::npos) << readText(dir + "/c.log");
+  EXPECT_EQ(run(bin + " --help", dir + "/help.log"), 0);
+  const std::string help = readText(dir + "/help.log");
+  for (const char* option : {"--frames", "--clouds", "--poses", "--extrinsic", "--resolution", "--max-range",
+                             "--config", "--out", "--voxels-out", "--stats-out"}) {
+    EXPECT_NE(help.find(option), std::string::npos) << option;
+  }
+}
+
+TEST(Replay, SimulatorIsTheDefaultSource) {
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_sim";
+  fs::remove_all(dir);
+  // A --save-map folder that does not exist is refused before the run, not after it.
+  EXPECT_NE(run(std::string(MLMAP_REPLAY_BIN) + " --max-frames 5 --out '" + dir +
+                    "' --save-map '" + dir + "/no/such/folder/map.mlmap'",
+                dir + ".log"),
+            0);
+  EXPECT_NE(readText(dir + ".log").find("does not exist"), std::string::npos) << readText(dir + ".log");
+  EXPECT_FALSE(fs::exists(dir + "/stats.json"));
+  ASSERT_EQ(run(std::string(MLMAP_REPLAY_BIN) + " --max-frames 5 --out '" + dir + "' --save-map '" +
+                    dir + "/map.mlmap'",
+                dir + ".log"),
+            0)
+      << readText(dir + ".log");
+  // The saved map holds exactly the voxels of the text list.
+  std::vector<VoxelIndex> saved;
+  for (const io::OccupiedVoxel& v : io::occupiedVoxels(io::loadMapFile(dir + "/map.mlmap"))) saved.push_back(v.index);
+  std::vector<VoxelIndex> listed = io::readVoxelText(dir + "/occupied_voxels.txt");
+  const auto less = [](const VoxelIndex& a, const VoxelIndex& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  };
+  std::sort(saved.begin(), saved.end(), less);
+  std::sort(listed.begin(), listed.end(), less);
+  EXPECT_GT(saved.size(), 100u);
+  EXPECT_EQ(saved, listed);
+  const std::string stats = readText(dir + "/stats.json");
+  EXPECT_EQ(jsonInt(stats, "frames_mapped"), 5);
+  EXPECT_NE(stats.find("\"kind\": \"simulator\""), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir + "/accuracy_top.png"));
+  EXPECT_EQ(io::readVoxelText(dir + "/occupied_voxels.txt").size(),
+            static_cast<std::size_t>(jsonInt(readText(dir + "/report.json"), "occupied_voxels")));
+}
+
+TEST(Replay, RealsenseFramesGiveTheDemosMap) {
+  const std::string frames = std::string(MLMAP_SHARED_DATA_DIR) + "/realsense_tabletop";
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_frames";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  // The DDS replay configuration as it is (the offline programs skip its dds and map_file
+  // sections): the demo's frame settings with the ESDF box cut to 2 x 2 x 1 m, which makes
+  // planning ten times cheaper and changes no voxel.
+  const std::string config = std::string(MLMAP_SOURCE_DIR) + "/config/mlmap_node_replay.yaml";
+  const std::string options = " --frames '" + frames + "' --config '" + config + "' --out '" + dir;
+  ASSERT_EQ(run(std::string(MLMAP_REPLAY_BIN) + options + "/replay'", dir + "/replay.log"), 0)
+      << readText(dir + "/replay.log");
+  ASSERT_EQ(run(std::string(MLMAP_DEMO_BIN) + options + "/demo'", dir + "/demo.log"), 0)
+      << readText(dir + "/demo.log");
+  // mlmap_demo maps the frames with the same settings (eval::runConfig) in the same order: the
+  // same map (4397 voxels, as mlmap_dds_end_to_end_replay receives over DDS). Voxel-for-voxel
+  // agreement with the engine run directly is checked on clouds above.
+  const std::vector<VoxelIndex> replayed = io::readVoxelText(dir + "/replay/occupied_voxels.txt");
+  const long demo = jsonInt(readText(dir + "/demo/report.json"), "occupied_voxels");
+  EXPECT_GT(demo, 1000);
+  EXPECT_EQ(static_cast<long>(replayed.size()), demo);
+  EXPECT_EQ(jsonInt(readText(dir + "/replay/report.json"), "occupied_voxels"), demo);
+  EXPECT_EQ(jsonInt(readText(dir + "/replay/stats.json"), "frames_mapped"), 50);
+}
+
+}  // namespace
+}  // namespace mlmap
