@@ -1,0 +1,74 @@
+#pragma once
+/// @file
+/// The input thread's work: decode and check each input, pair clouds and depth images with
+/// poses by stamp (PoseBuffer), submit paired frames to the engine.
+
+#include "counter_sink.h"
+#include "input_queue.h"
+#include "node_log.h"
+
+#include "mlmap/core/pose_buffer.h"
+#include "mlmap/dds/dds_config.h"
+#include "mlmap/pipeline/map_engine.h"
+
+#include <chrono>
+#include <cstddef>
+#include <deque>
+#include <variant>
+
+namespace mlmap::dds::node {
+
+/// Pairs frames with poses. A frame whose pose has not come yet waits (at most kMaxPending
+/// frames, at most kPoseWait_s of wall time); frames far ahead of the newest pose, across a pose
+/// jump or without a pose within the tolerance are dropped, counted and logged. Not thread-safe:
+/// the input thread owns it.
+class FramePairer {
+ public:
+  static constexpr std::size_t kMaxPending = 8;  ///< decoded frames waiting for their pose
+  static constexpr double kPoseWait_s = 0.5;     ///< wall time a frame may wait for its pose
+
+  /// `T_B_S`: the sensor's mounting, given to every frame. `engine` receives the paired frames.
+  FramePairer(const DdsConfig& dds, const Transform& T_B_S, MapEngine& engine,
+              CounterSink& counters, NodeLog& log);
+
+  /// Takes one input: a frame is paired or waits, a pose may release waiting frames, a camera
+  /// info is kept for the depth images after it.
+  void handle(Input& input);
+  /// Drops (and counts) the frames that waited longer than kPoseWait_s.
+  void expireWaiting();
+  /// Shutting down: what still waits for a pose will not get one (counted).
+  void dropWaiting();
+
+ private:
+  using Frame = std::variant<PointCloudFrame, DepthFrame>;
+  struct Waiting {
+    Frame frame;
+    std::chrono::steady_clock::time_point since;
+  };
+
+  void handle(CloudSample& msg);
+  void handle(sensor_msgs::Image_& msg);
+  void handle(sensor_msgs::CameraInfo_& msg);
+  template <typename PoseMsg>
+  void handle(PoseMsg& msg);
+  void malformed(const char* what, const DecodeStatus& status);
+  void addPose(double stamp_s, const Transform& T_W_B);
+  void place(Frame&& frame);
+  /// Submits the frame when its pose is known; kPending leaves it to the caller.
+  PoseBuffer::LookupResult tryPlace(Frame& frame);
+  /// Submits the waiting frames, oldest first, up to the first whose pose is still pending.
+  void releaseWaiting();
+  void noPose(double stamp_s);
+
+  const DdsConfig& dds_;
+  Transform T_B_S_;
+  MapEngine& engine_;
+  CounterSink& counters_;
+  NodeLog& log_;
+  PoseBuffer poses_;
+  std::deque<Waiting> waiting_;
+  sensor_msgs::CameraInfo_ camera_info_;
+  bool have_camera_info_ = false;
+};
+
+}  // namespace mlmap::dds::node

@@ -1,0 +1,44 @@
+#pragma once
+/// @file
+/// The node's inputs: one BEST_EFFORT reader per configured input topic, whose listener only
+/// takes samples and hands them to the InputQueue.
+
+#include "counter_sink.h"
+#include "input_queue.h"
+#include "node_log.h"
+
+#include "mlmap/dds/dds_config.h"
+
+#include <fastdds/dds/subscriber/DataReaderListener.hpp>
+#include <fastdds/dds/subscriber/Subscriber.hpp>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace mlmap::dds::node {
+
+/// Creates the readers of `dds.topics` (cloud, pose, odometry, depth image, camera info; empty
+/// names are left out) in `subscriber`. Samples that fail to decode are counted
+/// (inputs_malformed) and logged; each publisher matched or lost is counted
+/// (publishers_matched) and logged. The listeners live as long as this object: destroy the
+/// readers (the participant) first.
+class InputReaders {
+ public:
+  InputReaders(eprosima::fastdds::dds::Subscriber* subscriber, const DdsConfig& dds,
+               InputQueue& queue, CounterSink& counters, NodeLog& log);
+
+ private:
+  template <typename PubSubType, typename Msg>
+  void add(const std::string& name);
+  void handOver(Input&& input);
+
+  eprosima::fastdds::dds::Subscriber* subscriber_;
+  const DdsConfig& dds_;
+  InputQueue& queue_;
+  CounterSink& counters_;
+  NodeLog& log_;
+  std::vector<std::unique_ptr<eprosima::fastdds::dds::DataReaderListener>> listeners_;
+};
+
+}  // namespace mlmap::dds::node

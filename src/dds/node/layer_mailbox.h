@@ -1,0 +1,80 @@
+#pragma once
+/// @file
+/// What the engine's threads hand to the node's publishing thread: copies of the awareness and
+/// global layers (made at their publishing rates), and the news that a snapshot is out.
+
+#include "mlmap/awareness/awareness_map.h"
+#include "mlmap/dds/dds_config.h"
+#include "mlmap/global/global_map.h"
+
+#include <Eigen/Core>
+
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <vector>
+
+namespace mlmap::dds::node {
+
+/// Publishes at most at `rate_hz` (0: never).
+class RateGate {
+ public:
+  explicit RateGate(double rate_hz);
+  /// Enabled and the period ran out since mark() (or never marked).
+  [[nodiscard]] bool due() const;
+  void mark();
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  double period_s_ = 0.0;
+  bool enabled_ = false;
+  Clock::time_point last_ = Clock::time_point::min();
+};
+
+/// A layer's occupied points, copied on an engine thread for the publishing thread.
+struct LayerCopy {
+  std::vector<Eigen::Vector3f> points_W;  ///< cell / voxel centres in the world frame
+  double stamp_s = 0.0;
+  bool fresh = false;  ///< not taken yet
+};
+
+/// The hand-over from the engine's threads (copyAwareness, copyGlobal, announceSnapshot: a copy
+/// and a notify, so mapping never waits for publishing) to the publishing thread (take()).
+/// Thread-safe.
+class LayerMailbox {
+ public:
+  explicit LayerMailbox(const PublishRates& rates);
+
+  /// Copies the awareness map's occupied cells when awareness_hz allows.
+  void copyAwareness(const AwarenessMap& map, double stamp_s);
+  /// Copies the global map's voxels when it changed (`version`) and global_map_hz allows (or
+  /// `force`).
+  void copyGlobal(const GlobalMap& map, double stamp_s, std::uint64_t version, bool force = false);
+  /// A frame's snapshot is out.
+  void announceSnapshot();
+  /// The publishing thread is to publish once more and end.
+  void close();
+
+  /// What take() hands over.
+  struct News {
+    LayerCopy awareness;
+    LayerCopy global;
+    bool last = false;  ///< closed: publish the final state and end
+  };
+  /// Waits up to `poll` for news and takes it.
+  News take(std::chrono::milliseconds poll);
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  LayerCopy awareness_;
+  LayerCopy global_;
+  RateGate awareness_gate_;
+  RateGate global_gate_;
+  std::uint64_t global_version_ = ~std::uint64_t{0};
+  bool snapshot_fresh_ = false;
+  bool closed_ = false;
+};
+
+}  // namespace mlmap::dds::node
