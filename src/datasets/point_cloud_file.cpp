@@ -152,244 +152,342 @@ bool lzfDecompress(const unsigned char* in, std::size_t in_size, std::size_t exp
   return op == expected_size;
 }
 
-PointCloudFile parsePcd(const std::string& content, const std::string& source) {
-  std::vector<PcdField> fields;
+namespace {
+
+/// A PCD header as written, checked line by line (readPcdHeader()).
+struct PcdHeader {
+  std::vector<PcdField> fields;  ///< names only; types and sizes come from pcdLayout()
   std::vector<std::string> sizes, types, counts;
   std::uint64_t width = 0, height = 1, points = 0;
   bool have_width = false, have_points = false, have_fields = false;
-  std::string data;
+  std::string data;               ///< ascii, binary or binary_compressed (checked by the reader)
+  std::vector<double> viewpoint;  ///< empty or tx ty tz qw qx qy qz
+};
+
+/// The header's WIDTH, HEIGHT or POINTS value (one non-negative integer).
+std::uint64_t pcdCount(const std::vector<std::string>& args, const std::string& source,
+                       const std::string& where) {
+  std::uint64_t v = 0;
+  if (args.size() != 1 || !parseCount(args[0], &v))
+    fail(source, where + ": expected one non-negative integer");
+  return v;
+}
+
+/// The header's VIEWPOINT: 7 finite numbers.
+std::vector<double> pcdViewpoint(const std::vector<std::string>& args, const std::string& source,
+                                 const std::string& where) {
   std::vector<double> viewpoint;
-  std::size_t pos = 0;
+  for (const std::string& a : args) {
+    double v = 0.0;
+    if (!parseDouble(a, &v) || !std::isfinite(v))
+      fail(source, where + ": '" + a + "' is not a finite number");
+    viewpoint.push_back(v);
+  }
+  if (viewpoint.size() != 7) fail(source, where + ": expected 7 values tx ty tz qw qx qy qz");
+  return viewpoint;
+}
+
+/// Applies one header line (`key` and its `args`) to `h`.
+void applyPcdHeaderLine(const std::string& key, const std::vector<std::string>& args, int line_no,
+                        const std::string& source, PcdHeader* h) {
+  const std::string where = "PCD header line " + std::to_string(line_no) + " (" + key + ")";
+  if (key == "VERSION") {
+    return;
+  } else if (key == "FIELDS") {
+    if (args.empty()) fail(source, where + ": no field names");
+    for (const std::string& a : args) h->fields.push_back({a, {}, 1, 0});
+    h->have_fields = true;
+  } else if (key == "SIZE") {
+    h->sizes = args;
+  } else if (key == "TYPE") {
+    h->types = args;
+  } else if (key == "COUNT") {
+    h->counts = args;
+  } else if (key == "WIDTH") {
+    h->width = pcdCount(args, source, where);
+    h->have_width = true;
+  } else if (key == "HEIGHT") {
+    h->height = pcdCount(args, source, where);
+  } else if (key == "POINTS") {
+    h->points = pcdCount(args, source, where);
+    h->have_points = true;
+  } else if (key == "VIEWPOINT") {
+    h->viewpoint = pcdViewpoint(args, source, where);
+  } else if (key == "DATA") {
+    if (args.size() != 1) fail(source, where + ": expected ascii, binary or binary_compressed");
+    h->data = args[0];
+  } else {
+    fail(source, "PCD header line " + std::to_string(line_no) + ": unknown keyword '" + key + "'");
+  }
+}
+
+/// Reads the header lines up to and including DATA; `pos` and `line_no` end after it.
+PcdHeader readPcdHeader(const std::string& content, const std::string& source, std::size_t* pos,
+                        int* line_no) {
+  PcdHeader h;
   std::string line;
-  int line_no = 0;
-  while (data.empty()) {
-    if (!nextLine(content, &pos, &line)) fail(source, "PCD header ends before its DATA line");
-    ++line_no;
+  while (h.data.empty()) {
+    if (!nextLine(content, pos, &line)) fail(source, "PCD header ends before its DATA line");
+    ++*line_no;
     const std::vector<std::string> w = splitWords(line);
     if (w.empty() || w[0][0] == '#') continue;
-    const std::string& key = w[0];
-    const std::vector<std::string> args(w.begin() + 1, w.end());
-    const std::string where = "PCD header line " + std::to_string(line_no) + " (" + key + ")";
-    if (key == "VERSION") {
-      continue;
-    } else if (key == "FIELDS") {
-      if (args.empty()) fail(source, where + ": no field names");
-      for (const std::string& a : args) fields.push_back({a, {}, 1, 0});
-      have_fields = true;
-    } else if (key == "SIZE") {
-      sizes = args;
-    } else if (key == "TYPE") {
-      types = args;
-    } else if (key == "COUNT") {
-      counts = args;
-    } else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
-      std::uint64_t v = 0;
-      if (args.size() != 1 || !parseCount(args[0], &v)) {
-        fail(source, where + ": expected one non-negative integer");
-      }
-      if (key == "WIDTH") {
-        width = v;
-        have_width = true;
-      } else if (key == "HEIGHT") {
-        height = v;
-      } else {
-        points = v;
-        have_points = true;
-      }
-    } else if (key == "VIEWPOINT") {
-      viewpoint.clear();
-      for (const std::string& a : args) {
-        double v = 0.0;
-        if (!parseDouble(a, &v) || !std::isfinite(v)) fail(source, where + ": '" + a + "' is not a finite number");
-        viewpoint.push_back(v);
-      }
-      if (viewpoint.size() != 7) fail(source, where + ": expected 7 values tx ty tz qw qx qy qz");
-    } else if (key == "DATA") {
-      if (args.size() != 1) fail(source, where + ": expected ascii, binary or binary_compressed");
-      data = args[0];
-    } else {
-      fail(source, "PCD header line " + std::to_string(line_no) + ": unknown keyword '" + key + "'");
-    }
+    applyPcdHeaderLine(w[0], std::vector<std::string>(w.begin() + 1, w.end()), *line_no, source,
+                       &h);
   }
-  if (!have_fields) fail(source, "PCD header has no FIELDS line");
-  if (sizes.size() != fields.size() || types.size() != fields.size()) {
-    fail(source, "PCD header: FIELDS names " + std::to_string(fields.size()) + " fields but SIZE has " +
-                     std::to_string(sizes.size()) + " and TYPE " + std::to_string(types.size()));
+  return h;
+}
+
+/// Checks that the header's lines agree: as many sizes, types (and counts) as fields, WIDTH
+/// given, WIDTH x HEIGHT within 32 bits each and equal to POINTS.
+void checkPcdSize(const PcdHeader& h, const std::string& source) {
+  if (!h.have_fields) fail(source, "PCD header has no FIELDS line");
+  if (h.sizes.size() != h.fields.size() || h.types.size() != h.fields.size()) {
+    fail(source, "PCD header: FIELDS names " + std::to_string(h.fields.size()) +
+                     " fields but SIZE has " + std::to_string(h.sizes.size()) + " and TYPE " +
+                     std::to_string(h.types.size()));
   }
-  if (!counts.empty() && counts.size() != fields.size()) {
-    fail(source, "PCD header: COUNT has " + std::to_string(counts.size()) + " entries for " +
-                     std::to_string(fields.size()) + " fields");
+  if (!h.counts.empty() && h.counts.size() != h.fields.size()) {
+    fail(source, "PCD header: COUNT has " + std::to_string(h.counts.size()) + " entries for " +
+                     std::to_string(h.fields.size()) + " fields");
   }
-  if (!have_width) fail(source, "PCD header has no WIDTH line");
-  if (width > std::numeric_limits<std::uint32_t>::max() || height > std::numeric_limits<std::uint32_t>::max()) {
-    fail(source, "PCD header: WIDTH " + std::to_string(width) + " x HEIGHT " + std::to_string(height) +
-                     " is beyond 32 bits per dimension");
+  if (!h.have_width) fail(source, "PCD header has no WIDTH line");
+  if (h.width > std::numeric_limits<std::uint32_t>::max() ||
+      h.height > std::numeric_limits<std::uint32_t>::max()) {
+    fail(source, "PCD header: WIDTH " + std::to_string(h.width) + " x HEIGHT " +
+                     std::to_string(h.height) + " is beyond 32 bits per dimension");
   }
-  if (!have_points) points = width * height;
-  if (points != width * height) {
+  const std::uint64_t points = h.have_points ? h.points : h.width * h.height;
+  if (points != h.width * h.height) {
     fail(source, "PCD header: POINTS " + std::to_string(points) + " is not WIDTH x HEIGHT = " +
-                     std::to_string(width) + " x " + std::to_string(height));
+                     std::to_string(h.width) + " x " + std::to_string(h.height));
   }
-  std::size_t record = 0;
-  std::size_t values_per_point = 0;
+}
+
+/// Where each field lies in a point record, and which fields are x, y and z.
+struct PcdLayout {
+  std::vector<PcdField> fields;
+  std::size_t record = 0;            ///< bytes per point (binary)
+  std::size_t values_per_point = 0;  ///< numbers per line (ascii)
+  std::size_t xyz[3] = {0, 0, 0};    ///< field index of x, y, z
+  [[nodiscard]] const PcdField& axis(int a) const { return fields[xyz[a]]; }
+};
+
+/// Field `f`'s type from its SIZE, TYPE and COUNT entries.
+void setPcdFieldType(const PcdHeader& h, std::size_t f, const std::string& source,
+                     PcdField* field) {
+  std::uint64_t size = 0, count = 1;
+  if (!parseCount(h.sizes[f], &size) || (size != 1 && size != 2 && size != 4 && size != 8)) {
+    fail(source, "PCD field '" + field->name + "': SIZE '" + h.sizes[f] + "' is not 1, 2, 4 or 8");
+  }
+  if (!h.counts.empty() && (!parseCount(h.counts[f], &count) || count == 0 || count > 1000000)) {
+    fail(source,
+         "PCD field '" + field->name + "': COUNT '" + h.counts[f] + "' is not a positive integer");
+  }
+  const std::string& t = h.types[f];
+  if (t == "F") {
+    field->type.kind = Kind::kFloat;
+    if (size != 4 && size != 8)
+      fail(source, "PCD field '" + field->name + "': TYPE F needs SIZE 4 or 8, got " + h.sizes[f]);
+  } else if (t == "I") {
+    field->type.kind = Kind::kInt;
+  } else if (t == "U") {
+    field->type.kind = Kind::kUint;
+  } else {
+    fail(source, "PCD field '" + field->name + "': TYPE '" + t + "' is not F, I or U");
+  }
+  field->type.size = static_cast<std::size_t>(size);
+  field->count = static_cast<std::size_t>(count);
+}
+
+/// The fields' types and offsets; x, y and z each exactly once, TYPE F with COUNT 1.
+PcdLayout pcdLayout(const PcdHeader& h, const std::string& source) {
+  PcdLayout layout;
+  layout.fields = h.fields;
   int xyz[3] = {-1, -1, -1};
-  for (std::size_t f = 0; f < fields.size(); ++f) {
-    PcdField& field = fields[f];
-    std::uint64_t size = 0, count = 1;
-    if (!parseCount(sizes[f], &size) || (size != 1 && size != 2 && size != 4 && size != 8)) {
-      fail(source, "PCD field '" + field.name + "': SIZE '" + sizes[f] + "' is not 1, 2, 4 or 8");
-    }
-    if (!counts.empty() && (!parseCount(counts[f], &count) || count == 0 || count > 1000000)) {
-      fail(source, "PCD field '" + field.name + "': COUNT '" + counts[f] + "' is not a positive integer");
-    }
-    const std::string& t = types[f];
-    if (t == "F") {
-      field.type.kind = Kind::kFloat;
-      if (size != 4 && size != 8) fail(source, "PCD field '" + field.name + "': TYPE F needs SIZE 4 or 8, got " + sizes[f]);
-    } else if (t == "I") {
-      field.type.kind = Kind::kInt;
-    } else if (t == "U") {
-      field.type.kind = Kind::kUint;
-    } else {
-      fail(source, "PCD field '" + field.name + "': TYPE '" + t + "' is not F, I or U");
-    }
-    field.type.size = static_cast<std::size_t>(size);
-    field.count = static_cast<std::size_t>(count);
-    field.offset = record;
-    record += field.type.size * field.count;
-    values_per_point += field.count;
+  for (std::size_t f = 0; f < layout.fields.size(); ++f) {
+    PcdField& field = layout.fields[f];
+    setPcdFieldType(h, f, source, &field);
+    field.offset = layout.record;
+    layout.record += field.type.size * field.count;
+    layout.values_per_point += field.count;
     for (int a = 0; a < 3; ++a) {
-      if (field.name == std::string(1, static_cast<char>('x' + a))) {
-        if (xyz[a] >= 0) fail(source, "PCD header: field '" + field.name + "' appears twice");
-        if (field.type.kind != Kind::kFloat || field.count != 1) {
-          fail(source, "PCD field '" + field.name + "' must be TYPE F (SIZE 4 or 8) with COUNT 1, got TYPE " +
-                           t + " SIZE " + sizes[f] + " COUNT " + std::to_string(field.count));
-        }
-        xyz[a] = static_cast<int>(f);
+      if (field.name != std::string(1, static_cast<char>('x' + a))) continue;
+      if (xyz[a] >= 0) fail(source, "PCD header: field '" + field.name + "' appears twice");
+      if (field.type.kind != Kind::kFloat || field.count != 1) {
+        fail(source, "PCD field '" + field.name +
+                         "' must be TYPE F (SIZE 4 or 8) with COUNT 1, got TYPE " + h.types[f] +
+                         " SIZE " + h.sizes[f] + " COUNT " + std::to_string(field.count));
       }
+      xyz[a] = static_cast<int>(f);
     }
   }
   for (int a = 0; a < 3; ++a) {
-    if (xyz[a] < 0) fail(source, std::string("PCD file has no field '") + static_cast<char>('x' + a) + "'");
+    if (xyz[a] < 0)
+      fail(source, std::string("PCD file has no field '") + static_cast<char>('x' + a) + "'");
+    layout.xyz[a] = static_cast<std::size_t>(xyz[a]);
   }
+  return layout;
+}
 
+/// The cloud the header describes, without its points.
+PointCloudFile pcdCloud(const PcdHeader& h, const std::string& source) {
   PointCloudFile cloud;
-  cloud.points_in_file = static_cast<std::size_t>(points);
-  cloud.width = static_cast<std::uint32_t>(width);
-  cloud.height = static_cast<std::uint32_t>(height);
-  if (!viewpoint.empty()) {
-    const Eigen::Quaterniond q(viewpoint[3], viewpoint[4], viewpoint[5], viewpoint[6]);
-    if (!makePose(Eigen::Vector3d(viewpoint[0], viewpoint[1], viewpoint[2]), q, &cloud.T_C_V)) {
+  cloud.points_in_file = static_cast<std::size_t>(h.width * h.height);
+  cloud.width = static_cast<std::uint32_t>(h.width);
+  cloud.height = static_cast<std::uint32_t>(h.height);
+  if (!h.viewpoint.empty()) {
+    const std::vector<double>& v = h.viewpoint;
+    const Eigen::Quaterniond q(v[3], v[4], v[5], v[6]);
+    if (!makePose(Eigen::Vector3d(v[0], v[1], v[2]), q, &cloud.T_C_V)) {
       fail(source, "PCD VIEWPOINT: the quaternion qw qx qy qz is not of unit length");
     }
   }
-  cloud.encoding = "pcd " + data;
-  cloud.points_C.reserve(std::min(cloud.points_in_file, content.size() - pos));  // >= 1 byte each
-  const PcdField& fx = fields[static_cast<std::size_t>(xyz[0])];
-  const PcdField& fy = fields[static_cast<std::size_t>(xyz[1])];
-  const PcdField& fz = fields[static_cast<std::size_t>(xyz[2])];
-  const std::size_t n = cloud.points_in_file;
+  cloud.encoding = "pcd " + h.data;
+  return cloud;
+}
 
-  if (data == "ascii") {
-    std::size_t column[3];
+/// DATA ascii: one line of numbers per point, from `pos` (header line `line_no`) on.
+void readPcdAscii(const std::string& content, const std::string& source, const PcdLayout& layout,
+                  std::size_t pos, int line_no, PointCloudFile* cloud) {
+  const std::size_t n = cloud->points_in_file;
+  std::size_t column[3];
+  for (int a = 0; a < 3; ++a) {
+    std::size_t c = 0;
+    for (std::size_t f = 0; f < layout.xyz[a]; ++f) c += layout.fields[f].count;
+    column[a] = c;
+  }
+  std::size_t read = 0;
+  std::string line;
+  while (nextLine(content, &pos, &line)) {
+    ++line_no;
+    const std::vector<std::string> w = splitWords(line);
+    if (w.empty()) continue;
+    if (read == n) {
+      fail(source, "line " + std::to_string(line_no) + ": more data than the " + std::to_string(n) +
+                       " points the header declares");
+    }
+    if (w.size() != layout.values_per_point) {
+      fail(source, "line " + std::to_string(line_no) + " (point " + std::to_string(read) +
+                       "): expected " + std::to_string(layout.values_per_point) + " values, got " +
+                       std::to_string(w.size()));
+    }
+    double v[3];
     for (int a = 0; a < 3; ++a) {
-      std::size_t c = 0;
-      for (std::size_t f = 0; f < static_cast<std::size_t>(xyz[a]); ++f) c += fields[f].count;
-      column[a] = c;
-    }
-    std::size_t read = 0;
-    while (nextLine(content, &pos, &line)) {
-      ++line_no;
-      const std::vector<std::string> w = splitWords(line);
-      if (w.empty()) continue;
-      if (read == n) {
-        fail(source, "line " + std::to_string(line_no) + ": more data than the " + std::to_string(n) +
-                         " points the header declares");
+      if (!parseDouble(w[column[a]], &v[a])) {
+        fail(source,
+             "line " + std::to_string(line_no) + ": '" + w[column[a]] + "' is not a number");
       }
-      if (w.size() != values_per_point) {
-        fail(source, "line " + std::to_string(line_no) + " (point " + std::to_string(read) + "): expected " +
-                         std::to_string(values_per_point) + " values, got " + std::to_string(w.size()));
-      }
-      double v[3];
-      for (int a = 0; a < 3; ++a) {
-        if (!parseDouble(w[column[a]], &v[a])) {
-          fail(source, "line " + std::to_string(line_no) + ": '" + w[column[a]] + "' is not a number");
-        }
-      }
-      addPoint(v[0], v[1], v[2], &cloud);
-      ++read;
     }
-    if (read != n) {
-      fail(source, "truncated: the file ends after " + std::to_string(read) + " of " + std::to_string(n) +
-                       " points");
-    }
+    addPoint(v[0], v[1], v[2], cloud);
+    ++read;
+  }
+  if (read != n) {
+    fail(source, "truncated: the file ends after " + std::to_string(read) + " of " +
+                     std::to_string(n) + " points");
+  }
+}
+
+/// DATA binary: `available` bytes of point records from `bytes` on.
+void readPcdBinary(const unsigned char* bytes, std::size_t available, const std::string& source,
+                   const PcdLayout& layout, PointCloudFile* cloud) {
+  const std::size_t n = cloud->points_in_file;
+  const std::size_t needed = n * layout.record;
+  if (available < needed) {
+    fail(source, "truncated: binary data holds " + std::to_string(available) + " bytes, " +
+                     std::to_string(n) + " points of " + std::to_string(layout.record) +
+                     " bytes need " + std::to_string(needed));
+  }
+  if (available > needed) {
+    fail(source, std::to_string(available - needed) + " bytes of unexpected data after the " +
+                     std::to_string(n) + " points");
+  }
+  const PcdField& fx = layout.axis(0);
+  const PcdField& fy = layout.axis(1);
+  const PcdField& fz = layout.axis(2);
+  for (std::size_t i = 0; i < n; ++i) {
+    const unsigned char* p = bytes + i * layout.record;
+    addPoint(loadScalar(p + fx.offset, fx.type, false), loadScalar(p + fy.offset, fy.type, false),
+             loadScalar(p + fz.offset, fz.type, false), cloud);
+  }
+}
+
+/// DATA binary_compressed: sizes, then LZF data of the field-major records.
+void readPcdCompressed(const unsigned char* bytes, std::size_t available, const std::string& source,
+                       const PcdLayout& layout, PointCloudFile* cloud) {
+  const std::size_t n = cloud->points_in_file;
+  const std::size_t needed = n * layout.record;
+  if (available < 8) fail(source, "truncated: binary_compressed data has no size header");
+  std::uint32_t compressed = 0, uncompressed = 0;
+  std::memcpy(&compressed, bytes, 4);  // little endian, as the rest
+  std::memcpy(&uncompressed, bytes + 4, 4);
+  if (uncompressed != needed) {
+    fail(source, "binary_compressed: uncompressed size " + std::to_string(uncompressed) +
+                     " is not " + std::to_string(n) + " points x " + std::to_string(layout.record) +
+                     " bytes");
+  }
+  if (available - 8 < compressed) {
+    fail(source, "truncated: binary_compressed data holds " + std::to_string(available - 8) +
+                     " bytes of the " + std::to_string(compressed) + " the header declares");
+  }
+  if (available - 8 > compressed) {
+    fail(source, std::to_string(available - 8 - compressed) +
+                     " bytes of unexpected data after the compressed block");
+  }
+  // An LZF back reference of 3 bytes expands to at most 264: anything that claims more than 88
+  // times its compressed size is corrupt, and is refused before its buffer is allocated.
+  if (needed > std::size_t{88} * compressed) {
+    fail(source, "binary_compressed: " + std::to_string(compressed) +
+                     " bytes of LZF data cannot decode to " + std::to_string(needed) + " bytes");
+  }
+  std::vector<unsigned char> raw;
+  if (!lzfDecompress(bytes + 8, compressed, needed, &raw)) {
+    fail(source, "binary_compressed: the LZF data is corrupt (does not decode to " +
+                     std::to_string(needed) + " bytes)");
+  }
+  // Field-major layout: every point's x, then every point's y, ...
+  const PcdField& fx = layout.axis(0);
+  const PcdField& fy = layout.axis(1);
+  const PcdField& fz = layout.axis(2);
+  const unsigned char* px = raw.data() + n * fx.offset;
+  const unsigned char* py = raw.data() + n * fy.offset;
+  const unsigned char* pz = raw.data() + n * fz.offset;
+  for (std::size_t i = 0; i < n; ++i) {
+    addPoint(loadScalar(px + i * fx.type.size, fx.type, false),
+             loadScalar(py + i * fy.type.size, fy.type, false),
+             loadScalar(pz + i * fz.type.size, fz.type, false), cloud);
+  }
+}
+
+}  // namespace
+
+PointCloudFile parsePcd(const std::string& content, const std::string& source) {
+  std::size_t pos = 0;
+  int line_no = 0;
+  const PcdHeader header = readPcdHeader(content, source, &pos, &line_no);
+  checkPcdSize(header, source);
+  const PcdLayout layout = pcdLayout(header, source);
+  PointCloudFile cloud = pcdCloud(header, source);
+  cloud.points_C.reserve(std::min(cloud.points_in_file, content.size() - pos));  // >= 1 byte each
+  if (header.data == "ascii") {
+    readPcdAscii(content, source, layout, pos, line_no, &cloud);
     return cloud;
   }
-
   const auto* bytes = reinterpret_cast<const unsigned char*>(content.data()) + pos;
   const std::size_t available = content.size() - pos;
-  if (n > std::numeric_limits<std::uint32_t>::max() / record) {
-    fail(source, std::to_string(n) + " points of " + std::to_string(record) + " bytes: too large");
+  const std::size_t n = cloud.points_in_file;
+  if (n > std::numeric_limits<std::uint32_t>::max() / layout.record) {
+    fail(source,
+         std::to_string(n) + " points of " + std::to_string(layout.record) + " bytes: too large");
   }
-  const std::size_t needed = n * record;
-  if (data == "binary") {
-    if (available < needed) {
-      fail(source, "truncated: binary data holds " + std::to_string(available) + " bytes, " +
-                       std::to_string(n) + " points of " + std::to_string(record) + " bytes need " +
-                       std::to_string(needed));
-    }
-    if (available > needed) {
-      fail(source, std::to_string(available - needed) + " bytes of unexpected data after the " +
-                       std::to_string(n) + " points");
-    }
-    for (std::size_t i = 0; i < n; ++i) {
-      const unsigned char* p = bytes + i * record;
-      addPoint(loadScalar(p + fx.offset, fx.type, false), loadScalar(p + fy.offset, fy.type, false),
-               loadScalar(p + fz.offset, fz.type, false), &cloud);
-    }
+  if (header.data == "binary") {
+    readPcdBinary(bytes, available, source, layout, &cloud);
     return cloud;
   }
-  if (data == "binary_compressed") {
-    if (available < 8) fail(source, "truncated: binary_compressed data has no size header");
-    std::uint32_t compressed = 0, uncompressed = 0;
-    std::memcpy(&compressed, bytes, 4);  // little endian, as the rest
-    std::memcpy(&uncompressed, bytes + 4, 4);
-    if (uncompressed != needed) {
-      fail(source, "binary_compressed: uncompressed size " + std::to_string(uncompressed) + " is not " +
-                       std::to_string(n) + " points x " + std::to_string(record) + " bytes");
-    }
-    if (available - 8 < compressed) {
-      fail(source, "truncated: binary_compressed data holds " + std::to_string(available - 8) +
-                       " bytes of the " + std::to_string(compressed) + " the header declares");
-    }
-    if (available - 8 > compressed) {
-      fail(source, std::to_string(available - 8 - compressed) +
-                       " bytes of unexpected data after the compressed block");
-    }
-    // An LZF back reference of 3 bytes expands to at most 264: anything that claims more than 88
-    // times its compressed size is corrupt, and is refused before its buffer is allocated.
-    if (needed > std::size_t{88} * compressed) {
-      fail(source, "binary_compressed: " + std::to_string(compressed) + " bytes of LZF data cannot decode to " +
-                       std::to_string(needed) + " bytes");
-    }
-    std::vector<unsigned char> raw;
-    if (!lzfDecompress(bytes + 8, compressed, needed, &raw)) {
-      fail(source, "binary_compressed: the LZF data is corrupt (does not decode to " +
-                       std::to_string(needed) + " bytes)");
-    }
-    // Field-major layout: every point's x, then every point's y, ...
-    auto start = [&](const PcdField& f) { return raw.data() + n * f.offset; };
-    const unsigned char* px = start(fx);
-    const unsigned char* py = start(fy);
-    const unsigned char* pz = start(fz);
-    for (std::size_t i = 0; i < n; ++i) {
-      addPoint(loadScalar(px + i * fx.type.size, fx.type, false),
-               loadScalar(py + i * fy.type.size, fy.type, false),
-               loadScalar(pz + i * fz.type.size, fz.type, false), &cloud);
-    }
+  if (header.data == "binary_compressed") {
+    readPcdCompressed(bytes, available, source, layout, &cloud);
     return cloud;
   }
-  fail(source, "PCD DATA '" + data + "' is not ascii, binary or binary_compressed");
+  fail(source, "PCD DATA '" + header.data + "' is not ascii, binary or binary_compressed");
 }
 
 // ---- PLY ------------------------------------------------------------------------------------

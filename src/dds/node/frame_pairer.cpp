@@ -20,7 +20,11 @@ double stampOf(const std::variant<PointCloudFrame, DepthFrame>& frame) {
 
 FramePairer::FramePairer(const DdsConfig& dds, const Transform& T_B_S, MapEngine& engine,
                          CounterSink& counters, NodeLog& log)
-    : dds_(dds), T_B_S_(T_B_S), engine_(engine), counters_(counters), log_(log),
+    : dds_(dds),
+      T_B_S_(T_B_S),
+      engine_(engine),
+      counters_(counters),
+      log_(log),
       poses_(poseBufferConfig(dds)) {}
 
 void FramePairer::handle(Input& input) {
@@ -51,7 +55,8 @@ void FramePairer::handle(sensor_msgs::Image_& msg) {
   counters_.add(&NodeCounters::images_received);
   if (!have_camera_info_) {
     counters_.add(&NodeCounters::images_without_info);
-    log_.limited(LogLevel::kWarning, kReasonNoInfo, "depth image before any valid CameraInfo: dropped");
+    log_.limited(LogLevel::kWarning, kReasonNoInfo,
+                 "depth image before any valid CameraInfo: dropped");
     return;
   }
   if (msg.header_().stamp_().nanosec_() >= 1000000000u) {
@@ -106,7 +111,8 @@ void FramePairer::addPose(double stamp_s, const Transform& T_W_B) {
 }
 
 void FramePairer::releaseWaiting() {
-  while (!waiting_.empty() && tryPlace(waiting_.front().frame) != PoseBuffer::LookupResult::kPending) {
+  while (!waiting_.empty() &&
+         tryPlace(waiting_.front().frame) != PoseBuffer::LookupResult::kPending) {
     waiting_.pop_front();
   }
 }
@@ -117,7 +123,8 @@ PoseBuffer::LookupResult FramePairer::tryPlace(Frame& frame) {
   const PoseBuffer::LookupResult found = poses_.lookup(stamp_s, &T_W_B);
   if (found == PoseBuffer::LookupResult::kFound) {
     std::visit([&](auto& f) { f.T_W_B = T_W_B; }, frame);
-    const FrameStatus status = std::visit([&](auto& f) { return engine_.submit(std::move(f)); }, frame);
+    const FrameStatus status =
+        std::visit([&](auto& f) { return engine_.submit(std::move(f)); }, frame);
     counters_.add(status == FrameStatus::kAccepted ? &NodeCounters::frames_submitted
                                                    : &NodeCounters::frames_engine_rejected);
   } else if (found == PoseBuffer::LookupResult::kNoPose) {

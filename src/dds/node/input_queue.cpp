@@ -3,7 +3,8 @@
 namespace mlmap::dds::node {
 
 bool isFrame(const Input& input) {
-  return std::holds_alternative<CloudSample>(input) || std::holds_alternative<sensor_msgs::Image_>(input);
+  return std::holds_alternative<CloudSample>(input) ||
+         std::holds_alternative<sensor_msgs::Image_>(input);
 }
 
 InputQueue::PushResult InputQueue::push(Input&& input) {

@@ -39,8 +39,9 @@ void InputReaders::add(const std::string& name) {
         mine = now;
         if (change == 0) return;
         counters_.addPublishersMatched(change);
-        log_.always(LogLevel::kInfo, dds_topic + ": a publisher " + (change > 0 ? "matched" : "left") +
-                                         " (" + std::to_string(now) + " now)");
+        log_.always(LogLevel::kInfo, dds_topic + ": a publisher " +
+                                         (change > 0 ? "matched" : "left") + " (" +
+                                         std::to_string(now) + " now)");
       });
   eprosima::fastdds::dds::DataReaderQos qos = sensorReaderQos();
   if (!dds_.data_sharing) qos.data_sharing().off();

@@ -31,7 +31,8 @@ void LayerMailbox::copyAwareness(const AwarenessMap& map, double stamp_s) {
   cv_.notify_one();
 }
 
-void LayerMailbox::copyGlobal(const GlobalMap& map, double stamp_s, std::uint64_t version, bool force) {
+void LayerMailbox::copyGlobal(const GlobalMap& map, double stamp_s, std::uint64_t version,
+                              bool force) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (version == global_version_ || (!force && !global_gate_.due())) return;
   global_gate_.mark();
@@ -66,9 +67,8 @@ void LayerMailbox::close() {
 LayerMailbox::News LayerMailbox::take(std::chrono::milliseconds poll) {
   News news;
   std::unique_lock<std::mutex> lock(mutex_);
-  cv_.wait_for(lock, poll, [this] {
-    return closed_ || snapshot_fresh_ || awareness_.fresh || global_.fresh;
-  });
+  cv_.wait_for(lock, poll,
+               [this] { return closed_ || snapshot_fresh_ || awareness_.fresh || global_.fresh; });
   news.last = closed_;
   snapshot_fresh_ = false;
   if (awareness_.fresh) std::swap(news.awareness, awareness_);

@@ -57,8 +57,10 @@ void MapPersistence::save(const char* why) {
     log_.always(LogLevel::kInfo, m.str());
   } catch (const std::exception& e) {
     counters_.mapSaved(false);
-    log_.always(LogLevel::kError, std::string(why) + ": map not saved (the previous file, if any, is "
-                                                     "unchanged): " + e.what());
+    log_.always(LogLevel::kError, std::string(why) +
+                                      ": map not saved (the previous file, if any, is "
+                                      "unchanged): " +
+                                      e.what());
   }
 }
 

@@ -52,19 +52,21 @@ struct MappingNode::Impl {
 
   void setUp() {
     engine = makeEngine();
-    persistence = std::make_unique<node::MapPersistence>(config.map_file, config.map, *engine, counters, log);
+    persistence =
+        std::make_unique<node::MapPersistence>(config.map_file, config.map, *engine, counters, log);
     const bool loaded = persistence->load();
 
     participant = createParticipant(config.dds, "mlmap_node");
     domain_id = static_cast<int>(participant->get_domain_id());
     auto* publisher = participant->create_publisher(eprosima::fastdds::dds::PUBLISHER_QOS_DEFAULT);
-    auto* subscriber = participant->create_subscriber(eprosima::fastdds::dds::SUBSCRIBER_QOS_DEFAULT);
+    auto* subscriber =
+        participant->create_subscriber(eprosima::fastdds::dds::SUBSCRIBER_QOS_DEFAULT);
     if (publisher == nullptr || subscriber == nullptr) {
       throw std::runtime_error("cannot create the DDS publisher / subscriber");
     }
     const Transform T_B_S = config.map.sensor.T_B_S();
-    outputs = std::make_unique<node::Outputs>(publisher, config.dds, T_B_S, *engine, mailbox, counters,
-                                              log, started);
+    outputs = std::make_unique<node::Outputs>(publisher, config.dds, T_B_S, *engine, mailbox,
+                                              counters, log, started);
     pairer = std::make_unique<node::FramePairer>(config.dds, T_B_S, *engine, counters, log);
     readers = std::make_unique<node::InputReaders>(subscriber, config.dds, queue, counters, log);
     if (loaded) {
@@ -93,7 +95,9 @@ struct MappingNode::Impl {
     observers.snapshot = [this](std::uint64_t, double) { mailbox.announceSnapshot(); };
     return std::make_unique<MapEngine>(
         map_config,
-        [this](LogLevel level, const std::string& m) { log.limited(level, node::kReasonEngine, m); },
+        [this](LogLevel level, const std::string& m) {
+          log.limited(level, node::kReasonEngine, m);
+        },
         std::move(observers));
   }
 
@@ -157,7 +161,9 @@ NodeCounters MappingNode::counters() const { return impl_->counters.snapshot(); 
 
 EngineStats MappingNode::engineStats() const { return impl_->engine->stats(); }
 
-std::shared_ptr<const MapSnapshot> MappingNode::snapshot() const { return impl_->engine->snapshot(); }
+std::shared_ptr<const MapSnapshot> MappingNode::snapshot() const {
+  return impl_->engine->snapshot();
+}
 
 int MappingNode::domainId() const { return impl_->domain_id; }
 

@@ -22,24 +22,36 @@ using TfMessage = ::tf2_msgs::msg::dds_::TFMessage_;
 /// A QoS policy's name as DDS (and ROS 2's QoS messages) spell it.
 std::string qosPolicyName(fdds::QosPolicyId_t id) {
   switch (id) {
-    case fdds::DURABILITY_QOS_POLICY_ID: return "DURABILITY";
-    case fdds::PRESENTATION_QOS_POLICY_ID: return "PRESENTATION";
-    case fdds::DEADLINE_QOS_POLICY_ID: return "DEADLINE";
-    case fdds::LATENCYBUDGET_QOS_POLICY_ID: return "LATENCY_BUDGET";
-    case fdds::OWNERSHIP_QOS_POLICY_ID: return "OWNERSHIP";
-    case fdds::LIVELINESS_QOS_POLICY_ID: return "LIVELINESS";
-    case fdds::RELIABILITY_QOS_POLICY_ID: return "RELIABILITY";
-    case fdds::DESTINATIONORDER_QOS_POLICY_ID: return "DESTINATION_ORDER";
-    case fdds::DATAREPRESENTATION_QOS_POLICY_ID: return "DATA_REPRESENTATION";
-    case fdds::DISABLEPOSITIVEACKS_QOS_POLICY_ID: return "DISABLE_POSITIVE_ACKS";
-    default: return "QoS policy " + std::to_string(static_cast<int>(id));
+    case fdds::DURABILITY_QOS_POLICY_ID:
+      return "DURABILITY";
+    case fdds::PRESENTATION_QOS_POLICY_ID:
+      return "PRESENTATION";
+    case fdds::DEADLINE_QOS_POLICY_ID:
+      return "DEADLINE";
+    case fdds::LATENCYBUDGET_QOS_POLICY_ID:
+      return "LATENCY_BUDGET";
+    case fdds::OWNERSHIP_QOS_POLICY_ID:
+      return "OWNERSHIP";
+    case fdds::LIVELINESS_QOS_POLICY_ID:
+      return "LIVELINESS";
+    case fdds::RELIABILITY_QOS_POLICY_ID:
+      return "RELIABILITY";
+    case fdds::DESTINATIONORDER_QOS_POLICY_ID:
+      return "DESTINATION_ORDER";
+    case fdds::DATAREPRESENTATION_QOS_POLICY_ID:
+      return "DATA_REPRESENTATION";
+    case fdds::DISABLEPOSITIVEACKS_QOS_POLICY_ID:
+      return "DISABLE_POSITIVE_ACKS";
+    default:
+      return "QoS policy " + std::to_string(static_cast<int>(id));
   }
 }
 
 /// The awareness or the global layer, from the copies the engine's threads made.
 class LayerCopyOutput : public OutputOperation {
  public:
-  LayerCopyOutput(CountedWriter writer, LayerCopy LayerMailbox::News::*copy, const std::string& world)
+  LayerCopyOutput(CountedWriter writer, LayerCopy LayerMailbox::News::*copy,
+                  const std::string& world)
       : writer_(writer), copy_(copy), world_(world) {}
   void publish(const PublishRound& round) override {
     const LayerCopy& copy = round.news.*copy_;
@@ -63,7 +75,8 @@ class TfOutput : public OutputOperation {
     if (!round.snap || round.snap->frame() == frame_) return;
     frame_ = round.snap->frame();
     TfMessage tf;
-    tf.transforms_().push_back(toTransformStamped(round.snap->T_W_B(), round.snap->stamp_s(), world_, body_));
+    tf.transforms_().push_back(
+        toTransformStamped(round.snap->T_W_B(), round.snap->stamp_s(), world_, body_));
     writer_.write(&tf);
   }
 
@@ -82,7 +95,8 @@ std::vector<Eigen::Vector3f> occupiedCenters(const LocalWindow& window) {
     for (int y = 0; y < n.y(); ++y) {
       for (int z = 0; z < n.z(); ++z, ++i) {
         if (window.model.state(window.log_odds[i]) == Occupancy::kOccupied) {
-          out.push_back(voxelCenter(window.min_index + VoxelIndex(x, y, z), window.resolution_m).cast<float>());
+          out.push_back(voxelCenter(window.min_index + VoxelIndex(x, y, z), window.resolution_m)
+                            .cast<float>());
         }
       }
     }
@@ -96,11 +110,12 @@ class LocalMapOutput : public OutputOperation {
   LocalMapOutput(CountedWriter writer, const DdsConfig& dds)
       : writer_(writer), gate_(dds.rates.local_map_hz), world_(dds.world_frame) {}
   void publish(const PublishRound& round) override {
-    if (!writer_ || !round.snap || round.snap->frame() == frame_ || !(round.last || gate_.due())) return;
+    if (!writer_ || !round.snap || round.snap->frame() == frame_ || !(round.last || gate_.due()))
+      return;
     gate_.mark();
     frame_ = round.snap->frame();
-    sensor_msgs::PointCloud2_ msg =
-        encodePointCloud2(occupiedCenters(round.snap->window()), nullptr, round.snap->stamp_s(), world_);
+    sensor_msgs::PointCloud2_ msg = encodePointCloud2(occupiedCenters(round.snap->window()),
+                                                      nullptr, round.snap->stamp_s(), world_);
     writer_.write(&msg);
   }
 
@@ -124,7 +139,8 @@ class GridOutput : public OutputOperation {
     }
     gate_.mark();
     sent_ = snap->gridPtr();
-    nav_msgs::OccupancyGrid_ msg = toOccupancyGrid(snap->grid(), snap->grid().band_min_z_m, snap->stamp_s(), world_);
+    nav_msgs::OccupancyGrid_ msg =
+        toOccupancyGrid(snap->grid(), snap->grid().band_min_z_m, snap->stamp_s(), world_);
     writer_.write(&msg);
   }
 
@@ -140,7 +156,10 @@ class GridOutput : public OutputOperation {
 class EsdfOutput : public OutputOperation {
  public:
   EsdfOutput(CountedWriter block, CountedWriter slice, const DdsConfig& dds)
-      : block_(block), slice_(slice), gate_(dds.rates.esdf_hz), world_(dds.world_frame),
+      : block_(block),
+        slice_(slice),
+        gate_(dds.rates.esdf_hz),
+        world_(dds.world_frame),
         slice_height_m_(dds.esdf_slice_height_m) {}
   void publish(const PublishRound& round) override {
     const auto& snap = round.snap;
@@ -174,8 +193,12 @@ class StatusOutput : public OutputOperation {
  public:
   StatusOutput(CountedWriter writer, const DdsConfig& dds, const MapEngine& engine,
                const CounterSink& counters, Clock::time_point started)
-      : writer_(writer), gate_(dds.rates.status_hz), world_(dds.world_frame), engine_(engine),
-        counters_(counters), started_(started) {}
+      : writer_(writer),
+        gate_(dds.rates.status_hz),
+        world_(dds.world_frame),
+        engine_(engine),
+        counters_(counters),
+        started_(started) {}
   void publish(const PublishRound& round) override {
     if (!writer_ || !(round.last || gate_.due())) return;
     gate_.mark();
@@ -232,7 +255,8 @@ void CountedWriter::write(void* msg) const {
   if (writer_->write(msg)) {
     counters_->add(&NodeCounters::messages_published);
   } else {
-    log_->limited(LogLevel::kWarning, kReasonDds, "a DDS write failed on " + writer_->get_topic()->get_name());
+    log_->limited(LogLevel::kWarning, kReasonDds,
+                  "a DDS write failed on " + writer_->get_topic()->get_name());
   }
 }
 
@@ -244,14 +268,17 @@ void IncompatibleQosListener::on_offered_incompatible_qos(
                   ? ", this writer offers VOLATILE"
                   : ", this writer offers TRANSIENT_LOCAL";
   }
-  report_(writer->get_topic()->get_name() + ": a subscriber requests a QoS this writer does not offer (" +
+  report_(writer->get_topic()->get_name() +
+          ": a subscriber requests a QoS this writer does not offer (" +
           qosPolicyName(status.last_policy_id) + offered + "); it receives nothing");
 }
 
 Outputs::Outputs(fdds::Publisher* publisher, const DdsConfig& dds, const Transform& T_B_S,
                  MapEngine& engine, LayerMailbox& mailbox, CounterSink& counters, NodeLog& log,
                  Clock::time_point started)
-    : mailbox_(mailbox), engine_(engine), log_(log),
+    : mailbox_(mailbox),
+      engine_(engine),
+      log_(log),
       qos_listener_([&counters, &log](const std::string& what) {
         counters.add(&NodeCounters::subscribers_incompatible);
         log.limited(LogLevel::kWarning, kReasonQos, what);
@@ -261,28 +288,38 @@ Outputs::Outputs(fdds::Publisher* publisher, const DdsConfig& dds, const Transfo
   const TopicNames& n = dds.topics;
   const PublishRates& r = dds.rates;
   // A writer on `name` when `rate_hz` publishes at all.
-  auto writer = [&](auto type, const std::string& name, double rate_hz, const fdds::DataWriterQos& qos) {
+  auto writer = [&](auto type, const std::string& name, double rate_hz,
+                    const fdds::DataWriterQos& qos) {
     using PubSubType = decltype(type);
-    fdds::DataWriter* w = (name.empty() || rate_hz <= 0)
-                              ? nullptr
-                              : createWriter<PubSubType>(publisher, ddsTopicName(dds.ns, name), qos, &qos_listener_);
+    fdds::DataWriter* w =
+        (name.empty() || rate_hz <= 0)
+            ? nullptr
+            : createWriter<PubSubType>(publisher, ddsTopicName(dds.ns, name), qos, &qos_listener_);
     return CountedWriter(w, counters, log);
   };
   const CountedWriter tf = writer(TfType(), "tf", 1.0, reliableWriterQos(100));
   const CountedWriter tf_static = writer(TfType(), "tf_static", 1.0, latchedWriterQos());
-  const CountedWriter awareness = writer(CloudType(), n.awareness, r.awareness_hz, reliableWriterQos(2));
-  const CountedWriter local = writer(CloudType(), n.local_map, r.local_map_hz, reliableWriterQos(2));
-  const CountedWriter global = writer(CloudType(), n.global_map, r.global_map_hz, latchedWriterQos());
-  const CountedWriter grid = writer(nav_msgs::OccupancyGrid_PubSubType(), n.grid, r.grid_hz, latchedWriterQos());
+  const CountedWriter awareness =
+      writer(CloudType(), n.awareness, r.awareness_hz, reliableWriterQos(2));
+  const CountedWriter local =
+      writer(CloudType(), n.local_map, r.local_map_hz, reliableWriterQos(2));
+  const CountedWriter global =
+      writer(CloudType(), n.global_map, r.global_map_hz, latchedWriterQos());
+  const CountedWriter grid =
+      writer(nav_msgs::OccupancyGrid_PubSubType(), n.grid, r.grid_hz, latchedWriterQos());
   const CountedWriter slice = writer(CloudType(), n.esdf_slice, r.esdf_hz, reliableWriterQos(2));
-  const CountedWriter block = writer(mlmap_msgs::VoxelBlock_PubSubType(), n.esdf_block, r.esdf_hz, reliableWriterQos(2));
-  const CountedWriter status = writer(mlmap_msgs::Status_PubSubType(), n.status, r.status_hz, reliableWriterQos(10));
+  const CountedWriter block =
+      writer(mlmap_msgs::VoxelBlock_PubSubType(), n.esdf_block, r.esdf_hz, reliableWriterQos(2));
+  const CountedWriter status =
+      writer(mlmap_msgs::Status_PubSubType(), n.status, r.status_hz, reliableWriterQos(10));
   has_global_ = static_cast<bool>(global);
-  writers_ = {global.get(), grid.get(), local.get(), status.get(), tf.get(), tf_static.get(),
-              awareness.get(), block.get(), slice.get()};
+  writers_ = {global.get(),    grid.get(),      local.get(), status.get(), tf.get(),
+              tf_static.get(), awareness.get(), block.get(), slice.get()};
 
-  operations_.push_back(std::make_unique<LayerCopyOutput>(awareness, &LayerMailbox::News::awareness, dds.world_frame));
-  operations_.push_back(std::make_unique<LayerCopyOutput>(global, &LayerMailbox::News::global, dds.world_frame));
+  operations_.push_back(std::make_unique<LayerCopyOutput>(awareness, &LayerMailbox::News::awareness,
+                                                          dds.world_frame));
+  operations_.push_back(
+      std::make_unique<LayerCopyOutput>(global, &LayerMailbox::News::global, dds.world_frame));
   operations_.push_back(std::make_unique<TfOutput>(tf, dds));
   operations_.push_back(std::make_unique<LocalMapOutput>(local, dds));
   operations_.push_back(std::make_unique<GridOutput>(grid, dds));
@@ -291,7 +328,8 @@ Outputs::Outputs(fdds::Publisher* publisher, const DdsConfig& dds, const Transfo
 
   // The sensor's mounting, latched for late joiners.
   TfMessage mounting;
-  mounting.transforms_().push_back(toTransformStamped(T_B_S, 0.0, dds.body_frame, dds.sensor_frame));
+  mounting.transforms_().push_back(
+      toTransformStamped(T_B_S, 0.0, dds.body_frame, dds.sensor_frame));
   tf_static.get()->write(&mounting);
 }
 
@@ -326,11 +364,13 @@ void Outputs::waitForAcknowledgments() {
     const auto left = std::chrono::duration_cast<std::chrono::nanoseconds>(deadline - Clock::now());
     if (left.count() <= 0) break;
     const auto s = std::chrono::duration_cast<std::chrono::seconds>(left);
-    if (w->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(
-            static_cast<std::int32_t>(s.count()), static_cast<std::uint32_t>((left - s).count()))) !=
+    if (w->wait_for_acknowledgments(
+            eprosima::fastrtps::Duration_t(static_cast<std::int32_t>(s.count()),
+                                           static_cast<std::uint32_t>((left - s).count()))) !=
         eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
-      log_.limited(LogLevel::kWarning, kReasonDds,
-                   "shutdown: " + w->get_topic()->get_name() + " not acknowledged by every reader in time");
+      log_.limited(
+          LogLevel::kWarning, kReasonDds,
+          "shutdown: " + w->get_topic()->get_name() + " not acknowledged by every reader in time");
     }
   }
 }

@@ -61,8 +61,9 @@ class IncompatibleQosListener : public eprosima::fastdds::dds::DataWriterListene
  public:
   explicit IncompatibleQosListener(std::function<void(const std::string&)> report)
       : report_(std::move(report)) {}
-  void on_offered_incompatible_qos(eprosima::fastdds::dds::DataWriter* writer,
-                                   const eprosima::fastdds::dds::OfferedIncompatibleQosStatus& status) override;
+  void on_offered_incompatible_qos(
+      eprosima::fastdds::dds::DataWriter* writer,
+      const eprosima::fastdds::dds::OfferedIncompatibleQosStatus& status) override;
 
  private:
   std::function<void(const std::string&)> report_;
@@ -74,9 +75,9 @@ class Outputs {
  public:
   /// Creates every writer in `publisher` and publishes rt/tf_static (the sensor's mounting
   /// T_B_S, latched for late joiners). `started`: the node's start (the status's uptime).
-  Outputs(eprosima::fastdds::dds::Publisher* publisher, const DdsConfig& dds, const Transform& T_B_S,
-          MapEngine& engine, LayerMailbox& mailbox, CounterSink& counters, NodeLog& log,
-          std::chrono::steady_clock::time_point started);
+  Outputs(eprosima::fastdds::dds::Publisher* publisher, const DdsConfig& dds,
+          const Transform& T_B_S, MapEngine& engine, LayerMailbox& mailbox, CounterSink& counters,
+          NodeLog& log, std::chrono::steady_clock::time_point started);
   ~Outputs();
   Outputs(const Outputs&) = delete;
   Outputs& operator=(const Outputs&) = delete;
@@ -104,7 +105,7 @@ class Outputs {
   NodeLog& log_;
   IncompatibleQosListener qos_listener_;  ///< outlives the writers (the participant goes first)
   std::vector<std::unique_ptr<OutputOperation>> operations_;  ///< in publishing order
-  std::vector<eprosima::fastdds::dds::DataWriter*> writers_;   ///< every writer, for finish()
+  std::vector<eprosima::fastdds::dds::DataWriter*> writers_;  ///< every writer, for finish()
   bool has_global_ = false;
   std::thread thread_;
   bool finished_ = false;
