@@ -190,7 +190,26 @@ std::string encodeMapFile(const MapState& state) {
   return out;
 }
 
-MapState decodeMapFile(const std::string& bytes, const std::string& source) {
+namespace {
+
+/// What the header says beyond the MapState fields it fills.
+struct MapFileLayout {
+  std::uint64_t total = 0;  ///< file size
+  bool placed = false;      ///< the local window has a place (and voxels)
+  VoxelIndex min_index = VoxelIndex::Zero();
+  std::uint64_t local_bytes = 0;  ///< local section, its checksum included
+  std::uint64_t submaps = 0;
+  std::uint64_t global_voxels = 0;
+  // Where the sections lie (checkSections()).
+  std::size_t local_start = 0;
+  std::size_t local_data = 0;  ///< local section without its checksum
+  std::size_t global_start = 0;
+  std::size_t window_voxels = 0;
+};
+
+/// Magic, version, header size and checksum, and the size the header announces against the
+/// file's; leaves `r` after the announced size.
+std::uint64_t checkEnvelope(const std::string& bytes, const std::string& source, Reader* r) {
   const std::size_t n = bytes.size();
   const std::size_t magic_checked = std::min(n, sizeof kMagic);
   if (n < 16 || std::memcmp(bytes.data(), kMagic, magic_checked) != 0) {
@@ -200,13 +219,12 @@ MapState decodeMapFile(const std::string& bytes, const std::string& source) {
     refuse(source, "not an mlmap map file (it does not start with \"MLMAPMAP\"; " +
                        std::to_string(n) + " bytes)");
   }
-  Reader r(bytes, sizeof kMagic);
-  const auto version = r.integer<std::uint32_t>();
+  const auto version = r->integer<std::uint32_t>();
   if (version != kMapFileVersion) {
     refuse(source, "map file format version " + std::to_string(version) +
                        ", this build reads version " + std::to_string(kMapFileVersion));
   }
-  const auto header_bytes = r.integer<std::uint32_t>();
+  const auto header_bytes = r->integer<std::uint32_t>();
   // cppcheck-suppress knownConditionTrueFalse ; refuse() throws, cppcheck misses it
   if (header_bytes != kHeaderBytes) {
     refuse(source, "corrupted header: header size " + std::to_string(header_bytes) +
@@ -220,7 +238,7 @@ MapState decodeMapFile(const std::string& bytes, const std::string& source) {
   if (Reader(bytes, kHeaderBytes - 4).integer<std::uint32_t>() != header_crc) {
     refuse(source, "header checksum mismatch: the file is corrupted");
   }
-  const auto total = r.integer<std::uint64_t>();
+  const auto total = r->integer<std::uint64_t>();
   if (n < total) {
     refuse(source, "truncated: " + std::to_string(n) + " bytes of the " + std::to_string(total) +
                        " its header announces");
@@ -229,100 +247,117 @@ MapState decodeMapFile(const std::string& bytes, const std::string& source) {
     refuse(source, std::to_string(n - total) + " bytes after the end of the map (" +
                        std::to_string(total) + " bytes announced)");
   }
+  return total;
+}
 
-  MapState state;
-  const auto fingerprint = r.integer<std::uint64_t>();
-  state.local_map.resolution_m = r.real();
-  for (int a = 0; a < 3; ++a) state.local_map.size_cells[a] = r.integer<std::int32_t>();
-  LogOddsConfig& lo = state.log_odds;
+/// The configuration fields, checked against their fingerprint and validated.
+void readConfiguration(const std::string& source, Reader* r, MapState* state) {
+  const auto fingerprint = r->integer<std::uint64_t>();
+  state->local_map.resolution_m = r->real();
+  for (int a = 0; a < 3; ++a) state->local_map.size_cells[a] = r->integer<std::int32_t>();
+  LogOddsConfig& lo = state->log_odds;
   for (double* v : {&lo.hit, &lo.miss, &lo.clamp_min, &lo.clamp_max, &lo.occupied_threshold}) {
-    *v = r.real();
+    *v = r->real();
   }
-  if (fingerprint != mapConfigFingerprint(state.local_map, lo)) {
+  if (fingerprint != mapConfigFingerprint(state->local_map, lo)) {
     refuse(source, "corrupted header: the configuration fingerprint does not match its fields");
   }
   std::vector<std::string> config_errors;
-  state.local_map.validate(&config_errors);
+  state->local_map.validate(&config_errors);
   lo.validate(&config_errors);
   if (!config_errors.empty()) refuse(source, "invalid configuration in the header: " + config_errors[0]);
-  state.has_last_stamp = r.integer<std::uint8_t>() != 0;
-  const bool placed = r.integer<std::uint8_t>() != 0;
-  (void)r.integer<std::uint16_t>();
-  state.last_stamp_s = r.real();
+}
+
+/// The rest of the header: stamp, pose, frame count, the window's place and the section sizes.
+void readHeaderFields(const std::string& source, Reader* r, MapState* state, MapFileLayout* layout) {
+  state->has_last_stamp = r->integer<std::uint8_t>() != 0;
+  layout->placed = r->integer<std::uint8_t>() != 0;
+  (void)r->integer<std::uint16_t>();
+  state->last_stamp_s = r->real();
   double pose[7];
-  for (double& v : pose) v = r.real();
+  for (double& v : pose) v = r->real();
   const Eigen::Quaterniond q(pose[3], pose[4], pose[5], pose[6]);
-  if (!makePose(Eigen::Vector3d(pose[0], pose[1], pose[2]), q, &state.T_W_B)) {
+  if (!makePose(Eigen::Vector3d(pose[0], pose[1], pose[2]), q, &state->T_W_B)) {
     refuse(source, "invalid body pose in the header");
   }
-  state.frames_mapped = r.integer<std::uint64_t>();
-  VoxelIndex min_index;
-  for (int a = 0; a < 3; ++a) min_index[a] = r.integer<std::int32_t>();
-  const auto local_bytes = r.integer<std::uint64_t>();
-  const auto submaps = r.integer<std::uint64_t>();
-  const auto global_voxels = r.integer<std::uint64_t>();
+  state->frames_mapped = r->integer<std::uint64_t>();
+  for (int a = 0; a < 3; ++a) layout->min_index[a] = r->integer<std::int32_t>();
+  layout->local_bytes = r->integer<std::uint64_t>();
+  layout->submaps = r->integer<std::uint64_t>();
+  layout->global_voxels = r->integer<std::uint64_t>();
+}
 
-  const std::size_t window_voxels =
-      placed ? static_cast<std::size_t>(state.local_map.size_cells.prod()) : 0;
-  if (local_bytes < 4 || local_bytes > total || (placed && local_bytes < 12) ||
-      local_bytes > window_voxels * (sizeof(LogOddsQ) + 8) + 4) {
-    refuse(source, "local section of " + std::to_string(local_bytes) + " bytes for a window of " +
-                       std::to_string(window_voxels) + " voxels");
+/// The section sizes against the window and the file size (before anything is allocated), the
+/// sections' checksums and the end marker.
+void checkSections(const std::string& bytes, const std::string& source, const MapState& state,
+                   MapFileLayout* l) {
+  l->window_voxels = l->placed ? static_cast<std::size_t>(state.local_map.size_cells.prod()) : 0;
+  if (l->local_bytes < 4 || l->local_bytes > l->total || (l->placed && l->local_bytes < 12) ||
+      l->local_bytes > l->window_voxels * (sizeof(LogOddsQ) + 8) + 4) {
+    refuse(source, "local section of " + std::to_string(l->local_bytes) + " bytes for a window of " +
+                       std::to_string(l->window_voxels) + " voxels");
   }
-  // Sizes announced by the header must add up to the file size before anything is allocated.
-  const std::uint64_t rest = total - kHeaderBytes - local_bytes - sizeof kTrailer;
-  if (total < kHeaderBytes + local_bytes + sizeof kTrailer || submaps > rest / kSubmapHeadBytes ||
-      global_voxels > rest / kRecordBytes ||
-      rest != submaps * kSubmapHeadBytes + global_voxels * kRecordBytes + 4) {
+  const std::uint64_t rest = l->total - kHeaderBytes - l->local_bytes - sizeof kTrailer;
+  if (l->total < kHeaderBytes + l->local_bytes + sizeof kTrailer ||
+      l->submaps > rest / kSubmapHeadBytes || l->global_voxels > rest / kRecordBytes ||
+      rest != l->submaps * kSubmapHeadBytes + l->global_voxels * kRecordBytes + 4) {
     refuse(source, "section sizes in the header do not add up to the file size");
   }
-
-  const std::size_t local_start = kHeaderBytes;
-  const std::size_t local_data = static_cast<std::size_t>(local_bytes) - 4;
-  if (Reader(bytes, local_start + local_data).integer<std::uint32_t>() !=
-      crc32(bytes.data() + local_start, local_data)) {
+  l->local_start = kHeaderBytes;
+  l->local_data = static_cast<std::size_t>(l->local_bytes) - 4;
+  if (Reader(bytes, l->local_start + l->local_data).integer<std::uint32_t>() !=
+      crc32(bytes.data() + l->local_start, l->local_data)) {
     refuse(source, "local map checksum mismatch: the file is corrupted");
   }
-  const std::size_t global_start = local_start + static_cast<std::size_t>(local_bytes);
+  l->global_start = l->local_start + static_cast<std::size_t>(l->local_bytes);
   const std::size_t global_data = static_cast<std::size_t>(rest) - 4;
-  if (Reader(bytes, global_start + global_data).integer<std::uint32_t>() !=
-      crc32(bytes.data() + global_start, global_data)) {
+  if (Reader(bytes, l->global_start + global_data).integer<std::uint32_t>() !=
+      crc32(bytes.data() + l->global_start, global_data)) {
     refuse(source, "global map checksum mismatch: the file is corrupted");
   }
-  if (std::memcmp(bytes.data() + n - sizeof kTrailer, kTrailer, sizeof kTrailer) != 0) {
+  if (std::memcmp(bytes.data() + bytes.size() - sizeof kTrailer, kTrailer, sizeof kTrailer) != 0) {
     refuse(source, "missing end marker \"MLMAPEND\": the file is corrupted");
   }
+}
 
-  state.window.resolution_m = state.local_map.resolution_m;
-  state.window.model = LogOddsModel(lo);
-  if (placed) {
-    state.window.min_index = min_index;
-    state.window.size = state.local_map.size_cells;
-    state.window.log_odds.assign(window_voxels, kUnknownLogOdds);
-    Reader lr(bytes, local_start);
-    std::size_t filled = 0;
-    while (lr.pos() + 8 <= local_start + local_data && filled < window_voxels) {
-      const auto unknown = lr.integer<std::uint32_t>();
-      const auto known = lr.integer<std::uint32_t>();
-      if (unknown > window_voxels - filled || known > window_voxels - filled - unknown ||
-          lr.pos() + known * sizeof(LogOddsQ) > local_start + local_data) {
-        break;
-      }
-      filled += unknown;
-      for (std::uint32_t k = 0; k < known; ++k) state.window.log_odds[filled++] = lr.integer<std::int16_t>();
+/// The local window from its runs of unknown and known voxels; they must cover it exactly.
+void readLocalWindow(const std::string& bytes, const std::string& source, const MapFileLayout& l,
+                     MapState* state) {
+  state->window.resolution_m = state->local_map.resolution_m;
+  state->window.model = LogOddsModel(state->log_odds);
+  if (!l.placed) return;
+  state->window.min_index = l.min_index;
+  state->window.size = state->local_map.size_cells;
+  state->window.log_odds.assign(l.window_voxels, kUnknownLogOdds);
+  const std::size_t end = l.local_start + l.local_data;
+  Reader lr(bytes, l.local_start);
+  std::size_t filled = 0;
+  while (lr.pos() + 8 <= end && filled < l.window_voxels) {
+    const auto unknown = lr.integer<std::uint32_t>();
+    const auto known = lr.integer<std::uint32_t>();
+    if (unknown > l.window_voxels - filled || known > l.window_voxels - filled - unknown ||
+        lr.pos() + known * sizeof(LogOddsQ) > end) {
+      break;
     }
-    if (filled != window_voxels || lr.pos() != local_start + local_data) {
-      refuse(source, "local map: its runs do not cover the " + std::to_string(window_voxels) +
-                         "-voxel window exactly");
-    }
+    filled += unknown;
+    for (std::uint32_t k = 0; k < known; ++k) state->window.log_odds[filled++] = lr.integer<std::int16_t>();
   }
-  Reader gr(bytes, global_start);
+  if (filled != l.window_voxels || lr.pos() != end) {
+    refuse(source, "local map: its runs do not cover the " + std::to_string(l.window_voxels) +
+                       "-voxel window exactly");
+  }
+}
+
+/// The global map's submaps; their voxels must add up to what the header announces.
+void readGlobalSubmaps(const std::string& bytes, const std::string& source, const MapFileLayout& l,
+                       MapState* state) {
+  Reader gr(bytes, l.global_start);
   std::uint64_t voxels_read = 0;
-  state.global_submaps.resize(static_cast<std::size_t>(submaps));
-  for (auto& [m, records] : state.global_submaps) {
+  state->global_submaps.resize(static_cast<std::size_t>(l.submaps));
+  for (auto& [m, records] : state->global_submaps) {
     for (int a = 0; a < 3; ++a) m[a] = gr.integer<std::int32_t>();
     const auto count = gr.integer<std::uint32_t>();
-    if (count > global_voxels - voxels_read) {
+    if (count > l.global_voxels - voxels_read) {
       refuse(source, "global map: more voxels in the submaps than the header announces");
     }
     voxels_read += count;
@@ -332,10 +367,24 @@ MapState decodeMapFile(const std::string& bytes, const std::string& source) {
       rec.log_odds = gr.integer<std::int16_t>();
     }
   }
-  if (voxels_read != global_voxels) {
-    refuse(source, "global map: " + std::to_string(voxels_read) + " voxels in the submaps, the header announces " +
-                       std::to_string(global_voxels));
+  if (voxels_read != l.global_voxels) {
+    refuse(source, "global map: " + std::to_string(voxels_read) +
+                       " voxels in the submaps, the header announces " + std::to_string(l.global_voxels));
   }
+}
+
+}  // namespace
+
+MapState decodeMapFile(const std::string& bytes, const std::string& source) {
+  Reader r(bytes, sizeof kMagic);
+  MapFileLayout layout;
+  layout.total = checkEnvelope(bytes, source, &r);
+  MapState state;
+  readConfiguration(source, &r, &state);
+  readHeaderFields(source, &r, &state, &layout);
+  checkSections(bytes, source, state, &layout);
+  readLocalWindow(bytes, source, layout, &state);
+  readGlobalSubmaps(bytes, source, layout, &state);
   // Checksums prove the bytes are what was written, not that what was written is a map.
   const std::vector<std::string> problems = mapStateProblems(state);
   if (!problems.empty()) refuse(source, "inconsistent map: " + problems.front());
