@@ -281,24 +281,42 @@ bool AwarenessStage::process(const DepthFrame& frame, MeasurementBatch* batch,
 void AwarenessStage::processSource(const Source& source, double stamp_s, const Transform& T_W_B,
                                    const Transform& T_B_S, MeasurementBatch* batch,
                                    PointCounters* counters) {
-  const AwarenessConfig& ac = config_.awareness;
+  const FrameGeometry g = beginFrame(stamp_s, T_W_B, T_B_S, batch);
+  collectEnds(source, g, counters);
+  // Occupied list (unique voxels).
+  for (const End& e : ends_) {
+    if (!e.cut) batch->hits.push_back({e.voxel + g.box_origin, e.p_W});
+  }
+  updateAwarenessMap(T_W_B.translation());
+  carve(g.origin_vox, batch);
+  batch->free_count = countBits(batch->free);
+  counters->hit_voxels = batch->hits.size();
+  counters->free_voxels = batch->free_count;
+}
+
+AwarenessStage::FrameGeometry AwarenessStage::beginFrame(double stamp_s, const Transform& T_W_B,
+                                                         const Transform& T_B_S,
+                                                         MeasurementBatch* batch) {
   const double res = config_.local_map.resolution_m;
-  const Transform T_W_S = T_W_B * T_B_S;
+  FrameGeometry g;
+  g.T_W_S = T_W_B * T_B_S;
+  const Transform& T_W_S = g.T_W_S;
   const Eigen::Vector3d o_W = T_W_S.translation();
   const Eigen::Vector3d body_W = T_W_B.translation();
 
   // Scratch box around the sensor: everything within range that the local map can hold. After
   // re-centring the body lies in the centre submap, so the map reaches at most 3 submaps away.
   const VoxelIndex sensor_voxel = voxelIndexOf(o_W, res);
-  const int range_voxels = static_cast<int>(std::ceil(ac.max_range_m / res)) + 1;
+  const int range_voxels = static_cast<int>(std::ceil(config_.awareness.max_range_m / res)) + 1;
   const int offset_voxels = static_cast<int>(std::ceil((o_W - body_W).norm() / res)) + 1;
   const Eigen::Vector3i submap = config_.local_map.submap_cells();
   Eigen::Vector3i half;
   for (int a = 0; a < 3; ++a) half[a] = std::min(range_voxels, 3 * submap[a] + offset_voxels);
-  const VoxelIndex box_origin = sensor_voxel - half;
-  const Eigen::Vector3i dims = 2 * half + Eigen::Vector3i::Ones();
-  box_dims_ = dims;
-  batch->free.reset(box_origin, dims);
+  g.box_origin = sensor_voxel - half;
+  g.dims = 2 * half + Eigen::Vector3i::Ones();
+  g.origin_vox = o_W * (1.0 / res) - g.box_origin.cast<double>();  // as collectEnds() scales
+  box_dims_ = g.dims;
+  batch->free.reset(g.box_origin, g.dims);
   batch->hits.clear();
   batch->stamp_s = stamp_s;
   batch->T_W_B = T_W_B;
@@ -311,7 +329,17 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
     for (std::vector<BinSlot>& slots : slots_) std::fill(slots.begin(), slots.end(), BinSlot{});
     stamp_ = 1;
   }
+  return g;
+}
 
+void AwarenessStage::collectEnds(const Source& source, const FrameGeometry& g,
+                                 PointCounters* counters) {
+  const AwarenessConfig& ac = config_.awareness;
+  const double res = config_.local_map.resolution_m;
+  const Transform& T_W_S = g.T_W_S;
+  const Eigen::Vector3d o_W = T_W_S.translation();
+  const VoxelIndex& box_origin = g.box_origin;
+  const Eigen::Vector3i& dims = g.dims;
   PointCounters& c = *counters;
   const std::size_t count = source.count;
 
@@ -319,7 +347,6 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
   // every point into a key (box voxel, or why it is not one) and its box coordinates, without
   // branches; pass 2 groups the runs of equal keys into end voxels.
   const double inv_res = 1.0 / res;
-  const Eigen::Vector3d origin_vox = o_W * inv_res - box_origin.cast<double>();
   const Eigen::Matrix3d M = T_W_S.linear() * inv_res;
   const double m00 = M(0, 0), m01 = M(0, 1), m02 = M(0, 2);
   const double m10 = M(1, 0), m11 = M(1, 1), m12 = M(1, 2);
@@ -439,13 +466,9 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
     }
   }
   mergeRun();
+}
 
-  // Occupied list (unique voxels).
-  for (const End& e : ends_) {
-    if (!e.cut) batch->hits.push_back({e.voxel + box_origin, e.p_W});
-  }
-
-  // Awareness map: carried obstacles, hits, then the 2D rho-z ray walks.
+void AwarenessStage::updateAwarenessMap(const Eigen::Vector3d& body_W) {
   map_.beginFrame(body_W);
   for (const auto* list : {&ends_, &outside_}) {
     for (const End& e : *list) {
@@ -459,11 +482,6 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
     }
   }
   map_.endFrame();
-
-  carve(origin_vox, batch);
-  batch->free_count = countBits(batch->free);
-  c.hit_voxels = batch->hits.size();
-  c.free_voxels = batch->free_count;
 }
 
 void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {

@@ -65,8 +65,26 @@ class AwarenessStage {
     /// wrote.
     std::size_t fill(std::size_t first, std::size_t len, float* xs, float* ys, float* zs) const;
   };
+  /// One frame: the scratch box, its points grouped into end voxels, the hits, the awareness
+  /// map, the free space.
   void processSource(const Source& source, double stamp_s, const Transform& T_W_B,
                      const Transform& T_B_S, MeasurementBatch* batch, PointCounters* counters);
+  /// A frame's scratch box around the sensor (everything within range that the local map can
+  /// hold) and the sensor pose.
+  struct FrameGeometry {
+    Transform T_W_S = Transform::Identity();
+    VoxelIndex box_origin = VoxelIndex::Zero();  ///< world voxel index of the box's corner
+    Eigen::Vector3i dims = Eigen::Vector3i::Zero();  ///< box size [voxels]
+    Eigen::Vector3d origin_vox = Eigen::Vector3d::Zero();  ///< the sensor, box voxel units
+  };
+  /// Sizes the scratch box and resets the batch and the per-frame tables.
+  FrameGeometry beginFrame(double stamp_s, const Transform& T_W_B, const Transform& T_B_S,
+                           MeasurementBatch* batch);
+  /// Turns every point into its end voxel (ends_, one per box voxel) or an end beyond the box
+  /// (outside_, per point), counting the points rejected or cut at the maximum range.
+  void collectEnds(const Source& source, const FrameGeometry& g, PointCounters* counters);
+  /// The awareness map of this frame: carried obstacles, hits, then the 2D rho-z ray walks.
+  void updateAwarenessMap(const Eigen::Vector3d& body_W);
   /// A voxel where rays end in this frame: the box of its points and the first point.
   struct End {
     Eigen::Vector3i voxel = Eigen::Vector3i::Zero();  // box-relative
