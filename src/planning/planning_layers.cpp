@@ -76,110 +76,14 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
   local.updateWindowCopy(window.get());  // pooled: only the submaps changed since it was filled
   const double copy_ms = msSince(start);
   const Eigen::Vector3d body_W = T_W_B.translation();
-
-  // 2D grid: rebuilt whole when the window or the band's layers moved, or when the global map it
-  // includes changed (submaps retired or restored, which moves the window, or a loaded map);
-  // otherwise only the columns of the band's submaps whose values changed since the last grid
-  // are projected again.
-  double grid_ms = -1.0;
-  const ProjectedGridConfig& gc = config_.projected_grid;
-  if (gc.enabled) {
-    const Clock::time_point grid_start = Clock::now();
-    const double res = window->resolution_m;
-    const double offset = gc.relative_band ? body_W.z() : 0.0;
-    int band_k0 = 0;
-    int band_k1 = 0;
-    bandLayers(gc.band_min_m + offset, gc.band_max_m + offset, res, &band_k0, &band_k1);
-    const int window_z0 = window->min_index.z();
-    const int window_z1 = window_z0 + window->size.z();
-    // With the global map included, a band reaching beyond the window adds retired voxels above
-    // or below the window's columns: those columns then do not depend on the window alone.
-    const bool columns_from_window =
-        !gc.include_global || (band_k0 >= window_z0 && band_k1 <= window_z1);
-    const bool global_changed = gc.include_global && global.modifications() != grid_global_;
-    const bool rebuild = grid_ == nullptr || window->min_index != grid_window_min_ ||
-                         band_k0 != grid_band_k0_ || band_k1 != grid_band_k1_ ||
-                         !columns_from_window || global_changed;
-    if (rebuild) {
-      const std::shared_ptr<ProjectedGrid> grid = reuse(&grid_pool_);
-      projectToGrid(*window, &global, gc, body_W.z(), grid.get());
-      grid_ = grid;
-      grid_window_min_ = window->min_index;
-      grid_band_k0_ = band_k0;
-      grid_band_k1_ = band_k1;
-      grid_global_ = global.modifications();
-      grid_ms = msSince(grid_start);
-      ++grid_rebuilds_;
-    } else if (window->size.prod() > 0) {
-      // Submap columns (x, y) with a changed submap in the band's layers.
-      constexpr int kN = LocalMapConfig::kSubmapsPerAxis;
-      const Eigen::Vector3i cells = local.config().submap_cells();
-      const SubmapIndex first = local.submapOf(window->min_index);
-      std::array<std::array<bool, kN>, kN> dirty{};  // [x][y]
-      bool any = false;
-      for (int sz = 0; sz < kN; ++sz) {
-        const int z_lo = window_z0 + sz * cells.z();
-        if (z_lo + cells.z() <= band_k0 || z_lo >= band_k1) continue;
-        for (int sx = 0; sx < kN; ++sx) {
-          for (int sy = 0; sy < kN; ++sy) {
-            if (local.submapChangedAt(first + SubmapIndex(sx, sy, sz)) > grid_clock_) {
-              dirty[static_cast<std::size_t>(sx)][static_cast<std::size_t>(sy)] = true;
-              any = true;
-            }
-          }
-        }
-      }
-      if (any) {
-        const std::shared_ptr<ProjectedGrid> grid = reuse(&grid_pool_);
-        *grid = *grid_;  // the published grid stays as it is; the copy is patched
-        for (int sx = 0; sx < kN; ++sx) {
-          for (int sy = 0; sy < kN; ++sy) {
-            if (!dirty[static_cast<std::size_t>(sx)][static_cast<std::size_t>(sy)]) continue;
-            const Eigen::Vector2i begin(sx * cells.x(), sy * cells.y());
-            reprojectWindowColumns(*window, gc, begin, begin + cells.head<2>(), grid.get());
-          }
-        }
-        grid_ = grid;
-        grid_ms = msSince(grid_start);
-      }
-    }
-    grid_clock_ = local.changeClock();
-  }
-
-  // ESDF: due when something changed and the rate allows.
-  bool esdf_due = false;
-  bool unchanged = false;
-  bool rate_limited = false;
-  if (config_.esdf.enabled && window->size.prod() > 0) {
-    Eigen::Vector3i size;
-    const VoxelIndex box_min = esdfBoxMin(*window, body_W, &size);
-    // Unchanged: the box is where it was and no voxel state inside it changed (submaps of the
-    // box with a later state stamp than the last ESDF's).
-    unchanged = box_min == esdf_box_min_ && size == esdf_box_size_;
-    if (unchanged) {
-      const SubmapIndex m0 = local.submapOf(box_min);
-      const SubmapIndex m1 = local.submapOf(box_min + size - VoxelIndex::Ones());
-      for (int x = m0.x(); x <= m1.x() && unchanged; ++x)
-        for (int y = m0.y(); y <= m1.y() && unchanged; ++y)
-          for (int z = m0.z(); z <= m1.z() && unchanged; ++z) {
-            unchanged = local.submapStateChangedAt(SubmapIndex(x, y, z)) <= esdf_clock_;
-          }
-    }
-    rate_limited = !unchanged && config_.esdf.max_rate_hz > 0.0 &&
-                   stamp_s - esdf_stamp_s_ < 1.0 / config_.esdf.max_rate_hz;
-    if (!unchanged && !rate_limited) {
-      esdf_due = true;
-      esdf_clock_ = local.changeClock();
-      esdf_box_min_ = box_min;
-      esdf_box_size_ = size;
-      esdf_stamp_s_ = stamp_s;
-    }
-  }
+  const double grid_ms =
+      config_.projected_grid.enabled ? updateGrid(local, global, *window, body_W) : -1.0;
+  const EsdfDecision decision = decideEsdf(local, *window, body_W, stamp_s);
 
   std::shared_ptr<const EsdfMap> esdf;
   double esdf_ms = -1.0;
   const EsdfJob job{window, body_W, frame};
-  const bool compute_here = esdf_due && !own_thread_;
+  const bool compute_here = decision.due && !own_thread_;
   if (compute_here) {
     const Clock::time_point esdf_start = Clock::now();
     esdf = computeEsdf(job);
@@ -188,11 +92,8 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
   const Clock::time_point publish_start = Clock::now();
   publish(window, grid_, std::move(esdf), /*keep_esdf=*/!compute_here, frame, stamp_s, T_W_B);
   const double snapshot_ms = copy_ms + msSince(publish_start);
-  std::size_t bytes = 0;
-  for (const auto& w : window_pool_) bytes += w->log_odds.capacity() * sizeof(LogOddsQ);
-  for (const auto& g : grid_pool_) bytes += g->cells.capacity();
   bool superseded = false;
-  if (esdf_due && own_thread_) {
+  if (decision.due && own_thread_) {
     {
       std::lock_guard<std::mutex> lock(job_mutex_);
       superseded = has_job_;
@@ -201,7 +102,125 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
     }
     job_cv_.notify_all();
   }
+  recordUpdate(snapshot_ms, grid_ms, esdf_ms, frame, decision, superseded);
+}
 
+// 2D grid: rebuilt whole when the window or the band's layers moved, or when the global map it
+// includes changed (submaps retired or restored, which moves the window, or a loaded map);
+// otherwise only the columns of the band's submaps whose values changed since the last grid are
+// projected again.
+double PlanningLayers::updateGrid(const LocalMap& local, const GlobalMap& global,
+                                  const LocalWindow& window, const Eigen::Vector3d& body_W) {
+  const ProjectedGridConfig& gc = config_.projected_grid;
+  const Clock::time_point grid_start = Clock::now();
+  double grid_ms = -1.0;
+  const double offset = gc.relative_band ? body_W.z() : 0.0;
+  int band_k0 = 0;
+  int band_k1 = 0;
+  bandLayers(gc.band_min_m + offset, gc.band_max_m + offset, window.resolution_m, &band_k0,
+             &band_k1);
+  const int window_z0 = window.min_index.z();
+  const int window_z1 = window_z0 + window.size.z();
+  // With the global map included, a band reaching beyond the window adds retired voxels above
+  // or below the window's columns: those columns then do not depend on the window alone.
+  const bool columns_from_window =
+      !gc.include_global || (band_k0 >= window_z0 && band_k1 <= window_z1);
+  const bool global_changed = gc.include_global && global.modifications() != grid_global_;
+  const bool rebuild = grid_ == nullptr || window.min_index != grid_window_min_ ||
+                       band_k0 != grid_band_k0_ || band_k1 != grid_band_k1_ ||
+                       !columns_from_window || global_changed;
+  if (rebuild) {
+    const std::shared_ptr<ProjectedGrid> grid = reuse(&grid_pool_);
+    projectToGrid(window, &global, gc, body_W.z(), grid.get());
+    grid_ = grid;
+    grid_window_min_ = window.min_index;
+    grid_band_k0_ = band_k0;
+    grid_band_k1_ = band_k1;
+    grid_global_ = global.modifications();
+    grid_ms = msSince(grid_start);
+    ++grid_rebuilds_;
+  } else if (window.size.prod() > 0 && patchGridColumns(local, window, band_k0, band_k1)) {
+    grid_ms = msSince(grid_start);
+  }
+  grid_clock_ = local.changeClock();
+  return grid_ms;
+}
+
+bool PlanningLayers::patchGridColumns(const LocalMap& local, const LocalWindow& window, int band_k0,
+                                      int band_k1) {
+  // Submap columns (x, y) with a changed submap in the band's layers.
+  constexpr int kN = LocalMapConfig::kSubmapsPerAxis;
+  const Eigen::Vector3i cells = local.config().submap_cells();
+  const SubmapIndex first = local.submapOf(window.min_index);
+  const int window_z0 = window.min_index.z();
+  std::array<std::array<bool, kN>, kN> dirty{};  // [x][y]
+  bool any = false;
+  for (int sz = 0; sz < kN; ++sz) {
+    const int z_lo = window_z0 + sz * cells.z();
+    if (z_lo + cells.z() <= band_k0 || z_lo >= band_k1) continue;
+    for (int sx = 0; sx < kN; ++sx) {
+      for (int sy = 0; sy < kN; ++sy) {
+        if (local.submapChangedAt(first + SubmapIndex(sx, sy, sz)) > grid_clock_) {
+          dirty[static_cast<std::size_t>(sx)][static_cast<std::size_t>(sy)] = true;
+          any = true;
+        }
+      }
+    }
+  }
+  if (!any) return false;
+  const std::shared_ptr<ProjectedGrid> grid = reuse(&grid_pool_);
+  *grid = *grid_;  // the published grid stays as it is; the copy is patched
+  for (int sx = 0; sx < kN; ++sx) {
+    for (int sy = 0; sy < kN; ++sy) {
+      if (!dirty[static_cast<std::size_t>(sx)][static_cast<std::size_t>(sy)]) continue;
+      const Eigen::Vector2i begin(sx * cells.x(), sy * cells.y());
+      reprojectWindowColumns(window, config_.projected_grid, begin, begin + cells.head<2>(),
+                             grid.get());
+    }
+  }
+  grid_ = grid;
+  return true;
+}
+
+// ESDF: due when something changed and the rate allows.
+PlanningLayers::EsdfDecision PlanningLayers::decideEsdf(const LocalMap& local,
+                                                        const LocalWindow& window,
+                                                        const Eigen::Vector3d& body_W,
+                                                        double stamp_s) {
+  EsdfDecision d;
+  if (!config_.esdf.enabled || window.size.prod() <= 0) return d;
+  Eigen::Vector3i size;
+  const VoxelIndex box_min = esdfBoxMin(window, body_W, &size);
+  // Unchanged: the box is where it was and no voxel state inside it changed (submaps of the box
+  // with a later state stamp than the last ESDF's).
+  d.unchanged = box_min == esdf_box_min_ && size == esdf_box_size_;
+  if (d.unchanged) {
+    const SubmapIndex m0 = local.submapOf(box_min);
+    const SubmapIndex m1 = local.submapOf(box_min + size - VoxelIndex::Ones());
+    for (int x = m0.x(); x <= m1.x() && d.unchanged; ++x)
+      for (int y = m0.y(); y <= m1.y() && d.unchanged; ++y)
+        for (int z = m0.z(); z <= m1.z() && d.unchanged; ++z) {
+          d.unchanged = local.submapStateChangedAt(SubmapIndex(x, y, z)) <= esdf_clock_;
+        }
+  }
+  d.rate_limited = !d.unchanged && config_.esdf.max_rate_hz > 0.0 &&
+                   stamp_s - esdf_stamp_s_ < 1.0 / config_.esdf.max_rate_hz;
+  if (!d.unchanged && !d.rate_limited) {
+    d.due = true;
+    esdf_clock_ = local.changeClock();
+    esdf_box_min_ = box_min;
+    esdf_box_size_ = size;
+    esdf_stamp_s_ = stamp_s;
+  }
+  return d;
+}
+
+void PlanningLayers::recordUpdate(double snapshot_ms, double grid_ms, double esdf_ms,
+                                  std::uint64_t frame, const EsdfDecision& decision,
+                                  bool superseded) {
+  std::size_t bytes = 0;
+  for (const auto& w : window_pool_) bytes += w->log_odds.capacity() * sizeof(LogOddsQ);
+  for (const auto& g : grid_pool_) bytes += g->cells.capacity();
   std::lock_guard<std::mutex> lock(stats_mutex_);
   stats_.snapshot_bytes = bytes;
   ++stats_.snapshots;
@@ -219,8 +238,8 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
     stats_.max_esdf_ms = std::max(stats_.max_esdf_ms, esdf_ms);
     stats_.esdf_frame = frame;
   }
-  stats_.esdf_unchanged += unchanged ? 1 : 0;
-  stats_.esdf_rate_limited += rate_limited ? 1 : 0;
+  stats_.esdf_unchanged += decision.unchanged ? 1 : 0;
+  stats_.esdf_rate_limited += decision.rate_limited ? 1 : 0;
   stats_.esdf_superseded += superseded ? 1 : 0;
 }
 

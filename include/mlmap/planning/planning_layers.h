@@ -69,6 +69,24 @@ class PlanningLayers {
     std::uint64_t frame = 0;
   };
   std::shared_ptr<const EsdfMap> computeEsdf(const EsdfJob& job);
+  /// Whether this frame's ESDF is computed, and why not.
+  struct EsdfDecision {
+    bool due = false;           ///< compute it (the box's state changed and the rate allows)
+    bool unchanged = false;     ///< the box is where it was and nothing in it changed
+    bool rate_limited = false;  ///< changed, but esdf.max_rate_hz says not yet
+  };
+  /// Rebuilds or patches the 2D grid (grid_) from `window`; its time [ms], -1 when unchanged.
+  double updateGrid(const LocalMap& local, const GlobalMap& global, const LocalWindow& window,
+                    const Eigen::Vector3d& body_W);
+  /// Projects again the grid columns of the band's submaps that changed since the last grid;
+  /// false when none did (grid_ unchanged).
+  bool patchGridColumns(const LocalMap& local, const LocalWindow& window, int band_k0, int band_k1);
+  /// Decides this frame's ESDF (and, when due, records the box and clock it is computed for).
+  EsdfDecision decideEsdf(const LocalMap& local, const LocalWindow& window,
+                          const Eigen::Vector3d& body_W, double stamp_s);
+  /// The statistics of one update().
+  void recordUpdate(double snapshot_ms, double grid_ms, double esdf_ms, std::uint64_t frame,
+                    const EsdfDecision& decision, bool superseded);
   void publish(std::shared_ptr<const LocalWindow> window, std::shared_ptr<const ProjectedGrid> grid,
                std::shared_ptr<const EsdfMap> esdf, bool keep_esdf, std::uint64_t frame,
                double stamp_s, const Transform& T_W_B);
