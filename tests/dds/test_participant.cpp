@@ -456,7 +456,7 @@ TEST(ParticipantSetup, LargeDataRaisesAProfilesSizesOnACopyAndNeverLowersThem) {
 TEST(ParticipantSetup, AProfilesSharedMemoryIsLeftOutUnlessAskedAndThatIsSaid) {
   ASSERT_TRUE(loadTestProfiles());
   DdsConfig config;
-  config.domain_id = 158;
+  config.domain_id = 162;
   config.discovery_range = "OFF";
   config.participant_profile = "mlmap_test_loopback_no_peers";
   const ParticipantSetup setup = participantSetup(config, "test");
