@@ -94,8 +94,8 @@ void useLoopbackOnly(bool shared_memory, fdds::DomainParticipantQos* qos) {
 }
 
 /// Makes the built-in transports explicit (UDPv4, plus SHM with `shared_memory`) so that they can
-/// be sized and so that no SHM transport comes in unasked; without `shared_memory`, removes the
-/// SHM transports a profile lists. Returns what was removed, for the log ("" for nothing).
+/// be sized and so that no SHM transport comes in unasked; without `shared_memory`, also removes
+/// the SHM transports a profile lists. Returns what was removed, for the log ("" for nothing).
 /// Throws std::runtime_error when no transport is left.
 std::string withSharedMemoryOnlyIfAsked(bool shared_memory, const std::string& profile,
                                         fdds::DomainParticipantQos* qos) {
@@ -107,7 +107,6 @@ std::string withSharedMemoryOnlyIfAsked(bool shared_memory, const std::string& p
                                         std::make_shared<SharedMemTransportDescriptor>());
     }
     transport.use_builtin_transports = false;
-    return "";
   }
   if (shared_memory) return "";
   std::vector<TransportPtr>& listed = transport.user_transports;
