@@ -128,11 +128,23 @@ const char* toString(UnknownAs policy) {
   return "invalid";
 }
 
+bool parseUnknownAs(const std::string& text, UnknownAs* policy) {
+  for (const UnknownAs candidate : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+    if (text == toString(candidate)) {
+      *policy = candidate;
+      return true;
+    }
+  }
+  return false;
+}
+
+const char* unknownAsChoices() { return "occupied or free"; }
+
 void EsdfConfig::validate(std::vector<std::string>* errors) const {
   require(std::isfinite(max_distance_m) && max_distance_m > 0.0 && max_distance_m <= 1000.0,
           "esdf.max_distance_m", "must be finite, > 0 and <= 1000 m", max_distance_m, errors);
   require(unknown_as == UnknownAs::kOccupied || unknown_as == UnknownAs::kFree, "esdf.unknown_as",
-          "must be occupied or free", static_cast<int>(unknown_as), errors);
+          std::string("must be ") + unknownAsChoices(), static_cast<int>(unknown_as), errors);
   require(num_threads >= 1 && num_threads <= kMaxThreads, "esdf.num_threads", "must be in [1, 64]",
           num_threads, errors);
   require(std::isfinite(max_rate_hz) && max_rate_hz >= 0.0, "esdf.max_rate_hz",
