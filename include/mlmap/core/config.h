@@ -10,28 +10,25 @@
 /// list (mlmap/config/config_keys.h). A visitor has
 ///   `void key(const char* name, T& field, const char* unit, const char* doc)` and
 ///   `void section(const char* name, S& sub, const char* doc)` (S: another config struct);
-/// `self` is the struct or a const one, and T / S are then const too.
+/// `self` is the struct or a const one, and T / S are then const too (mlmap/core/key_list.h).
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "mlmap/core/key_list.h"
+
 #include <cstdint>
 #include <string>
-#include <type_traits>
 #include <vector>
 
 namespace mlmap {
-
-/// Walks the keys of config struct `config` (const or not) with `visitor`: C::visit(config, visitor).
-template <class C, class V>
-void visitConfig(C& config, V& visitor) {
-  std::remove_const_t<C>::visit(config, visitor);
-}
 
 /// Cylindrical awareness grid around the body (paper IV-A). Axes are parallel to the world
 /// frame; the origin is the body position. Default: 100 x 180 x 25 cells (rho x phi x z).
 /// Keys: visit().
 struct AwarenessConfig {
+  /// Its top-level section in the YAML file (MapConfig::visit()).
+  static constexpr const char* kSection = "awareness";
   double rho_cell_m = 0.1;        ///< key rho_cell_m
   int rho_cells = 100;            ///< key rho_cells
   int phi_cells = 180;            ///< key phi_cells
@@ -71,6 +68,8 @@ struct AwarenessConfig {
 /// miss -0.4 = P 0.4), clamping as OctoMap ([-2, 3.5] = P 0.12..0.97), occupied above 0 (P 0.5).
 /// Keys: visit().
 struct LogOddsConfig {
+  /// Its top-level section in the YAML file (MapConfig::visit()).
+  static constexpr const char* kSection = "log_odds";
   double hit = 0.85;                ///< key hit
   double miss = -0.4;               ///< key miss
   double clamp_min = -2.0;          ///< key clamp_min
@@ -96,6 +95,8 @@ struct LogOddsConfig {
 /// Default: paper Table 2, 0.2 m voxels, 95 x 95 x 35 cells = 19 x 19 x 7 m.
 /// Keys: visit().
 struct LocalMapConfig {
+  /// Its top-level section in the YAML file (MapConfig::visit()).
+  static constexpr const char* kSection = "local_map";
   double resolution_m = 0.2;               ///< key resolution_m
   Eigen::Vector3i size_cells{95, 95, 35};  ///< key size_cells (multiples of kSubmapsPerAxis)
 
@@ -116,6 +117,8 @@ struct LocalMapConfig {
 /// convention (z forward, x right, y down) on a FLU body, 0.1 m ahead of the body origin.
 /// Keys: visit().
 struct SensorConfig {
+  /// Its top-level section in the YAML file (MapConfig::visit()).
+  static constexpr const char* kSection = "sensor";
   Eigen::Vector3d translation_B_m{0.1, 0.0, 0.0};       ///< key translation_B_m
   Eigen::Vector3d rotation_rpy_deg{-90.0, 0.0, -90.0};  ///< key rotation_rpy_deg
 
@@ -136,6 +139,8 @@ struct SensorConfig {
 /// How the two stages run (paper V-A, Figure 5).
 /// Keys: visit().
 struct PipelineConfig {
+  /// Its top-level section in the YAML file (MapConfig::visit()).
+  static constexpr const char* kSection = "pipeline";
   bool threaded = false;            ///< key threaded
   int input_queue_capacity = 2;     ///< key input_queue_capacity (drops the OLDEST when full)
   int batch_queue_capacity = 2;     ///< key batch_queue_capacity (back-pressure when full)
@@ -162,6 +167,8 @@ struct PipelineConfig {
 /// The projected 2D grid for ground-plane planners (paper Fig. 6, nav_msgs/OccupancyGrid values).
 /// Keys: visit().
 struct ProjectedGridConfig {
+  /// Its top-level section in the YAML file (MapConfig::visit()).
+  static constexpr const char* kSection = "projected_grid";
   bool enabled = true;              ///< key enabled
   bool relative_band = true;        ///< key relative_band
   double band_min_m = -0.3;         ///< key band_min_m
@@ -203,6 +210,8 @@ const char* unknownAsChoices();
 /// The local ESDF for planners (mlmap/planning/esdf.h).
 /// Keys: visit().
 struct EsdfConfig {
+  /// Its top-level section in the YAML file (MapConfig::visit()).
+  static constexpr const char* kSection = "esdf";
   bool enabled = true;                                   ///< key enabled
   double max_distance_m = 2.0;                           ///< key max_distance_m
   UnknownAs unknown_as = UnknownAs::kOccupied;           ///< key unknown_as
@@ -250,16 +259,18 @@ struct MapConfig {
   /// The top-level sections of an engine configuration (see the file comment).
   template <class Self, class V>
   static void visit(Self& c, V& v) {
-    v.section("awareness", c.awareness,
+    v.section(AwarenessConfig::kSection, c.awareness,
               "cylindrical grid around the body, axes parallel to the world (paper IV-A)");
-    v.section("log_odds", c.log_odds, "natural-log odds, ln(p / (1 - p)) (paper Eq. 7-9, Table 1)");
-    v.section("local_map", c.local_map,
+    v.section(LogOddsConfig::kSection, c.log_odds,
+              "natural-log odds, ln(p / (1 - p)) (paper Eq. 7-9, Table 1)");
+    v.section(LocalMapConfig::kSection, c.local_map,
               "dense sliding window of the active area (paper IV-B, IV-C, Table 2)");
-    v.section("sensor", c.sensor, "where the sensor sits on the body: T_B_S");
-    v.section("pipeline", c.pipeline, "threads (paper V-A, Figure 5)");
-    v.section("projected_grid", c.projected_grid,
+    v.section(SensorConfig::kSection, c.sensor, "where the sensor sits on the body: T_B_S");
+    v.section(PipelineConfig::kSection, c.pipeline, "threads (paper V-A, Figure 5)");
+    v.section(ProjectedGridConfig::kSection, c.projected_grid,
               "2D grid for ground-plane planners (paper Fig. 6), nav_msgs/OccupancyGrid values");
-    v.section("esdf", c.esdf, "exact signed distance field of the local map, for planners");
+    v.section(EsdfConfig::kSection, c.esdf,
+              "exact signed distance field of the local map, for planners");
   }
 
   /// All problems found, each as "section.key: what is wrong (got X)". Empty = valid.

@@ -159,6 +159,9 @@ SecuritySetup resolveSecurity(const SecurityConfig& config);
 
 /// The `dds` section. Keys, units and meanings: visit().
 struct DdsConfig {
+  /// Its top-level section in the node's YAML file (NodeConfig::visitNodeSections()).
+  static constexpr const char* kSection = "dds";
+
   int domain_id = -1;                          ///< key domain_id
   std::string ns;                              ///< key ns
   std::string discovery_range;                 ///< key discovery_range

@@ -21,6 +21,9 @@ namespace mlmap::dds {
 /// Files are mlmap map files (mlmap/map_io/map_file.h); mlmap_map_tool converts them.
 /// Keys, units and meanings: visit().
 struct MapFileOptions {
+  /// Its top-level section in the node's YAML file (NodeConfig::visitNodeSections()).
+  static constexpr const char* kSection = "map_file";
+
   std::string load_path;         ///< key load_path
   bool load_missing_ok = false;  ///< key load_missing_ok
   std::string save_path;         ///< key save_path (saved after the queued frames are mapped)
@@ -60,9 +63,9 @@ struct NodeConfig {
   /// The top-level sections that are the node's, not the engine's: `dds` and `map_file`.
   template <class Self, class V>
   static void visitNodeSections(Self& c, V& v) {
-    v.section("dds", c.dds,
+    v.section(DdsConfig::kSection, c.dds,
               "ROS 2 (Jazzy) peers over Fast DDS: topics rt/<ns>/<name>, ROS types and QoS");
-    v.section("map_file", c.map_file,
+    v.section(MapFileOptions::kSection, c.map_file,
               "mlmap map files (full local + global state); mlmap_map_tool converts them");
   }
 };

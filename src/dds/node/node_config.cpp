@@ -14,26 +14,29 @@
 namespace mlmap::dds {
 
 void MapFileOptions::validate(std::vector<std::string>* errors) const {
+  const auto key = [this](const auto& field) {
+    return std::string(kSection) + "." + keyPath(*this, field);
+  };
   if (!std::isfinite(save_period_s) || save_period_s < 0.0) {
-    errors->push_back("map_file.save_period_s: must be >= 0 (0: only at shutdown) (got " +
+    errors->push_back(key(save_period_s) + ": must be >= 0 (0: only at shutdown) (got " +
                       std::to_string(save_period_s) + ")");
   } else if (save_period_s > 0.0 && save_path.empty()) {
-    errors->push_back("map_file.save_period_s: periodic saving needs map_file.save_path");
+    errors->push_back(key(save_period_s) + ": periodic saving needs " + key(save_path));
   }
   if (!save_path.empty()) {
     const std::filesystem::path p(save_path);
     const std::filesystem::path dir = p.has_parent_path() ? p.parent_path() : ".";
     std::error_code ec;
     if (!std::filesystem::is_directory(dir, ec)) {
-      errors->push_back("map_file.save_path: folder '" + dir.string() + "' does not exist (got '" +
+      errors->push_back(key(save_path) + ": folder '" + dir.string() + "' does not exist (got '" +
                         save_path + "')");
     } else if (!p.has_filename() || std::filesystem::is_directory(p, ec)) {
-      errors->push_back("map_file.save_path: is a folder, not a file name (got '" + save_path + "')");
+      errors->push_back(key(save_path) + ": is a folder, not a file name (got '" + save_path + "')");
     }
   }
   if (!load_path.empty() && !load_missing_ok && !std::filesystem::exists(load_path)) {
-    errors->push_back("map_file.load_path: no such file (got '" + load_path +
-                      "'; set map_file.load_missing_ok to start empty when it is missing)");
+    errors->push_back(key(load_path) + ": no such file (got '" + load_path + "'; set " +
+                      key(load_missing_ok) + " to start empty when it is missing)");
   }
 }
 
