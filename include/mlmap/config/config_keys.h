@@ -89,6 +89,7 @@ class YamlReader {
     std::vector<std::string>* errors = section_.errors();
     const std::size_t before = errors->size();
     section_.read(name, &value);
+    // cppcheck-suppress knownConditionTrueFalse ; section_.read appends to *errors on a bad value
     if (errors->size() == before) *field = value;
   }
 
@@ -286,7 +287,8 @@ class MarkdownKeyTable {
   [[nodiscard]] const std::string& rows() const { return rows_; }
 
  private:
-  /// `text` as one table cell: line breaks become spaces, '|' is escaped.
+  /// `text` as one table cell: line breaks become spaces, '|' and '<' (which would start an HTML
+  /// tag, as in `rt/<ns>`) are escaped.
   static std::string cell(const std::string& text) {
     std::string out;
     for (const char c : text) {
@@ -294,6 +296,8 @@ class MarkdownKeyTable {
         out += ' ';
       } else if (c == '|') {
         out += "\\|";
+      } else if (c == '<') {
+        out += "&lt;";
       } else {
         out += c;
       }

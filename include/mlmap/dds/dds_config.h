@@ -196,10 +196,10 @@ struct DdsConfig {
           "DDS domain = ROS_DOMAIN_ID; -1: the ROS_DOMAIN_ID variable, else 0. Valid: 0..232");
     v.key("ns", c.ns, "", "topic namespace: \"uav1\" -> rt/uav1/cloud; \"\" for none");
     v.key("discovery_range", c.discovery_range, "",
-          "\"\" (ROS_AUTOMATIC_DISCOVERY_RANGE, else SUBNET), LOCALHOST, SUBNET or OFF:\n"
-          "LOCALHOST: UDPv4 on 127.0.0.1 only, unicast discovery (up to 32 participants)\n"
-          "SUBNET: the profile's (default: Fast DDS's) transports, multicast discovery\n"
-          "OFF: no multicast, only the profile's own initial peers");
+          "\"\" (ROS_AUTOMATIC_DISCOVERY_RANGE, else SUBNET), LOCALHOST, SUBNET or OFF.\n"
+          "LOCALHOST: UDPv4 on 127.0.0.1 only, unicast discovery (up to 32 participants).\n"
+          "SUBNET: the profile's (default: Fast DDS's) transports, multicast discovery.\n"
+          "OFF: no multicast, only the profile's own initial peers.");
     v.key("profiles_file", c.profiles_file, "",
           "Fast DDS XML profiles to load, e.g. config/dds/udp_only.xml (\"\" for none)");
     v.key("participant_profile", c.participant_profile, "",
