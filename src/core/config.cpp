@@ -20,66 +20,72 @@ void require(bool ok, const std::string& key, const std::string& what, const T& 
 
 bool finitePositive(double v) { return std::isfinite(v) && v > 0.0; }
 
+/// "section.key" of `field`, a member of section struct `section`, from its key list.
+template <class Section, class T>
+std::string sectionKey(const Section& section, const T& field) {
+  return std::string(Section::kSection) + "." + keyPath(section, field);
+}
+
 }  // namespace
 
 double AwarenessConfig::phi_cell_rad() const { return 2.0 * kPi / phi_cells; }
 
 void AwarenessConfig::validate(std::vector<std::string>* errors) const {
-  require(finitePositive(rho_cell_m) && rho_cell_m <= 10.0, "awareness.rho_cell_m",
+  require(finitePositive(rho_cell_m) && rho_cell_m <= 10.0, sectionKey(*this, rho_cell_m),
           "must be in (0, 10] m", rho_cell_m, errors);
-  require(rho_cells >= 1 && rho_cells <= 4096, "awareness.rho_cells", "must be in [1, 4096]",
+  require(rho_cells >= 1 && rho_cells <= 4096, sectionKey(*this, rho_cells), "must be in [1, 4096]",
           rho_cells, errors);
-  require(phi_cells >= 4 && phi_cells <= 4096, "awareness.phi_cells", "must be in [4, 4096]",
+  require(phi_cells >= 4 && phi_cells <= 4096, sectionKey(*this, phi_cells), "must be in [4, 4096]",
           phi_cells, errors);
-  require(finitePositive(z_cell_m) && z_cell_m <= 10.0, "awareness.z_cell_m",
+  require(finitePositive(z_cell_m) && z_cell_m <= 10.0, sectionKey(*this, z_cell_m),
           "must be in (0, 10] m", z_cell_m, errors);
-  require(z_cells >= 1 && z_cells <= 4096, "awareness.z_cells", "must be in [1, 4096]", z_cells,
-          errors);
-  require(z_cells_below >= 0 && z_cells_below <= z_cells, "awareness.z_cells_below",
+  require(z_cells >= 1 && z_cells <= 4096, sectionKey(*this, z_cells), "must be in [1, 4096]",
+          z_cells, errors);
+  require(z_cells_below >= 0 && z_cells_below <= z_cells, sectionKey(*this, z_cells_below),
           "must be in [0, z_cells]", z_cells_below, errors);
-  require(std::isfinite(min_range_m) && min_range_m >= 0.0, "awareness.min_range_m",
+  require(std::isfinite(min_range_m) && min_range_m >= 0.0, sectionKey(*this, min_range_m),
           "must be >= 0 m", min_range_m, errors);
-  require(finitePositive(max_range_m) && max_range_m > min_range_m, "awareness.max_range_m",
+  require(finitePositive(max_range_m) && max_range_m > min_range_m, sectionKey(*this, max_range_m),
           "must be > min_range_m", max_range_m, errors);
-  require(sample_count >= 0, "awareness.sample_count", "must be >= 0 (0 = all points)",
+  require(sample_count >= 0, sectionKey(*this, sample_count), "must be >= 0 (0 = all points)",
           sample_count, errors);
 }
 
 void LogOddsConfig::validate(std::vector<std::string>* errors) const {
-  require(std::isfinite(hit) && hit > 0.0 && hit <= 10.0, "log_odds.hit", "must be in (0, 10]",
-          hit, errors);
-  require(std::isfinite(miss) && miss < 0.0 && miss >= -10.0, "log_odds.miss",
+  require(std::isfinite(hit) && hit > 0.0 && hit <= 10.0, sectionKey(*this, hit),
+          "must be in (0, 10]", hit, errors);
+  require(std::isfinite(miss) && miss < 0.0 && miss >= -10.0, sectionKey(*this, miss),
           "must be in [-10, 0)", miss, errors);
   require(std::isfinite(clamp_min) && clamp_min < 0.0 && clamp_min >= -30.0,
-          "log_odds.clamp_min", "must be in [-30, 0)", clamp_min, errors);
-  require(std::isfinite(clamp_max) && clamp_max > 0.0 && clamp_max <= 30.0, "log_odds.clamp_max",
-          "must be in (0, 30]", clamp_max, errors);
+          sectionKey(*this, clamp_min), "must be in [-30, 0)", clamp_min, errors);
+  require(std::isfinite(clamp_max) && clamp_max > 0.0 && clamp_max <= 30.0,
+          sectionKey(*this, clamp_max), "must be in (0, 30]", clamp_max, errors);
   require(std::isfinite(occupied_threshold) && occupied_threshold >= clamp_min &&
               occupied_threshold < clamp_max,
-          "log_odds.occupied_threshold", "must be in [clamp_min, clamp_max)", occupied_threshold,
-          errors);
+          sectionKey(*this, occupied_threshold), "must be in [clamp_min, clamp_max)",
+          occupied_threshold, errors);
 }
 
 void LocalMapConfig::validate(std::vector<std::string>* errors) const {
   require(finitePositive(resolution_m) && resolution_m >= 0.01 && resolution_m <= 5.0,
-          "local_map.resolution_m", "must be in [0.01, 5] m", resolution_m, errors);
+          sectionKey(*this, resolution_m), "must be in [0.01, 5] m", resolution_m, errors);
   static const char* kAxis[3] = {"x", "y", "z"};
   for (int a = 0; a < 3; ++a) {
     const int n = size_cells[a];
     require(n >= kSubmapsPerAxis && n % kSubmapsPerAxis == 0 && n <= 2000,
-            std::string("local_map.size_cells.") + kAxis[a],
+            sectionKey(*this, size_cells) + "." + kAxis[a],
             "must be a multiple of 5 (5 submaps per axis) in [5, 2000]", n, errors);
   }
   const double cells = static_cast<double>(size_cells.x()) * size_cells.y() * size_cells.z();
-  require(cells <= 2.0e8, "local_map.size_cells", "more than 2e8 voxels (400 MB) in the active area",
-          cells, errors);
+  require(cells <= 2.0e8, sectionKey(*this, size_cells),
+          "more than 2e8 voxels (400 MB) in the active area", cells, errors);
 }
 
 void SensorConfig::validate(std::vector<std::string>* errors) const {
   require(translation_B_m.allFinite() && translation_B_m.norm() <= 10.0,
-          "sensor.translation_B_m", "must be finite and within 10 m of the body",
+          sectionKey(*this, translation_B_m), "must be finite and within 10 m of the body",
           translation_B_m.transpose(), errors);
-  require(rotation_rpy_deg.allFinite(), "sensor.rotation_rpy_deg", "must be finite",
+  require(rotation_rpy_deg.allFinite(), sectionKey(*this, rotation_rpy_deg), "must be finite",
           rotation_rpy_deg.transpose(), errors);
 }
 
@@ -96,17 +102,21 @@ Eigen::Isometry3d SensorConfig::T_B_S() const {
 
 void PipelineConfig::validate(std::vector<std::string>* errors) const {
   require(input_queue_capacity >= 1 && input_queue_capacity <= 1000,
-          "pipeline.input_queue_capacity", "must be in [1, 1000]", input_queue_capacity, errors);
+          sectionKey(*this, input_queue_capacity), "must be in [1, 1000]", input_queue_capacity,
+          errors);
   require(batch_queue_capacity >= 1 && batch_queue_capacity <= 1000,
-          "pipeline.batch_queue_capacity", "must be in [1, 1000]", batch_queue_capacity, errors);
+          sectionKey(*this, batch_queue_capacity), "must be in [1, 1000]", batch_queue_capacity,
+          errors);
 }
 
 void ProjectedGridConfig::validate(std::vector<std::string>* errors) const {
-  require(std::isfinite(band_min_m) && std::abs(band_min_m) <= 1000.0, "projected_grid.band_min_m",
-          "must be a finite height within 1000 m", band_min_m, errors);
-  require(std::isfinite(band_max_m) && std::abs(band_max_m) <= 1000.0, "projected_grid.band_max_m",
-          "must be a finite height within 1000 m", band_max_m, errors);
-  require(!(band_max_m < band_min_m), "projected_grid.band_max_m", "must not be below band_min_m",
+  require(std::isfinite(band_min_m) && std::abs(band_min_m) <= 1000.0,
+          sectionKey(*this, band_min_m), "must be a finite height within 1000 m", band_min_m,
+          errors);
+  require(std::isfinite(band_max_m) && std::abs(band_max_m) <= 1000.0,
+          sectionKey(*this, band_max_m), "must be a finite height within 1000 m", band_max_m,
+          errors);
+  require(!(band_max_m < band_min_m), sectionKey(*this, band_max_m), "must not be below band_min_m",
           band_max_m, errors);
 }
 
@@ -128,19 +138,34 @@ const char* toString(UnknownAs policy) {
   return "invalid";
 }
 
+bool parseUnknownAs(const std::string& text, UnknownAs* policy) {
+  for (const UnknownAs candidate : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+    if (text == toString(candidate)) {
+      *policy = candidate;
+      return true;
+    }
+  }
+  return false;
+}
+
+const char* unknownAsChoices() { return "occupied or free"; }
+
 void EsdfConfig::validate(std::vector<std::string>* errors) const {
   require(std::isfinite(max_distance_m) && max_distance_m > 0.0 && max_distance_m <= 1000.0,
-          "esdf.max_distance_m", "must be finite, > 0 and <= 1000 m", max_distance_m, errors);
-  require(unknown_as == UnknownAs::kOccupied || unknown_as == UnknownAs::kFree, "esdf.unknown_as",
-          "must be occupied or free", static_cast<int>(unknown_as), errors);
-  require(num_threads >= 1 && num_threads <= kMaxThreads, "esdf.num_threads", "must be in [1, 64]",
-          num_threads, errors);
-  require(std::isfinite(max_rate_hz) && max_rate_hz >= 0.0, "esdf.max_rate_hz",
+          sectionKey(*this, max_distance_m), "must be finite, > 0 and <= 1000 m", max_distance_m,
+          errors);
+  require(unknown_as == UnknownAs::kOccupied || unknown_as == UnknownAs::kFree,
+          sectionKey(*this, unknown_as), std::string("must be ") + unknownAsChoices(),
+          static_cast<int>(unknown_as), errors);
+  require(num_threads >= 1 && num_threads <= kMaxThreads, sectionKey(*this, num_threads),
+          "must be in [1, 64]", num_threads, errors);
+  require(std::isfinite(max_rate_hz) && max_rate_hz >= 0.0, sectionKey(*this, max_rate_hz),
           "must be finite and >= 0 (0: no limit)", max_rate_hz, errors);
   for (int a = 0; a < 3; ++a) {
     require(std::isfinite(box_size_m[a]) && box_size_m[a] >= 0.0 && box_size_m[a] <= 10000.0,
-            "esdf.box_size_m", "must be finite, >= 0 and <= 10000 m per axis (0: whole local map)",
-            box_size_m[a], errors);
+            sectionKey(*this, box_size_m),
+            "must be finite, >= 0 and <= 10000 m per axis (0: whole local map)", box_size_m[a],
+            errors);
   }
 }
 
@@ -169,8 +194,9 @@ std::vector<std::string> MapConfig::validate() const {
     constexpr double kMaxScratchVoxels = 268435456.0;  // 2^28: a 32 MB bitset
     if (box_voxels > kMaxScratchVoxels) {
       std::ostringstream message;
-      message << "awareness.max_range_m / local_map.resolution_m: the free-space scratch box around "
-                 "the sensor would hold "
+      message << keyPath(*this, awareness.max_range_m) << " / "
+              << keyPath(*this, local_map.resolution_m)
+              << ": the free-space scratch box around the sensor would hold "
               << box_voxels << " voxels (limit 2^28); lower max_range_m, the resolution or the "
                  "local map size";
       errors.push_back(message.str());
@@ -178,7 +204,8 @@ std::vector<std::string> MapConfig::validate() const {
   }
   if (errors.empty() && awareness.max_range_m > awareness.radius_m() + 1e-9) {
     std::ostringstream message;
-    message << "awareness.max_range_m: must not exceed the awareness radius rho_cells * rho_cell_m = "
+    message << keyPath(*this, awareness.max_range_m)
+            << ": must not exceed the awareness radius rho_cells * rho_cell_m = "
             << awareness.radius_m() << " m (got " << awareness.max_range_m << ")";
     errors.push_back(message.str());
   }

@@ -32,4 +32,18 @@ void readEngineSections(Section& top, MapConfig* config);
 /// The effective configuration as YAML, every key present (what `--print-config` shows).
 std::string toYaml(const MapConfig& config);
 
+/// The prose at the top of config/mlmap.yaml.
+inline constexpr const char* kEngineDefaultsHeader =
+    "# mlmap engine configuration. Every key is optional: a missing key takes the default shown here\n"
+    "# (the paper's performance configuration). Unknown keys and bad values stop the program with a\n"
+    "# message naming the key. Print the effective configuration with `mlmap_demo --print-config`.\n"
+    "# Generated from the key lists in include/mlmap/core/config.h by\n"
+    "# `build/mlmap_config_tool --write` (a test fails when this file differs): edit those instead.\n";
+/// The text of config/mlmap.yaml: kEngineDefaultsHeader, then every engine key with its default,
+/// unit and meaning, from the key lists (MapConfig::visit()).
+std::string engineDefaultsYaml();
+/// The Markdown table of every engine key (section.key, default, unit, meaning) for
+/// docs/configuration.md, from the same key lists.
+std::string engineKeyReference();
+
 }  // namespace mlmap::io

@@ -28,33 +28,64 @@ bool parseDiscoveryRange(const std::string& text, DiscoveryRange* range);
 const char* toString(DiscoveryRange range);
 
 /// Topic names (ROS names, without `rt/` and without the namespace). Empty input names disable
-/// that input; empty output names disable that output.
+/// that input; empty output names disable that output. Inputs are BEST_EFFORT readers (they
+/// match any publisher), outputs RELIABLE writers. Keys and meanings: visit() (as the engine's
+/// config structs, mlmap/core/config.h).
 struct TopicNames {
-  // Inputs (BEST_EFFORT readers: they match any publisher).
-  std::string cloud = "cloud";                          ///< sensor_msgs/PointCloud2, sensor frame
-  std::string pose = "pose";                            ///< geometry_msgs/PoseStamped, T_W_B
-  std::string odometry = "";                            ///< nav_msgs/Odometry (alternative to pose)
-  std::string depth_image = "";                         ///< sensor_msgs/Image 16UC1 / 32FC1
-  std::string camera_info = "";                         ///< sensor_msgs/CameraInfo of the depth image
-  // Outputs (RELIABLE writers).
-  std::string awareness = "mlmap/awareness/occupied";   ///< PointCloud2, awareness occupied cells
-  std::string local_map = "mlmap/local_map/occupied";   ///< PointCloud2, local occupied voxels
-  std::string global_map = "mlmap/global_map/occupied"; ///< PointCloud2, TRANSIENT_LOCAL
-  std::string grid = "mlmap/grid";                      ///< nav_msgs/OccupancyGrid, TRANSIENT_LOCAL
-  std::string esdf_slice = "mlmap/esdf/slice";          ///< PointCloud2 with `intensity` = distance
-  std::string esdf_block = "mlmap/esdf/block";          ///< mlmap_msgs/VoxelBlock
-  std::string status = "mlmap/status";                  ///< mlmap_msgs/Status
+  std::string cloud = "cloud";                           ///< key cloud (input)
+  std::string pose = "pose";                             ///< key pose (input)
+  std::string odometry = "";                             ///< key odometry (input)
+  std::string depth_image = "";                          ///< key depth_image (input)
+  std::string camera_info = "";                          ///< key camera_info (input)
+  std::string awareness = "mlmap/awareness/occupied";    ///< key awareness (output)
+  std::string local_map = "mlmap/local_map/occupied";    ///< key local_map (output)
+  std::string global_map = "mlmap/global_map/occupied";  ///< key global_map (output)
+  std::string grid = "mlmap/grid";                       ///< key grid (output)
+  std::string esdf_slice = "mlmap/esdf/slice";           ///< key esdf_slice (output)
+  std::string esdf_block = "mlmap/esdf/block";           ///< key esdf_block (output)
+  std::string status = "mlmap/status";                   ///< key status (output)
+
+  /// The keys of `dds.topics`: visitor.key(name, field, unit, doc) for each.
+  template <class Self, class V>
+  static void visit(Self& c, V& v) {
+    v.key("cloud", c.cloud, "",
+          "in: sensor_msgs/PointCloud2 in the sensor frame (BEST_EFFORT reader: matches any publisher)");
+    v.key("pose", c.pose, "", "in: geometry_msgs/PoseStamped, T_W_B");
+    v.key("odometry", c.odometry, "", "in: nav_msgs/Odometry, alternative to pose");
+    v.key("depth_image", c.depth_image, "",
+          "in: sensor_msgs/Image 16UC1 [mm] or 32FC1 [m]; needs camera_info");
+    v.key("camera_info", c.camera_info, "", "in: sensor_msgs/CameraInfo of the depth image");
+    v.key("awareness", c.awareness, "", "out: PointCloud2 of the awareness map's occupied cells");
+    v.key("local_map", c.local_map, "", "out: PointCloud2 of the local map's occupied voxels");
+    v.key("global_map", c.global_map, "",
+          "out: PointCloud2, TRANSIENT_LOCAL (late joiners get the last one)");
+    v.key("grid", c.grid, "", "out: nav_msgs/OccupancyGrid, TRANSIENT_LOCAL");
+    v.key("esdf_slice", c.esdf_slice, "", "out: PointCloud2 with `intensity` = signed distance [m]");
+    v.key("esdf_block", c.esdf_block, "", "out: mlmap_msgs/VoxelBlock");
+    v.key("status", c.status, "", "out: mlmap_msgs/Status");
+  }
 };
 
 /// Publishing rates [Hz] of the outputs (0 disables that output). Outputs are published from
-/// their own thread at most at these rates, and only when their content changed.
+/// their own thread at most at these rates, and only when their content changed. Keys: visit().
 struct PublishRates {
-  double awareness_hz = 10.0;
-  double local_map_hz = 5.0;
-  double global_map_hz = 0.5;
-  double grid_hz = 2.0;
-  double esdf_hz = 2.0;
-  double status_hz = 1.0;
+  double awareness_hz = 10.0;  ///< key awareness_hz
+  double local_map_hz = 5.0;   ///< key local_map_hz
+  double global_map_hz = 0.5;  ///< key global_map_hz
+  double grid_hz = 2.0;        ///< key grid_hz
+  double esdf_hz = 2.0;        ///< key esdf_hz
+  double status_hz = 1.0;      ///< key status_hz
+
+  /// The keys of `dds.rates`: visitor.key(name, field, unit, doc) for each.
+  template <class Self, class V>
+  static void visit(Self& c, V& v) {
+    v.key("awareness_hz", c.awareness_hz, "Hz", "topics.awareness");
+    v.key("local_map_hz", c.local_map_hz, "Hz", "topics.local_map");
+    v.key("global_map_hz", c.global_map_hz, "Hz", "topics.global_map");
+    v.key("grid_hz", c.grid_hz, "Hz", "topics.grid");
+    v.key("esdf_hz", c.esdf_hz, "Hz", "topics.esdf_slice and topics.esdf_block");
+    v.key("status_hz", c.status_hz, "Hz", "topics.status");
+  }
 };
 
 /// ROS_SECURITY_STRATEGY: what a participant does when security is enabled but its enclave's
@@ -76,10 +107,22 @@ enum class SecurityStrategy {
 /// enclave), `strategy` <- ROS_SECURITY_STRATEGY (only "Enforce" enforces; else Permissive).
 /// A value set here wins over the environment (as for `domain_id`).
 struct SecurityConfig {
-  std::optional<bool> enable;  ///< unset: ROS_SECURITY_ENABLE == "true"; default false
-  std::string keystore;        ///< SROS2 keystore root (holds enclaves/); "": ROS_SECURITY_KEYSTORE
-  std::string enclave;         ///< e.g. "/mlmap/node"; "": ROS_SECURITY_ENCLAVE_OVERRIDE, else "/"
-  std::string strategy;        ///< "Enforce" or "Permissive" (any case); "": ROS_SECURITY_STRATEGY
+  std::optional<bool> enable;  ///< key enable (unset: ROS_SECURITY_ENABLE == "true")
+  std::string keystore;        ///< key keystore
+  std::string enclave;         ///< key enclave
+  std::string strategy;        ///< key strategy
+
+  /// The keys of `dds.security`: visitor.key(name, field, unit, doc) for each.
+  template <class Self, class V>
+  static void visit(Self& c, V& v) {
+    v.key("enable", c.enable, "", "true / false; empty: ROS_SECURITY_ENABLE (\"true\" enables), else off");
+    v.key("keystore", c.keystore, "", "keystore root (holds enclaves/); \"\": ROS_SECURITY_KEYSTORE");
+    v.key("enclave", c.enclave, "",
+          "this node's enclave, e.g. /mlmap/node; \"\": ROS_SECURITY_ENCLAVE_OVERRIDE, else \"/\"");
+    v.key("strategy", c.strategy, "",
+          "Enforce: refuse to start when a file is missing; Permissive: warn, run unsecured;\n"
+          "\"\": ROS_SECURITY_STRATEGY (\"Enforce\" enforces, anything else is Permissive)");
+  }
 
   /// Problems as "dds.security.key: what is wrong (got X)", appended to `errors`: strategy empty,
   /// Enforce or Permissive; enclave empty or an absolute ROS name ("/a/b": tokens of letters,
@@ -114,39 +157,82 @@ struct SecuritySetup {
 /// file); with Permissive the same problems give a warning and an unsecured setup, as rmw.
 SecuritySetup resolveSecurity(const SecurityConfig& config);
 
-/// The `dds` section.
+/// The `dds` section. Keys, units and meanings: visit().
 struct DdsConfig {
-  int domain_id = -1;              ///< -1: ROS_DOMAIN_ID, else 0. Valid: 0..232
-  std::string ns;                  ///< topic namespace ("uav1" -> rt/uav1/...); "" for none
-  std::string discovery_range;     ///< "" (environment / default) or LOCALHOST / SUBNET / OFF
-  std::string profiles_file;       ///< Fast DDS XML profiles to load ("" for none); needs
-                                   ///< participant_profile (its is_default_profile is not used)
-  std::string participant_profile; ///< participant profile to use, from profiles_file or from
-                                   ///< FASTRTPS_DEFAULT_PROFILES_FILE ("": the factory default)
-  bool large_data = true;          ///< 4 MB socket buffers (16 MB SHM segment) for multi-MB clouds
-  /// Fast DDS's shared-memory transport. Off: UDP only towards every participant, so that no
-  /// other process on the host (a ROS 2 Jazzy node on Fast DDS 2.14, whose segments Fast DDS 2.9
-  /// cannot read) can crash this one; mlmap's own clouds still go by data-sharing. On: only where
-  /// every Fast DDS participant on the host is version 2.9 (see createParticipant()).
+  /// Its top-level section in the node's YAML file (NodeConfig::visitNodeSections()).
+  static constexpr const char* kSection = "dds";
+
+  int domain_id = -1;                          ///< key domain_id
+  std::string ns;                              ///< key ns
+  std::string discovery_range;                 ///< key discovery_range
+  std::string profiles_file;                   ///< key profiles_file (its is_default_profile unused)
+  std::string participant_profile;             ///< key participant_profile
+  bool large_data = true;                      ///< key large_data
+  /// Key shared_memory. Off: UDP only towards every participant, so that no other process on
+  /// the host can crash this one; mlmap's own clouds still go by data-sharing (see
+  /// createParticipant()).
   bool shared_memory = false;
-  /// Clouds from a same-host Fast DDS writer that offers data-sharing (mlmap_sensor_publisher
-  /// does) are read from its history in shared memory, not through a transport; the publisher
-  /// follows this key too. Other writers (a ROS 2 driver) reach the node as before.
+  /// Key data_sharing; mlmap_sensor_publisher follows it too. Other writers (a ROS 2 driver)
+  /// reach the node through a transport as before.
   bool data_sharing = true;
-  std::string world_frame = "map";         ///< frame_id of the maps and parent of rt/tf
-  std::string body_frame = "base_link";    ///< child of rt/tf, parent of the sensor on rt/tf_static
-  std::string sensor_frame = "camera_depth_optical_frame";  ///< child on rt/tf_static
-  TopicNames topics;
-  PublishRates rates;
-  double pose_tolerance_s = 0.05;  ///< a cloud needs a pose within this of its stamp
-  double pose_buffer_s = 2.0;      ///< poses kept for pairing
-  double max_future_s = 1.0;       ///< stamps farther ahead of the newest pose are rejected
-  /// Two consecutive poses implying a faster motion are a jump (a relocalisation, an odometry
-  /// reset), not a flight: no cloud stamped between them is mapped [m/s]. Far above a multirotor.
-  double max_pose_speed_mps = 50.0;
-  double max_pose_rotation_rate_dps = 1800.0;  ///< the same for the rotation between them [deg/s]
-  double esdf_slice_height_m = 0.0;  ///< slice height relative to the body [m]
-  SecurityConfig security;         ///< DDS Security (SROS2 keystore); off unless enabled
+  std::string world_frame = "map";                          ///< key world_frame
+  std::string body_frame = "base_link";                     ///< key body_frame
+  std::string sensor_frame = "camera_depth_optical_frame";  ///< key sensor_frame
+  TopicNames topics;                           ///< section topics
+  PublishRates rates;                          ///< section rates
+  double pose_tolerance_s = 0.05;              ///< key pose_tolerance_s
+  double pose_buffer_s = 2.0;                  ///< key pose_buffer_s
+  double max_future_s = 1.0;                   ///< key max_future_s
+  double max_pose_speed_mps = 50.0;            ///< key max_pose_speed_mps (far above a multirotor)
+  double max_pose_rotation_rate_dps = 1800.0;  ///< key max_pose_rotation_rate_dps
+  double esdf_slice_height_m = 0.0;            ///< key esdf_slice_height_m
+  SecurityConfig security;                     ///< section security (off unless enabled)
+
+  /// The keys of the `dds` section: visitor.key(name, field, unit, doc) for each key and
+  /// visitor.section(name, sub, doc) for topics, rates and security (see mlmap/core/config.h).
+  template <class Self, class V>
+  static void visit(Self& c, V& v) {
+    v.key("domain_id", c.domain_id, "",
+          "DDS domain = ROS_DOMAIN_ID; -1: the ROS_DOMAIN_ID variable, else 0. Valid: 0..232");
+    v.key("ns", c.ns, "", "topic namespace: \"uav1\" -> rt/uav1/cloud; \"\" for none");
+    v.key("discovery_range", c.discovery_range, "",
+          "\"\" (ROS_AUTOMATIC_DISCOVERY_RANGE, else SUBNET), LOCALHOST, SUBNET or OFF.\n"
+          "LOCALHOST: UDPv4 on 127.0.0.1 only, unicast discovery (up to 32 participants).\n"
+          "SUBNET: the profile's (default: Fast DDS's) transports, multicast discovery.\n"
+          "OFF: no multicast, only the profile's own initial peers.");
+    v.key("profiles_file", c.profiles_file, "",
+          "Fast DDS XML profiles to load, e.g. config/dds/udp_only.xml (\"\" for none)");
+    v.key("participant_profile", c.participant_profile, "",
+          "participant profile to use (needed with profiles_file), e.g. mlmap_udp_only;\n"
+          "\"\": Fast DDS's default (FASTRTPS_DEFAULT_PROFILES_FILE's default profile)");
+    v.key("large_data", c.large_data, "",
+          "raise socket buffers to 4 MB and SHM segments to 16 MB (multi-MB point clouds)");
+    v.key("shared_memory", c.shared_memory, "",
+          "Fast DDS's SHM transport: true only if every Fast DDS on this host is 2.9\n"
+          "(Jazzy's default rmw, Fast DDS 2.14, crashes a 2.9 peer through it)");
+    v.key("data_sharing", c.data_sharing, "",
+          "read same-host clouds from a Fast DDS writer that offers data-sharing\n"
+          "(mlmap_sensor_publisher) in its shared memory, with no transport copies");
+    v.key("world_frame", c.world_frame, "", "frame_id of the maps, parent on rt/tf");
+    v.key("body_frame", c.body_frame, "", "child on rt/tf, parent of the sensor on rt/tf_static");
+    v.key("sensor_frame", c.sensor_frame, "", "child on rt/tf_static (sensor.* gives T_B_S)");
+    v.section("topics", c.topics, "ROS topic names relative to ns; \"\" disables that input or output");
+    v.section("rates", c.rates,
+              "outputs are published at most this often, and only when changed; 0 disables");
+    v.key("pose_tolerance_s", c.pose_tolerance_s, "s", "a cloud needs a pose within this of its stamp");
+    v.key("pose_buffer_s", c.pose_buffer_s, "s", "poses kept for that pairing");
+    v.key("max_future_s", c.max_future_s, "s",
+          "stamps farther than this ahead of the newest pose are rejected");
+    v.key("max_pose_speed_mps", c.max_pose_speed_mps, "m/s",
+          "two consecutive poses implying a faster motion are a jump (relocalisation,\n"
+          "odometry reset): no cloud stamped between them is mapped");
+    v.key("max_pose_rotation_rate_dps", c.max_pose_rotation_rate_dps, "deg/s",
+          "the same for the rotation between them");
+    v.key("esdf_slice_height_m", c.esdf_slice_height_m, "m",
+          "height of the ESDF slice relative to the body");
+    v.section("security", c.security,
+              "DDS Security from an SROS2 keystore, as rmw_fastrtps (docs/security.md)");
+  }
 
   /// Every problem as "dds.key: what is wrong (got X)". Empty = valid. Checks: domain_id -1 or
   /// 0..232; ns and topic names valid ROS names (letters, digits, '_', tokens not starting with a

@@ -1,5 +1,7 @@
 #include "mlmap/dds/dds_config.h"
 
+#include "mlmap/core/key_list.h"
+
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -50,39 +52,70 @@ std::string rosNameProblem(const std::string& name) {
   return "";
 }
 
-void checkRate(const char* key, double hz, std::vector<std::string>* errors) {
-  if (!std::isfinite(hz) || hz < 0.0) {
-    errors->push_back(std::string("dds.rates.") + key + ": must be >= 0 (0 disables) (got " +
-                      number(hz) + ")");
-  }
+/// "dds.<path>" of `field`, a member (or nested member) of `dds`, from the key list.
+template <class T>
+std::string ddsKey(const DdsConfig& dds, const T& field) {
+  return std::string(DdsConfig::kSection) + "." + keyPath(dds, field);
 }
 
-void checkPositive(const char* key, double value, std::vector<std::string>* errors) {
+/// "dds.security.<key>" of a SecurityConfig member, from the key lists.
+template <class T>
+std::string securityKey(T SecurityConfig::*member) {
+  static const DdsConfig kDefaults;
+  return ddsKey(kDefaults, kDefaults.security.*member);
+}
+
+void checkPositive(const std::string& key, double value, std::vector<std::string>* errors) {
   if (!std::isfinite(value) || value <= 0.0) {
-    errors->push_back(std::string("dds.") + key + ": must be > 0 (got " + number(value) + ")");
+    errors->push_back(key + ": must be > 0 (got " + number(value) + ")");
   }
 }
 
-void checkFrame(const char* key, const std::string& frame, std::vector<std::string>* errors) {
+void checkFrame(const std::string& key, const std::string& frame, std::vector<std::string>* errors) {
   if (frame.empty()) {
-    errors->push_back(std::string("dds.") + key + ": must not be empty");
+    errors->push_back(key + ": must not be empty");
   } else if (frame[0] == '/') {
-    errors->push_back(std::string("dds.") + key + ": tf2 frame ids must not start with '/' (got " +
-                      frame + ")");
+    errors->push_back(key + ": tf2 frame ids must not start with '/' (got " + frame + ")");
   } else if (frame.find_first_of(" \t\n") != std::string::npos) {
-    errors->push_back(std::string("dds.") + key + ": must not contain whitespace (got '" + frame +
-                      "')");
+    errors->push_back(key + ": must not contain whitespace (got '" + frame + "')");
   }
 }
 
-void checkTopic(const char* key, const std::string& topic, std::vector<std::string>* errors) {
-  if (topic.empty()) return;  // disabled
-  const std::string problem = rosNameProblem(topic);
-  if (!problem.empty()) {
-    errors->push_back(std::string("dds.topics.") + key + ": not a valid ROS topic name: " +
-                      problem + " (got '" + topic + "')");
+/// Checks every key of TopicNames (a visitor of its key list): empty, or a valid ROS name.
+class TopicChecker {
+ public:
+  TopicChecker(std::string path, std::vector<std::string>* errors)
+      : path_(std::move(path)), errors_(errors) {}
+  void key(const char* name, const std::string& topic, const char* /*unit*/, const char* /*doc*/) {
+    if (topic.empty()) return;  // disabled
+    const std::string problem = rosNameProblem(topic);
+    if (!problem.empty()) {
+      errors_->push_back(path_ + "." + name + ": not a valid ROS topic name: " + problem +
+                         " (got '" + topic + "')");
+    }
   }
-}
+
+ private:
+  std::string path_;
+  std::vector<std::string>* errors_;
+};
+
+/// Checks every key of PublishRates (a visitor of its key list): finite and >= 0.
+class RateChecker {
+ public:
+  RateChecker(std::string path, std::vector<std::string>* errors)
+      : path_(std::move(path)), errors_(errors) {}
+  void key(const char* name, double hz, const char* /*unit*/, const char* /*doc*/) {
+    if (!std::isfinite(hz) || hz < 0.0) {
+      errors_->push_back(path_ + "." + name + ": must be >= 0 (0 disables) (got " + number(hz) +
+                         ")");
+    }
+  }
+
+ private:
+  std::string path_;
+  std::vector<std::string>* errors_;
+};
 
 /// Why `enclave` is not a valid enclave name ("" when it is): "/" or an absolute ROS name.
 std::string enclaveProblem(const std::string& enclave) {
@@ -114,18 +147,20 @@ bool parseStrategy(const std::string& text, SecurityStrategy* strategy) {
 void SecurityConfig::validate(std::vector<std::string>* errors) const {
   SecurityStrategy parsed{};
   if (!strategy.empty() && !parseStrategy(strategy, &parsed)) {
-    errors->push_back("dds.security.strategy: must be empty (ROS_SECURITY_STRATEGY), Enforce or "
-                      "Permissive (got '" + strategy + "')");
+    errors->push_back(securityKey(&SecurityConfig::strategy) +
+                      ": must be empty (ROS_SECURITY_STRATEGY), Enforce or Permissive (got '" +
+                      strategy + "')");
   }
   if (!enclave.empty()) {
     const std::string problem = enclaveProblem(enclave);
     if (!problem.empty()) {
-      errors->push_back("dds.security.enclave: not a valid enclave name: " + problem + " (got '" +
-                        enclave + "')");
+      errors->push_back(securityKey(&SecurityConfig::enclave) + ": not a valid enclave name: " +
+                        problem + " (got '" + enclave + "')");
     }
   }
   if (keystore.find_first_of("\n\r") != std::string::npos) {
-    errors->push_back("dds.security.keystore: must not contain a line break (got '" + keystore + "')");
+    errors->push_back(securityKey(&SecurityConfig::keystore) +
+                      ": must not contain a line break (got '" + keystore + "')");
   }
 }
 
@@ -162,12 +197,14 @@ SecuritySetup resolveSecurity(const SecurityConfig& config) {
       throw std::invalid_argument("DDS Security (strategy Enforce): " + problem);
     }
     setup.warning = "DDS Security requested but " + problem +
-                    ": running WITHOUT security (strategy Permissive; set dds.security.strategy or "
-                    "ROS_SECURITY_STRATEGY to Enforce to refuse instead)";
+                    ": running WITHOUT security (strategy Permissive; set " +
+                    securityKey(&SecurityConfig::strategy) +
+                    " or ROS_SECURITY_STRATEGY to Enforce to refuse instead)";
     return setup;
   };
   if (setup.keystore.empty()) {
-    return unusable("no keystore is set (dds.security.keystore or ROS_SECURITY_KEYSTORE)");
+    return unusable("no keystore is set (" + securityKey(&SecurityConfig::keystore) +
+                    " or ROS_SECURITY_KEYSTORE)");
   }
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -238,60 +275,47 @@ const char* toString(DiscoveryRange range) {
 
 std::vector<std::string> DdsConfig::validate() const {
   std::vector<std::string> errors;
+  const auto key = [this](const auto& field) { return ddsKey(*this, field); };
   if (domain_id < -1 || domain_id > kMaxDomainId) {
-    errors.push_back("dds.domain_id: must be -1 (ROS_DOMAIN_ID, else 0) or 0.." +
+    errors.push_back(key(domain_id) + ": must be -1 (ROS_DOMAIN_ID, else 0) or 0.." +
                      std::to_string(kMaxDomainId) + " (got " + std::to_string(domain_id) + ")");
   }
   if (!ns.empty()) {
     const std::string problem = rosNameProblem(ns);
     if (!problem.empty()) {
-      errors.push_back("dds.ns: not a valid ROS namespace: " + problem + " (got '" + ns + "')");
+      errors.push_back(key(ns) + ": not a valid ROS namespace: " + problem + " (got '" + ns + "')");
     }
   }
   DiscoveryRange range{};
   if (!discovery_range.empty() && !parseDiscoveryRange(discovery_range, &range)) {
-    errors.push_back("dds.discovery_range: must be empty, LOCALHOST, SUBNET, OFF or SYSTEM_DEFAULT (got " +
+    errors.push_back(key(discovery_range) +
+                     ": must be empty, LOCALHOST, SUBNET, OFF or SYSTEM_DEFAULT (got " +
                      discovery_range + ")");
   }
   if (!profiles_file.empty() && participant_profile.empty()) {
-    errors.push_back("dds.participant_profile: must name the participant profile to use from "
-                     "dds.profiles_file (" + profiles_file + "), e.g. mlmap_loopback");
+    errors.push_back(key(participant_profile) + ": must name the participant profile to use from " +
+                     key(profiles_file) + " (" + profiles_file + "), e.g. mlmap_loopback");
   }
-  checkFrame("world_frame", world_frame, &errors);
-  checkFrame("body_frame", body_frame, &errors);
-  checkFrame("sensor_frame", sensor_frame, &errors);
+  checkFrame(key(world_frame), world_frame, &errors);
+  checkFrame(key(body_frame), body_frame, &errors);
+  checkFrame(key(sensor_frame), sensor_frame, &errors);
 
-  checkTopic("cloud", topics.cloud, &errors);
-  checkTopic("pose", topics.pose, &errors);
-  checkTopic("odometry", topics.odometry, &errors);
-  checkTopic("depth_image", topics.depth_image, &errors);
-  checkTopic("camera_info", topics.camera_info, &errors);
-  checkTopic("awareness", topics.awareness, &errors);
-  checkTopic("local_map", topics.local_map, &errors);
-  checkTopic("global_map", topics.global_map, &errors);
-  checkTopic("grid", topics.grid, &errors);
-  checkTopic("esdf_slice", topics.esdf_slice, &errors);
-  checkTopic("esdf_block", topics.esdf_block, &errors);
-  checkTopic("status", topics.status, &errors);
+  TopicChecker topic_checker(key(topics), &errors);
+  visitConfig(topics, topic_checker);
   if (!topics.depth_image.empty() && topics.camera_info.empty()) {
-    errors.push_back("dds.topics.camera_info: must be set when dds.topics.depth_image is (the "
-                     "depth image is unprojected with its intrinsics)");
+    errors.push_back(key(topics.camera_info) + ": must be set when " + key(topics.depth_image) +
+                     " is (the depth image is unprojected with its intrinsics)");
   }
 
-  checkRate("awareness_hz", rates.awareness_hz, &errors);
-  checkRate("local_map_hz", rates.local_map_hz, &errors);
-  checkRate("global_map_hz", rates.global_map_hz, &errors);
-  checkRate("grid_hz", rates.grid_hz, &errors);
-  checkRate("esdf_hz", rates.esdf_hz, &errors);
-  checkRate("status_hz", rates.status_hz, &errors);
+  RateChecker rate_checker(key(rates), &errors);
+  visitConfig(rates, rate_checker);
 
-  checkPositive("pose_tolerance_s", pose_tolerance_s, &errors);
-  checkPositive("pose_buffer_s", pose_buffer_s, &errors);
-  checkPositive("max_future_s", max_future_s, &errors);
-  checkPositive("max_pose_speed_mps", max_pose_speed_mps, &errors);
-  checkPositive("max_pose_rotation_rate_dps", max_pose_rotation_rate_dps, &errors);
+  for (const double* positive : {&pose_tolerance_s, &pose_buffer_s, &max_future_s,
+                                 &max_pose_speed_mps, &max_pose_rotation_rate_dps}) {
+    checkPositive(key(*positive), *positive, &errors);
+  }
   if (!std::isfinite(esdf_slice_height_m)) {
-    errors.push_back("dds.esdf_slice_height_m: must be a finite number (got " +
+    errors.push_back(key(esdf_slice_height_m) + ": must be a finite number (got " +
                      number(esdf_slice_height_m) + ")");
   }
   security.validate(&errors);
@@ -335,8 +359,9 @@ DiscoveryRange resolveDiscoveryRange(const DdsConfig& config) {
   DiscoveryRange range = DiscoveryRange::kSystemDefault;
   if (!config.discovery_range.empty()) {
     if (!parseDiscoveryRange(config.discovery_range, &range)) {
-      throw std::invalid_argument("dds.discovery_range must be LOCALHOST, SUBNET, OFF or "
-                                  "SYSTEM_DEFAULT (got '" + config.discovery_range + "')");
+      throw std::invalid_argument(ddsKey(config, config.discovery_range) +
+                                  " must be LOCALHOST, SUBNET, OFF or SYSTEM_DEFAULT (got '" +
+                                  config.discovery_range + "')");
     }
     return range;
   }
