@@ -6,6 +6,7 @@
 #if MLMAP_HAVE_OCTOMAP
 #include "mlmap/map_io/octomap_export.h"
 #endif
+#include "mlmap/core/stopwatch.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include <CLI/CLI.hpp>
@@ -18,10 +19,6 @@
 #include <vector>
 
 namespace {
-
-double msSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
 
 void reportFile(const std::string& what, const std::string& path, std::size_t occupied) {
   const auto bytes = static_cast<double>(std::filesystem::file_size(path));
