@@ -3,23 +3,15 @@
 
 #include "mlmap/dds/mapping_node.h"
 #include "mlmap/dds/node_config.h"
+#include "mlmap/apps/stop_signal.h"
 
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
-#include <atomic>
 #include <chrono>
-#include <csignal>
 #include <iostream>
 #include <thread>
-
-namespace {
-
-std::atomic<bool> g_stop{false};
-extern "C" void onSignal(int) { g_stop = true; }
-
-}  // namespace
 
 int main(int argc, char** argv) {
   using namespace mlmap;
@@ -48,8 +40,7 @@ int main(int argc, char** argv) {
       std::cout << mlmap::dds::toYaml(config);
       return 0;
     }
-    std::signal(SIGINT, onSignal);
-    std::signal(SIGTERM, onSignal);
+    apps::installStopHandler();
     mlmap::dds::MappingNode node(config, [](LogLevel level, const std::string& message) {
       spdlog::log(level == LogLevel::kError     ? spdlog::level::err
                   : level == LogLevel::kWarning ? spdlog::level::warn
@@ -65,7 +56,7 @@ int main(int argc, char** argv) {
                  inputs);
     const auto start = std::chrono::steady_clock::now();
     auto last_report = start;
-    while (!g_stop) {
+    while (!apps::stopRequested()) {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
       const auto now = std::chrono::steady_clock::now();
       if (duration_s > 0 && std::chrono::duration<double>(now - start).count() >= duration_s) break;
