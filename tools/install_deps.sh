@@ -24,6 +24,7 @@ programs=(
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev  # depth PNGs, map pictures
   liboctomap-dev                       # OctoMap: .bt export (mlmap_map_tool), the side-by-side comparison
   fastdds-tools                        # `fastdds discovery` (config/dds/discovery_server_client.xml)
+  nlohmann-json3-dev                   # JSON files: report.json, stats.json, summary.json
 )
 # The tests and their tools.
 test_tools=(

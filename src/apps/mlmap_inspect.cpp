@@ -5,10 +5,13 @@
 // arrival (wall clock minus its header stamp: the delay from capture to the ground when the
 // sensor stamps with the wall clock) is summarised per topic.
 
+#include "mlmap/apps/stop_signal.h"
+#include "mlmap/core/stopwatch.h"
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/node_config.h"
 #include "mlmap/dds/participant.h"
 #include "mlmap/dds/ros_conversions.h"
+#include "mlmap/eval/json_output.h"
 #include "mlmap/eval/sim_flight.h"
 #include "mlmap/pictures/map_image.h"
 #include "mlmap/datasets/world_yaml.h"
@@ -26,13 +29,11 @@
 #include <opencv2/imgproc.hpp>
 #include <spdlog/spdlog.h>
 
-#include <atomic>
 #include <chrono>
-#include <csignal>
+#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <map>
-#include <sstream>
+#include <memory>
 #include <mutex>
 #include <thread>
 
@@ -40,10 +41,44 @@ namespace {
 
 using namespace mlmap;
 namespace fdds = eprosima::fastdds::dds;
-using Clock = std::chrono::steady_clock;
+using Clock = SteadyClock;
+using CloudMsg = mlmap::dds::sensor_msgs::PointCloud2_;
 
-std::atomic<bool> g_stop{false};
-extern "C" void onSignal(int) { g_stop = true; }
+/// The command line of mlmap_inspect.
+struct Options {
+  std::string config_path;            ///< -c, --config: node configuration (empty: defaults)
+  double duration_s = 0.0;            ///< --duration (0: until SIGINT / SIGTERM)
+  double idle_s = 0.0;                ///< --idle-stop (0: never)
+  std::string out_dir;                ///< --out: pictures and summary.json (empty: none)
+  std::string scenario_path;          ///< --scenario: score against this world
+  bool use_default_scenario = false;  ///< --default-scenario: score against the built-in room
+  bool expect_all = false;            ///< --expect-all: exit 2 unless every enabled layer arrived
+  bool as_bridge = false;             ///< --as-bridge: subscribe with the ROS 2 bridge's QoS
+  std::vector<std::string> expect_topics;  ///< --expect: exit 2 unless these arrived
+  double min_precision = 0.0;         ///< --min-precision: exit 2 below it (0: no check)
+  apps::SecurityOptions security;     ///< --keystore, --enclave, --security-strategy
+};
+
+/// Adds every option of mlmap_inspect to `app`.
+void addOptions(CLI::App& app, Options& o) {
+  app.add_option("-c,--config", o.config_path, "node configuration (topics, namespace, domain)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--duration", o.duration_s, "stop after this many seconds (0: until SIGINT)");
+  app.add_option("--idle-stop", o.idle_s, "stop once nothing arrived for this many seconds after the first message (0: never)");
+  app.add_option("--out", o.out_dir, "write pictures and summary.json into this folder");
+  app.add_option("--scenario", o.scenario_path, "score received voxels against this scenario's world")
+      ->check(CLI::ExistingFile);
+  app.add_flag("--default-scenario", o.use_default_scenario, "score against the built-in scenario");
+  app.add_flag("--expect-all", o.expect_all, "exit 2 unless every enabled layer arrived");
+  app.add_flag("--as-bridge", o.as_bridge,
+               "subscribe as the ROS 2 ground-station bridge does over a radio link: BEST_EFFORT "
+               "for the awareness, local map and ESDF slice, no ESDF block");
+  app.add_option("--expect", o.expect_topics,
+                 "exit 2 unless these layers arrived (topic names as in the config, e.g. mlmap/grid)")
+      ->delimiter(',');
+  app.add_option("--min-precision", o.min_precision, "exit 2 when the scored precision is lower");
+  o.security.add(app);
+}
 
 /// What arrived on one topic.
 struct TopicLog {
@@ -53,8 +88,6 @@ struct TopicLog {
   Clock::time_point first, last;
   std::vector<double> age_ms;   // wall clock at arrival minus header stamp, per message
 };
-
-
 
 /// Everything received, guarded by one mutex (listener threads write, main reads).
 struct Received {
@@ -67,6 +100,8 @@ struct Received {
   std::vector<Eigen::Vector3d> trajectory_W;
   std::uint64_t malformed = 0;
 
+  /// Counts a message of `bytes` bytes with `points` points / cells on topic `name`, and its age
+  /// from `stamp`; call with `mutex` held.
   void note(const std::string& name, std::size_t bytes, std::size_t points,
             const ::builtin_interfaces::msg::dds_::Time_& stamp) {
     TopicLog& t = topics[name];
@@ -81,6 +116,209 @@ struct Received {
   }
 };
 
+/// The readers of the node's layers, with the names of the layers expected to arrive.
+struct Subscription {
+  mlmap::dds::ParticipantPtr participant;
+  std::unique_ptr<mlmap::dds::TakeReaders> readers;
+  std::vector<std::string> expected;
+  std::string ns;  ///< the node's DDS namespace
+
+  /// Deletes the readers and then their listeners: no more callbacks from here on.
+  void close() {
+    participant.reset();
+    readers.reset();
+  }
+  /// Adds a reader of `PubSubType` on the node's topic `name` and expects `name` to arrive.
+  template <typename PubSubType>
+  void add(const std::string& name, const fdds::DataReaderQos& qos,
+           std::function<void(typename PubSubType::type&&)> sink) {
+    expected.push_back(name);
+    readers->add<PubSubType>(mlmap::dds::ddsTopicName(ns, name), qos, std::move(sink));
+  }
+};
+
+/// The points of a PointCloud2 layer into `rx.*store`, and the `intensity` field (float32 at
+/// offset 12, as mlmap's clouds carry the ESDF slice's distances) into `rx.*intensity` if given.
+std::function<void(CloudMsg&&)> cloudSink(Received* rx, const std::string& name,
+                                          std::vector<Eigen::Vector3f> Received::*store,
+                                          std::vector<float> Received::*intensity) {
+  return [rx, name, store, intensity](CloudMsg&& msg) {
+    std::vector<Eigen::Vector3f> points;
+    const bool ok = mlmap::dds::decodePointCloud2(msg, &points).ok();
+    std::lock_guard<std::mutex> lock(rx->mutex);
+    if (!ok) return void(++rx->malformed);
+    rx->note(name, msg.data_().size(), points.size(), msg.header_().stamp_());
+    if (intensity != nullptr && msg.point_step_() >= 16) {
+      std::vector<float>& values = rx->*intensity;
+      values.resize(points.size());
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        std::memcpy(&values[i], msg.data_().data() + i * msg.point_step_() + 12, 4);
+      }
+    }
+    rx->*store = std::move(points);
+  };
+}
+
+/// Subscribes to the four PointCloud2 layers the configuration enables. With --as-bridge the
+/// heavy ones are read best-effort, as over a lossy link: a lost sample is never repaired, the
+/// next one replaces it.
+void subscribeClouds(const Options& o, const mlmap::dds::DdsConfig& dds, Subscription* sub, Received* rx) {
+  const mlmap::dds::TopicNames& n = dds.topics;
+  const mlmap::dds::PublishRates& r = dds.rates;
+  const fdds::DataReaderQos heavy =
+      o.as_bridge ? mlmap::dds::sensorReaderQos(1) : mlmap::dds::reliableReaderQos(false, 2);
+  const fdds::DataReaderQos latched = mlmap::dds::reliableReaderQos(true, 2);
+  auto cloudTopic = [&](const std::string& name, double rate_hz, const fdds::DataReaderQos& qos,
+                        std::vector<Eigen::Vector3f> Received::*store, std::vector<float> Received::*intensity) {
+    if (name.empty() || rate_hz <= 0) return;
+    sub->add<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(name, qos, cloudSink(rx, name, store, intensity));
+  };
+  cloudTopic(n.awareness, r.awareness_hz, heavy, &Received::awareness, nullptr);
+  cloudTopic(n.local_map, r.local_map_hz, heavy, &Received::local, nullptr);
+  cloudTopic(n.global_map, r.global_map_hz, latched, &Received::global, nullptr);
+  cloudTopic(n.esdf_slice, r.esdf_hz, heavy, &Received::esdf_slice, &Received::esdf_slice_distance);
+}
+
+/// Subscribes to the 2D grid and the ESDF block (not with --as-bridge), when enabled.
+void subscribeGridAndEsdf(const Options& o, const mlmap::dds::DdsConfig& dds, Subscription* sub, Received* rx) {
+  const mlmap::dds::TopicNames& n = dds.topics;
+  if (!n.grid.empty() && dds.rates.grid_hz > 0) {
+    sub->add<mlmap::dds::nav_msgs::OccupancyGrid_PubSubType>(
+        n.grid, mlmap::dds::reliableReaderQos(true, 1),
+        [rx, name = n.grid](mlmap::dds::nav_msgs::OccupancyGrid_&& msg) {
+          std::lock_guard<std::mutex> lock(rx->mutex);
+          rx->note(name, msg.data_().size(), msg.data_().size(), msg.header_().stamp_());
+          rx->grid = std::move(msg);
+        });
+  }
+  if (!n.esdf_block.empty() && dds.rates.esdf_hz > 0 && !o.as_bridge) {
+    sub->add<mlmap::dds::mlmap_msgs::VoxelBlock_PubSubType>(
+        n.esdf_block, mlmap::dds::reliableReaderQos(false, 2),
+        [rx, name = n.esdf_block](mlmap::dds::mlmap_msgs::VoxelBlock_&& msg) {
+          std::lock_guard<std::mutex> lock(rx->mutex);
+          rx->note(name, msg.values_().size() * 4, msg.values_().size(), msg.header_().stamp_());
+        });
+  }
+}
+
+/// Subscribes to the node's status, when enabled, and to the trajectory on tf.
+void subscribeStatusAndTf(const mlmap::dds::DdsConfig& dds, Subscription* sub, Received* rx) {
+  const std::string& status = dds.topics.status;
+  if (!status.empty() && dds.rates.status_hz > 0) {
+    sub->add<mlmap::dds::mlmap_msgs::Status_PubSubType>(
+        status, mlmap::dds::reliableReaderQos(false, 10), [rx, status](mlmap::dds::mlmap_msgs::Status_&& msg) {
+          std::lock_guard<std::mutex> lock(rx->mutex);
+          rx->note(status, sizeof(msg), 1, msg.header_().stamp_());
+          rx->status = std::move(msg);
+        });
+  }
+  sub->add<::tf2_msgs::msg::dds_::TFMessage_PubSubType>(
+      "tf", mlmap::dds::reliableReaderQos(false, 100), [rx](::tf2_msgs::msg::dds_::TFMessage_&& msg) {
+        std::lock_guard<std::mutex> lock(rx->mutex);
+        if (msg.transforms_().empty()) return;
+        rx->note("tf", 0, msg.transforms_().size(), msg.transforms_().front().header_().stamp_());
+        for (const auto& t : msg.transforms_()) {
+          const auto& p = t.transform_().translation_();
+          rx->trajectory_W.emplace_back(p.x_(), p.y_(), p.z_());
+        }
+      });
+}
+
+/// Joins the node's DDS graph and subscribes to every layer the configuration enables.
+Subscription subscribe(const Options& o, const mlmap::dds::DdsConfig& dds, Received* rx) {
+  Subscription sub;
+  sub.ns = dds.ns;
+  sub.participant = mlmap::dds::createParticipant(dds, "mlmap_inspect");
+  fdds::Subscriber* subscriber = sub.participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+  sub.readers = std::make_unique<mlmap::dds::TakeReaders>(subscriber, [rx](const std::string& what) {
+    std::lock_guard<std::mutex> lock(rx->mutex);
+    ++rx->malformed;
+    spdlog::warn("{}", what);
+  });
+  subscribeClouds(o, dds, &sub, rx);
+  subscribeGridAndEsdf(o, dds, &sub, rx);
+  subscribeStatusAndTf(dds, &sub, rx);
+  return sub;
+}
+
+/// True when something arrived and nothing has for more than `idle_s` seconds (0: never).
+bool idleTooLong(const Received& rx, double idle_s, Clock::time_point now) {
+  if (idle_s <= 0) return false;
+  Clock::time_point newest = Clock::time_point::min();
+  for (const auto& [name, t] : rx.topics) newest = std::max(newest, t.last);
+  return newest != Clock::time_point::min() && secondsBetween(newest, now) > idle_s;
+}
+
+/// Waits for messages until --duration, --idle-stop or a stop signal, printing the counts every
+/// two seconds.
+void listen(const Options& o, Received* rx) {
+  const auto start = Clock::now();
+  auto last_print = start;
+  while (!apps::stopRequested()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const auto now = Clock::now();
+    if (o.duration_s > 0 && secondsBetween(start, now) >= o.duration_s) break;
+    std::lock_guard<std::mutex> lock(rx->mutex);
+    if (idleTooLong(*rx, o.idle_s, now)) break;
+    if (secondsBetween(last_print, now) >= 2.0) {
+      last_print = now;
+      std::string line;
+      for (const auto& [name, t] : rx->topics) line += fmt::format(" {}:{}", name, t.messages);
+      spdlog::info("received{}", line.empty() ? " nothing yet" : line);
+    }
+  }
+}
+
+/// The names of `names` that nothing arrived on.
+std::vector<std::string> missingOf(const Received& rx, const std::vector<std::string>& names) {
+  std::vector<std::string> missing;
+  for (const std::string& name : names) {
+    if (rx.topics.count(name) == 0) missing.push_back(name);
+  }
+  return missing;
+}
+
+/// One line per topic: messages, rate, size, points and the age at arrival.
+void printTopics(const Received& rx) {
+  for (const auto& [name, t] : rx.topics) {
+    const TimingSummary age = summarizeTimings(t.age_ms);
+    const double span = secondsBetween(t.first, t.last);
+    const std::string age_text =
+        t.age_ms.empty() ? std::string("no stamped message")
+                         : fmt::format("age at arrival median {:.1f} ms, p99 {:.1f} ms", age.median_ms, age.p99_ms);
+    spdlog::info("{:28} {:6} messages {:8.2f} Hz {:9.1f} kB/msg, last {} points/cells, {}",
+                 name, t.messages, span > 0 ? static_cast<double>(t.messages - 1) / span : 0.0,
+                 static_cast<double>(t.bytes) / 1e3 / static_cast<double>(t.messages), t.last_points,
+                 age_text);
+  }
+}
+
+/// The received occupied voxels scored against a scenario's world.
+struct Score {
+  double precision = -1.0;  ///< -1: not scored
+  std::size_t voxels = 0;   ///< distinct voxels scored
+};
+
+/// Scores the local + global voxels against --scenario or the built-in one (if asked).
+Score scoreAgainstScenario(const Options& o, const Received& rx, double res) {
+  Score score;
+  if (o.scenario_path.empty() && !o.use_default_scenario) return score;
+  const io::Scenario scenario =
+      o.scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(o.scenario_path);
+  eval::VoxelSet voxels;
+  for (const auto* list : {&rx.local, &rx.global}) {
+    for (const Eigen::Vector3f& p : *list) voxels.insert(voxelIndexOf(p.cast<double>(), res));
+  }
+  std::size_t right = 0;
+  for (const VoxelIndex& v : voxels) right += eval::touchesSolid(scenario.world, v, res) ? 1 : 0;
+  score.voxels = voxels.size();
+  score.precision = score.voxels > 0 ? static_cast<double>(right) / static_cast<double>(score.voxels) : 0.0;
+  spdlog::info("received occupied voxels (local + global): {}, precision against the scenario: {:.3f}",
+               score.voxels, score.precision);
+  return score;
+}
+
+/// The occupancy grid as a picture, north up, about 600 pixels across.
 cv::Mat gridImage(const mlmap::dds::nav_msgs::OccupancyGrid_& grid) {
   const int w = static_cast<int>(grid.info_().width_());
   const int h = static_cast<int>(grid.info_().height_());
@@ -132,6 +370,7 @@ cv::Mat esdfSliceImage(const std::vector<Eigen::Vector3f>& points, const std::ve
   return image;
 }
 
+/// Received points as voxel centres of size `res` [m], for the pictures.
 io::VoxelList voxelList(const std::vector<Eigen::Vector3f>& points, double res) {
   io::VoxelList list{res, {}};
   list.centers_W.reserve(points.size());
@@ -142,257 +381,91 @@ io::VoxelList voxelList(const std::vector<Eigen::Vector3f>& points, double res) 
   return list;
 }
 
-}  // namespace
+/// Writes dds_map_top.png, dds_awareness_top.png and, when received, dds_grid.png and
+/// dds_esdf_slice.png to `out_dir`.
+void writePictures(const std::string& out_dir, const Received& rx, double res) {
+  std::vector<Eigen::Vector3f> all = rx.global;
+  all.insert(all.end(), rx.local.begin(), rx.local.end());
+  io::MapImageOptions options;
+  options.trajectory_W = rx.trajectory_W;
+  options.title = "received over DDS: local + global occupied voxels";
+  io::writePng(out_dir + "/dds_map_top.png", io::renderTopDown(voxelList(all, res), options));
+  options.title = "received over DDS: awareness occupied cells (last frame)";
+  io::writePng(out_dir + "/dds_awareness_top.png", io::renderTopDown(voxelList(rx.awareness, res), options));
+  if (!rx.grid.data_().empty()) io::writePng(out_dir + "/dds_grid.png", gridImage(rx.grid));
+  if (!rx.esdf_slice.empty() && rx.esdf_slice_distance.size() == rx.esdf_slice.size()) {
+    io::writePng(out_dir + "/dds_esdf_slice.png", esdfSliceImage(rx.esdf_slice, rx.esdf_slice_distance, res));
+  }
+}
 
-int main(int argc, char** argv) {
-  CLI::App app{"mlmap_inspect: watch mlmap_node's layers over DDS, write pictures and a summary"};
-  std::string config_path, out_dir, scenario_path;
-  double duration_s = 0.0, idle_s = 0.0;
-  bool expect_all = false, use_default_scenario = false, as_bridge = false;
-  std::vector<std::string> expect_topics;
-  double min_precision = 0.0;
-  app.add_option("-c,--config", config_path, "node configuration (topics, namespace, domain)")
-      ->check(CLI::ExistingFile);
-  app.add_option("--duration", duration_s, "stop after this many seconds (0: until SIGINT)");
-  app.add_option("--idle-stop", idle_s, "stop once nothing arrived for this many seconds after the first message (0: never)");
-  app.add_option("--out", out_dir, "write pictures and summary.json into this folder");
-  app.add_option("--scenario", scenario_path, "score received voxels against this scenario's world")
-      ->check(CLI::ExistingFile);
-  app.add_flag("--default-scenario", use_default_scenario, "score against the built-in scenario");
-  app.add_flag("--expect-all", expect_all, "exit 2 unless every enabled layer arrived");
-  app.add_flag("--as-bridge", as_bridge,
-               "subscribe as the ROS 2 ground-station bridge does over a radio link: BEST_EFFORT "
-               "for the awareness, local map and ESDF slice, no ESDF block");
-  app.add_option("--expect", expect_topics,
-                 "exit 2 unless these layers arrived (topic names as in the config, e.g. mlmap/grid)")
-      ->delimiter(',');
-  app.add_option("--min-precision", min_precision, "exit 2 when the scored precision is lower");
-  mlmap::apps::SecurityOptions security;
-  security.add(app);
-  CLI11_PARSE(app, argc, argv);
-  std::signal(SIGINT, onSignal);
-  std::signal(SIGTERM, onSignal);
+/// summary.json: per topic the counts and ages, the missing layers, the score and the node's
+/// own counts.
+eval::Json summaryJson(const Received& rx, const std::vector<std::string>& missing, const Score& score) {
+  eval::Json topics = eval::Json::object();
+  for (const auto& [name, t] : rx.topics) {
+    const TimingSummary age = summarizeTimings(t.age_ms);
+    topics[name] = {{"messages", t.messages},
+                    {"bytes", t.bytes},
+                    {"age_ms", {{"median", age.median_ms}, {"p99", age.p99_ms}}},
+                    {"last_points", t.last_points}};
+  }
+  eval::Json summary;
+  summary["topics"] = std::move(topics);
+  summary["missing"] = missing;
+  summary["malformed"] = rx.malformed;
+  summary["scored_voxels"] = score.voxels;
+  summary["precision"] = score.precision;
+  summary["node_frames_mapped"] = rx.status.frames_mapped_();
+  summary["node_global_voxels"] = rx.status.global_voxels_();
+  return summary;
+}
 
+/// Prints what arrived, scores it, writes the pictures and summary.json (--out) and returns the
+/// exit status: 2 when an expected layer is missing or the precision is too low, else 0.
+int report(const Options& o, const Received& rx, const std::vector<std::string>& expected, double res) {
+  const std::vector<std::string> missing = missingOf(rx, expected);
+  const std::vector<std::string> missing_listed = missingOf(rx, o.expect_topics);
+  printTopics(rx);
+  for (const std::string& name : missing) spdlog::warn("{:28} nothing received", name);
+  for (const std::string& name : missing_listed) spdlog::error("{:28} expected, nothing received", name);
+  const Score score = scoreAgainstScenario(o, rx, res);
+  if (!o.out_dir.empty()) {
+    std::filesystem::create_directories(o.out_dir);
+    writePictures(o.out_dir, rx, res);
+    eval::writeJsonFile(o.out_dir + "/summary.json", summaryJson(rx, missing, score), /*expanded_levels=*/2);
+    spdlog::info("wrote pictures and summary.json to {}", o.out_dir);
+  }
+  if (o.expect_all && !missing.empty()) return 2;
+  if (!missing_listed.empty()) return 2;
+  if (o.min_precision > 0 && score.precision < o.min_precision) return 2;
+  return 0;
+}
+
+/// Subscribes, listens and reports; returns the exit status (1: an error, logged).
+int run(const Options& o) {
+  apps::installStopHandler();
   try {
     mlmap::dds::NodeConfig config =
-        config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(config_path);
-    security.apply(&config.dds.security);
-    const mlmap::dds::TopicNames& n = config.dds.topics;
-    const mlmap::dds::PublishRates& r = config.dds.rates;
-    const std::string& ns = config.dds.ns;
-    mlmap::dds::ParticipantPtr participant = mlmap::dds::createParticipant(config.dds, "mlmap_inspect");
-    fdds::Subscriber* subscriber = participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+        o.config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(o.config_path);
+    o.security.apply(&config.dds.security);
     Received rx;
-    std::vector<std::unique_ptr<fdds::DataReaderListener>> listeners;
-    auto onError = [&rx](const std::string& what) {
-      std::lock_guard<std::mutex> lock(rx.mutex);
-      ++rx.malformed;
-      spdlog::warn("{}", what);
-    };
-    std::vector<std::string> expected;
-    // A PointCloud2 layer; `intensity` (optional) receives the `intensity` field, which mlmap's
-    // clouds carry as float32 at offset 12 (the ESDF slice's distances).
-    // Heavy layers over a lossy link: a lost sample is never repaired, the next one replaces it.
-    const auto heavyQos = [as_bridge](int depth) {
-      return as_bridge ? mlmap::dds::sensorReaderQos(1) : mlmap::dds::reliableReaderQos(false, depth);
-    };
-    auto cloudTopic = [&](const std::string& name, double rate_hz, bool latched,
-                          std::vector<Eigen::Vector3f> Received::*store,
-                          std::vector<float> Received::*intensity) {
-      if (name.empty() || rate_hz <= 0) return;
-      expected.push_back(name);
-      auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::sensor_msgs::PointCloud2_>>(
-          [&rx, name, store, intensity](mlmap::dds::sensor_msgs::PointCloud2_&& msg) {
-            std::vector<Eigen::Vector3f> points;
-            const bool ok = mlmap::dds::decodePointCloud2(msg, &points).ok();
-            std::lock_guard<std::mutex> lock(rx.mutex);
-            if (!ok) return void(++rx.malformed);
-            rx.note(name, msg.data_().size(), points.size(), msg.header_().stamp_());
-            if (intensity != nullptr && msg.point_step_() >= 16) {
-              std::vector<float>& values = rx.*intensity;
-              values.resize(points.size());
-              for (std::size_t i = 0; i < points.size(); ++i) {
-                std::memcpy(&values[i], msg.data_().data() + i * msg.point_step_() + 12, 4);
-              }
-            }
-            rx.*store = std::move(points);
-          },
-          onError);
-      mlmap::dds::createReader<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(
-          subscriber, mlmap::dds::ddsTopicName(ns, name),
-          latched ? mlmap::dds::reliableReaderQos(true, 2) : heavyQos(2), l.get());
-      listeners.push_back(std::move(l));
-    };
-    cloudTopic(n.awareness, r.awareness_hz, false, &Received::awareness, nullptr);
-    cloudTopic(n.local_map, r.local_map_hz, false, &Received::local, nullptr);
-    cloudTopic(n.global_map, r.global_map_hz, true, &Received::global, nullptr);
-    cloudTopic(n.esdf_slice, r.esdf_hz, false, &Received::esdf_slice, &Received::esdf_slice_distance);
-    if (!n.grid.empty() && r.grid_hz > 0) {
-      expected.push_back(n.grid);
-      auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::nav_msgs::OccupancyGrid_>>(
-          [&rx, name = n.grid](mlmap::dds::nav_msgs::OccupancyGrid_&& msg) {
-            std::lock_guard<std::mutex> lock(rx.mutex);
-            rx.note(name, msg.data_().size(), msg.data_().size(), msg.header_().stamp_());
-            rx.grid = std::move(msg);
-          },
-          onError);
-      mlmap::dds::createReader<mlmap::dds::nav_msgs::OccupancyGrid_PubSubType>(
-          subscriber, mlmap::dds::ddsTopicName(ns, n.grid), mlmap::dds::reliableReaderQos(true, 1), l.get());
-      listeners.push_back(std::move(l));
-    }
-    if (!n.esdf_block.empty() && r.esdf_hz > 0 && !as_bridge) {
-      expected.push_back(n.esdf_block);
-      auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::mlmap_msgs::VoxelBlock_>>(
-          [&rx, name = n.esdf_block](mlmap::dds::mlmap_msgs::VoxelBlock_&& msg) {
-            std::lock_guard<std::mutex> lock(rx.mutex);
-            rx.note(name, msg.values_().size() * 4, msg.values_().size(), msg.header_().stamp_());
-          },
-          onError);
-      mlmap::dds::createReader<mlmap::dds::mlmap_msgs::VoxelBlock_PubSubType>(
-          subscriber, mlmap::dds::ddsTopicName(ns, n.esdf_block), mlmap::dds::reliableReaderQos(false, 2), l.get());
-      listeners.push_back(std::move(l));
-    }
-    if (!n.status.empty() && r.status_hz > 0) {
-      expected.push_back(n.status);
-      auto l = std::make_unique<mlmap::dds::TakeListener<mlmap::dds::mlmap_msgs::Status_>>(
-          [&rx, name = n.status](mlmap::dds::mlmap_msgs::Status_&& msg) {
-            std::lock_guard<std::mutex> lock(rx.mutex);
-            rx.note(name, sizeof(msg), 1, msg.header_().stamp_());
-            rx.status = std::move(msg);
-          },
-          onError);
-      mlmap::dds::createReader<mlmap::dds::mlmap_msgs::Status_PubSubType>(
-          subscriber, mlmap::dds::ddsTopicName(ns, n.status), mlmap::dds::reliableReaderQos(false, 10), l.get());
-      listeners.push_back(std::move(l));
-    }
-    {
-      expected.push_back("tf");
-      auto l = std::make_unique<mlmap::dds::TakeListener<::tf2_msgs::msg::dds_::TFMessage_>>(
-          [&rx](::tf2_msgs::msg::dds_::TFMessage_&& msg) {
-            std::lock_guard<std::mutex> lock(rx.mutex);
-            if (msg.transforms_().empty()) return;
-            rx.note("tf", 0, msg.transforms_().size(), msg.transforms_().front().header_().stamp_());
-            for (const auto& t : msg.transforms_()) {
-              const auto& p = t.transform_().translation_();
-              rx.trajectory_W.emplace_back(p.x_(), p.y_(), p.z_());
-            }
-          },
-          onError);
-      mlmap::dds::createReader<::tf2_msgs::msg::dds_::TFMessage_PubSubType>(
-          subscriber, mlmap::dds::ddsTopicName(ns, "tf"), mlmap::dds::reliableReaderQos(false, 100), l.get());
-      listeners.push_back(std::move(l));
-    }
-
-    spdlog::info("listening for {} layers of mlmap_node (namespace '{}')", expected.size(), ns);
-    const auto start = Clock::now();
-    auto last_print = start;
-    while (!g_stop) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-      const auto now = Clock::now();
-      const double elapsed = std::chrono::duration<double>(now - start).count();
-      if (duration_s > 0 && elapsed >= duration_s) break;
-      std::lock_guard<std::mutex> lock(rx.mutex);
-      if (idle_s > 0) {
-        Clock::time_point newest = Clock::time_point::min();
-        for (const auto& [name, t] : rx.topics) newest = std::max(newest, t.last);
-        if (newest != Clock::time_point::min() &&
-            std::chrono::duration<double>(now - newest).count() > idle_s) {
-          break;
-        }
-      }
-      if (std::chrono::duration<double>(now - last_print).count() >= 2.0) {
-        last_print = now;
-        std::string line;
-        for (const auto& [name, t] : rx.topics) line += fmt::format(" {}:{}", name, t.messages);
-        spdlog::info("received{}", line.empty() ? " nothing yet" : line);
-      }
-    }
-    participant.reset();  // no more callbacks from here on
-    listeners.clear();
-
-    // Summary.
-    const double res = config.map.local_map.resolution_m;
-    std::vector<std::string> missing;
-    for (const std::string& name : expected) {
-      if (rx.topics.count(name) == 0) missing.push_back(name);
-    }
-    std::vector<std::string> missing_listed;
-    for (const std::string& name : expect_topics) {
-      if (rx.topics.count(name) == 0) missing_listed.push_back(name);
-    }
-    for (const auto& [name, t] : rx.topics) {
-      const TimingSummary age = summarizeTimings(t.age_ms);
-      const double span = std::chrono::duration<double>(t.last - t.first).count();
-      const std::string age_text =
-          t.age_ms.empty() ? std::string("no stamped message")
-                           : fmt::format("age at arrival median {:.1f} ms, p99 {:.1f} ms", age.median_ms, age.p99_ms);
-      spdlog::info("{:28} {:6} messages {:8.2f} Hz {:9.1f} kB/msg, last {} points/cells, {}",
-                   name, t.messages, span > 0 ? static_cast<double>(t.messages - 1) / span : 0.0,
-                   static_cast<double>(t.bytes) / 1e3 / static_cast<double>(t.messages), t.last_points,
-                   age_text);
-    }
-    for (const std::string& name : missing) spdlog::warn("{:28} nothing received", name);
-    for (const std::string& name : missing_listed) spdlog::error("{:28} expected, nothing received", name);
-
-    // Score local + global voxels against ground truth.
-    double precision = -1.0;
-    std::size_t scored = 0;
-    if (!scenario_path.empty() || use_default_scenario) {
-      const io::Scenario scenario =
-          scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(scenario_path);
-      eval::VoxelSet voxels;
-      for (const auto* list : {&rx.local, &rx.global}) {
-        for (const Eigen::Vector3f& p : *list) voxels.insert(voxelIndexOf(p.cast<double>(), res));
-      }
-      std::size_t right = 0;
-      for (const VoxelIndex& v : voxels) right += eval::touchesSolid(scenario.world, v, res) ? 1 : 0;
-      scored = voxels.size();
-      precision = scored > 0 ? static_cast<double>(right) / static_cast<double>(scored) : 0.0;
-      spdlog::info("received occupied voxels (local + global): {}, precision against the scenario: {:.3f}",
-                   scored, precision);
-    }
-
-    if (!out_dir.empty()) {
-      std::filesystem::create_directories(out_dir);
-      std::vector<Eigen::Vector3f> all = rx.global;
-      all.insert(all.end(), rx.local.begin(), rx.local.end());
-      io::MapImageOptions options;
-      options.trajectory_W = rx.trajectory_W;
-      options.title = "received over DDS: local + global occupied voxels";
-      io::writePng(out_dir + "/dds_map_top.png", io::renderTopDown(voxelList(all, res), options));
-      options.title = "received over DDS: awareness occupied cells (last frame)";
-      io::writePng(out_dir + "/dds_awareness_top.png",
-                   io::renderTopDown(voxelList(rx.awareness, res), options));
-      if (!rx.grid.data_().empty()) io::writePng(out_dir + "/dds_grid.png", gridImage(rx.grid));
-      if (!rx.esdf_slice.empty() && rx.esdf_slice_distance.size() == rx.esdf_slice.size()) {
-        io::writePng(out_dir + "/dds_esdf_slice.png",
-                     esdfSliceImage(rx.esdf_slice, rx.esdf_slice_distance, res));
-      }
-      std::ofstream json(out_dir + "/summary.json");
-      json << "{\n  \"topics\": {";
-      bool first = true;
-      for (const auto& [name, t] : rx.topics) {
-        const TimingSummary age = summarizeTimings(t.age_ms);
-        json << (first ? "" : ",") << "\n    \"" << name << "\": {\"messages\": " << t.messages
-             << ", \"bytes\": " << t.bytes << ", \"age_ms\": {\"median\": " << age.median_ms
-             << ", \"p99\": " << age.p99_ms << "}, \"last_points\": " << t.last_points
-             << "}";
-        first = false;
-      }
-      json << "\n  },\n  \"missing\": [";
-      for (std::size_t i = 0; i < missing.size(); ++i) json << (i ? ", " : "") << '"' << missing[i] << '"';
-      json << "],\n  \"malformed\": " << rx.malformed << ",\n  \"scored_voxels\": " << scored
-           << ",\n  \"precision\": " << precision << ",\n  \"node_frames_mapped\": "
-           << rx.status.frames_mapped_() << ",\n  \"node_global_voxels\": " << rx.status.global_voxels_()
-           << "\n}\n";
-      spdlog::info("wrote pictures and summary.json to {}", out_dir);
-    }
-    if (expect_all && !missing.empty()) return 2;
-    if (!missing_listed.empty()) return 2;
-    if (min_precision > 0 && precision < min_precision) return 2;
-    return 0;
+    Subscription sub = subscribe(o, config.dds, &rx);
+    spdlog::info("listening for {} layers of mlmap_node (namespace '{}')", sub.expected.size(), sub.ns);
+    listen(o, &rx);
+    sub.close();
+    return report(o, rx, sub.expected, config.map.local_map.resolution_m);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 1;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"mlmap_inspect: watch mlmap_node's layers over DDS, write pictures and a summary"};
+  Options options;
+  addOptions(app, options);
+  CLI11_PARSE(app, argc, argv);
+  return run(options);
 }

@@ -2,103 +2,136 @@
 // map layers out, over plain Fast DDS: no ROS installation needed on the vehicle.
 
 #include "mlmap/dds/mapping_node.h"
+#include "mlmap/core/stopwatch.h"
 #include "mlmap/dds/node_config.h"
+#include "mlmap/apps/stop_signal.h"
 
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
-#include <atomic>
 #include <chrono>
-#include <csignal>
 #include <iostream>
 #include <thread>
 
 namespace {
 
-std::atomic<bool> g_stop{false};
-extern "C" void onSignal(int) { g_stop = true; }
+using namespace mlmap;
 
-}  // namespace
+/// The command line of mlmap_node.
+struct Options {
+  std::string config_path;     ///< -c, --config (empty: defaults)
+  double duration_s = 0.0;     ///< --duration (0: until SIGINT / SIGTERM)
+  double report_every_s = 5.0; ///< --report-every: seconds between progress lines (0: none)
+  bool print_config = false;   ///< --print-config
+};
 
-int main(int argc, char** argv) {
-  using namespace mlmap;
-  CLI::App app{"mlmap_node: multilayer mapping over ROS 2 compatible DDS topics (Fast DDS, no ROS)"};
-  std::string config_path;
-  double duration_s = 0.0;
-  double report_every_s = 5.0;
-  bool print_config = false;
-  app.add_option("-c,--config", config_path,
+/// Adds every option of mlmap_node to `app`.
+void addOptions(CLI::App& app, Options& o) {
+  app.add_option("-c,--config", o.config_path,
                  "YAML configuration: engine sections as config/mlmap.yaml plus a dds section "
                  "(config/mlmap_node.yaml); defaults when omitted")
       ->check(CLI::ExistingFile);
-  app.add_option("--duration", duration_s, "stop after this many seconds (0: until SIGINT/SIGTERM)")
+  app.add_option("--duration", o.duration_s, "stop after this many seconds (0: until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--report-every", report_every_s, "seconds between progress lines (0: none)")
+  app.add_option("--report-every", o.report_every_s, "seconds between progress lines (0: none)")
       ->check(CLI::NonNegativeNumber);
-  app.add_flag("--print-config", print_config, "print the effective configuration and exit");
-  CLI11_PARSE(app, argc, argv);
+  app.add_flag("--print-config", o.print_config, "print the effective configuration and exit");
+}
 
-  auto logger = spdlog::stderr_color_mt("mlmap_node");
-  spdlog::set_default_logger(logger);
+/// The node's messages to the log, at their level.
+void logNodeMessage(LogLevel level, const std::string& message) {
+  spdlog::log(level == LogLevel::kError     ? spdlog::level::err
+              : level == LogLevel::kWarning ? spdlog::level::warn
+                                            : spdlog::level::info,
+              message);
+}
+
+/// Logs the domain, namespace and input topics the node listens on.
+void logInputs(const mlmap::dds::NodeConfig& config, const mlmap::dds::MappingNode& node) {
+  std::string inputs;
+  const mlmap::dds::TopicNames& t = config.dds.topics;
+  for (const std::string* name : {&t.cloud, &t.depth_image, &t.camera_info, &t.pose, &t.odometry}) {
+    if (!name->empty()) inputs += (inputs.empty() ? "" : ", ") + mlmap::dds::ddsTopicName(config.dds.ns, *name);
+  }
+  spdlog::info("mapping on DDS domain {} (namespace '{}'), inputs: {}", node.domainId(), config.dds.ns, inputs);
+}
+
+/// One progress line: frames, timings and memory.
+void logProgress(const mlmap::dds::MappingNode& node) {
+  const EngineStats s = node.engineStats();
+  const mlmap::dds::NodeCounters c = node.counters();
+  spdlog::info("frames: {} received, {} mapped, {} without pose, {} malformed; total {:.1f} ms "
+               "median, {:.1f} ms p99; {:.1f} MB",
+               c.clouds_received + c.images_received, s.frames_mapped, c.frames_without_pose,
+               c.inputs_malformed, s.total.median_ms, s.total.p99_ms,
+               static_cast<double>(s.memory.total()) / 1e6);
+}
+
+/// Maps until --duration or a stop signal, with a progress line every --report-every seconds.
+void mapUntilStopped(const Options& o, const mlmap::dds::MappingNode& node) {
+  const auto start = SteadyClock::now();
+  auto last_report = start;
+  while (!apps::stopRequested()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    const auto now = SteadyClock::now();
+    if (o.duration_s > 0 && secondsBetween(start, now) >= o.duration_s) break;
+    if (o.report_every_s > 0 && secondsBetween(last_report, now) >= o.report_every_s) {
+      last_report = now;
+      logProgress(node);
+    }
+  }
+}
+
+/// Stops the node and logs its counts; returns the exit status (1 when the map of this run was
+/// not saved at shutdown).
+int stopAndReport(const mlmap::dds::NodeConfig& config, mlmap::dds::MappingNode& node) {
+  spdlog::info("stopping");
+  node.stop();
+  const EngineStats s = node.engineStats();
+  const mlmap::dds::NodeCounters c = node.counters();
+  spdlog::info("done: {} frames mapped ({} dropped, {} rejected by the engine, {} without pose, "
+               "{} across a pose jump, {} malformed inputs, {} poses rejected); {} messages published; "
+               "{} map saves, {} failed",
+               s.frames_mapped, s.frames_dropped + c.frames_handover_dropped,
+               c.frames_engine_rejected, c.frames_without_pose + c.frames_future,
+               c.frames_across_pose_jump, c.inputs_malformed, c.poses_rejected, c.messages_published,
+               c.map_saves, c.map_saves_failed);
+  if (!config.map_file.save_path.empty() && c.last_map_save_failed) {
+    // The map of this run is lost unless a supervisor notices: say so in the exit status.
+    spdlog::error("the map was not saved to '{}' at shutdown (see above)", config.map_file.save_path);
+    return 1;
+  }
+  return 0;
+}
+
+/// Runs the node the options describe; returns the exit status (1: an error, logged).
+int run(const Options& o) {
+  spdlog::set_default_logger(spdlog::stderr_color_mt("mlmap_node"));
   try {
     const mlmap::dds::NodeConfig config =
-        config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(config_path);
-    if (print_config) {
+        o.config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(o.config_path);
+    if (o.print_config) {
       std::cout << mlmap::dds::toYaml(config);
       return 0;
     }
-    std::signal(SIGINT, onSignal);
-    std::signal(SIGTERM, onSignal);
-    mlmap::dds::MappingNode node(config, [](LogLevel level, const std::string& message) {
-      spdlog::log(level == LogLevel::kError     ? spdlog::level::err
-                  : level == LogLevel::kWarning ? spdlog::level::warn
-                                                : spdlog::level::info,
-                  message);
-    });
-    std::string inputs;
-    const mlmap::dds::TopicNames& t = config.dds.topics;
-    for (const std::string* name : {&t.cloud, &t.depth_image, &t.camera_info, &t.pose, &t.odometry}) {
-      if (!name->empty()) inputs += (inputs.empty() ? "" : ", ") + mlmap::dds::ddsTopicName(config.dds.ns, *name);
-    }
-    spdlog::info("mapping on DDS domain {} (namespace '{}'), inputs: {}", node.domainId(), config.dds.ns,
-                 inputs);
-    const auto start = std::chrono::steady_clock::now();
-    auto last_report = start;
-    while (!g_stop) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-      const auto now = std::chrono::steady_clock::now();
-      if (duration_s > 0 && std::chrono::duration<double>(now - start).count() >= duration_s) break;
-      if (report_every_s > 0 && std::chrono::duration<double>(now - last_report).count() >= report_every_s) {
-        last_report = now;
-        const EngineStats s = node.engineStats();
-        const mlmap::dds::NodeCounters c = node.counters();
-        spdlog::info("frames: {} received, {} mapped, {} without pose, {} malformed; total {:.1f} ms "
-                     "median, {:.1f} ms p99; {:.1f} MB",
-                     c.clouds_received + c.images_received, s.frames_mapped, c.frames_without_pose,
-                     c.inputs_malformed, s.total.median_ms, s.total.p99_ms,
-                     static_cast<double>(s.memory.total()) / 1e6);
-      }
-    }
-    spdlog::info("stopping");
-    node.stop();
-    const EngineStats s = node.engineStats();
-    const mlmap::dds::NodeCounters c = node.counters();
-    spdlog::info("done: {} frames mapped ({} dropped, {} rejected by the engine, {} without pose, "
-                 "{} across a pose jump, {} malformed inputs, {} poses rejected); {} messages published; "
-                 "{} map saves, {} failed",
-                 s.frames_mapped, s.frames_dropped + c.frames_handover_dropped,
-                 c.frames_engine_rejected, c.frames_without_pose + c.frames_future,
-                 c.frames_across_pose_jump, c.inputs_malformed, c.poses_rejected, c.messages_published,
-                 c.map_saves, c.map_saves_failed);
-    if (!config.map_file.save_path.empty() && c.last_map_save_failed) {
-      // The map of this run is lost unless a supervisor notices: say so in the exit status.
-      spdlog::error("the map was not saved to '{}' at shutdown (see above)", config.map_file.save_path);
-      return 1;
-    }
-    return 0;
+    apps::installStopHandler();
+    mlmap::dds::MappingNode node(config, logNodeMessage);
+    logInputs(config, node);
+    mapUntilStopped(o, node);
+    return stopAndReport(config, node);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 1;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"mlmap_node: multilayer mapping over ROS 2 compatible DDS topics (Fast DDS, no ROS)"};
+  Options options;
+  addOptions(app, options);
+  CLI11_PARSE(app, argc, argv);
+  return run(options);
 }

@@ -2,6 +2,8 @@
 // point clouds with a trajectory file) or on the simulator, and writes the demo's outputs plus
 // the occupied voxels as text and per-frame statistics as JSON.
 
+#include "mlmap/core/stopwatch.h"
+#include "mlmap/eval/json_output.h"
 #include "mlmap/eval/run_outputs.h"
 #include "mlmap/datasets/cloud_sequence.h"
 #include "mlmap/datasets/frame_directory.h"
@@ -12,21 +14,16 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
-#include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
+#include <optional>
 
 namespace {
 
 using namespace mlmap;
-using Clock = std::chrono::steady_clock;
-
-double msBetween(Clock::time_point a, Clock::time_point b) {
-  return std::chrono::duration<double, std::milli>(b - a).count();
-}
+using Clock = SteadyClock;
 
 /// One frame of the run, for --stats-out.
 struct FrameRecord {
@@ -102,64 +99,106 @@ struct RunInfo {
   std::size_t points_in_files = 0;
 };
 
+/// stats.json's timing_ms: each stage's median, p99, mean and maximum over the accepted frames.
+eval::Json timingJson(const std::vector<FrameRecord>& frames) {
+  return {{"read", eval::toJson(summarize(frames, &FrameRecord::read_ms))},
+          {"awareness", eval::toJson(summarize(frames, &FrameRecord::awareness_ms))},
+          {"local_global", eval::toJson(summarize(frames, &FrameRecord::local_global_ms))},
+          {"planning", eval::toJson(summarize(frames, &FrameRecord::planning_ms))},
+          {"engine", eval::toJson(summarize(frames, &FrameRecord::engine_ms))}};
+}
+
+/// stats.json's memory_bytes: the process's peak, the engine's peak and its final accounting.
+eval::Json memoryJson(const EngineStats& s, std::size_t peak_engine_bytes) {
+  return {{"peak_rss", eval::peakRssBytes()},
+          {"engine_peak", peak_engine_bytes},
+          {"engine_final", {{"awareness", s.memory.awareness_bytes},
+                            {"local", s.memory.local_bytes},
+                            {"global", s.memory.global_bytes},
+                            {"planning", s.memory.planning_bytes},
+                            {"total", s.memory.total()}}}};
+}
+
+/// stats.json's counters: frames, points and voxels.
+eval::Json countersJson(const RunInfo& info, const EngineStats& s, const std::vector<FrameRecord>& frames,
+                        std::size_t occupied) {
+  std::size_t reader_dropped = 0;
+  for (const FrameRecord& f : frames) reader_dropped += f.non_finite_dropped;
+  return {{"frames", frames.size()},
+          {"frames_mapped", s.frames_mapped},
+          {"rejected_invalid_pose", s.rejected_invalid_pose},
+          {"rejected_out_of_order", s.rejected_out_of_order},
+          {"rejected_empty", s.rejected_empty},
+          {"rejected_bad_image", s.rejected_bad_image},
+          {"clouds_without_pose", info.clouds_without_pose},
+          {"points_in_files", info.points_in_files},
+          {"non_finite_dropped_by_reader", reader_dropped},
+          {"points_in", s.points.points_in},
+          {"no_data_or_non_finite", s.points.rejected_non_finite},
+          {"too_close", s.points.rejected_too_close},
+          {"beyond_max_range", s.points.beyond_max_range},
+          {"hit_voxels", s.points.hit_voxels},
+          {"free_voxels", s.points.free_voxels},
+          {"occupied_voxels", occupied},
+          {"global_voxels", s.global_voxels},
+          {"global_submaps", s.global_submaps},
+          {"local_shifts", s.local.shifts},
+          {"submaps_retired", s.local.submaps_retired},
+          {"submaps_restored", s.local.submaps_restored},
+          {"esdf_updates", s.planning.esdf_updates}};
+}
+
+/// One entry of stats.json's frames.
+eval::Json frameJson(const FrameRecord& f) {
+  return {{"name", f.name},
+          {"stamp_s", f.stamp_s},  // printed to full double precision: epoch stamps keep their ns
+          {"status", toString(f.status)},
+          {"points", f.points},
+          {"non_finite_dropped", f.non_finite_dropped},
+          {"read_ms", f.read_ms},
+          {"awareness_ms", f.awareness_ms},
+          {"local_global_ms", f.local_global_ms},
+          {"planning_ms", f.planning_ms},
+          {"engine_ms", f.engine_ms},
+          {"engine_bytes", f.engine_bytes}};
+}
+
+/// Writes stats.json (--stats-out) to `path`. @throws std::runtime_error when it cannot.
 void writeStats(const std::string& path, const RunInfo& info, const MapConfig& config,
                 const EngineStats& s, const std::vector<FrameRecord>& frames,
                 std::size_t occupied, std::size_t peak_engine_bytes) {
-  std::ofstream o(path);
-  o.precision(10);
-  std::size_t reader_dropped = 0;
-  for (const FrameRecord& f : frames) reader_dropped += f.non_finite_dropped;
-  o << "{\n  \"source\": " << eval::jsonString(info.source) << ",\n  \"kind\": \"" << info.kind << "\""
-    << ",\n  \"pairing\": \"" << info.pairing << "\""
-    << ",\n  \"resolution_m\": " << config.local_map.resolution_m
-    << ",\n  \"max_range_m\": " << config.awareness.max_range_m
-    << ",\n  \"timing_ms\": {\"read\": " << eval::toJson(summarize(frames, &FrameRecord::read_ms))
-    << ",\n                \"awareness\": " << eval::toJson(summarize(frames, &FrameRecord::awareness_ms))
-    << ",\n                \"local_global\": " << eval::toJson(summarize(frames, &FrameRecord::local_global_ms))
-    << ",\n                \"planning\": " << eval::toJson(summarize(frames, &FrameRecord::planning_ms))
-    << ",\n                \"engine\": " << eval::toJson(summarize(frames, &FrameRecord::engine_ms)) << "}"
-    << ",\n  \"memory_bytes\": {\"peak_rss\": " << eval::peakRssBytes()
-    << ", \"engine_peak\": " << peak_engine_bytes << ", \"engine_final\": {\"awareness\": "
-    << s.memory.awareness_bytes << ", \"local\": " << s.memory.local_bytes
-    << ", \"global\": " << s.memory.global_bytes << ", \"planning\": " << s.memory.planning_bytes
-    << ", \"total\": " << s.memory.total() << "}}"
-    << ",\n  \"counters\": {\"frames\": " << frames.size() << ", \"frames_mapped\": " << s.frames_mapped
-    << ", \"rejected_invalid_pose\": " << s.rejected_invalid_pose
-    << ", \"rejected_out_of_order\": " << s.rejected_out_of_order
-    << ", \"rejected_empty\": " << s.rejected_empty << ", \"rejected_bad_image\": " << s.rejected_bad_image
-    << ",\n               \"clouds_without_pose\": " << info.clouds_without_pose
-    << ", \"points_in_files\": " << info.points_in_files
-    << ", \"non_finite_dropped_by_reader\": " << reader_dropped
-    << ",\n               \"points_in\": " << s.points.points_in
-    << ", \"no_data_or_non_finite\": " << s.points.rejected_non_finite
-    << ", \"too_close\": " << s.points.rejected_too_close
-    << ", \"beyond_max_range\": " << s.points.beyond_max_range
-    << ", \"hit_voxels\": " << s.points.hit_voxels << ", \"free_voxels\": " << s.points.free_voxels
-    << ",\n               \"occupied_voxels\": " << occupied << ", \"global_voxels\": " << s.global_voxels
-    << ", \"global_submaps\": " << s.global_submaps << ", \"local_shifts\": " << s.local.shifts
-    << ", \"submaps_retired\": " << s.local.submaps_retired
-    << ", \"submaps_restored\": " << s.local.submaps_restored
-    << ", \"esdf_updates\": " << s.planning.esdf_updates << "}"
-    << ",\n  \"frames\": [";
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    const FrameRecord& f = frames[i];
-    char stamp[40];
-    std::snprintf(stamp, sizeof(stamp), "%.9f", f.stamp_s);  // full precision of epoch stamps
-    o << (i == 0 ? "\n" : ",\n") << "    {\"name\": " << eval::jsonString(f.name) << ", \"stamp_s\": " << stamp
-      << ", \"status\": \"" << toString(f.status) << "\", \"points\": " << f.points
-      << ", \"non_finite_dropped\": " << f.non_finite_dropped << ", \"read_ms\": " << f.read_ms
-      << ", \"awareness_ms\": " << f.awareness_ms << ", \"local_global_ms\": " << f.local_global_ms
-      << ", \"planning_ms\": " << f.planning_ms << ", \"engine_ms\": " << f.engine_ms
-      << ", \"engine_bytes\": " << f.engine_bytes << "}";
-  }
-  o << "\n  ]\n}\n";
-  if (!o) throw std::runtime_error(path + ": cannot write");
+  eval::Json stats;
+  stats["source"] = info.source;
+  stats["kind"] = info.kind;
+  stats["pairing"] = info.pairing;
+  stats["resolution_m"] = config.local_map.resolution_m;
+  stats["max_range_m"] = config.awareness.max_range_m;
+  stats["timing_ms"] = timingJson(frames);
+  stats["memory_bytes"] = memoryJson(s, peak_engine_bytes);
+  stats["counters"] = countersJson(info, s, frames, occupied);
+  stats["frames"] = eval::Json::array();
+  for (const FrameRecord& f : frames) stats["frames"].push_back(frameJson(f));
+  eval::writeJsonFile(path, stats, /*expanded_levels=*/2);
 }
 
-}  // namespace
+/// The command line of mlmap_replay.
+struct Options {
+  std::string frames_dir;      ///< --frames: an RGB-D frame directory
+  std::string clouds_dir;      ///< --clouds: PCD / PLY clouds, with poses_path
+  std::string poses_path;      ///< --poses: the clouds' trajectory (TUM or CSV)
+  std::string extrinsic_text;  ///< --extrinsic: the sensor in the pose frame, "x y z qx qy qz qw"
+  std::string scenario_path;   ///< --scenario: simulator world + flight (empty: the built-in room)
+  std::string config_path;     ///< --config: engine configuration YAML (empty: defaults)
+  double resolution_m = 0.0;   ///< --resolution (0: the config's, or the kind's default)
+  double max_range_m = 0.0;    ///< --max-range (0: the config's)
+  int max_frames = 0;          ///< --max-frames (0: all)
+  std::string out_dir = "mlmap_replay_out";  ///< --out
+  std::string voxels_out;      ///< --voxels-out (empty: OUT/occupied_voxels.txt)
+  std::string stats_out;       ///< --stats-out (empty: OUT/stats.json)
+  std::string save_map_path;   ///< --save-map (empty: not saved)
+};
 
-int main(int argc, char** argv) {
-  CLI::App app{
+constexpr const char* kAbout =
       "mlmap_replay: runs the mapping engine offline on recorded data and writes the map.\n"
       "Sources (one of):\n"
       "  --frames DIR              an RGB-D frame directory (frame-N.depth.png, frame-N.pose.txt,\n"
@@ -175,28 +214,25 @@ int main(int argc, char** argv) {
       "Writes to --out: map_top.png, map_side.png (accuracy_top.png for the simulator),\n"
       "report.json (as mlmap_demo), occupied_voxels.txt ('ix iy iz' per line, sorted,\n"
       "i = floor(coordinate / resolution), world grid aligned at the origin; '#' header line) and\n"
-      "stats.json (per-frame timings per stage, peak memory, counters)."};
-  std::string frames_dir, clouds_dir, poses_path, extrinsic_text, config_path, scenario_path;
-  std::string out_dir = "mlmap_replay_out";
-  std::string voxels_out, stats_out;
-  double resolution_m = 0.0;
-  double max_range_m = 0.0;
-  int max_frames = 0;
-  auto* frames_opt = app.add_option("--frames", frames_dir, "RGB-D frame directory to map")
+      "stats.json (per-frame timings per stage, peak memory, counters).";
+
+/// Adds --frames, --clouds, --poses, --extrinsic and --scenario (one source at most) to `app`.
+void addSourceOptions(CLI::App& app, Options& o) {
+  auto* frames_opt = app.add_option("--frames", o.frames_dir, "RGB-D frame directory to map")
                          ->check(CLI::ExistingDirectory);
-  auto* clouds_opt = app.add_option("--clouds", clouds_dir, "directory of .pcd / .ply point clouds "
-                                                            "(in the sensor frame; a PCD VIEWPOINT is taken "
-                                                            "as the sensor's pose in the cloud's frame) to map")
+  auto* clouds_opt = app.add_option("--clouds", o.clouds_dir, "directory of .pcd / .ply point clouds "
+                                                              "(in the sensor frame; a PCD VIEWPOINT is taken "
+                                                              "as the sensor's pose in the cloud's frame) to map")
                          ->check(CLI::ExistingDirectory);
   auto* poses_opt =
-      app.add_option("--poses", poses_path,
+      app.add_option("--poses", o.poses_path,
                      "trajectory of the clouds: TUM ('t tx ty tz qx qy qz qw', '#' comments) or CSV "
                      "with a header (t|time|timestamp|stamp[_s|_ms|_us|_ns], x|tx|px|pos_x|position_x "
                      "..., qx|q_x|rot_x|orientation_x ... qw); CSV when the name ends in .csv or the "
                      "first line has a comma. The poses are the sensor's unless --extrinsic is given")
           ->check(CLI::ExistingFile);
   auto* extrinsic_opt =
-      app.add_option("--extrinsic", extrinsic_text,
+      app.add_option("--extrinsic", o.extrinsic_text,
                      "the sensor (cloud frame) in the pose frame, \"x y z qx qy qz qw\" (metres, unit "
                      "quaternion), e.g. a LiDAR on a vehicle whose poses --poses gives (default: "
                      "identity, the poses are the sensor's)");
@@ -204,204 +240,293 @@ int main(int argc, char** argv) {
   poses_opt->needs(clouds_opt);
   extrinsic_opt->needs(clouds_opt);
   frames_opt->excludes(clouds_opt);
-  auto* scenario_opt = app.add_option("--scenario", scenario_path,
+  auto* scenario_opt = app.add_option("--scenario", o.scenario_path,
                                       "simulator: world + flight YAML (default: the built-in room)")
                            ->check(CLI::ExistingFile);
   scenario_opt->excludes(frames_opt)->excludes(clouds_opt);
-  app.add_option("--resolution", resolution_m,
+}
+
+/// Adds --resolution, --max-range and --config to `app`.
+void addEngineOptions(CLI::App& app, Options& o) {
+  app.add_option("--resolution", o.resolution_m,
                  "voxel size [m]; the local map keeps ~19x19x7 m (default: --config's, or without "
                  "--config 0.02 for --frames and 0.1 otherwise)")
       ->check(CLI::Range(0.01, 2.0));
-  app.add_option("--max-range", max_range_m,
+  app.add_option("--max-range", o.max_range_m,
                  "maximum range [m] (awareness.max_range_m; default: --config's, 10): farther points "
                  "clear their ray up to here and mark nothing; the awareness grid grows to reach it")
       ->check(CLI::Range(0.1, 400.0));
-  app.add_option("--config", config_path, "engine configuration YAML (config/mlmap.yaml documents "
-                                          "every key; an mlmap_node file works too, its dds and "
-                                          "map_file sections are skipped; the replay always runs "
-                                          "synchronously)")
+  app.add_option("--config", o.config_path, "engine configuration YAML (config/mlmap.yaml documents "
+                                            "every key; an mlmap_node file works too, its dds and "
+                                            "map_file sections are skipped; the replay always runs "
+                                            "synchronously)")
       ->check(CLI::ExistingFile);
-  app.add_option("--out", out_dir, "output folder")->capture_default_str();
-  app.add_option("--voxels-out", voxels_out, "occupied voxels as text (default: OUT/occupied_voxels.txt)");
-  app.add_option("--stats-out", stats_out,
+}
+
+/// Adds --out, --voxels-out, --stats-out, --max-frames and --save-map to `app`.
+void addOutputOptions(CLI::App& app, Options& o) {
+  app.add_option("--out", o.out_dir, "output folder")->capture_default_str();
+  app.add_option("--voxels-out", o.voxels_out, "occupied voxels as text (default: OUT/occupied_voxels.txt)");
+  app.add_option("--stats-out", o.stats_out,
                  "statistics JSON (default: OUT/stats.json): per-frame timings by stage (read, "
                  "awareness, local_global, planning, engine) with their median / p99, peak memory "
                  "(process RSS, engine accounting) and counters");
-  app.add_option("--max-frames", max_frames, "stop after N frames (0: all)")->check(CLI::NonNegativeNumber);
-  std::string save_map_path;
-  app.add_option("--save-map", save_map_path,
+  app.add_option("--max-frames", o.max_frames, "stop after N frames (0: all)")->check(CLI::NonNegativeNumber);
+  app.add_option("--save-map", o.save_map_path,
                  "also save the final map (local + global layers) to this mlmap map file; "
                  "mlmap_map_tool converts it to PLY / PCD / PGM + YAML / OctoMap .bt, and "
                  "mlmap_node can start from it (map_file.load_path)");
-  CLI11_PARSE(app, argc, argv);
-  spdlog::set_default_logger(spdlog::stderr_color_mt("mlmap"));  // stdout carries the results
-  if (voxels_out.empty()) voxels_out = out_dir + "/occupied_voxels.txt";
-  if (stats_out.empty()) stats_out = out_dir + "/stats.json";
+}
 
+/// The kind of data the options name.
+eval::DataKind dataKind(const Options& o) {
+  return !o.frames_dir.empty()   ? eval::DataKind::kFrameDirectory
+         : !o.clouds_dir.empty() ? eval::DataKind::kPointClouds
+                                 : eval::DataKind::kSimulator;
+}
+
+/// The cloud sequence's options: --extrinsic parsed (the cloud sequence gives T_B_S from it and
+/// the viewpoints; the config's sensor is unused). Empty when --extrinsic is malformed (logged).
+std::optional<io::CloudSequenceOptions> cloudOptions(const Options& o) {
+  io::CloudSequenceOptions cloud_options;
+  if (o.extrinsic_text.empty()) return cloud_options;
   try {
-    const eval::DataKind kind = !frames_dir.empty()   ? eval::DataKind::kFrameDirectory
-                                : !clouds_dir.empty() ? eval::DataKind::kPointClouds
-                                                      : eval::DataKind::kSimulator;
-    MapConfig config = eval::runConfig(config_path, kind, resolution_m);
-    io::CloudSequenceOptions cloud_options;
-    if (kind == eval::DataKind::kPointClouds) {
-      // The cloud sequence gives T_B_S (extrinsic and viewpoint); the config's sensor is unused.
-      if (!extrinsic_text.empty()) {
-        try {
-          cloud_options.T_P_C = io::parseTransformXyzQuat(extrinsic_text);
-        } catch (const std::invalid_argument& e) {
-          spdlog::error("--extrinsic '{}': {}", extrinsic_text, e.what());
-          return 2;
-        }
-      }
-    }
-    if (max_range_m > 0.0) {
-      config.awareness.max_range_m = max_range_m;
-      if (config.awareness.radius_m() < max_range_m) {
-        config.awareness.rho_cells = static_cast<int>(std::ceil(max_range_m / config.awareness.rho_cell_m));
-      }
-    }
-    if (config.pipeline.threaded) {
-      spdlog::warn("pipeline.threaded: the replay runs synchronously (every frame is mapped, in order)");
-      config.pipeline.threaded = false;
-    }
-    const std::vector<std::string> problems = config.validate();
-    if (!problems.empty()) {
-      for (const auto& p : problems) spdlog::error("{}", p);
-      return 2;
-    }
-    std::filesystem::create_directories(out_dir);
-    if (!save_map_path.empty()) eval::checkSaveMapTarget(save_map_path);  // before the run
+    cloud_options.T_P_C = io::parseTransformXyzQuat(o.extrinsic_text);
+  } catch (const std::invalid_argument& e) {
+    spdlog::error("--extrinsic '{}': {}", o.extrinsic_text, e.what());
+    return std::nullopt;
+  }
+  return cloud_options;
+}
 
-    FrameTimer timer;
-    MapEngine engine(config,
-                     [](LogLevel level, const std::string& message) {
-                       if (level == LogLevel::kError) {
-                         spdlog::error("{}", message);
-                       } else {
-                         spdlog::warn("{}", message);
-                       }
-                     },
-                     timer.observers());
-    const double res = config.local_map.resolution_m;
-    std::vector<FrameRecord> records;
-    RunInfo info;
-    eval::MapOutputs outputs;
+/// --max-range applied (the awareness grid grows to reach it) and the engine made synchronous.
+void adjustConfig(const Options& o, MapConfig* config) {
+  if (o.max_range_m > 0.0) {
+    config->awareness.max_range_m = o.max_range_m;
+    if (config->awareness.radius_m() < o.max_range_m) {
+      config->awareness.rho_cells = static_cast<int>(std::ceil(o.max_range_m / config->awareness.rho_cell_m));
+    }
+  }
+  if (config->pipeline.threaded) {
+    spdlog::warn("pipeline.threaded: the replay runs synchronously (every frame is mapped, in order)");
+    config->pipeline.threaded = false;
+  }
+}
+
+/// False (the problems logged) when `config` is invalid.
+bool validConfig(const MapConfig& config) {
+  const std::vector<std::string> problems = config.validate();
+  for (const auto& p : problems) spdlog::error("{}", p);
+  return problems.empty();
+}
+
+/// The engine's messages to the log.
+void logEngineMessage(LogLevel level, const std::string& message) {
+  if (level == LogLevel::kError) {
+    spdlog::error("{}", message);
+  } else {
+    spdlog::warn("{}", message);
+  }
+}
+
+/// The engine of one replay with what it records: frames, source, outputs.
+struct Replay {
+  Replay(const MapConfig& config, const std::string& out_dir)
+      : engine(config, logEngineMessage, timer.observers()) {
     outputs.out_dir = out_dir;
-    eval::ScoredFlight scored;
-    auto submit = [&](auto frame, FrameRecord record) {
-      outputs.trajectory_W.push_back(frame.T_W_B.translation());
-      record.stamp_s = frame.stamp_s;
-      timer.begin();
-      record.status = engine.submit(std::move(frame));
-      (void)timer.end(engine, &record);
-      records.push_back(std::move(record));
-    };
+  }
+  /// Maps `frame`, recording its status and timings in `record`.
+  template <typename Frame>
+  void submit(Frame frame, FrameRecord record) {
+    outputs.trajectory_W.push_back(frame.T_W_B.translation());
+    record.stamp_s = frame.stamp_s;
+    timer.begin();
+    record.status = engine.submit(std::move(frame));
+    (void)timer.end(engine, &record);
+    records.push_back(std::move(record));
+  }
+  [[nodiscard]] double resolution_m() const { return engine.config().local_map.resolution_m; }
 
-    if (kind == eval::DataKind::kFrameDirectory) {
-      const io::FrameDirectory frames(frames_dir);
-      const std::size_t n = max_frames > 0 ? std::min<std::size_t>(frames.size(), max_frames) : frames.size();
-      spdlog::info("mapping {} RGB-D frames of {} at {} m", n, frames_dir, res);
-      eval::ProgressBar bar("mapping");
-      for (std::size_t i = 0; i < n; ++i) {
-        FrameRecord record;
-        record.name = frames.frameName(i);
-        const Clock::time_point start = Clock::now();
-        DepthFrame frame = frames.read(i);
-        record.read_ms = msBetween(start, Clock::now());
-        record.points = frame.depth_mm.size() + frame.depth_m.size();
-        submit(std::move(frame), std::move(record));
-        bar.update(static_cast<int>(i + 1), static_cast<int>(n));
-      }
-      info = {frames_dir, "frames", "frame files", 0, 0};
-      outputs.optical_world = true;  // the world is the first camera's optical frame
-    } else if (kind == eval::DataKind::kPointClouds) {
-      const io::CloudSequence clouds(clouds_dir, poses_path, cloud_options);
-      info = {clouds_dir + " + " + poses_path, "clouds", io::toString(clouds.pairing()),
-              clouds.unpaired().size(), 0};
-      if (!clouds.unpaired().empty()) {
-        spdlog::warn("{} of {} clouds have no pose within {} s of their stamp and are skipped (first: {})",
-                     clouds.unpaired().size(), clouds.size() + clouds.unpaired().size(),
-                     cloud_options.pose_tolerance_s, clouds.unpaired().front());
-      }
-      const std::size_t n = max_frames > 0 ? std::min<std::size_t>(clouds.size(), max_frames) : clouds.size();
-      spdlog::info("mapping {} clouds of {} paired {} with {} poses at {} m, max range {} m", n,
-                   clouds_dir, io::toString(clouds.pairing()), clouds.poseCount(), res,
-                   config.awareness.max_range_m);
-      eval::ProgressBar bar("mapping");
-      for (std::size_t i = 0; i < n; ++i) {
-        FrameRecord record;
-        record.name = clouds.clouds()[i].file_name;
-        io::PointCloudFile file;
-        const Clock::time_point start = Clock::now();
-        PointCloudFrame frame = clouds.read(i, &file);
-        record.read_ms = msBetween(start, Clock::now());
-        record.points = frame.points_S.size();
-        record.non_finite_dropped = file.non_finite_dropped;
-        info.points_in_files += file.points_in_file;
-        submit(std::move(frame), std::move(record));
-        bar.update(static_cast<int>(i + 1), static_cast<int>(n));
-      }
-    } else {
-      const io::Scenario scenario =
-          scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(scenario_path);
-      eval::FlightOptions options;
-      if (max_frames > 0) options.max_frames = max_frames;
-      eval::ProgressBar bar("flying ");
-      Clock::time_point frame_start = Clock::now();
-      FrameRecord record;
-      options.before_submit = [&](int i) {
-        record = FrameRecord{};
-        record.name = "sim-" + std::to_string(i);
-        record.read_ms = msBetween(frame_start, Clock::now());
-        record.points = static_cast<std::size_t>(scenario.camera.intrinsics.width) *
-                        static_cast<std::size_t>(scenario.camera.intrinsics.height);
-        timer.begin();
-      };
-      options.progress = [&](int done, int total) {
-        // Called right after submit(): the frame's status is the engine's last counters'.
-        record.status = timer.end(engine, &record) ? FrameStatus::kAccepted : FrameStatus::kEmpty;
-        record.stamp_s = eval::frameTime(scenario, done - 1);
-        records.push_back(record);
-        bar.update(done, total);
-        frame_start = Clock::now();
-      };
-      spdlog::info("flying the {} scenario at {} m voxels",
-                   scenario_path.empty() ? "built-in room" : scenario_path, res);
-      scored = eval::flyAndScore(scenario, engine, options);
-      outputs.trajectory_W = scored.flight.trajectory_W;
-      outputs.scored = &scored;
-      info = {scenario_path.empty() ? "simulator: built-in room" : "simulator: " + scenario_path,
-              "simulator", "simulated poses", 0, 0};
-    }
-    engine.flush();
-    outputs.source = info.source;
+  FrameTimer timer;  // before the engine: the engine holds its observers
+  MapEngine engine;
+  std::vector<FrameRecord> records;
+  RunInfo info;
+  eval::MapOutputs outputs;
+  eval::ScoredFlight scored;  ///< the simulator's flight and accuracy
+};
 
-    const EngineStats s = engine.stats();
-    const std::vector<VoxelIndex> occupied = engine.occupiedVoxels();
-    std::vector<std::string> written = eval::writeMapOutputs(outputs, s, occupied, res);
-    io::writeVoxelText(voxels_out, occupied, res);
-    writeStats(stats_out, info, config, s, records, occupied.size(), timer.peakEngineBytes());
-    eval::printSummary(s, res, outputs.scored != nullptr ? &scored.accuracy : nullptr);
-    const TimingSummary read = summarize(records, &FrameRecord::read_ms);
-    const TimingSummary planning = summarize(records, &FrameRecord::planning_ms);
-    const TimingSummary whole = summarize(records, &FrameRecord::engine_ms);
-    std::printf("  replay per frame [ms] median   p99\n");
-    std::printf("    planning layers    %7.2f %7.2f   (snapshot, 2D grid, ESDF when due)\n", planning.median_ms,
-                planning.p99_ms);
-    std::printf("    submit() in all    %7.2f %7.2f\n", whole.median_ms, whole.p99_ms);
-    std::printf("    reading the input  %7.2f %7.2f\n", read.median_ms, read.p99_ms);
-    std::printf("  peak memory          %.1f MB resident (process), %.1f MB engine accounting\n",
-                static_cast<double>(eval::peakRssBytes()) / 1e6,
-                static_cast<double>(timer.peakEngineBytes()) / 1e6);
-    std::string names;
-    for (const std::string& name : written) names += (names.empty() ? "" : ", ") + name;
-    std::printf("\n  wrote %s/{%s}\n        %s (%zu occupied voxels)\n        %s\n", out_dir.c_str(),
-                names.c_str(), voxels_out.c_str(), occupied.size(), stats_out.c_str());
-    if (!save_map_path.empty()) eval::saveMap(engine, save_map_path);
-    return s.frames_mapped > 0 ? 0 : 3;
+/// The number of frames to map of `available`, --max-frames applied.
+std::size_t frameCount(const Options& o, std::size_t available) {
+  return o.max_frames > 0 ? std::min<std::size_t>(available, static_cast<std::size_t>(o.max_frames))
+                          : available;
+}
+
+/// Maps the RGB-D frames of --frames.
+void mapFrameDirectory(const Options& o, Replay* replay) {
+  const io::FrameDirectory frames(o.frames_dir);
+  const std::size_t n = frameCount(o, frames.size());
+  spdlog::info("mapping {} RGB-D frames of {} at {} m", n, o.frames_dir, replay->resolution_m());
+  eval::ProgressBar bar("mapping");
+  for (std::size_t i = 0; i < n; ++i) {
+    FrameRecord record;
+    record.name = frames.frameName(i);
+    const Clock::time_point start = Clock::now();
+    DepthFrame frame = frames.read(i);
+    record.read_ms = msSince(start);
+    record.points = frame.depth_mm.size() + frame.depth_m.size();
+    replay->submit(std::move(frame), std::move(record));
+    bar.update(static_cast<int>(i + 1), static_cast<int>(n));
+  }
+  replay->info = {o.frames_dir, "frames", "frame files", 0, 0};
+  replay->outputs.optical_world = true;  // the world is the first camera's optical frame
+}
+
+/// Maps the clouds of --clouds at the poses of --poses.
+void mapCloudSequence(const Options& o, const io::CloudSequenceOptions& cloud_options, Replay* replay) {
+  const io::CloudSequence clouds(o.clouds_dir, o.poses_path, cloud_options);
+  replay->info = {o.clouds_dir + " + " + o.poses_path, "clouds", io::toString(clouds.pairing()),
+                  clouds.unpaired().size(), 0};
+  if (!clouds.unpaired().empty()) {
+    spdlog::warn("{} of {} clouds have no pose within {} s of their stamp and are skipped (first: {})",
+                 clouds.unpaired().size(), clouds.size() + clouds.unpaired().size(),
+                 cloud_options.pose_tolerance_s, clouds.unpaired().front());
+  }
+  const std::size_t n = frameCount(o, clouds.size());
+  spdlog::info("mapping {} clouds of {} paired {} with {} poses at {} m, max range {} m", n,
+               o.clouds_dir, io::toString(clouds.pairing()), clouds.poseCount(), replay->resolution_m(),
+               replay->engine.config().awareness.max_range_m);
+  eval::ProgressBar bar("mapping");
+  for (std::size_t i = 0; i < n; ++i) {
+    FrameRecord record;
+    record.name = clouds.clouds()[i].file_name;
+    io::PointCloudFile file;
+    const Clock::time_point start = Clock::now();
+    PointCloudFrame frame = clouds.read(i, &file);
+    record.read_ms = msSince(start);
+    record.points = frame.points_S.size();
+    record.non_finite_dropped = file.non_finite_dropped;
+    replay->info.points_in_files += file.points_in_file;
+    replay->submit(std::move(frame), std::move(record));
+    bar.update(static_cast<int>(i + 1), static_cast<int>(n));
+  }
+}
+
+/// Flies the simulator through --scenario (or the built-in room) and scores the map.
+void flySimulator(const Options& o, Replay* replay) {
+  const io::Scenario scenario =
+      o.scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(o.scenario_path);
+  eval::FlightOptions options;
+  if (o.max_frames > 0) options.max_frames = o.max_frames;
+  eval::ProgressBar bar("flying ");
+  Clock::time_point frame_start = Clock::now();
+  FrameRecord record;
+  options.before_submit = [&](int i) {
+    record = FrameRecord{};
+    record.name = "sim-" + std::to_string(i);
+    record.read_ms = msSince(frame_start);
+    record.points = static_cast<std::size_t>(scenario.camera.intrinsics.width) *
+                    static_cast<std::size_t>(scenario.camera.intrinsics.height);
+    replay->timer.begin();
+  };
+  options.progress = [&](int done, int total) {
+    // Called right after submit(): the frame's status is the engine's last counters'.
+    record.status = replay->timer.end(replay->engine, &record) ? FrameStatus::kAccepted : FrameStatus::kEmpty;
+    record.stamp_s = eval::frameTime(scenario, done - 1);
+    replay->records.push_back(record);
+    bar.update(done, total);
+    frame_start = Clock::now();
+  };
+  spdlog::info("flying the {} scenario at {} m voxels",
+               o.scenario_path.empty() ? "built-in room" : o.scenario_path, replay->resolution_m());
+  replay->scored = eval::flyAndScore(scenario, replay->engine, options);
+  replay->outputs.trajectory_W = replay->scored.flight.trajectory_W;
+  replay->outputs.scored = &replay->scored;
+  replay->info = {o.scenario_path.empty() ? "simulator: built-in room" : "simulator: " + o.scenario_path,
+                  "simulator", "simulated poses", 0, 0};
+}
+
+/// Prints the replay's own figures after the engine's: per-frame timings, memory, the files.
+void printReplaySummary(const Options& o, const Replay& replay, const std::vector<std::string>& written,
+                        std::size_t occupied) {
+  const TimingSummary read = summarize(replay.records, &FrameRecord::read_ms);
+  const TimingSummary planning = summarize(replay.records, &FrameRecord::planning_ms);
+  const TimingSummary whole = summarize(replay.records, &FrameRecord::engine_ms);
+  std::printf("  replay per frame [ms] median   p99\n");
+  std::printf("    planning layers    %7.2f %7.2f   (snapshot, 2D grid, ESDF when due)\n", planning.median_ms,
+              planning.p99_ms);
+  std::printf("    submit() in all    %7.2f %7.2f\n", whole.median_ms, whole.p99_ms);
+  std::printf("    reading the input  %7.2f %7.2f\n", read.median_ms, read.p99_ms);
+  std::printf("  peak memory          %.1f MB resident (process), %.1f MB engine accounting\n",
+              static_cast<double>(eval::peakRssBytes()) / 1e6,
+              static_cast<double>(replay.timer.peakEngineBytes()) / 1e6);
+  std::string names;
+  for (const std::string& name : written) names += (names.empty() ? "" : ", ") + name;
+  std::printf("\n  wrote %s/{%s}\n        %s (%zu occupied voxels)\n        %s\n", o.out_dir.c_str(),
+              names.c_str(), o.voxels_out.c_str(), occupied, o.stats_out.c_str());
+}
+
+/// Writes the map outputs, the voxels and stats.json, prints the summary and saves the map.
+/// Returns the exit status: 0, or 3 when no frame was mapped.
+int finish(const Options& o, const MapConfig& config, Replay* replay) {
+  replay->engine.flush();
+  replay->outputs.source = replay->info.source;
+  const double res = replay->resolution_m();
+  const EngineStats s = replay->engine.stats();
+  const std::vector<VoxelIndex> occupied = replay->engine.occupiedVoxels();
+  const std::vector<std::string> written = eval::writeMapOutputs(replay->outputs, s, occupied, res);
+  io::writeVoxelText(o.voxels_out, occupied, res);
+  writeStats(o.stats_out, replay->info, config, s, replay->records, occupied.size(),
+             replay->timer.peakEngineBytes());
+  eval::printSummary(s, res, replay->outputs.scored != nullptr ? &replay->scored.accuracy : nullptr);
+  printReplaySummary(o, *replay, written, occupied.size());
+  if (!o.save_map_path.empty()) eval::saveMap(replay->engine, o.save_map_path);
+  return s.frames_mapped > 0 ? 0 : 3;
+}
+
+/// Checks the configuration, maps the source and writes the outputs. Returns the exit status:
+/// 0, 2 for a bad configuration or --extrinsic, 3 when no frame was mapped.
+int replaySource(const Options& o) {
+  const eval::DataKind kind = dataKind(o);
+  MapConfig config = eval::runConfig(o.config_path, kind, o.resolution_m);
+  const std::optional<io::CloudSequenceOptions> cloud_options = cloudOptions(o);
+  if (!cloud_options) return 2;
+  adjustConfig(o, &config);
+  if (!validConfig(config)) return 2;
+  std::filesystem::create_directories(o.out_dir);
+  if (!o.save_map_path.empty()) eval::checkSaveMapTarget(o.save_map_path);  // before the run
+
+  Replay replay(config, o.out_dir);
+  if (kind == eval::DataKind::kFrameDirectory) {
+    mapFrameDirectory(o, &replay);
+  } else if (kind == eval::DataKind::kPointClouds) {
+    mapCloudSequence(o, *cloud_options, &replay);
+  } else {
+    flySimulator(o, &replay);
+  }
+  return finish(o, config, &replay);
+}
+
+/// Runs the replay the options describe; returns the exit status (1: an error, logged).
+int run(Options o) {
+  spdlog::set_default_logger(spdlog::stderr_color_mt("mlmap"));  // stdout carries the results
+  if (o.voxels_out.empty()) o.voxels_out = o.out_dir + "/occupied_voxels.txt";
+  if (o.stats_out.empty()) o.stats_out = o.out_dir + "/stats.json";
+  try {
+    return replaySource(o);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 1;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{kAbout};
+  Options options;
+  addSourceOptions(app, options);
+  addEngineOptions(app, options);
+  addOutputOptions(app, options);
+  CLI11_PARSE(app, argc, argv);
+  return run(std::move(options));
 }

@@ -13,6 +13,8 @@
 // then reads them in this process's shared memory (see createDataSharingCloudWriter()). Exit
 // status 1 when a frame could not be written.
 
+#include "mlmap/apps/stop_signal.h"
+#include "mlmap/core/stopwatch.h"
 #include "mlmap/dds/cloud_sample.h"
 #include "mlmap/dds/cloud_writer.h"
 #include "mlmap/dds/entities.h"
@@ -34,10 +36,8 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstring>
 #include <memory>
 #include <optional>
@@ -48,10 +48,51 @@ namespace {
 
 using namespace mlmap;
 namespace fdds = eprosima::fastdds::dds;
-using Clock = std::chrono::steady_clock;
+using Clock = SteadyClock;
 
-std::atomic<bool> g_stop{false};
-extern "C" void onSignal(int) { g_stop = true; }
+/// The command line of mlmap_sensor_publisher.
+struct Options {
+  std::string config_path;    ///< -c, --config: node configuration (empty: defaults)
+  std::string scenario_path;  ///< --scenario (empty: the built-in room)
+  std::string frames_dir;     ///< --frames-dir: replay these RGB-D frames instead
+  std::string mode = "cloud";  ///< --mode: cloud (PointCloud2) or depth (Image + CameraInfo)
+  double rate_hz = 0.0;       ///< --rate (0: the scenario's, or 30 for a replay)
+  double pose_rate_hz = 50.0;  ///< --pose-rate: poses per second of flight (simulator)
+  double wait_s = 10.0;       ///< --wait-for-subscriber [s]
+  double speed = 1.0;         ///< --speed: flight seconds per wall-clock second (simulator)
+  int max_frames = 0;         ///< --max-frames (0: all)
+  bool prerender = false;     ///< --prerender: render and encode every frame first
+  apps::SecurityOptions security;  ///< --keystore, --enclave, --security-strategy
+};
+
+/// Adds every option of mlmap_sensor_publisher to `app`.
+void addOptions(CLI::App& app, Options& o) {
+  app.add_option("-c,--config", o.config_path, "node configuration (its dds section and sensor mounting)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--scenario", o.scenario_path, "scenario YAML (default: the built-in room)")
+      ->check(CLI::ExistingFile);
+  app.add_option("--frames-dir", o.frames_dir, "replay a folder of RGB-D frames instead (see README)")
+      ->check(CLI::ExistingDirectory);
+  app.add_option("--mode", o.mode, "what the sensor publishes: cloud (PointCloud2) or depth (Image)")
+      ->check(CLI::IsMember({"cloud", "depth"}));
+  app.add_option("--rate", o.rate_hz, "frames per second (default: the scenario's; 30 for a replay)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--speed", o.speed,
+                 "flight seconds per wall-clock second (simulator only): > 1 flies farther in the "
+                 "same number of frames (stamps stay wall-clock times)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--pose-rate", o.pose_rate_hz, "poses per second of flight (simulator only)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--max-frames", o.max_frames, "stop after this many frames (0: all)")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--wait-for-subscriber", o.wait_s,
+                 "seconds to wait for subscribers of the sensor and pose topics before starting")
+      ->check(CLI::NonNegativeNumber);
+  app.add_flag("--prerender", o.prerender,
+               "render and encode every frame before streaming (benchmarks: the simulator cannot "
+               "hold the rate; memory = frames x message size, 4.8 MB per 640x480 cloud)");
+  o.security.add(app);
+}
 
 /// An organised cloud (width x height) of float32 x, y, z, intensity (16 bytes per point, as a
 /// depth camera driver publishes it); pixels without a return are NaN (is_dense false).
@@ -98,6 +139,7 @@ mlmap::dds::sensor_msgs::PointCloud2_ organisedCloud(const DepthFrame& frame, do
   return msg;
 }
 
+/// The depth image of `frame` (16UC1 millimetres or 32FC1 metres, as it was captured).
 mlmap::dds::sensor_msgs::Image_ depthImage(const DepthFrame& frame, double stamp_s, const std::string& frame_id) {
   mlmap::dds::sensor_msgs::Image_ msg;
   msg.header_().stamp_(mlmap::dds::toRosTime(stamp_s));
@@ -116,6 +158,7 @@ mlmap::dds::sensor_msgs::Image_ depthImage(const DepthFrame& frame, double stamp
   return msg;
 }
 
+/// The CameraInfo of a pinhole camera without distortion.
 mlmap::dds::sensor_msgs::CameraInfo_ cameraInfo(const PinholeIntrinsics& k, double stamp_s,
                                          const std::string& frame_id) {
   mlmap::dds::sensor_msgs::CameraInfo_ msg;
@@ -139,16 +182,141 @@ struct PreparedFrame {
   std::optional<mlmap::dds::sensor_msgs::Image_> image;        ///< depth mode, with `info`
   std::optional<mlmap::dds::sensor_msgs::CameraInfo_> info;
 
+  /// Stamps every message of the frame with `stamp_s` [s since the epoch].
   void setStamp(double stamp_s) {
     const auto stamp = mlmap::dds::toRosTime(stamp_s);
     if (cloud) cloud->header_().stamp_(stamp);
     if (image) image->header_().stamp_(stamp);
     if (info) info->header_().stamp_(stamp);
   }
+  /// The size of the frame's payload [bytes].
   [[nodiscard]] std::size_t bytes() const {
     return (cloud ? cloud->data_().size() : 0) + (image ? image->data_().size() : 0);
   }
 };
+
+/// Where the frames come from: the simulator flying a scenario, or a folder of recorded frames.
+struct FrameSource {
+  std::optional<io::Scenario> scenario;       ///< the simulator's world and flight
+  std::optional<sim::DepthCamera> camera;     ///< the simulator's camera
+  std::unique_ptr<io::FrameDirectory> replay; ///< recorded frames instead
+  double rate_hz = 0.0;                       ///< frames per second
+  double speed = 1.0;                         ///< flight seconds per wall-clock second
+  int frames = 0;                             ///< frames to publish
+  Transform T_B_S = Transform::Identity();    ///< the sensor on the body (simulator)
+  bool depth_mode = false;                    ///< depth images instead of clouds
+  std::string sensor_frame;                   ///< frame_id of the sensor messages
+
+  /// Frame i, encoded (stamps are set when it is sent).
+  [[nodiscard]] PreparedFrame prepare(int i) const {
+    PreparedFrame prepared;
+    DepthFrame frame;
+    if (replay) {
+      frame = replay->read(static_cast<std::size_t>(i));
+      prepared.T_W_B = frame.T_W_B;
+    } else {
+      prepared.flight_s = speed * i / rate_hz;
+      frame.T_W_B = scenario->trajectory.poseAt(prepared.flight_s);
+      camera->render(scenario->world, frame.T_W_B * T_B_S, prepared.flight_s, &frame);
+    }
+    if (depth_mode) {
+      prepared.info = cameraInfo(frame.intrinsics, 0.0, sensor_frame);
+      prepared.image = depthImage(frame, 0.0, sensor_frame);
+    } else {
+      prepared.cloud = organisedCloud(frame, 0.0, sensor_frame);
+    }
+    return prepared;
+  }
+};
+
+/// Throws when the configuration disables a topic the mode needs.
+void checkTopics(const Options& o, const mlmap::dds::TopicNames& topics) {
+  const bool depth_mode = o.mode == "depth";
+  const std::string& sensor_topic = depth_mode ? topics.depth_image : topics.cloud;
+  if (sensor_topic.empty() || topics.pose.empty() || (depth_mode && topics.camera_info.empty())) {
+    throw std::runtime_error("the configuration disables the " + o.mode + " or pose topic");
+  }
+}
+
+/// Opens the frame source the options name, with its rate and number of frames.
+FrameSource openSource(const Options& o, const mlmap::dds::NodeConfig& config) {
+  FrameSource source;
+  source.rate_hz = o.rate_hz;
+  if (!o.frames_dir.empty()) {
+    source.replay = std::make_unique<io::FrameDirectory>(o.frames_dir);
+    if (source.rate_hz <= 0) source.rate_hz = io::kFrameDirectoryRate_hz;
+  } else {
+    source.scenario = o.scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(o.scenario_path);
+    if (source.rate_hz <= 0) source.rate_hz = source.scenario->frame_rate_hz;
+  }
+  checkTopics(o, config.dds.topics);
+  const int available =
+      source.replay ? static_cast<int>(source.replay->size())
+                    : static_cast<int>(std::floor(source.scenario->trajectory.duration_s() * source.rate_hz)) + 1;
+  source.frames = o.max_frames > 0 ? std::min(o.max_frames, available) : available;
+  source.T_B_S = config.map.sensor.T_B_S();
+  if (source.replay && !source.T_B_S.isApprox(Transform::Identity())) {
+    spdlog::warn("replayed frames are camera poses (T_B_S = identity) but the configuration mounts "
+                 "the sensor elsewhere: give mlmap_node a config with sensor translation 0 and "
+                 "rotation 0 (config/mlmap_node_replay.yaml)");
+  }
+  if (source.scenario) source.camera.emplace(source.scenario->camera);
+  source.speed = o.speed;
+  source.depth_mode = o.mode == "depth";
+  source.sensor_frame = config.dds.sensor_frame;
+  return source;
+}
+
+/// The writers of the sensor (cloud, or image + camera info) and pose topics.
+struct Writers {
+  mlmap::dds::ParticipantPtr participant;
+  fdds::DataWriter* sensor = nullptr;
+  fdds::DataWriter* info = nullptr;  ///< depth mode only
+  fdds::DataWriter* pose = nullptr;
+  std::uint32_t cloud_bytes = 0;     ///< every cloud's serialised size, with data-sharing
+  std::string sensor_topic;          ///< the sensor's DDS topic name
+};
+
+/// The sensor writer: images, or clouds (with data-sharing unless dds.data_sharing is false).
+void createSensorWriter(const mlmap::dds::DdsConfig& dds, const FrameSource& source,
+                        fdds::Publisher* publisher, const fdds::DataWriterQos& qos, Writers* w) {
+  if (source.depth_mode) {
+    w->sensor = mlmap::dds::createWriter<mlmap::dds::sensor_msgs::Image_PubSubType>(publisher, w->sensor_topic, qos);
+  } else if (dds.data_sharing) {
+    // Every cloud has the size of the first (one camera): the writer's slots get that size.
+    PreparedFrame first = source.prepare(0);
+    mlmap::dds::sensor_msgs::PointCloud2_PubSubType plain;
+    w->cloud_bytes = plain.getSerializedSizeProvider(&*first.cloud)();
+    w->sensor = mlmap::dds::createDataSharingCloudWriter(publisher, w->sensor_topic, qos, w->cloud_bytes);
+    spdlog::info("clouds of {:.2f} MB offered with data-sharing (dds.data_sharing)", w->cloud_bytes / 1e6);
+  } else {
+    w->sensor = mlmap::dds::createWriter<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(publisher, w->sensor_topic, qos);
+  }
+}
+
+/// Joins the DDS graph and creates the writers.
+Writers createWriters(const mlmap::dds::DdsConfig& dds, const FrameSource& source) {
+  Writers w;
+  w.participant = mlmap::dds::createParticipant(dds, "mlmap_sensor_publisher");
+  fdds::Publisher* publisher = w.participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  const mlmap::dds::TopicNames& topics = dds.topics;
+  // Sensor drivers and odometry publish best-effort (ROS 2 sensor data QoS; PX4 does too), and
+  // mlmap_node reads best-effort: that is what its readers get from this writer. The writer
+  // offers RELIABLE (KEEP_LAST 5, so it never blocks) because Fast DDS 2.9.1's best-effort
+  // writers do not drop a same-host reader's UDP locator when shared memory reaches it
+  // (eProsima/Fast-DDS#3655, fixed after 2.9.1; Jazzy's 2.14 has the fix): every 4.9 MB cloud
+  // crossed loopback UDP too, which doubled its transport cost in the latency benchmark.
+  const fdds::DataWriterQos qos = mlmap::dds::reliableWriterQos(5);
+  w.sensor_topic = mlmap::dds::ddsTopicName(dds.ns, source.depth_mode ? topics.depth_image : topics.cloud);
+  createSensorWriter(dds, source, publisher, qos, &w);
+  if (source.depth_mode) {
+    w.info = mlmap::dds::createWriter<mlmap::dds::sensor_msgs::CameraInfo_PubSubType>(
+        publisher, mlmap::dds::ddsTopicName(dds.ns, topics.camera_info), qos);
+  }
+  w.pose = mlmap::dds::createWriter<mlmap::dds::geometry_msgs::PoseStamped_PubSubType>(
+      publisher, mlmap::dds::ddsTopicName(dds.ns, topics.pose), qos);
+  return w;
+}
 
 /// Waits until every writer has a matched reader (false: timed out or stopped).
 bool waitForReaders(const std::vector<fdds::DataWriter*>& writers, double timeout_s) {
@@ -161,8 +329,170 @@ bool waitForReaders(const std::vector<fdds::DataWriter*>& writers, double timeou
       all = all && matched.current_count > 0;
     }
     if (all) return true;
-    if (g_stop || std::chrono::duration<double>(Clock::now() - start).count() >= timeout_s) return false;
+    if (apps::stopRequested() || secondsBetween(start, Clock::now()) >= timeout_s) return false;
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+}
+
+/// Waits for the mapping node (matching is asynchronous; frames sent before it are lost) and
+/// returns the number of subscribers of the sensor topic. A writer can see its match before the
+/// reader has matched it: a short grace period after.
+int waitForSubscribers(const Writers& w, double wait_s) {
+  std::vector<fdds::DataWriter*> writers = {w.sensor, w.pose};
+  if (w.info != nullptr) writers.push_back(w.info);
+  const bool matched = waitForReaders(writers, wait_s);
+  if (matched) std::this_thread::sleep_for(std::chrono::milliseconds(250));
+  fdds::PublicationMatchedStatus sensor_matched;
+  w.sensor->get_publication_matched_status(sensor_matched);
+  if (!matched) spdlog::warn("not every topic has a subscriber after {} s: publishing anyway", wait_s);
+  return sensor_matched.current_count;
+}
+
+/// Every frame rendered and encoded (--prerender), with a progress line every two seconds.
+std::vector<PreparedFrame> prerenderFrames(const FrameSource& source) {
+  std::vector<PreparedFrame> prerendered;
+  const auto render_start = Clock::now();
+  auto last_line = render_start;
+  std::size_t bytes = 0;
+  prerendered.reserve(static_cast<std::size_t>(source.frames));
+  for (int i = 0; i < source.frames && !apps::stopRequested(); ++i) {
+    prerendered.push_back(source.prepare(i));
+    bytes += prerendered.back().bytes();
+    if (secondsBetween(last_line, Clock::now()) >= 2.0 || i + 1 == source.frames) {
+      last_line = Clock::now();
+      spdlog::info("prerendered {} / {} frames ({:.0f} MB, {:.1f} s)", i + 1, source.frames,
+                   static_cast<double>(bytes) / 1e6, secondsBetween(render_start, last_line));
+    }
+  }
+  return prerendered;
+}
+
+/// What the stream did.
+struct StreamStats {
+  int sent = 0;             ///< frames written
+  int late = 0;             ///< frames sent more than kLate_ms after their capture time
+  int failed = 0;           ///< frames whose write failed
+  double max_late_ms = 0.0; ///< the latest a frame left after its capture time [ms]
+};
+
+/// A frame sent later than this after its capture time counts as late [ms].
+constexpr double kLate_ms = 5.0;
+
+/// Sends frames in real time: frame i is captured at start + i / rate, with the wall-clock stamp
+/// wall0 + i / rate. The simulator's flight time t maps to the stamp wall0 + t / speed (poses as
+/// well as frames).
+class Streamer {
+ public:
+  Streamer(const FrameSource& source, const Writers& writers, const mlmap::dds::DdsConfig& dds,
+           double pose_rate_hz)
+      : source_(source), writers_(writers), world_frame_(dds.world_frame),
+        pose_period_s_(1.0 / pose_rate_hz), start_(Clock::now()), wall0_s_(mlmap::dds::wallClockNow_s()) {}
+
+  /// Sends frame `i` at its capture time, with the poses up to it.
+  void send(int i, PreparedFrame frame) {
+    const auto due = start_ + std::chrono::duration_cast<Clock::duration>(
+                                  std::chrono::duration<double>(i / source_.rate_hz));
+    std::this_thread::sleep_until(due);
+    const double late_ms = msSince(due);
+    stats_.max_late_ms = std::max(stats_.max_late_ms, late_ms);
+    stats_.late += late_ms > kLate_ms ? 1 : 0;
+    const double stamp_s = wall0_s_ + i / source_.rate_hz;
+    publishPosesFor(frame, stamp_s);
+    frame.setStamp(stamp_s);
+    if (write(frame)) {
+      ++stats_.sent;
+    } else if (stats_.failed++ == 0) {
+      spdlog::error("frame {}: the DDS write failed{}", i,
+                    writers_.cloud_bytes > 0 ? " (data-sharing: a cloud larger than the first, or every "
+                                               "slot still held by a reader that has not taken it)"
+                                             : "");
+    }
+  }
+  [[nodiscard]] const StreamStats& stats() const { return stats_; }
+
+ private:
+  void publishPose(const Transform& T_W_B, double stamp_s) {
+    mlmap::dds::geometry_msgs::PoseStamped_ pose = mlmap::dds::toPoseStamped(T_W_B, stamp_s, world_frame_);
+    writers_.pose->write(&pose);
+  }
+  void publishPosesFor(const PreparedFrame& frame, double stamp_s) {
+    if (source_.replay) {
+      publishPose(frame.T_W_B, stamp_s);  // the recording has one pose per frame
+      return;
+    }
+    // Odometry runs ahead of the camera by up to one pose period, as a fast IMU-based
+    // estimator does, so each frame finds poses on both sides of its stamp.
+    for (; static_cast<double>(pose_k_) * pose_period_s_ <= frame.flight_s + pose_period_s_ + 1e-9; ++pose_k_) {
+      const double pose_t_s = static_cast<double>(pose_k_) * pose_period_s_;
+      publishPose(source_.scenario->trajectory.poseAt(pose_t_s), wall0_s_ + pose_t_s / source_.speed);
+    }
+  }
+  bool write(PreparedFrame& frame) {
+    if (source_.depth_mode) {
+      const bool info_written = writers_.info->write(&*frame.info);
+      return writers_.sensor->write(&*frame.image) && info_written;
+    }
+    return writers_.sensor->write(&*frame.cloud);
+  }
+
+  const FrameSource& source_;
+  const Writers& writers_;
+  std::string world_frame_;
+  double pose_period_s_;
+  Clock::time_point start_;
+  double wall0_s_;
+  long pose_k_ = 0;
+  StreamStats stats_;
+};
+
+/// Publishes every frame (prerendered ones if given) until done or stopped.
+StreamStats stream(const FrameSource& source, const Writers& writers, const mlmap::dds::DdsConfig& dds,
+                   double pose_rate_hz, std::vector<PreparedFrame>* prerendered) {
+  Streamer streamer(source, writers, dds, pose_rate_hz);
+  const int frames = source.frames;
+  for (int i = 0; i < frames && !apps::stopRequested(); ++i) {
+    streamer.send(i, prerendered != nullptr ? std::move((*prerendered)[static_cast<std::size_t>(i)])
+                                            : source.prepare(i));
+    if (frames >= 10 && (i + 1) % (frames / 10) == 0) spdlog::info("{} / {} frames published", i + 1, frames);
+  }
+  return streamer.stats();
+}
+
+/// Reports late and failed frames; returns the exit status (1 when a frame could not be written).
+int finish(const StreamStats& s, bool prerender) {
+  if (s.late > 0) {
+    spdlog::warn("{} of {} frames left more than {} ms after their capture time (max {:.1f} ms; "
+                 "their latency includes it): {}",
+                 s.late, s.sent + s.failed, kLate_ms, s.max_late_ms,
+                 prerender ? "the machine is busy" : "the simulator is slower than --rate (try --prerender)");
+  }
+  if (s.failed > 0) spdlog::error("{} of {} frames could not be written", s.failed, s.sent + s.failed);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // let the last samples leave
+  spdlog::info("done: {} frames published; at most {:.2f} ms after their capture time", s.sent, s.max_late_ms);
+  return s.failed > 0 ? 1 : 0;
+}
+
+/// Opens the source, waits for the subscribers and publishes; returns the exit status (1: an
+/// error, logged, or a frame that could not be written).
+int run(const Options& o) {
+  apps::installStopHandler();
+  try {
+    mlmap::dds::NodeConfig config =
+        o.config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(o.config_path);
+    o.security.apply(&config.dds.security);
+    const FrameSource source = openSource(o, config);
+    const Writers writers = createWriters(config.dds, source);
+    const int subscribers = waitForSubscribers(writers, o.wait_s);
+    std::vector<PreparedFrame> prerendered;
+    if (o.prerender) prerendered = prerenderFrames(source);
+    spdlog::info("publishing {} on {} ({} subscriber(s)) at {} Hz", source.depth_mode ? "depth images" : "clouds",
+                 writers.sensor_topic, subscribers, source.rate_hz);
+    const StreamStats stats =
+        stream(source, writers, config.dds, o.pose_rate_hz, o.prerender ? &prerendered : nullptr);
+    return finish(stats, o.prerender);
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 1;
   }
 }
 
@@ -170,221 +500,8 @@ bool waitForReaders(const std::vector<fdds::DataWriter*>& writers, double timeou
 
 int main(int argc, char** argv) {
   CLI::App app{"mlmap_sensor_publisher: simulated (or replayed) depth sensor + odometry over DDS"};
-  std::string config_path, scenario_path, frames_dir, mode = "cloud";
-  double rate_hz = 0.0, pose_rate_hz = 50.0, wait_s = 10.0, speed = 1.0;
-  int max_frames = 0;
-  bool prerender = false;
-  app.add_option("-c,--config", config_path, "node configuration (its dds section and sensor mounting)")
-      ->check(CLI::ExistingFile);
-  app.add_option("--scenario", scenario_path, "scenario YAML (default: the built-in room)")
-      ->check(CLI::ExistingFile);
-  app.add_option("--frames-dir", frames_dir, "replay a folder of RGB-D frames instead (see README)")
-      ->check(CLI::ExistingDirectory);
-  app.add_option("--mode", mode, "what the sensor publishes: cloud (PointCloud2) or depth (Image)")
-      ->check(CLI::IsMember({"cloud", "depth"}));
-  app.add_option("--rate", rate_hz, "frames per second (default: the scenario's; 30 for a replay)")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--speed", speed,
-                 "flight seconds per wall-clock second (simulator only): > 1 flies farther in the "
-                 "same number of frames (stamps stay wall-clock times)")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--pose-rate", pose_rate_hz, "poses per second of flight (simulator only)")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--max-frames", max_frames, "stop after this many frames (0: all)")
-      ->check(CLI::NonNegativeNumber);
-  app.add_option("--wait-for-subscriber", wait_s,
-                 "seconds to wait for subscribers of the sensor and pose topics before starting")
-      ->check(CLI::NonNegativeNumber);
-  app.add_flag("--prerender", prerender,
-               "render and encode every frame before streaming (benchmarks: the simulator cannot "
-               "hold the rate; memory = frames x message size, 4.8 MB per 640x480 cloud)");
-  mlmap::apps::SecurityOptions security;
-  security.add(app);
+  Options options;
+  addOptions(app, options);
   CLI11_PARSE(app, argc, argv);
-  std::signal(SIGINT, onSignal);
-  std::signal(SIGTERM, onSignal);
-
-  try {
-    mlmap::dds::NodeConfig config =
-        config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(config_path);
-    security.apply(&config.dds.security);
-    std::optional<io::Scenario> scenario;
-    std::unique_ptr<io::FrameDirectory> replay;
-    if (!frames_dir.empty()) {
-      replay = std::make_unique<io::FrameDirectory>(frames_dir);
-      if (rate_hz <= 0) rate_hz = io::kFrameDirectoryRate_hz;
-    } else {
-      scenario = scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(scenario_path);
-      if (rate_hz <= 0) rate_hz = scenario->frame_rate_hz;
-    }
-    const mlmap::dds::TopicNames& topics = config.dds.topics;
-    const bool depth_mode = mode == "depth";
-    const std::string sensor_topic = depth_mode ? topics.depth_image : topics.cloud;
-    if (sensor_topic.empty() || topics.pose.empty() || (depth_mode && topics.camera_info.empty())) {
-      throw std::runtime_error("the configuration disables the " + mode + " or pose topic");
-    }
-
-    const int available = replay ? static_cast<int>(replay->size())
-                                 : static_cast<int>(std::floor(scenario->trajectory.duration_s() * rate_hz)) + 1;
-    const int frames = max_frames > 0 ? std::min(max_frames, available) : available;
-    const Transform T_B_S = config.map.sensor.T_B_S();
-    if (replay && !T_B_S.isApprox(Transform::Identity())) {
-      spdlog::warn("replayed frames are camera poses (T_B_S = identity) but the configuration mounts "
-                   "the sensor elsewhere: give mlmap_node a config with sensor translation 0 and "
-                   "rotation 0 (config/mlmap_node_replay.yaml)");
-    }
-    std::optional<sim::DepthCamera> camera;
-    if (scenario) camera.emplace(scenario->camera);
-    const std::string& world = config.dds.world_frame;
-    const std::string& sensor = config.dds.sensor_frame;
-
-    // Frame i, encoded (stamps are set when it is sent).
-    auto prepare = [&](int i) {
-      PreparedFrame prepared;
-      DepthFrame frame;
-      if (replay) {
-        frame = replay->read(static_cast<std::size_t>(i));
-        prepared.T_W_B = frame.T_W_B;
-      } else {
-        prepared.flight_s = speed * i / rate_hz;
-        frame.T_W_B = scenario->trajectory.poseAt(prepared.flight_s);
-        camera->render(scenario->world, frame.T_W_B * T_B_S, prepared.flight_s, &frame);
-      }
-      if (depth_mode) {
-        prepared.info = cameraInfo(frame.intrinsics, 0.0, sensor);
-        prepared.image = depthImage(frame, 0.0, sensor);
-      } else {
-        prepared.cloud = organisedCloud(frame, 0.0, sensor);
-      }
-      return prepared;
-    };
-    mlmap::dds::ParticipantPtr participant = mlmap::dds::createParticipant(config.dds, "mlmap_sensor_publisher");
-    fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
-    const auto ns = config.dds.ns;
-    // Sensor drivers and odometry publish best-effort (ROS 2 sensor data QoS; PX4 does too), and
-    // mlmap_node reads best-effort: that is what its readers get from this writer. The writer
-    // offers RELIABLE (KEEP_LAST 5, so it never blocks) because Fast DDS 2.9.1's best-effort
-    // writers do not drop a same-host reader's UDP locator when shared memory reaches it
-    // (eProsima/Fast-DDS#3655, fixed after 2.9.1; Jazzy's 2.14 has the fix): every 4.9 MB cloud
-    // crossed loopback UDP too, which doubled its transport cost in the latency benchmark.
-    const fdds::DataWriterQos sensor_qos = mlmap::dds::reliableWriterQos(5);
-    const std::string sensor_dds_topic = mlmap::dds::ddsTopicName(ns, sensor_topic);
-    fdds::DataWriter* sensor_writer = nullptr;
-    std::uint32_t cloud_bytes = 0;  // every cloud's serialised size, with data-sharing
-    if (depth_mode) {
-      sensor_writer = mlmap::dds::createWriter<mlmap::dds::sensor_msgs::Image_PubSubType>(publisher, sensor_dds_topic, sensor_qos);
-    } else if (config.dds.data_sharing) {
-      // Every cloud has the size of the first (one camera): the writer's slots get that size.
-      PreparedFrame first = prepare(0);
-      mlmap::dds::sensor_msgs::PointCloud2_PubSubType plain;
-      cloud_bytes = plain.getSerializedSizeProvider(&*first.cloud)();
-      sensor_writer = mlmap::dds::createDataSharingCloudWriter(publisher, sensor_dds_topic, sensor_qos, cloud_bytes);
-      spdlog::info("clouds of {:.2f} MB offered with data-sharing (dds.data_sharing)", cloud_bytes / 1e6);
-    } else {
-      sensor_writer = mlmap::dds::createWriter<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(publisher, sensor_dds_topic, sensor_qos);
-    }
-    fdds::DataWriter* info_writer =
-        depth_mode ? mlmap::dds::createWriter<mlmap::dds::sensor_msgs::CameraInfo_PubSubType>(publisher, mlmap::dds::ddsTopicName(ns, topics.camera_info), sensor_qos)
-                   : nullptr;
-    fdds::DataWriter* pose_writer = mlmap::dds::createWriter<mlmap::dds::geometry_msgs::PoseStamped_PubSubType>(
-        publisher, mlmap::dds::ddsTopicName(ns, topics.pose), sensor_qos);
-
-    // Wait for the mapping node (matching is asynchronous; frames sent before it are lost). A
-    // writer can see its match before the reader has matched it: a short grace period after.
-    std::vector<fdds::DataWriter*> writers = {sensor_writer, pose_writer};
-    if (info_writer != nullptr) writers.push_back(info_writer);
-    const bool matched = waitForReaders(writers, wait_s);
-    if (matched) std::this_thread::sleep_for(std::chrono::milliseconds(250));
-    fdds::PublicationMatchedStatus sensor_matched;
-    sensor_writer->get_publication_matched_status(sensor_matched);
-    if (!matched) spdlog::warn("not every topic has a subscriber after {} s: publishing anyway", wait_s);
-
-    std::vector<PreparedFrame> prerendered;
-    if (prerender) {
-      const auto render_start = Clock::now();
-      auto last_line = render_start;
-      std::size_t bytes = 0;
-      prerendered.reserve(static_cast<std::size_t>(frames));
-      for (int i = 0; i < frames && !g_stop; ++i) {
-        prerendered.push_back(prepare(i));
-        bytes += prerendered.back().bytes();
-        if (std::chrono::duration<double>(Clock::now() - last_line).count() >= 2.0 || i + 1 == frames) {
-          last_line = Clock::now();
-          spdlog::info("prerendered {} / {} frames ({:.0f} MB, {:.1f} s)", i + 1, frames,
-                       static_cast<double>(bytes) / 1e6,
-                       std::chrono::duration<double>(last_line - render_start).count());
-        }
-      }
-    }
-    spdlog::info("publishing {} on {} ({} subscriber(s)) at {} Hz", depth_mode ? "depth images" : "clouds",
-                 mlmap::dds::ddsTopicName(ns, sensor_topic), sensor_matched.current_count, rate_hz);
-
-    // Frame i is captured at start + i / rate: wall-clock stamp wall0 + i / rate. The simulator's
-    // flight time t maps to the stamp wall0 + t / speed (poses as well as frames).
-    const auto start = Clock::now();
-    const double wall0_s = mlmap::dds::wallClockNow_s();
-    const double pose_period_s = 1.0 / pose_rate_hz;
-    long pose_k = 0;
-    int sent = 0, late = 0, failed = 0;
-    double max_late_ms = 0.0;
-    constexpr double kLate_ms = 5.0;
-    auto publishPose = [&](const Transform& T_W_B, double stamp_s) {
-      mlmap::dds::geometry_msgs::PoseStamped_ pose = mlmap::dds::toPoseStamped(T_W_B, stamp_s, world);
-      pose_writer->write(&pose);
-    };
-    for (int i = 0; i < frames && !g_stop; ++i) {
-      PreparedFrame frame = prerender ? std::move(prerendered[static_cast<std::size_t>(i)]) : prepare(i);
-      const auto due = start + std::chrono::duration_cast<Clock::duration>(
-                                   std::chrono::duration<double>(i / rate_hz));
-      std::this_thread::sleep_until(due);
-      const double late_ms = std::chrono::duration<double, std::milli>(Clock::now() - due).count();
-      max_late_ms = std::max(max_late_ms, late_ms);
-      late += late_ms > kLate_ms ? 1 : 0;
-      const double stamp_s = wall0_s + i / rate_hz;
-      if (replay) {
-        publishPose(frame.T_W_B, stamp_s);  // the recording has one pose per frame
-      } else {
-        // Odometry runs ahead of the camera by up to one pose period, as a fast IMU-based
-        // estimator does, so each frame finds poses on both sides of its stamp.
-        for (; static_cast<double>(pose_k) * pose_period_s <= frame.flight_s + pose_period_s + 1e-9;
-             ++pose_k) {
-          const double pose_t_s = static_cast<double>(pose_k) * pose_period_s;
-          publishPose(scenario->trajectory.poseAt(pose_t_s), wall0_s + pose_t_s / speed);
-        }
-      }
-      frame.setStamp(stamp_s);
-      bool written = true;
-      if (depth_mode) {
-        const bool info_written = info_writer->write(&*frame.info);
-        written = sensor_writer->write(&*frame.image) && info_written;
-      } else {
-        written = sensor_writer->write(&*frame.cloud);
-      }
-      if (written) {
-        ++sent;
-      } else if (failed++ == 0) {
-        spdlog::error("frame {}: the DDS write failed{}", i,
-                      cloud_bytes > 0 ? " (data-sharing: a cloud larger than the first, or every "
-                                        "slot still held by a reader that has not taken it)"
-                                      : "");
-      }
-      if (frames >= 10 && (i + 1) % (frames / 10) == 0) {
-        spdlog::info("{} / {} frames published", i + 1, frames);
-      }
-    }
-    if (late > 0) {
-      spdlog::warn("{} of {} frames left more than {} ms after their capture time (max {:.1f} ms; "
-                   "their latency includes it): {}",
-                   late, sent + failed, kLate_ms, max_late_ms,
-                   prerender ? "the machine is busy" : "the simulator is slower than --rate (try --prerender)");
-    }
-    if (failed > 0) spdlog::error("{} of {} frames could not be written", failed, sent + failed);
-    std::this_thread::sleep_for(std::chrono::milliseconds(300));  // let the last samples leave
-    spdlog::info("done: {} frames published; at most {:.2f} ms after their capture time", sent,
-                 max_late_ms);
-    return failed > 0 ? 1 : 0;
-  } catch (const std::exception& e) {
-    spdlog::error("{}", e.what());
-    return 1;
-  }
+  return run(options);
 }

@@ -1,6 +1,7 @@
 #include "mlmap/eval/run_outputs.h"
 
 #include "mlmap/config/config_yaml.h"
+#include "mlmap/eval/json_output.h"
 #include "mlmap/map_io/map_file.h"
 #include "mlmap/pictures/map_image.h"
 
@@ -13,7 +14,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <stdexcept>
 
 namespace mlmap::eval {
@@ -28,6 +28,43 @@ io::VoxelList voxelList(const std::vector<VoxelIndex>& voxels, double res,
   list.centers_W.reserve(voxels.size());
   for (const VoxelIndex& v : voxels) list.centers_W.push_back(R_display_W * voxelCenter(v, res));
   return list;
+}
+
+/// report.json: the engine's figures after a run of `source`, with the accuracy when scored.
+Json reportJson(const std::string& source, const EngineStats& s, std::size_t occupied, double res,
+                const Accuracy* accuracy) {
+  Json report;
+  report["source"] = source;
+  report["resolution_m"] = res;
+  report["frames_mapped"] = s.frames_mapped;
+  report["frames_dropped"] = s.frames_dropped;
+  report["frames_rejected"] =
+      s.rejected_invalid_pose + s.rejected_out_of_order + s.rejected_empty + s.rejected_bad_image;
+  report["occupied_voxels"] = occupied;
+  report["timing"] = {{"awareness", toJson(s.awareness)},
+                      {"local_global", toJson(s.local_global)},
+                      {"total", toJson(s.total)}};
+  report["memory_bytes"] = {{"awareness", s.memory.awareness_bytes},
+                            {"local", s.memory.local_bytes},
+                            {"global", s.memory.global_bytes}};
+  report["global_map"] = {{"occupied_voxels", s.global_voxels}, {"submaps", s.global_submaps}};
+  report["local_map"] = {{"shifts", s.local.shifts},
+                         {"submaps_retired", s.local.submaps_retired},
+                         {"submaps_restored", s.local.submaps_restored}};
+  report["points"] = {{"in", s.points.points_in},
+                      {"no_data_or_non_finite", s.points.rejected_non_finite},
+                      {"too_close", s.points.rejected_too_close},
+                      {"beyond_max_range", s.points.beyond_max_range},
+                      {"hit_voxels", s.points.hit_voxels},
+                      {"free_voxels", s.points.free_voxels}};
+  if (accuracy != nullptr) {
+    report["accuracy"] = {{"precision", accuracy->precision},
+                          {"recall", accuracy->recall},
+                          {"f1", accuracy->f1},
+                          {"mapped", accuracy->mapped},
+                          {"observed_truth", accuracy->observed_truth}};
+  }
+  return report;
 }
 
 }  // namespace
@@ -87,14 +124,6 @@ ScoredFlight flyAndScore(const io::Scenario& scenario, MapEngine& engine, const 
   return s;
 }
 
-std::string toJson(const TimingSummary& t) {
-  std::ostringstream o;
-  o << "{\"median_ms\": " << t.median_ms << ", \"p99_ms\": " << t.p99_ms
-    << ", \"mean_ms\": " << t.mean_ms << ", \"max_ms\": " << t.max_ms
-    << ", \"frames\": " << t.samples << "}";
-  return o.str();
-}
-
 std::vector<std::string> writeMapOutputs(const MapOutputs& outputs, const EngineStats& s,
                                          const std::vector<VoxelIndex>& occupied, double res) {
   const std::string& out_dir = outputs.out_dir;
@@ -124,35 +153,8 @@ std::vector<std::string> writeMapOutputs(const MapOutputs& outputs, const Engine
     written.push_back("accuracy_top.png");
   }
 
-  std::ofstream report(out_dir + "/report.json");
-  report << "{\n  \"source\": \"" << outputs.source << "\",\n  \"resolution_m\": " << res
-         << ",\n  \"frames_mapped\": " << s.frames_mapped
-         << ",\n  \"frames_dropped\": " << s.frames_dropped
-         << ",\n  \"frames_rejected\": "
-         << s.rejected_invalid_pose + s.rejected_out_of_order + s.rejected_empty + s.rejected_bad_image
-         << ",\n  \"occupied_voxels\": " << occupied.size()
-         << ",\n  \"timing\": {\"awareness\": " << toJson(s.awareness)
-         << ", \"local_global\": " << toJson(s.local_global) << ", \"total\": " << toJson(s.total)
-         << "},\n  \"memory_bytes\": {\"awareness\": " << s.memory.awareness_bytes
-         << ", \"local\": " << s.memory.local_bytes << ", \"global\": " << s.memory.global_bytes
-         << "},\n  \"global_map\": {\"occupied_voxels\": " << s.global_voxels
-         << ", \"submaps\": " << s.global_submaps << "},\n  \"local_map\": {\"shifts\": "
-         << s.local.shifts << ", \"submaps_retired\": " << s.local.submaps_retired
-         << ", \"submaps_restored\": " << s.local.submaps_restored
-         << "},\n  \"points\": {\"in\": " << s.points.points_in
-         << ", \"no_data_or_non_finite\": " << s.points.rejected_non_finite
-         << ", \"too_close\": " << s.points.rejected_too_close
-         << ", \"beyond_max_range\": " << s.points.beyond_max_range
-         << ", \"hit_voxels\": " << s.points.hit_voxels
-         << ", \"free_voxels\": " << s.points.free_voxels << "}";
-  if (accuracy != nullptr) {
-    report << ",\n  \"accuracy\": {\"precision\": " << accuracy->precision
-           << ", \"recall\": " << accuracy->recall << ", \"f1\": " << accuracy->f1
-           << ", \"mapped\": " << accuracy->mapped
-           << ", \"observed_truth\": " << accuracy->observed_truth << "}";
-  }
-  report << "\n}\n";
-  if (!report) throw std::runtime_error(out_dir + "/report.json: cannot write");
+  writeJsonFile(out_dir + "/report.json", reportJson(outputs.source, s, occupied.size(), res, accuracy),
+                /*expanded_levels=*/1);
   written.push_back("report.json");
   return written;
 }
@@ -185,20 +187,7 @@ void printSummary(const EngineStats& s, double res, const Accuracy* accuracy) {
 }
 
 std::string jsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-      out += buf;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
+  return Json(s).dump(-1, ' ', false, Json::error_handler_t::replace);
 }
 
 std::size_t peakRssBytes() {

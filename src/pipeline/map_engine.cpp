@@ -1,5 +1,7 @@
 #include "mlmap/pipeline/map_engine.h"
 
+#include "mlmap/core/stopwatch.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -12,10 +14,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kTimingWindow = 2000;   // frames kept for median / p99
 constexpr double kMaxAbsCoordinate_m = 1e6;   // keeps voxel indices far from int overflow
-
-double msSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 const MapConfig& validated(const MapConfig& config) {
   throwIfInvalid(config.validate(), "mlmap configuration");

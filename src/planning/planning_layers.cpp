@@ -1,5 +1,7 @@
 #include "mlmap/planning/planning_layers.h"
 
+#include "mlmap/core/stopwatch.h"
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -9,11 +11,7 @@
 namespace mlmap {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
+using Clock = SteadyClock;
 
 }  // namespace
 

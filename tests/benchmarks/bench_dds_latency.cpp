@@ -14,6 +14,7 @@
 // ms; p99 <= engine p99 + 15 ms) and writes JSON. Figures, not pass/fail: only --require-all
 // (the ctest smoke run) fails, when a frame sent did not reach this program or no status came.
 
+#include "mlmap/apps/stop_signal.h"
 #include "mlmap/dds/entities.h"
 #include "mlmap/pipeline/map_engine.h"
 #include "mlmap/dds/node_config.h"
@@ -30,7 +31,6 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -45,9 +45,6 @@ namespace {
 using namespace mlmap;
 namespace fdds = eprosima::fastdds::dds;
 using Clock = std::chrono::steady_clock;
-
-std::atomic<bool> g_stop{false};
-extern "C" void onSignal(int) { g_stop = true; }
 
 constexpr double kTargetP50Margin_ms = 5.0;   // p50 <= engine median + this
 constexpr double kTargetP99Margin_ms = 15.0;  // p99 <= engine p99 + this
@@ -139,8 +136,7 @@ int main(int argc, char** argv) {
                "exit 3 unless every frame sent reached this program as a local map and a final "
                "status arrived (smoke test)");
   CLI11_PARSE(app, argc, argv);
-  std::signal(SIGINT, onSignal);
-  std::signal(SIGTERM, onSignal);
+  mlmap::apps::installStopHandler();
 
   try {
     const mlmap::dds::NodeConfig config =
@@ -223,7 +219,7 @@ int main(int argc, char** argv) {
     // Ready once the node's writers are matched: the driver starts the publisher after this line.
     const auto start = Clock::now();
     bool ready = false;
-    while (!g_stop) {
+    while (!mlmap::apps::stopRequested()) {
       const auto now = Clock::now();
       const double elapsed_s = std::chrono::duration<double>(now - start).count();
       if (elapsed_s >= duration_s) {

@@ -4,6 +4,7 @@
 // unknown beyond a plane 5 m ahead (x), below the floor slab and outside the room's footprint
 // (never seen), so both unknown policies have work to do. Figures, not pass/fail.
 
+#include "mlmap/core/stopwatch.h"
 #include "mlmap/planning/esdf.h"
 #include "mlmap/sim/world.h"
 #include "../support/random_draws.h"
@@ -22,11 +23,7 @@
 namespace {
 
 using namespace mlmap;
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
+using Clock = SteadyClock;
 
 /// Nearest-rank percentile of the samples (sorted in place).
 double percentile(std::vector<double>* samples, double fraction) {

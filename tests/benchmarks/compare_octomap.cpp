@@ -5,6 +5,7 @@
 // the voxels of both maps for pictures). Figures, not pass/fail: see README "Side by side with
 // OctoMap". Exits non-zero when OctoMap's keys do not map to mlmap's voxel indices.
 
+#include "mlmap/core/stopwatch.h"
 #include "mlmap/eval/run_outputs.h"
 #include "mlmap/eval/sim_flight.h"
 #include "mlmap/eval/voxel_agreement.h"
@@ -35,11 +36,7 @@
 namespace {
 
 using namespace mlmap;
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+using Clock = SteadyClock;
 
 /// Peak and current resident set size of this process [bytes], from /proc/self/status.
 std::size_t procStatusBytes(const char* key) {

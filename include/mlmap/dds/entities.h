@@ -1,7 +1,8 @@
 #pragma once
 /// @file
 /// Small helpers every mlmap DDS program uses: registering a generated type, creating a topic's
-/// reader or writer, and a listener that takes samples and hands them over.
+/// reader or writer, a listener that takes samples and hands them over, and a set of readers
+/// with their listeners (TakeReaders).
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -15,8 +16,10 @@
 
 #include <exception>
 #include <functional>
+#include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace mlmap::dds {
 
@@ -152,5 +155,41 @@ eprosima::fastdds::dds::DataReader* createReader(eprosima::fastdds::dds::Subscri
   if (reader == nullptr) throw std::runtime_error("cannot create a reader on " + dds_topic);
   return reader;
 }
+
+/// Readers that each hand their samples to a TakeListener, created together with their listener,
+/// which the set keeps alive: delete the readers (or their participant) before the set. The one
+/// way a program subscribes to a topic of `PubSubType` (its generated `type` is the message).
+class TakeReaders {
+ public:
+  /// Readers on `subscriber`; a payload that fails to deserialise on any of them is reported to
+  /// `on_error` (on Fast DDS's listener thread) and dropped.
+  TakeReaders(eprosima::fastdds::dds::Subscriber* subscriber,
+              std::function<void(const std::string&)> on_error)
+      : subscriber_(subscriber), on_error_(std::move(on_error)) {}
+
+  /// A reader of `PubSubType` on `dds_topic` whose samples go to `sink` (on Fast DDS's listener
+  /// thread: keep it short); `on_matched`, if given, hears its number of matched publishers each
+  /// time it changes. Throws std::runtime_error on failure.
+  template <typename PubSubType>
+  eprosima::fastdds::dds::DataReader* add(const std::string& dds_topic,
+                                          const eprosima::fastdds::dds::DataReaderQos& qos,
+                                          std::function<void(typename PubSubType::type&&)> sink,
+                                          std::function<void(int)> on_matched = {}) {
+    auto listener = std::make_unique<TakeListener<typename PubSubType::type>>(std::move(sink), on_error_,
+                                                                              std::move(on_matched));
+    eprosima::fastdds::dds::DataReader* reader =
+        createReader<PubSubType>(subscriber_, dds_topic, qos, listener.get());
+    listeners_.push_back(std::move(listener));
+    return reader;
+  }
+
+  /// The number of readers added.
+  [[nodiscard]] std::size_t size() const { return listeners_.size(); }
+
+ private:
+  eprosima::fastdds::dds::Subscriber* subscriber_;
+  std::function<void(const std::string&)> on_error_;
+  std::vector<std::unique_ptr<eprosima::fastdds::dds::DataReaderListener>> listeners_;
+};
 
 }  // namespace mlmap::dds

@@ -81,11 +81,8 @@ void saveMap(const MapEngine& engine, const std::string& path);
 /// Prints the engine's figures (and the accuracy, when given) to stdout.
 void printSummary(const EngineStats& stats, double resolution_m, const Accuracy* accuracy);
 
-/// `{"median_ms": ..., "p99_ms": ..., "mean_ms": ..., "max_ms": ..., "frames": ...}`.
-[[nodiscard]] std::string toJson(const TimingSummary& timing);
-
 /// `s` as a JSON string literal, quotes included (quotes, backslashes and control characters
-/// escaped).
+/// escaped; bytes that are not UTF-8 replaced by U+FFFD).
 [[nodiscard]] std::string jsonString(const std::string& s);
 
 /// Peak resident set size of this process so far [bytes] (getrusage), 0 when unknown.

@@ -1,0 +1,63 @@
+#include "mlmap/eval/json_output.h"
+
+#include <fstream>
+#include <stdexcept>
+
+namespace mlmap::eval {
+namespace {
+
+/// A scalar (or an empty container) as nlohmann prints it; bad UTF-8 replaced, not thrown.
+std::string scalarText(const Json& json) {
+  return json.dump(-1, ' ', false, Json::error_handler_t::replace);
+}
+
+void format(const Json& json, int expanded_levels, int depth, std::string* out);
+
+/// The members of an object or array, separated by ", " on one line or one per line.
+void formatMembers(const Json& json, int expanded_levels, int depth, std::string* out) {
+  const bool expanded = depth < expanded_levels;
+  const std::string indent(static_cast<std::size_t>(2 * (depth + 1)), ' ');
+  bool first = true;
+  for (auto it = json.begin(); it != json.end(); ++it) {
+    *out += first ? "" : ",";
+    *out += expanded ? "\n" + indent : std::string(first ? "" : " ");
+    if (json.is_object()) *out += scalarText(Json(it.key())) + ": ";
+    format(it.value(), expanded_levels, depth + 1, out);
+    first = false;
+  }
+  if (expanded) *out += "\n" + std::string(static_cast<std::size_t>(2 * depth), ' ');
+}
+
+void format(const Json& json, int expanded_levels, int depth, std::string* out) {
+  if (!json.is_structured() || json.empty()) {
+    *out += scalarText(json);
+    return;
+  }
+  *out += json.is_object() ? "{" : "[";
+  formatMembers(json, expanded_levels, depth, out);
+  *out += json.is_object() ? "}" : "]";
+}
+
+}  // namespace
+
+std::string formatJson(const Json& json, int expanded_levels) {
+  std::string text;
+  format(json, expanded_levels, 0, &text);
+  return text;
+}
+
+void writeJsonFile(const std::string& path, const Json& json, int expanded_levels) {
+  std::ofstream file(path);
+  file << formatJson(json, expanded_levels) << '\n';
+  if (!file) throw std::runtime_error(path + ": cannot write");
+}
+
+Json toJson(const TimingSummary& timing) {
+  return Json{{"median_ms", timing.median_ms},
+              {"p99_ms", timing.p99_ms},
+              {"mean_ms", timing.mean_ms},
+              {"max_ms", timing.max_ms},
+              {"frames", timing.samples}};
+}
+
+}  // namespace mlmap::eval
