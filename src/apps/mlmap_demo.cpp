@@ -3,7 +3,7 @@
 
 #include "mlmap/eval/run_outputs.h"
 #include "mlmap/config/config_yaml.h"
-#include "mlmap/datasets/frame_directory.h"
+#include "mlmap/datasets/frame_source.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include <CLI/CLI.hpp>
@@ -68,14 +68,14 @@ void logEngineMessage(LogLevel level, const std::string& message) {
 
 /// Maps the frames of --frames into `engine`.
 void mapFrames(const Options& o, MapEngine& engine, eval::MapOutputs* outputs) {
-  const io::FrameDirectory frames(o.frames_dir);
+  const io::FrameDirectorySource frames(o.frames_dir);
   const std::size_t n = o.max_frames > 0 ? std::min<std::size_t>(frames.size(), o.max_frames) : frames.size();
   spdlog::info("mapping {} frames of {} at {} m", n, o.frames_dir, engine.config().local_map.resolution_m);
   eval::ProgressBar bar("mapping");
   for (std::size_t i = 0; i < n; ++i) {
-    DepthFrame frame = frames.read(i);
-    outputs->trajectory_W.push_back(frame.T_W_B.translation());
-    engine.submit(std::move(frame));
+    io::SourceFrame frame = frames.read(i);
+    outputs->trajectory_W.push_back(io::bodyPoseOf(frame).translation());
+    std::visit([&engine](auto& f) { engine.submit(std::move(f)); }, frame);
     bar.update(static_cast<int>(i + 1), static_cast<int>(n));
   }
   engine.flush();

@@ -7,6 +7,7 @@
 #include "mlmap/eval/run_outputs.h"
 #include "mlmap/datasets/cloud_sequence.h"
 #include "mlmap/datasets/frame_directory.h"
+#include "mlmap/datasets/frame_source.h"
 #include "mlmap/map_io/voxel_text.h"
 #include "mlmap/pipeline/map_engine.h"
 
@@ -361,29 +362,43 @@ std::size_t frameCount(const Options& o, std::size_t available) {
                           : available;
 }
 
-/// Maps the RGB-D frames of --frames.
-void mapFrameDirectory(const Options& o, Replay* replay) {
-  const io::FrameDirectory frames(o.frames_dir);
-  const std::size_t n = frameCount(o, frames.size());
-  spdlog::info("mapping {} RGB-D frames of {} at {} m", n, o.frames_dir, replay->resolution_m());
+/// Maps the first frames of `source` (--max-frames of them), recording each.
+void mapFrames(const Options& o, const io::FrameSource& source, Replay* replay) {
+  const std::size_t n = frameCount(o, source.size());
   eval::ProgressBar bar("mapping");
   for (std::size_t i = 0; i < n; ++i) {
     FrameRecord record;
-    record.name = frames.frameName(i);
+    io::SourceFrameInfo info;
     const Clock::time_point start = Clock::now();
-    DepthFrame frame = frames.read(i);
+    io::SourceFrame frame = source.read(i, &info);
     record.read_ms = msSince(start);
-    record.points = frame.depth_mm.size() + frame.depth_m.size();
-    replay->submit(std::move(frame), std::move(record));
+    record.name = info.name;
+    if (std::holds_alternative<PointCloudFrame>(frame)) {
+      record.points = std::get<PointCloudFrame>(frame).points_S.size();
+      record.non_finite_dropped = info.non_finite_dropped;
+      replay->info.points_in_files += info.points_in_file;
+    } else {
+      record.points = info.points_in_file;  // the image's pixels
+    }
+    std::visit([&](auto& f) { replay->submit(std::move(f), std::move(record)); }, frame);
     bar.update(static_cast<int>(i + 1), static_cast<int>(n));
   }
+}
+
+/// Maps the RGB-D frames of --frames.
+void mapFrameDirectory(const Options& o, Replay* replay) {
+  const io::FrameDirectorySource frames(o.frames_dir);
+  spdlog::info("mapping {} RGB-D frames of {} at {} m", frameCount(o, frames.size()), o.frames_dir,
+               replay->resolution_m());
   replay->info = {o.frames_dir, "frames", "frame files", 0, 0};
+  mapFrames(o, frames, replay);
   replay->outputs.optical_world = true;  // the world is the first camera's optical frame
 }
 
 /// Maps the clouds of --clouds at the poses of --poses.
 void mapCloudSequence(const Options& o, const io::CloudSequenceOptions& cloud_options, Replay* replay) {
-  const io::CloudSequence clouds(o.clouds_dir, o.poses_path, cloud_options);
+  const io::CloudSequenceSource source(o.clouds_dir, o.poses_path, cloud_options);
+  const io::CloudSequence& clouds = source.sequence();
   replay->info = {o.clouds_dir + " + " + o.poses_path, "clouds", io::toString(clouds.pairing()),
                   clouds.unpaired().size(), 0};
   if (!clouds.unpaired().empty()) {
@@ -391,24 +406,10 @@ void mapCloudSequence(const Options& o, const io::CloudSequenceOptions& cloud_op
                  clouds.unpaired().size(), clouds.size() + clouds.unpaired().size(),
                  cloud_options.pose_tolerance_s, clouds.unpaired().front());
   }
-  const std::size_t n = frameCount(o, clouds.size());
-  spdlog::info("mapping {} clouds of {} paired {} with {} poses at {} m, max range {} m", n,
-               o.clouds_dir, io::toString(clouds.pairing()), clouds.poseCount(), replay->resolution_m(),
-               replay->engine.config().awareness.max_range_m);
-  eval::ProgressBar bar("mapping");
-  for (std::size_t i = 0; i < n; ++i) {
-    FrameRecord record;
-    record.name = clouds.clouds()[i].file_name;
-    io::PointCloudFile file;
-    const Clock::time_point start = Clock::now();
-    PointCloudFrame frame = clouds.read(i, &file);
-    record.read_ms = msSince(start);
-    record.points = frame.points_S.size();
-    record.non_finite_dropped = file.non_finite_dropped;
-    replay->info.points_in_files += file.points_in_file;
-    replay->submit(std::move(frame), std::move(record));
-    bar.update(static_cast<int>(i + 1), static_cast<int>(n));
-  }
+  spdlog::info("mapping {} clouds of {} paired {} with {} poses at {} m, max range {} m",
+               frameCount(o, clouds.size()), o.clouds_dir, io::toString(clouds.pairing()),
+               clouds.poseCount(), replay->resolution_m(), replay->engine.config().awareness.max_range_m);
+  mapFrames(o, source, replay);
 }
 
 /// Flies the simulator through --scenario (or the built-in room) and scores the map.

@@ -22,8 +22,8 @@
 #include "mlmap/dds/participant.h"
 #include "mlmap/dds/ros_conversions.h"
 #include "mlmap/datasets/frame_directory.h"
+#include "mlmap/datasets/frame_source.h"
 #include "mlmap/datasets/world_yaml.h"
-#include "mlmap/sim/depth_camera.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
 #include "sensor_msgs/msg/CameraInfo_PubSubTypes.h"
@@ -195,30 +195,23 @@ struct PreparedFrame {
   }
 };
 
-/// Where the frames come from: the simulator flying a scenario, or a folder of recorded frames.
-struct FrameSource {
-  std::optional<io::Scenario> scenario;       ///< the simulator's world and flight
-  std::optional<sim::DepthCamera> camera;     ///< the simulator's camera
-  std::unique_ptr<io::FrameDirectory> replay; ///< recorded frames instead
-  double rate_hz = 0.0;                       ///< frames per second
-  double speed = 1.0;                         ///< flight seconds per wall-clock second
-  int frames = 0;                             ///< frames to publish
-  Transform T_B_S = Transform::Identity();    ///< the sensor on the body (simulator)
-  bool depth_mode = false;                    ///< depth images instead of clouds
-  std::string sensor_frame;                   ///< frame_id of the sensor messages
+/// Where the frames come from (an io::FrameSource: the simulator flying a scenario, or a folder
+/// of recorded frames) and how they go out.
+struct SensorFeed {
+  std::unique_ptr<io::FrameSource> frames_in;  ///< the frames
+  const io::SimulatedFlightSource* simulator = nullptr;  ///< frames_in when it is the simulator
+  double rate_hz = 0.0;                        ///< frames per second
+  double speed = 1.0;                          ///< flight seconds per wall-clock second
+  int frames = 0;                              ///< frames to publish
+  bool depth_mode = false;                     ///< depth images instead of clouds
+  std::string sensor_frame;                    ///< frame_id of the sensor messages
 
   /// Frame i, encoded (stamps are set when it is sent).
   [[nodiscard]] PreparedFrame prepare(int i) const {
     PreparedFrame prepared;
-    DepthFrame frame;
-    if (replay) {
-      frame = replay->read(static_cast<std::size_t>(i));
-      prepared.T_W_B = frame.T_W_B;
-    } else {
-      prepared.flight_s = speed * i / rate_hz;
-      frame.T_W_B = scenario->trajectory.poseAt(prepared.flight_s);
-      camera->render(scenario->world, frame.T_W_B * T_B_S, prepared.flight_s, &frame);
-    }
+    const DepthFrame frame = std::get<DepthFrame>(frames_in->read(static_cast<std::size_t>(i)));
+    prepared.T_W_B = frame.T_W_B;
+    if (simulator != nullptr) prepared.flight_s = simulator->frameTime(static_cast<std::size_t>(i));
     if (depth_mode) {
       prepared.info = cameraInfo(frame.intrinsics, 0.0, sensor_frame);
       prepared.image = depthImage(frame, 0.0, sensor_frame);
@@ -239,28 +232,30 @@ void checkTopics(const Options& o, const mlmap::dds::TopicNames& topics) {
 }
 
 /// Opens the frame source the options name, with its rate and number of frames.
-FrameSource openSource(const Options& o, const mlmap::dds::NodeConfig& config) {
-  FrameSource source;
-  source.rate_hz = o.rate_hz;
+SensorFeed openSource(const Options& o, const mlmap::dds::NodeConfig& config) {
+  SensorFeed source;
+  const Transform T_B_S = config.map.sensor.T_B_S();
   if (!o.frames_dir.empty()) {
-    source.replay = std::make_unique<io::FrameDirectory>(o.frames_dir);
-    if (source.rate_hz <= 0) source.rate_hz = io::kFrameDirectoryRate_hz;
+    source.frames_in = std::make_unique<io::FrameDirectorySource>(o.frames_dir);
+    source.rate_hz = o.rate_hz > 0 ? o.rate_hz : io::kFrameDirectoryRate_hz;
+    if (!T_B_S.isApprox(Transform::Identity())) {
+      spdlog::warn("replayed frames are camera poses (T_B_S = identity) but the configuration mounts "
+                   "the sensor elsewhere: give mlmap_node a config with sensor translation 0 and "
+                   "rotation 0 (config/mlmap_node_replay.yaml)");
+    }
   } else {
-    source.scenario = o.scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(o.scenario_path);
-    if (source.rate_hz <= 0) source.rate_hz = source.scenario->frame_rate_hz;
+    io::Scenario scenario = o.scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(o.scenario_path);
+    io::SimulatedTiming timing;
+    timing.rate_hz = o.rate_hz > 0 ? o.rate_hz : scenario.frame_rate_hz;
+    timing.speed = o.speed;
+    auto simulator = std::make_unique<io::SimulatedFlightSource>(std::move(scenario), T_B_S, timing);
+    source.simulator = simulator.get();
+    source.rate_hz = timing.rate_hz;
+    source.frames_in = std::move(simulator);
   }
   checkTopics(o, config.dds.topics);
-  const int available =
-      source.replay ? static_cast<int>(source.replay->size())
-                    : static_cast<int>(std::floor(source.scenario->trajectory.duration_s() * source.rate_hz)) + 1;
+  const int available = static_cast<int>(source.frames_in->size());
   source.frames = o.max_frames > 0 ? std::min(o.max_frames, available) : available;
-  source.T_B_S = config.map.sensor.T_B_S();
-  if (source.replay && !source.T_B_S.isApprox(Transform::Identity())) {
-    spdlog::warn("replayed frames are camera poses (T_B_S = identity) but the configuration mounts "
-                 "the sensor elsewhere: give mlmap_node a config with sensor translation 0 and "
-                 "rotation 0 (config/mlmap_node_replay.yaml)");
-  }
-  if (source.scenario) source.camera.emplace(source.scenario->camera);
   source.speed = o.speed;
   source.depth_mode = o.mode == "depth";
   source.sensor_frame = config.dds.sensor_frame;
@@ -278,7 +273,7 @@ struct Writers {
 };
 
 /// The sensor writer: images, or clouds (with data-sharing unless dds.data_sharing is false).
-void createSensorWriter(const mlmap::dds::DdsConfig& dds, const FrameSource& source,
+void createSensorWriter(const mlmap::dds::DdsConfig& dds, const SensorFeed& source,
                         fdds::Publisher* publisher, const fdds::DataWriterQos& qos, Writers* w) {
   if (source.depth_mode) {
     w->sensor = mlmap::dds::createWriter<mlmap::dds::sensor_msgs::Image_PubSubType>(publisher, w->sensor_topic, qos);
@@ -295,7 +290,7 @@ void createSensorWriter(const mlmap::dds::DdsConfig& dds, const FrameSource& sou
 }
 
 /// Joins the DDS graph and creates the writers.
-Writers createWriters(const mlmap::dds::DdsConfig& dds, const FrameSource& source) {
+Writers createWriters(const mlmap::dds::DdsConfig& dds, const SensorFeed& source) {
   Writers w;
   w.participant = mlmap::dds::createParticipant(dds, "mlmap_sensor_publisher");
   fdds::Publisher* publisher = w.participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
@@ -349,7 +344,7 @@ int waitForSubscribers(const Writers& w, double wait_s) {
 }
 
 /// Every frame rendered and encoded (--prerender), with a progress line every two seconds.
-std::vector<PreparedFrame> prerenderFrames(const FrameSource& source) {
+std::vector<PreparedFrame> prerenderFrames(const SensorFeed& source) {
   std::vector<PreparedFrame> prerendered;
   const auto render_start = Clock::now();
   auto last_line = render_start;
@@ -383,7 +378,7 @@ constexpr double kLate_ms = 5.0;
 /// well as frames).
 class Streamer {
  public:
-  Streamer(const FrameSource& source, const Writers& writers, const mlmap::dds::DdsConfig& dds,
+  Streamer(const SensorFeed& source, const Writers& writers, const mlmap::dds::DdsConfig& dds,
            double pose_rate_hz)
       : source_(source), writers_(writers), world_frame_(dds.world_frame),
         pose_period_s_(1.0 / pose_rate_hz), start_(Clock::now()), wall0_s_(mlmap::dds::wallClockNow_s()) {}
@@ -416,7 +411,7 @@ class Streamer {
     writers_.pose->write(&pose);
   }
   void publishPosesFor(const PreparedFrame& frame, double stamp_s) {
-    if (source_.replay) {
+    if (source_.simulator == nullptr) {
       publishPose(frame.T_W_B, stamp_s);  // the recording has one pose per frame
       return;
     }
@@ -424,7 +419,7 @@ class Streamer {
     // estimator does, so each frame finds poses on both sides of its stamp.
     for (; static_cast<double>(pose_k_) * pose_period_s_ <= frame.flight_s + pose_period_s_ + 1e-9; ++pose_k_) {
       const double pose_t_s = static_cast<double>(pose_k_) * pose_period_s_;
-      publishPose(source_.scenario->trajectory.poseAt(pose_t_s), wall0_s_ + pose_t_s / source_.speed);
+      publishPose(source_.simulator->scenario().trajectory.poseAt(pose_t_s), wall0_s_ + pose_t_s / source_.speed);
     }
   }
   bool write(PreparedFrame& frame) {
@@ -435,7 +430,7 @@ class Streamer {
     return writers_.sensor->write(&*frame.cloud);
   }
 
-  const FrameSource& source_;
+  const SensorFeed& source_;
   const Writers& writers_;
   std::string world_frame_;
   double pose_period_s_;
@@ -446,7 +441,7 @@ class Streamer {
 };
 
 /// Publishes every frame (prerendered ones if given) until done or stopped.
-StreamStats stream(const FrameSource& source, const Writers& writers, const mlmap::dds::DdsConfig& dds,
+StreamStats stream(const SensorFeed& source, const Writers& writers, const mlmap::dds::DdsConfig& dds,
                    double pose_rate_hz, std::vector<PreparedFrame>* prerendered) {
   Streamer streamer(source, writers, dds, pose_rate_hz);
   const int frames = source.frames;
@@ -480,7 +475,7 @@ int run(const Options& o) {
     mlmap::dds::NodeConfig config =
         o.config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(o.config_path);
     o.security.apply(&config.dds.security);
-    const FrameSource source = openSource(o, config);
+    const SensorFeed source = openSource(o, config);
     const Writers writers = createWriters(config.dds, source);
     const int subscribers = waitForSubscribers(writers, o.wait_s);
     std::vector<PreparedFrame> prerendered;

@@ -1,6 +1,6 @@
 #include "mlmap/eval/sim_flight.h"
 
-#include "mlmap/core/voxel_bitset.h"
+#include "mlmap/datasets/frame_source.h"
 
 #include <algorithm>
 #include <chrono>
@@ -19,53 +19,49 @@ bool touchesSolid(const sim::World& world, const VoxelIndex& v, double resolutio
   return world.intersectsBox(lo, lo + Eigen::Vector3d::Constant(resolution_m), 1e-6);
 }
 
-int frameCount(const io::Scenario& scenario) {
-  return static_cast<int>(std::floor(scenario.trajectory.duration_s() * scenario.frame_rate_hz)) + 1;
-}
+int frameCount(const io::Scenario& scenario) { return io::SimulatedFlightSource::frameCount(scenario); }
 
 double frameTime(const io::Scenario& scenario, int i) { return i / scenario.frame_rate_hz; }
+
+void ObservedTruth::observe(const DepthFrame& frame, const sim::World& world, const MapConfig& config) {
+  // Voxels of measured points whose interior overlaps a static solid. A voxel that only touches a
+  // surface with a face (a floor at z = 0 under the voxel layer [0, res)) is empty inside: it is
+  // not required, and accepted if mapped.
+  const double res = config.local_map.resolution_m;
+  const double max_range_m = config.awareness.max_range_m;
+  const Transform T_W_S = frame.T_W_B * frame.T_B_S;
+  backProject(frame, &points_S_);
+  const double range = max_range_m + 1.0;
+  const VoxelIndex origin = voxelIndexOf(T_W_S.translation(), res) -
+                            VoxelIndex::Constant(static_cast<int>(range / res) + 1);
+  seen_.reset(origin, Eigen::Vector3i::Constant(2 * (static_cast<int>(range / res) + 1) + 1));
+  for (const Eigen::Vector3f& p_S : points_S_) {
+    const Eigen::Vector3d p_W = T_W_S * p_S.cast<double>();
+    if ((p_W - T_W_S.translation()).norm() > max_range_m) continue;
+    const VoxelIndex v = voxelIndexOf(p_W, res);
+    const VoxelIndex r = v - origin;
+    if (!seen_.contains(r.x(), r.y(), r.z()) || seen_.testAndSet(r.x(), r.y(), r.z())) continue;
+    if (voxels_.count(v)) continue;
+    if (overlapsSolid(world, v, res)) voxels_.insert(v);
+  }
+}
 
 FlightResult flyScenario(const io::Scenario& scenario, MapEngine& engine,
                          const FlightOptions& options) {
   FlightResult result;
-  const sim::DepthCamera camera(scenario.camera);
-  const Transform T_B_S = engine.config().sensor.T_B_S();
-  const double res = engine.config().local_map.resolution_m;
-  const int first = static_cast<int>(std::ceil(options.start_time_s * scenario.frame_rate_hz));
-  const int last = std::min(frameCount(scenario), first + std::max(options.max_frames, 0));
-  const int planned = std::max(last - first, 0);
+  io::SimulatedTiming timing;
+  timing.start_time_s = options.start_time_s;
+  const io::SimulatedFlightSource source(scenario, engine.config().sensor.T_B_S(), timing);
+  const int planned = static_cast<int>(std::min<std::size_t>(source.size(),
+                                                             static_cast<std::size_t>(std::max(options.max_frames, 0))));
   std::vector<double> render_ms;
-  std::vector<Eigen::Vector3f> points_S;
-  VoxelBitset seen;
-  for (int i = first; i < last; ++i) {
-    const double t = frameTime(scenario, i);
-    DepthFrame frame;
-    frame.T_W_B = scenario.trajectory.poseAt(t);
-    frame.T_B_S = T_B_S;
-    const Transform T_W_S = frame.T_W_B * T_B_S;
+  ObservedTruth truth;
+  for (int i = 0; i < planned; ++i) {
     const auto start = std::chrono::steady_clock::now();
-    camera.render(scenario.world, T_W_S, t, &frame);
+    DepthFrame frame = std::get<DepthFrame>(source.read(static_cast<std::size_t>(i)));
     render_ms.push_back(
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-    frame.stamp_s = t;
-
-    // Ground truth actually observed: voxels of measured points whose interior overlaps a static
-    // solid. A voxel that only touches a surface with a face (a floor at z = 0 under the voxel
-    // layer [0, res)) is empty inside: it is not required, and accepted if mapped.
-    backProject(frame, &points_S);
-    const double range = engine.config().awareness.max_range_m + 1.0;
-    const VoxelIndex origin = voxelIndexOf(T_W_S.translation(), res) -
-                              VoxelIndex::Constant(static_cast<int>(range / res) + 1);
-    seen.reset(origin, Eigen::Vector3i::Constant(2 * (static_cast<int>(range / res) + 1) + 1));
-    for (const Eigen::Vector3f& p_S : points_S) {
-      const Eigen::Vector3d p_W = T_W_S * p_S.cast<double>();
-      if ((p_W - T_W_S.translation()).norm() > engine.config().awareness.max_range_m) continue;
-      const VoxelIndex v = voxelIndexOf(p_W, res);
-      const VoxelIndex r = v - origin;
-      if (!seen.contains(r.x(), r.y(), r.z()) || seen.testAndSet(r.x(), r.y(), r.z())) continue;
-      if (result.observed_truth.count(v)) continue;
-      if (overlapsSolid(scenario.world, v, res)) result.observed_truth.insert(v);
-    }
+    truth.observe(frame, scenario.world, engine.config());
     result.trajectory_W.push_back(frame.T_W_B.translation());
     if (options.before_submit) options.before_submit(result.frames);
     engine.submit(std::move(frame));
@@ -73,6 +69,7 @@ FlightResult flyScenario(const io::Scenario& scenario, MapEngine& engine,
     if (options.progress) options.progress(result.frames, planned);
   }
   engine.flush();
+  result.observed_truth = truth.voxels();
   if (!render_ms.empty()) {
     std::nth_element(render_ms.begin(), render_ms.begin() + render_ms.size() / 2, render_ms.end());
     result.render_ms_median = render_ms[render_ms.size() / 2];

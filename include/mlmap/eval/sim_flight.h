@@ -3,6 +3,7 @@
 /// Flying the engine through a simulated scenario and scoring the map against ground truth.
 /// Shared by the demo, the benchmark and the tests.
 
+#include "mlmap/core/voxel_bitset.h"
 #include "mlmap/datasets/world_yaml.h"
 #include "mlmap/pipeline/map_engine.h"
 
@@ -65,8 +66,23 @@ struct FlightResult {
 /// Body pose and time of frame `i`.
 [[nodiscard]] double frameTime(const io::Scenario& scenario, int i);
 
-/// Renders every frame of the scenario (camera mounted as `config.sensor` says) and submits it
-/// to `engine` as a depth image. Also gathers the observed ground truth.
+/// The true voxels a flight observed: voxels of measured points whose interior overlaps a static
+/// solid of the world, gathered frame by frame.
+class ObservedTruth {
+ public:
+  /// Adds the true voxels of `frame`'s points within `config`'s maximum range.
+  void observe(const DepthFrame& frame, const sim::World& world, const MapConfig& config);
+  [[nodiscard]] const VoxelSet& voxels() const { return voxels_; }
+
+ private:
+  VoxelSet voxels_;
+  std::vector<Eigen::Vector3f> points_S_;  ///< scratch
+  VoxelBitset seen_;                       ///< scratch: the frame's voxels already looked at
+};
+
+/// Renders every frame of the scenario (io::SimulatedFlightSource, the camera mounted as
+/// `config.sensor` says) and submits it to `engine` as a depth image. Also gathers the observed
+/// ground truth.
 FlightResult flyScenario(const io::Scenario& scenario, MapEngine& engine,
                          const FlightOptions& options = {});
 
