@@ -50,7 +50,7 @@ std::string qosPolicyName(fdds::QosPolicyId_t id) {
 /// The awareness or the global layer, from the copies the engine's threads made.
 class LayerCopyOutput : public OutputOperation {
  public:
-  LayerCopyOutput(CountedWriter writer, LayerCopy LayerMailbox::News::*copy,
+  LayerCopyOutput(const CountedWriter& writer, LayerCopy LayerMailbox::News::*copy,
                   const std::string& world)
       : writer_(writer), copy_(copy), world_(world) {}
   void publish(const PublishRound& round) override {
@@ -69,7 +69,7 @@ class LayerCopyOutput : public OutputOperation {
 /// rt/tf: world -> body of each new snapshot.
 class TfOutput : public OutputOperation {
  public:
-  TfOutput(CountedWriter writer, const DdsConfig& dds)
+  TfOutput(const CountedWriter& writer, const DdsConfig& dds)
       : writer_(writer), world_(dds.world_frame), body_(dds.body_frame) {}
   void publish(const PublishRound& round) override {
     if (!round.snap || round.snap->frame() == frame_) return;
@@ -107,7 +107,7 @@ std::vector<Eigen::Vector3f> occupiedCenters(const LocalWindow& window) {
 /// The local map's occupied voxels, of a new snapshot, at local_map_hz.
 class LocalMapOutput : public OutputOperation {
  public:
-  LocalMapOutput(CountedWriter writer, const DdsConfig& dds)
+  LocalMapOutput(const CountedWriter& writer, const DdsConfig& dds)
       : writer_(writer), gate_(dds.rates.local_map_hz), world_(dds.world_frame) {}
   void publish(const PublishRound& round) override {
     if (!writer_ || !round.snap || round.snap->frame() == frame_ || !(round.last || gate_.due()))
@@ -129,7 +129,7 @@ class LocalMapOutput : public OutputOperation {
 /// The 2D grid, when the planning thread made a new one, at grid_hz.
 class GridOutput : public OutputOperation {
  public:
-  GridOutput(CountedWriter writer, const DdsConfig& dds)
+  GridOutput(const CountedWriter& writer, const DdsConfig& dds)
       : writer_(writer), gate_(dds.rates.grid_hz), world_(dds.world_frame) {}
   void publish(const PublishRound& round) override {
     const auto& snap = round.snap;
@@ -155,7 +155,7 @@ class GridOutput : public OutputOperation {
 /// the body's height (+ esdf_slice_height_m).
 class EsdfOutput : public OutputOperation {
  public:
-  EsdfOutput(CountedWriter block, CountedWriter slice, const DdsConfig& dds)
+  EsdfOutput(const CountedWriter& block, const CountedWriter& slice, const DdsConfig& dds)
       : block_(block),
         slice_(slice),
         gate_(dds.rates.esdf_hz),
@@ -191,7 +191,7 @@ class EsdfOutput : public OutputOperation {
 /// mlmap_msgs/Status at status_hz: the engine's statistics and the node's counters.
 class StatusOutput : public OutputOperation {
  public:
-  StatusOutput(CountedWriter writer, const DdsConfig& dds, const MapEngine& engine,
+  StatusOutput(const CountedWriter& writer, const DdsConfig& dds, const MapEngine& engine,
                const CounterSink& counters, Clock::time_point started)
       : writer_(writer),
         gate_(dds.rates.status_hz),
