@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Fuzzes every parser of outside data (tests/fuzz, README "Fuzzing") with libFuzzer for a bounded
+# Fuzzes every parser of outside data (tests/fuzz, docs/fuzzing.md) with libFuzzer for a bounded
 # time, each target on a scratch copy of its seed corpus and regression inputs (nothing is written
 # into tests/). Prints executions, exec/s and coverage per target and a final table; exits
 # non-zero when a target crashed, and says where the reproducer is and how to keep it.

@@ -83,7 +83,7 @@ cmake --build build-tsan -j2 --target mlmap_concurrency_tests
 TSAN_OPTIONS="halt_on_error=1 second_deadlock_stack=1" build-tsan/tests/mlmap_concurrency_tests
 endPart "build + run, gcc + TSan"
 
-echo "== 3. fuzzing: every target for a short, bounded time (README: Fuzzing)"
+echo "== 3. fuzzing: every target for a short, bounded time (docs/fuzzing.md)"
 bash tools/fuzz.sh --build build-asan --no-build --seconds 15 --jobs 2
 endPart "libFuzzer, 15 s per target"
 

@@ -71,7 +71,7 @@ void addOptions(CLI::App& app, Options& o) {
       ->check(CLI::ExistingFile);
   app.add_option("--scenario", o.scenario_path, "scenario YAML (default: the built-in room)")
       ->check(CLI::ExistingFile);
-  app.add_option("--frames-dir", o.frames_dir, "replay a folder of RGB-D frames instead (see README)")
+  app.add_option("--frames-dir", o.frames_dir, "replay a folder of RGB-D frames instead (see docs/replay.md)")
       ->check(CLI::ExistingDirectory);
   app.add_option("--mode", o.mode, "what the sensor publishes: cloud (PointCloud2) or depth (Image)")
       ->check(CLI::IsMember({"cloud", "depth"}));

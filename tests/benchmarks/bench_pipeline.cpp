@@ -1,6 +1,6 @@
 // mlmap_bench: per-frame cost of the engine (synchronous mode, one core) on simulated 640x480
 // depth frames and on the shared real RealSense frames. Prints median and p99 per stage and the
-// memory by layer. Figures, not pass/fail: see README "Performance".
+// memory by layer. Figures, not pass/fail: see docs/performance.md.
 
 #include "mlmap/eval/run_outputs.h"
 #include "mlmap/eval/sim_flight.h"

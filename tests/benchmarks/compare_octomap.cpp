@@ -2,8 +2,8 @@
 // MapEngine (synchronous mode: one core, like OctoMap) and into octomap::OcTree::insertPointCloud
 // (default sensor model). Prints per-frame time (median, p99) of both and their ratio, memory of
 // both, and the agreement of the occupied voxels; writes the figures as JSON (and, on request,
-// the voxels of both maps for pictures). Figures, not pass/fail: see README "Side by side with
-// OctoMap". Exits non-zero when OctoMap's keys do not map to mlmap's voxel indices.
+// the voxels of both maps for pictures). Figures, not pass/fail: see docs/comparison.md.
+// Exits non-zero when OctoMap's keys do not map to mlmap's voxel indices.
 
 #include "mlmap/core/stopwatch.h"
 #include "mlmap/eval/run_outputs.h"

@@ -1,7 +1,7 @@
 // Faults at the mapping node's inputs and outputs, in process, over DDS on loopback (domains
 // 200..205, 208): the sensor stream stops and resumes; the pose stream lags, jumps and goes backwards;
 // clouds arrive faster than the engine maps; a subscriber leaves and returns. Each test asserts
-// the behaviour README "Soak and fault tests" documents. The vehicle is a sparse simulated LiDAR
+// the behaviour docs/soak-and-faults.md documents. The vehicle is a sparse simulated LiDAR
 // (the sensor frame is the body frame) in two rooms 40 m apart.
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/mapping_node.h"

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// Helpers shared by the fuzz targets (tests/fuzz/fuzz_*.cpp, README "Fuzzing").
+/// Helpers shared by the fuzz targets (tests/fuzz/fuzz_*.cpp, docs/fuzzing.md).
 ///
 /// A fuzz target may fail only by a sanitizer report or a crash. The code under test must answer
 /// bad input with its documented error: each target catches exactly the documented exception

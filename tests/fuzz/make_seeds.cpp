@@ -1,7 +1,7 @@
 /// @file
 /// Writes the binary seeds of the fuzz corpus (tests/fuzz/corpus/): CDR samples serialised by the
 /// generated types from real messages, and map files from a small map state. Run once when the
-/// seeds need to change; the output is committed (README "Fuzzing"):
+/// seeds need to change; the output is committed (docs/fuzzing.md):
 ///   cmake --build build-test --target mlmap_fuzz_make_seeds && build-test/tests/fuzz/mlmap_fuzz_make_seeds tests/fuzz/corpus
 
 #include "../support/small_map_state.h"

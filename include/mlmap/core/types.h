@@ -2,7 +2,7 @@
 /// @file
 /// Basic types shared by every mlmap layer.
 ///
-/// Frames (see README "Frames and units"): W is the world (gravity-aligned, fixed), B the body
+/// Frames (see docs/architecture.md, "Frames and units"): W is the world (gravity-aligned, fixed), B the body
 /// (vehicle, FLU), S the sensor (for cameras the optical frame: x right, y down, z forward).
 /// `T_A_B` maps points expressed in frame B into frame A (p_A = T_A_B * p_B). All lengths are
 /// metres, angles radians unless a name says `_deg`, times seconds.

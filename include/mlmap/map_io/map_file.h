@@ -3,7 +3,7 @@
 /// mlmap's own map file: the full state of a map (MapState: global layer, local window with every
 /// voxel's log-odds, last stamp and pose), so that mapping goes on exactly where it stopped.
 ///
-/// Layout (version 1, little endian; see README "Map files and exports"):
+/// Layout (version 1, little endian; see docs/map-files.md):
 ///
 /// | bytes | content |
 /// |---|---|
