@@ -19,8 +19,12 @@ namespace {
 const std::string kTabletopDir = std::string(MLMAP_SHARED_DATA_DIR) + "/realsense_tabletop";
 
 bool sameDepth(const DepthFrame& a, const DepthFrame& b) {
-  return a.depth_mm == b.depth_mm && a.depth_m.size() == b.depth_m.size() &&
-         std::memcmp(a.depth_m.data(), b.depth_m.data(), a.depth_m.size() * sizeof(float)) == 0 &&
+  // Bit for bit (NaN pixels included); no memcmp of empty vectors' null data.
+  const bool same_metres =
+      a.depth_m.size() == b.depth_m.size() &&
+      (a.depth_m.empty() ||
+       std::memcmp(a.depth_m.data(), b.depth_m.data(), a.depth_m.size() * sizeof(float)) == 0);
+  return a.depth_mm == b.depth_mm && same_metres &&
          a.intrinsics.width == b.intrinsics.width && a.intrinsics.height == b.intrinsics.height &&
          a.intrinsics.fx == b.intrinsics.fx && a.intrinsics.cy == b.intrinsics.cy &&
          a.T_W_B.matrix() == b.T_W_B.matrix() && a.T_B_S.matrix() == b.T_B_S.matrix() &&
