@@ -445,8 +445,7 @@ int report(const Options& o, const Received& rx, const std::vector<std::string>&
 int run(const Options& o) {
   apps::installStopHandler();
   try {
-    mlmap::dds::NodeConfig config =
-        o.config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(o.config_path);
+    mlmap::dds::NodeConfig config = mlmap::dds::nodeConfigOrDefaults(o.config_path);
     o.security.apply(&config.dds.security);
     Received rx;
     Subscription sub = subscribe(o, config.dds, &rx);

@@ -109,8 +109,7 @@ int stopAndReport(const mlmap::dds::NodeConfig& config, mlmap::dds::MappingNode&
 int run(const Options& o) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("mlmap_node"));
   try {
-    const mlmap::dds::NodeConfig config =
-        o.config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(o.config_path);
+    const mlmap::dds::NodeConfig config = mlmap::dds::nodeConfigOrDefaults(o.config_path);
     if (o.print_config) {
       std::cout << mlmap::dds::toYaml(config);
       return 0;

@@ -472,8 +472,7 @@ int finish(const StreamStats& s, bool prerender) {
 int run(const Options& o) {
   apps::installStopHandler();
   try {
-    mlmap::dds::NodeConfig config =
-        o.config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(o.config_path);
+    mlmap::dds::NodeConfig config = mlmap::dds::nodeConfigOrDefaults(o.config_path);
     o.security.apply(&config.dds.security);
     const SensorFeed source = openSource(o, config);
     const Writers writers = createWriters(config.dds, source);

@@ -1,5 +1,6 @@
 #include "mlmap/eval/sim_flight.h"
 
+#include "mlmap/core/stopwatch.h"
 #include "mlmap/datasets/frame_source.h"
 
 #include <algorithm>
@@ -57,10 +58,9 @@ FlightResult flyScenario(const io::Scenario& scenario, MapEngine& engine,
   std::vector<double> render_ms;
   ObservedTruth truth;
   for (int i = 0; i < planned; ++i) {
-    const auto start = std::chrono::steady_clock::now();
+    const auto start = SteadyClock::now();
     DepthFrame frame = std::get<DepthFrame>(source.read(static_cast<std::size_t>(i)));
-    render_ms.push_back(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    render_ms.push_back(msSince(start));
     truth.observe(frame, scenario.world, engine.config());
     result.trajectory_W.push_back(frame.T_W_B.translation());
     if (options.before_submit) options.before_submit(result.frames);

@@ -139,8 +139,7 @@ int main(int argc, char** argv) {
   mlmap::apps::installStopHandler();
 
   try {
-    const mlmap::dds::NodeConfig config =
-        config_path.empty() ? mlmap::dds::NodeConfig{} : mlmap::dds::loadNodeConfigYaml(config_path);
+    const mlmap::dds::NodeConfig config = mlmap::dds::nodeConfigOrDefaults(config_path);
     const mlmap::dds::TopicNames& n = config.dds.topics;
     const std::string& ns = config.dds.ns;
     if (n.local_map.empty() || config.dds.rates.local_map_hz <= 0 || n.status.empty() ||

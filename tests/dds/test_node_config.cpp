@@ -42,6 +42,15 @@ TEST(NodeConfigYaml, EmptyDocumentGivesTheDefaultsOfBothParts) {
   EXPECT_TRUE(sameConfig(parseNodeConfigYaml("dds:\n"), NodeConfig{}));
 }
 
+TEST(NodeConfigYaml, NoConfigPathGivesTheDefaultsAndAPathIsLoaded) {
+  EXPECT_TRUE(sameConfig(nodeConfigOrDefaults(""), NodeConfig{}));
+  const std::string path = std::string(MLMAP_SOURCE_DIR) + "/config/mlmap_node_depth.yaml";
+  const NodeConfig shipped = nodeConfigOrDefaults(path);
+  EXPECT_FALSE(sameConfig(shipped, NodeConfig{})) << "the depth config differs from the defaults";
+  EXPECT_TRUE(sameConfig(shipped, loadNodeConfigYaml(path)));
+  EXPECT_THROW(nodeConfigOrDefaults("/no/such/mlmap.yaml"), std::runtime_error);
+}
+
 TEST(NodeConfigYaml, EveryDdsKeyIsRead) {
   const NodeConfig c = parseNodeConfigYaml(R"(
 local_map: {resolution_m: 0.1, size_cells: [165, 165, 75]}

@@ -34,6 +34,7 @@ struct CloudSample : sensor_msgs::PointCloud2_ {
 /// helpers of participant.h use DYNAMIC_REUSABLE and no data-sharing writer.
 class CloudSamplePubSubType : public sensor_msgs::PointCloud2_PubSubType {
  public:
+  using type = CloudSample;  ///< what createData() makes and deserialize() fills
   /// Reads the message's fields as the generated type does, except data_: its bytes are
   /// decoded in place into points_S. false (with the sample unusable) on malformed CDR; may
   /// throw Fast CDR exceptions, as the generated code does (CheckedType catches them).

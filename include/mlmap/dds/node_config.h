@@ -77,6 +77,9 @@ NodeConfig parseNodeConfigYaml(const std::string& text,
                                const std::string& source_name = "<string>");
 /// Loads a YAML file. Throws std::runtime_error (file name included) on any problem.
 NodeConfig loadNodeConfigYaml(const std::string& path);
+/// What a program started with `--config path` runs with: loadNodeConfigYaml(path), or the
+/// defaults when `path` is empty (no --config).
+NodeConfig nodeConfigOrDefaults(const std::string& path);
 /// The effective configuration as YAML, every key present (parses back to the same config).
 std::string toYaml(const NodeConfig& config);
 

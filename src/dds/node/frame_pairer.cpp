@@ -1,5 +1,6 @@
 #include "frame_pairer.h"
 
+#include "mlmap/core/stopwatch.h"
 #include "mlmap/dds/mapping_node.h"
 
 #include <sstream>
@@ -7,10 +8,6 @@
 
 namespace mlmap::dds::node {
 namespace {
-
-double secondsSince(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
 
 double stampOf(const std::variant<PointCloudFrame, DepthFrame>& frame) {
   return std::visit([](const auto& f) { return f.stamp_s; }, frame);
@@ -174,7 +171,7 @@ void FramePairer::place(Frame&& frame) {
 }
 
 void FramePairer::expireWaiting() {
-  while (!waiting_.empty() && secondsSince(waiting_.front().since) > kPoseWait_s) {
+  while (!waiting_.empty() && secondsBetween(waiting_.front().since, SteadyClock::now()) > kPoseWait_s) {
     noPose(stampOf(waiting_.front().frame));
     waiting_.pop_front();
   }

@@ -1,6 +1,5 @@
 #include "input_readers.h"
 
-#include "mlmap/dds/entities.h"
 #include "mlmap/dds/participant.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
@@ -14,25 +13,31 @@ namespace mlmap::dds::node {
 
 InputReaders::InputReaders(eprosima::fastdds::dds::Subscriber* subscriber, const DdsConfig& dds,
                            InputQueue& queue, CounterSink& counters, NodeLog& log)
-    : subscriber_(subscriber), dds_(dds), queue_(queue), counters_(counters), log_(log) {
+    : dds_(dds),
+      queue_(queue),
+      counters_(counters),
+      log_(log),
+      readers_(subscriber, [this](const std::string& what) {
+        counters_.add(&NodeCounters::inputs_malformed);
+        log_.limited(LogLevel::kWarning, kReasonMalformed, what);
+      }) {
   const TopicNames& n = dds.topics;
-  add<CloudSamplePubSubType, CloudSample>(n.cloud);  // one PointCloud2 type per participant
-  add<geometry_msgs::PoseStamped_PubSubType, geometry_msgs::PoseStamped_>(n.pose);
-  add<nav_msgs::Odometry_PubSubType, nav_msgs::Odometry_>(n.odometry);
-  add<sensor_msgs::Image_PubSubType, sensor_msgs::Image_>(n.depth_image);
-  add<sensor_msgs::CameraInfo_PubSubType, sensor_msgs::CameraInfo_>(n.camera_info);
+  add<CloudSamplePubSubType>(n.cloud);  // one PointCloud2 type per participant
+  add<geometry_msgs::PoseStamped_PubSubType>(n.pose);
+  add<nav_msgs::Odometry_PubSubType>(n.odometry);
+  add<sensor_msgs::Image_PubSubType>(n.depth_image);
+  add<sensor_msgs::CameraInfo_PubSubType>(n.camera_info);
 }
 
-template <typename PubSubType, typename Msg>
+template <typename PubSubType>
 void InputReaders::add(const std::string& name) {
   if (name.empty()) return;
   const std::string dds_topic = ddsTopicName(dds_.ns, name);
-  auto listener = std::make_unique<TakeListener<Msg>>(
-      [this](Msg&& msg) { handOver(Input(std::move(msg))); },
-      [this](const std::string& what) {
-        counters_.add(&NodeCounters::inputs_malformed);
-        log_.limited(LogLevel::kWarning, kReasonMalformed, what);
-      },
+  eprosima::fastdds::dds::DataReaderQos qos = sensorReaderQos();
+  if (!dds_.data_sharing) qos.data_sharing().off();
+  readers_.add<PubSubType>(
+      dds_topic, qos,
+      [this](typename PubSubType::type&& msg) { handOver(Input(std::move(msg))); },
       // This reader's own count, so that the total follows current_count exactly.
       [this, dds_topic, mine = std::int64_t{0}](int now) mutable {
         const std::int64_t change = now - mine;
@@ -43,10 +48,6 @@ void InputReaders::add(const std::string& name) {
                                          (change > 0 ? "matched" : "left") + " (" +
                                          std::to_string(now) + " now)");
       });
-  eprosima::fastdds::dds::DataReaderQos qos = sensorReaderQos();
-  if (!dds_.data_sharing) qos.data_sharing().off();
-  createReader<PubSubType>(subscriber_, dds_topic, qos, listener.get());
-  listeners_.push_back(std::move(listener));
 }
 
 void InputReaders::handOver(Input&& input) {

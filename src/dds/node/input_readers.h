@@ -8,13 +8,11 @@
 #include "node_log.h"
 
 #include "mlmap/dds/dds_config.h"
+#include "mlmap/dds/entities.h"
 
-#include <fastdds/dds/subscriber/DataReaderListener.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 
-#include <memory>
 #include <string>
-#include <vector>
 
 namespace mlmap::dds::node {
 
@@ -29,16 +27,15 @@ class InputReaders {
                InputQueue& queue, CounterSink& counters, NodeLog& log);
 
  private:
-  template <typename PubSubType, typename Msg>
+  template <typename PubSubType>
   void add(const std::string& name);
   void handOver(Input&& input);
 
-  eprosima::fastdds::dds::Subscriber* subscriber_;
   const DdsConfig& dds_;
   InputQueue& queue_;
   CounterSink& counters_;
   NodeLog& log_;
-  std::vector<std::unique_ptr<eprosima::fastdds::dds::DataReaderListener>> listeners_;
+  TakeReaders readers_;  ///< the readers' listeners
 };
 
 }  // namespace mlmap::dds::node

@@ -1,5 +1,7 @@
 #include "layer_mailbox.h"
 
+#include "mlmap/core/stopwatch.h"
+
 #include <utility>
 
 namespace mlmap::dds::node {
@@ -9,7 +11,7 @@ RateGate::RateGate(double rate_hz)
 
 bool RateGate::due() const {
   return enabled_ && (last_ == Clock::time_point::min() ||
-                      std::chrono::duration<double>(Clock::now() - last_).count() >= period_s_);
+                      secondsBetween(last_, Clock::now()) >= period_s_);
 }
 
 void RateGate::mark() { last_ = Clock::now(); }

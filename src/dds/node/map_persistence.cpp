@@ -1,5 +1,6 @@
 #include "map_persistence.h"
 
+#include "mlmap/core/stopwatch.h"
 #include "mlmap/map_io/map_export.h"
 #include "mlmap/map_io/map_file.h"
 
@@ -10,13 +11,6 @@
 #include <string>
 
 namespace mlmap::dds::node {
-namespace {
-
-double msSince(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-}
-
-}  // namespace
 
 MapPersistence::MapPersistence(const MapFileOptions& options, const MapConfig& map,
                                MapEngine& engine, CounterSink& counters, NodeLog& log)
@@ -30,7 +24,7 @@ bool MapPersistence::load() {
     log_.always(LogLevel::kInfo, "no map at '" + options_.load_path + "' yet: starting empty");
     return false;
   }
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = SteadyClock::now();
   const MapState state = io::loadMapFile(options_.load_path);
   io::checkMapMatchesConfig(state, map_, options_.load_path);
   engine_.restoreState(state);
@@ -46,7 +40,7 @@ bool MapPersistence::load() {
 void MapPersistence::save(const char* why) {
   const std::string& path = options_.save_path;
   try {
-    const auto start = std::chrono::steady_clock::now();
+    const auto start = SteadyClock::now();
     const MapState state = engine_.exportState();
     io::saveMapFile(state, path);
     counters_.mapSaved(true);

@@ -70,6 +70,10 @@ NodeConfig loadNodeConfigYaml(const std::string& path) {
   return parseNodeConfigYaml(io::readConfigFile(path), path);
 }
 
+NodeConfig nodeConfigOrDefaults(const std::string& path) {
+  return path.empty() ? NodeConfig{} : loadNodeConfigYaml(path);
+}
+
 std::string toYaml(const NodeConfig& config) {
   YAML::Emitter out;
   out.SetDoublePrecision(15);  // as the engine sections: typed values round-trip

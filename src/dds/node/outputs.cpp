@@ -1,5 +1,6 @@
 #include "outputs.h"
 
+#include "mlmap/core/stopwatch.h"
 #include "mlmap/dds/cloud_sample.h"
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/participant.h"
@@ -214,7 +215,7 @@ class StatusOutput : public OutputOperation {
     m.header_().stamp_(toRosTime(stamp_s));
     m.header_().frame_id_(world_);
     m.version_(1);
-    m.uptime_s_(std::chrono::duration<double>(Clock::now() - started_).count());
+    m.uptime_s_(secondsBetween(started_, Clock::now()));
     m.frames_in_(s.frames_in);
     m.frames_mapped_(s.frames_mapped);
     m.frames_dropped_(s.frames_dropped + c.frames_handover_dropped);
