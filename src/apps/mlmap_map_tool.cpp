@@ -11,8 +11,12 @@
 
 #include <CLI/CLI.hpp>
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -33,6 +37,20 @@ struct Options {
   bool local_only = false;  ///< --grid-local-only
   std::string bt_path;      ///< --bt (empty: none)
   int bench_runs = 0;       ///< --bench: load and save N times (0: no benchmark)
+  bool overwrite = false;   ///< --overwrite: outputs may replace existing mlmap map files
+
+  /// Every file the options write.
+  [[nodiscard]] std::vector<std::string> outputs() const {
+    std::vector<std::string> paths;
+    for (const std::string* p : {&ply_path, &pcd_path, &bt_path}) {
+      if (!p->empty()) paths.push_back(*p);
+    }
+    if (!grid_base.empty()) {
+      paths.push_back(grid_base + ".pgm");
+      paths.push_back(grid_base + ".yaml");
+    }
+    return paths;
+  }
 };
 
 /// Adds every option of mlmap_map_tool to `app`.
@@ -50,9 +68,12 @@ void addOptions(CLI::App& app, Options& o) {
       ->expected(2);
   app.add_flag("--grid-local-only", o.local_only, "grid of the local window only (default: local + global)");
   app.add_option("--bt", o.bt_path, "write an OctoMap binary tree (.bt): occupied and known-free voxels");
-  app.add_option("--bench", o.bench_runs, "load the map and save it (to MAP.bench, removed after) N "
-                                         "times each; print median / p99 / best times")
+  app.add_option("--bench", o.bench_runs, "load the map and save it (to a new temporary file "
+                                         "beside it, removed after) N times each; print median / "
+                                         "p99 / best times")
       ->check(CLI::PositiveNumber);
+  app.add_flag("--overwrite", o.overwrite, "outputs may replace existing mlmap map files (never "
+                                           "the input map)");
 }
 
 /// False (the reason printed) when the options ask for nothing or for what this build cannot do.
@@ -68,9 +89,24 @@ bool checkOptions(const Options& o) {
     return false;
   }
 #endif
-  if (!o.band.empty() && !(o.band[0] < o.band[1])) {
-    std::cerr << "--band: MIN must be below MAX\n";
-    return false;
+  if (!o.band.empty()) {
+    const auto inRange = [](double z) { return std::isfinite(z) && std::abs(z) < kMaxAbsCoordinate_m; };
+    if (!inRange(o.band[0]) || !inRange(o.band[1])) {
+      std::cerr << "--band: heights must be finite and within " << kMaxAbsCoordinate_m
+                << " m of the origin\n";
+      return false;
+    }
+    if (!(o.band[0] < o.band[1])) {
+      std::cerr << "--band: MIN must be below MAX\n";
+      return false;
+    }
+  }
+  for (const std::string& out : o.outputs()) {
+    const std::string conflict = io::outputConflict(out, {o.map_path}, o.overwrite, "--overwrite");
+    if (!conflict.empty()) {
+      std::cerr << "not writing " << conflict << "\n";
+      return false;
+    }
   }
   return true;
 }
@@ -107,11 +143,28 @@ void printInfo(const std::string& map_path, const MapState& state, std::size_t o
               state.has_last_stamp ? std::to_string(state.last_stamp_s).c_str() : "none");
 }
 
-/// --bench: loads and saves the map `runs` times each and prints the times.
+/// A new empty file beside `path` ("<path>.bench-XXXXXX") that nothing else uses.
+std::string newFileBeside(const std::string& path) {
+  std::string name = path + ".bench-XXXXXX";
+  const int fd = ::mkstemp(name.data());
+  if (fd < 0) throw std::runtime_error("cannot create a file beside '" + path + "' for --bench");
+  ::close(fd);
+  return name;
+}
+
+/// --bench: loads and saves the map `runs` times each and prints the times. The saves go to a
+/// new file of its own, removed after: no existing file is touched.
 void benchmark(const std::string& map_path, int runs) {
   std::vector<double> load_times_ms;
   std::vector<double> save_times_ms;
-  const std::string bench_path = map_path + ".bench";
+  struct RemovedAtExit {
+    std::string path;
+    ~RemovedAtExit() {
+      std::error_code ignored;
+      std::filesystem::remove(path, ignored);
+    }
+  } bench_file{newFileBeside(map_path)};
+  const std::string& bench_path = bench_file.path;
   for (int i = 0; i < runs; ++i) {
     auto start = SteadyClock::now();
     const MapState again = io::loadMapFile(map_path);
@@ -120,7 +173,6 @@ void benchmark(const std::string& map_path, int runs) {
     io::saveMapFile(again, bench_path);
     save_times_ms.push_back(msSince(start));
   }
-  std::filesystem::remove(bench_path);
   for (auto [what, values] : {std::pair{"load", load_times_ms}, std::pair{"save", save_times_ms}}) {
     const TimingSummary t = summarizeTimings(values);
     std::printf("%s (%d runs): median %.2f ms, p99 %.2f ms, best %.2f ms\n", what, runs,

@@ -12,6 +12,7 @@
 
 #include <chrono>
 #include <iostream>
+#include <optional>
 #include <thread>
 
 namespace {
@@ -115,7 +116,9 @@ int run(const Options& o) {
       return 0;
     }
     apps::installStopHandler();
+    std::optional<apps::ExitAtOnceOnStop> starting(std::in_place);  // SIGTERM works while loading
     mlmap::dds::MappingNode node(config, logNodeMessage);
+    starting.reset();  // from here on a stop signal stops the node cleanly (final save)
     logInputs(config, node);
     mapUntilStopped(o, node);
     return stopAndReport(config, node);

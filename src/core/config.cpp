@@ -1,5 +1,6 @@
 #include "mlmap/core/config.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -78,7 +79,9 @@ void LocalMapConfig::validate(std::vector<std::string>* errors) const {
   }
   const double cells = static_cast<double>(size_cells.x()) * size_cells.y() * size_cells.z();
   require(cells <= 2.0e8, sectionKey(*this, size_cells),
-          "more than 2e8 voxels (400 MB) in the active area", cells, errors);
+          "more than 2e8 voxels in the active area (each takes 2 bytes in the window and up to "
+          "21 more in the planners' snapshots and ESDF: 4.7 GB at the limit)",
+          cells, errors);
 }
 
 void SensorConfig::validate(std::vector<std::string>* errors) const {
@@ -210,6 +213,66 @@ std::vector<std::string> MapConfig::validate() const {
     errors.push_back(message.str());
   }
   return errors;
+}
+
+namespace {
+
+/// The free-space scratch box of the awareness stage [voxels] (MapConfig::validate()).
+double scratchBoxVoxels(const MapConfig& c) {
+  const double res = c.local_map.resolution_m;
+  const double range_voxels = std::ceil(c.awareness.max_range_m / res) + 1.0;
+  const double offset_voxels = std::ceil(c.sensor.translation_B_m.norm() / res) + 1.0;
+  double box_voxels = 1.0;
+  for (int a = 0; a < 3; ++a) {
+    const double submap = c.local_map.size_cells[a] / LocalMapConfig::kSubmapsPerAxis;
+    box_voxels *= 2.0 * std::min(range_voxels, 3.0 * submap + offset_voxels) + 1.0;
+  }
+  return box_voxels;
+}
+
+std::string megabytes(std::size_t bytes) {
+  std::ostringstream m;
+  m.precision(bytes >= 1000000000 ? 2 : 3);
+  if (bytes >= 1000000000) {
+    m << static_cast<double>(bytes) / 1e9 << " GB";
+  } else {
+    m << static_cast<double>(bytes) / 1e6 << " MB";
+  }
+  return m.str();
+}
+
+}  // namespace
+
+MemoryEstimate estimateMemory(const MapConfig& c) {
+  // Bytes per voxel, read off the engine's accounting (docs/performance.md, "Memory").
+  constexpr double kLocalPerVoxel = 2.05;      // int16 log-odds plus per-submap bookkeeping
+  constexpr double kSnapshotPerVoxel = 4.0;    // two int16 window copies
+  constexpr double kEsdfPerBoxVoxel = 17.3;    // two buffers of float distance, int32 work, bits
+  constexpr double kAwarenessCellBytes = 9.0;  // per cylindrical cell: state, bins, scratch
+  MemoryEstimate e;
+  const Eigen::Vector3i& n = c.local_map.size_cells;
+  const double window = static_cast<double>(n.x()) * n.y() * n.z();
+  e.local_bytes = static_cast<std::size_t>(window * kLocalPerVoxel);
+  e.snapshot_bytes = static_cast<std::size_t>(window * kSnapshotPerVoxel);
+  if (c.esdf.enabled) {
+    double box = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      const double edge_m = c.esdf.box_size_m[a];
+      const double cells_on_axis = std::max(1.0, std::round(edge_m / c.local_map.resolution_m));
+    box *= edge_m > 0.0 ? std::min<double>(n[a], cells_on_axis) : n[a];
+    }
+    e.esdf_bytes = static_cast<std::size_t>(box * kEsdfPerBoxVoxel);
+  }
+  const double cells = static_cast<double>(c.awareness.rho_cells) * c.awareness.phi_cells *
+                       c.awareness.z_cells;
+  e.awareness_bytes = static_cast<std::size_t>(cells * kAwarenessCellBytes + scratchBoxVoxels(c) / 8.0);
+  return e;
+}
+
+std::string describeMemory(const MemoryEstimate& e) {
+  return megabytes(e.total()) + " (local map " + megabytes(e.local_bytes) + ", snapshots " +
+         megabytes(e.snapshot_bytes) + ", ESDF " + megabytes(e.esdf_bytes) + ", awareness " +
+         megabytes(e.awareness_bytes) + ")";
 }
 
 }  // namespace mlmap

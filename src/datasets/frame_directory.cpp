@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <sstream>
@@ -119,21 +120,64 @@ Transform parsePoseMatrix(const std::string& text, const std::string& path) {
 
 namespace {
 
-/// Loads an image unchanged; never throws cv::Exception (returns an empty Mat on failure).
-cv::Mat loadUnchanged(const std::string& path) {
-  try {
-    return cv::imread(path, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception&) {
-    return {};
+/// Largest depth image read [pixels] (4096 x 4096; depth sensors give at most about 2 MP) and
+/// its largest side: checked in the PNG header, before anything is decoded.
+constexpr std::uint64_t kMaxDepthPixels = std::uint64_t{1} << 24;
+constexpr std::uint32_t kMaxDepthSide = 16384;
+/// Largest depth PNG file [bytes]: a 16 MP 16-bit image stored uncompressed, with room to spare.
+constexpr std::uintmax_t kMaxDepthFileBytes = std::uintmax_t{64} << 20;
+
+std::uint32_t bigEndian32(const std::string& bytes, std::size_t at) {
+  std::uint32_t v = 0;
+  for (std::size_t i = 0; i < 4; ++i) v = (v << 8) | static_cast<unsigned char>(bytes[at + i]);
+  return v;
+}
+
+/// Checks the PNG signature and header (IHDR) of `bytes` before decoding: a 16-bit grayscale
+/// image within kMaxDepthSide and kMaxDepthPixels (a small file may declare a huge image).
+void checkDepthPngHeader(const std::string& bytes, const std::string& path) {
+  static const char kSignature[] = "\x89PNG\r\n\x1a\n";
+  constexpr std::size_t kHeaderEnd = 33;  // signature 8, chunk length 4, "IHDR" 4, data 13, CRC 4
+  if (bytes.size() < kHeaderEnd || bytes.compare(0, 8, kSignature, 8) != 0 ||
+      bytes.compare(12, 4, "IHDR") != 0) {
+    throw std::runtime_error("FrameDirectory: depth image '" + path +
+                             "' is not a PNG file (depth images are 16-bit PNG)");
+  }
+  const std::uint32_t width = bigEndian32(bytes, 16);
+  const std::uint32_t height = bigEndian32(bytes, 20);
+  const int bit_depth = static_cast<unsigned char>(bytes[24]);
+  const int color_type = static_cast<unsigned char>(bytes[25]);
+  if (width == 0 || height == 0 || width > kMaxDepthSide || height > kMaxDepthSide ||
+      std::uint64_t{width} * height > kMaxDepthPixels) {
+    throw std::runtime_error("FrameDirectory: depth image '" + path + "' declares " +
+                             std::to_string(width) + " x " + std::to_string(height) +
+                             " pixels; at most " + std::to_string(kMaxDepthPixels) +
+                             " pixels and " + std::to_string(kMaxDepthSide) + " per side are read");
+  }
+  if (bit_depth != 16 || color_type != 0) {
+    throw std::runtime_error("FrameDirectory: depth image '" + path + "' has " +
+                             std::to_string(bit_depth) + "-bit samples of PNG colour type " +
+                             std::to_string(color_type) +
+                             ", expected 16-bit grayscale (type 0, millimetres)");
   }
 }
 
-/// Loads a depth PNG and checks it is 16-bit single channel.
+/// Loads a depth PNG and checks it is 16-bit single channel; its header is checked before it
+/// is decoded. Never lets a cv::Exception out.
 cv::Mat loadDepthImage(const std::string& path) {
-  cv::Mat image = loadUnchanged(path);
+  const std::string bytes = readFileBytes(path, kMaxDepthFileBytes);
+  checkDepthPngHeader(bytes, path);
+  cv::Mat image;
+  try {
+    const cv::Mat encoded(1, static_cast<int>(bytes.size()), CV_8UC1,
+                          const_cast<char*>(bytes.data()));  // read only: imdecode copies out
+    image = cv::imdecode(encoded, cv::IMREAD_UNCHANGED);
+  } catch (const cv::Exception&) {
+    image = cv::Mat();
+  }
   if (image.empty()) {
-    throw std::runtime_error("FrameDirectory: cannot read depth image '" + path +
-                             "' (missing, empty or not a decodable image)");
+    throw std::runtime_error("FrameDirectory: cannot decode depth image '" + path +
+                             "' (a corrupted PNG)");
   }
   if (image.type() != CV_16UC1) {
     throw std::runtime_error("FrameDirectory: depth image '" + path + "' is " +

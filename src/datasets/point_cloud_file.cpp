@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -684,11 +685,29 @@ PointCloudFile parsePly(const std::string& content, const std::string& source) {
   return cloud;
 }
 
-std::string readFileBytes(const std::string& path) {
+std::string readFileBytes(const std::string& path, std::uintmax_t max_bytes) {
+  std::error_code ec;
+  const std::filesystem::file_status status = std::filesystem::status(path, ec);
+  if (ec) throw std::runtime_error(path + ": cannot open (" + ec.message() + ")");
+  if (!std::filesystem::is_regular_file(status)) {
+    throw std::runtime_error(path + (std::filesystem::is_directory(status)
+                                         ? ": is a directory, not a file"
+                                         : ": is not a regular file (a device, pipe or socket)"));
+  }
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) throw std::runtime_error(path + ": cannot read its size (" + ec.message() + ")");
+  if (size > max_bytes) {
+    throw std::runtime_error(path + ": " + std::to_string(size) + " bytes, more than the " +
+                             std::to_string(max_bytes) + " this reader accepts");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path + ": cannot open");
-  std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw std::runtime_error(path + ": read error");
+  std::string content(static_cast<std::size_t>(size), '\0');
+  in.read(content.data(), static_cast<std::streamsize>(size));
+  if (static_cast<std::uintmax_t>(in.gcount()) != size) {
+    throw std::runtime_error(path + ": read error after " + std::to_string(in.gcount()) + " of " +
+                             std::to_string(size) + " bytes (did the file change?)");
+  }
   return content;
 }
 

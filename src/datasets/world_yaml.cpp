@@ -1,5 +1,7 @@
 #include "mlmap/datasets/world_yaml.h"
 
+#include "mlmap/config/yaml_section.h"
+
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -286,12 +288,7 @@ Scenario parseRoot(const YAML::Node& root) {
 }
 
 Scenario parseWithName(const std::string& text, const std::string& source_name) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(source_name + ": YAML syntax error: " + e.what());
-  }
+  const YAML::Node root = io::parseYamlDocument(text, source_name);  // one document, no duplicates
   try {
     return parseRoot(root);
   } catch (const ParseError& e) {

@@ -1,6 +1,7 @@
 #include "mlmap/local/map_state.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <sstream>
 
@@ -32,6 +33,16 @@ std::vector<std::string> mapConfigDifferences(const MapState& state, const MapCo
 
 std::vector<std::string> mapStateProblems(const MapState& state) {
   std::vector<std::string> problems;
+  // The stamp and pose pass the checks a live frame's do (MapEngine::submit()).
+  if (state.has_last_stamp && !std::isfinite(state.last_stamp_s)) {
+    problems.push_back("last stamp is not finite");
+  }
+  if (!isMappablePose(state.T_W_B)) {
+    std::ostringstream m;
+    m << "last body pose is not a valid pose within " << kMaxAbsCoordinate_m
+      << " m of the origin (position " << state.T_W_B.translation().transpose() << ")";
+    problems.push_back(m.str());
+  }
   const LogOddsModel model(state.log_odds);
   const Eigen::Vector3i submap_cells = state.local_map.submap_cells();
   const LocalWindow& w = state.window;

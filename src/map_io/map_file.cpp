@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -208,10 +209,12 @@ struct MapFileLayout {
 };
 
 /// Magic, version, header size and checksum, and the size the header announces against the
-/// file's; leaves `r` after the announced size.
-std::uint64_t checkEnvelope(const std::string& bytes, const std::string& source, Reader* r) {
-  const std::size_t n = bytes.size();
-  const std::size_t magic_checked = std::min(n, sizeof kMagic);
+/// file's, `file_bytes`; `bytes` holds the file from its start, at least its header when the file
+/// has one. Leaves `r` after the announced size.
+std::uint64_t checkEnvelope(const std::string& bytes, std::uint64_t file_bytes,
+                            const std::string& source, Reader* r) {
+  const std::uint64_t n = file_bytes;
+  const std::size_t magic_checked = std::min(bytes.size(), sizeof kMagic);
   if (n < 16 || std::memcmp(bytes.data(), kMagic, magic_checked) != 0) {
     if (n > 0 && std::memcmp(bytes.data(), kMagic, magic_checked) == 0) {
       refuse(source, "truncated: " + std::to_string(n) + " bytes, not even a complete header");
@@ -378,7 +381,7 @@ void readGlobalSubmaps(const std::string& bytes, const std::string& source, cons
 MapState decodeMapFile(const std::string& bytes, const std::string& source) {
   Reader r(bytes, sizeof kMagic);
   MapFileLayout layout;
-  layout.total = checkEnvelope(bytes, source, &r);
+  layout.total = checkEnvelope(bytes, bytes.size(), source, &r);
   MapState state;
   readConfiguration(source, &r, &state);
   readHeaderFields(source, &r, &state, &layout);
@@ -446,6 +449,56 @@ void writeFileAtomically(const std::string& path, const std::string& bytes) {
     ::fsync(dir_fd);
     ::close(dir_fd);
   }
+  (void)removeLeftoverTemporaries(path);
+}
+
+bool isMapFile(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return false;
+  std::ifstream in(path, std::ios::binary);
+  char magic[sizeof kMagic] = {};
+  in.read(magic, sizeof magic);
+  return in.gcount() == static_cast<std::streamsize>(sizeof magic) &&
+         std::memcmp(magic, kMagic, sizeof magic) == 0;
+}
+
+std::string outputConflict(const std::string& output, const std::vector<std::string>& inputs,
+                           bool overwrite_maps, const std::string& overwrite_flag) {
+  std::error_code ec;
+  if (!std::filesystem::exists(output, ec)) return "";
+  for (const std::string& input : inputs) {
+    if (!input.empty() && std::filesystem::equivalent(output, input, ec)) {
+      return "'" + output + "' is an input of this run: writing it would destroy what is read";
+    }
+  }
+  if (!overwrite_maps && isMapFile(output)) {
+    return "'" + output + "' is an existing mlmap map: give another path, or " + overwrite_flag +
+           " to replace it";
+  }
+  return "";
+}
+
+std::size_t removeLeftoverTemporaries(const std::string& path) {
+  const std::filesystem::path target(path);
+  const std::filesystem::path dir =
+      target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
+  const std::string prefix = target.filename().string() + ".tmp-";
+  constexpr std::size_t kSuffixChars = 6;  // mkstemp's XXXXXX
+  std::size_t removed = 0;
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::filesystem::directory_entry& entry = *it;
+    std::error_code entry_ec;
+    const std::string name = entry.path().filename().string();
+    if (name.size() != prefix.size() + kSuffixChars || name.compare(0, prefix.size(), prefix) != 0 ||
+        !std::all_of(name.begin() + static_cast<std::ptrdiff_t>(prefix.size()), name.end(),
+                     [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0; }) ||
+        !entry.is_regular_file(entry_ec)) {
+      continue;
+    }
+    if (std::filesystem::remove(entry.path(), entry_ec)) ++removed;
+  }
+  return removed;
 }
 
 void saveMapFile(const MapState& state, const std::string& path) {
@@ -453,10 +506,37 @@ void saveMapFile(const MapState& state, const std::string& path) {
 }
 
 MapState loadMapFile(const std::string& path) {
+  // What is read from outside is bounded before it is allocated: a regular file, within the
+  // size limit, whose header (checked first) announces exactly the file's size.
+  std::error_code ec;
+  const std::filesystem::file_status status = std::filesystem::status(path, ec);
+  if (ec) refuse(path, "cannot open the map file: " + ec.message());
+  if (!std::filesystem::is_regular_file(status)) {
+    refuse(path, std::filesystem::is_directory(status)
+                     ? "is a directory, not a map file"
+                     : "is not a regular file (a device, pipe or socket), not a map file");
+  }
+  const std::uintmax_t file_bytes = std::filesystem::file_size(path, ec);
+  if (ec) refuse(path, "cannot read the map file's size: " + ec.message());
+  if (file_bytes > kMaxMapFileBytes) {
+    refuse(path, std::to_string(file_bytes) + " bytes: larger than the " +
+                     std::to_string(kMaxMapFileBytes >> 30) + " GiB a map file may have");
+  }
   std::ifstream in(path, std::ios::binary);
   if (!in) refuse(path, errnoText("cannot open the map file", errno));
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) refuse(path, "read error");
+  auto readInto = [&](std::string* bytes, std::size_t from, std::size_t to) {
+    bytes->resize(to);
+    in.read(bytes->data() + from, static_cast<std::streamsize>(to - from));
+    if (static_cast<std::size_t>(in.gcount()) != to - from) {
+      refuse(path, "read error after " + std::to_string(from + static_cast<std::size_t>(in.gcount())) +
+                       " of " + std::to_string(file_bytes) + " bytes (did the file change?)");
+    }
+  };
+  std::string bytes;
+  readInto(&bytes, 0, static_cast<std::size_t>(std::min<std::uintmax_t>(file_bytes, kHeaderBytes)));
+  Reader header(bytes, sizeof kMagic);
+  (void)checkEnvelope(bytes, file_bytes, path, &header);
+  readInto(&bytes, bytes.size(), static_cast<std::size_t>(file_bytes));
   return decodeMapFile(bytes, path);
 }
 

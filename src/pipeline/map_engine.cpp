@@ -13,7 +13,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kTimingWindow = 2000;   // frames kept for median / p99
-constexpr double kMaxAbsCoordinate_m = 1e6;   // keeps voxel indices far from int overflow
 
 const MapConfig& validated(const MapConfig& config) {
   throwIfInvalid(config.validate(), "mlmap configuration");
@@ -98,22 +97,41 @@ MapEngine::~MapEngine() {
 }
 
 FrameStatus MapEngine::admit(double stamp_s, const Transform& T_W_B, const Transform& T_B_S) {
-  std::lock_guard<std::mutex> lock(stats_mutex_);
-  ++stats_.frames_in;
-  const bool pose_ok = isValidPose(T_W_B) && isValidPose(T_B_S) &&
-                       T_W_B.translation().cwiseAbs().maxCoeff() < kMaxAbsCoordinate_m &&
-                       T_B_S.translation().norm() < 100.0;
-  if (!pose_ok) {
-    ++stats_.rejected_invalid_pose;
-    return FrameStatus::kInvalidPose;
+  double loaded_stamp_s = 0.0;  ///< set when this frame restarts the stamp order after a load
+  bool restarted = false;
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    ++stats_.frames_in;
+    const bool pose_ok =
+        isMappablePose(T_W_B) && isValidPose(T_B_S) && T_B_S.translation().norm() < 100.0;
+    if (!pose_ok) {
+      ++stats_.rejected_invalid_pose;
+      return FrameStatus::kInvalidPose;
+    }
+    const bool in_order = !config_.pipeline.reject_out_of_order || !have_stamp_ || stamp_s > last_stamp_s_;
+    if (!std::isfinite(stamp_s) || (!in_order && !stamp_from_load_)) {
+      ++stats_.rejected_out_of_order;
+      return FrameStatus::kOutOfOrder;
+    }
+    if (!in_order) {  // the first frame after a load, older than the map: another time base
+      restarted = true;
+      loaded_stamp_s = last_stamp_s_;
+      ++stats_.stamp_order_restarts;
+    }
+    last_stamp_s_ = stamp_s;
+    have_stamp_ = true;
+    stamp_from_load_ = false;
   }
-  if (!std::isfinite(stamp_s) ||
-      (config_.pipeline.reject_out_of_order && have_stamp_ && !(stamp_s > last_stamp_s_))) {
-    ++stats_.rejected_out_of_order;
-    return FrameStatus::kOutOfOrder;
+  if (restarted) {
+    std::ostringstream m;
+    m.precision(15);
+    m << "the first frame after loading the map has stamp " << stamp_s
+      << " s, older than the map's last stamp " << loaded_stamp_s << " s by "
+      << loaded_stamp_s - stamp_s
+      << " s: the map was saved on another time base (wall-clock time against sim time, or a "
+         "clock reset at boot); the stamp order restarts from this frame";
+    log_.log(LogLevel::kWarning, 7, m.str());
   }
-  last_stamp_s_ = stamp_s;
-  have_stamp_ = true;
   return FrameStatus::kAccepted;
 }
 
@@ -353,10 +371,6 @@ MapState MapEngine::exportState() const {
 
 void MapEngine::restoreState(const MapState& state) {
   std::vector<std::string> errors = mapConfigDifferences(state, config_);
-  if (state.has_last_stamp && !std::isfinite(state.last_stamp_s)) {
-    errors.push_back("last stamp is not finite");
-  }
-  if (!isValidPose(state.T_W_B)) errors.push_back("last body pose is not a valid pose");
   if (errors.empty()) {  // judged against its own configuration, which must be this one
     for (std::string& problem : mapStateProblems(state)) errors.push_back(std::move(problem));
   }
@@ -379,6 +393,7 @@ void MapEngine::restoreState(const MapState& state) {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     have_stamp_ = state.has_last_stamp;
     last_stamp_s_ = state.has_last_stamp ? state.last_stamp_s : -1e300;
+    stamp_from_load_ = state.has_last_stamp;
     stats_.global_voxels = global_.voxelCount();
     stats_.global_submaps = global_.submapCount();
     stats_.memory.global_bytes = global_.memoryBytes();

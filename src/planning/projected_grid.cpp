@@ -48,12 +48,22 @@ void projectWindowColumns(const LocalWindow& window, const ProjectedGridConfig& 
 }  // namespace
 
 void bandLayers(double z_min_m, double z_max_m, double resolution_m, int* k0, int* k1) {
+  *k0 = 0;
+  *k1 = 0;
+  if (!(z_min_m <= z_max_m) || !(resolution_m > 0.0)) return;  // NaN included: an empty band
+  // Layers beyond +-2^30 hold no voxel (kMaxAbsWindowVoxelIndex): heights are clamped there, so
+  // an absurd band (1e8 m, 1e300 m from a file) is an empty or short range, never a long loop.
+  constexpr double kLimit = 1 << 30;
+  const double lo = std::clamp(z_min_m / resolution_m, -kLimit, kLimit);
+  const double hi = std::clamp(z_max_m / resolution_m, -kLimit, kLimit);
   auto inBand = [&](int k) { return (k + 0.5) * resolution_m >= z_min_m; };
   auto belowTop = [&](int k) { return (k + 0.5) * resolution_m <= z_max_m; };
-  int a = floorToInt(z_min_m / resolution_m) - 1;
-  while (!inBand(a)) ++a;
-  int b = floorToInt(z_max_m / resolution_m) + 1;
-  while (!belowTop(b)) --b;
+  // The first layer in the band lies within 2 of floor(lo) - 1 (a few more steps absorb the
+  // rounding of the products); likewise the last one below the top.
+  int a = floorToInt(lo) - 1;
+  for (int step = 0; step < 4 && !inBand(a); ++step) ++a;
+  int b = floorToInt(hi) + 1;
+  for (int step = 0; step < 4 && !belowTop(b); ++step) --b;
   *k0 = a;
   *k1 = std::max(a, b + 1);
 }

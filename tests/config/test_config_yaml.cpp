@@ -95,5 +95,20 @@ TEST(ConfigYaml, UnknownKeysAndBadValuesAreClearErrors) {
   EXPECT_THROW(io::loadConfigYaml("/nonexistent/mlmap.yaml"), std::runtime_error);
 }
 
+// YAML forbids a key twice in a mapping; yaml-cpp keeps the first value without a word, so the
+// second (the one a user just added at the end of the file) would be ignored.
+TEST(ConfigYaml, DuplicateKeysAndExtraDocumentsAreErrors) {
+  const std::string twice = errorOf("local_map:\n  resolution_m: 0.1\n  resolution_m: 0.2\n");
+  EXPECT_NE(twice.find("line 3: key 'local_map.resolution_m' appears twice (first on line 2)"),
+            std::string::npos)
+      << twice;
+  const std::string sections = errorOf("esdf: {enabled: false}\nawareness: {}\nesdf: {}\n");
+  EXPECT_NE(sections.find("key 'esdf' appears twice"), std::string::npos) << sections;
+  const std::string documents = errorOf("local_map: {resolution_m: 0.1}\n---\nesdf: {}\n");
+  EXPECT_NE(documents.find("2 YAML documents"), std::string::npos) << documents;
+  // Equal keys in different mappings, and a lone document marker, are fine.
+  EXPECT_EQ(errorOf("---\nlocal_map: {resolution_m: 0.1}\nesdf: {max_distance_m: 2.0}\n"), "");
+}
+
 }  // namespace
 }  // namespace mlmap

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 #include <unistd.h>
@@ -296,10 +297,39 @@ TEST_F(TempFrameDir, WrongImageTypeOrSizeIsRejected) {
   const FrameDirectory frames(dir_.string());
   ASSERT_EQ(frames.size(), 5u);
   EXPECT_NO_THROW((void)frames.read(0));
-  expectThrowWith([&] { (void)frames.read(1); }, {path("frame-000001.depth.png"), "CV_8UC1"});
-  expectThrowWith([&] { (void)frames.read(2); }, {path("frame-000002.depth.png"), "CV_16UC3"});
+  expectThrowWith([&] { (void)frames.read(1); },
+                  {path("frame-000001.depth.png"), "8-bit samples of PNG colour type 0"});
+  expectThrowWith([&] { (void)frames.read(2); },
+                  {path("frame-000002.depth.png"), "16-bit samples of PNG colour type 2"});
   expectThrowWith([&] { (void)frames.read(3); }, {path("frame-000003.depth.png"), "80x60"});
-  expectThrowWith([&] { (void)frames.read(4); }, {path("frame-000004.depth.png"), "cannot read"});
+  expectThrowWith([&] { (void)frames.read(4); }, {path("frame-000004.depth.png"), "not a PNG file"});
+}
+
+// A small PNG may declare a huge image (a decompression bomb: 1.7 MB declaring 30000 x 30000
+// was decoded to 1.9 GB before the size check); the header is checked before decoding. A device
+// named like a frame is never read.
+TEST_F(TempFrameDir, HugeDeclaredImagesAndDevicesAreRefusedBeforeReading) {
+  writeIntrinsics();
+  writeFrame("frame-000000");
+  writeFrame("frame-000001");
+  std::string png;
+  {
+    std::ifstream in(path("frame-000001.depth.png"), std::ios::binary);
+    png.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  ASSERT_GT(png.size(), 33u);
+  const unsigned char side[4] = {0x00, 0x00, 0x75, 0x30};  // 30000, big-endian
+  for (int i = 0; i < 4; ++i) png[16 + i] = png[20 + i] = static_cast<char>(side[i]);
+  writeText("frame-000001.depth.png", png);
+  writePose("frame-000002");
+  fs::create_symlink("/dev/zero", path("frame-000002.depth.png"));
+
+  const FrameDirectory frames(dir_.string());
+  ASSERT_EQ(frames.size(), 3u);
+  expectThrowWith([&] { (void)frames.read(1); },
+                  {path("frame-000001.depth.png"), "declares 30000 x 30000 pixels"});
+  expectThrowWith([&] { (void)frames.read(2); },
+                  {path("frame-000002.depth.png"), "not a regular file"});
 }
 
 TEST_F(TempFrameDir, WrongFirstImageFailsAtOpen) {
@@ -307,7 +337,7 @@ TEST_F(TempFrameDir, WrongFirstImageFailsAtOpen) {
   writeDepth("frame-000000", cv::Mat(120, 160, CV_8UC1, cv::Scalar(7)));
   writePose("frame-000000");
   expectThrowWith([&] { FrameDirectory frames(dir_.string()); },
-                  {path("frame-000000.depth.png"), "CV_8UC1"});
+                  {path("frame-000000.depth.png"), "8-bit samples"});
 }
 
 TEST_F(TempFrameDir, EmptyOrMissingDirectoryIsReported) {

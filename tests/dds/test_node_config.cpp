@@ -268,7 +268,7 @@ TEST(NodeConfigYaml, MapFileSectionIsReadValidatedAndPrinted) {
                        "map_file.load_path: no such file (got '/nonexistent/map.mlmap'"));
   EXPECT_TRUE(contains(errorOf("map_file: {save_paht: x}"),
                        "map_file.save_paht: unknown key (known keys: load_missing_ok, load_path, "
-                       "save_path, save_period_s)"));
+                       "overwrite, save_path, save_period_s)"));
   EXPECT_TRUE(contains(errorOf("map_file: {save_period_s: soon}"),
                        "map_file.save_period_s: cannot read 'soon'"));
 }

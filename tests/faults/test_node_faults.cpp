@@ -1,5 +1,5 @@
 // Faults at the mapping node's inputs and outputs, in process, over DDS on loopback (domains
-// 200..205, 208): the sensor stream stops and resumes; the pose stream lags, jumps and goes backwards;
+// 200..205, 208, 209): the sensor stream stops and resumes; the pose stream lags, jumps and goes backwards;
 // clouds arrive faster than the engine maps; a subscriber leaves and returns. Each test asserts
 // the behaviour docs/soak-and-faults.md documents. The vehicle is a sparse simulated LiDAR
 // (the sensor frame is the body frame) in two rooms 40 m apart.
@@ -27,7 +27,9 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
@@ -308,6 +310,67 @@ TEST(NodeFaults, PoseJumpLimitsComeFromTheConfiguration) {
       << "dds.max_pose_speed_mps was not applied: the cloud was interpolated";
   flyMapped(vehicle, node, 30.6, 1.1, 3, &n);
   expectEveryCloudAccountedFor(node);
+}
+
+// The node's map file against what a supervisor and a user expect: a map saved on another time
+// base (wall-clock stamps, then a sensor on sim time) is extended from the first live frame,
+// said plainly; an existing map that was not loaded is never replaced without map_file.overwrite;
+// temporary files of a save killed before its rename are removed at start.
+TEST(NodeFaults, MapFileTimeBaseOverwriteAndLeftovers) {
+  const std::string dir = ::testing::TempDir() + "mlmap_fault_map_file_" + std::to_string(::getpid());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  NodeConfig config = lidarNodeConfig(209);
+  config.map_file.save_path = dir + "/map.mlmap";
+  {
+    MappingNode node(config);
+    Vehicle vehicle(209, config);
+    ASSERT_TRUE(vehicle.matched(node));
+    std::uint64_t n = 0;
+    flyMapped(vehicle, node, 1000.0, 0.0, 5, &n);  // stamps of a wall clock
+  }
+  ASSERT_TRUE(io::isMapFile(config.map_file.save_path));
+  const std::string saved = io::encodeMapFile(io::loadMapFile(config.map_file.save_path));
+
+  // The same save_path, nothing loaded: the node refuses to start, the map stays.
+  try {
+    MappingNode node(config);
+    ADD_FAILURE() << "a node started that would replace an existing map it did not load";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("map_file.save_path '" + config.map_file.save_path +
+                                         "' already exists"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(io::encodeMapFile(io::loadMapFile(config.map_file.save_path)), saved);
+
+  // Loaded, with a leftover of a killed save beside it, and a sensor on another time base.
+  config.map_file.load_path = config.map_file.save_path;
+  const std::string leftover = config.map_file.save_path + ".tmp-Ab12Cd";
+  std::ofstream(leftover) << "half a map";
+  std::vector<std::string> lines;
+  std::mutex lines_mutex;
+  {
+    MappingNode node(config, [&](LogLevel, const std::string& m) {
+      std::lock_guard<std::mutex> lock(lines_mutex);
+      lines.push_back(m);
+    });
+    EXPECT_FALSE(std::filesystem::exists(leftover));
+    Vehicle vehicle(209, config);
+    ASSERT_TRUE(vehicle.matched(node));
+    std::uint64_t n = 0;  // frames_mapped counts this run
+    flyMapped(vehicle, node, 20.0, 0.0, 5, &n);
+    EXPECT_EQ(node.engineStats().stamp_order_restarts, 1u);
+    EXPECT_EQ(node.engineStats().rejected_out_of_order, 0u);
+  }
+  auto logged = [&](const std::string& text) {
+    return std::any_of(lines.begin(), lines.end(),
+                       [&](const std::string& l) { return l.find(text) != std::string::npos; });
+  };
+  EXPECT_TRUE(logged("removed 1 temporary file(s) of an interrupted save"));
+  EXPECT_TRUE(logged("saved on another time base"));
+  EXPECT_TRUE(logged("older than the map's last stamp 1000.4 s"));
+  std::filesystem::remove_all(dir);
 }
 
 TEST(NodeFaults, BackwardPosesAreRejectedCountedAndMappingResumes) {

@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <csignal>
 #include <cstring>
 #include <filesystem>
@@ -23,6 +24,7 @@
 #include <map>
 #include <sstream>
 #include <tuple>
+#include <vector>
 
 namespace mlmap {
 namespace {
@@ -146,13 +148,40 @@ TEST(MapFile, MappingAfterALoadGivesTheSameMapAsNeverStopping) {
   // The same bytes: every voxel, every global record, the window position, last stamp and pose.
   EXPECT_EQ(io::encodeMapFile(second_half.exportState()), io::encodeMapFile(straight.exportState()));
   EXPECT_GT(straight.globalMap().voxelCount(), 100u);
-  // Frames older than the saved map's last one are refused after the load.
+}
+
+// A map saved on one time base (wall-clock time) and a sensor on another (sim time, a clock
+// reset at boot): every frame used to be refused as out of order, without a word. The first
+// frame after a load that is older than the map restarts the stamp order, counted; frames older
+// than it are refused as before.
+TEST(MapFile, AFirstFrameOlderThanTheLoadedMapRestartsTheStampOrder) {
+  MapEngine first_half(smallConfig());
+  flyCheap(first_half, 0, 20);
+  const MapState saved = io::decodeMapFile(io::encodeMapFile(first_half.exportState()), "saved");
+  ASSERT_TRUE(saved.has_last_stamp);
+  ASSERT_GT(saved.last_stamp_s, 0.6);
+
   MapEngine reloaded(smallConfig());
-  reloaded.restoreState(io::decodeMapFile(bytes, "first_half"));
-  PointCloudFrame old_frame;
-  old_frame.stamp_s = 0.5;
-  old_frame.points_S = {Eigen::Vector3f(0, 0, 1)};
-  EXPECT_EQ(reloaded.submit(old_frame), FrameStatus::kOutOfOrder);
+  reloaded.restoreState(saved);
+  PointCloudFrame frame;
+  frame.points_S = {Eigen::Vector3f(0, 0, 1)};
+  frame.stamp_s = 0.5;
+  EXPECT_EQ(reloaded.submit(frame), FrameStatus::kAccepted);
+  EXPECT_EQ(reloaded.stats().stamp_order_restarts, 1u);
+  frame.stamp_s = 0.4;
+  EXPECT_EQ(reloaded.submit(frame), FrameStatus::kOutOfOrder);
+  frame.stamp_s = 0.6;
+  EXPECT_EQ(reloaded.submit(frame), FrameStatus::kAccepted);
+  EXPECT_EQ(reloaded.stats().stamp_order_restarts, 1u);
+
+  // On the same time base nothing restarts.
+  MapEngine resumed(smallConfig());
+  resumed.restoreState(saved);
+  frame.stamp_s = saved.last_stamp_s + 0.1;
+  EXPECT_EQ(resumed.submit(frame), FrameStatus::kAccepted);
+  frame.stamp_s = saved.last_stamp_s;
+  EXPECT_EQ(resumed.submit(frame), FrameStatus::kOutOfOrder);
+  EXPECT_EQ(resumed.stats().stamp_order_restarts, 0u);
 }
 
 TEST(MapFile, EveryTruncationIsRefusedAsTruncated) {
@@ -278,6 +307,71 @@ TEST(MapFile, TheEngineRefusesInconsistentStatesAndKeepsItsMap) {
   s = smallState();
   s.window.min_index.x() = 2147483646;  // min_index + size would overflow int
   refused(s, "is beyond");
+  // The stamp and pose pass the checks a live frame's do: a body 1e300 m up used to hang the 2D
+  // grid's band computation of every program that loaded the map.
+  s = smallState();
+  s.T_W_B.translation().z() = 1e300;
+  refused(s, "last body pose is not a valid pose within 1e+06 m");
+  s = smallState();
+  s.T_W_B.translation().x() = -2e6;
+  refused(s, "last body pose");
+  s = smallState();
+  s.has_last_stamp = true;
+  s.last_stamp_s = std::nan("");
+  refused(s, "last stamp is not finite");
+}
+
+// Only a regular file within the size limit is read, and only past a header that checks out:
+// /dev/zero as a map allocated until std::bad_alloc; a directory gave a libstdc++ message
+// without the path.
+TEST(MapFile, OnlyARegularFileWithAValidHeaderIsReadWhole) {
+  TempDir dir;
+  auto loadError = [](const std::string& path) {
+    try {
+      (void)io::loadMapFile(path);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(loadError("/dev/zero").find("/dev/zero: is not a regular file"), std::string::npos);
+  EXPECT_NE(loadError(dir.path.string()).find(dir.path.string() + ": is a directory"),
+            std::string::npos);
+  EXPECT_NE(loadError(dir.file("missing.mlmap")).find("missing.mlmap: cannot open"),
+            std::string::npos);
+  // A header announcing more than the file holds is refused from the header alone.
+  const std::string path = dir.file("short.mlmap");
+  const std::string bytes = io::encodeMapFile(smallState());
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << bytes.substr(0, bytes.size() / 2);
+  }
+  EXPECT_NE(loadError(path).find("truncated"), std::string::npos) << loadError(path);
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << "not a map at all, just text";
+  }
+  EXPECT_NE(loadError(path).find("not an mlmap map file"), std::string::npos) << loadError(path);
+}
+
+// A save killed before its rename leaves "<name>.tmp-XXXXXX"; the next save removes it, and
+// nothing else.
+TEST(MapFile, TheNextSaveRemovesTemporaryFilesOfAnInterruptedOne) {
+  TempDir dir;
+  const std::string path = dir.file("map.mlmap");
+  for (const char* name : {"map.mlmap.tmp-a1B2c3", "map.mlmap.tmp-ZZZZZZ"}) {
+    std::ofstream(dir.file(name)) << "half a map";
+  }
+  for (const char* name : {"map.mlmap.tmp-toolong1", "other.mlmap.tmp-a1B2c3", "map.mlmap.tmp-"}) {
+    std::ofstream(dir.file(name)) << "not ours";
+  }
+  io::saveMapFile(smallState(), path);
+  std::vector<std::string> left;
+  for (const auto& entry : fs::directory_iterator(dir.path)) left.push_back(entry.path().filename());
+  std::sort(left.begin(), left.end());
+  EXPECT_EQ(left, (std::vector<std::string>{"map.mlmap", "map.mlmap.tmp-", "map.mlmap.tmp-toolong1",
+                                            "other.mlmap.tmp-a1B2c3"}));
+  EXPECT_EQ(io::removeLeftoverTemporaries(path), 0u);
 }
 
 TEST(MapFile, AFailedSaveLeavesThePreviousFileAndNoTemporaryFile) {

@@ -70,6 +70,33 @@ TEST(MapEngine, NoiseFreeSimulatedFlightReachesF1OfAtLeast095At10cm) {
   EXPECT_GT(s.local.shifts, 0u) << "the flight should slide the local map";
 }
 
+// The estimate made from the configuration before anything is allocated against what the
+// engine accounts once it maps: the layers it covers within 15 % each, with the ESDF over the
+// whole window, over a box, and off (the awareness grid, whose point buffers vary with the
+// frames, within 30 %).
+TEST(MapEngine, MemoryEstimateMatchesTheEngineAccounting) {
+  const io::Scenario scenario = io::defaultScenario();
+  for (int variant = 0; variant < 3; ++variant) {
+    MapConfig c = configAt(0.1);
+    if (variant == 1) c.esdf.box_size_m = Eigen::Vector3d(8.0, 8.0, 4.0);
+    if (variant == 2) c.esdf.enabled = false;
+    const MemoryEstimate estimate = estimateMemory(c);
+    MapEngine engine(c);
+    eval::FlightOptions options;
+    options.max_frames = 30;
+    (void)eval::flyScenario(scenario, engine, options);
+    const MemoryUsage used = engine.stats().memory;
+    const auto mb = [](std::size_t bytes) { return static_cast<double>(bytes) / 1e6; };
+    const double planning_mb = mb(estimate.snapshot_bytes) + mb(estimate.esdf_bytes);
+    std::printf("variant %d: estimate %s; engine: local %.1f MB, planning %.1f MB, awareness %.1f MB\n",
+                variant, describeMemory(estimate).c_str(), mb(used.local_bytes),
+                mb(used.planning_bytes), mb(used.awareness_bytes));
+    EXPECT_NEAR(mb(estimate.local_bytes), mb(used.local_bytes), 0.15 * mb(used.local_bytes));
+    EXPECT_NEAR(planning_mb, mb(used.planning_bytes), 0.15 * mb(used.planning_bytes));
+    EXPECT_NEAR(mb(estimate.awareness_bytes), mb(used.awareness_bytes), 0.3 * mb(used.awareness_bytes));
+  }
+}
+
 TEST(MapEngine, MovingObstacleLeavesNoTraceWithinTenFramesOfLeaving) {
   // A camera hovering in front of a wall; a person-sized box walks across the view.
   io::Scenario scenario;

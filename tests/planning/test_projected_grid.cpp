@@ -3,6 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+#include <utility>
+#include <vector>
 #include <random>
 
 namespace mlmap {
@@ -69,6 +72,62 @@ void expectMatchesDirect(const LocalWindow& w, const ProjectedGridConfig& c, dou
     EXPECT_GT(unknown, 0);   // the scene exercises every value
     EXPECT_GT(occupied, 0);
   }
+}
+
+// bandLayers() against the definition, layer by layer, over a range around the band.
+TEST(ProjectedGrid, BandLayersAreTheLayersWhoseCentreLiesInTheBand) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> z(-40.0, 40.0);
+  for (double res : {0.01, 0.05, 0.1, 0.3, 1.0}) {
+    for (int trial = 0; trial < 300; ++trial) {
+      double lo = z(rng);
+      double hi = trial % 10 == 0 ? lo : z(rng);
+      if (lo > hi) std::swap(lo, hi);
+      int k0 = 0;
+      int k1 = 0;
+      bandLayers(lo, hi, res, &k0, &k1);
+      const int scan0 = static_cast<int>(std::floor(lo / res)) - 5;
+      const int scan1 = static_cast<int>(std::floor(hi / res)) + 5;
+      for (int k = scan0; k <= scan1; ++k) {
+        const double centre = (k + 0.5) * res;
+        EXPECT_EQ(centre >= lo && centre <= hi, k >= k0 && k < k1)
+            << "layer " << k << " of band [" << lo << ", " << hi << "] at " << res << " m";
+      }
+    }
+  }
+}
+
+// Heights from options or files can be anything: the band's layers stay a short or empty
+// range inside +-2^30 and the call returns at once (it used to loop past 2^31).
+TEST(ProjectedGrid, AbsurdBandsGiveBoundedLayers) {
+  const double nan = std::nan("");
+  const double inf = std::numeric_limits<double>::infinity();
+  const std::vector<std::pair<double, double>> bands = {
+      {1e8, 2e8}, {1e300, 1e300 + 1}, {-1e300, 1e300}, {-inf, inf}, {nan, 1.0},
+      {1.0, nan}, {2.0, 1.0},         {-2e8, -1e8},    {1e300, inf}};
+  for (double res : {0.01, 0.1}) {
+    for (const auto& [lo, hi] : bands) {
+      int k0 = 7;
+      int k1 = 7;
+      bandLayers(lo, hi, res, &k0, &k1);
+      EXPECT_LE(k0, k1) << lo << " .. " << hi;
+      EXPECT_LE(std::abs(static_cast<long long>(k0)), (1LL << 30) + 8) << lo << " .. " << hi;
+      EXPECT_LE(std::abs(static_cast<long long>(k1)), (1LL << 30) + 8) << lo << " .. " << hi;
+      if (!(lo <= hi)) {
+        EXPECT_EQ(k0, k1) << "an inverted or NaN band is empty";
+      }
+    }
+  }
+  // A grid projected with such a band is all unknown, and computing it takes no time.
+  std::mt19937 rng(3);
+  const LocalWindow w = randomWindow(rng, 0.1);
+  ProjectedGridConfig c;
+  c.relative_band = false;
+  c.band_min_m = 1e8;
+  c.band_max_m = 2e8;
+  ProjectedGrid grid;
+  projectToGrid(w, nullptr, c, 0.0, &grid);
+  for (std::int8_t v : grid.cells) EXPECT_EQ(v, ProjectedGrid::kUnknown);
 }
 
 TEST(ProjectedGrid, MatchesADirectProjectionInBothBandModes) {

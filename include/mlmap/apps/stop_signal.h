@@ -1,6 +1,9 @@
 #pragma once
 /// @file
-/// The programs' stop request: SIGINT and SIGTERM set a flag that the programs' loops poll.
+/// The programs' stop request: SIGINT and SIGTERM set a flag that the programs' loops poll. A
+/// phase that cannot poll and has nothing to save (a node's start-up: loading its map, creating
+/// its DDS entities) holds an ExitAtOnceOnStop instead: a signal then ends the process at once,
+/// so a supervisor's SIGTERM works in every phase.
 
 namespace mlmap::apps {
 
@@ -13,5 +16,17 @@ void installStopHandler();
 
 /// Sets the stop flag, as the signals do.
 void requestStop();
+
+/// While an object of this class lives, SIGINT and SIGTERM (with installStopHandler() called)
+/// end the process at once, as the signal's default action does (a supervisor sees "terminated
+/// by SIGTERM"), after one line on stderr. A signal that arrived before it was made ends the
+/// process when it is made. Not nestable.
+class ExitAtOnceOnStop {
+ public:
+  ExitAtOnceOnStop();
+  ~ExitAtOnceOnStop();
+  ExitAtOnceOnStop(const ExitAtOnceOnStop&) = delete;
+  ExitAtOnceOnStop& operator=(const ExitAtOnceOnStop&) = delete;
+};
 
 }  // namespace mlmap::apps

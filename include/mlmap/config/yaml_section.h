@@ -120,14 +120,64 @@ class Section {
   std::set<std::string> known_;
 };
 
-/// Parses YAML text. Throws std::runtime_error "<source_name>: not valid YAML: ..." on a syntax
-/// error.
+/// Appends to `errors` every key that appears twice in a mapping of `node` or below it, as
+/// "line L: key '<path>' appears twice (first on line M)" (YAML forbids it; yaml-cpp would
+/// silently keep the first value). Nesting deeper than `max_depth` is an error too.
+inline void findDuplicateKeys(const YAML::Node& node, const std::string& path, int max_depth,
+                              std::vector<std::string>* errors) {
+  if (max_depth < 0) {
+    errors->push_back("line " + std::to_string(node.Mark().line + 1) + ": '" + path +
+                      "' is nested too deeply for a configuration");
+    return;
+  }
+  if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) {
+      findDuplicateKeys(node[i], path + "[" + std::to_string(i) + "]", max_depth - 1, errors);
+    }
+    return;
+  }
+  if (!node.IsMap()) return;
+  std::vector<std::pair<std::string, int>> seen;  // key, line (1-based)
+  for (const auto& entry : node) {
+    const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : "<complex key>";
+    const int line = entry.first.Mark().line + 1;
+    const std::string key_path = path.empty() ? key : path + "." + key;
+    for (const auto& [other, other_line] : seen) {
+      if (other == key) {
+        errors->push_back("line " + std::to_string(line) + ": key '" + key_path +
+                          "' appears twice (first on line " + std::to_string(other_line) + ")");
+        break;
+      }
+    }
+    seen.emplace_back(key, line);
+    findDuplicateKeys(entry.second, key_path, max_depth - 1, errors);
+  }
+}
+
+/// Parses one YAML document strictly: a syntax error, a second document ("---") or a key that
+/// appears twice in a mapping throws std::runtime_error "<source_name>: ..." naming the line.
 inline YAML::Node parseYamlDocument(const std::string& text, const std::string& source_name) {
+  std::vector<YAML::Node> documents;
   try {
-    return YAML::Load(text);
+    documents = YAML::LoadAll(text);
   } catch (const YAML::Exception& e) {
     throw std::runtime_error(source_name + ": not valid YAML: " + e.what());
   }
+  if (documents.size() > 1) {
+    throw std::runtime_error(source_name + ": " + std::to_string(documents.size()) +
+                             " YAML documents (separated by '---'); a configuration is one "
+                             "document: merge them or remove the extra ones");
+  }
+  if (documents.empty()) return YAML::Node();
+  std::vector<std::string> errors;
+  constexpr int kMaxDepth = 32;
+  findDuplicateKeys(documents.front(), "", kMaxDepth, &errors);
+  if (!errors.empty()) {
+    std::string m = source_name + ": not a valid configuration:";
+    for (const std::string& e : errors) m += "\n  " + e;
+    throw std::runtime_error(m);
+  }
+  return documents.front();
 }
 
 /// The whole text of a configuration file. Throws std::runtime_error "<path>: cannot open the

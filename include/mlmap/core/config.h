@@ -277,4 +277,25 @@ struct MapConfig {
   [[nodiscard]] std::vector<std::string> validate() const;
 };
 
+/// The memory [bytes] of the layers whose size a configuration fixes, before anything is
+/// allocated: the engine's own accounting (EngineStats::memory) once mapping runs, within about
+/// 15 % (tests/pipeline compares them). The global map is not in it: it grows with what is seen.
+struct MemoryEstimate {
+  std::size_t local_bytes = 0;      ///< the local map's window: 2 bytes of log-odds per voxel
+  std::size_t snapshot_bytes = 0;   ///< two window copies for planners (one read, one filled)
+  std::size_t esdf_bytes = 0;       ///< two ESDF buffers over the box (0 when esdf.enabled is off)
+  /// The cylindrical grid and the free-space scratch box (a frame's point buffers add about
+  /// 12 bytes per point: 3.7 MB for a 640 x 480 depth image).
+  std::size_t awareness_bytes = 0;
+  [[nodiscard]] std::size_t total() const {
+    return local_bytes + snapshot_bytes + esdf_bytes + awareness_bytes;
+  }
+};
+
+/// The memory `config` will take (see MemoryEstimate); `config` must be valid.
+[[nodiscard]] MemoryEstimate estimateMemory(const MapConfig& config);
+
+/// "4.7 GB (local map 400 MB, snapshots 800 MB, ESDF 3.4 GB, awareness 12 MB)".
+[[nodiscard]] std::string describeMemory(const MemoryEstimate& estimate);
+
 }  // namespace mlmap

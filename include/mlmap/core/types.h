@@ -115,6 +115,16 @@ bool makePose(const Eigen::Vector3d& t, const Eigen::Quaterniond& q, Transform* 
 /// True when `T` is finite and its linear part is a rotation (orthonormal, det +1) within `tolerance`.
 bool isValidPose(const Transform& T, double tolerance = 1e-4);
 
+/// Largest |coordinate| [m] of a body position the engine maps at, live or loaded from a file:
+/// keeps every voxel index far from int overflow at the finest resolution.
+inline constexpr double kMaxAbsCoordinate_m = 1e6;
+
+/// True when `T_W_B` is a valid pose (isValidPose) within kMaxAbsCoordinate_m of the origin on
+/// every axis: the bound every body pose passes, whether it comes from a sensor or a file.
+inline bool isMappablePose(const Transform& T_W_B) {
+  return isValidPose(T_W_B) && T_W_B.translation().cwiseAbs().maxCoeff() < kMaxAbsCoordinate_m;
+}
+
 /// Back-projects the valid pixels of a depth frame into sensor-frame points (z forward).
 /// Invalid pixels (see DepthEncoding) are skipped; `skipped` (optional) counts them.
 /// Returns false when the image size disagrees with the intrinsics.

@@ -57,7 +57,15 @@ struct PointCloudFile {
 [[nodiscard]] bool lzfDecompress(const unsigned char* in, std::size_t in_size,
                                  std::size_t expected_size, std::vector<unsigned char>* out);
 
-/// Reads a whole file into a string. @throws std::runtime_error naming the path on failure.
-[[nodiscard]] std::string readFileBytes(const std::string& path);
+/// Largest input file the dataset readers read whole [bytes] (1 GiB: some 80 million points of
+/// a binary PCD).
+inline constexpr std::uintmax_t kMaxInputFileBytes = std::uintmax_t{1} << 30;
+
+/// Reads the whole regular file `path` into a string, checking its size against `max_bytes`
+/// before anything is allocated. @throws std::runtime_error naming the path when it is missing,
+/// not a regular file (a directory, device or pipe: /dev/zero never ends), larger than
+/// `max_bytes`, or unreadable.
+[[nodiscard]] std::string readFileBytes(const std::string& path,
+                                        std::uintmax_t max_bytes = kMaxInputFileBytes);
 
 }  // namespace mlmap::io

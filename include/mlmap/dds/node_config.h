@@ -28,6 +28,7 @@ struct MapFileOptions {
   bool load_missing_ok = false;  ///< key load_missing_ok
   std::string save_path;         ///< key save_path (saved after the queued frames are mapped)
   double save_period_s = 0.0;    ///< key save_period_s
+  bool overwrite = false;        ///< key overwrite
 
   /// The keys of the `map_file` section: visitor.key(name, field, unit, doc) for each.
   template <class Self, class V>
@@ -42,6 +43,9 @@ struct MapFileOptions {
           "must exist; written to a temporary file there, then renamed");
     v.key("save_period_s", c.save_period_s, "s",
           "also save every this many seconds while mapping (0: only at shutdown); needs save_path");
+    v.key("overwrite", c.overwrite, "",
+          "true: save_path may replace an existing file the node did not load (false: such\n"
+          "a file stops the node at start, so that no earlier map is lost by mistake)");
   }
 
   /// Appends every problem as "map_file.key: what is wrong"; nothing when valid.

@@ -53,7 +53,8 @@ struct MapState {
                                                             const MapConfig& config);
 
 /// What makes `state` inconsistent in itself, judged against its own `local_map` and `log_odds`
-/// (empty when it is sound): a window of the wrong size, off the submap grid, beyond
+/// (empty when it is sound): a last stamp that is not finite, a body pose that a live frame could
+/// not have (isMappablePose()), a window of the wrong size, off the submap grid, beyond
 /// kMaxAbsWindowVoxelIndex or with values outside the clamping bounds; global submaps listed twice,
 /// inside the window or beyond GlobalMap::kSubmapIndexLimit; records that are not increasing
 /// occupied voxels of their submap. Every reader of saved maps checks this before using one.

@@ -23,6 +23,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace mlmap::io {
 
@@ -48,7 +49,12 @@ inline constexpr std::uint32_t kMapFileVersion = 1;
 /// temporary file is removed, `path` keeps its previous content, and std::runtime_error names
 /// the path and the reason.
 void saveMapFile(const MapState& state, const std::string& path);
-/// Reads and decodes a map file. Throws std::runtime_error naming the path.
+/// Largest map file loadMapFile() reads [bytes] (8 GiB: some 800 million occupied voxels).
+inline constexpr std::uintmax_t kMaxMapFileBytes = std::uintmax_t{8} << 30;
+
+/// Reads and decodes a map file. Only a regular file within kMaxMapFileBytes is read, and only
+/// past a header that checks out and announces the file's exact size. Throws std::runtime_error
+/// naming the path (missing, a directory or device, too large, corrupted, truncated).
 [[nodiscard]] MapState loadMapFile(const std::string& path);
 
 /// Throws std::runtime_error "<source_name>: made with a different configuration: ..." listing
@@ -59,5 +65,21 @@ void checkMapMatchesConfig(const MapState& state, const MapConfig& config,
 /// Writes `bytes` to `path` the way saveMapFile() does (temporary file, flush, rename); used by
 /// the exports too. Throws std::runtime_error naming the path and the reason.
 void writeFileAtomically(const std::string& path, const std::string& bytes);
+
+/// True when `path` is an existing file that starts like an mlmap map file ("MLMAPMAP").
+[[nodiscard]] bool isMapFile(const std::string& path);
+
+/// Why a program must not write `output`, or "" when it may: `output` is one of `inputs` (the
+/// same file under any spelling of its path), or an existing mlmap map file while
+/// `overwrite_maps` is false (the message then names `overwrite_flag`, the option that allows
+/// it). Every program checks its outputs with it before writing anything.
+[[nodiscard]] std::string outputConflict(const std::string& output,
+                                         const std::vector<std::string>& inputs,
+                                         bool overwrite_maps, const std::string& overwrite_flag);
+
+/// Removes the temporary files a write of `path` left behind when it was killed before its
+/// rename ("<name>.tmp-XXXXXX" beside `path`); returns how many. writeFileAtomically() calls it
+/// after each write; the node calls it at start for its save path. Never throws.
+std::size_t removeLeftoverTemporaries(const std::string& path);
 
 }  // namespace mlmap::io

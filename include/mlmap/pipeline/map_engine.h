@@ -69,6 +69,10 @@ struct EngineStats {
   std::uint64_t frames_dropped = 0;
   std::uint64_t rejected_invalid_pose = 0;
   std::uint64_t rejected_out_of_order = 0;
+  /// First frames after restoreState() older than the loaded map's last stamp (another time
+  /// base: a map saved on wall-clock time, a sensor on sim time): accepted, the stamp order
+  /// restarted from them (at most one per load).
+  std::uint64_t stamp_order_restarts = 0;
   std::uint64_t rejected_empty = 0;
   std::uint64_t rejected_bad_image = 0;
   PointCounters points;
@@ -140,7 +144,9 @@ class MapEngine {
   /// still queued are not in it; call flush() first to include them (e.g. at shutdown).
   [[nodiscard]] MapState exportState() const;
   /// Replaces the local and global layers by `state` (a loaded map) and publishes a snapshot of
-  /// it. Later frames must be newer than its last stamp. Call before submitting frames, or after
+  /// it. Later frames must be newer than its last stamp, except the first one: when that one is
+  /// older (the map was saved on another time base), the stamp order restarts from it, counted
+  /// (stamp_order_restarts) and logged with both stamps. Call before submitting frames, or after
   /// flush() with no frame in flight. Throws std::invalid_argument, changing nothing, when the
   /// state does not fit this engine (voxel size, window size or log-odds model differ from the
   /// configuration, or its data is inconsistent); the message names what differs.
@@ -185,6 +191,7 @@ class MapEngine {
   Samples awareness_ms_, local_ms_, total_ms_;
   double last_stamp_s_ = -1e300;
   bool have_stamp_ = false;
+  bool stamp_from_load_ = false;  ///< last_stamp_s_ came from restoreState(), no frame since
 
   // Threaded mode.
   std::mutex queue_mutex_;

@@ -45,7 +45,8 @@ struct ProjectedGrid {
 };
 
 /// World z layers [k0, k1) of the band [z_min_m, z_max_m]: those whose centre (k + 0.5) * res
-/// lies in it (k1 == k0 when none does).
+/// lies in it (k1 == k0 when none does, or when a bound is NaN or z_min_m > z_max_m). Layers
+/// beyond +-2^30 are never in it, so the range stays short for any heights.
 void bandLayers(double z_min_m, double z_max_m, double resolution_m, int* k0, int* k1);
 
 /// Builds the grid of the local window (and, when configured, of the global map's occupied voxels

@@ -1,5 +1,7 @@
 #include "mlmap/apps/stop_signal.h"
 
+#include <unistd.h>
+
 #include <atomic>
 #include <csignal>
 #include <mutex>
@@ -7,10 +9,27 @@
 namespace mlmap::apps {
 namespace {
 
-std::atomic<bool> g_stop{false};  // lock-free on every target mlmap builds for
-static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
+// Lock-free on every target mlmap builds for: the signal handler reads and writes them.
+std::atomic<bool> g_stop{false};
+std::atomic<bool> g_exit_at_once{false};
+std::atomic<int> g_signal{0};  ///< the last stop signal received
+static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs lock-free flags");
+static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs lock-free flags");
 
-extern "C" void onStopSignal(int) { g_stop.store(true); }
+/// Ends the process as `signo`'s default action does; only async-signal-safe calls.
+[[noreturn]] void exitBySignal(int signo) {
+  static const char kMessage[] = "stop signal during start-up: exiting at once (nothing to save yet)\n";
+  (void)!::write(STDERR_FILENO, kMessage, sizeof kMessage - 1);
+  std::signal(signo, SIG_DFL);
+  std::raise(signo);
+  ::_exit(128 + signo);  // not reached: the default action of SIGINT / SIGTERM ends the process
+}
+
+extern "C" void onStopSignal(int signo) {
+  g_signal.store(signo);
+  g_stop.store(true);
+  if (g_exit_at_once.load()) exitBySignal(signo);
+}
 
 }  // namespace
 
@@ -25,5 +44,13 @@ void installStopHandler() {
 bool stopRequested() { return g_stop.load(); }
 
 void requestStop() { g_stop.store(true); }
+
+ExitAtOnceOnStop::ExitAtOnceOnStop() {
+  g_exit_at_once.store(true);
+  const int signo = g_signal.load();
+  if (signo != 0) exitBySignal(signo);  // it came before this phase began
+}
+
+ExitAtOnceOnStop::~ExitAtOnceOnStop() { g_exit_at_once.store(false); }
 
 }  // namespace mlmap::apps

@@ -19,13 +19,24 @@ MapPersistence::MapPersistence(const MapFileOptions& options, const MapConfig& m
 MapPersistence::~MapPersistence() { stopPeriodicSaves(); }
 
 bool MapPersistence::load() {
+  const bool loaded = loadIfAsked();
+  checkSavePath(loaded);
+  return loaded;
+}
+
+bool MapPersistence::loadIfAsked() {
   if (options_.load_path.empty()) return false;
   if (options_.load_missing_ok && !std::filesystem::exists(options_.load_path)) {
     log_.always(LogLevel::kInfo, "no map at '" + options_.load_path + "' yet: starting empty");
     return false;
   }
   const auto start = SteadyClock::now();
-  const MapState state = io::loadMapFile(options_.load_path);
+  MapState state;
+  try {
+    state = io::loadMapFile(options_.load_path);
+  } catch (const std::bad_alloc&) {
+    throw std::runtime_error(options_.load_path + ": out of memory while loading the map");
+  }
   io::checkMapMatchesConfig(state, map_, options_.load_path);
   engine_.restoreState(state);
   std::ostringstream m;
@@ -33,8 +44,28 @@ bool MapPersistence::load() {
     << msSince(start) << " ms: " << io::occupiedVoxels(state).size() << " occupied voxels ("
     << state.globalVoxelCount() << " in the global map), " << state.frames_mapped
     << " frames mapped before";
+  if (state.has_last_stamp) m << ", last stamp " << std::setprecision(3) << state.last_stamp_s << " s";
   log_.always(LogLevel::kInfo, m.str());
   return true;
+}
+
+void MapPersistence::checkSavePath(bool loaded) {
+  const std::string& path = options_.save_path;
+  if (path.empty()) return;
+  const std::size_t leftovers = io::removeLeftoverTemporaries(path);
+  if (leftovers > 0) {
+    log_.always(LogLevel::kWarning, "removed " + std::to_string(leftovers) +
+                                        " temporary file(s) of an interrupted save of '" + path +
+                                        "'");
+  }
+  std::error_code ec;
+  if (options_.overwrite || !std::filesystem::exists(path, ec)) return;
+  if (loaded && std::filesystem::equivalent(path, options_.load_path, ec)) return;
+  throw std::runtime_error(
+      "map_file.save_path '" + path +
+      "' already exists and is not the map this node loaded: its first save would replace it. "
+      "Set map_file.load_path to it to go on mapping it, choose another save_path, or set "
+      "map_file.overwrite: true");
 }
 
 void MapPersistence::save(const char* why) {

@@ -26,8 +26,10 @@ class MapPersistence {
   MapPersistence& operator=(const MapPersistence&) = delete;
 
   /// Loads load_path into the engine; false when there is nothing to load (none set, or
-  /// missing with load_missing_ok). Throws std::runtime_error naming the file when it cannot be
-  /// used (unreadable, corrupt, or made with another resolution, window or log-odds model).
+  /// missing with load_missing_ok). Then removes what interrupted saves left beside save_path.
+  /// Throws std::runtime_error naming the file when the map cannot be used (unreadable,
+  /// corrupt, too large, or made with another resolution, window or log-odds model), or when
+  /// save_path names an existing file that was not loaded and map_file.overwrite is false.
   bool load();
   /// Saves to save_path (atomically: the previous file stays when this fails); logs the outcome,
   /// never throws. `why` starts the log line ("shutdown", "periodic save").
@@ -38,6 +40,8 @@ class MapPersistence {
   void stopPeriodicSaves();
 
  private:
+  bool loadIfAsked();
+  void checkSavePath(bool loaded);
   void saveLoop();
 
   const MapFileOptions& options_;

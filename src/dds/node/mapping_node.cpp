@@ -9,6 +9,8 @@
 #include "node_log.h"
 #include "outputs.h"
 
+#include <unistd.h>
+
 #include <atomic>
 #include <chrono>
 #include <memory>
@@ -51,6 +53,7 @@ struct MappingNode::Impl {
   Impl(const NodeConfig& c, const LogSink& sink) : config(c), log(sink), mailbox(c.dds.rates) {}
 
   void setUp() {
+    logMemoryEstimate();
     engine = makeEngine();
     persistence =
         std::make_unique<node::MapPersistence>(config.map_file, config.map, *engine, counters, log);
@@ -69,6 +72,7 @@ struct MappingNode::Impl {
                                               counters, log, started);
     pairer = std::make_unique<node::FramePairer>(config.dds, T_B_S, *engine, counters, log);
     readers = std::make_unique<node::InputReaders>(subscriber, config.dds, queue, counters, log);
+    warnAboutMissingInputs(loaded);
     if (loaded) {
       // The loaded map goes out at once: the latched global map and grid for late joiners.
       const std::shared_ptr<const MapSnapshot> snap = engine->snapshot();
@@ -79,6 +83,39 @@ struct MappingNode::Impl {
     outputs->start();
     persistence->startPeriodicSaves();
     setup_done = true;
+  }
+
+  /// What the configured layers will take, said before they are allocated; a warning when it
+  /// is more than most of this machine's memory.
+  void logMemoryEstimate() {
+    const MemoryEstimate estimate = estimateMemory(config.map);
+    log.always(LogLevel::kInfo, "memory of the configured layers (global map not included): " +
+                                    describeMemory(estimate));
+    const long pages = ::sysconf(_SC_PHYS_PAGES);
+    const long page_bytes = ::sysconf(_SC_PAGE_SIZE);
+    const double physical = pages > 0 && page_bytes > 0 ? static_cast<double>(pages) * static_cast<double>(page_bytes) : 0.0;
+    if (physical > 0.0 && static_cast<double>(estimate.total()) > 0.8 * physical) {
+      log.always(LogLevel::kWarning,
+                 "the configured layers need more than 80 % of this machine's " +
+                     std::to_string(static_cast<long long>(physical / 1e6)) +
+                     " MB: lower local_map.size_cells, or set esdf.box_size_m");
+    }
+  }
+
+  /// A configuration without a sensor or a pose topic is legal (a node that serves a loaded
+  /// map) but rarely meant: it is said at start.
+  void warnAboutMissingInputs(bool loaded) {
+    const TopicNames& t = config.dds.topics;
+    if (t.cloud.empty() && t.depth_image.empty()) {
+      log.always(LogLevel::kWarning,
+                 std::string("no sensor topic is configured (dds.topics.cloud, "
+                             "dds.topics.depth_image): the node maps nothing") +
+                     (loaded ? " and publishes the loaded map only" : ""));
+    } else if (t.pose.empty() && t.odometry.empty()) {
+      log.always(LogLevel::kWarning,
+                 "no pose topic is configured (dds.topics.pose, dds.topics.odometry): every "
+                 "frame will be dropped for want of a pose");
+    }
   }
 
   /// The engine, both stages threaded (Figure 5), its layers copied into the mailbox.
