@@ -9,6 +9,7 @@
 
 #include "fuzz_support.h"
 
+#include "mlmap/map_io/map_export.h"
 #include "mlmap/map_io/map_file.h"
 
 #include <cstring>
@@ -84,6 +85,12 @@ void decodeOne(const std::string& bytes) {
   requireThat(again.T_W_B.isApprox(state.T_W_B, 1e-12), "decode(encode(map)) moved the body pose");
   again.T_W_B = state.T_W_B;
   requireThat(mlmap::io::encodeMapFile(again) == encoded, "decode(encode(map)) is not the same map");
+  (void)mlmap::io::occupiedVoxels(state);
+  try {
+    (void)mlmap::io::projectMap(state, mlmap::ProjectedGridConfig{});  // the band around the body
+  } catch (const std::runtime_error&) {
+    // a grid too large to make (submaps far apart) is refused, by design
+  }
 }
 
 }  // namespace

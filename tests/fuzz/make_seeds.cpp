@@ -187,6 +187,18 @@ void mapFiles() {
   never_placed.local_map = placed.local_map;
   never_placed.log_odds = placed.log_odds;
   write("fuzz_map_file", "never_placed.mlmap", io::encodeMapFile(never_placed));
+  // Valid checksums over absurd fields: the loader must refuse them (or, for the far but legal
+  // body, every use of the map must still end).
+  MapState far_up = placed;
+  far_up.T_W_B.translation().z() = 1e300;
+  write("fuzz_map_file", "body_1e300_m_up.mlmap", io::encodeMapFile(far_up));
+  MapState far_legal = placed;
+  far_legal.T_W_B.translation() = Eigen::Vector3d(-9.9e5, 9.9e5, 9.9e5);
+  write("fuzz_map_file", "body_far_but_legal.mlmap", io::encodeMapFile(far_legal));
+  MapState nan_stamp = placed;
+  nan_stamp.has_last_stamp = true;
+  nan_stamp.last_stamp_s = std::nan("");
+  write("fuzz_map_file", "nan_stamp.mlmap", io::encodeMapFile(nan_stamp));
 }
 
 }  // namespace
