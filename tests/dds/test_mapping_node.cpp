@@ -474,6 +474,31 @@ TEST(MappingNodeInput, PublishersAreCountedAndLoggedAsTheyMatchAndLeave) {
   EXPECT_EQ(log.count("rt/cloud: a publisher left (0 now)"), 1);
 }
 
+// What a configuration will not do is said at start: a range beyond the local window, no sensor
+// topic, and the memory of the configured layers.
+TEST(MappingNodeStart, SaysWhatItsConfigurationWillNotDo) {
+  NodeConfig config = nodeConfig(178);
+  config.map.awareness.rho_cells = 300;
+  config.map.awareness.max_range_m = 30.0;
+  config.dds.topics.cloud.clear();
+  config.dds.topics.depth_image.clear();
+  config.dds.topics.camera_info.clear();
+  CapturedLog log;
+  { MappingNode node(config, log.sink()); }
+  EXPECT_EQ(log.count("awareness.max_range_m (30 m) reaches beyond the local window"), 1);
+  EXPECT_EQ(log.count("farther than 11.4 m from the body are never mapped"), 1);
+  EXPECT_EQ(log.count("local_map.size_cells 250 x 250 horizontally holds the range"), 1);
+  EXPECT_EQ(log.count("no sensor topic is configured"), 1);
+  EXPECT_EQ(log.count("memory of the configured layers (global map not included): "), 1);
+  config.map = MapConfig{};  // defaults: a 10 m range, a 19 m window (3 submaps: 11.4 m)
+  config.dds.topics = TopicNames{};
+  CapturedLog quiet;
+  { MappingNode node(config, quiet.sink()); }
+  EXPECT_EQ(quiet.count("reaches beyond the local window"), 0);
+  EXPECT_EQ(quiet.count("no sensor topic"), 0);
+  EXPECT_EQ(quiet.count("no pose topic"), 0);
+}
+
 // A subscriber asking for more than a layer's writer offers (here TRANSIENT_LOCAL of the
 // VOLATILE local map, as a map display may) gets nothing from DDS and no error: the node says so.
 TEST(MappingNodeOutput, SubscribersWithIncompatibleQosAreLoggedWithThePolicyAndCounted) {

@@ -11,9 +11,12 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <thread>
 
@@ -54,6 +57,7 @@ struct MappingNode::Impl {
 
   void setUp() {
     logMemoryEstimate();
+    warnIfRangeExceedsWindow();
     engine = makeEngine();
     persistence =
         std::make_unique<node::MapPersistence>(config.map_file, config.map, *engine, counters, log);
@@ -100,6 +104,24 @@ struct MappingNode::Impl {
                      std::to_string(static_cast<long long>(physical / 1e6)) +
                      " MB: lower local_map.size_cells, or set esdf.box_size_m");
     }
+  }
+
+  /// The local window is centred on the body's submap (5 per axis): a hit more than 3 submaps
+  /// from the body horizontally lies outside it wherever the body is in its submap, and is
+  /// counted, not mapped (between 2 and 3 submaps it depends on where the body is). A range
+  /// beyond 3 submaps is said at start, with the window that would hold it.
+  void warnIfRangeExceedsWindow() {
+    const LocalMapConfig& lm = config.map.local_map;
+    const int cells = std::min(lm.size_cells.x(), lm.size_cells.y());
+    const double reach_m = 0.6 * cells * lm.resolution_m;  // 3 of the 5 submaps
+    const double range_m = config.map.awareness.max_range_m;
+    if (range_m <= reach_m) return;
+    const int needed = static_cast<int>(std::ceil(range_m / (3.0 * lm.resolution_m) - 1e-9)) * 5;
+    std::ostringstream m;
+    m << "awareness.max_range_m (" << range_m << " m) reaches beyond the local window: hits "
+      << "farther than " << reach_m << " m from the body are never mapped, only counted; "
+      << "local_map.size_cells " << needed << " x " << needed << " horizontally holds the range";
+    log.always(LogLevel::kWarning, m.str());
   }
 
   /// A configuration without a sensor or a pose topic is legal (a node that serves a loaded
