@@ -224,7 +224,7 @@ double scratchBoxVoxels(const MapConfig& c) {
   const double offset_voxels = std::ceil(c.sensor.translation_B_m.norm() / res) + 1.0;
   double box_voxels = 1.0;
   for (int a = 0; a < 3; ++a) {
-    const double submap = c.local_map.size_cells[a] / LocalMapConfig::kSubmapsPerAxis;
+    const int submap = c.local_map.size_cells[a] / LocalMapConfig::kSubmapsPerAxis;  // exact
     box_voxels *= 2.0 * std::min(range_voxels, 3.0 * submap + offset_voxels) + 1.0;
   }
   return box_voxels;
