@@ -25,6 +25,7 @@ programs=(
   liboctomap-dev                       # OctoMap: .bt export (mlmap_map_tool), the side-by-side comparison
   fastdds-tools                        # `fastdds discovery` (config/dds/discovery_server_client.xml)
   nlohmann-json3-dev                   # JSON files: report.json, stats.json, summary.json
+  libzstd-dev liblz4-dev libsqlite3-dev  # ROS 2 bags: MCAP chunks (zstd, lz4), sqlite3 .db3 files
 )
 # The tests and their tools.
 test_tools=(
@@ -34,6 +35,7 @@ test_tools=(
   cyclonedds-dev cyclonedds-tools      # cross-vendor interoperability test (ROS 2's other tier-1 DDS)
   iproute2                             # network-namespace tests
   openssl python3                      # DDS Security: test keystores (tools/make_test_keystore.sh), the capture test
+  nodejs npm                           # the ROS 2 test bags' writers (tests/bag/fixtures, npm ci of its lockfile)
 )
 # The ROS 2 ground-station tools (tools/ros2, docker/): no ROS in Debian 12, so their tests run
 # the ROS-free parts under /usr/bin/python3 and lint the rest.

@@ -195,7 +195,9 @@ TEST(McapConformance, ReaderFindsEveryMessageInLogTimeOrder) {
     for (std::size_t i = 0; i < reader.messages().size(); ++i) {
       const mcap::Message m = reader.read(i);
       EXPECT_EQ(m.log_time_ns, reader.messages()[i].log_time_ns);
-      if (i > 0) EXPECT_LE(reader.messages()[i - 1].log_time_ns, m.log_time_ns);
+      if (i > 0) {
+        EXPECT_LE(reader.messages()[i - 1].log_time_ns, m.log_time_ns);
+      }
       EXPECT_EQ(reader.channels().count(m.channel_id), 1U);
       got.emplace_back(m.log_time_ns, m.channel_id, m.sequence, m.data);
     }
