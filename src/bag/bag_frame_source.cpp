@@ -187,26 +187,19 @@ BagFrameSource::BagFrameSource(std::shared_ptr<const BagReader> bag, const BagFr
   }
   inputs_ = autoSelect(*bag_, options_.inputs, options_.world_frame);
   warnings_ = bag_->warnings();
-  readStaticTransforms();
   indexFrames();
 }
 
-void BagFrameSource::readStaticTransforms() {
-  const std::size_t topic = bag_->findTopic("/tf_static");
-  if (topic == bag_->topics().size()) return;
-  if (bag_->topics()[topic].type != kTfMessageType) return;
-  for (std::size_t i = 0; i < bag_->entries().size(); ++i) {
-    if (bag_->entries()[i].topic != topic) continue;
-    tf2_msgs::TFMessage_ msg;
-    decodeCdr(bag_->read(i).data, messageName(*bag_, i), &msg);
-    for (const auto& t : msg.transforms_()) {
-      Transform T = Transform::Identity();
-      if (!transformOf(t, &T)) {
-        throw std::runtime_error(messageName(*bag_, i) + ": transform " + t.header_().frame_id_() +
-                                 " -> " + t.child_frame_id_() + " is not a rigid transform");
-      }
-      static_edges_.push_back({t.header_().frame_id_(), t.child_frame_id_(), T});
+void BagFrameSource::addStaticTransforms(const std::vector<std::uint8_t>& bytes, const std::string& what) {
+  tf2_msgs::TFMessage_ msg;
+  decodeCdr(bytes, what, &msg);
+  for (const auto& t : msg.transforms_()) {
+    Transform T = Transform::Identity();
+    if (!transformOf(t, &T)) {
+      throw std::runtime_error(what + ": transform " + t.header_().frame_id_() + " -> " +
+                               t.child_frame_id_() + " is not a rigid transform");
     }
+    static_edges_.push_back({t.header_().frame_id_(), t.child_frame_id_(), T});
   }
 }
 
@@ -249,70 +242,87 @@ std::size_t BagFrameSource::extrinsicFor(const std::string& frame_id) {
   return extrinsics_.size() - 1;
 }
 
-std::vector<BagFrameSource::StampedTransform> BagFrameSource::readPoses() const {
-  std::vector<StampedTransform> poses;
-  const std::size_t topic = bag_->findTopic(inputs_.pose_from_tf ? "/tf" : inputs_.pose_topic);
-  const bool odometry = bag_->topics()[topic].type == kOdometryType;
-  for (std::size_t i = 0; i < bag_->entries().size(); ++i) {
-    if (bag_->entries()[i].topic != topic) continue;
-    const std::string what = messageName(*bag_, i);
-    const std::vector<std::uint8_t> bytes = bag_->read(i).data;
-    StampedTransform pose;
-    dds::DecodeStatus status;
-    if (inputs_.pose_from_tf) {
-      tf2_msgs::TFMessage_ msg;
-      decodeCdr(bytes, what, &msg);
-      for (const auto& t : msg.transforms_()) {
-        if (t.header_().frame_id_() != options_.world_frame || t.child_frame_id_() != options_.body_frame) {
-          continue;
-        }
-        if (!transformOf(t, &pose.T) || t.header_().stamp_().nanosec_() >= 1000000000U) {
-          throw std::runtime_error(what + ": transform " + options_.world_frame + " -> " +
-                                   options_.body_frame + " is not valid");
-        }
-        pose.stamp_s = dds::toSeconds(t.header_().stamp_());
-        poses.push_back(pose);
+void BagFrameSource::addPoses(const std::vector<std::uint8_t>& bytes, const std::string& what,
+                              bool odometry, std::vector<StampedTransform>* poses) const {
+  StampedTransform pose;
+  if (inputs_.pose_from_tf) {
+    tf2_msgs::TFMessage_ msg;
+    decodeCdr(bytes, what, &msg);
+    for (const auto& t : msg.transforms_()) {
+      if (t.header_().frame_id_() != options_.world_frame || t.child_frame_id_() != options_.body_frame) {
+        continue;
       }
-      continue;
+      if (!transformOf(t, &pose.T) || t.header_().stamp_().nanosec_() >= 1000000000U) {
+        throw std::runtime_error(what + ": transform " + options_.world_frame + " -> " +
+                                 options_.body_frame + " is not valid");
+      }
+      pose.stamp_s = dds::toSeconds(t.header_().stamp_());
+      poses->push_back(pose);
     }
-    if (odometry) {
-      dds::nav_msgs::Odometry_ msg;
-      decodeCdr(bytes, what, &msg);
-      status = dds::decodePose(msg, &pose.stamp_s, &pose.T);
-    } else {
-      dds::geometry_msgs::PoseStamped_ msg;
-      decodeCdr(bytes, what, &msg);
-      status = dds::decodePose(msg, &pose.stamp_s, &pose.T);
-    }
-    if (!status.ok()) {
-      throw std::runtime_error(what + ": " + dds::toString(status.error) + ": " + status.detail);
-    }
-    poses.push_back(pose);
+    return;
   }
-  std::stable_sort(poses.begin(), poses.end(),
-                   [](const StampedTransform& a, const StampedTransform& b) { return a.stamp_s < b.stamp_s; });
-  return poses;
+  dds::DecodeStatus status;
+  if (odometry) {
+    dds::nav_msgs::Odometry_ msg;
+    decodeCdr(bytes, what, &msg);
+    status = dds::decodePose(msg, &pose.stamp_s, &pose.T);
+  } else {
+    dds::geometry_msgs::PoseStamped_ msg;
+    decodeCdr(bytes, what, &msg);
+    status = dds::decodePose(msg, &pose.stamp_s, &pose.T);
+  }
+  if (!status.ok()) throw std::runtime_error(what + ": " + dds::toString(status.error) + ": " + status.detail);
+  poses->push_back(pose);
 }
 
-std::vector<std::pair<double, std::size_t>> BagFrameSource::readCameraInfoStamps() const {
-  std::vector<std::pair<double, std::size_t>> stamps;
-  const std::size_t topic = bag_->findTopic(inputs_.camera_info_topic);
+BagFrameSource::Scan BagFrameSource::scanBag() {
+  // One pass in log-time order, so that each chunk of the bag is decompressed once.
+  const std::size_t none = bag_->topics().size();
+  const std::size_t static_topic = bag_->findTopic("/tf_static");
+  const bool has_static = static_topic != none && bag_->topics()[static_topic].type == kTfMessageType;
+  const std::size_t pose_topic = bag_->findTopic(inputs_.pose_from_tf ? "/tf" : inputs_.pose_topic);
+  const bool odometry = bag_->topics()[pose_topic].type == kOdometryType;
+  const std::size_t info_topic = inputs_.depth_topic.empty() ? none : bag_->findTopic(inputs_.camera_info_topic);
+  std::vector<std::size_t> input_topics;
+  for (const std::string& t : inputs_.cloud_topics) input_topics.push_back(bag_->findTopic(t));
+  if (!inputs_.depth_topic.empty()) input_topics.push_back(bag_->findTopic(inputs_.depth_topic));
+  Scan scan;
   for (std::size_t i = 0; i < bag_->entries().size(); ++i) {
-    if (bag_->entries()[i].topic != topic) continue;
-    stamps.emplace_back(dds::toSeconds(headerOf(bag_->read(i).data, messageName(*bag_, i)).stamp_()), i);
+    const std::size_t topic = bag_->entries()[i].topic;
+    const bool input = std::find(input_topics.begin(), input_topics.end(), topic) != input_topics.end();
+    if (!input && topic != pose_topic && topic != info_topic && !(has_static && topic == static_topic)) {
+      continue;
+    }
+    const std::string what = messageName(*bag_, i);
+    const std::vector<std::uint8_t> bytes = bag_->read(i).data;
+    if (has_static && topic == static_topic) addStaticTransforms(bytes, what);
+    if (topic == pose_topic) addPoses(bytes, what, odometry, &scan.poses);
+    if (topic == info_topic) scan.infos.emplace_back(dds::toSeconds(headerOf(bytes, what).stamp_()), i);
+    if (input) {
+      const auto header = headerOf(bytes, what);
+      auto id = std::find(scan.frame_ids.begin(), scan.frame_ids.end(), header.frame_id_());
+      if (id == scan.frame_ids.end()) id = scan.frame_ids.insert(id, header.frame_id_());
+      scan.inputs.push_back({i, dds::toSeconds(header.stamp_()),
+                             static_cast<std::size_t>(id - scan.frame_ids.begin())});
+    }
   }
-  std::sort(stamps.begin(), stamps.end());
-  if (stamps.empty()) throw std::runtime_error(bag_->path() + ": " + inputs_.camera_info_topic + " has no message");
-  return stamps;
+  std::stable_sort(scan.poses.begin(), scan.poses.end(),
+                   [](const StampedTransform& a, const StampedTransform& b) { return a.stamp_s < b.stamp_s; });
+  std::sort(scan.infos.begin(), scan.infos.end());
+  return scan;
 }
 
 void BagFrameSource::indexFrames() {
-  const std::vector<StampedTransform> poses = readPoses();
+  const Scan scan = scanBag();
+  const std::vector<StampedTransform>& poses = scan.poses;
   pose_count_ = poses.size();
   if (poses.empty()) {
     throw std::runtime_error(bag_->path() + ": no pose in " +
                              (inputs_.pose_from_tf ? "/tf " + options_.world_frame + " -> " + options_.body_frame
                                                    : inputs_.pose_topic));
+  }
+  if (!inputs_.depth_topic.empty() && scan.infos.empty()) {
+    throw std::runtime_error(bag_->path() + ": " + inputs_.camera_info_topic + " has no message");
   }
   PoseBufferConfig config;
   config.tolerance_s = options_.pose_tolerance_s;
@@ -320,26 +330,16 @@ void BagFrameSource::indexFrames() {
   config.max_future_s = 1e12;
   PoseBuffer buffer(config);
   for (const StampedTransform& p : poses) buffer.add(p.stamp_s, p.T);  // equal stamps: first kept
-  std::vector<std::pair<double, std::size_t>> infos;
-  if (!inputs_.depth_topic.empty()) infos = readCameraInfoStamps();
 
-  std::vector<std::size_t> input_topics;
-  for (const std::string& t : inputs_.cloud_topics) input_topics.push_back(bag_->findTopic(t));
-  if (!inputs_.depth_topic.empty()) input_topics.push_back(bag_->findTopic(inputs_.depth_topic));
   double first_s = 0.0;
   double last_s = 0.0;
-  std::size_t inputs_seen = 0;
-  for (std::size_t i = 0; i < bag_->entries().size(); ++i) {
-    if (std::find(input_topics.begin(), input_topics.end(), bag_->entries()[i].topic) == input_topics.end()) {
-      continue;
-    }
-    const auto header = headerOf(bag_->read(i).data, messageName(*bag_, i));
+  for (std::size_t k = 0; k < scan.inputs.size(); ++k) {
+    const Scan::Input& input = scan.inputs[k];
     FrameRef frame;
-    frame.entry = i;
-    frame.stamp_s = dds::toSeconds(header.stamp_());
-    first_s = inputs_seen == 0 ? frame.stamp_s : std::min(first_s, frame.stamp_s);
-    last_s = inputs_seen == 0 ? frame.stamp_s : std::max(last_s, frame.stamp_s);
-    ++inputs_seen;
+    frame.entry = input.entry;
+    frame.stamp_s = input.stamp_s;
+    first_s = k == 0 ? frame.stamp_s : std::min(first_s, frame.stamp_s);
+    last_s = k == 0 ? frame.stamp_s : std::max(last_s, frame.stamp_s);
     const auto same = std::lower_bound(poses.begin(), poses.end(), frame.stamp_s - kSameStamp_s,
                                        [](const StampedTransform& p, double t) { return p.stamp_s < t; });
     if (same != poses.end() && std::abs(same->stamp_s - frame.stamp_s) <= kSameStamp_s) {
@@ -348,11 +348,13 @@ void BagFrameSource::indexFrames() {
       ++unpaired_;
       continue;
     }
-    frame.extrinsic = extrinsicFor(header.frame_id_());
-    if (!infos.empty()) {
+    frame.extrinsic = extrinsicFor(scan.frame_ids[input.frame_id]);
+    if (!scan.infos.empty()) {
       // The CameraInfo nearest in stamp (they rarely change; usually the same stamp).
+      const auto& infos = scan.infos;
       auto it = std::lower_bound(infos.begin(), infos.end(), std::make_pair(frame.stamp_s, std::size_t{0}));
-      if (it == infos.end() || (it != infos.begin() && frame.stamp_s - std::prev(it)->first < it->first - frame.stamp_s)) {
+      if (it == infos.end() ||
+          (it != infos.begin() && frame.stamp_s - std::prev(it)->first < it->first - frame.stamp_s)) {
         it = std::prev(it);
       }
       frame.info_entry = it->second;
@@ -364,14 +366,14 @@ void BagFrameSource::indexFrames() {
   if (frames_.empty()) {
     std::ostringstream m;
     m << std::fixed << std::setprecision(6) << bag_->path() << ": no input frame has a pose within "
-      << options_.pose_tolerance_s << " s of its stamp (" << inputs_seen << " frames";
-    if (inputs_seen > 0) m << " " << first_s << ".." << last_s << " s";
+      << options_.pose_tolerance_s << " s of its stamp (" << scan.inputs.size() << " frames";
+    if (!scan.inputs.empty()) m << " " << first_s << ".." << last_s << " s";
     m << ", " << poses.size() << " poses " << poses.front().stamp_s << ".." << poses.back().stamp_s << " s)";
     throw std::runtime_error(m.str());
   }
   if (unpaired_ > 0) {
     warnings_.push_back(bag_->path() + ": " + std::to_string(unpaired_) + " of " +
-                        std::to_string(inputs_seen) + " input frames have no pose within " +
+                        std::to_string(scan.inputs.size()) + " input frames have no pose within " +
                         std::to_string(options_.pose_tolerance_s) + " s: skipped");
   }
 }

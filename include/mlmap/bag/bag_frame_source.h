@@ -98,10 +98,29 @@ class BagFrameSource : public io::FrameSource {
     std::string child;
     Transform T_parent_child = Transform::Identity();
   };
-  void readStaticTransforms();
-  [[nodiscard]] std::vector<StampedTransform> readPoses() const;
-  [[nodiscard]] std::vector<std::pair<double, std::size_t>> readCameraInfoStamps() const;
+  /// What one pass over the bag found.
+  struct Scan {
+    /// An input message.
+    struct Input {
+      std::size_t entry = 0;     ///< in bag entries()
+      double stamp_s = 0.0;      ///< header stamp
+      std::size_t frame_id = 0;  ///< index into frame_ids
+    };
+    std::vector<StampedTransform> poses;              ///< by stamp
+    std::vector<std::pair<double, std::size_t>> infos;  ///< CameraInfo stamp, entry; by stamp
+    std::vector<Input> inputs;                        ///< in log-time order
+    std::vector<std::string> frame_ids;               ///< of the inputs
+  };
+  /// Reads the poses, /tf_static, the CameraInfo stamps and the inputs' headers in one pass.
+  Scan scanBag();
+  /// Adds the /tf_static transforms of one message to static_edges_.
+  void addStaticTransforms(const std::vector<std::uint8_t>& bytes, const std::string& what);
+  /// Adds the T_W_B of one pose (or /tf) message to `poses`.
+  void addPoses(const std::vector<std::uint8_t>& bytes, const std::string& what, bool odometry,
+                std::vector<StampedTransform>* poses) const;
+  /// Index into extrinsics_ of T_B_S for a sensor frame (found through /tf_static once).
   std::size_t extrinsicFor(const std::string& frame_id);
+  /// Pairs the inputs with poses into frames_.
   void indexFrames();
 
   std::shared_ptr<const BagReader> bag_;
