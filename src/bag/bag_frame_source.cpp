@@ -44,7 +44,8 @@ std::vector<std::size_t> topicsOfType(const BagReader& bag, const std::string& t
 }
 
 [[noreturn]] void refuse(const BagReader& bag, const std::string& what) {
-  throw std::runtime_error(bag.path() + ": " + what + ". The bag's topics:\n" + bag.describeTopics());
+  throw std::runtime_error(bag.path() + ": " + what + ". The bag's topics:\n" +
+                           bag.describeTopics());
 }
 
 /// The topic `name`, which must exist with one of `types`.
@@ -58,8 +59,8 @@ void requireTopic(const BagReader& bag, const std::string& option, const std::st
     refuse(bag, option + " '" + name + "' is a " + bag.topics()[t].type + ", not a " + want);
   }
   if (bag.topics()[t].serialization_format != "cdr") {
-    refuse(bag, option + " '" + name + "' is serialised as '" + bag.topics()[t].serialization_format +
-                    "', not cdr");
+    refuse(bag, option + " '" + name + "' is serialised as '" +
+                    bag.topics()[t].serialization_format + "', not cdr");
   }
 }
 
@@ -79,18 +80,22 @@ std::string messageName(const BagReader& bag, std::size_t entry) {
 }
 
 /// The std_msgs/Header that opens a PointCloud2 or an Image, through the generated type.
-::std_msgs::msg::dds_::Header_ headerOf(const std::vector<std::uint8_t>& bytes, const std::string& what) {
+::std_msgs::msg::dds_::Header_ headerOf(const std::vector<std::uint8_t>& bytes,
+                                        const std::string& what) {
   namespace cdr = eprosima::fastcdr;
   ::std_msgs::msg::dds_::Header_ header;
   try {
-    cdr::FastBuffer buffer(const_cast<char*>(reinterpret_cast<const char*>(bytes.data())), bytes.size());
+    cdr::FastBuffer buffer(const_cast<char*>(reinterpret_cast<const char*>(bytes.data())),
+                           bytes.size());
     cdr::Cdr in(buffer, cdr::Cdr::DEFAULT_ENDIAN, cdr::Cdr::DDS_CDR);
     in.read_encapsulation();
     header.deserialize(in);
   } catch (const std::exception&) {
-    throw std::runtime_error(what + ": malformed CDR header (" + std::to_string(bytes.size()) + " bytes)");
+    throw std::runtime_error(what + ": malformed CDR header (" + std::to_string(bytes.size()) +
+                             " bytes)");
   }
-  if (header.stamp_().nanosec_() >= 1000000000U) throw std::runtime_error(what + ": nanosec >= 1e9");
+  if (header.stamp_().nanosec_() >= 1000000000U)
+    throw std::runtime_error(what + ": nanosec >= 1e9");
   return header;
 }
 
@@ -103,10 +108,13 @@ Transform inverse(const Transform& T) {
 
 }  // namespace
 
-BagInputs autoSelect(const BagReader& bag, const BagInputs& requested, const std::string& world_frame) {
+BagInputs autoSelect(const BagReader& bag, const BagInputs& requested,
+                     const std::string& world_frame) {
   BagInputs inputs = requested;
-  for (const std::string& topic : inputs.cloud_topics) requireTopic(bag, "cloud_topics", topic, {kPointCloud2Type});
-  if (!inputs.depth_topic.empty()) requireTopic(bag, "depth_topic", inputs.depth_topic, {kImageType});
+  for (const std::string& topic : inputs.cloud_topics)
+    requireTopic(bag, "cloud_topics", topic, {kPointCloud2Type});
+  if (!inputs.depth_topic.empty())
+    requireTopic(bag, "depth_topic", inputs.depth_topic, {kImageType});
   if (!inputs.cloud_topics.empty() && !inputs.depth_topic.empty()) {
     refuse(bag, "name either cloud_topics or depth_topic, not both");
   }
@@ -141,13 +149,15 @@ BagInputs autoSelect(const BagReader& bag, const BagInputs& requested, const std
         inputs.camera_info_topic = bag.topics()[infos[0]].name;
       } else {
         refuse(bag, "cannot choose the CameraInfo of " + depth + ": no " + sibling + " and " +
-                        std::to_string(infos.size()) + " CameraInfo topics; name it with the option "
+                        std::to_string(infos.size()) +
+                        " CameraInfo topics; name it with the option "
                         "camera_info_topic");
       }
     }
     requireTopic(bag, "camera_info_topic", inputs.camera_info_topic, {kCameraInfoType});
   }
-  if (!inputs.pose_topic.empty() && inputs.pose_from_tf) refuse(bag, "name pose_topic or /tf poses, not both");
+  if (!inputs.pose_topic.empty() && inputs.pose_from_tf)
+    refuse(bag, "name pose_topic or /tf poses, not both");
   if (!inputs.pose_topic.empty()) {
     requireTopic(bag, "pose_topic", inputs.pose_topic, {kPoseStampedType, kOdometryType});
   } else if (!inputs.pose_from_tf) {
@@ -159,8 +169,9 @@ BagInputs autoSelect(const BagReader& bag, const BagInputs& requested, const std
     } else if (poses.empty() && has_tf && !world_frame.empty()) {
       inputs.pose_from_tf = true;
     } else if (poses.empty() && has_tf) {
-      refuse(bag, "the poses can only come from /tf: set the option world_frame (and body_frame "
-                  "when it is not base_link)");
+      refuse(bag,
+             "the poses can only come from /tf: set the option world_frame (and body_frame "
+             "when it is not base_link)");
     } else {
       refuse(bag, "cannot choose the pose topic among " + std::to_string(poses.size()) +
                       " PoseStamped / Odometry topics" +
@@ -175,13 +186,15 @@ BagInputs autoSelect(const BagReader& bag, const BagInputs& requested, const std
   return inputs;
 }
 
-BagFrameSource::BagFrameSource(std::shared_ptr<const BagReader> bag, const BagFrameSourceOptions& options)
+BagFrameSource::BagFrameSource(std::shared_ptr<const BagReader> bag,
+                               const BagFrameSourceOptions& options)
     : bag_(std::move(bag)), options_(options) {
   if (bag_ == nullptr) throw std::invalid_argument("BagFrameSource: no bag");
   if (!(options_.pose_tolerance_s > 0.0) || !std::isfinite(options_.pose_tolerance_s)) {
     throw std::invalid_argument("BagFrameSource: pose_tolerance_s must be positive");
   }
-  if (options_.body_frame.empty()) throw std::invalid_argument("BagFrameSource: body_frame is empty");
+  if (options_.body_frame.empty())
+    throw std::invalid_argument("BagFrameSource: body_frame is empty");
   if (options_.T_B_S && !isValidPose(*options_.T_B_S)) {
     throw std::invalid_argument("BagFrameSource: T_B_S is not a rigid transform");
   }
@@ -190,7 +203,8 @@ BagFrameSource::BagFrameSource(std::shared_ptr<const BagReader> bag, const BagFr
   indexFrames();
 }
 
-void BagFrameSource::addStaticTransforms(const std::vector<std::uint8_t>& bytes, const std::string& what) {
+void BagFrameSource::addStaticTransforms(const std::vector<std::uint8_t>& bytes,
+                                         const std::string& what) {
   tf2_msgs::TFMessage_ msg;
   decodeCdr(bytes, what, &msg);
   for (const auto& t : msg.transforms_()) {
@@ -212,7 +226,8 @@ std::size_t BagFrameSource::extrinsicFor(const std::string& frame_id) {
     T_B_S = *options_.T_B_S;
   } else if (frame_id != options_.body_frame) {
     // Breadth-first through /tf_static, both ways along each edge, from the body frame.
-    std::deque<std::pair<std::string, Transform>> queue = {{options_.body_frame, Transform::Identity()}};
+    std::deque<std::pair<std::string, Transform>> queue = {
+        {options_.body_frame, Transform::Identity()}};
     std::set<std::string> seen = {options_.body_frame};
     bool found = false;
     while (!queue.empty() && !found) {
@@ -249,7 +264,8 @@ void BagFrameSource::addPoses(const std::vector<std::uint8_t>& bytes, const std:
     tf2_msgs::TFMessage_ msg;
     decodeCdr(bytes, what, &msg);
     for (const auto& t : msg.transforms_()) {
-      if (t.header_().frame_id_() != options_.world_frame || t.child_frame_id_() != options_.body_frame) {
+      if (t.header_().frame_id_() != options_.world_frame ||
+          t.child_frame_id_() != options_.body_frame) {
         continue;
       }
       if (!transformOf(t, &pose.T) || t.header_().stamp_().nanosec_() >= 1000000000U) {
@@ -271,7 +287,8 @@ void BagFrameSource::addPoses(const std::vector<std::uint8_t>& bytes, const std:
     decodeCdr(bytes, what, &msg);
     status = dds::decodePose(msg, &pose.stamp_s, &pose.T);
   }
-  if (!status.ok()) throw std::runtime_error(what + ": " + dds::toString(status.error) + ": " + status.detail);
+  if (!status.ok())
+    throw std::runtime_error(what + ": " + dds::toString(status.error) + ": " + status.detail);
   poses->push_back(pose);
 }
 
@@ -279,25 +296,30 @@ BagFrameSource::Scan BagFrameSource::scanBag() {
   // One pass in log-time order, so that each chunk of the bag is decompressed once.
   const std::size_t none = bag_->topics().size();
   const std::size_t static_topic = bag_->findTopic("/tf_static");
-  const bool has_static = static_topic != none && bag_->topics()[static_topic].type == kTfMessageType;
+  const bool has_static =
+      static_topic != none && bag_->topics()[static_topic].type == kTfMessageType;
   const std::size_t pose_topic = bag_->findTopic(inputs_.pose_from_tf ? "/tf" : inputs_.pose_topic);
   const bool odometry = bag_->topics()[pose_topic].type == kOdometryType;
-  const std::size_t info_topic = inputs_.depth_topic.empty() ? none : bag_->findTopic(inputs_.camera_info_topic);
+  const std::size_t info_topic =
+      inputs_.depth_topic.empty() ? none : bag_->findTopic(inputs_.camera_info_topic);
   std::vector<std::size_t> input_topics;
   for (const std::string& t : inputs_.cloud_topics) input_topics.push_back(bag_->findTopic(t));
   if (!inputs_.depth_topic.empty()) input_topics.push_back(bag_->findTopic(inputs_.depth_topic));
   Scan scan;
   for (std::size_t i = 0; i < bag_->entries().size(); ++i) {
     const std::size_t topic = bag_->entries()[i].topic;
-    const bool input = std::find(input_topics.begin(), input_topics.end(), topic) != input_topics.end();
-    if (!input && topic != pose_topic && topic != info_topic && !(has_static && topic == static_topic)) {
+    const bool input =
+        std::find(input_topics.begin(), input_topics.end(), topic) != input_topics.end();
+    if (!input && topic != pose_topic && topic != info_topic &&
+        !(has_static && topic == static_topic)) {
       continue;
     }
     const std::string what = messageName(*bag_, i);
     const std::vector<std::uint8_t> bytes = bag_->read(i).data;
     if (has_static && topic == static_topic) addStaticTransforms(bytes, what);
     if (topic == pose_topic) addPoses(bytes, what, odometry, &scan.poses);
-    if (topic == info_topic) scan.infos.emplace_back(dds::toSeconds(headerOf(bytes, what).stamp_()), i);
+    if (topic == info_topic)
+      scan.infos.emplace_back(dds::toSeconds(headerOf(bytes, what).stamp_()), i);
     if (input) {
       const auto header = headerOf(bytes, what);
       auto id = std::find(scan.frame_ids.begin(), scan.frame_ids.end(), header.frame_id_());
@@ -306,8 +328,9 @@ BagFrameSource::Scan BagFrameSource::scanBag() {
                              static_cast<std::size_t>(id - scan.frame_ids.begin())});
     }
   }
-  std::stable_sort(scan.poses.begin(), scan.poses.end(),
-                   [](const StampedTransform& a, const StampedTransform& b) { return a.stamp_s < b.stamp_s; });
+  std::stable_sort(
+      scan.poses.begin(), scan.poses.end(),
+      [](const StampedTransform& a, const StampedTransform& b) { return a.stamp_s < b.stamp_s; });
   std::sort(scan.infos.begin(), scan.infos.end());
   return scan;
 }
@@ -318,8 +341,9 @@ void BagFrameSource::indexFrames() {
   pose_count_ = poses.size();
   if (poses.empty()) {
     throw std::runtime_error(bag_->path() + ": no pose in " +
-                             (inputs_.pose_from_tf ? "/tf " + options_.world_frame + " -> " + options_.body_frame
-                                                   : inputs_.pose_topic));
+                             (inputs_.pose_from_tf
+                                  ? "/tf " + options_.world_frame + " -> " + options_.body_frame
+                                  : inputs_.pose_topic));
   }
   if (!inputs_.depth_topic.empty() && scan.infos.empty()) {
     throw std::runtime_error(bag_->path() + ": " + inputs_.camera_info_topic + " has no message");
@@ -340,8 +364,9 @@ void BagFrameSource::indexFrames() {
     frame.stamp_s = input.stamp_s;
     first_s = k == 0 ? frame.stamp_s : std::min(first_s, frame.stamp_s);
     last_s = k == 0 ? frame.stamp_s : std::max(last_s, frame.stamp_s);
-    const auto same = std::lower_bound(poses.begin(), poses.end(), frame.stamp_s - kSameStamp_s,
-                                       [](const StampedTransform& p, double t) { return p.stamp_s < t; });
+    const auto same =
+        std::lower_bound(poses.begin(), poses.end(), frame.stamp_s - kSameStamp_s,
+                         [](const StampedTransform& p, double t) { return p.stamp_s < t; });
     if (same != poses.end() && std::abs(same->stamp_s - frame.stamp_s) <= kSameStamp_s) {
       frame.T_W_B = same->T;
     } else if (buffer.lookup(frame.stamp_s, &frame.T_W_B) != PoseBuffer::LookupResult::kFound) {
@@ -352,9 +377,10 @@ void BagFrameSource::indexFrames() {
     if (!scan.infos.empty()) {
       // The CameraInfo nearest in stamp (they rarely change; usually the same stamp).
       const auto& infos = scan.infos;
-      auto it = std::lower_bound(infos.begin(), infos.end(), std::make_pair(frame.stamp_s, std::size_t{0}));
-      if (it == infos.end() ||
-          (it != infos.begin() && frame.stamp_s - std::prev(it)->first < it->first - frame.stamp_s)) {
+      auto it = std::lower_bound(infos.begin(), infos.end(),
+                                 std::make_pair(frame.stamp_s, std::size_t{0}));
+      if (it == infos.end() || (it != infos.begin() &&
+                                frame.stamp_s - std::prev(it)->first < it->first - frame.stamp_s)) {
         it = std::prev(it);
       }
       frame.info_entry = it->second;
@@ -368,7 +394,8 @@ void BagFrameSource::indexFrames() {
     m << std::fixed << std::setprecision(6) << bag_->path() << ": no input frame has a pose within "
       << options_.pose_tolerance_s << " s of its stamp (" << scan.inputs.size() << " frames";
     if (!scan.inputs.empty()) m << " " << first_s << ".." << last_s << " s";
-    m << ", " << poses.size() << " poses " << poses.front().stamp_s << ".." << poses.back().stamp_s << " s)";
+    m << ", " << poses.size() << " poses " << poses.front().stamp_s << ".." << poses.back().stamp_s
+      << " s)";
     throw std::runtime_error(m.str());
   }
   if (unpaired_ > 0) {
@@ -389,14 +416,16 @@ io::SourceFrame BagFrameSource::read(std::size_t i, io::SourceFrameInfo* info) c
   const Transform& T_B_S = extrinsics_[ref.extrinsic].second;
   if (info != nullptr) {
     std::ostringstream name;
-    name << bag_->topics()[message.topic].name << "@" << std::fixed << std::setprecision(6) << ref.stamp_s;
+    name << bag_->topics()[message.topic].name << "@" << std::fixed << std::setprecision(6)
+         << ref.stamp_s;
     info->name = name.str();
   }
   if (inputs_.depth_topic.empty()) {
     dds::CloudSample sample;
     decodeCdr(message.data, what, &sample);
     if (!sample.status.ok()) {
-      throw std::runtime_error(what + ": " + dds::toString(sample.status.error) + ": " + sample.status.detail);
+      throw std::runtime_error(what + ": " + dds::toString(sample.status.error) + ": " +
+                               sample.status.detail);
     }
     PointCloudFrame frame;
     frame.stamp_s = ref.stamp_s;
@@ -418,7 +447,8 @@ io::SourceFrame BagFrameSource::read(std::size_t i, io::SourceFrameInfo* info) c
   decodeCdr(bag_->read(ref.info_entry).data, messageName(*bag_, ref.info_entry), &camera_info);
   DepthFrame frame;
   const dds::DecodeStatus status = dds::decodeDepthImage(image, camera_info, &frame);
-  if (!status.ok()) throw std::runtime_error(what + ": " + dds::toString(status.error) + ": " + status.detail);
+  if (!status.ok())
+    throw std::runtime_error(what + ": " + dds::toString(status.error) + ": " + status.detail);
   frame.stamp_s = ref.stamp_s;
   frame.T_W_B = ref.T_W_B;
   frame.T_B_S = T_B_S;
@@ -433,12 +463,14 @@ std::string BagFrameSource::describe() const {
   std::ostringstream text;
   text << frames_.size() << " frames of " << bag_->path() << " from ";
   if (inputs_.depth_topic.empty()) {
-    for (std::size_t k = 0; k < inputs_.cloud_topics.size(); ++k) text << (k > 0 ? ", " : "") << inputs_.cloud_topics[k];
+    for (std::size_t k = 0; k < inputs_.cloud_topics.size(); ++k)
+      text << (k > 0 ? ", " : "") << inputs_.cloud_topics[k];
   } else {
     text << inputs_.depth_topic << " with " << inputs_.camera_info_topic;
   }
   text << ", poses from "
-       << (inputs_.pose_from_tf ? "/tf " + options_.world_frame + " -> " + options_.body_frame : inputs_.pose_topic);
+       << (inputs_.pose_from_tf ? "/tf " + options_.world_frame + " -> " + options_.body_frame
+                                : inputs_.pose_topic);
   if (unpaired_ > 0) text << " (" << unpaired_ << " frames without a pose skipped)";
   return text.str();
 }

@@ -29,8 +29,11 @@ class FolderBag : public BagReader {
       std::vector<std::size_t> topic_map;
       for (const TopicInfo& topic : files_[f]->topics()) {
         std::size_t k = 0;
-        while (k < topics_.size() && (topics_[k].name != topic.name || topics_[k].type != topic.type)) ++k;
-        if (k == topics_.size()) topics_.push_back({topic.name, topic.type, topic.serialization_format, 0});
+        while (k < topics_.size() &&
+               (topics_[k].name != topic.name || topics_[k].type != topic.type))
+          ++k;
+        if (k == topics_.size())
+          topics_.push_back({topic.name, topic.type, topic.serialization_format, 0});
         topics_[k].message_count += topic.message_count;
         topic_map.push_back(k);
       }
@@ -80,7 +83,8 @@ std::unique_ptr<BagReader> openFile(const std::string& path) {
   char head[16] = {};
   in.read(head, sizeof(head));
   if (in.gcount() >= 8 && std::memcmp(head, "\x89MCAP0\r\n", 8) == 0) return openMcapBag(path);
-  if (in.gcount() == 16 && std::memcmp(head, "SQLite format 3\0", 16) == 0) return openSqliteBag(path);
+  if (in.gcount() == 16 && std::memcmp(head, "SQLite format 3\0", 16) == 0)
+    return openSqliteBag(path);
   throw std::runtime_error(path + ": neither MCAP nor sqlite3 (unknown first bytes)");
 }
 
@@ -98,7 +102,8 @@ std::unique_ptr<BagReader> openFolder(const std::string& dir) {
   if (!info || !info.IsMap()) {
     throw std::runtime_error(metadata_path.string() + ": no rosbag2_bagfile_information");
   }
-  const std::string storage = info["storage_identifier"] ? info["storage_identifier"].as<std::string>("") : "";
+  const std::string storage =
+      info["storage_identifier"] ? info["storage_identifier"].as<std::string>("") : "";
   if (storage != "mcap" && storage != "sqlite3") {
     throw std::runtime_error(metadata_path.string() + ": storage_identifier '" + storage +
                              "' (known: mcap, sqlite3)");

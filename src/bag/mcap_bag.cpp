@@ -42,7 +42,9 @@ class McapBag : public BagReader {
     mcap::Message message = mcap_.read(i);
     return {entries_[i].topic, message.log_time_ns, std::move(message.data)};
   }
-  [[nodiscard]] const std::vector<std::string>& warnings() const override { return mcap_.warnings(); }
+  [[nodiscard]] const std::vector<std::string>& warnings() const override {
+    return mcap_.warnings();
+  }
   [[nodiscard]] const std::string& path() const override { return mcap_.path(); }
 
  private:

@@ -10,11 +10,10 @@
 namespace mlmap::bag::mcap::detail {
 
 std::string opcodeName(std::uint8_t opcode) {
-  static const char* const kNames[] = {"",           "Header",          "Footer",     "Schema",
-                                       "Channel",    "Message",         "Chunk",      "MessageIndex",
-                                       "ChunkIndex", "Attachment",      "AttachmentIndex",
-                                       "Statistics", "Metadata",        "MetadataIndex",
-                                       "SummaryOffset", "DataEnd"};
+  static const char* const kNames[] = {
+      "",         "Header",        "Footer",        "Schema",     "Channel",         "Message",
+      "Chunk",    "MessageIndex",  "ChunkIndex",    "Attachment", "AttachmentIndex", "Statistics",
+      "Metadata", "MetadataIndex", "SummaryOffset", "DataEnd"};
   if (opcode >= 1 && opcode <= 0x0F) return kNames[opcode];
   char text[16];
   std::snprintf(text, sizeof(text), "opcode 0x%02x", opcode);
@@ -250,8 +249,9 @@ ChunkHeader parseChunk(const std::uint8_t* body, std::size_t size) {
   chunk.compression = in.string();
   const std::uint64_t records_size = in.u64();
   if (records_size > in.left()) {
-    throw std::runtime_error("its records length " + std::to_string(records_size) + " exceeds the " +
-                             std::to_string(in.left()) + " bytes left in the record");
+    throw std::runtime_error("its records length " + std::to_string(records_size) +
+                             " exceeds the " + std::to_string(in.left()) +
+                             " bytes left in the record");
   }
   chunk.records = body + in.position();
   chunk.records_size = static_cast<std::size_t>(records_size);
@@ -265,9 +265,11 @@ void decompressZstd(const ChunkHeader& chunk, std::vector<std::uint8_t>* out) {
   if (declared == ZSTD_CONTENTSIZE_ERROR) throw std::runtime_error("zstd data are corrupt");
   if (declared != ZSTD_CONTENTSIZE_UNKNOWN && declared != chunk.uncompressed_size) {
     throw std::runtime_error("zstd frame holds " + std::to_string(declared) +
-                             " bytes, the chunk declares " + std::to_string(chunk.uncompressed_size));
+                             " bytes, the chunk declares " +
+                             std::to_string(chunk.uncompressed_size));
   }
-  const std::size_t n = ZSTD_decompress(out->data(), out->size(), chunk.records, chunk.records_size);
+  const std::size_t n =
+      ZSTD_decompress(out->data(), out->size(), chunk.records, chunk.records_size);
   if (ZSTD_isError(n) != 0) {
     throw std::runtime_error(std::string("zstd: ") + ZSTD_getErrorName(n) +
                              " (the chunk declares " + std::to_string(chunk.uncompressed_size) +
@@ -321,13 +323,14 @@ void decompressLz4(const ChunkHeader& chunk, std::vector<std::uint8_t>* out) {
 }  // namespace
 
 std::vector<std::uint8_t> decompressChunk(const ChunkHeader& chunk) {
-  if (chunk.compression != "" && chunk.compression != "zstd" && chunk.compression != "lz4") {
+  if (!chunk.compression.empty() && chunk.compression != "zstd" && chunk.compression != "lz4") {
     throw std::runtime_error("unknown compression '" + chunk.compression +
                              "' (known: none, zstd, lz4)");
   }
   if (chunk.uncompressed_size > kMaxMcapRecordBytes) {
-    throw std::runtime_error("declared uncompressed size " + std::to_string(chunk.uncompressed_size) +
-                             " exceeds the limit of " + std::to_string(kMaxMcapRecordBytes) + " bytes");
+    throw std::runtime_error("declared uncompressed size " +
+                             std::to_string(chunk.uncompressed_size) + " exceeds the limit of " +
+                             std::to_string(kMaxMcapRecordBytes) + " bytes");
   }
   if (chunk.compression.empty() && chunk.uncompressed_size != chunk.records_size) {
     throw std::runtime_error("uncompressed chunk holds " + std::to_string(chunk.records_size) +
@@ -337,9 +340,10 @@ std::vector<std::uint8_t> decompressChunk(const ChunkHeader& chunk) {
   // block of at least 4 bytes): a larger declared size is a lie, refused before allocating it.
   const std::uint64_t max_ratio = chunk.compression == "lz4" ? 256 : 32768;
   if (!chunk.compression.empty() && chunk.uncompressed_size / max_ratio > chunk.records_size + 64) {
-    throw std::runtime_error("declared uncompressed size " + std::to_string(chunk.uncompressed_size) +
-                             " is impossible for " + std::to_string(chunk.records_size) + " bytes of " +
-                             chunk.compression + " data");
+    throw std::runtime_error("declared uncompressed size " +
+                             std::to_string(chunk.uncompressed_size) + " is impossible for " +
+                             std::to_string(chunk.records_size) + " bytes of " + chunk.compression +
+                             " data");
   }
   std::vector<std::uint8_t> out(static_cast<std::size_t>(chunk.uncompressed_size));
   if (chunk.compression.empty()) {

@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
+#include <system_error>
 #include <tuple>
 
 namespace mlmap::bag::mcap {
@@ -22,7 +23,8 @@ class File {
  public:
   explicit File(const std::string& path) : path_(path) {
     fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0) throw std::runtime_error(path + ": cannot open: " + std::strerror(errno));
+    if (fd_ < 0)
+      throw std::runtime_error(path + ": cannot open: " + std::generic_category().message(errno));
     struct stat st {};
     if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) {
       ::close(fd_);
@@ -51,14 +53,16 @@ class File {
 };
 
 /// Reads `size` bytes at `offset` of `fd` into `out` (the caller checked they are in the file).
-void readAt(int fd, const std::string& path, std::uint64_t offset, std::size_t size, std::uint8_t* out) {
+void readAt(int fd, const std::string& path, std::uint64_t offset, std::size_t size,
+            std::uint8_t* out) {
   std::size_t done = 0;
   while (done < size) {
     const ssize_t n = ::pread(fd, out + done, size - done, static_cast<off_t>(offset + done));
     if (n < 0 && errno == EINTR) continue;
     if (n <= 0) {
-      throw std::runtime_error(path + ": read error at byte " + std::to_string(offset + done) +
-                               (n < 0 ? std::string(": ") + std::strerror(errno) : ": end of file"));
+      throw std::runtime_error(
+          path + ": read error at byte " + std::to_string(offset + done) +
+          (n < 0 ? ": " + std::generic_category().message(errno) : ": end of file"));
     }
     done += static_cast<std::size_t>(n);
   }
@@ -101,7 +105,8 @@ bool checkMagic(const File& file, const std::string& path) {
                              " bytes, shorter than the magic)");
   }
   readAt(file.fd(), path, 0, 8, magic);
-  if (!isMagic(magic)) throw std::runtime_error(path + ": not an MCAP file (wrong magic at byte 0)");
+  if (!isMagic(magic))
+    throw std::runtime_error(path + ": not an MCAP file (wrong magic at byte 0)");
   if (file.size() < 16) return false;
   readAt(file.fd(), path, file.size() - 8, 8, magic);
   return isMagic(magic);
@@ -125,12 +130,13 @@ void visitChunkRecords(const std::vector<std::uint8_t>& records, const std::stri
   while (pos < records.size()) {
     detail::Cursor in(records.data() + pos, records.size() - pos);
     const std::uint8_t opcode = withContext(context, [&] { return in.u8(); });
-    const std::uint64_t length = withContext(context + ": record at chunk byte " + std::to_string(pos),
-                                             [&] { return in.u64(); });
+    const std::uint64_t length = withContext(
+        context + ": record at chunk byte " + std::to_string(pos), [&] { return in.u64(); });
     if (length > in.left()) {
-      throw std::runtime_error(context + ": " + detail::opcodeName(opcode) + " record at chunk byte " +
-                               std::to_string(pos) + " declares " + std::to_string(length) +
-                               " bytes, " + std::to_string(in.left()) + " left in the chunk");
+      throw std::runtime_error(context + ": " + detail::opcodeName(opcode) +
+                               " record at chunk byte " + std::to_string(pos) + " declares " +
+                               std::to_string(length) + " bytes, " + std::to_string(in.left()) +
+                               " left in the chunk");
     }
     visit(opcode, pos, records.data() + pos + kRecordPrefixBytes, static_cast<std::size_t>(length));
     pos += kRecordPrefixBytes + length;
@@ -166,30 +172,33 @@ ScanResult scanRecords(const std::string& path, const std::function<void(const R
     if (prefix.opcode == detail::kChunk || detail::isParsedOpcode(prefix.opcode)) {
       if (prefix.length > kMaxMcapRecordBytes) {
         throw std::runtime_error(context + ": " + std::to_string(prefix.length) +
-                                 " bytes exceed the limit of " + std::to_string(kMaxMcapRecordBytes));
+                                 " bytes exceed the limit of " +
+                                 std::to_string(kMaxMcapRecordBytes));
       }
       const std::vector<std::uint8_t> body = readBytes(file.fd(), path, body_offset, prefix.length);
       if (prefix.opcode == detail::kChunk) {
         const std::vector<std::uint8_t> records = withContext(context, [&] {
           return detail::decompressChunk(detail::parseChunk(body.data(), body.size()));
         });
-        visitChunkRecords(records, context,
-                          [&](std::uint8_t opcode, std::uint64_t pos, const std::uint8_t* data,
-                              std::size_t size) {
-                            if (!detail::isParsedOpcode(opcode)) return;
-                            const std::string inner = context + ": " + detail::opcodeName(opcode) +
-                                                      " record at chunk byte " + std::to_string(pos);
-                            visit(withContext(inner, [&] { return detail::parseRecord(opcode, data, size); }));
-                          });
+        visitChunkRecords(
+            records, context,
+            [&](std::uint8_t opcode, std::uint64_t pos, const std::uint8_t* data,
+                std::size_t size) {
+              if (!detail::isParsedOpcode(opcode)) return;
+              const std::string inner = context + ": " + detail::opcodeName(opcode) +
+                                        " record at chunk byte " + std::to_string(pos);
+              visit(withContext(inner, [&] { return detail::parseRecord(opcode, data, size); }));
+            });
       } else {
-        visit(withContext(context, [&] { return detail::parseRecord(prefix.opcode, body.data(), body.size()); }));
+        visit(withContext(
+            context, [&] { return detail::parseRecord(prefix.opcode, body.data(), body.size()); }));
       }
     }
     offset = body_offset + prefix.length;
   }
   if (!closed) {
-    result.warning = path + ": no closing magic after byte " + std::to_string(offset) +
-                     ": the file was cut off";
+    result.warning =
+        path + ": no closing magic after byte " + std::to_string(offset) + ": the file was cut off";
     return result;
   }
   result.complete = true;
@@ -234,8 +243,10 @@ bool McapReader::openIndexed() {
     throw std::runtime_error(where(path_, prefix.opcode, footer_offset) +
                              ": expected the Footer record (20 bytes) before the closing magic");
   }
-  const std::vector<std::uint8_t> body = readBytes(fd_, path_, footer_offset + kRecordPrefixBytes, 20);
-  const auto footer = std::get<Footer>(detail::parseRecord(detail::kFooter, body.data(), body.size()));
+  const std::vector<std::uint8_t> body =
+      readBytes(fd_, path_, footer_offset + kRecordPrefixBytes, 20);
+  const auto footer =
+      std::get<Footer>(detail::parseRecord(detail::kFooter, body.data(), body.size()));
   if (footer.summary_start == 0) return false;
   if (footer.summary_start < 8 || footer.summary_start > footer_offset) {
     throw std::runtime_error(where(path_, detail::kFooter, footer_offset) + ": summary_start " +
@@ -250,38 +261,42 @@ bool McapReader::openIndexed() {
   }
   if (summary_end - footer.summary_start > kMaxMcapRecordBytes) {
     throw std::runtime_error(path_ + ": summary section of " +
-                             std::to_string(summary_end - footer.summary_start) + " bytes is too large");
+                             std::to_string(summary_end - footer.summary_start) +
+                             " bytes is too large");
   }
   const std::vector<std::uint8_t> summary =
       readBytes(fd_, path_, footer.summary_start, summary_end - footer.summary_start);
   std::vector<ChunkIndex> chunk_indexes;
   bool has_statistics = false;
   Statistics statistics;
-  visitChunkRecords(summary, path_ + ": summary section at byte " + std::to_string(footer.summary_start),
-                    [&](std::uint8_t opcode, std::uint64_t pos, const std::uint8_t* data, std::size_t size) {
-                      if (!detail::isParsedOpcode(opcode)) return;
-                      const std::string context =
-                          where(path_, opcode, footer.summary_start + pos);
-                      Record record = withContext(context, [&] { return detail::parseRecord(opcode, data, size); });
-                      if (auto* s = std::get_if<Schema>(&record)) {
-                        schemas_[s->id] = std::move(*s);
-                      } else if (auto* c = std::get_if<Channel>(&record)) {
-                        channels_[c->id] = std::move(*c);
-                      } else if (auto* ci = std::get_if<ChunkIndex>(&record)) {
-                        chunk_indexes.push_back(std::move(*ci));
-                      } else if (auto* st = std::get_if<Statistics>(&record)) {
-                        has_statistics = true;
-                        statistics = *st;
-                      }
-                    });
+  visitChunkRecords(
+      summary, path_ + ": summary section at byte " + std::to_string(footer.summary_start),
+      [&](std::uint8_t opcode, std::uint64_t pos, const std::uint8_t* data, std::size_t size) {
+        if (!detail::isParsedOpcode(opcode)) return;
+        const std::string context = where(path_, opcode, footer.summary_start + pos);
+        Record record =
+            withContext(context, [&] { return detail::parseRecord(opcode, data, size); });
+        if (auto* s = std::get_if<Schema>(&record)) {
+          schemas_[s->id] = std::move(*s);
+        } else if (auto* c = std::get_if<Channel>(&record)) {
+          channels_[c->id] = std::move(*c);
+        } else if (auto* ci = std::get_if<ChunkIndex>(&record)) {
+          chunk_indexes.push_back(std::move(*ci));
+        } else if (auto* st = std::get_if<Statistics>(&record)) {
+          has_statistics = true;
+          statistics = *st;
+        }
+      });
   const bool no_messages = has_statistics && statistics.message_count == 0;
   if (channels_.empty() && !no_messages) return false;
   if (chunk_indexes.empty() && !no_messages) return false;  // messages outside chunks: scan
   std::sort(chunk_indexes.begin(), chunk_indexes.end(),
-            [](const ChunkIndex& a, const ChunkIndex& b) { return a.chunk_start_offset < b.chunk_start_offset; });
+            [](const ChunkIndex& a, const ChunkIndex& b) {
+              return a.chunk_start_offset < b.chunk_start_offset;
+            });
   for (const ChunkIndex& index : chunk_indexes) {
-    const std::string context = path_ + ": ChunkIndex of the chunk at byte " +
-                                std::to_string(index.chunk_start_offset);
+    const std::string context =
+        path_ + ": ChunkIndex of the chunk at byte " + std::to_string(index.chunk_start_offset);
     if (index.chunk_start_offset < 8 || index.chunk_length < kRecordPrefixBytes ||
         index.chunk_start_offset > footer.summary_start ||
         index.chunk_length > footer.summary_start - index.chunk_start_offset) {
@@ -297,16 +312,19 @@ bool McapReader::openIndexed() {
     for (const auto& [channel_id, offset] : index.message_index_offsets) {
       if (offset < 8 || offset >= footer.summary_start ||
           footer.summary_start - offset < kRecordPrefixBytes) {
-        throw std::runtime_error(context + ": message index of channel " + std::to_string(channel_id) +
-                                 " at byte " + std::to_string(offset) + " is outside the data section");
+        throw std::runtime_error(context + ": message index of channel " +
+                                 std::to_string(channel_id) + " at byte " + std::to_string(offset) +
+                                 " is outside the data section");
       }
       const RecordPrefix mi = readPrefix(fd_, path_, offset);
       const std::string mi_context = where(path_, mi.opcode, offset);
       if (mi.opcode != detail::kMessageIndex ||
           mi.length > footer.summary_start - offset - kRecordPrefixBytes) {
-        throw std::runtime_error(mi_context + ": not a MessageIndex record inside the data section");
+        throw std::runtime_error(mi_context +
+                                 ": not a MessageIndex record inside the data section");
       }
-      const std::vector<std::uint8_t> entries = readBytes(fd_, path_, offset + kRecordPrefixBytes, mi.length);
+      const std::vector<std::uint8_t> entries =
+          readBytes(fd_, path_, offset + kRecordPrefixBytes, mi.length);
       withContext(mi_context, [&] {
         detail::Cursor in(entries.data(), entries.size());
         const std::uint16_t id = in.u16();
@@ -322,8 +340,8 @@ bool McapReader::openIndexed() {
           location.chunk = chunk;
           if (location.offset >= index.uncompressed_size) {
             throw std::runtime_error("message offset " + std::to_string(location.offset) +
-                                     " is outside its chunk of " + std::to_string(index.uncompressed_size) +
-                                     " bytes");
+                                     " is outside its chunk of " +
+                                     std::to_string(index.uncompressed_size) + " bytes");
           }
           messages_.push_back(location);
         }
@@ -345,7 +363,8 @@ void McapReader::openByScan(bool closed) {
   std::uint64_t offset = 8;
   while (offset < end) {
     if (end - offset < kRecordPrefixBytes) {
-      warnings_.push_back(path_ + ": cut off inside a record header at byte " + std::to_string(offset));
+      warnings_.push_back(path_ + ": cut off inside a record header at byte " +
+                          std::to_string(offset));
       return;
     }
     const RecordPrefix prefix = readPrefix(fd_, path_, offset);
@@ -356,8 +375,9 @@ void McapReader::openByScan(bool closed) {
         throw std::runtime_error(context + ": declares " + std::to_string(prefix.length) +
                                  " bytes, only " + std::to_string(left) + " remain before the end");
       }
-      warnings_.push_back(context + ": declares " + std::to_string(prefix.length) + " bytes, only " +
-                          std::to_string(left) + " remain: the file was cut off there");
+      warnings_.push_back(context + ": declares " + std::to_string(prefix.length) +
+                          " bytes, only " + std::to_string(left) +
+                          " remain: the file was cut off there");
       return;
     }
     const std::uint64_t body_offset = offset + kRecordPrefixBytes;
@@ -383,7 +403,8 @@ void McapReader::openByScan(bool closed) {
       messages_.push_back(location);
     } else if (prefix.opcode == detail::kSchema || prefix.opcode == detail::kChannel) {
       const std::vector<std::uint8_t> body = readBytes(fd_, path_, body_offset, prefix.length);
-      Record record = withContext(context, [&] { return detail::parseRecord(prefix.opcode, body.data(), body.size()); });
+      Record record = withContext(
+          context, [&] { return detail::parseRecord(prefix.opcode, body.data(), body.size()); });
       if (auto* s = std::get_if<Schema>(&record)) schemas_[s->id] = std::move(*s);
       if (auto* c = std::get_if<Channel>(&record)) channels_[c->id] = std::move(*c);
     } else if (prefix.opcode == detail::kChunk) {
@@ -396,39 +417,40 @@ void McapReader::openByScan(bool closed) {
     }
     offset = body_offset + prefix.length;
   }
-  if (!closed) warnings_.push_back(path_ + ": no closing magic after byte " + std::to_string(offset));
+  if (!closed)
+    warnings_.push_back(path_ + ": no closing magic after byte " + std::to_string(offset));
 }
 
 void McapReader::indexChunk(std::uint32_t chunk, const std::vector<std::uint8_t>& records,
                             std::uint64_t chunk_offset) {
   const std::string context = where(path_, detail::kChunk, chunk_offset);
-  visitChunkRecords(records, context,
-                    [&](std::uint8_t opcode, std::uint64_t pos, const std::uint8_t* data, std::size_t size) {
-                      if (opcode != detail::kMessage && opcode != detail::kSchema &&
-                          opcode != detail::kChannel) {
-                        return;
-                      }
-                      const std::string inner = context + ": " + detail::opcodeName(opcode) +
-                                                " record at chunk byte " + std::to_string(pos);
-                      if (opcode == detail::kMessage) {
-                        withContext(inner, [&] {
-                          detail::Cursor in(data, size);
-                          MessageLocation location;
-                          location.channel_id = in.u16();
-                          in.u32();
-                          location.log_time_ns = in.u64();
-                          in.u64();
-                          location.chunk = chunk;
-                          location.offset = pos;
-                          messages_.push_back(location);
-                          return 0;
-                        });
-                        return;
-                      }
-                      Record record = withContext(inner, [&] { return detail::parseRecord(opcode, data, size); });
-                      if (auto* s = std::get_if<Schema>(&record)) schemas_[s->id] = std::move(*s);
-                      if (auto* c = std::get_if<Channel>(&record)) channels_[c->id] = std::move(*c);
-                    });
+  visitChunkRecords(
+      records, context,
+      [&](std::uint8_t opcode, std::uint64_t pos, const std::uint8_t* data, std::size_t size) {
+        if (opcode != detail::kMessage && opcode != detail::kSchema && opcode != detail::kChannel) {
+          return;
+        }
+        const std::string inner = context + ": " + detail::opcodeName(opcode) +
+                                  " record at chunk byte " + std::to_string(pos);
+        if (opcode == detail::kMessage) {
+          withContext(inner, [&] {
+            detail::Cursor in(data, size);
+            MessageLocation location;
+            location.channel_id = in.u16();
+            in.u32();
+            location.log_time_ns = in.u64();
+            in.u64();
+            location.chunk = chunk;
+            location.offset = pos;
+            messages_.push_back(location);
+            return 0;
+          });
+          return;
+        }
+        Record record = withContext(inner, [&] { return detail::parseRecord(opcode, data, size); });
+        if (auto* s = std::get_if<Schema>(&record)) schemas_[s->id] = std::move(*s);
+        if (auto* c = std::get_if<Channel>(&record)) channels_[c->id] = std::move(*c);
+      });
 }
 
 const std::vector<std::uint8_t>& McapReader::chunkRecords(std::uint32_t chunk) const {
@@ -436,16 +458,19 @@ const std::vector<std::uint8_t>& McapReader::chunkRecords(std::uint32_t chunk) c
   const ChunkSpan& span = chunks_.at(chunk - 1);
   const RecordPrefix prefix = readPrefix(fd_, path_, span.offset);
   const std::string context = where(path_, prefix.opcode, span.offset);
-  if (prefix.opcode != detail::kChunk) throw std::runtime_error(context + ": expected a Chunk record");
+  if (prefix.opcode != detail::kChunk)
+    throw std::runtime_error(context + ": expected a Chunk record");
   if (prefix.length != span.length - kRecordPrefixBytes) {
     throw std::runtime_error(context + ": declares " + std::to_string(prefix.length) +
-                             " bytes, its chunk index " + std::to_string(span.length - kRecordPrefixBytes));
+                             " bytes, its chunk index " +
+                             std::to_string(span.length - kRecordPrefixBytes));
   }
   if (prefix.length > kMaxMcapRecordBytes) {
     throw std::runtime_error(context + ": " + std::to_string(prefix.length) +
                              " bytes exceed the limit of " + std::to_string(kMaxMcapRecordBytes));
   }
-  const std::vector<std::uint8_t> body = readBytes(fd_, path_, span.offset + kRecordPrefixBytes, prefix.length);
+  const std::vector<std::uint8_t> body =
+      readBytes(fd_, path_, span.offset + kRecordPrefixBytes, prefix.length);
   cached_chunk_ = 0;
   cached_records_ = withContext(context, [&] {
     return detail::decompressChunk(detail::parseChunk(body.data(), body.size()));
@@ -466,13 +491,13 @@ Message McapReader::read(std::size_t i) const {
     const std::string context = where(path_, prefix.opcode, location.offset);
     if (prefix.length > kMaxMcapRecordBytes ||
         prefix.length > file_size_ - location.offset - kRecordPrefixBytes) {
-      throw std::runtime_error(context + ": " + std::to_string(prefix.length) + " bytes do not fit");
+      throw std::runtime_error(context + ": " + std::to_string(prefix.length) +
+                               " bytes do not fit");
     }
     const std::vector<std::uint8_t> body =
         readBytes(fd_, path_, location.offset + kRecordPrefixBytes, prefix.length);
-    return std::get<Message>(withContext(context, [&] {
-      return detail::parseRecord(detail::kMessage, body.data(), body.size());
-    }));
+    return std::get<Message>(withContext(
+        context, [&] { return detail::parseRecord(detail::kMessage, body.data(), body.size()); }));
   }
   const std::vector<std::uint8_t>& records = chunkRecords(location.chunk);
   const std::string context = where(path_, detail::kChunk, chunks_[location.chunk - 1].offset) +
@@ -484,9 +509,9 @@ Message McapReader::read(std::size_t i) const {
     const std::uint64_t length = in.u64();
     if (opcode != detail::kMessage) throw std::runtime_error("not a Message record");
     if (length > in.left()) throw std::runtime_error("the record runs past the chunk");
-    return std::get<Message>(detail::parseRecord(
-        detail::kMessage, records.data() + location.offset + kRecordPrefixBytes,
-        static_cast<std::size_t>(length)));
+    return std::get<Message>(
+        detail::parseRecord(detail::kMessage, records.data() + location.offset + kRecordPrefixBytes,
+                            static_cast<std::size_t>(length)));
   });
 }
 

@@ -33,7 +33,8 @@ void deserialize(const std::vector<std::uint8_t>& bytes, const std::string& what
   } catch (const std::exception&) {
     ok = false;
   }
-  if (!ok) throw std::runtime_error(what + ": malformed CDR (" + std::to_string(bytes.size()) + " bytes)");
+  if (!ok)
+    throw std::runtime_error(what + ": malformed CDR (" + std::to_string(bytes.size()) + " bytes)");
 }
 
 }  // namespace

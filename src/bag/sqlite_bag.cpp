@@ -38,8 +38,8 @@ std::string text(sqlite3_stmt* statement, int column) {
 class SqliteBag : public BagReader {
  public:
   explicit SqliteBag(const std::string& path) : path_(path) {
-    if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY | SQLITE_OPEN_FULLMUTEX, nullptr) !=
-        SQLITE_OK) {
+    if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY | SQLITE_OPEN_FULLMUTEX,
+                        nullptr) != SQLITE_OK) {
       const std::string error = db_ != nullptr ? sqlite3_errmsg(db_) : "out of memory";
       sqlite3_close(db_);
       throw std::runtime_error(path + ": cannot open as sqlite3: " + error);
@@ -47,7 +47,8 @@ class SqliteBag : public BagReader {
     try {
       readTopics();
       readEntries();
-      read_statement_ = std::make_unique<Statement>(db_, path_, "SELECT data FROM messages WHERE id = ?");
+      read_statement_ =
+          std::make_unique<Statement>(db_, path_, "SELECT data FROM messages WHERE id = ?");
     } catch (...) {
       sqlite3_close(db_);
       throw;
@@ -93,7 +94,8 @@ class SqliteBag : public BagReader {
     int step = SQLITE_ROW;
     while ((step = sqlite3_step(statement.get())) == SQLITE_ROW) {
       topic_of_id_[sqlite3_column_int64(statement.get(), 0)] = topics_.size();
-      topics_.push_back({text(statement.get(), 1), text(statement.get(), 2), text(statement.get(), 3), 0});
+      topics_.push_back(
+          {text(statement.get(), 1), text(statement.get(), 2), text(statement.get(), 3), 0});
     }
     if (step != SQLITE_DONE) throw std::runtime_error(path_ + ": topics: " + sqlite3_errmsg(db_));
   }

@@ -44,7 +44,8 @@ void setU64(std::vector<std::uint8_t>* bytes, std::size_t at, std::uint64_t v) {
 /// Byte offset of the first record with `opcode` in the data section of an MCAP file.
 std::size_t firstRecord(const std::vector<std::uint8_t>& bytes, std::uint8_t opcode) {
   std::size_t at = 8;
-  while (at + 9 <= bytes.size() && bytes[at] != opcode) at += 9 + static_cast<std::size_t>(u64At(bytes, at + 1));
+  while (at + 9 <= bytes.size() && bytes[at] != opcode)
+    at += 9 + static_cast<std::size_t>(u64At(bytes, at + 1));
   if (at + 9 > bytes.size()) throw std::runtime_error("no record of that opcode");
   return at;
 }
@@ -73,10 +74,12 @@ TEST(BadBags, TruncatedMcapIsReadUpToTheCutWithAWarning) {
   for (const double fraction : {0.35, 0.7, 0.95}) {
     SCOPED_TRACE(fraction);
     const std::string path = scratch("truncated.mcap");
-    writeAll(path, {whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(data_end * fraction)});
+    writeAll(path,
+             {whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(data_end * fraction)});
     const auto bag = openBag(path);
     ASSERT_FALSE(bag->warnings().empty());
-    EXPECT_NE(bag->warnings()[0].find(path + ": no footer (the recording was cut off)"), std::string::npos)
+    EXPECT_NE(bag->warnings()[0].find(path + ": no footer (the recording was cut off)"),
+              std::string::npos)
         << bag->warnings()[0];
     EXPECT_LT(bag->entries().size(), 14U);
     EXPECT_GE(bag->entries().size(), previous);  // more of the file, at least as many messages
@@ -102,20 +105,24 @@ TEST(BadBags, WrongMagic) {
   writeAll(path, bytes);
   EXPECT_EQ(errorOf([&] { mlmap::bag::mcap::McapReader reader(path); }),
             path + ": not an MCAP file (wrong magic at byte 0)");
-  EXPECT_EQ(errorOf([&] { readEverything(path); }), path + ": neither MCAP nor sqlite3 (unknown first bytes)");
+  EXPECT_EQ(errorOf([&] { readEverything(path); }),
+            path + ": neither MCAP nor sqlite3 (unknown first bytes)");
 }
 
 TEST(BadBags, ChunkWhoseRecordsLengthLies) {
   std::vector<std::uint8_t> bytes = readAll(fixture("clouds_noindex.mcap"));
   const std::size_t chunk = firstRecord(bytes, 0x06);
-  // Body: start, end, uncompressed_size (u64 x3), crc (u32), compression "" (u32 0), records length.
-  const std::size_t records_length_at = chunk + 9 + 8 * 3 + 4 + 4;
+  // Body: start, end, uncompressed_size (u64 x3), crc (u32), compression "" (u32 0), records
+  // length.
+  const std::size_t records_length_at = chunk + 9 + 24 + 4 + 4;
   setU64(&bytes, records_length_at, u64At(bytes, records_length_at) + 1000);
   const std::string path = scratch("lying_records_length.mcap");
   writeAll(path, bytes);
   const std::string error = errorOf([&] { readEverything(path); });
-  EXPECT_NE(error.find(path + ": Chunk record at byte " + std::to_string(chunk) + ": its records length"),
-            std::string::npos) << error;
+  EXPECT_NE(
+      error.find(path + ": Chunk record at byte " + std::to_string(chunk) + ": its records length"),
+      std::string::npos)
+      << error;
 }
 
 TEST(BadBags, ChunkWhoseRecordLengthRunsPastTheEnd) {
@@ -125,23 +132,26 @@ TEST(BadBags, ChunkWhoseRecordLengthRunsPastTheEnd) {
   const std::string path = scratch("lying_chunk_length.mcap");
   writeAll(path, bytes);
   const std::string error = errorOf([&] { readEverything(path); });
-  EXPECT_NE(error.find(path + ": Chunk record at byte " + std::to_string(chunk) + ": declares 1099511627776 bytes"),
-            std::string::npos) << error;
+  EXPECT_NE(error.find(path + ": Chunk record at byte " + std::to_string(chunk) +
+                       ": declares 1099511627776 bytes"),
+            std::string::npos)
+      << error;
 }
 
 TEST(BadBags, ChunkWhoseUncompressedSizeLies) {
   std::vector<std::uint8_t> bytes = readAll(fixture("clouds_zstd.mcap"));
   const std::size_t chunk = firstRecord(bytes, 0x06);
   const std::size_t size_at = chunk + 9 + 16;
-  for (const std::uint64_t lie : {u64At(bytes, size_at) + 1, u64At(bytes, size_at) - 1,
-                                  std::uint64_t{1} << 33}) {
+  for (const std::uint64_t lie :
+       {u64At(bytes, size_at) + 1, u64At(bytes, size_at) - 1, std::uint64_t{1} << 33}) {
     SCOPED_TRACE(lie);
     std::vector<std::uint8_t> lying = bytes;
     setU64(&lying, size_at, lie);
     const std::string path = scratch("lying_uncompressed_size.mcap");
     writeAll(path, lying);
     const std::string error = errorOf([&] { readEverything(path); });
-    EXPECT_NE(error.find(path + ": Chunk record at byte " + std::to_string(chunk) + ": "), std::string::npos)
+    EXPECT_NE(error.find(path + ": Chunk record at byte " + std::to_string(chunk) + ": "),
+              std::string::npos)
         << error;
     EXPECT_NE(error.find(std::to_string(lie)), std::string::npos) << error;
   }
@@ -150,7 +160,7 @@ TEST(BadBags, ChunkWhoseUncompressedSizeLies) {
 TEST(BadBags, UnknownCompression) {
   std::vector<std::uint8_t> bytes = readAll(fixture("clouds_zstd.mcap"));
   const std::size_t chunk = firstRecord(bytes, 0x06);
-  const std::size_t name_at = chunk + 9 + 8 * 3 + 4 + 4;
+  const std::size_t name_at = chunk + 9 + 24 + 4 + 4;
   ASSERT_EQ(std::string(bytes.begin() + name_at, bytes.begin() + name_at + 4), "zstd");
   bytes[name_at + 3] = 'x';
   const std::string path = scratch("unknown_compression.mcap");
@@ -158,7 +168,8 @@ TEST(BadBags, UnknownCompression) {
   const std::string error = errorOf([&] { readEverything(path); });
   EXPECT_NE(error.find(path + ": Chunk record at byte " + std::to_string(chunk) +
                        ": unknown compression 'zstx' (known: none, zstd, lz4)"),
-            std::string::npos) << error;
+            std::string::npos)
+      << error;
 }
 
 TEST(BadBags, CorruptCompressedData) {
@@ -166,22 +177,25 @@ TEST(BadBags, CorruptCompressedData) {
     SCOPED_TRACE(name);
     std::vector<std::uint8_t> bytes = readAll(fixture(name));
     const std::size_t chunk = firstRecord(bytes, 0x06);
-    const std::size_t data_at = chunk + 9 + 8 * 3 + 4 + 4 + 4 + 8;
+    const std::size_t data_at = chunk + 9 + 24 + 4 + 4 + 4 + 8;
     for (std::size_t k = 8; k < 40; ++k) bytes[data_at + k] ^= 0x5A;
     const std::string path = scratch(std::string("corrupt_") + name);
     writeAll(path, bytes);
     const std::string error = errorOf([&] { readEverything(path); });
-    EXPECT_NE(error.find(path + ": Chunk record at byte " + std::to_string(chunk)), std::string::npos) << error;
+    EXPECT_NE(error.find(path + ": Chunk record at byte " + std::to_string(chunk)),
+              std::string::npos)
+        << error;
   }
 }
 
 /// Runs `sql` on a copy of clouds.db3 and returns the copy's path.
 std::string editedDb3(const std::string& name, const std::string& sql) {
-  const std::string path = scratch(name);
+  std::string path = scratch(name);
   fs::copy_file(fixture("clouds.db3"), path, fs::copy_options::overwrite_existing);
   sqlite3* db = nullptr;
   EXPECT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
-  EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+  EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK)
+      << sqlite3_errmsg(db);
   sqlite3_close(db);
   return path;
 }
@@ -194,22 +208,29 @@ TEST(BadBags, MalformedMessageNamesTopicAndTime) {
   const std::string error = errorOf([&] {
     mlmap::bag::BagFrameSource source(openBag(path), mlmap::bag::BagFrameSourceOptions{});
   });
-  EXPECT_EQ(error, path + ": /points message at log time 1700000001100000000 ns: malformed CDR header (5 bytes)");
+  EXPECT_EQ(
+      error,
+      path +
+          ": /points message at log time 1700000001100000000 ns: malformed CDR header (5 bytes)");
 }
 
 TEST(BadBags, UnknownTypeIsNotTakenForAnInput) {
-  const std::string path = editedDb3("unknown_type.db3",
-                                     "UPDATE topics SET type = 'acme_msgs/msg/Cloud' WHERE name = '/points'");
+  const std::string path = editedDb3(
+      "unknown_type.db3", "UPDATE topics SET type = 'acme_msgs/msg/Cloud' WHERE name = '/points'");
   const std::string error = errorOf([&] {
     mlmap::bag::BagFrameSource source(openBag(path), mlmap::bag::BagFrameSourceOptions{});
   });
-  EXPECT_NE(error.find("0 PointCloud2 topics and 0 depth Image topics"), std::string::npos) << error;
+  EXPECT_NE(error.find("0 PointCloud2 topics and 0 depth Image topics"), std::string::npos)
+      << error;
   EXPECT_NE(error.find("/points (acme_msgs/msg/Cloud, 4 messages)"), std::string::npos) << error;
   mlmap::bag::BagFrameSourceOptions named;
   named.inputs.cloud_topics = {"/points"};
-  const std::string named_error = errorOf([&] { mlmap::bag::BagFrameSource source(openBag(path), named); });
-  EXPECT_NE(named_error.find("'/points' is a acme_msgs/msg/Cloud, not a sensor_msgs/msg/PointCloud2"),
-            std::string::npos) << named_error;
+  const std::string named_error =
+      errorOf([&] { mlmap::bag::BagFrameSource source(openBag(path), named); });
+  EXPECT_NE(
+      named_error.find("'/points' is a acme_msgs/msg/Cloud, not a sensor_msgs/msg/PointCloud2"),
+      std::string::npos)
+      << named_error;
 }
 
 TEST(BadBags, SqliteFileThatIsNotABag) {
@@ -217,7 +238,8 @@ TEST(BadBags, SqliteFileThatIsNotABag) {
   fs::remove(path);
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
-  ASSERT_EQ(sqlite3_exec(db, "CREATE TABLE other(x INTEGER)", nullptr, nullptr, nullptr), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "CREATE TABLE other(x INTEGER)", nullptr, nullptr, nullptr),
+            SQLITE_OK);
   sqlite3_close(db);
   EXPECT_EQ(errorOf([&] { readEverything(path); }),
             path + ": not a rosbag2 sqlite3 bag (no such table: topics)");
@@ -230,14 +252,18 @@ TEST(BadBags, SqliteFileThatIsNotABag) {
 TEST(BadBags, MetadataOfAnotherStorage) {
   const fs::path dir = scratch("other_storage");
   fs::create_directories(dir);
-  std::ofstream(dir / "metadata.yaml") << "rosbag2_bagfile_information:\n  version: 9\n"
-                                          "  storage_identifier: rosbag_v2\n  relative_file_paths: [a.bag]\n";
-  EXPECT_EQ(errorOf([&] { readEverything(dir.string()); }),
-            (dir / "metadata.yaml").string() + ": storage_identifier 'rosbag_v2' (known: mcap, sqlite3)");
-  std::ofstream(dir / "metadata.yaml") << "rosbag2_bagfile_information:\n  storage_identifier: mcap\n"
-                                          "  relative_file_paths: [../../etc/passwd]\n";
-  EXPECT_NE(errorOf([&] { readEverything(dir.string()); }).find("is not a file name inside the folder"),
-            std::string::npos);
+  std::ofstream(dir / "metadata.yaml")
+      << "rosbag2_bagfile_information:\n  version: 9\n"
+         "  storage_identifier: rosbag_v2\n  relative_file_paths: [a.bag]\n";
+  EXPECT_EQ(
+      errorOf([&] { readEverything(dir.string()); }),
+      (dir / "metadata.yaml").string() + ": storage_identifier 'rosbag_v2' (known: mcap, sqlite3)");
+  std::ofstream(dir / "metadata.yaml")
+      << "rosbag2_bagfile_information:\n  storage_identifier: mcap\n"
+         "  relative_file_paths: [../../etc/passwd]\n";
+  EXPECT_NE(
+      errorOf([&] { readEverything(dir.string()); }).find("is not a file name inside the folder"),
+      std::string::npos);
 }
 
 }  // namespace

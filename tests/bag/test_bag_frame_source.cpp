@@ -40,11 +40,14 @@ Transform transformOf(const nlohmann::json& j) {
 
 double secondsAfterT0(const std::string& stamp_ns) {
   const double t0_s = expected()["t0_s"];
-  return static_cast<double>(std::stoull(stamp_ns) - static_cast<std::uint64_t>(t0_s) * 1000000000ULL) * 1e-9;
+  return static_cast<double>(std::stoull(stamp_ns) -
+                             static_cast<std::uint64_t>(t0_s) * 1000000000ULL) *
+         1e-9;
 }
 
 void expectNear(const Transform& a, const Transform& b, double tolerance) {
-  EXPECT_LT((a.matrix() - b.matrix()).cwiseAbs().maxCoeff(), tolerance) << a.matrix() << "\n---\n" << b.matrix();
+  EXPECT_LT((a.matrix() - b.matrix()).cwiseAbs().maxCoeff(), tolerance) << a.matrix() << "\n---\n"
+                                                                        << b.matrix();
 }
 
 /// Every frame of `source` is the generator's cloud with its pose and the LiDAR's extrinsic.
@@ -150,7 +153,8 @@ std::string errorOf(Make&& make) {
 TEST(BagFrameSource, AmbiguousInputsNameTheOptionAndListTheTopics) {
   const std::shared_ptr<const mlmap::bag::BagReader> bag = openBag(fixture("tf_unchunked.mcap"));
   const std::string clouds = errorOf([&] { (void)autoSelect(*bag, BagInputs{}, "world"); });
-  EXPECT_NE(clouds.find("2 PointCloud2 topics (/points, /points_aux)"), std::string::npos) << clouds;
+  EXPECT_NE(clouds.find("2 PointCloud2 topics (/points, /points_aux)"), std::string::npos)
+      << clouds;
   EXPECT_NE(clouds.find("cloud_topics"), std::string::npos) << clouds;
   EXPECT_NE(clouds.find("/tf (tf2_msgs/msg/TFMessage, 9 messages)"), std::string::npos) << clouds;
 
@@ -162,15 +166,18 @@ TEST(BagFrameSource, AmbiguousInputsNameTheOptionAndListTheTopics) {
   named.cloud_topics = {"/tf"};
   const std::string type = errorOf([&] { (void)autoSelect(*bag, named, "world"); });
   EXPECT_NE(type.find("'/tf' is a tf2_msgs/msg/TFMessage, not a sensor_msgs/msg/PointCloud2"),
-            std::string::npos) << type;
+            std::string::npos)
+      << type;
 }
 
 TEST(BagFrameSource, MissingExtrinsicSaysWhatToSet) {
   BagFrameSourceOptions options;
   options.body_frame = "imu";
-  const std::string error = errorOf([&] { BagFrameSource(openBag(fixture("clouds_zstd.mcap")), options); });
+  const std::string error =
+      errorOf([&] { BagFrameSource(openBag(fixture("clouds_zstd.mcap")), options); });
   EXPECT_NE(error.find("no /tf_static path from the body frame 'imu' to the sensor frame 'lidar'"),
-            std::string::npos) << error;
+            std::string::npos)
+      << error;
   options.T_B_S = Transform::Identity();
   const BagFrameSource source(openBag(fixture("clouds_zstd.mcap")), options);
   expectNear(std::get<mlmap::PointCloudFrame>(source.read(0)).T_B_S, Transform::Identity(), 1e-15);

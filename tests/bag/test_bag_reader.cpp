@@ -48,7 +48,8 @@ std::vector<std::tuple<std::uint64_t, std::string, std::vector<std::uint8_t>>> a
 TEST(BagReader, ListsTopicsWithTypesAndCounts) {
   const auto bag = openBag(fixture("clouds_zstd.mcap"));
   EXPECT_TRUE(bag->warnings().empty());
-  const std::map<std::string, std::uint64_t> want = {{"/points", 4}, {"/pose", 9}, {"/tf_static", 1}};
+  const std::map<std::string, std::uint64_t> want = {
+      {"/points", 4}, {"/pose", 9}, {"/tf_static", 1}};
   EXPECT_EQ(counts(*bag), want);
   const BagReader& reader = *bag;
   EXPECT_EQ(reader.topics()[reader.findTopic("/points")].type, "sensor_msgs/msg/PointCloud2");
@@ -62,7 +63,8 @@ TEST(BagReader, ListsTopicsWithTypesAndCounts) {
 TEST(BagReader, EveryStorageGivesTheSameMessages) {
   const auto reference = allMessages(*openBag(fixture("clouds_zstd.mcap")));
   ASSERT_EQ(reference.size(), 14U);
-  for (const char* name : {"clouds_noindex.mcap", "clouds_folder", "clouds.db3", "clouds_db3_folder"}) {
+  for (const char* name :
+       {"clouds_noindex.mcap", "clouds_folder", "clouds.db3", "clouds_db3_folder"}) {
     SCOPED_TRACE(name);
     const auto bag = openBag(fixture(name));
     EXPECT_TRUE(bag->warnings().empty());
@@ -71,7 +73,8 @@ TEST(BagReader, EveryStorageGivesTheSameMessages) {
 }
 
 TEST(BagReader, Lz4AndUnchunkedMcapMatchTheSqliteCopy) {
-  EXPECT_EQ(allMessages(*openBag(fixture("depth_lz4.mcap"))), allMessages(*openBag(fixture("depth.db3"))));
+  EXPECT_EQ(allMessages(*openBag(fixture("depth_lz4.mcap"))),
+            allMessages(*openBag(fixture("depth.db3"))));
   const auto unchunked = openBag(fixture("depth32_unchunked.mcap"));
   EXPECT_EQ(counts(*unchunked).at("/camera/depth/image_rect_raw"), 3U);
 }

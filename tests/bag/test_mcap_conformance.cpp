@@ -74,27 +74,32 @@ Json toJson(const mcap::Record& record) {
                                 {"summary_offset_start", num(r.summary_offset_start)},
                                 {"summary_crc", num(r.summary_crc)}};
         } else if constexpr (std::is_same_v<R, mcap::Schema>) {
-          type = "Schema", f = {{"id", num(r.id)}, {"name", r.name}, {"encoding", r.encoding},
+          type = "Schema", f = {{"id", num(r.id)},
+                                {"name", r.name},
+                                {"encoding", r.encoding},
                                 {"data", bytes(r.data)}};
         } else if constexpr (std::is_same_v<R, mcap::Channel>) {
-          type = "Channel", f = {{"id", num(r.id)}, {"schema_id", num(r.schema_id)},
-                                 {"topic", r.topic}, {"message_encoding", r.message_encoding},
+          type = "Channel", f = {{"id", num(r.id)},
+                                 {"schema_id", num(r.schema_id)},
+                                 {"topic", r.topic},
+                                 {"message_encoding", r.message_encoding},
                                  {"metadata", mapOf(r.metadata)}};
         } else if constexpr (std::is_same_v<R, mcap::Message>) {
-          type = "Message", f = {{"channel_id", num(r.channel_id)}, {"sequence", num(r.sequence)},
+          type = "Message", f = {{"channel_id", num(r.channel_id)},
+                                 {"sequence", num(r.sequence)},
                                  {"log_time", num(r.log_time_ns)},
-                                 {"publish_time", num(r.publish_time_ns)}, {"data", bytes(r.data)}};
+                                 {"publish_time", num(r.publish_time_ns)},
+                                 {"data", bytes(r.data)}};
         } else if constexpr (std::is_same_v<R, mcap::ChunkIndex>) {
-          type = "ChunkIndex",
-          f = {{"message_start_time", num(r.message_start_time_ns)},
-               {"message_end_time", num(r.message_end_time_ns)},
-               {"chunk_start_offset", num(r.chunk_start_offset)},
-               {"chunk_length", num(r.chunk_length)},
-               {"message_index_offsets", mapOf(r.message_index_offsets)},
-               {"message_index_length", num(r.message_index_length)},
-               {"compression", r.compression},
-               {"compressed_size", num(r.compressed_size)},
-               {"uncompressed_size", num(r.uncompressed_size)}};
+          type = "ChunkIndex", f = {{"message_start_time", num(r.message_start_time_ns)},
+                                    {"message_end_time", num(r.message_end_time_ns)},
+                                    {"chunk_start_offset", num(r.chunk_start_offset)},
+                                    {"chunk_length", num(r.chunk_length)},
+                                    {"message_index_offsets", mapOf(r.message_index_offsets)},
+                                    {"message_index_length", num(r.message_index_length)},
+                                    {"compression", r.compression},
+                                    {"compressed_size", num(r.compressed_size)},
+                                    {"uncompressed_size", num(r.uncompressed_size)}};
         } else if constexpr (std::is_same_v<R, mcap::Attachment>) {
           type = "Attachment", f = {{"log_time", num(r.log_time_ns)},
                                     {"create_time", num(r.create_time_ns)},
@@ -103,21 +108,20 @@ Json toJson(const mcap::Record& record) {
                                     {"data", bytes(r.data)}};
         } else if constexpr (std::is_same_v<R, mcap::AttachmentIndex>) {
           type = "AttachmentIndex",
-          f = {{"offset", num(r.offset)},           {"length", num(r.length)},
-               {"log_time", num(r.log_time_ns)},    {"create_time", num(r.create_time_ns)},
-               {"data_size", num(r.data_size)},     {"name", r.name},
+          f = {{"offset", num(r.offset)},        {"length", num(r.length)},
+               {"log_time", num(r.log_time_ns)}, {"create_time", num(r.create_time_ns)},
+               {"data_size", num(r.data_size)},  {"name", r.name},
                {"media_type", r.media_type}};
         } else if constexpr (std::is_same_v<R, mcap::Statistics>) {
-          type = "Statistics",
-          f = {{"message_count", num(r.message_count)},
-               {"schema_count", num(r.schema_count)},
-               {"channel_count", num(r.channel_count)},
-               {"attachment_count", num(r.attachment_count)},
-               {"metadata_count", num(r.metadata_count)},
-               {"chunk_count", num(r.chunk_count)},
-               {"message_start_time", num(r.message_start_time_ns)},
-               {"message_end_time", num(r.message_end_time_ns)},
-               {"channel_message_counts", mapOf(r.channel_message_counts)}};
+          type = "Statistics", f = {{"message_count", num(r.message_count)},
+                                    {"schema_count", num(r.schema_count)},
+                                    {"channel_count", num(r.channel_count)},
+                                    {"attachment_count", num(r.attachment_count)},
+                                    {"metadata_count", num(r.metadata_count)},
+                                    {"chunk_count", num(r.chunk_count)},
+                                    {"message_start_time", num(r.message_start_time_ns)},
+                                    {"message_end_time", num(r.message_end_time_ns)},
+                                    {"channel_message_counts", mapOf(r.channel_message_counts)}};
         } else if constexpr (std::is_same_v<R, mcap::Metadata>) {
           type = "Metadata", f = {{"name", r.name}, {"metadata", mapOf(r.metadata)}};
         } else if constexpr (std::is_same_v<R, mcap::MetadataIndex>) {
@@ -161,8 +165,8 @@ TEST(McapConformance, ScanFindsEveryRecordInOrder) {
   for (const fs::path& file : conformanceFiles()) {
     SCOPED_TRACE(file.filename().string());
     Json records = Json::array();
-    const mcap::ScanResult result =
-        mcap::scanRecords(file.string(), [&](const mcap::Record& r) { records.push_back(toJson(r)); });
+    const mcap::ScanResult result = mcap::scanRecords(
+        file.string(), [&](const mcap::Record& r) { records.push_back(toJson(r)); });
     EXPECT_TRUE(result.complete) << result.warning;
     const Json want = expected(file)["records"];
     ASSERT_EQ(records.size(), want.size());
@@ -183,10 +187,12 @@ TEST(McapConformance, ReaderFindsEveryMessageInLogTimeOrder) {
       std::map<std::string, Json> f;
       for (const Json& field : record["fields"]) f[field[0]] = field[1];
       std::vector<std::uint8_t> data;
-      for (const Json& b : f["data"]) data.push_back(static_cast<std::uint8_t>(std::stoi(b.get<std::string>())));
+      for (const Json& b : f["data"])
+        data.push_back(static_cast<std::uint8_t>(std::stoi(b.get<std::string>())));
       want.emplace_back(std::stoull(f["log_time"].get<std::string>()),
                         static_cast<std::uint16_t>(std::stoul(f["channel_id"].get<std::string>())),
-                        static_cast<std::uint32_t>(std::stoul(f["sequence"].get<std::string>())), data);
+                        static_cast<std::uint32_t>(std::stoul(f["sequence"].get<std::string>())),
+                        data);
     }
     mcap::McapReader reader(file.string());
     EXPECT_TRUE(reader.warnings().empty());
@@ -201,9 +207,8 @@ TEST(McapConformance, ReaderFindsEveryMessageInLogTimeOrder) {
       EXPECT_EQ(reader.channels().count(m.channel_id), 1U);
       got.emplace_back(m.log_time_ns, m.channel_id, m.sequence, m.data);
     }
-    std::stable_sort(want.begin(), want.end(), [](const Key& a, const Key& b) {
-      return std::get<0>(a) < std::get<0>(b);
-    });
+    std::stable_sort(want.begin(), want.end(),
+                     [](const Key& a, const Key& b) { return std::get<0>(a) < std::get<0>(b); });
     EXPECT_EQ(got, want);
   }
   EXPECT_GT(indexed, 50U);  // the chunk-indexed variants went through the summary

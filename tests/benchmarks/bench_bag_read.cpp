@@ -33,7 +33,8 @@ std::uint64_t bytesOnDisk(const std::string& path) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s BAG [--world-frame F] [--body-frame B] [--cloud-topic T]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s BAG [--world-frame F] [--body-frame B] [--cloud-topic T]\n",
+                 argv[0]);
     return 2;
   }
   const std::string path = argv[1];
@@ -65,17 +66,20 @@ int main(int argc, char** argv) {
       message_bytes += std::visit(
           [](const auto& f) -> std::uint64_t {
             using F = std::decay_t<decltype(f)>;
-            if constexpr (std::is_same_v<F, mlmap::PointCloudFrame>) return f.points_S.size() * 12;
-            else return f.depth_mm.size() * 2 + f.depth_m.size() * 4;
+            if constexpr (std::is_same_v<F, mlmap::PointCloudFrame>)
+              return f.points_S.size() * 12;
+            else
+              return f.depth_mm.size() * 2 + f.depth_m.size() * 4;
           },
           frame);
     }
     const double read_s = secondsSince(read_start);
     const double file_mb = static_cast<double>(bytesOnDisk(path)) / 1e6;
     std::printf("%s\n", source.describe().c_str());
-    std::printf("file %.1f MB; open (index, poses, pairing) %.3f s; read + decode %zu frames "
-                "(%llu points) %.3f s\n",
-                file_mb, open_s, source.size(), static_cast<unsigned long long>(points), read_s);
+    std::printf(
+        "file %.1f MB; open (index, poses, pairing) %.3f s; read + decode %zu frames "
+        "(%llu points) %.3f s\n",
+        file_mb, open_s, source.size(), static_cast<unsigned long long>(points), read_s);
     std::printf("file rate (open + read): %.1f MB/s; decoded x,y,z: %.1f MB/s; %.1f frames/s\n",
                 file_mb / (open_s + read_s), static_cast<double>(message_bytes) / 1e6 / read_s,
                 static_cast<double>(source.size()) / read_s);

@@ -29,7 +29,8 @@ void readAllWays(const std::string& path) {
   namespace mcap = mlmap::bag::mcap;
   try {
     std::size_t messages = 0;
-    (void)mcap::scanRecords(path, [&](const mcap::Record& r) { messages += std::holds_alternative<mcap::Message>(r); });
+    (void)mcap::scanRecords(
+        path, [&](const mcap::Record& r) { messages += std::holds_alternative<mcap::Message>(r); });
   } catch (const std::runtime_error&) {
   }
   try {
@@ -42,7 +43,8 @@ void readAllWays(const std::string& path) {
   } catch (const std::runtime_error&) {
   }
   try {
-    const mlmap::bag::BagFrameSource source(mlmap::bag::openMcapBag(path), mlmap::bag::BagFrameSourceOptions{});
+    const mlmap::bag::BagFrameSource source(mlmap::bag::openMcapBag(path),
+                                            mlmap::bag::BagFrameSourceOptions{});
     for (std::size_t i = 0; i < source.size(); ++i) (void)source.read(i);
   } catch (const std::runtime_error&) {
   }

@@ -38,7 +38,7 @@ struct BagInputs {
 /// Settings of a BagFrameSource.
 struct BagFrameSourceOptions {
   BagInputs inputs;
-  std::string world_frame;              ///< /tf poses: the world (fixed) frame, e.g. "map"
+  std::string world_frame;               ///< /tf poses: the world (fixed) frame, e.g. "map"
   std::string body_frame = "base_link";  ///< the body B: /tf child, /tf_static parent of sensors
   /// Extrinsic of every input's sensor frame; unset: from /tf_static (identity when the
   /// message's frame_id is body_frame).
@@ -67,7 +67,8 @@ class BagFrameSource : public io::FrameSource {
   BagFrameSource(std::shared_ptr<const BagReader> bag, const BagFrameSourceOptions& options);
 
   [[nodiscard]] std::size_t size() const override { return frames_.size(); }
-  [[nodiscard]] io::SourceFrame read(std::size_t i, io::SourceFrameInfo* info = nullptr) const override;
+  [[nodiscard]] io::SourceFrame read(std::size_t i,
+                                     io::SourceFrameInfo* info = nullptr) const override;
   [[nodiscard]] std::string describe() const override;
 
   /// The inputs used (after autoSelect()).
@@ -82,11 +83,11 @@ class BagFrameSource : public io::FrameSource {
  private:
   /// A frame: where its message is, its stamp and pose.
   struct FrameRef {
-    std::size_t entry = 0;        ///< the input message in bag entries()
-    std::size_t info_entry = 0;   ///< depth: its CameraInfo message in bag entries()
-    double stamp_s = 0.0;         ///< header stamp
+    std::size_t entry = 0;       ///< the input message in bag entries()
+    std::size_t info_entry = 0;  ///< depth: its CameraInfo message in bag entries()
+    double stamp_s = 0.0;        ///< header stamp
     Transform T_W_B = Transform::Identity();
-    std::size_t extrinsic = 0;    ///< index into extrinsics_
+    std::size_t extrinsic = 0;  ///< index into extrinsics_
   };
   struct StampedTransform {
     double stamp_s = 0.0;
@@ -106,10 +107,10 @@ class BagFrameSource : public io::FrameSource {
       double stamp_s = 0.0;      ///< header stamp
       std::size_t frame_id = 0;  ///< index into frame_ids
     };
-    std::vector<StampedTransform> poses;              ///< by stamp
+    std::vector<StampedTransform> poses;                ///< by stamp
     std::vector<std::pair<double, std::size_t>> infos;  ///< CameraInfo stamp, entry; by stamp
-    std::vector<Input> inputs;                        ///< in log-time order
-    std::vector<std::string> frame_ids;               ///< of the inputs
+    std::vector<Input> inputs;                          ///< in log-time order
+    std::vector<std::string> frame_ids;                 ///< of the inputs
   };
   /// Reads the poses, /tf_static, the CameraInfo stamps and the inputs' headers in one pass.
   Scan scanBag();

@@ -127,9 +127,9 @@ struct DataEnd {
 
 /// A record as scanRecords() yields it (Chunk records are yielded as their content, Message
 /// index records are skipped).
-using Record = std::variant<Header, Footer, Schema, Channel, Message, ChunkIndex, Attachment,
-                            AttachmentIndex, Statistics, Metadata, MetadataIndex, SummaryOffset,
-                            DataEnd>;
+using Record =
+    std::variant<Header, Footer, Schema, Channel, Message, ChunkIndex, Attachment, AttachmentIndex,
+                 Statistics, Metadata, MetadataIndex, SummaryOffset, DataEnd>;
 
 /// How far a linear scan got.
 struct ScanResult {
@@ -149,8 +149,8 @@ ScanResult scanRecords(const std::string& path, const std::function<void(const R
 struct MessageLocation {
   std::uint64_t log_time_ns = 0;
   std::uint16_t channel_id = 0;
-  std::uint32_t chunk = 0;    ///< index into the reader's chunks + 1; 0: not in a chunk
-  std::uint64_t offset = 0;   ///< of the Message record: in the file, or in the decompressed chunk
+  std::uint32_t chunk = 0;   ///< index into the reader's chunks + 1; 0: not in a chunk
+  std::uint64_t offset = 0;  ///< of the Message record: in the file, or in the decompressed chunk
 };
 
 /// An MCAP file opened for reading messages by index in log-time order. Opening reads the
