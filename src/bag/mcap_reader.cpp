@@ -479,6 +479,22 @@ const std::vector<std::uint8_t>& McapReader::chunkRecords(std::uint32_t chunk) c
   return cached_records_;
 }
 
+namespace {
+
+/// The message, after checking that it is the one its index entry says (a message index may lie).
+Message checkedAgainstIndex(Message message, const MessageLocation& location) {
+  if (message.log_time_ns != location.log_time_ns || message.channel_id != location.channel_id) {
+    throw std::runtime_error("the message (channel " + std::to_string(message.channel_id) +
+                             ", log time " + std::to_string(message.log_time_ns) +
+                             ") is not the one its message index says (channel " +
+                             std::to_string(location.channel_id) + ", log time " +
+                             std::to_string(location.log_time_ns) + ")");
+  }
+  return message;
+}
+
+}  // namespace
+
 Message McapReader::read(std::size_t i) const {
   if (i >= messages_.size()) {
     throw std::out_of_range(path_ + ": message " + std::to_string(i) + " of " +
@@ -489,15 +505,17 @@ Message McapReader::read(std::size_t i) const {
   if (location.chunk == 0) {
     const RecordPrefix prefix = readPrefix(fd_, path_, location.offset);
     const std::string context = where(path_, prefix.opcode, location.offset);
-    if (prefix.length > kMaxMcapRecordBytes ||
+    if (prefix.opcode != detail::kMessage || prefix.length > kMaxMcapRecordBytes ||
         prefix.length > file_size_ - location.offset - kRecordPrefixBytes) {
-      throw std::runtime_error(context + ": " + std::to_string(prefix.length) +
-                               " bytes do not fit");
+      throw std::runtime_error(context + ": not a Message record of at most the bytes left");
     }
     const std::vector<std::uint8_t> body =
         readBytes(fd_, path_, location.offset + kRecordPrefixBytes, prefix.length);
-    return std::get<Message>(withContext(
-        context, [&] { return detail::parseRecord(detail::kMessage, body.data(), body.size()); }));
+    return withContext(context, [&] {
+      return checkedAgainstIndex(
+          std::get<Message>(detail::parseRecord(detail::kMessage, body.data(), body.size())),
+          location);
+    });
   }
   const std::vector<std::uint8_t>& records = chunkRecords(location.chunk);
   const std::string context = where(path_, detail::kChunk, chunks_[location.chunk - 1].offset) +
@@ -509,9 +527,11 @@ Message McapReader::read(std::size_t i) const {
     const std::uint64_t length = in.u64();
     if (opcode != detail::kMessage) throw std::runtime_error("not a Message record");
     if (length > in.left()) throw std::runtime_error("the record runs past the chunk");
-    return std::get<Message>(
-        detail::parseRecord(detail::kMessage, records.data() + location.offset + kRecordPrefixBytes,
-                            static_cast<std::size_t>(length)));
+    return checkedAgainstIndex(
+        std::get<Message>(detail::parseRecord(detail::kMessage,
+                                              records.data() + location.offset + kRecordPrefixBytes,
+                                              static_cast<std::size_t>(length))),
+        location);
   });
 }
 
