@@ -349,6 +349,12 @@ bool McapReader::openIndexed() {
       });
     }
   }
+  if (has_statistics && statistics.message_count != messages_.size()) {
+    // Messages outside the indexed chunks (the format allows them): only a scan finds them all.
+    chunks_.clear();
+    messages_.clear();
+    return false;
+  }
   used_summary_ = true;
   return true;
 }
@@ -358,6 +364,8 @@ void McapReader::openByScan(bool closed) {
   channels_.clear();
   chunks_.clear();
   messages_.clear();
+  cached_chunk_ = 0;  // chunk numbers of an abandoned indexed opening mean other chunks here
+  cached_records_.clear();
   const std::uint64_t end = closed ? file_size_ - 8 : file_size_;
   const bool cut_allowed = !closed;
   std::uint64_t offset = 8;
