@@ -108,6 +108,16 @@ Transform inverse(const Transform& T) {
 
 }  // namespace
 
+Transform BagFrameSource::transformAt(const std::vector<StampedTransform>& series, double stamp_s) {
+  const auto after =
+      std::lower_bound(series.begin(), series.end(), stamp_s,
+                       [](const StampedTransform& p, double t) { return p.stamp_s < t; });
+  if (after == series.begin()) return series.front().T;
+  if (after == series.end()) return series.back().T;
+  const StampedTransform& before = *std::prev(after);
+  return interpolatePose(before.T, before.stamp_s, after->T, after->stamp_s, stamp_s);
+}
+
 BagInputs autoSelect(const BagReader& bag, const BagInputs& requested,
                      const std::string& world_frame) {
   BagInputs inputs = requested;
@@ -260,23 +270,6 @@ std::size_t BagFrameSource::extrinsicFor(const std::string& frame_id) {
 void BagFrameSource::addPoses(const std::vector<std::uint8_t>& bytes, const std::string& what,
                               bool odometry, std::vector<StampedTransform>* poses) const {
   StampedTransform pose;
-  if (inputs_.pose_from_tf) {
-    tf2_msgs::TFMessage_ msg;
-    decodeCdr(bytes, what, &msg);
-    for (const auto& t : msg.transforms_()) {
-      if (t.header_().frame_id_() != options_.world_frame ||
-          t.child_frame_id_() != options_.body_frame) {
-        continue;
-      }
-      if (!transformOf(t, &pose.T) || t.header_().stamp_().nanosec_() >= 1000000000U) {
-        throw std::runtime_error(what + ": transform " + options_.world_frame + " -> " +
-                                 options_.body_frame + " is not valid");
-      }
-      pose.stamp_s = dds::toSeconds(t.header_().stamp_());
-      poses->push_back(pose);
-    }
-    return;
-  }
   dds::DecodeStatus status;
   if (odometry) {
     dds::nav_msgs::Odometry_ msg;
@@ -290,6 +283,94 @@ void BagFrameSource::addPoses(const std::vector<std::uint8_t>& bytes, const std:
   if (!status.ok())
     throw std::runtime_error(what + ": " + dds::toString(status.error) + ": " + status.detail);
   poses->push_back(pose);
+}
+
+void BagFrameSource::addTf(const std::vector<std::uint8_t>& bytes, const std::string& what,
+                           TfEdges* tf) const {
+  tf2_msgs::TFMessage_ msg;
+  decodeCdr(bytes, what, &msg);
+  for (const auto& t : msg.transforms_()) {
+    const std::string& parent = t.header_().frame_id_();
+    const std::string& child = t.child_frame_id_();
+    StampedTransform sample;
+    if (!transformOf(t, &sample.T) || t.header_().stamp_().nanosec_() >= 1000000000U) {
+      throw std::runtime_error(what + ": transform " + parent + " -> " + child + " is not valid");
+    }
+    sample.stamp_s = dds::toSeconds(t.header_().stamp_());
+    const auto known = tf->parent_of.find(child);
+    if (known == tf->parent_of.end() || known->second != parent) {
+      tf->parent_of[child] = parent;
+      // The frames above the body (its ancestors, as far as known): only their transforms are
+      // kept whole; of the others only the latest, which seeds a frame found to be an ancestor.
+      tf->ancestors.clear();
+      std::string frame = options_.body_frame;
+      for (auto up = tf->parent_of.find(frame);
+           up != tf->parent_of.end() && tf->ancestors.size() < 64; up = tf->parent_of.find(frame)) {
+        tf->ancestors.insert(frame);
+        frame = up->second;
+      }
+      for (const std::string& a : tf->ancestors) {
+        const auto latest = tf->latest.find(a);
+        if (tf->series[a].empty() && latest != tf->latest.end())
+          tf->series[a].push_back(latest->second);
+      }
+    }
+    tf->latest[child] = sample;
+    if (tf->ancestors.count(child) != 0) tf->series[child].push_back(sample);
+  }
+}
+
+std::vector<BagFrameSource::StampedTransform> BagFrameSource::composeTfPoses(TfEdges* tf) const {
+  // The chain world -> ... -> body through /tf (dynamic) and /tf_static edges, body end first.
+  struct Edge {
+    const std::vector<StampedTransform>* series = nullptr;  ///< dynamic; null: static
+    Transform T_parent_child = Transform::Identity();
+  };
+  std::vector<Edge> chain;
+  std::string frame = options_.body_frame;
+  std::string walked = frame;
+  while (frame != options_.world_frame && chain.size() < 64) {
+    Edge edge;
+    std::string parent;
+    if (const auto up = tf->parent_of.find(frame); up != tf->parent_of.end()) {
+      parent = up->second;
+      std::vector<StampedTransform>& series = tf->series[frame];
+      std::stable_sort(series.begin(), series.end(),
+                       [](const StampedTransform& a, const StampedTransform& b) {
+                         return a.stamp_s < b.stamp_s;
+                       });
+      edge.series = &series;
+    } else {
+      for (const StaticEdge& e : static_edges_) {
+        if (e.child == frame) parent = e.parent, edge.T_parent_child = e.T_parent_child;
+      }
+    }
+    if (parent.empty()) {
+      throw std::runtime_error(bag_->path() + ": no /tf path from '" + options_.world_frame +
+                               "' to the body frame '" + options_.body_frame + "' (found " +
+                               walked + " with no parent); set world_frame or body_frame");
+    }
+    chain.push_back(edge);
+    frame = parent;
+    walked += " <- " + parent;
+  }
+  // The poses at the stamps of the lowest dynamic edge, the others interpolated there (their
+  // nearest transform held outside their range, as a slow map -> odom is).
+  const auto lowest =
+      std::find_if(chain.begin(), chain.end(), [](const Edge& e) { return e.series != nullptr; });
+  if (lowest == chain.end() || lowest->series->empty()) return {};
+  std::vector<StampedTransform> poses;
+  poses.reserve(lowest->series->size());
+  for (const StampedTransform& sample : *lowest->series) {
+    StampedTransform pose;
+    pose.stamp_s = sample.stamp_s;
+    for (auto edge = chain.rbegin(); edge != chain.rend(); ++edge) {
+      pose.T = pose.T * (edge->series == nullptr ? edge->T_parent_child
+                                                 : transformAt(*edge->series, sample.stamp_s));
+    }
+    poses.push_back(pose);
+  }
+  return poses;
 }
 
 BagFrameSource::Scan BagFrameSource::scanBag() {
@@ -317,7 +398,8 @@ BagFrameSource::Scan BagFrameSource::scanBag() {
     const std::string what = messageName(*bag_, i);
     const std::vector<std::uint8_t> bytes = bag_->read(i).data;
     if (has_static && topic == static_topic) addStaticTransforms(bytes, what);
-    if (topic == pose_topic) addPoses(bytes, what, odometry, &scan.poses);
+    if (topic == pose_topic && inputs_.pose_from_tf) addTf(bytes, what, &scan.tf);
+    if (topic == pose_topic && !inputs_.pose_from_tf) addPoses(bytes, what, odometry, &scan.poses);
     if (topic == info_topic)
       scan.infos.emplace_back(dds::toSeconds(headerOf(bytes, what).stamp_()), i);
     if (input) {
@@ -328,6 +410,7 @@ BagFrameSource::Scan BagFrameSource::scanBag() {
                              static_cast<std::size_t>(id - scan.frame_ids.begin())});
     }
   }
+  if (inputs_.pose_from_tf) scan.poses = composeTfPoses(&scan.tf);
   std::stable_sort(
       scan.poses.begin(), scan.poses.end(),
       [](const StampedTransform& a, const StampedTransform& b) { return a.stamp_s < b.stamp_s; });

@@ -139,6 +139,37 @@ TEST(BagFrameSource, PosesFromTfWithTheNamedCloudTopic) {
   expectGeneratedClouds(source);
 }
 
+TEST(BagFrameSource, PosesThroughATfChain) {
+  BagFrameSourceOptions options;
+  options.world_frame = "world";
+  const BagFrameSource source(openBag(fixture("tf_chain.mcap")), options);
+  EXPECT_TRUE(source.inputs().pose_from_tf);
+  EXPECT_EQ(source.poseCount(), 9U);  // at the stamps of odom -> base_link
+  const auto& clouds = expected()["clouds"];
+  ASSERT_EQ(source.size(), clouds.size());
+  const Transform T_W_O = transformOf(expected()["T_world_odom"]);
+  for (std::size_t i = 0; i < source.size(); ++i) {
+    const auto frame = std::get<mlmap::PointCloudFrame>(source.read(i));
+    expectNear(frame.T_W_B, T_W_O * bodyPose(secondsAfterT0(clouds[i]["stamp_ns"])), 1e-6);
+    expectNear(frame.T_B_S, transformOf(expected()["T_B_lidar"]), 1e-12);
+  }
+  // From odom, the chain is one edge; from a frame not in the tree, the error shows the chain.
+  options.world_frame = "odom";
+  const BagFrameSource from_odom(openBag(fixture("tf_chain.mcap")), options);
+  expectNear(std::get<mlmap::PointCloudFrame>(from_odom.read(0)).T_W_B,
+             bodyPose(secondsAfterT0(clouds[0]["stamp_ns"])), 1e-6);
+  options.world_frame = "map";
+  try {
+    const BagFrameSource from_map(openBag(fixture("tf_chain.mcap")), options);
+    ADD_FAILURE() << "no error without a path to map";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no /tf path from 'map' to the body frame 'base_link' "
+                                         "(found base_link <- odom <- world with no parent)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 /// The message of the std::runtime_error `make` throws ("" when it throws none).
 template <typename Make>
 std::string errorOf(Make&& make) {

@@ -2,8 +2,11 @@
 /// @file
 /// A ROS 2 bag as a FrameSource: point-cloud frames from PointCloud2 topics, or depth frames from
 /// a depth Image (16UC1 in millimetres, 32FC1 in metres) with its CameraInfo; the body pose
-/// T_W_B from a PoseStamped or Odometry topic, or from /tf (world_frame -> body_frame); the
-/// sensor extrinsic T_B_S from /tf_static, between body_frame and each message's frame_id.
+/// T_W_B from a PoseStamped or Odometry topic, or from /tf (world_frame -> body_frame, through
+/// the frames between them: /tf and /tf_static edges, e.g. map -> odom -> base_link; the poses
+/// are at the stamps of the lowest /tf edge, the other edges interpolated there and their
+/// nearest transform held outside their range); the sensor extrinsic T_B_S from /tf_static,
+/// between body_frame and each message's frame_id.
 ///
 /// Pairing is CloudSequence's (mlmap/datasets/cloud_sequence.h) on the messages' header stamps:
 /// a pose with the frame's stamp (within 1 us), or mlmap's PoseBuffer interpolation between the
@@ -19,8 +22,10 @@
 #include "mlmap/datasets/frame_source.h"
 
 #include <cstddef>
+#include <map>
 #include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -99,6 +104,13 @@ class BagFrameSource : public io::FrameSource {
     std::string child;
     Transform T_parent_child = Transform::Identity();
   };
+  /// The /tf transforms kept while scanning: whole series only for the body's ancestors.
+  struct TfEdges {
+    std::map<std::string, std::string> parent_of;    ///< child -> parent, every frame seen
+    std::set<std::string> ancestors;                 ///< the body and the frames above it
+    std::map<std::string, StampedTransform> latest;  ///< child -> its latest transform
+    std::map<std::string, std::vector<StampedTransform>> series;  ///< child -> its transforms
+  };
   /// What one pass over the bag found.
   struct Scan {
     /// An input message.
@@ -111,6 +123,7 @@ class BagFrameSource : public io::FrameSource {
     std::vector<std::pair<double, std::size_t>> infos;  ///< CameraInfo stamp, entry; by stamp
     std::vector<Input> inputs;                          ///< in log-time order
     std::vector<std::string> frame_ids;                 ///< of the inputs
+    TfEdges tf;                                         ///< poses from /tf: what it held
   };
   /// Reads the poses, /tf_static, the CameraInfo stamps and the inputs' headers in one pass.
   Scan scanBag();
@@ -119,6 +132,12 @@ class BagFrameSource : public io::FrameSource {
   /// Adds the T_W_B of one pose (or /tf) message to `poses`.
   void addPoses(const std::vector<std::uint8_t>& bytes, const std::string& what, bool odometry,
                 std::vector<StampedTransform>* poses) const;
+  /// Adds the transforms of one /tf message to `tf`.
+  void addTf(const std::vector<std::uint8_t>& bytes, const std::string& what, TfEdges* tf) const;
+  /// T_W_B from the /tf chain world_frame -> ... -> body_frame (see the file comment).
+  std::vector<StampedTransform> composeTfPoses(TfEdges* tf) const;
+  /// A transform of `series` (sorted) at `stamp_s`: interpolated, or the nearest outside its range.
+  static Transform transformAt(const std::vector<StampedTransform>& series, double stamp_s);
   /// Index into extrinsics_ of T_B_S for a sensor frame (found through /tf_static once).
   std::size_t extrinsicFor(const std::string& frame_id);
   /// Pairs the inputs with poses into frames_.
