@@ -318,7 +318,7 @@ bool McapReader::openIndexed() {
       }
       const RecordPrefix mi = readPrefix(fd_, path_, offset);
       const std::string mi_context = where(path_, mi.opcode, offset);
-      if (mi.opcode != detail::kMessageIndex ||
+      if (mi.opcode != detail::kMessageIndex || mi.length > kMaxMcapRecordBytes ||
           mi.length > footer.summary_start - offset - kRecordPrefixBytes) {
         throw std::runtime_error(mi_context +
                                  ": not a MessageIndex record inside the data section");
@@ -329,9 +329,15 @@ bool McapReader::openIndexed() {
         detail::Cursor in(entries.data(), entries.size());
         const std::uint16_t id = in.u16();
         const std::uint32_t bytes = in.u32();
-        in.skip(0, "");
         if (bytes > in.left()) throw std::runtime_error("its records run past the record");
         if (bytes % 16 != 0) throw std::runtime_error("its records length is not a multiple of 16");
+        // Each entry is 16 bytes of the file and each message at least 31 of its chunk: indexes
+        // that list more (the same records pointed at again and again) are refused, so that
+        // the index in memory stays proportional to the file.
+        if (messages_.size() + bytes / 16 > file_size_ / 16 ||
+            bytes / 16 > index.uncompressed_size / 31) {
+          throw std::runtime_error("it lists more messages than the file or its chunk can hold");
+        }
         for (std::uint32_t k = 0; k < bytes / 16; ++k) {
           MessageLocation location;
           location.log_time_ns = in.u64();
