@@ -35,7 +35,6 @@ test_tools=(
   cyclonedds-dev cyclonedds-tools      # cross-vendor interoperability test (ROS 2's other tier-1 DDS)
   iproute2                             # network-namespace tests
   openssl python3                      # DDS Security: test keystores (tools/make_test_keystore.sh), the capture test
-  nodejs npm                           # the ROS 2 test bags' writers (tests/bag/fixtures, npm ci of its lockfile)
 )
 # The ROS 2 ground-station tools (tools/ros2, docker/): no ROS in Debian 12, so their tests run
 # the ROS-free parts under /usr/bin/python3 and lint the rest.
@@ -52,6 +51,14 @@ case "${1:-}" in
   --programs) packages+=("${programs[@]}") ;;
   *) packages+=("${programs[@]}" "${test_tools[@]}" "${ground_tools[@]}") ;;
 esac
+
+# Node.js and npm write the ROS 2 test bags (tests/bag/fixtures, `npm ci` of its lockfile): the
+# machine's own when there (a Node.js build that bundles npm conflicts with Debian's npm
+# package), Debian's otherwise.
+if [ -z "${1:-}" ]; then
+  command -v node >/dev/null || packages+=(nodejs)
+  command -v npm >/dev/null || packages+=(npm)
+fi
 
 missing=()
 for p in "${packages[@]}"; do
