@@ -25,6 +25,7 @@ programs=(
   liboctomap-dev                       # OctoMap: .bt export (mlmap_map_tool), the side-by-side comparison
   fastdds-tools                        # `fastdds discovery` (config/dds/discovery_server_client.xml)
   nlohmann-json3-dev                   # JSON files: report.json, stats.json, summary.json
+  libzstd-dev liblz4-dev libsqlite3-dev  # ROS 2 bags: MCAP chunks (zstd, lz4), sqlite3 .db3 files
 )
 # The tests and their tools.
 test_tools=(
@@ -50,6 +51,14 @@ case "${1:-}" in
   --programs) packages+=("${programs[@]}") ;;
   *) packages+=("${programs[@]}" "${test_tools[@]}" "${ground_tools[@]}") ;;
 esac
+
+# Node.js and npm write the ROS 2 test bags (tests/bag/fixtures, `npm ci` of its lockfile): the
+# machine's own when there (a Node.js build that bundles npm conflicts with Debian's npm
+# package), Debian's otherwise.
+if [ -z "${1:-}" ]; then
+  command -v node >/dev/null || packages+=(nodejs)
+  command -v npm >/dev/null || packages+=(npm)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

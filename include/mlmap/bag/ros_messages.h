@@ -1,0 +1,55 @@
+#pragma once
+/// @file
+/// ROS 2 messages of a bag decoded with mlmap's own IDL types (mlmap_dds_wire): the CDR bytes are
+/// handed to the generated type's deserialize() as mlmap_node's DDS reader hands a sample, and
+/// PointCloud2 goes through CloudSamplePubSubType, the node's in-place decoder. A bag message
+/// and a live topic therefore decode the same.
+
+#include "mlmap/core/types.h"
+#include "mlmap/dds/cloud_sample.h"
+#include "mlmap/dds/ros_conversions.h"
+
+#include "tf2_msgs/msg/TFMessage_.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace mlmap::bag {
+
+namespace tf2_msgs = ::tf2_msgs::msg::dds_;
+
+/// The ROS 2 type names read (as bags store them).
+inline constexpr const char* kPointCloud2Type = "sensor_msgs/msg/PointCloud2";
+inline constexpr const char* kImageType = "sensor_msgs/msg/Image";
+inline constexpr const char* kCameraInfoType = "sensor_msgs/msg/CameraInfo";
+inline constexpr const char* kPoseStampedType = "geometry_msgs/msg/PoseStamped";
+inline constexpr const char* kOdometryType = "nav_msgs/msg/Odometry";
+inline constexpr const char* kTfMessageType = "tf2_msgs/msg/TFMessage";
+
+/// Decodes CDR `bytes` (encapsulation header first) into `msg`. @throws std::runtime_error
+/// "`what`: malformed CDR" when the generated type rejects them.
+void decodeCdr(const std::vector<std::uint8_t>& bytes, const std::string& what,
+               dds::sensor_msgs::Image_* msg);
+/// The same for a CameraInfo.
+void decodeCdr(const std::vector<std::uint8_t>& bytes, const std::string& what,
+               dds::sensor_msgs::CameraInfo_* msg);
+/// The same for a PoseStamped.
+void decodeCdr(const std::vector<std::uint8_t>& bytes, const std::string& what,
+               dds::geometry_msgs::PoseStamped_* msg);
+/// The same for an Odometry.
+void decodeCdr(const std::vector<std::uint8_t>& bytes, const std::string& what,
+               dds::nav_msgs::Odometry_* msg);
+/// The same for a TFMessage.
+void decodeCdr(const std::vector<std::uint8_t>& bytes, const std::string& what,
+               tf2_msgs::TFMessage_* msg);
+/// A PointCloud2 through the node's CloudSamplePubSubType: header and layout in `sample`, x, y,
+/// z in sample->points_S, the layout check's outcome in sample->status.
+void decodeCdr(const std::vector<std::uint8_t>& bytes, const std::string& what,
+               dds::CloudSample* sample);
+
+/// T_parent_child of a TransformStamped. false (T untouched) when not finite or the quaternion
+/// is not of unit norm (within 1e-3).
+bool transformOf(const dds::geometry_msgs::TransformStamped_& msg, Transform* T_parent_child);
+
+}  // namespace mlmap::bag

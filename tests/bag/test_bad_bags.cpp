@@ -1,0 +1,269 @@
+/// @file
+/// Bad bags get a clear message naming the file and the byte offset or record, never a crash:
+/// a recording cut off (read up to the cut, with a warning), a wrong magic, a chunk whose
+/// lengths lie, an unknown compression, a malformed message, a type the reader does not know,
+/// a sqlite3 file that is not a rosbag2 bag, a metadata.yaml of another storage.
+
+#include "bag_fixtures.h"
+
+#include "mlmap/bag/bag_frame_source.h"
+#include "mlmap/bag/bag_reader.h"
+#include "mlmap/bag/mcap.h"
+
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <cstring>
+#include <filesystem>
+
+namespace {
+
+namespace fs = std::filesystem;
+using mlmap::bag::openBag;
+using mlmap::bag::testing::fixture;
+using mlmap::bag::testing::readAll;
+using mlmap::bag::testing::writeAll;
+
+/// A scratch file path for this test.
+std::string scratch(const std::string& name) {
+  const fs::path dir = fs::path(MLMAP_BAG_FIXTURES_DIR).parent_path() / "bad_bags";
+  fs::create_directories(dir);
+  return (dir / name).string();
+}
+
+std::uint64_t u64At(const std::vector<std::uint8_t>& bytes, std::size_t at) {
+  std::uint64_t v = 0;
+  std::memcpy(&v, bytes.data() + at, 8);  // x86-64 / ARM64: little endian, as MCAP
+  return v;
+}
+
+void setU64(std::vector<std::uint8_t>* bytes, std::size_t at, std::uint64_t v) {
+  std::memcpy(bytes->data() + at, &v, 8);
+}
+
+/// Byte offset of the first record with `opcode` in the data section of an MCAP file.
+std::size_t firstRecord(const std::vector<std::uint8_t>& bytes, std::uint8_t opcode) {
+  std::size_t at = 8;
+  while (at + 9 <= bytes.size() && bytes[at] != opcode)
+    at += 9 + static_cast<std::size_t>(u64At(bytes, at + 1));
+  if (at + 9 > bytes.size()) throw std::runtime_error("no record of that opcode");
+  return at;
+}
+
+/// The message of the std::runtime_error `make` throws ("" when it throws none).
+template <typename Make>
+std::string errorOf(Make&& make) {
+  try {
+    make();
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+/// Opens `path` as a bag and reads every message.
+void readEverything(const std::string& path) {
+  const auto bag = openBag(path);
+  for (std::size_t i = 0; i < bag->entries().size(); ++i) (void)bag->read(i);
+}
+
+TEST(BadBags, TruncatedMcapIsReadUpToTheCutWithAWarning) {
+  const std::vector<std::uint8_t> whole = readAll(fixture("clouds_noindex.mcap"));
+  const double data_end = static_cast<double>(firstRecord(whole, 0x0F));  // cuts inside the data
+  std::size_t previous = 0;
+  for (const double fraction : {0.35, 0.7, 0.95}) {
+    SCOPED_TRACE(fraction);
+    const std::string path = scratch("truncated.mcap");
+    writeAll(path,
+             {whole.begin(), whole.begin() + static_cast<std::ptrdiff_t>(data_end * fraction)});
+    const auto bag = openBag(path);
+    ASSERT_FALSE(bag->warnings().empty());
+    EXPECT_NE(bag->warnings()[0].find(path + ": no footer (the recording was cut off)"),
+              std::string::npos)
+        << bag->warnings()[0];
+    EXPECT_LT(bag->entries().size(), 14U);
+    EXPECT_GE(bag->entries().size(), previous);  // more of the file, at least as many messages
+    previous = bag->entries().size();
+    for (std::size_t i = 0; i < bag->entries().size(); ++i) (void)bag->read(i);
+  }
+  EXPECT_GT(previous, 0U);
+  // Cut off, the compressed bag too: whole chunks before the cut are read.
+  const std::vector<std::uint8_t> zstd = readAll(fixture("clouds_zstd.mcap"));
+  const double zstd_data_end = static_cast<double>(firstRecord(zstd, 0x0F));
+  const std::string path = scratch("truncated_zstd.mcap");
+  writeAll(path, {zstd.begin(), zstd.begin() + static_cast<std::ptrdiff_t>(zstd_data_end * 0.8)});
+  const mlmap::bag::mcap::McapReader reader(path);
+  EXPECT_FALSE(reader.usedSummary());
+  EXPECT_GT(reader.messages().size(), 0U);
+  EXPECT_LT(reader.messages().size(), 14U);
+}
+
+TEST(BadBags, WrongMagic) {
+  std::vector<std::uint8_t> bytes = readAll(fixture("clouds_zstd.mcap"));
+  bytes[1] = 'X';
+  const std::string path = scratch("wrong_magic.mcap");
+  writeAll(path, bytes);
+  EXPECT_EQ(errorOf([&] { mlmap::bag::mcap::McapReader reader(path); }),
+            path + ": not an MCAP file (wrong magic at byte 0)");
+  EXPECT_EQ(errorOf([&] { readEverything(path); }),
+            path + ": neither MCAP nor sqlite3 (unknown first bytes)");
+}
+
+TEST(BadBags, ChunkWhoseRecordsLengthLies) {
+  std::vector<std::uint8_t> bytes = readAll(fixture("clouds_noindex.mcap"));
+  const std::size_t chunk = firstRecord(bytes, 0x06);
+  // Body: start, end, uncompressed_size (u64 x3), crc (u32), compression "" (u32 0), records
+  // length.
+  const std::size_t records_length_at = chunk + 9 + 24 + 4 + 4;
+  setU64(&bytes, records_length_at, u64At(bytes, records_length_at) + 1000);
+  const std::string path = scratch("lying_records_length.mcap");
+  writeAll(path, bytes);
+  const std::string error = errorOf([&] { readEverything(path); });
+  EXPECT_NE(
+      error.find(path + ": Chunk record at byte " + std::to_string(chunk) + ": its records length"),
+      std::string::npos)
+      << error;
+}
+
+TEST(BadBags, ChunkWhoseRecordLengthRunsPastTheEnd) {
+  std::vector<std::uint8_t> bytes = readAll(fixture("clouds_noindex.mcap"));
+  const std::size_t chunk = firstRecord(bytes, 0x06);
+  setU64(&bytes, chunk + 1, std::uint64_t{1} << 40);  // 1 TiB: must not be allocated
+  const std::string path = scratch("lying_chunk_length.mcap");
+  writeAll(path, bytes);
+  const std::string error = errorOf([&] { readEverything(path); });
+  EXPECT_NE(error.find(path + ": Chunk record at byte " + std::to_string(chunk) +
+                       ": declares 1099511627776 bytes"),
+            std::string::npos)
+      << error;
+}
+
+TEST(BadBags, ChunkWhoseUncompressedSizeLies) {
+  std::vector<std::uint8_t> bytes = readAll(fixture("clouds_zstd.mcap"));
+  const std::size_t chunk = firstRecord(bytes, 0x06);
+  const std::size_t size_at = chunk + 9 + 16;
+  for (const std::uint64_t lie :
+       {u64At(bytes, size_at) + 1, u64At(bytes, size_at) - 1, std::uint64_t{1} << 33}) {
+    SCOPED_TRACE(lie);
+    std::vector<std::uint8_t> lying = bytes;
+    setU64(&lying, size_at, lie);
+    const std::string path = scratch("lying_uncompressed_size.mcap");
+    writeAll(path, lying);
+    const std::string error = errorOf([&] { readEverything(path); });
+    EXPECT_NE(error.find(path + ": Chunk record at byte " + std::to_string(chunk) + ": "),
+              std::string::npos)
+        << error;
+    EXPECT_NE(error.find(std::to_string(lie)), std::string::npos) << error;
+  }
+}
+
+TEST(BadBags, UnknownCompression) {
+  std::vector<std::uint8_t> bytes = readAll(fixture("clouds_zstd.mcap"));
+  const std::size_t chunk = firstRecord(bytes, 0x06);
+  const std::size_t name_at = chunk + 9 + 24 + 4 + 4;
+  ASSERT_EQ(std::string(bytes.begin() + name_at, bytes.begin() + name_at + 4), "zstd");
+  bytes[name_at + 3] = 'x';
+  const std::string path = scratch("unknown_compression.mcap");
+  writeAll(path, bytes);
+  const std::string error = errorOf([&] { readEverything(path); });
+  EXPECT_NE(error.find(path + ": Chunk record at byte " + std::to_string(chunk) +
+                       ": unknown compression 'zstx' (known: none, zstd, lz4)"),
+            std::string::npos)
+      << error;
+}
+
+TEST(BadBags, CorruptCompressedData) {
+  for (const char* name : {"clouds_zstd.mcap", "depth_lz4.mcap"}) {
+    SCOPED_TRACE(name);
+    std::vector<std::uint8_t> bytes = readAll(fixture(name));
+    const std::size_t chunk = firstRecord(bytes, 0x06);
+    const std::size_t data_at = chunk + 9 + 24 + 4 + 4 + 4 + 8;
+    for (std::size_t k = 8; k < 40; ++k) bytes[data_at + k] ^= 0x5A;
+    const std::string path = scratch(std::string("corrupt_") + name);
+    writeAll(path, bytes);
+    const std::string error = errorOf([&] { readEverything(path); });
+    EXPECT_NE(error.find(path + ": Chunk record at byte " + std::to_string(chunk)),
+              std::string::npos)
+        << error;
+  }
+}
+
+/// Runs `sql` on a copy of clouds.db3 and returns the copy's path.
+std::string editedDb3(const std::string& name, const std::string& sql) {
+  std::string path = scratch(name);
+  fs::copy_file(fixture("clouds.db3"), path, fs::copy_options::overwrite_existing);
+  sqlite3* db = nullptr;
+  EXPECT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  EXPECT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK)
+      << sqlite3_errmsg(db);
+  sqlite3_close(db);
+  return path;
+}
+
+TEST(BadBags, MalformedMessageNamesTopicAndTime) {
+  const std::string path = editedDb3(
+      "malformed_cloud.db3",
+      "UPDATE messages SET data = x'0001000001' WHERE topic_id = "
+      "(SELECT id FROM topics WHERE name = '/points') AND timestamp = 1700000001100000000");
+  const std::string error = errorOf([&] {
+    mlmap::bag::BagFrameSource source(openBag(path), mlmap::bag::BagFrameSourceOptions{});
+  });
+  EXPECT_EQ(
+      error,
+      path +
+          ": /points message at log time 1700000001100000000 ns: malformed CDR header (5 bytes)");
+}
+
+TEST(BadBags, UnknownTypeIsNotTakenForAnInput) {
+  const std::string path = editedDb3(
+      "unknown_type.db3", "UPDATE topics SET type = 'acme_msgs/msg/Cloud' WHERE name = '/points'");
+  const std::string error = errorOf([&] {
+    mlmap::bag::BagFrameSource source(openBag(path), mlmap::bag::BagFrameSourceOptions{});
+  });
+  EXPECT_NE(error.find("0 PointCloud2 topics and 0 depth Image topics"), std::string::npos)
+      << error;
+  EXPECT_NE(error.find("/points (acme_msgs/msg/Cloud, 4 messages)"), std::string::npos) << error;
+  mlmap::bag::BagFrameSourceOptions named;
+  named.inputs.cloud_topics = {"/points"};
+  const std::string named_error =
+      errorOf([&] { mlmap::bag::BagFrameSource source(openBag(path), named); });
+  EXPECT_NE(
+      named_error.find("'/points' is a acme_msgs/msg/Cloud, not a sensor_msgs/msg/PointCloud2"),
+      std::string::npos)
+      << named_error;
+}
+
+TEST(BadBags, SqliteFileThatIsNotABag) {
+  const std::string path = scratch("not_a_bag.db3");
+  fs::remove(path);
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(db, "CREATE TABLE other(x INTEGER)", nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(db);
+  EXPECT_EQ(errorOf([&] { readEverything(path); }),
+            path + ": not a rosbag2 sqlite3 bag (no such table: topics)");
+  std::vector<std::uint8_t> bytes = readAll(path);
+  std::fill(bytes.begin() + 100, bytes.end(), 0xEE);  // the header stays, the pages are garbage
+  writeAll(path, bytes);
+  EXPECT_NE(errorOf([&] { readEverything(path); }).find(path + ": "), std::string::npos);
+}
+
+TEST(BadBags, MetadataOfAnotherStorage) {
+  const fs::path dir = scratch("other_storage");
+  fs::create_directories(dir);
+  std::ofstream(dir / "metadata.yaml")
+      << "rosbag2_bagfile_information:\n  version: 9\n"
+         "  storage_identifier: rosbag_v2\n  relative_file_paths: [a.bag]\n";
+  EXPECT_EQ(
+      errorOf([&] { readEverything(dir.string()); }),
+      (dir / "metadata.yaml").string() + ": storage_identifier 'rosbag_v2' (known: mcap, sqlite3)");
+  std::ofstream(dir / "metadata.yaml")
+      << "rosbag2_bagfile_information:\n  storage_identifier: mcap\n"
+         "  relative_file_paths: [../../etc/passwd]\n";
+  EXPECT_NE(
+      errorOf([&] { readEverything(dir.string()); }).find("is not a file name inside the folder"),
+      std::string::npos);
+}
+
+}  // namespace
