@@ -9,6 +9,12 @@ way rosidl_generator_type_description does, from mlmap's DDS-form IDL (`module <
 { module dds_ { struct <Name>_ { <type> <member>_; ... }; }; }; };`): the `dds_` module and the
 trailing underscores are dropped to get the ROS names back.
 
+A file under `<pkg>/srv/` holds a service's `<Name>_Request_` and `<Name>_Response_` structs; the
+service type `<pkg>/srv/<Name>` and its `<Name>_Event` (service_msgs/msg/ServiceEventInfo `info`,
+at most one request and one response) are derived from them as rosidl does. Their table entries
+use the DDS naming too (`<pkg>::srv::dds_::<Name>_`, `..._Event_`), though only _Request_ and
+_Response_ go on the wire.
+
 The DDS form loses one distinction of the ROS form: `octet` is both ROS `uint8` (and `char`,
 which rosidl maps to uint8) and ROS `byte`. It is read as uint8, what every standard type mlmap
 uses has; a member whose ROS type is `byte` says so with the comment `// ros: byte` on its line.
@@ -77,7 +83,7 @@ class IdlError(Exception):
 
 
 def value_type(idl_type, comment):
-    """(basic type id key, string capacity, nested type name) of one IDL element type."""
+    """Return (basic type id key, string capacity, nested type name) of an IDL element type."""
     idl_type = ' '.join(idl_type.split())
     string = STRING_RE.match(idl_type)
     if string:
@@ -97,7 +103,7 @@ def value_type(idl_type, comment):
 
 
 def field(line):
-    """The type description field ({name, type, default_value}) of one member line."""
+    """Return the type description field of a member line (its name, type, default value)."""
     match = MEMBER_RE.match(line)
     if not match:
         raise IdlError(f'cannot read the member {line.strip()!r}')
@@ -124,8 +130,42 @@ def field(line):
     }
 
 
+def nested_field(name, type_name, offset=0, capacity=0):
+    """Return a field of a nested type (offset: 0, or an array / sequence offset)."""
+    return {
+        'name': name,
+        'type': {
+            'type_id': FIELD_TYPE_IDS['nested'] + offset,
+            'capacity': capacity,
+            'string_capacity': 0,
+            'nested_type_name': type_name,
+        },
+        'default_value': '',
+    }
+
+
+def add_service_types(types):
+    """Add the service type and its _Event type of each _Request/_Response pair in `types`."""
+    for request in [name for name in types if name.endswith('_Request')]:
+        service = request[:-len('_Request')]
+        response = service + '_Response'
+        if response not in types:
+            raise IdlError(f'{request} has no {response}')
+        event = service + '_Event'
+        types[event] = {'type_name': event, 'fields': [
+            nested_field('info', 'service_msgs/msg/ServiceEventInfo'),
+            nested_field('request', request, BOUNDED_SEQUENCE_OFFSET, 1),
+            nested_field('response', response, BOUNDED_SEQUENCE_OFFSET, 1),
+        ]}
+        types[service] = {'type_name': service, 'fields': [
+            nested_field('request_message', request),
+            nested_field('response_message', response),
+            nested_field('event_message', event),
+        ]}
+
+
 def strip_comments_and_directives(text):
-    """The IDL text without block comments and preprocessor lines; line comments stay."""
+    """Return the IDL text without block comments and preprocessor lines (line comments stay)."""
     text = re.sub(r'/\*.*?\*/', '', text, flags=re.S)
     return '\n'.join(line for line in text.splitlines() if not line.lstrip().startswith('#'))
 
@@ -145,11 +185,13 @@ def read_idl(path):
         types[type_name] = {'type_name': type_name, 'fields': [field(line) for line in lines]}
     if not types:
         raise IdlError(f'{path}: no struct')
+    if kind == 'srv':
+        add_service_types(types)
     return types
 
 
 def full_description(type_name, individual):
-    """The type's description and, sorted by name, every type it refers to (transitively)."""
+    """Return the type's description and, sorted by name, every type it refers to."""
     references = set()
     pending = [type_name]
     while pending:
@@ -216,6 +258,7 @@ inline constexpr TypeHashEntry kTypeHashes[] = {{
 
 
 def main():
+    """Compute the table and write it as a header or print it."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--idl-root', type=Path, required=True)
     output = parser.add_mutually_exclusive_group(required=True)

@@ -103,7 +103,8 @@ class EndpointLog : public fdds::DomainParticipantListener {
   static Endpoint endpoint(const rtps::GUID_t& guid, std::string topic, std::string type,
                            const std::vector<rtps::octet>& user_data,
                            fdds::ReliabilityQosPolicyKind reliability,
-                           fdds::DurabilityQosPolicyKind durability, eprosima::fastrtps::Duration_t lifespan) {
+                           fdds::DurabilityQosPolicyKind durability,
+                           eprosima::fastrtps::Duration_t lifespan) {
     return Endpoint{toGid(guid),     std::move(topic),
                     std::move(type), std::string(user_data.begin(), user_data.end()),
                     reliability,     durability,

@@ -71,8 +71,43 @@ const std::vector<std::pair<std::string, std::string>> kJazzyHashes = {
      "RIHS01_91a0593bacdcc50ea9bdcf849a938b128412cc1ea821245c663bcd26f83c295e"},
 };
 
+// Jazzy's hashes of services (the service type itself, derived by rosidl from its request and
+// response) and of the request and response types their endpoints carry, same source.
+const std::vector<std::pair<std::string, std::string>> kJazzyServiceHashes = {
+    {"rcl_interfaces::srv::dds_::GetParameters_",
+     "RIHS01_bf9803d5c74cf989a5de3e0c2e99444599a627c7ff75f97b8c05b01003675cbc"},
+    {"rcl_interfaces::srv::dds_::ListParameters_",
+     "RIHS01_3e6062bfbb27bfb8730d4cef2558221f51a11646d78e7bb30a1e83afac3aad9d"},
+    {"std_srvs::srv::dds_::Trigger_",
+     "RIHS01_eeff2cd6fa5ad9d27cdf4dec64818317839b62f212a91e6b5304b634b2062c5f"},
+    {"std_srvs::srv::dds_::Empty_",
+     "RIHS01_5888399dedec5ccc85ea6451949fd2c9f97bfdf963f9a588821639fcd31b5d19"},
+    {"std_srvs::srv::dds_::Trigger_Request_",
+     "RIHS01_d010825374ce8918e72bfd826c82603e60f45419e932ea976f807b74a863a199"},
+    {"std_srvs::srv::dds_::Trigger_Response_",
+     "RIHS01_2d946c21e2fc3f1e9ca6986a8191d85fcc70097a8bb7771a053564bc47009cdf"},
+    {"rcl_interfaces::srv::dds_::GetParameters_Request_",
+     "RIHS01_135a9e1c3d7cebef792f6687d7ddf99949b21a0bd9a320d863a9110a3f5cf4d6"},
+    {"rcl_interfaces::srv::dds_::GetParameters_Response_",
+     "RIHS01_9fa773b46e39cc5d02db6224d8fd520bb9caeeffc2b27c96c1e59431baba9f2a"},
+    {"rcl_interfaces::srv::dds_::ListParameters_Request_",
+     "RIHS01_a1b0b5d6b967a5b8ac5bc8563c3ea678f349e312a6a4967227c5a96bc5ce38df"},
+    {"rcl_interfaces::srv::dds_::ListParameters_Response_",
+     "RIHS01_31b937b82de3612426be79f231e386259f97e8dc843e3f2845288b4bfa296bdd"},
+    {"rcl_interfaces::srv::dds_::DescribeParameters_Request_",
+     "RIHS01_05dd1c2bc87dec2627105c8070d6f9725c781a4f2ab852975bf105462b82b644"},
+    {"rcl_interfaces::srv::dds_::DescribeParameters_Response_",
+     "RIHS01_ad6747319613c6131589e062e095b469a46cc764f7d0f12a001a49e6cd893995"},
+};
+
 TEST(TypeHashes, EqualJazzysForEveryStandardType) {
   for (const auto& [type, hash] : kJazzyHashes) {
+    EXPECT_EQ(rosTypeHash(type), hash) << type;
+  }
+}
+
+TEST(TypeHashes, EqualJazzysForServicesAndTheirRequestsAndResponses) {
+  for (const auto& [type, hash] : kJazzyServiceHashes) {
     EXPECT_EQ(rosTypeHash(type), hash) << type;
   }
 }
