@@ -24,6 +24,7 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mlmap::dds {
@@ -135,9 +136,9 @@ struct Observer {
   fdds::Subscriber* subscriber = nullptr;
 };
 
-/// The latest sample of a reader, kept.
+/// Every sample a reader took, kept in order.
 template <typename Msg>
-class Latest {
+class Received {
  public:
   TakeListener<Msg> listener{[this](Msg&& m) {
                                std::lock_guard<std::mutex> lock(mutex_);
@@ -196,9 +197,9 @@ TEST(RosGraph, GidIsTheGuidPrefixThenTheEntityId) {
 // DDS discovery reports them (the ros_discovery_info writer itself belongs to no node).
 TEST(RosGraph, DiscoveryInfoListsTheNodeWithExactlyItsEndpoints) {
   constexpr int kDomain = 220;
+  Received<rmw::ParticipantEntitiesInfo_> infos;  // outlives the observer's reader
   Observer observer(kDomain);
   ASSERT_TRUE(observer.participant);
-  Latest<rmw::ParticipantEntitiesInfo_> infos;
   fdds::DataReaderQos qos = reliableReaderQos(true, 1);
   createReader<rmw::ParticipantEntitiesInfo_PubSubType>(observer.subscriber, "ros_discovery_info",
                                                         qos, &infos.listener);
@@ -302,9 +303,9 @@ TEST(RosGraph, RosoutHasRclsQosAndCarriesTheNodesLogLines) {
   NodeConfig config = nodeConfig(kDomain);
   config.dds.topics.cloud = "";  // logged as a warning at start
   MappingNode node(config);
+  Received<rcl::Log_> lines;   // outlives the observer's reader
   Observer observer(kDomain);  // joins after the node's first lines
   ASSERT_TRUE(observer.participant);
-  Latest<rcl::Log_> lines;
   fdds::DataReaderQos reader_qos = reliableReaderQos(true, 1000);
   createReader<rcl::Log_PubSubType>(observer.subscriber, "rt/rosout", reader_qos, &lines.listener);
 
