@@ -1,8 +1,10 @@
 #pragma once
 /// @file
 /// Small helpers every mlmap DDS program uses: registering a generated type, creating a topic's
-/// reader or writer, a listener that takes samples and hands them over, and a set of readers
-/// with their listeners (TakeReaders).
+/// reader or writer (with the ROS 2 type hash in its USER_DATA, as rmw does), a listener that
+/// takes samples and hands them over, and a set of readers with their listeners (TakeReaders).
+
+#include "mlmap/dds/type_hash.h"
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -90,16 +92,31 @@ eprosima::fastdds::dds::Topic* findOrCreateTopic(eprosima::fastdds::dds::DomainP
   return topic;
 }
 
+/// `qos` with the USER_DATA rmw_fastrtps_cpp gives a ROS 2 endpoint of `dds_type_name`:
+/// "typehash=RIHS01_<64 hex>;" (rosEndpointUserData), so `ros2 topic info -v` shows the type hash
+/// and ROS tools do not warn. USER_DATA the caller set already is kept. The one place every writer
+/// and reader mlmap creates gets it from (createWriter, createReader, the data-sharing cloud
+/// writer). `Qos` is DataWriterQos or DataReaderQos.
+template <typename Qos>
+Qos withRosTypeHash(Qos qos, const std::string& dds_type_name) {
+  if (qos.user_data().data_vec().empty()) {
+    qos.user_data().data_vec(rosEndpointUserData(dds_type_name));
+  }
+  return qos;
+}
+
 /// A writer of `PubSubType` on `dds_topic`, with `listener` (which must outlive the writer) if
-/// given. Throws std::runtime_error on failure.
+/// given, with the type's ROS 2 type hash in its USER_DATA (withRosTypeHash). Throws
+/// std::runtime_error on failure.
 template <typename PubSubType>
 eprosima::fastdds::dds::DataWriter* createWriter(eprosima::fastdds::dds::Publisher* publisher,
                                                  const std::string& dds_topic,
                                                  const eprosima::fastdds::dds::DataWriterQos& qos,
                                                  eprosima::fastdds::dds::DataWriterListener* listener = nullptr) {
   auto* participant = const_cast<eprosima::fastdds::dds::DomainParticipant*>(publisher->get_participant());
+  eprosima::fastdds::dds::Topic* topic = findOrCreateTopic<PubSubType>(participant, dds_topic);
   eprosima::fastdds::dds::DataWriter* writer =
-      publisher->create_datawriter(findOrCreateTopic<PubSubType>(participant, dds_topic), qos, listener);
+      publisher->create_datawriter(topic, withRosTypeHash(qos, topic->get_type_name()), listener);
   if (writer == nullptr) throw std::runtime_error("cannot create a writer on " + dds_topic);
   return writer;
 }
@@ -143,15 +160,17 @@ class TakeListener : public eprosima::fastdds::dds::DataReaderListener {
 };
 
 /// A reader of `PubSubType` on `dds_topic` whose samples go to `listener` (which must outlive
-/// the reader). Throws std::runtime_error on failure.
+/// the reader), with the type's ROS 2 type hash in its USER_DATA (withRosTypeHash). Throws
+/// std::runtime_error on failure.
 template <typename PubSubType>
 eprosima::fastdds::dds::DataReader* createReader(eprosima::fastdds::dds::Subscriber* subscriber,
                                                  const std::string& dds_topic,
                                                  const eprosima::fastdds::dds::DataReaderQos& qos,
                                                  eprosima::fastdds::dds::DataReaderListener* listener) {
   auto* participant = const_cast<eprosima::fastdds::dds::DomainParticipant*>(subscriber->get_participant());
-  eprosima::fastdds::dds::DataReader* reader = subscriber->create_datareader(
-      findOrCreateTopic<PubSubType>(participant, dds_topic), qos, listener);
+  eprosima::fastdds::dds::Topic* topic = findOrCreateTopic<PubSubType>(participant, dds_topic);
+  eprosima::fastdds::dds::DataReader* reader =
+      subscriber->create_datareader(topic, withRosTypeHash(qos, topic->get_type_name()), listener);
   if (reader == nullptr) throw std::runtime_error("cannot create a reader on " + dds_topic);
   return reader;
 }

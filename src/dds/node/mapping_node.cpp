@@ -9,6 +9,8 @@
 #include "node_log.h"
 #include "outputs.h"
 
+#include "mlmap/dds/ros_graph.h"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -16,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -32,11 +35,17 @@ PoseBufferConfig poseBufferConfig(const DdsConfig& dds) {
   return config;
 }
 
+/// The node's name in the ROS 2 graph (`ros2 node list`), and its participant's name.
+constexpr const char* kNodeName = "mlmap_node";
+
 /// The node's parts, composed: the engine; its map file; the inputs (readers -> queue -> the
 /// input thread's pairing); the outputs (layer mailbox -> the publishing thread's operations);
-/// the counters and the log every part writes to.
+/// its place in the ROS 2 graph (ros_discovery_info, /rosout); the counters and the log every
+/// part writes to.
 struct MappingNode::Impl {
   NodeConfig config;
+  std::mutex rosout_mutex;  ///< guards rosout against its deletion in stop()
+  std::unique_ptr<RosoutWriter> rosout;
   node::NodeLog log;
   node::CounterSink counters;
   std::chrono::steady_clock::time_point started = std::chrono::steady_clock::now();
@@ -44,6 +53,7 @@ struct MappingNode::Impl {
   std::unique_ptr<MapEngine> engine;
   std::unique_ptr<node::MapPersistence> persistence;
   ParticipantPtr participant;
+  std::unique_ptr<DiscoveryInfoPublisher> graph;
   std::unique_ptr<node::Outputs> outputs;
   node::InputQueue queue;
   std::unique_ptr<node::InputReaders> readers;
@@ -53,17 +63,21 @@ struct MappingNode::Impl {
   std::atomic<bool> stopped{false};
   int domain_id = -1;
 
-  Impl(const NodeConfig& c, const LogSink& sink) : config(c), log(sink), mailbox(c.dds.rates) {}
+  Impl(const NodeConfig& c, const LogSink& sink)
+      : config(c), log(teeToRosout(sink)), mailbox(c.dds.rates) {}
+
+  /// `sink`, and /rosout once the node has its writer there.
+  LogSink teeToRosout(const LogSink& sink) {
+    return [this, sink](LogLevel level, const std::string& message) {
+      if (sink) sink(level, message);
+      std::lock_guard<std::mutex> lock(rosout_mutex);
+      if (rosout) rosout->write(level, message);
+    };
+  }
 
   void setUp() {
-    logMemoryEstimate();
-    warnIfRangeExceedsWindow();
-    engine = makeEngine();
-    persistence =
-        std::make_unique<node::MapPersistence>(config.map_file, config.map, *engine, counters, log);
-    const bool loaded = persistence->load();
-
-    participant = createParticipant(config.dds, "mlmap_node");
+    // The participant first, so that the node's log lines from here on reach /rosout too.
+    participant = createParticipant(config.dds, kNodeName);
     domain_id = static_cast<int>(participant->get_domain_id());
     auto* publisher = participant->create_publisher(eprosima::fastdds::dds::PUBLISHER_QOS_DEFAULT);
     auto* subscriber =
@@ -71,11 +85,29 @@ struct MappingNode::Impl {
     if (publisher == nullptr || subscriber == nullptr) {
       throw std::runtime_error("cannot create the DDS publisher / subscriber");
     }
+    const std::string node_namespace = rosNodeNamespace(config.dds.ns);
+    {
+      auto writer =
+          std::make_unique<RosoutWriter>(publisher, rosLoggerName(node_namespace, kNodeName));
+      std::lock_guard<std::mutex> lock(rosout_mutex);
+      rosout = std::move(writer);
+    }
+    graph = std::make_unique<DiscoveryInfoPublisher>(participant.get(), kNodeName, node_namespace);
+    graph->announce({publisher}, {subscriber});
+
+    logMemoryEstimate();
+    warnIfRangeExceedsWindow();
+    engine = makeEngine();
+    persistence =
+        std::make_unique<node::MapPersistence>(config.map_file, config.map, *engine, counters, log);
+    const bool loaded = persistence->load();
+
     const Transform T_B_S = config.map.sensor.T_B_S();
     outputs = std::make_unique<node::Outputs>(publisher, config.dds, T_B_S, *engine, mailbox,
                                               counters, log, started);
     pairer = std::make_unique<node::FramePairer>(config.dds, T_B_S, *engine, counters, log);
     readers = std::make_unique<node::InputReaders>(subscriber, config.dds, queue, counters, log);
+    graph->announce({publisher}, {subscriber});  // the ROS graph learns of the new endpoints
     warnAboutMissingInputs(loaded);
     if (loaded) {
       // The loaded map goes out at once: the latched global map and grid for late joiners.
@@ -185,6 +217,10 @@ struct MappingNode::Impl {
       handOverFinalGlobalMap();
     }
     if (outputs) outputs->finish();  // publishes the final state once, waits for the readers
+    {
+      std::lock_guard<std::mutex> lock(rosout_mutex);
+      rosout.reset();  // from here on the log goes to the sink only
+    }
     // Readers and writers first (their listeners die with the parts), then everything else.
     participant.reset();
     readers.reset();

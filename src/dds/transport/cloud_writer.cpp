@@ -1,5 +1,6 @@
 #include "mlmap/dds/cloud_writer.h"
 
+#include "mlmap/dds/entities.h"
 #include "mlmap/dds/participant.h"
 
 #include "mlmap/dds/ros_conversions.h"
@@ -39,7 +40,8 @@ eprosima::fastdds::dds::DataWriter* createDataSharingCloudWriter(
   qos.data_sharing().automatic(std::vector<std::uint16_t>{dataSharingDomainId()});  // with mlmap's readers only
   // Data-sharing needs preallocated history slots (the shared pool).
   qos.endpoint().history_memory_policy = eprosima::fastrtps::rtps::PREALLOCATED_MEMORY_MODE;
-  fdds::DataWriter* writer = publisher->create_datawriter(topic, qos);
+  fdds::DataWriter* writer =
+      publisher->create_datawriter(topic, withRosTypeHash(qos, type.get_type_name()));
   if (writer == nullptr) throw std::runtime_error("cannot create a data-sharing writer on " + dds_topic);
   return writer;
 }
