@@ -56,8 +56,4 @@ void saveMapFile(const MapState& state, const std::string& path);
 void checkMapMatchesConfig(const MapState& state, const MapConfig& config,
                            const std::string& source_name);
 
-/// Writes `bytes` to `path` the way saveMapFile() does (temporary file, flush, rename); used by
-/// the exports too. Throws std::runtime_error naming the path and the reason.
-void writeFileAtomically(const std::string& path, const std::string& bytes);
-
 }  // namespace mlmap::io
