@@ -237,6 +237,89 @@ TEST(Replay, SimulatorIsTheDefaultSource) {
             static_cast<std::size_t>(jsonInt(readText(dir + "/report.json"), "occupied_voxels")));
 }
 
+TEST(Replay, ReaderThreadGivesTheSameMapAsReadingInTurn) {
+  const std::string frames = std::string(MLMAP_SHARED_DATA_DIR) + "/realsense_tabletop";
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_reader";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string base = std::string(MLMAP_REPLAY_BIN) + " --frames '" + frames +
+                           "' --resolution 0.02 --max-frames 20 --reader-threads ";
+  ASSERT_EQ(run(base + "0 --out '" + dir + "/in_turn'", dir + "/in_turn.log"), 0)
+      << readText(dir + "/in_turn.log");
+  ASSERT_EQ(run(base + "1 --out '" + dir + "/ahead'", dir + "/ahead.log"), 0) << readText(dir + "/ahead.log");
+  const std::string in_turn = readText(dir + "/in_turn/occupied_voxels.txt");
+  EXPECT_GT(io::readVoxelText(dir + "/in_turn/occupied_voxels.txt").size(), 1000u);
+  EXPECT_EQ(readText(dir + "/ahead/occupied_voxels.txt"), in_turn);
+  // The frames in the same order, each with its own read time.
+  const std::string stats = readText(dir + "/ahead/stats.json");
+  EXPECT_EQ(jsonInt(stats, "frames_mapped"), 20);
+  std::size_t at = 0;
+  for (const char* name : {"frame-000015", "frame-000017", "frame-000019", "frame-000021"}) {
+    const std::size_t found = stats.find(std::string("\"name\": \"") + name + "\"", at);
+    ASSERT_NE(found, std::string::npos) << name;
+    at = found;
+  }
+  EXPECT_NE(stats.find("\"read_wait_ms\": "), std::string::npos);
+  // The default replay runs no planning layer: no output needs one.
+  EXPECT_EQ(jsonInt(stats, "esdf_updates"), 0);
+  EXPECT_NE(readText(dir + "/ahead.log").find("planning layers       off"), std::string::npos)
+      << readText(dir + "/ahead.log");
+}
+
+TEST(Replay, UnreadableCloudAfterGoodOnesIsNamedWithOrWithoutTheReaderThread) {
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_bad_middle";
+  fs::remove_all(dir);
+  fs::create_directories(dir + "/clouds");
+  std::vector<Eigen::Vector3d> wall;
+  for (int j = -10; j <= 10; ++j) wall.emplace_back(2.05, 0.1 * j, 0.0);
+  std::string poses;
+  for (int i = 0; i < 8; ++i) {
+    const std::string name = dir + "/clouds/scan_" + std::to_string(i);
+    if (i == 5) {
+      mlmap::testing::writeFile(name + ".pcd", "VERSION 0.7\nFIELDS x y\n");
+    } else {
+      mlmap::testing::writeFile(name + ".ply", mlmap::testing::makePly(wall, mlmap::testing::PlyFormat::kAscii, true));
+    }
+    poses += std::to_string(i + 1) + " 0 0 0 0 0 0 1\n";
+  }
+  mlmap::testing::writeFile(dir + "/poses.txt", poses);
+  for (const char* threads : {"0", "1"}) {
+    const std::string log = dir + "/threads_" + threads + ".log";
+    EXPECT_EQ(run(std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir + "/clouds' --poses '" + dir +
+                      "/poses.txt' --reader-threads " + threads + " --out '" + dir + "/out'",
+                  log),
+              1);
+    EXPECT_NE(readText(log).find(dir + "/clouds/scan_5.pcd: PCD header ends before its DATA line"),
+              std::string::npos)
+        << readText(log);
+  }
+}
+
+TEST(Replay, TheMapIsWrittenFirstAndAFailedPictureLeavesNoPartialFile) {
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_picture_fails";
+  fs::remove_all(dir);
+  // map_top.png cannot be replaced (a folder holds its name): the picture fails after the map.
+  fs::create_directories(dir + "/out/map_top.png");
+  const std::string command = std::string(MLMAP_REPLAY_BIN) + " --max-frames 5 --out '" + dir +
+                              "/out' --save-map '" + dir + "/map.mlmap' --voxels-out '" + dir +
+                              "/voxels.txt' --grid-out '" + dir + "/grid'";
+  EXPECT_EQ(run(command, dir + "/replay.log"), 1);
+  const std::string log = readText(dir + "/replay.log");
+  EXPECT_NE(log.find("cannot write '" + dir + "/out/map_top.png'"), std::string::npos) << log;
+  // The map, its voxel list and the grid were written before, whole.
+  std::vector<VoxelIndex> saved;
+  for (const io::OccupiedVoxel& v : io::occupiedVoxels(io::loadMapFile(dir + "/map.mlmap"))) saved.push_back(v.index);
+  EXPECT_GT(saved.size(), 100u);
+  EXPECT_EQ(io::sortedUnique(saved), io::readVoxelText(dir + "/voxels.txt"));
+  EXPECT_NE(readText(dir + "/grid.yaml").find("image: grid.pgm"), std::string::npos);
+  EXPECT_TRUE(fs::is_regular_file(dir + "/grid.pgm"));
+  // No temporary file is left behind, and nothing after the failed picture was written.
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+  }
+  EXPECT_FALSE(fs::exists(dir + "/out/stats.json"));
+}
+
 TEST(Replay, RealsenseFramesGiveTheDemosMap) {
   const std::string frames = std::string(MLMAP_SHARED_DATA_DIR) + "/realsense_tabletop";
   const std::string dir = ::testing::TempDir() + "/mlmap_replay_frames";
