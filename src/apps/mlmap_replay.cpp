@@ -144,6 +144,9 @@ eval::Json countersJson(const RunInfo& info, const EngineStats& s, const std::ve
           {"too_close", s.points.rejected_too_close},
           {"beyond_max_range", s.points.beyond_max_range},
           {"hit_voxels", s.points.hit_voxels},
+          {"hits_beyond_local_map", s.points.hits_beyond_local_map},
+          {"hits_outside_window", s.local.hits_outside_window},
+          {"free_outside_window", s.local.outside_window - s.local.hits_outside_window},
           {"free_voxels", s.points.free_voxels},
           {"occupied_voxels", occupied},
           {"global_voxels", s.global_voxels},
@@ -484,6 +487,21 @@ void flySimulator(const Options& o, Replay* replay) {
                   "simulator", "simulated poses", 0, 0};
 }
 
+/// Prints the hits the engine could not map: points in range beyond what the local map holds
+/// around the body, and hit voxels outside its window; a warning on the log says how to keep them.
+void printHitsNotMapped(const EngineStats& s) {
+  const std::uint64_t points = s.points.hits_beyond_local_map;
+  const std::uint64_t voxels = s.local.hits_outside_window;
+  std::printf("  hits not mapped      %llu points beyond the local map's reach, %llu hit voxels outside "
+              "its window\n",
+              static_cast<unsigned long long>(points), static_cast<unsigned long long>(voxels));
+  if (points + voxels > 0) {
+    spdlog::warn("{} points in range and {} hit voxels fell outside the local window and were not "
+                 "mapped: a larger local_map.size_cells (--config) keeps them",
+                 points, voxels);
+  }
+}
+
 /// Prints the replay's own figures after the engine's: per-frame timings, memory, the files.
 void printReplaySummary(const Options& o, const Replay& replay, const std::vector<std::string>& written,
                         std::size_t occupied) {
@@ -505,6 +523,7 @@ void printReplaySummary(const Options& o, const Replay& replay, const std::vecto
     const TimingSummary wait = summarize(replay.records, &FrameRecord::read_wait_ms);
     std::printf("    waiting for it     %7.2f %7.2f\n", wait.median_ms, wait.p99_ms);
   }
+  printHitsNotMapped(replay.engine.stats());
   std::printf("  peak memory          %.1f MB resident (process), %.1f MB engine accounting\n",
               static_cast<double>(eval::peakRssBytes()) / 1e6,
               static_cast<double>(replay.timer.peakEngineBytes()) / 1e6);

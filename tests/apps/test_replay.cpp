@@ -179,6 +179,39 @@ TEST(Replay, VoxelIndicesAreFloorOfCoordinateOverResolution) {
   EXPECT_EQ(readText(dir + "/out/occupied_voxels.txt").rfind("# mlmap occupied voxels: ix iy iz", 0), 0u);
 }
 
+TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
+  // A wall 2 m away and one 15 m away beside it, in range (20 m) but beyond the 19 m window's
+  // half width:
+  // the far wall's hits cannot be mapped, and the summary, the log and stats.json say how many.
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_outside";
+  fs::remove_all(dir);
+  fs::create_directories(dir + "/clouds");
+  std::vector<Eigen::Vector3d> points;
+  for (int j = -10; j <= 10; ++j) {
+    for (int k = -5; k <= 5; ++k) {
+      points.emplace_back(2.05, 0.1 * j + 0.05, 0.1 * k + 0.05);
+      points.emplace_back(15.05, 0.1 * j + 5.05, 0.1 * k + 0.05);  // not behind the first
+    }
+  }
+  mlmap::testing::writeFile(dir + "/clouds/scan_a.ply",
+                            mlmap::testing::makePly(points, mlmap::testing::PlyFormat::kAscii, true));
+  mlmap::testing::writeFile(dir + "/poses.csv", "t,x,y,z,qx,qy,qz,qw\n1,0,0,0,0,0,0,1\n");
+  const std::string command = std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir + "/clouds' --poses '" + dir +
+                              "/poses.csv' --resolution 0.1 --max-range 20 --out '" + dir + "/out'";
+  ASSERT_EQ(run(command, dir + "/replay.log"), 0) << readText(dir + "/replay.log");
+  const std::string stats = readText(dir + "/out/stats.json");
+  EXPECT_EQ(jsonInt(stats, "hits_beyond_local_map"), 21 * 11);  // every point of the far wall
+  EXPECT_EQ(jsonInt(stats, "hits_outside_window"), 0);
+  EXPECT_EQ(jsonInt(stats, "hit_voxels"), 21 * 11);              // the near wall's
+  for (const VoxelIndex& v : io::readVoxelText(dir + "/out/occupied_voxels.txt")) EXPECT_EQ(v.x(), 20);
+  const std::string log = readText(dir + "/replay.log");
+  EXPECT_NE(log.find("hits not mapped      231 points beyond the local map's reach, 0 hit voxels"),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find("fell outside the local window and were not mapped"), std::string::npos) << log;
+  EXPECT_EQ(jsonInt(readText(dir + "/out/report.json"), "hits_beyond_local_map"), 21 * 11);
+}
+
 TEST(Replay, BadInputIsRefusedWithAMessage) {
   const std::string dir = ::testing::TempDir() + "/mlmap_replay_bad";
   fs::remove_all(dir);
