@@ -243,7 +243,7 @@ OctomapVoxels octomapOccupied(const octomap::OcTree& tree) {
     if (!tree.isNodeOccupied(*it)) continue;
     const octomap::point3d c = it.getCoordinate();
     if (it.getDepth() == max_depth) {
-      const octomap::OcTreeKey key = it.getKey();
+      const octomap::OcTreeKey& key = it.getKey();
       const VoxelIndex from_key(key[0] - kKeyOffset, key[1] - kKeyOffset, key[2] - kKeyOffset);
       ++r.leaves_checked;
       if (from_key != voxelIndexOf(Eigen::Vector3d(c.x(), c.y(), c.z()), res)) ++r.key_mismatches;
