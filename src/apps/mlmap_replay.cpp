@@ -215,24 +215,24 @@ struct Options {
 constexpr std::size_t kReadAheadFrames = 4;
 
 constexpr const char* kAbout =
-      "mlmap_replay: runs the mapping engine offline on recorded data and writes the map.\n"
-      "Sources (one of):\n"
-      "  --frames DIR              an RGB-D frame directory (frame-N.depth.png, frame-N.pose.txt,\n"
-      "                            intrinsics.K.txt; the poses are the camera's)\n"
-      "  --clouds DIR --poses FILE PCD (ascii, binary, binary_compressed) / PLY (ascii, binary\n"
-      "                            little / big endian) clouds with a TUM or CSV trajectory\n"
-      "  (neither)                 the simulator: the demo's built-in room flight\n"
-      "Clouds whose file names are time stamps (1305031102.175304.pcd, or integer\n"
-      "nanoseconds / microseconds: 19-20 / 16-17 digits)\n"
-      "get the pose at their stamp, interpolated between the two poses around it when the nearer\n"
-      "is within 0.05 s (never extrapolated; clouds without a pose are skipped and counted). Other\n"
-      "names are paired by order (natural sort) and need exactly one pose per cloud.\n"
-      "Writes to --out: map_top.png, map_side.png (accuracy_top.png for the simulator),\n"
-      "report.json (as mlmap_demo), occupied_voxels.txt ('ix iy iz' per line, sorted,\n"
-      "i = floor(coordinate / resolution), world grid aligned at the origin; '#' header line) and\n"
-      "stats.json (per-frame timings per stage, peak memory, counters).\n"
-      "The planning layers (snapshots, 2D grid, ESDF) run only for an output that needs them\n"
-      "(--grid-out); otherwise the replay maps and writes the map, nothing else.";
+    "mlmap_replay: runs the mapping engine offline on recorded data and writes the map.\n"
+    "Sources (one of):\n"
+    "  --frames DIR              an RGB-D frame directory (frame-N.depth.png, frame-N.pose.txt,\n"
+    "                            intrinsics.K.txt; the poses are the camera's)\n"
+    "  --clouds DIR --poses FILE PCD (ascii, binary, binary_compressed) / PLY (ascii, binary\n"
+    "                            little / big endian) clouds with a TUM or CSV trajectory\n"
+    "  (neither)                 the simulator: the demo's built-in room flight\n"
+    "Clouds whose file names are time stamps (1305031102.175304.pcd, or integer\n"
+    "nanoseconds / microseconds: 19-20 / 16-17 digits)\n"
+    "get the pose at their stamp, interpolated between the two poses around it when the nearer\n"
+    "is within 0.05 s (never extrapolated; clouds without a pose are skipped and counted). Other\n"
+    "names are paired by order (natural sort) and need exactly one pose per cloud.\n"
+    "Writes to --out: map_top.png, map_side.png (accuracy_top.png for the simulator),\n"
+    "report.json (as mlmap_demo), occupied_voxels.txt ('ix iy iz' per line, sorted,\n"
+    "i = floor(coordinate / resolution), world grid aligned at the origin; '#' header line) and\n"
+    "stats.json (per-frame timings per stage, peak memory, counters).\n"
+    "The planning layers (snapshots, 2D grid, ESDF) run only for an output that needs them\n"
+    "(--grid-out); otherwise the replay maps and writes the map, nothing else.";
 
 /// Adds --frames, --clouds, --poses, --extrinsic and --scenario (one source at most) to `app`.
 void addSourceOptions(CLI::App& app, Options& o) {
@@ -286,15 +286,17 @@ void addEngineOptions(CLI::App& app, Options& o) {
 void addOutputOptions(CLI::App& app, Options& o) {
   app.add_option("--out", o.out_dir, "output folder")->capture_default_str();
   app.add_option("--voxels-out", o.voxels_out, "occupied voxels as text (default: OUT/occupied_voxels.txt)");
-  app.add_option("--stats-out", o.stats_out,
-                 "statistics JSON (default: OUT/stats.json): per-frame timings by stage (read, read_wait, "
-                 "awareness, local_global, planning, engine) with their median / p99, peak memory "
-                 "(process RSS, engine accounting) and counters");
+  app.add_option(
+      "--stats-out", o.stats_out,
+      "statistics JSON (default: OUT/stats.json): per-frame timings by stage (read, read_wait, "
+      "awareness, local_global, planning, engine) with their median / p99, peak memory "
+      "(process RSS, engine accounting) and counters");
   app.add_option("--max-frames", o.max_frames, "stop after N frames (0: all)")->check(CLI::NonNegativeNumber);
-  app.add_option("--reader-threads", o.reader_threads,
-                 "--frames / --clouds: 1 reads and decodes the files on a thread of their own, a few "
-                 "frames ahead of the mapping; 0 reads each in turn on the mapping thread (the same "
-                 "map either way)")
+  app.add_option(
+         "--reader-threads", o.reader_threads,
+         "--frames / --clouds: 1 reads and decodes the files on a thread of their own, a few "
+         "frames ahead of the mapping; 0 reads each in turn on the mapping thread (the same "
+         "map either way)")
       ->check(CLI::Range(0, 1))
       ->capture_default_str();
   app.add_option("--save-map", o.save_map_path,
@@ -492,13 +494,15 @@ void flySimulator(const Options& o, Replay* replay) {
 void printHitsNotMapped(const EngineStats& s) {
   const std::uint64_t points = s.points.hits_beyond_local_map;
   const std::uint64_t voxels = s.local.hits_outside_window;
-  std::printf("  hits not mapped      %llu points beyond the local map's reach, %llu hit voxels outside "
-              "its window\n",
-              static_cast<unsigned long long>(points), static_cast<unsigned long long>(voxels));
+  std::printf(
+      "  hits not mapped      %llu points beyond the local map's reach, %llu hit voxels outside "
+      "its window\n",
+      static_cast<unsigned long long>(points), static_cast<unsigned long long>(voxels));
   if (points + voxels > 0) {
-    spdlog::warn("{} points in range and {} hit voxels fell outside the local window and were not "
-                 "mapped: a larger local_map.size_cells (--config) keeps them",
-                 points, voxels);
+    spdlog::warn(
+        "{} points in range and {} hit voxels fell outside the local window and were not "
+        "mapped: a larger local_map.size_cells (--config) keeps them",
+        points, voxels);
   }
 }
 
@@ -518,7 +522,7 @@ void printReplaySummary(const Options& o, const Replay& replay, const std::vecto
   std::printf("    submit() in all    %7.2f %7.2f\n", whole.median_ms, whole.p99_ms);
   std::printf("    reading the input  %7.2f %7.2f   (%s)\n", read.median_ms, read.p99_ms,
               o.reader_threads > 0 && replay.info.kind != "simulator" ? "on the reader thread"
-                                                                       : "on the mapping thread");
+                                                                      : "on the mapping thread");
   if (o.reader_threads > 0 && replay.info.kind != "simulator") {
     const TimingSummary wait = summarize(replay.records, &FrameRecord::read_wait_ms);
     std::printf("    waiting for it     %7.2f %7.2f\n", wait.median_ms, wait.p99_ms);
@@ -537,7 +541,9 @@ void printReplaySummary(const Options& o, const Replay& replay, const std::vecto
 /// naming the file when it cannot.
 void writeGrid(const std::string& base, const MapEngine& engine) {
   const std::shared_ptr<const MapSnapshot> snapshot = engine.snapshot();
-  if (snapshot->gridPtr() == nullptr) throw std::runtime_error(base + ".pgm: no 2D grid was made (no frame mapped)");
+  if (snapshot->gridPtr() == nullptr) {
+    throw std::runtime_error(base + ".pgm: no 2D grid was made (no frame mapped)");
+  }
   io::writeGridMap(*snapshot->gridPtr(), base);
 }
 

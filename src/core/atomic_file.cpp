@@ -14,7 +14,8 @@ namespace mlmap::io {
 namespace {
 
 std::string errnoText(const std::string& step, int err) {
-  return step + ": " + std::generic_category().message(err);  // not strerror: clang-tidy concurrency-mt-unsafe
+  return step + ": " +
+         std::generic_category().message(err);  // not strerror: clang-tidy concurrency-mt-unsafe
 }
 
 }  // namespace

@@ -193,22 +193,26 @@ TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
       points.emplace_back(15.05, 0.1 * j + 5.05, 0.1 * k + 0.05);  // not behind the first
     }
   }
-  mlmap::testing::writeFile(dir + "/clouds/scan_a.ply",
-                            mlmap::testing::makePly(points, mlmap::testing::PlyFormat::kAscii, true));
+  mlmap::testing::writeFile(
+      dir + "/clouds/scan_a.ply",
+      mlmap::testing::makePly(points, mlmap::testing::PlyFormat::kAscii, true));
   mlmap::testing::writeFile(dir + "/poses.csv", "t,x,y,z,qx,qy,qz,qw\n1,0,0,0,0,0,0,1\n");
-  const std::string command = std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir + "/clouds' --poses '" + dir +
+  const std::string command = std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir +
+                              "/clouds' --poses '" + dir +
                               "/poses.csv' --resolution 0.1 --max-range 20 --out '" + dir + "/out'";
   ASSERT_EQ(run(command, dir + "/replay.log"), 0) << readText(dir + "/replay.log");
   const std::string stats = readText(dir + "/out/stats.json");
   EXPECT_EQ(jsonInt(stats, "hits_beyond_local_map"), 21 * 11);  // every point of the far wall
   EXPECT_EQ(jsonInt(stats, "hits_outside_window"), 0);
-  EXPECT_EQ(jsonInt(stats, "hit_voxels"), 21 * 11);              // the near wall's
-  for (const VoxelIndex& v : io::readVoxelText(dir + "/out/occupied_voxels.txt")) EXPECT_EQ(v.x(), 20);
+  EXPECT_EQ(jsonInt(stats, "hit_voxels"), 21 * 11);  // the near wall's
+  for (const VoxelIndex& v : io::readVoxelText(dir + "/out/occupied_voxels.txt"))
+    EXPECT_EQ(v.x(), 20);
   const std::string log = readText(dir + "/replay.log");
   EXPECT_NE(log.find("hits not mapped      231 points beyond the local map's reach, 0 hit voxels"),
             std::string::npos)
       << log;
-  EXPECT_NE(log.find("fell outside the local window and were not mapped"), std::string::npos) << log;
+  EXPECT_NE(log.find("fell outside the local window and were not mapped"), std::string::npos)
+      << log;
   EXPECT_EQ(jsonInt(readText(dir + "/out/report.json"), "hits_beyond_local_map"), 21 * 11);
 }
 
@@ -279,7 +283,8 @@ TEST(Replay, ReaderThreadGivesTheSameMapAsReadingInTurn) {
                            "' --resolution 0.02 --max-frames 20 --reader-threads ";
   ASSERT_EQ(run(base + "0 --out '" + dir + "/in_turn'", dir + "/in_turn.log"), 0)
       << readText(dir + "/in_turn.log");
-  ASSERT_EQ(run(base + "1 --out '" + dir + "/ahead'", dir + "/ahead.log"), 0) << readText(dir + "/ahead.log");
+  ASSERT_EQ(run(base + "1 --out '" + dir + "/ahead'", dir + "/ahead.log"), 0)
+      << readText(dir + "/ahead.log");
   const std::string in_turn = readText(dir + "/in_turn/occupied_voxels.txt");
   EXPECT_GT(io::readVoxelText(dir + "/in_turn/occupied_voxels.txt").size(), 1000u);
   EXPECT_EQ(readText(dir + "/ahead/occupied_voxels.txt"), in_turn);
@@ -311,7 +316,8 @@ TEST(Replay, UnreadableCloudAfterGoodOnesIsNamedWithOrWithoutTheReaderThread) {
     if (i == 5) {
       mlmap::testing::writeFile(name + ".pcd", "VERSION 0.7\nFIELDS x y\n");
     } else {
-      mlmap::testing::writeFile(name + ".ply", mlmap::testing::makePly(wall, mlmap::testing::PlyFormat::kAscii, true));
+      mlmap::testing::writeFile(
+          name + ".ply", mlmap::testing::makePly(wall, mlmap::testing::PlyFormat::kAscii, true));
     }
     poses += std::to_string(i + 1) + " 0 0 0 0 0 0 1\n";
   }
@@ -341,7 +347,8 @@ TEST(Replay, TheMapIsWrittenFirstAndAFailedPictureLeavesNoPartialFile) {
   EXPECT_NE(log.find("cannot write '" + dir + "/out/map_top.png'"), std::string::npos) << log;
   // The map, its voxel list and the grid were written before, whole.
   std::vector<VoxelIndex> saved;
-  for (const io::OccupiedVoxel& v : io::occupiedVoxels(io::loadMapFile(dir + "/map.mlmap"))) saved.push_back(v.index);
+  for (const io::OccupiedVoxel& v : io::occupiedVoxels(io::loadMapFile(dir + "/map.mlmap")))
+    saved.push_back(v.index);
   EXPECT_GT(saved.size(), 100u);
   EXPECT_EQ(io::sortedUnique(saved), io::readVoxelText(dir + "/voxels.txt"));
   EXPECT_NE(readText(dir + "/grid.yaml").find("image: grid.pgm"), std::string::npos);

@@ -266,14 +266,16 @@ OctomapVoxels octomapOccupied(const octomap::OcTree& tree) {
 
 /// Inserts the finite points of `points_S` at least `min_range_m` from the sensor, in W, into
 /// `tree` with the sensor origin and `max_range_m` (insertPointCloud); `scan_W` is scratch.
-void insertScan(const std::vector<Eigen::Vector3f>& points_S, const Transform& T_W_S, float min_range_m,
-                double max_range_m, octomap::Pointcloud* scan_W, octomap::OcTree* tree) {
+void insertScan(const std::vector<Eigen::Vector3f>& points_S, const Transform& T_W_S,
+                float min_range_m, double max_range_m, octomap::Pointcloud* scan_W,
+                octomap::OcTree* tree) {
   scan_W->clear();
   scan_W->reserve(points_S.size());
   for (const Eigen::Vector3f& p : points_S) {
     if (!p.allFinite() || p.norm() < min_range_m) continue;
     const Eigen::Vector3d p_W = T_W_S * p.cast<double>();
-    scan_W->push_back(static_cast<float>(p_W.x()), static_cast<float>(p_W.y()), static_cast<float>(p_W.z()));
+    scan_W->push_back(static_cast<float>(p_W.x()), static_cast<float>(p_W.y()),
+                      static_cast<float>(p_W.z()));
   }
   const Eigen::Vector3d o_W = T_W_S.translation();
   tree->insertPointCloud(*scan_W,
@@ -583,8 +585,9 @@ void writeFrameDirectory(const Dataset& d, const std::string& dir) {
     cv::Mat depth_mm(K.height, K.width, CV_16UC1);
     for (int v = 0; v < K.height; ++v) {
       for (int u = 0; u < K.width; ++u) {
-        const float z = f.depth.depth_m[static_cast<std::size_t>(v) * static_cast<std::size_t>(K.width) +
-                                        static_cast<std::size_t>(u)];
+        const float z =
+            f.depth.depth_m[static_cast<std::size_t>(v) * static_cast<std::size_t>(K.width) +
+                            static_cast<std::size_t>(u)];
         const double mm = std::isfinite(z) && z > 0.0f ? std::round(1000.0 * z) : 0.0;
         depth_mm.at<std::uint16_t>(v, u) = static_cast<std::uint16_t>(mm < 65535.0 ? mm : 0.0);
       }
@@ -614,17 +617,19 @@ void writeCloudSequence(const Dataset& d, const std::string& dir) {
     const std::vector<Eigen::Vector3f>& points = f.cloud.points_S;
     std::ostringstream pcd;
     pcd << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH "
-        << points.size() << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << points.size() << "\nDATA binary\n";
+        << points.size() << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << points.size()
+        << "\nDATA binary\n";
     std::string bytes = pcd.str();
-    for (const Eigen::Vector3f& p : points) bytes.append(reinterpret_cast<const char*>(p.data()), 3 * sizeof(float));
+    for (const Eigen::Vector3f& p : points)
+      bytes.append(reinterpret_cast<const char*>(p.data()), 3 * sizeof(float));
     char name[64];
     std::snprintf(name, sizeof(name), "/clouds/scan_%06d.pcd", i);
     io::writeFileAtomically(dir + name, bytes);
     const Transform T_W_S = f.cloud.T_W_B * f.cloud.T_B_S;
     const Eigen::Quaterniond q(T_W_S.linear());
     const Eigen::Vector3d t = T_W_S.translation();
-    tum << 1.0 + 0.1 * i << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' '
-        << q.z() << ' ' << q.w() << '\n';
+    tum << 1.0 + 0.1 * i << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' '
+        << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
   }
   io::writeFileAtomically(dir + "/poses.tum", tum.str());
 }
@@ -634,12 +639,13 @@ void writeDatasetFiles(const Dataset& d, const std::string& dir) {
   if (d.frames == 0) return;
   if (d.frame(0).is_depth) {
     writeFrameDirectory(d, dir);
-    std::printf("wrote %d frames of %s to %s (mlmap_replay --frames %s)\n", d.frames, d.kind.c_str(),
-                dir.c_str(), dir.c_str());
+    std::printf("wrote %d frames of %s to %s (mlmap_replay --frames %s)\n", d.frames,
+                d.kind.c_str(), dir.c_str(), dir.c_str());
   } else {
     writeCloudSequence(d, dir);
-    std::printf("wrote %d scans of %s to %s (mlmap_replay --clouds %s/clouds --poses %s/poses.tum)\n",
-                d.frames, d.kind.c_str(), dir.c_str(), dir.c_str(), dir.c_str());
+    std::printf(
+        "wrote %d scans of %s to %s (mlmap_replay --clouds %s/clouds --poses %s/poses.tum)\n",
+        d.frames, d.kind.c_str(), dir.c_str(), dir.c_str(), dir.c_str());
   }
 }
 
@@ -662,7 +668,8 @@ int octomapReplay(const OctomapReplayOptions& o) {
   if (!o.frames_dir.empty()) {
     source = std::make_unique<io::FrameDirectorySource>(o.frames_dir);
   } else {
-    source = std::make_unique<io::CloudSequenceSource>(o.clouds_dir, o.poses_path, io::CloudSequenceOptions{});
+    source = std::make_unique<io::CloudSequenceSource>(o.clouds_dir, o.poses_path,
+                                                       io::CloudSequenceOptions{});
   }
   octomap::OcTree tree(o.resolution_m);
   const float min_range = static_cast<float>(AwarenessConfig{}.min_range_m);
@@ -686,10 +693,12 @@ int octomapReplay(const OctomapReplayOptions& o) {
   }
   const OctomapVoxels voxels = octomapOccupied(tree);
   if (!o.voxels_out.empty()) io::writeVoxelText(o.voxels_out, voxels.occupied, o.resolution_m);
-  std::printf("octomap replay: %zu frames of %s at %.3f m, range %.1f m: %zu occupied voxels, %.2f s "
-              "(reading %.2f s), peak RSS %.1f MB\n",
-              source->size(), source->describe().c_str(), o.resolution_m, o.max_range_m, voxels.occupied.size(),
-              msSince(start) / 1000.0, read_ms / 1000.0, static_cast<double>(procStatusBytes("VmHWM")) / 1e6);
+  std::printf(
+      "octomap replay: %zu frames of %s at %.3f m, range %.1f m: %zu occupied voxels, %.2f s "
+      "(reading %.2f s), peak RSS %.1f MB\n",
+      source->size(), source->describe().c_str(), o.resolution_m, o.max_range_m,
+      voxels.occupied.size(), msSince(start) / 1000.0, read_ms / 1000.0,
+      static_cast<double>(procStatusBytes("VmHWM")) / 1e6);
   return voxels.key_mismatches == 0 ? 0 : 1;
 }
 
@@ -745,15 +754,17 @@ int main(int argc, char** argv) {
                  "directory; LiDAR: binary PCD clouds + poses.tum) for whole-process runs of "
                  "mlmap_replay and --octomap-replay, and exit");
   OctomapReplayOptions replay;
-  auto* octomap_frames = app.add_option("--octomap-frames", replay.frames_dir,
-                                        "whole-process OctoMap replay of an RGB-D frame directory, and exit")
-                             ->check(CLI::ExistingDirectory);
+  auto* octomap_frames =
+      app.add_option("--octomap-frames", replay.frames_dir,
+                     "whole-process OctoMap replay of an RGB-D frame directory, and exit")
+          ->check(CLI::ExistingDirectory);
   auto* octomap_clouds = app.add_option("--octomap-clouds", replay.clouds_dir,
                                         "whole-process OctoMap replay of PCD / PLY clouds (with "
                                         "--octomap-poses), and exit")
                              ->check(CLI::ExistingDirectory);
-  auto* octomap_poses = app.add_option("--octomap-poses", replay.poses_path, "the clouds' poses (TUM or CSV)")
-                            ->check(CLI::ExistingFile);
+  auto* octomap_poses =
+      app.add_option("--octomap-poses", replay.poses_path, "the clouds' poses (TUM or CSV)")
+          ->check(CLI::ExistingFile);
   octomap_clouds->needs(octomap_poses)->excludes(octomap_frames);
   app.add_option("--octomap-resolution", replay.resolution_m, "the OctoMap replay's resolution [m]")
       ->check(CLI::Range(0.01, 2.0))

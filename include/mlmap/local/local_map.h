@@ -126,7 +126,8 @@ class LocalMap {
     for (int x = 0; x < size_.x(); ++x) {
       const auto sx = static_cast<std::size_t>(floorMod(min_index_.x() + x, size_.x()));
       for (int y = 0; y < size_.y(); ++y) {
-        const std::size_t column = (sx * ny + static_cast<std::size_t>(floorMod(min_index_.y() + y, size_.y()))) * nz;
+        const std::size_t column =
+            (sx * ny + static_cast<std::size_t>(floorMod(min_index_.y() + y, size_.y()))) * nz;
         std::size_t sz = z0;
         for (int z = 0; z < size_.z(); ++z) {
           const LogOddsQ v = cells_[column + sz];

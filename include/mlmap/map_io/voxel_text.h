@@ -23,7 +23,8 @@ namespace mlmap::io {
 [[nodiscard]] std::vector<VoxelIndex> sortedUnique(std::vector<VoxelIndex> voxels);
 
 /// The text of `voxels` (any order; duplicates once) in the format above.
-[[nodiscard]] std::string encodeVoxelText(const std::vector<VoxelIndex>& voxels, double resolution_m);
+[[nodiscard]] std::string encodeVoxelText(const std::vector<VoxelIndex>& voxels,
+                                          double resolution_m);
 /// Writes encodeVoxelText() to `path` atomically (writeFileAtomically(): a failed write leaves
 /// no partial file). @throws std::runtime_error naming the path when it cannot be written.
 void writeVoxelText(const std::string& path, const std::vector<VoxelIndex>& voxels,
