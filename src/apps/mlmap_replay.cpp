@@ -7,7 +7,9 @@
 #include "mlmap/eval/run_outputs.h"
 #include "mlmap/datasets/cloud_sequence.h"
 #include "mlmap/datasets/frame_directory.h"
+#include "mlmap/datasets/frame_prefetcher.h"
 #include "mlmap/datasets/frame_source.h"
+#include "mlmap/map_io/map_export.h"
 #include "mlmap/map_io/voxel_text.h"
 #include "mlmap/pipeline/map_engine.h"
 
@@ -34,6 +36,7 @@ struct FrameRecord {
   std::size_t non_finite_dropped = 0;  ///< NaN / Inf points the cloud reader dropped
   FrameStatus status = FrameStatus::kAccepted;
   double read_ms = 0.0;         ///< reading and parsing the file, or rendering (simulator)
+  double read_wait_ms = 0.0;    ///< the mapping waiting for the reader thread (0 without one)
   double awareness_ms = 0.0;    ///< submit() until the awareness map is updated
   double local_global_ms = 0.0; ///< re-centring and log-odds updates
   double planning_ms = 0.0;     ///< snapshot copy, 2D grid and ESDF when due
@@ -47,12 +50,13 @@ class FrameTimer {
   EngineObservers observers() {
     EngineObservers o;
     o.awareness = [this](const AwarenessMap&, double, const Transform&) { awareness_done_ = Clock::now(); };
-    o.snapshot = [this](std::uint64_t, double) { snapshot_done_ = Clock::now(); };
+    // After the local-global update and the planning layers, if any, of every mapped frame.
+    o.global = [this](const GlobalMap&, double, std::uint64_t) { mapped_done_ = Clock::now(); };
     return o;
   }
   void begin() {
     start_ = Clock::now();
-    awareness_done_ = snapshot_done_ = Clock::time_point{};
+    awareness_done_ = mapped_done_ = Clock::time_point{};
   }
   /// Fills the timings and memory of `r` after submit() returned; updates the engine peak.
   /// Returns true when the engine mapped a frame since the previous call.
@@ -60,12 +64,12 @@ class FrameTimer {
     const Clock::time_point now = Clock::now();
     r->engine_ms = msBetween(start_, now);
     const EngineStats s = engine.stats();
-    if (awareness_done_ != Clock::time_point{} && snapshot_done_ != Clock::time_point{}) {
+    if (awareness_done_ != Clock::time_point{} && mapped_done_ != Clock::time_point{}) {
       r->awareness_ms = msBetween(start_, awareness_done_);
       const PlanningStats& p = s.planning;
       r->planning_ms = p.last_snapshot_ms + (p.grid_updates != last_.grid_updates ? p.last_grid_ms : 0.0) +
                        (p.esdf_updates != last_.esdf_updates ? p.last_esdf_ms : 0.0);
-      r->local_global_ms = std::max(0.0, msBetween(awareness_done_, snapshot_done_) - r->planning_ms);
+      r->local_global_ms = std::max(0.0, msBetween(awareness_done_, mapped_done_) - r->planning_ms);
     }
     last_ = s.planning;
     r->engine_bytes = s.memory.total();
@@ -77,7 +81,7 @@ class FrameTimer {
   [[nodiscard]] std::size_t peakEngineBytes() const { return peak_engine_bytes_; }
 
  private:
-  Clock::time_point start_, awareness_done_, snapshot_done_;
+  Clock::time_point start_, awareness_done_, mapped_done_;
   PlanningStats last_;
   std::uint64_t frames_mapped_ = 0;
   std::size_t peak_engine_bytes_ = 0;
@@ -103,6 +107,7 @@ struct RunInfo {
 /// stats.json's timing_ms: each stage's median, p99, mean and maximum over the accepted frames.
 eval::Json timingJson(const std::vector<FrameRecord>& frames) {
   return {{"read", eval::toJson(summarize(frames, &FrameRecord::read_ms))},
+          {"read_wait", eval::toJson(summarize(frames, &FrameRecord::read_wait_ms))},
           {"awareness", eval::toJson(summarize(frames, &FrameRecord::awareness_ms))},
           {"local_global", eval::toJson(summarize(frames, &FrameRecord::local_global_ms))},
           {"planning", eval::toJson(summarize(frames, &FrameRecord::planning_ms))},
@@ -139,6 +144,9 @@ eval::Json countersJson(const RunInfo& info, const EngineStats& s, const std::ve
           {"too_close", s.points.rejected_too_close},
           {"beyond_max_range", s.points.beyond_max_range},
           {"hit_voxels", s.points.hit_voxels},
+          {"hits_beyond_local_map", s.points.hits_beyond_local_map},
+          {"hits_outside_window", s.local.hits_outside_window},
+          {"free_outside_window", s.local.outside_window - s.local.hits_outside_window},
           {"free_voxels", s.points.free_voxels},
           {"occupied_voxels", occupied},
           {"global_voxels", s.global_voxels},
@@ -157,6 +165,7 @@ eval::Json frameJson(const FrameRecord& f) {
           {"points", f.points},
           {"non_finite_dropped", f.non_finite_dropped},
           {"read_ms", f.read_ms},
+          {"read_wait_ms", f.read_wait_ms},
           {"awareness_ms", f.awareness_ms},
           {"local_global_ms", f.local_global_ms},
           {"planning_ms", f.planning_ms},
@@ -197,25 +206,33 @@ struct Options {
   std::string voxels_out;      ///< --voxels-out (empty: OUT/occupied_voxels.txt)
   std::string stats_out;       ///< --stats-out (empty: OUT/stats.json)
   std::string save_map_path;   ///< --save-map (empty: not saved)
+  std::string grid_out;        ///< --grid-out: the final 2D grid's PGM + YAML base (empty: none)
+  int reader_threads = 1;      ///< --reader-threads: 1 reads ahead on a thread, 0 in turn
 };
 
+/// Frames the reader thread keeps decoded ahead of the mapping: enough to ride out a slow file,
+/// few enough to hold little memory (a 640 x 480 depth image or an 80k-point cloud is ~1 MB).
+constexpr std::size_t kReadAheadFrames = 4;
+
 constexpr const char* kAbout =
-      "mlmap_replay: runs the mapping engine offline on recorded data and writes the map.\n"
-      "Sources (one of):\n"
-      "  --frames DIR              an RGB-D frame directory (frame-N.depth.png, frame-N.pose.txt,\n"
-      "                            intrinsics.K.txt; the poses are the camera's)\n"
-      "  --clouds DIR --poses FILE PCD (ascii, binary, binary_compressed) / PLY (ascii, binary\n"
-      "                            little / big endian) clouds with a TUM or CSV trajectory\n"
-      "  (neither)                 the simulator: the demo's built-in room flight\n"
-      "Clouds whose file names are time stamps (1305031102.175304.pcd, or integer\n"
-      "nanoseconds / microseconds: 19-20 / 16-17 digits)\n"
-      "get the pose at their stamp, interpolated between the two poses around it when the nearer\n"
-      "is within 0.05 s (never extrapolated; clouds without a pose are skipped and counted). Other\n"
-      "names are paired by order (natural sort) and need exactly one pose per cloud.\n"
-      "Writes to --out: map_top.png, map_side.png (accuracy_top.png for the simulator),\n"
-      "report.json (as mlmap_demo), occupied_voxels.txt ('ix iy iz' per line, sorted,\n"
-      "i = floor(coordinate / resolution), world grid aligned at the origin; '#' header line) and\n"
-      "stats.json (per-frame timings per stage, peak memory, counters).";
+    "mlmap_replay: runs the mapping engine offline on recorded data and writes the map.\n"
+    "Sources (one of):\n"
+    "  --frames DIR              an RGB-D frame directory (frame-N.depth.png, frame-N.pose.txt,\n"
+    "                            intrinsics.K.txt; the poses are the camera's)\n"
+    "  --clouds DIR --poses FILE PCD (ascii, binary, binary_compressed) / PLY (ascii, binary\n"
+    "                            little / big endian) clouds with a TUM or CSV trajectory\n"
+    "  (neither)                 the simulator: the demo's built-in room flight\n"
+    "Clouds whose file names are time stamps (1305031102.175304.pcd, or integer\n"
+    "nanoseconds / microseconds: 19-20 / 16-17 digits)\n"
+    "get the pose at their stamp, interpolated between the two poses around it when the nearer\n"
+    "is within 0.05 s (never extrapolated; clouds without a pose are skipped and counted). Other\n"
+    "names are paired by order (natural sort) and need exactly one pose per cloud.\n"
+    "Writes to --out: map_top.png, map_side.png (accuracy_top.png for the simulator),\n"
+    "report.json (as mlmap_demo), occupied_voxels.txt ('ix iy iz' per line, sorted,\n"
+    "i = floor(coordinate / resolution), world grid aligned at the origin; '#' header line) and\n"
+    "stats.json (per-frame timings per stage, peak memory, counters).\n"
+    "The planning layers (snapshots, 2D grid, ESDF) run only for an output that needs them\n"
+    "(--grid-out); otherwise the replay maps and writes the map, nothing else.";
 
 /// Adds --frames, --clouds, --poses, --extrinsic and --scenario (one source at most) to `app`.
 void addSourceOptions(CLI::App& app, Options& o) {
@@ -264,19 +281,32 @@ void addEngineOptions(CLI::App& app, Options& o) {
       ->check(CLI::ExistingFile);
 }
 
-/// Adds --out, --voxels-out, --stats-out, --max-frames and --save-map to `app`.
+/// Adds --out, --voxels-out, --stats-out, --max-frames, --reader-threads, --save-map and
+/// --grid-out to `app`.
 void addOutputOptions(CLI::App& app, Options& o) {
   app.add_option("--out", o.out_dir, "output folder")->capture_default_str();
   app.add_option("--voxels-out", o.voxels_out, "occupied voxels as text (default: OUT/occupied_voxels.txt)");
-  app.add_option("--stats-out", o.stats_out,
-                 "statistics JSON (default: OUT/stats.json): per-frame timings by stage (read, "
-                 "awareness, local_global, planning, engine) with their median / p99, peak memory "
-                 "(process RSS, engine accounting) and counters");
+  app.add_option(
+      "--stats-out", o.stats_out,
+      "statistics JSON (default: OUT/stats.json): per-frame timings by stage (read, read_wait, "
+      "awareness, local_global, planning, engine) with their median / p99, peak memory "
+      "(process RSS, engine accounting) and counters");
   app.add_option("--max-frames", o.max_frames, "stop after N frames (0: all)")->check(CLI::NonNegativeNumber);
+  app.add_option(
+         "--reader-threads", o.reader_threads,
+         "--frames / --clouds: 1 reads and decodes the files on a thread of their own, a few "
+         "frames ahead of the mapping; 0 reads each in turn on the mapping thread (the same "
+         "map either way)")
+      ->check(CLI::Range(0, 1))
+      ->capture_default_str();
   app.add_option("--save-map", o.save_map_path,
                  "also save the final map (local + global layers) to this mlmap map file; "
                  "mlmap_map_tool converts it to PLY / PCD / PGM + YAML / OctoMap .bt, and "
                  "mlmap_node can start from it (map_file.load_path)");
+  app.add_option("--grid-out", o.grid_out,
+                 "also write the final projected 2D grid (projected_grid section of --config) as "
+                 "BASE.pgm + BASE.yaml (ROS map_server); turns the planning layers on, without the "
+                 "ESDF");
 }
 
 /// The kind of data the options name.
@@ -300,7 +330,16 @@ std::optional<io::CloudSequenceOptions> cloudOptions(const Options& o) {
   return cloud_options;
 }
 
-/// --max-range applied (the awareness grid grows to reach it) and the engine made synchronous.
+/// The planning layers on only for the outputs that need them: the 2D grid for --grid-out; the
+/// ESDF for none. They change no voxel of the map.
+void planningForOutputs(const Options& o, MapConfig* config) {
+  config->pipeline.planning_layers = !o.grid_out.empty();
+  config->projected_grid.enabled = !o.grid_out.empty();
+  config->esdf.enabled = false;
+}
+
+/// --max-range applied (the awareness grid grows to reach it), the engine made synchronous and
+/// the planning layers limited to what the outputs need.
 void adjustConfig(const Options& o, MapConfig* config) {
   if (o.max_range_m > 0.0) {
     config->awareness.max_range_m = o.max_range_m;
@@ -312,6 +351,7 @@ void adjustConfig(const Options& o, MapConfig* config) {
     spdlog::warn("pipeline.threaded: the replay runs synchronously (every frame is mapped, in order)");
     config->pipeline.threaded = false;
   }
+  planningForOutputs(o, config);
 }
 
 /// False (the problems logged) when `config` is invalid.
@@ -362,25 +402,28 @@ std::size_t frameCount(const Options& o, std::size_t available) {
                           : available;
 }
 
-/// Maps the first frames of `source` (--max-frames of them), recording each.
+/// Maps the first frames of `source` (--max-frames of them) in order, recording each; with
+/// --reader-threads 1 they are read and decoded on a reader thread ahead of the mapping.
 void mapFrames(const Options& o, const io::FrameSource& source, Replay* replay) {
   const std::size_t n = frameCount(o, source.size());
+  io::FramePrefetcher reader(source, n, o.reader_threads > 0 ? kReadAheadFrames : 0);
   eval::ProgressBar bar("mapping");
+  io::PrefetchedFrame read;
   for (std::size_t i = 0; i < n; ++i) {
+    const Clock::time_point wait_start = Clock::now();
+    if (!reader.next(&read)) break;
     FrameRecord record;
-    io::SourceFrameInfo info;
-    const Clock::time_point start = Clock::now();
-    io::SourceFrame frame = source.read(i, &info);
-    record.read_ms = msSince(start);
-    record.name = info.name;
-    if (std::holds_alternative<PointCloudFrame>(frame)) {
-      record.points = std::get<PointCloudFrame>(frame).points_S.size();
-      record.non_finite_dropped = info.non_finite_dropped;
-      replay->info.points_in_files += info.points_in_file;
+    record.read_wait_ms = msSince(wait_start);
+    record.read_ms = read.read_ms;
+    record.name = read.info.name;
+    if (std::holds_alternative<PointCloudFrame>(read.frame)) {
+      record.points = std::get<PointCloudFrame>(read.frame).points_S.size();
+      record.non_finite_dropped = read.info.non_finite_dropped;
+      replay->info.points_in_files += read.info.points_in_file;
     } else {
-      record.points = info.points_in_file;  // the image's pixels
+      record.points = read.info.points_in_file;  // the image's pixels
     }
-    std::visit([&](auto& f) { replay->submit(std::move(f), std::move(record)); }, frame);
+    std::visit([&](auto& f) { replay->submit(std::move(f), std::move(record)); }, read.frame);
     bar.update(static_cast<int>(i + 1), static_cast<int>(n));
   }
 }
@@ -446,6 +489,23 @@ void flySimulator(const Options& o, Replay* replay) {
                   "simulator", "simulated poses", 0, 0};
 }
 
+/// Prints the hits the engine could not map: points in range beyond what the local map holds
+/// around the body, and hit voxels outside its window; a warning on the log says how to keep them.
+void printHitsNotMapped(const EngineStats& s) {
+  const std::uint64_t points = s.points.hits_beyond_local_map;
+  const std::uint64_t voxels = s.local.hits_outside_window;
+  std::printf(
+      "  hits not mapped      %llu points beyond the local map's reach, %llu hit voxels outside "
+      "its window\n",
+      static_cast<unsigned long long>(points), static_cast<unsigned long long>(voxels));
+  if (points + voxels > 0) {
+    spdlog::warn(
+        "{} points in range and {} hit voxels fell outside the local window and were not "
+        "mapped: a larger local_map.size_cells (--config) keeps them",
+        points, voxels);
+  }
+}
+
 /// Prints the replay's own figures after the engine's: per-frame timings, memory, the files.
 void printReplaySummary(const Options& o, const Replay& replay, const std::vector<std::string>& written,
                         std::size_t occupied) {
@@ -453,10 +513,21 @@ void printReplaySummary(const Options& o, const Replay& replay, const std::vecto
   const TimingSummary planning = summarize(replay.records, &FrameRecord::planning_ms);
   const TimingSummary whole = summarize(replay.records, &FrameRecord::engine_ms);
   std::printf("  replay per frame [ms] median   p99\n");
-  std::printf("    planning layers    %7.2f %7.2f   (snapshot, 2D grid, ESDF when due)\n", planning.median_ms,
-              planning.p99_ms);
+  if (replay.engine.config().pipeline.planning_layers) {
+    std::printf("    planning layers    %7.2f %7.2f   (snapshot, 2D grid)\n", planning.median_ms,
+                planning.p99_ms);
+  } else {
+    std::printf("    planning layers       off          (no output needs them)\n");
+  }
   std::printf("    submit() in all    %7.2f %7.2f\n", whole.median_ms, whole.p99_ms);
-  std::printf("    reading the input  %7.2f %7.2f\n", read.median_ms, read.p99_ms);
+  std::printf("    reading the input  %7.2f %7.2f   (%s)\n", read.median_ms, read.p99_ms,
+              o.reader_threads > 0 && replay.info.kind != "simulator" ? "on the reader thread"
+                                                                      : "on the mapping thread");
+  if (o.reader_threads > 0 && replay.info.kind != "simulator") {
+    const TimingSummary wait = summarize(replay.records, &FrameRecord::read_wait_ms);
+    std::printf("    waiting for it     %7.2f %7.2f\n", wait.median_ms, wait.p99_ms);
+  }
+  printHitsNotMapped(replay.engine.stats());
   std::printf("  peak memory          %.1f MB resident (process), %.1f MB engine accounting\n",
               static_cast<double>(eval::peakRssBytes()) / 1e6,
               static_cast<double>(replay.timer.peakEngineBytes()) / 1e6);
@@ -466,21 +537,34 @@ void printReplaySummary(const Options& o, const Replay& replay, const std::vecto
               names.c_str(), o.voxels_out.c_str(), occupied, o.stats_out.c_str());
 }
 
-/// Writes the map outputs, the voxels and stats.json, prints the summary and saves the map.
-/// Returns the exit status: 0, or 3 when no frame was mapped.
+/// Writes the final 2D grid (--grid-out) as BASE.pgm + BASE.yaml. @throws std::runtime_error
+/// naming the file when it cannot.
+void writeGrid(const std::string& base, const MapEngine& engine) {
+  const std::shared_ptr<const MapSnapshot> snapshot = engine.snapshot();
+  if (snapshot->gridPtr() == nullptr) {
+    throw std::runtime_error(base + ".pgm: no 2D grid was made (no frame mapped)");
+  }
+  io::writeGridMap(*snapshot->gridPtr(), base);
+}
+
+/// Writes the outputs, the map first (--save-map, the voxel list), then the 2D grid, the
+/// pictures with report.json and stats.json, and prints the summary. Returns the exit status: 0,
+/// or 3 when no frame was mapped. @throws std::runtime_error naming the file it cannot write;
+/// the files written before it are complete.
 int finish(const Options& o, const MapConfig& config, Replay* replay) {
   replay->engine.flush();
   replay->outputs.source = replay->info.source;
   const double res = replay->resolution_m();
   const EngineStats s = replay->engine.stats();
   const std::vector<VoxelIndex> occupied = replay->engine.occupiedVoxels();
-  const std::vector<std::string> written = eval::writeMapOutputs(replay->outputs, s, occupied, res);
+  if (!o.save_map_path.empty()) eval::saveMap(replay->engine, o.save_map_path);
   io::writeVoxelText(o.voxels_out, occupied, res);
+  if (!o.grid_out.empty()) writeGrid(o.grid_out, replay->engine);
+  const std::vector<std::string> written = eval::writeMapOutputs(replay->outputs, s, occupied, res);
   writeStats(o.stats_out, replay->info, config, s, replay->records, occupied.size(),
              replay->timer.peakEngineBytes());
   eval::printSummary(s, res, replay->outputs.scored != nullptr ? &replay->scored.accuracy : nullptr);
   printReplaySummary(o, *replay, written, occupied.size());
-  if (!o.save_map_path.empty()) eval::saveMap(replay->engine, o.save_map_path);
   return s.frames_mapped > 0 ? 0 : 3;
 }
 

@@ -80,6 +80,7 @@ PointCounters& PointCounters::operator+=(const PointCounters& o) {
   rejected_non_finite += o.rejected_non_finite;
   rejected_too_close += o.rejected_too_close;
   beyond_max_range += o.beyond_max_range;
+  hits_beyond_local_map += o.hits_beyond_local_map;
   sampled_out += o.sampled_out;
   hit_voxels += o.hit_voxels;
   free_voxels += o.free_voxels;
@@ -447,6 +448,7 @@ void AwarenessStage::collectEnds(const Source& source, const FrameGeometry& g,
           e.p_W = worldPoint(at);
           e.cut = key == kPointOutsideCutKey;
           c.beyond_max_range += e.cut ? 1 : 0;
+          c.hits_beyond_local_map += e.cut ? 0 : 1;
           outside_.push_back(e);
         }
         continue;

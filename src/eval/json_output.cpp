@@ -1,6 +1,7 @@
 #include "mlmap/eval/json_output.h"
 
-#include <fstream>
+#include "mlmap/core/atomic_file.h"
+
 #include <stdexcept>
 
 namespace mlmap::eval {
@@ -47,9 +48,7 @@ std::string formatJson(const Json& json, int expanded_levels) {
 }
 
 void writeJsonFile(const std::string& path, const Json& json, int expanded_levels) {
-  std::ofstream file(path);
-  file << formatJson(json, expanded_levels) << '\n';
-  if (!file) throw std::runtime_error(path + ": cannot write");
+  io::writeFileAtomically(path, formatJson(json, expanded_levels) + '\n');
 }
 
 Json toJson(const TimingSummary& timing) {

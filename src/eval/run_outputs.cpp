@@ -56,6 +56,8 @@ Json reportJson(const std::string& source, const EngineStats& s, std::size_t occ
                       {"too_close", s.points.rejected_too_close},
                       {"beyond_max_range", s.points.beyond_max_range},
                       {"hit_voxels", s.points.hit_voxels},
+                      {"hits_beyond_local_map", s.points.hits_beyond_local_map},
+                      {"hits_outside_window", s.local.hits_outside_window},
                       {"free_voxels", s.points.free_voxels}};
   if (accuracy != nullptr) {
     report["accuracy"] = {{"precision", accuracy->precision},

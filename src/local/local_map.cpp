@@ -364,6 +364,7 @@ void LocalMap::recenter(const Eigen::Vector3d& body_W, GlobalMap* global) {
 void LocalMap::integrate(const MeasurementBatch& batch) {
   if (!placed_) {
     counters_.outside_window += batch.hits.size() + batch.free_count;
+    counters_.hits_outside_window += batch.hits.size();
     return;
   }
   const std::uint64_t now = ++change_clock_;
@@ -384,6 +385,7 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
       const std::size_t cell = cells[i];
       if (cell == kOutside) {
         ++counters_.outside_window;
+        ++counters_.hits_outside_window;
         continue;
       }
       LogOddsQ& v = cells_[cell];

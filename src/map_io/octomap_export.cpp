@@ -1,5 +1,6 @@
 #include "mlmap/map_io/octomap_export.h"
 
+#include "mlmap/core/atomic_file.h"
 #include "mlmap/map_io/map_export.h"
 #include "mlmap/map_io/map_file.h"
 

@@ -1,9 +1,10 @@
 #include "mlmap/map_io/voxel_text.h"
 
+#include "mlmap/core/atomic_file.h"
+
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
-#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -20,17 +21,23 @@ std::vector<VoxelIndex> sortedUnique(std::vector<VoxelIndex> voxels) {
 
 void writeVoxelText(const std::string& path, const std::vector<VoxelIndex>& voxels,
                     double resolution_m) {
+  writeFileAtomically(path, encodeVoxelText(voxels, resolution_m));
+}
+
+std::string encodeVoxelText(const std::vector<VoxelIndex>& voxels, double resolution_m) {
   const std::vector<VoxelIndex> sorted = sortedUnique(voxels);
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "w"), &std::fclose);
-  if (!f) throw std::runtime_error(path + ": cannot open for writing");
-  std::fprintf(f.get(),
-               "# mlmap occupied voxels: ix iy iz, i = floor(coordinate / resolution), "
-               "resolution_m %.17g, %zu voxels\n",
-               resolution_m, sorted.size());
-  for (const VoxelIndex& v : sorted) std::fprintf(f.get(), "%d %d %d\n", v.x(), v.y(), v.z());
-  if (std::ferror(f.get()) != 0 || std::fclose(f.release()) != 0) {
-    throw std::runtime_error(path + ": write error");
+  char line[128];
+  std::snprintf(line, sizeof(line),
+                "# mlmap occupied voxels: ix iy iz, i = floor(coordinate / resolution), "
+                "resolution_m %.17g, %zu voxels\n",
+                resolution_m, sorted.size());
+  std::string text = line;
+  text.reserve(text.size() + sorted.size() * 16);
+  for (const VoxelIndex& v : sorted) {
+    const int n = std::snprintf(line, sizeof(line), "%d %d %d\n", v.x(), v.y(), v.z());
+    text.append(line, static_cast<std::size_t>(n));
   }
+  return text;
 }
 
 std::vector<VoxelIndex> readVoxelText(const std::string& path) {

@@ -1,5 +1,7 @@
 #include "mlmap/pictures/map_image.h"
 
+#include "mlmap/core/atomic_file.h"
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -7,7 +9,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <fstream>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
@@ -910,17 +911,7 @@ void writePng(const std::string& path, const cv::Mat& image) {
     throw std::runtime_error("writePng: cannot encode a " + cv::typeToString(image.type()) +
                              " image as PNG for '" + path + "': " + e.what());
   }
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) {
-    throw std::runtime_error("writePng: cannot open '" + path +
-                             "' for writing (missing directory or no permission?)");
-  }
-  out.write(reinterpret_cast<const char*>(bytes.data()),
-            static_cast<std::streamsize>(bytes.size()));
-  out.close();
-  if (!out) {
-    throw std::runtime_error("writePng: error while writing '" + path + "' (disk full?)");
-  }
+  writeFileAtomically(path, std::string(bytes.begin(), bytes.end()));
 }
 
 }  // namespace mlmap::io

@@ -76,7 +76,7 @@ MapEngine::MapEngine(const MapConfig& config, LogSink log, EngineObservers obser
       awareness_(config_),
       local_(config_.local_map, config_.log_odds),
       global_(config_.local_map.submap_cells(), config_.local_map.resolution_m),
-      planning_(config_, config_.pipeline.threaded) {
+      planning_(config_, config_.pipeline.threaded && config_.pipeline.planning_layers) {
   if (config_.pipeline.threaded) {
     for (int i = 0; i < config_.pipeline.batch_queue_capacity + 1; ++i) {
       batch_pool_.push_back(std::make_unique<MeasurementBatch>());
@@ -232,8 +232,10 @@ void MapEngine::localStep(const MeasurementBatch& batch) {
     ++frames_integrated_;
   }
   const double ms = msSince(start);
-  planning_.update(local_, global_, frames_integrated_, batch.stamp_s, batch.T_W_B);
-  if (observers_.snapshot) observers_.snapshot(frames_integrated_, batch.stamp_s);
+  if (config_.pipeline.planning_layers) {
+    planning_.update(local_, global_, frames_integrated_, batch.stamp_s, batch.T_W_B);
+    if (observers_.snapshot) observers_.snapshot(frames_integrated_, batch.stamp_s);
+  }
   if (observers_.global) {
     const LocalMapCounters& c = local_.counters();
     observers_.global(global_, batch.stamp_s, c.submaps_retired + c.submaps_restored);
@@ -398,6 +400,7 @@ void MapEngine::restoreState(const MapState& state) {
     stats_.global_submaps = global_.submapCount();
     stats_.memory.global_bytes = global_.memoryBytes();
   }
+  if (!config_.pipeline.planning_layers) return;
   planning_.update(local_, global_, frames_integrated_, state.last_stamp_s, state.T_W_B);
   planning_.flush();
 }

@@ -179,6 +179,43 @@ TEST(Replay, VoxelIndicesAreFloorOfCoordinateOverResolution) {
   EXPECT_EQ(readText(dir + "/out/occupied_voxels.txt").rfind("# mlmap occupied voxels: ix iy iz", 0), 0u);
 }
 
+TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
+  // A wall 2 m away and one 15 m away beside it, in range (20 m) but beyond the 19 m window's
+  // half width:
+  // the far wall's hits cannot be mapped, and the summary, the log and stats.json say how many.
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_outside";
+  fs::remove_all(dir);
+  fs::create_directories(dir + "/clouds");
+  std::vector<Eigen::Vector3d> points;
+  for (int j = -10; j <= 10; ++j) {
+    for (int k = -5; k <= 5; ++k) {
+      points.emplace_back(2.05, 0.1 * j + 0.05, 0.1 * k + 0.05);
+      points.emplace_back(15.05, 0.1 * j + 5.05, 0.1 * k + 0.05);  // not behind the first
+    }
+  }
+  mlmap::testing::writeFile(
+      dir + "/clouds/scan_a.ply",
+      mlmap::testing::makePly(points, mlmap::testing::PlyFormat::kAscii, true));
+  mlmap::testing::writeFile(dir + "/poses.csv", "t,x,y,z,qx,qy,qz,qw\n1,0,0,0,0,0,0,1\n");
+  const std::string command = std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir +
+                              "/clouds' --poses '" + dir +
+                              "/poses.csv' --resolution 0.1 --max-range 20 --out '" + dir + "/out'";
+  ASSERT_EQ(run(command, dir + "/replay.log"), 0) << readText(dir + "/replay.log");
+  const std::string stats = readText(dir + "/out/stats.json");
+  EXPECT_EQ(jsonInt(stats, "hits_beyond_local_map"), 21 * 11);  // every point of the far wall
+  EXPECT_EQ(jsonInt(stats, "hits_outside_window"), 0);
+  EXPECT_EQ(jsonInt(stats, "hit_voxels"), 21 * 11);  // the near wall's
+  for (const VoxelIndex& v : io::readVoxelText(dir + "/out/occupied_voxels.txt"))
+    EXPECT_EQ(v.x(), 20);
+  const std::string log = readText(dir + "/replay.log");
+  EXPECT_NE(log.find("hits not mapped      231 points beyond the local map's reach, 0 hit voxels"),
+            std::string::npos)
+      << log;
+  EXPECT_NE(log.find("fell outside the local window and were not mapped"), std::string::npos)
+      << log;
+  EXPECT_EQ(jsonInt(readText(dir + "/out/report.json"), "hits_beyond_local_map"), 21 * 11);
+}
+
 TEST(Replay, BadInputIsRefusedWithAMessage) {
   const std::string dir = ::testing::TempDir() + "/mlmap_replay_bad";
   fs::remove_all(dir);
@@ -237,6 +274,92 @@ TEST(Replay, SimulatorIsTheDefaultSource) {
             static_cast<std::size_t>(jsonInt(readText(dir + "/report.json"), "occupied_voxels")));
 }
 
+TEST(Replay, ReaderThreadGivesTheSameMapAsReadingInTurn) {
+  const std::string frames = std::string(MLMAP_SHARED_DATA_DIR) + "/realsense_tabletop";
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_reader";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string base = std::string(MLMAP_REPLAY_BIN) + " --frames '" + frames +
+                           "' --resolution 0.02 --max-frames 20 --reader-threads ";
+  ASSERT_EQ(run(base + "0 --out '" + dir + "/in_turn'", dir + "/in_turn.log"), 0)
+      << readText(dir + "/in_turn.log");
+  ASSERT_EQ(run(base + "1 --out '" + dir + "/ahead'", dir + "/ahead.log"), 0)
+      << readText(dir + "/ahead.log");
+  const std::string in_turn = readText(dir + "/in_turn/occupied_voxels.txt");
+  EXPECT_GT(io::readVoxelText(dir + "/in_turn/occupied_voxels.txt").size(), 1000u);
+  EXPECT_EQ(readText(dir + "/ahead/occupied_voxels.txt"), in_turn);
+  // The frames in the same order, each with its own read time.
+  const std::string stats = readText(dir + "/ahead/stats.json");
+  EXPECT_EQ(jsonInt(stats, "frames_mapped"), 20);
+  std::size_t at = 0;
+  for (const char* name : {"frame-000015", "frame-000017", "frame-000019", "frame-000021"}) {
+    const std::size_t found = stats.find(std::string("\"name\": \"") + name + "\"", at);
+    ASSERT_NE(found, std::string::npos) << name;
+    at = found;
+  }
+  EXPECT_NE(stats.find("\"read_wait_ms\": "), std::string::npos);
+  // The default replay runs no planning layer: no output needs one.
+  EXPECT_EQ(jsonInt(stats, "esdf_updates"), 0);
+  EXPECT_NE(readText(dir + "/ahead.log").find("planning layers       off"), std::string::npos)
+      << readText(dir + "/ahead.log");
+}
+
+TEST(Replay, UnreadableCloudAfterGoodOnesIsNamedWithOrWithoutTheReaderThread) {
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_bad_middle";
+  fs::remove_all(dir);
+  fs::create_directories(dir + "/clouds");
+  std::vector<Eigen::Vector3d> wall;
+  for (int j = -10; j <= 10; ++j) wall.emplace_back(2.05, 0.1 * j, 0.0);
+  std::string poses;
+  for (int i = 0; i < 8; ++i) {
+    const std::string name = dir + "/clouds/scan_" + std::to_string(i);
+    if (i == 5) {
+      mlmap::testing::writeFile(name + ".pcd", "VERSION 0.7\nFIELDS x y\n");
+    } else {
+      mlmap::testing::writeFile(
+          name + ".ply", mlmap::testing::makePly(wall, mlmap::testing::PlyFormat::kAscii, true));
+    }
+    poses += std::to_string(i + 1) + " 0 0 0 0 0 0 1\n";
+  }
+  mlmap::testing::writeFile(dir + "/poses.txt", poses);
+  for (const char* threads : {"0", "1"}) {
+    const std::string log = dir + "/threads_" + threads + ".log";
+    EXPECT_EQ(run(std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir + "/clouds' --poses '" + dir +
+                      "/poses.txt' --reader-threads " + threads + " --out '" + dir + "/out'",
+                  log),
+              1);
+    EXPECT_NE(readText(log).find(dir + "/clouds/scan_5.pcd: PCD header ends before its DATA line"),
+              std::string::npos)
+        << readText(log);
+  }
+}
+
+TEST(Replay, TheMapIsWrittenFirstAndAFailedPictureLeavesNoPartialFile) {
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_picture_fails";
+  fs::remove_all(dir);
+  // map_top.png cannot be replaced (a folder holds its name): the picture fails after the map.
+  fs::create_directories(dir + "/out/map_top.png");
+  const std::string command = std::string(MLMAP_REPLAY_BIN) + " --max-frames 5 --out '" + dir +
+                              "/out' --save-map '" + dir + "/map.mlmap' --voxels-out '" + dir +
+                              "/voxels.txt' --grid-out '" + dir + "/grid'";
+  EXPECT_EQ(run(command, dir + "/replay.log"), 1);
+  const std::string log = readText(dir + "/replay.log");
+  EXPECT_NE(log.find("cannot write '" + dir + "/out/map_top.png'"), std::string::npos) << log;
+  // The map, its voxel list and the grid were written before, whole.
+  std::vector<VoxelIndex> saved;
+  for (const io::OccupiedVoxel& v : io::occupiedVoxels(io::loadMapFile(dir + "/map.mlmap")))
+    saved.push_back(v.index);
+  EXPECT_GT(saved.size(), 100u);
+  EXPECT_EQ(io::sortedUnique(saved), io::readVoxelText(dir + "/voxels.txt"));
+  EXPECT_NE(readText(dir + "/grid.yaml").find("image: grid.pgm"), std::string::npos);
+  EXPECT_TRUE(fs::is_regular_file(dir + "/grid.pgm"));
+  // No temporary file is left behind, and nothing after the failed picture was written.
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
+  }
+  EXPECT_FALSE(fs::exists(dir + "/out/stats.json"));
+}
+
 TEST(Replay, RealsenseFramesGiveTheDemosMap) {
   const std::string frames = std::string(MLMAP_SHARED_DATA_DIR) + "/realsense_tabletop";
   const std::string dir = ::testing::TempDir() + "/mlmap_replay_frames";
@@ -252,7 +375,7 @@ TEST(Replay, RealsenseFramesGiveTheDemosMap) {
   ASSERT_EQ(run(std::string(MLMAP_DEMO_BIN) + options + "/demo'", dir + "/demo.log"), 0)
       << readText(dir + "/demo.log");
   // mlmap_demo maps the frames with the same settings (eval::runConfig) in the same order: the
-  // same map (4397 voxels, as mlmap_dds_end_to_end_replay receives over DDS). Voxel-for-voxel
+  // same map (4,323 voxels, as mlmap_dds_end_to_end_replay receives over DDS). Voxel-for-voxel
   // agreement with the engine run directly is checked on clouds above.
   const std::vector<VoxelIndex> replayed = io::readVoxelText(dir + "/replay/occupied_voxels.txt");
   const long demo = jsonInt(readText(dir + "/demo/report.json"), "occupied_voxels");

@@ -9,7 +9,11 @@
 #include "mlmap/eval/run_outputs.h"
 #include "mlmap/eval/sim_flight.h"
 #include "mlmap/eval/voxel_agreement.h"
+#include "mlmap/core/atomic_file.h"
 #include "mlmap/datasets/frame_directory.h"
+#include "mlmap/datasets/frame_source.h"
+#include "mlmap/map_io/voxel_text.h"
+#include "mlmap/pictures/map_image.h"
 #include "mlmap/datasets/world_yaml.h"
 #include "mlmap/pipeline/map_engine.h"
 #include "mlmap/sim/lidar.h"
@@ -239,7 +243,7 @@ OctomapVoxels octomapOccupied(const octomap::OcTree& tree) {
     if (!tree.isNodeOccupied(*it)) continue;
     const octomap::point3d c = it.getCoordinate();
     if (it.getDepth() == max_depth) {
-      const octomap::OcTreeKey key = it.getKey();
+      const octomap::OcTreeKey& key = it.getKey();
       const VoxelIndex from_key(key[0] - kKeyOffset, key[1] - kKeyOffset, key[2] - kKeyOffset);
       ++r.leaves_checked;
       if (from_key != voxelIndexOf(Eigen::Vector3d(c.x(), c.y(), c.z()), res)) ++r.key_mismatches;
@@ -258,6 +262,26 @@ OctomapVoxels octomapOccupied(const octomap::OcTree& tree) {
     }
   }
   return r;
+}
+
+/// Inserts the finite points of `points_S` at least `min_range_m` from the sensor, in W, into
+/// `tree` with the sensor origin and `max_range_m` (insertPointCloud); `scan_W` is scratch.
+void insertScan(const std::vector<Eigen::Vector3f>& points_S, const Transform& T_W_S,
+                float min_range_m, double max_range_m, octomap::Pointcloud* scan_W,
+                octomap::OcTree* tree) {
+  scan_W->clear();
+  scan_W->reserve(points_S.size());
+  for (const Eigen::Vector3f& p : points_S) {
+    if (!p.allFinite() || p.norm() < min_range_m) continue;
+    const Eigen::Vector3d p_W = T_W_S * p.cast<double>();
+    scan_W->push_back(static_cast<float>(p_W.x()), static_cast<float>(p_W.y()),
+                      static_cast<float>(p_W.z()));
+  }
+  const Eigen::Vector3d o_W = T_W_S.translation();
+  tree->insertPointCloud(*scan_W,
+                         octomap::point3d(static_cast<float>(o_W.x()), static_cast<float>(o_W.y()),
+                                          static_cast<float>(o_W.z())),
+                         max_range_m);
 }
 
 /// What one case measured.
@@ -326,19 +350,7 @@ CaseResult runCase(const Dataset& d, double resolution_m, const Options& o) {
       } else {
         points_S = f.cloud.points_S;
       }
-      scan_W.clear();
-      scan_W.reserve(points_S.size());
-      for (const Eigen::Vector3f& p : points_S) {
-        if (!p.allFinite() || p.norm() < min_range) continue;
-        const Eigen::Vector3d p_W = T_W_S * p.cast<double>();
-        scan_W.push_back(static_cast<float>(p_W.x()), static_cast<float>(p_W.y()),
-                         static_cast<float>(p_W.z()));
-      }
-      const Eigen::Vector3d o_W = T_W_S.translation();
-      tree->insertPointCloud(scan_W, octomap::point3d(static_cast<float>(o_W.x()),
-                                                      static_cast<float>(o_W.y()),
-                                                      static_cast<float>(o_W.z())),
-                             r.max_range_m);
+      insertScan(points_S, T_W_S, min_range, r.max_range_m, &scan_W, tree.get());
       octomap_ms = msSince(t0);
       r.octomap_ms.push_back(octomap_ms);
       const std::size_t bytes = tree->memoryUsage();
@@ -557,6 +569,139 @@ void writeVoxels(const std::string& path, const CaseResult& r) {
   }
 }
 
+/// Writes the frames of a depth dataset as an RGB-D frame directory (mlmap/datasets/
+/// frame_directory.h: 16-bit millimetre PNGs, camera-to-world pose matrices, intrinsics.K.txt).
+void writeFrameDirectory(const Dataset& d, const std::string& dir) {
+  std::filesystem::create_directories(dir);
+  for (int i = 0; i < d.frames; ++i) {
+    const Frame f = d.frame(i);
+    const PinholeIntrinsics& K = f.depth.intrinsics;
+    if (i == 0) {
+      std::ostringstream k;
+      k.precision(17);
+      k << K.fx << " 0 " << K.cx << "\n0 " << K.fy << " " << K.cy << "\n0 0 1\n";
+      io::writeFileAtomically(dir + "/intrinsics.K.txt", k.str());
+    }
+    cv::Mat depth_mm(K.height, K.width, CV_16UC1);
+    for (int v = 0; v < K.height; ++v) {
+      for (int u = 0; u < K.width; ++u) {
+        const float z =
+            f.depth.depth_m[static_cast<std::size_t>(v) * static_cast<std::size_t>(K.width) +
+                            static_cast<std::size_t>(u)];
+        const double mm = std::isfinite(z) && z > 0.0f ? std::round(1000.0 * z) : 0.0;
+        depth_mm.at<std::uint16_t>(v, u) = static_cast<std::uint16_t>(mm < 65535.0 ? mm : 0.0);
+      }
+    }
+    char name[64];
+    std::snprintf(name, sizeof(name), "/frame-%06d", i);
+    io::writePng(dir + name + ".depth.png", depth_mm);
+    const Eigen::Matrix4d T_W_C = (f.depth.T_W_B * f.depth.T_B_S).matrix();
+    std::ostringstream pose;
+    pose.precision(17);
+    for (int r = 0; r < 4; ++r) {
+      pose << T_W_C(r, 0) << ' ' << T_W_C(r, 1) << ' ' << T_W_C(r, 2) << ' ' << T_W_C(r, 3) << '\n';
+    }
+    io::writeFileAtomically(dir + name + ".pose.txt", pose.str());
+  }
+}
+
+/// Writes the scans of a LiDAR dataset as binary PCD files (sensor frame) in `dir`/clouds and
+/// their sensor poses as `dir`/poses.tum, paired by order.
+void writeCloudSequence(const Dataset& d, const std::string& dir) {
+  std::filesystem::create_directories(dir + "/clouds");
+  std::ostringstream tum;
+  tum.precision(17);
+  tum << "# timestamp tx ty tz qx qy qz qw (the sensor in the world)\n";
+  for (int i = 0; i < d.frames; ++i) {
+    const Frame f = d.frame(i);
+    const std::vector<Eigen::Vector3f>& points = f.cloud.points_S;
+    std::ostringstream pcd;
+    pcd << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH "
+        << points.size() << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " << points.size()
+        << "\nDATA binary\n";
+    std::string bytes = pcd.str();
+    for (const Eigen::Vector3f& p : points)
+      bytes.append(reinterpret_cast<const char*>(p.data()), 3 * sizeof(float));
+    char name[64];
+    std::snprintf(name, sizeof(name), "/clouds/scan_%06d.pcd", i);
+    io::writeFileAtomically(dir + name, bytes);
+    const Transform T_W_S = f.cloud.T_W_B * f.cloud.T_B_S;
+    const Eigen::Quaterniond q(T_W_S.linear());
+    const Eigen::Vector3d t = T_W_S.translation();
+    tum << 1.0 + 0.1 * i << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' '
+        << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
+  }
+  io::writeFileAtomically(dir + "/poses.tum", tum.str());
+}
+
+/// --write-frames: the frames of `d` as files both mlmap_replay and --octomap-replay read.
+void writeDatasetFiles(const Dataset& d, const std::string& dir) {
+  if (d.frames == 0) return;
+  if (d.frame(0).is_depth) {
+    writeFrameDirectory(d, dir);
+    std::printf("wrote %d frames of %s to %s (mlmap_replay --frames %s)\n", d.frames,
+                d.kind.c_str(), dir.c_str(), dir.c_str());
+  } else {
+    writeCloudSequence(d, dir);
+    std::printf(
+        "wrote %d scans of %s to %s (mlmap_replay --clouds %s/clouds --poses %s/poses.tum)\n",
+        d.frames, d.kind.c_str(), dir.c_str(), dir.c_str(), dir.c_str());
+  }
+}
+
+/// What --octomap-replay maps: the files of mlmap_replay's --frames or --clouds + --poses.
+struct OctomapReplayOptions {
+  std::string frames_dir;
+  std::string clouds_dir;
+  std::string poses_path;
+  double resolution_m = 0.1;
+  double max_range_m = 10.0;
+  std::string voxels_out;  ///< occupied voxels as mlmap_replay's text list (empty: none)
+};
+
+/// The whole-process OctoMap counterpart of mlmap_replay: every frame of the files read in turn
+/// (the same readers), back-projected as mlmap does, inserted with insertPointCloud at the
+/// resolution and range; prints the frames and the time. Returns the exit status.
+int octomapReplay(const OctomapReplayOptions& o) {
+  const Clock::time_point start = Clock::now();
+  std::unique_ptr<io::FrameSource> source;
+  if (!o.frames_dir.empty()) {
+    source = std::make_unique<io::FrameDirectorySource>(o.frames_dir);
+  } else {
+    source = std::make_unique<io::CloudSequenceSource>(o.clouds_dir, o.poses_path,
+                                                       io::CloudSequenceOptions{});
+  }
+  octomap::OcTree tree(o.resolution_m);
+  const float min_range = static_cast<float>(AwarenessConfig{}.min_range_m);
+  std::vector<Eigen::Vector3f> points_S;
+  octomap::Pointcloud scan_W;
+  double read_ms = 0.0;
+  for (std::size_t i = 0; i < source->size(); ++i) {
+    const Clock::time_point read_start = Clock::now();
+    io::SourceFrame frame = source->read(i);
+    read_ms += msSince(read_start);
+    Transform T_W_S;
+    if (const auto* depth = std::get_if<DepthFrame>(&frame)) {
+      backProject(*depth, &points_S);
+      T_W_S = depth->T_W_B * depth->T_B_S;
+    } else {
+      const auto& cloud = std::get<PointCloudFrame>(frame);
+      points_S = cloud.points_S;
+      T_W_S = cloud.T_W_B * cloud.T_B_S;
+    }
+    insertScan(points_S, T_W_S, min_range, o.max_range_m, &scan_W, &tree);
+  }
+  const OctomapVoxels voxels = octomapOccupied(tree);
+  if (!o.voxels_out.empty()) io::writeVoxelText(o.voxels_out, voxels.occupied, o.resolution_m);
+  std::printf(
+      "octomap replay: %zu frames of %s at %.3f m, range %.1f m: %zu occupied voxels, %.2f s "
+      "(reading %.2f s), peak RSS %.1f MB\n",
+      source->size(), source->describe().c_str(), o.resolution_m, o.max_range_m,
+      voxels.occupied.size(), msSince(start) / 1000.0, read_ms / 1000.0,
+      static_cast<double>(procStatusBytes("VmHWM")) / 1e6);
+  return voxels.key_mismatches == 0 ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -603,7 +748,39 @@ int main(int argc, char** argv) {
   app.add_flag("--voxels", o.voxels,
                "also write <out>/<dataset>_<res>.voxels.txt: both maps' occupied voxels, for pictures");
   app.add_flag("--quiet", o.quiet, "no progress lines");
+  std::string write_frames_dir;
+  app.add_option("--write-frames", write_frames_dir,
+                 "write each case's frames as files into DIR/<dataset> (depth: an RGB-D frame "
+                 "directory; LiDAR: binary PCD clouds + poses.tum) for whole-process runs of "
+                 "mlmap_replay and --octomap-replay, and exit");
+  OctomapReplayOptions replay;
+  auto* octomap_frames =
+      app.add_option("--octomap-frames", replay.frames_dir,
+                     "whole-process OctoMap replay of an RGB-D frame directory, and exit")
+          ->check(CLI::ExistingDirectory);
+  auto* octomap_clouds = app.add_option("--octomap-clouds", replay.clouds_dir,
+                                        "whole-process OctoMap replay of PCD / PLY clouds (with "
+                                        "--octomap-poses), and exit")
+                             ->check(CLI::ExistingDirectory);
+  auto* octomap_poses =
+      app.add_option("--octomap-poses", replay.poses_path, "the clouds' poses (TUM or CSV)")
+          ->check(CLI::ExistingFile);
+  octomap_clouds->needs(octomap_poses)->excludes(octomap_frames);
+  app.add_option("--octomap-resolution", replay.resolution_m, "the OctoMap replay's resolution [m]")
+      ->check(CLI::Range(0.01, 2.0))
+      ->capture_default_str();
+  app.add_option("--octomap-voxels", replay.voxels_out,
+                 "the OctoMap replay's occupied voxels, as mlmap_replay's occupied_voxels.txt");
   CLI11_PARSE(app, argc, argv);
+  if (!replay.frames_dir.empty() || !replay.clouds_dir.empty()) {
+    if (o.max_range_m > 0.0) replay.max_range_m = o.max_range_m;
+    try {
+      return octomapReplay(replay);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "mlmap_compare_octomap: %s\n", e.what());
+      return 1;
+    }
+  }
 
   try {
     std::vector<std::pair<std::string, double>> parsed;
@@ -627,6 +804,10 @@ int main(int argc, char** argv) {
     bool keys_ok = true;
     for (const auto& [kind, res] : parsed) {
       const Dataset d = makeDataset(kind, o);
+      if (!write_frames_dir.empty()) {
+        writeDatasetFiles(d, write_frames_dir + "/" + kind);
+        continue;
+      }
       results.push_back(runCase(d, res, o));
       printCase(results.back());
       keys_ok = keys_ok && results.back().octomap_voxels.key_mismatches == 0;

@@ -3,7 +3,8 @@
 # then the plot script on its output. Fails when a mapper did not run, when OctoMap's keys do
 # not map to mlmap's voxel indices (the program exits non-zero), when the two maps disagree
 # even within one cell, when --stream-hz does not give consecutive frames, when a chart is
-# missing, or when a bad --cases is not refused.
+# missing, when the whole-process runs from files (mlmap_replay and the OctoMap replay) disagree,
+# or when a bad --cases is not refused.
 # Usage: compare_octomap_smoke.sh BUILD_DIR SOURCE_DIR WORK_DIR
 set -euo pipefail
 build=$1 source=$2 work=$3
@@ -48,6 +49,37 @@ for png in octomap_time octomap_memory octomap_agreement octomap_diff_realsense_
            octomap_diff_building_0.20; do
   test -s "$work/png/$png.png" || { echo "missing $png.png" >&2; exit 1; }
 done
+# Whole-process runs from files: the frames written once, mapped by mlmap_replay and by the
+# OctoMap replay; both read the same files and their maps agree within one cell.
+"$build/mlmap_compare_octomap" --cases depth:0.2,lidar:0.2 --stream-hz 10 --frames 3 \
+  --write-frames "$work/files" --quiet > "$work/files.txt"
+"$build/mlmap_replay" --frames "$work/files/depth" --resolution 0.2 --max-range 10 \
+  --out "$work/replay_depth" > "$work/replay_depth.txt" 2>&1
+"$build/mlmap_compare_octomap" --octomap-frames "$work/files/depth" --octomap-resolution 0.2 \
+  --max-range 10 --octomap-voxels "$work/octomap_depth.txt" > "$work/octomap_depth.log"
+"$build/mlmap_replay" --clouds "$work/files/lidar/clouds" --poses "$work/files/lidar/poses.tum" \
+  --resolution 0.2 --max-range 8 --out "$work/replay_lidar" > "$work/replay_lidar.txt" 2>&1
+"$build/mlmap_compare_octomap" --octomap-clouds "$work/files/lidar/clouds" \
+  --octomap-poses "$work/files/lidar/poses.tum" --octomap-resolution 0.2 --max-range 8 \
+  --octomap-voxels "$work/octomap_lidar.txt" > "$work/octomap_lidar.log"
+grep -q "octomap replay: 3 frames" "$work/octomap_depth.log"
+/usr/bin/python3 - "$work" <<'PY'
+import sys
+work = sys.argv[1]
+def load(path):
+    return {tuple(map(int, l.split())) for l in open(path) if l.strip() and not l.startswith('#')}
+def near(v, s):
+    return any((v[0] + a, v[1] + b, v[2] + c) in s for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1))
+for kind in ('depth', 'lidar'):
+    m = load(f'{work}/replay_{kind}/occupied_voxels.txt')
+    o = load(f'{work}/octomap_{kind}.txt')
+    assert len(m) > 100 and len(o) > 100, (kind, len(m), len(o))
+    precision = sum(near(v, o) for v in m) / len(m)
+    recall = sum(near(v, m) for v in o) / len(o)
+    assert precision > 0.95 and recall > 0.95, (kind, precision, recall)
+    print(f'replay from files, {kind}: mlmap {len(m)}, OctoMap {len(o)} voxels; within one cell '
+          f'precision {precision:.3f}, recall {recall:.3f}')
+PY
 if "$build/mlmap_compare_octomap" --cases depth:zero --frames 1 > "$work/bad.txt" 2>&1; then
   echo "a bad --cases was accepted" >&2; exit 1
 fi

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <unordered_map>
 #include <limits>
@@ -224,6 +225,45 @@ TEST(MapEngine, ThreadedModeBuildsTheSameMapAsTheSynchronousMode) {
   EXPECT_TRUE(a == b);
   EXPECT_EQ(threaded_engine.stats().frames_mapped, 60u);
   EXPECT_EQ(threaded_engine.stats().frames_dropped, 0u);
+}
+
+TEST(MapEngine, WithoutPlanningLayersTheMapIsTheSameAndNoSnapshotIsMade) {
+  // Fly 30 m along x, so that submaps retire into the global map on the way.
+  const MapConfig with = configAt(0.2);
+  MapConfig without = with;
+  without.pipeline.planning_layers = false;
+  std::size_t snapshots_announced = 0;
+  EngineObservers observers;
+  observers.snapshot = [&](std::uint64_t, double) { ++snapshots_announced; };
+  MapEngine a(with);
+  MapEngine b(without, {}, observers);
+  for (int i = 0; i < 60; ++i) {
+    ASSERT_EQ(a.submit(cloudAt(1.0 + i, {0.5 * i, 0.0, 1.0})), FrameStatus::kAccepted);
+    ASSERT_EQ(b.submit(cloudAt(1.0 + i, {0.5 * i, 0.0, 1.0})), FrameStatus::kAccepted);
+  }
+  ASSERT_GT(a.stats().local.submaps_retired, 0u);
+  const auto sorted = [](const MapEngine& e) {
+    std::vector<VoxelIndex> v = e.occupiedVoxels();
+    std::sort(v.begin(), v.end(), [](const VoxelIndex& x, const VoxelIndex& y) {
+      return std::lexicographical_compare(x.data(), x.data() + 3, y.data(), y.data() + 3);
+    });
+    return v;
+  };
+  EXPECT_GT(a.occupiedVoxels().size(), 100u);
+  EXPECT_TRUE(sorted(a) == sorted(b));
+  EXPECT_EQ(a.stats().planning.snapshots, 60u);
+  const EngineStats s = b.stats();
+  EXPECT_EQ(s.frames_mapped, 60u);
+  EXPECT_EQ(s.planning.snapshots, 0u);
+  EXPECT_EQ(s.planning.esdf_updates, 0u);
+  EXPECT_EQ(s.memory.planning_bytes, 0u);
+  EXPECT_EQ(snapshots_announced, 0u);
+  EXPECT_EQ(b.snapshot()->frame(), 0u);
+  // A restored state publishes no snapshot either.
+  MapEngine c(without);
+  c.restoreState(a.exportState());
+  EXPECT_EQ(c.snapshot()->frame(), 0u);
+  EXPECT_TRUE(sorted(c) == sorted(a));
 }
 
 TEST(MapEngine, ObserversSeeEveryAwarenessFrameEverySnapshotAndEveryGlobalChange) {

@@ -145,6 +145,7 @@ struct PipelineConfig {
   int input_queue_capacity = 2;     ///< key input_queue_capacity (drops the OLDEST when full)
   int batch_queue_capacity = 2;     ///< key batch_queue_capacity (back-pressure when full)
   bool reject_out_of_order = true;  ///< key reject_out_of_order
+  bool planning_layers = true;      ///< key planning_layers
 
   /// The keys of the `pipeline` section (see the file comment).
   template <class Self, class V>
@@ -159,6 +160,10 @@ struct PipelineConfig {
           "measurement batches waiting; when full the awareness thread waits (nothing lost)");
     v.key("reject_out_of_order", c.reject_out_of_order, "",
           "frames not newer than the last accepted one are rejected (counted)");
+    v.key("planning_layers", c.planning_layers, "",
+          "true: after every mapped frame, a snapshot of the local window with the 2D grid\n"
+          "and the ESDF (as projected_grid and esdf enable them) is published for planners;\n"
+          "false: none is made, whatever those say (a program that only writes the map)");
   }
 
   void validate(std::vector<std::string>* errors) const;

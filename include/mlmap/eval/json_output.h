@@ -21,7 +21,8 @@ using Json = nlohmann::ordered_json;
 /// Strings that are not valid UTF-8 get U+FFFD for their bad bytes. Ends without a newline.
 [[nodiscard]] std::string formatJson(const Json& json, int expanded_levels);
 
-/// Writes formatJson(`json`, `expanded_levels`) and a newline to `path`.
+/// Writes formatJson(`json`, `expanded_levels`) and a newline to `path`, atomically
+/// (writeFileAtomically(): a failed write leaves no partial file).
 /// @throws std::runtime_error naming `path` when it cannot be written.
 void writeJsonFile(const std::string& path, const Json& json, int expanded_levels);
 

@@ -17,6 +17,7 @@
 /// checksum, holds inconsistent data, or (checkMapMatchesConfig) was made with a configuration
 /// whose fingerprinted fields differ.
 
+#include "mlmap/core/atomic_file.h"
 #include "mlmap/core/config.h"
 #include "mlmap/local/map_state.h"
 
@@ -62,10 +63,6 @@ inline constexpr std::uintmax_t kMaxMapFileBytes = std::uintmax_t{8} << 30;
 void checkMapMatchesConfig(const MapState& state, const MapConfig& config,
                            const std::string& source_name);
 
-/// Writes `bytes` to `path` the way saveMapFile() does (temporary file, flush, rename); used by
-/// the exports too. Throws std::runtime_error naming the path and the reason.
-void writeFileAtomically(const std::string& path, const std::string& bytes);
-
 /// True when `path` is an existing file that starts like an mlmap map file ("MLMAPMAP").
 [[nodiscard]] bool isMapFile(const std::string& path);
 
@@ -76,10 +73,5 @@ void writeFileAtomically(const std::string& path, const std::string& bytes);
 [[nodiscard]] std::string outputConflict(const std::string& output,
                                          const std::vector<std::string>& inputs,
                                          bool overwrite_maps, const std::string& overwrite_flag);
-
-/// Removes the temporary files a write of `path` left behind when it was killed before its
-/// rename ("<name>.tmp-XXXXXX" beside `path`); returns how many. writeFileAtomically() calls it
-/// after each write; the node calls it at start for its save path. Never throws.
-std::size_t removeLeftoverTemporaries(const std::string& path);
 
 }  // namespace mlmap::io

@@ -22,8 +22,11 @@ namespace mlmap::io {
 /// `voxels` sorted by (x, y, z) without duplicates.
 [[nodiscard]] std::vector<VoxelIndex> sortedUnique(std::vector<VoxelIndex> voxels);
 
-/// Writes `voxels` (any order; duplicates are written once) to `path` in the format above.
-/// @throws std::runtime_error naming the path when it cannot be written.
+/// The text of `voxels` (any order; duplicates once) in the format above.
+[[nodiscard]] std::string encodeVoxelText(const std::vector<VoxelIndex>& voxels,
+                                          double resolution_m);
+/// Writes encodeVoxelText() to `path` atomically (writeFileAtomically(): a failed write leaves
+/// no partial file). @throws std::runtime_error naming the path when it cannot be written.
 void writeVoxelText(const std::string& path, const std::vector<VoxelIndex>& voxels,
                     double resolution_m);
 

@@ -89,7 +89,8 @@ enum class ComparisonClass {
                                        const MapImageOptions& options,
                                        MapImageGeometry* geometry = nullptr);
 
-/// Writes `image` as a PNG file at `path` (parent directory must exist).
+/// Writes `image` as a PNG file at `path` (parent directory must exist), atomically
+/// (writeFileAtomically(): a failed write leaves no partial file).
 /// @throws std::runtime_error naming the path when the image is empty or cannot be written.
 void writePng(const std::string& path, const cv::Mat& image);
 

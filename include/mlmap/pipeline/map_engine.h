@@ -102,6 +102,7 @@ struct EngineObservers {
   /// `global`): from then on snapshot() returns it or a newer one. `frame` is its
   /// MapSnapshot::frame(). Lets a publisher wake as soon as there is something new instead of
   /// polling. (A snapshot the planning thread republishes with a new ESDF is not announced.)
+  /// Never called when pipeline.planning_layers is false: no snapshot is made.
   std::function<void(std::uint64_t frame, double stamp_s)> snapshot;
 };
 
@@ -123,7 +124,8 @@ class MapEngine {
   void flush();
 
   /// What planners read: the latest snapshot of the local window, 2D grid and ESDF. Safe to call
-  /// from any thread at any time; keep the pointer for a planning cycle (see MapSnapshot).
+  /// from any thread at any time; keep the pointer for a planning cycle (see MapSnapshot). With
+  /// pipeline.planning_layers false it stays the empty snapshot of a new engine.
   [[nodiscard]] std::shared_ptr<const MapSnapshot> snapshot() const { return planning_.snapshot(); }
 
   [[nodiscard]] EngineStats stats() const;
