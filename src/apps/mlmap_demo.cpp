@@ -29,6 +29,7 @@ struct Options {
   int max_frames = 0;         ///< --max-frames (0: all)
   double noise = -1.0;        ///< --noise: depth noise coefficient [1/m] (< 0: the scenario's)
   std::string save_map_path;  ///< --save-map (empty: not saved)
+  bool overwrite = false;     ///< --overwrite: --save-map may replace an existing map
   bool threaded = false;      ///< --threaded
   bool print_config = false;  ///< --print-config
 };
@@ -53,6 +54,7 @@ void addOptions(CLI::App& app, Options& o) {
   app.add_option("--save-map", o.save_map_path,
                  "save the final map (local + global layers) to this mlmap map file; "
                  "mlmap_map_tool converts it to PLY / PCD / PGM + YAML / OctoMap .bt");
+  app.add_flag("--overwrite", o.overwrite, "--save-map may replace an existing mlmap map");
   app.add_flag("--threaded", o.threaded, "run the awareness and local-global stages on two threads");
   app.add_flag("--print-config", o.print_config, "print the effective engine configuration and exit");
 }
@@ -142,7 +144,7 @@ int run(const Options& o) {
       return 2;
     }
     std::filesystem::create_directories(o.out_dir);
-    if (!o.save_map_path.empty()) eval::checkSaveMapTarget(o.save_map_path);  // before the flight
+    if (!o.save_map_path.empty()) eval::checkSaveMapTarget(o.save_map_path, o.overwrite);  // before the flight
     mapAndReport(o, config);
     return 0;
   } catch (const std::exception& e) {

@@ -12,6 +12,10 @@
 #include "mlmap/map_io/map_export.h"
 #include "mlmap/map_io/voxel_text.h"
 #include "mlmap/pipeline/map_engine.h"
+#if MLMAP_HAVE_BAG
+#include "mlmap/bag/bag_frame_source.h"
+#include "mlmap/bag/bag_reader.h"
+#endif
 
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
@@ -198,6 +202,13 @@ struct Options {
   std::string poses_path;      ///< --poses: the clouds' trajectory (TUM or CSV)
   std::string extrinsic_text;  ///< --extrinsic: the sensor in the pose frame, "x y z qx qy qz qw"
   std::string scenario_path;   ///< --scenario: simulator world + flight (empty: the built-in room)
+  std::string bag_path;        ///< --bag: a ROS 2 bag (folder with metadata.yaml, .mcap or .db3)
+  std::vector<std::string> cloud_topics;  ///< --cloud-topic (empty: chosen from the bag)
+  std::string depth_topic;        ///< --depth-topic
+  std::string camera_info_topic;  ///< --camera-info-topic
+  std::string pose_topic;         ///< --pose-topic (PoseStamped or Odometry)
+  std::string world_frame;        ///< --world-frame: poses from /tf, this frame to --body-frame
+  std::string body_frame = "base_link";  ///< --body-frame
   std::string config_path;     ///< --config: engine configuration YAML (empty: defaults)
   double resolution_m = 0.0;   ///< --resolution (0: the config's, or the kind's default)
   double max_range_m = 0.0;    ///< --max-range (0: the config's)
@@ -208,6 +219,7 @@ struct Options {
   std::string save_map_path;   ///< --save-map (empty: not saved)
   std::string grid_out;        ///< --grid-out: the final 2D grid's PGM + YAML base (empty: none)
   int reader_threads = 1;      ///< --reader-threads: 1 reads ahead on a thread, 0 in turn
+  bool overwrite = false;      ///< --overwrite: --save-map may replace an existing map
 };
 
 /// Frames the reader thread keeps decoded ahead of the mapping: enough to ride out a slow file,
@@ -221,7 +233,10 @@ constexpr const char* kAbout =
     "                            intrinsics.K.txt; the poses are the camera's)\n"
     "  --clouds DIR --poses FILE PCD (ascii, binary, binary_compressed) / PLY (ascii, binary\n"
     "                            little / big endian) clouds with a TUM or CSV trajectory\n"
-    "  (neither)                 the simulator: the demo's built-in room flight\n"
+    "  --bag PATH                a ROS 2 bag (a folder with metadata.yaml, or one .mcap / .db3\n"
+    "                            file): PointCloud2, or a depth Image with its CameraInfo; the\n"
+    "                            pose from PoseStamped / Odometry or /tf (--world-frame)\n"
+    "  (none)                    the simulator: the demo's built-in room flight\n"
     "Clouds whose file names are time stamps (1305031102.175304.pcd, or integer\n"
     "nanoseconds / microseconds: 19-20 / 16-17 digits)\n"
     "get the pose at their stamp, interpolated between the two poses around it when the nearer\n"
@@ -234,7 +249,37 @@ constexpr const char* kAbout =
     "The planning layers (snapshots, 2D grid, ESDF) run only for an output that needs them\n"
     "(--grid-out); otherwise the replay maps and writes the map, nothing else.";
 
-/// Adds --frames, --clouds, --poses, --extrinsic and --scenario (one source at most) to `app`.
+/// Adds --bag and the options that choose its topics and frames to `app`; --bag excludes the
+/// other sources `others`.
+void addBagOptions(CLI::App& app, Options& o, const std::vector<CLI::Option*>& others) {
+#if MLMAP_HAVE_BAG
+  auto* bag_opt = app.add_option("--bag", o.bag_path,
+                                 "ROS 2 bag to map: a folder with metadata.yaml, or one .mcap / "
+                                 ".db3 file; with no topic named, the inputs are chosen when the "
+                                 "bag leaves no doubt, else the error lists its topics")
+                      ->check(CLI::ExistingPath);
+  for (CLI::Option* other : others) bag_opt->excludes(other);
+  const std::vector<CLI::Option*> bag_only = {
+      app.add_option("--cloud-topic", o.cloud_topics, "--bag: a PointCloud2 topic (repeatable)"),
+      app.add_option("--depth-topic", o.depth_topic, "--bag: a depth Image topic (16UC1 mm, 32FC1 m)"),
+      app.add_option("--camera-info-topic", o.camera_info_topic,
+                     "--bag: the CameraInfo of --depth-topic (default: the one beside it)"),
+      app.add_option("--pose-topic", o.pose_topic, "--bag: a PoseStamped or Odometry topic giving the body pose"),
+      app.add_option("--world-frame", o.world_frame,
+                     "--bag: take the body pose from /tf, from this frame (e.g. map) to --body-frame"),
+      app.add_option("--body-frame", o.body_frame,
+                     "--bag: the body frame (/tf child; sensors' extrinsics from /tf_static)")
+          ->capture_default_str()};
+  for (CLI::Option* option : bag_only) option->needs(bag_opt);
+#else
+  (void)app;
+  (void)o;
+  (void)others;
+#endif
+}
+
+/// Adds --frames, --clouds, --poses, --extrinsic, --scenario and --bag (one source at most) to
+/// `app`.
 void addSourceOptions(CLI::App& app, Options& o) {
   auto* frames_opt = app.add_option("--frames", o.frames_dir, "RGB-D frame directory to map")
                          ->check(CLI::ExistingDirectory);
@@ -262,6 +307,7 @@ void addSourceOptions(CLI::App& app, Options& o) {
                                       "simulator: world + flight YAML (default: the built-in room)")
                            ->check(CLI::ExistingFile);
   scenario_opt->excludes(frames_opt)->excludes(clouds_opt);
+  addBagOptions(app, o, {frames_opt, clouds_opt, scenario_opt});
 }
 
 /// Adds --resolution, --max-range and --config to `app`.
@@ -303,6 +349,7 @@ void addOutputOptions(CLI::App& app, Options& o) {
                  "also save the final map (local + global layers) to this mlmap map file; "
                  "mlmap_map_tool converts it to PLY / PCD / PGM + YAML / OctoMap .bt, and "
                  "mlmap_node can start from it (map_file.load_path)");
+  app.add_flag("--overwrite", o.overwrite, "--save-map may replace an existing mlmap map");
   app.add_option("--grid-out", o.grid_out,
                  "also write the final projected 2D grid (projected_grid section of --config) as "
                  "BASE.pgm + BASE.yaml (ROS map_server); turns the planning layers on, without the "
@@ -311,9 +358,9 @@ void addOutputOptions(CLI::App& app, Options& o) {
 
 /// The kind of data the options name.
 eval::DataKind dataKind(const Options& o) {
-  return !o.frames_dir.empty()   ? eval::DataKind::kFrameDirectory
-         : !o.clouds_dir.empty() ? eval::DataKind::kPointClouds
-                                 : eval::DataKind::kSimulator;
+  return !o.frames_dir.empty()                          ? eval::DataKind::kFrameDirectory
+         : !o.clouds_dir.empty() || !o.bag_path.empty() ? eval::DataKind::kPointClouds
+                                                        : eval::DataKind::kSimulator;
 }
 
 /// The cloud sequence's options: --extrinsic parsed (the cloud sequence gives T_B_S from it and
@@ -338,7 +385,32 @@ void planningForOutputs(const Options& o, MapConfig* config) {
   config->esdf.enabled = false;
 }
 
-/// --max-range applied (the awareness grid grows to reach it), the engine made synchronous and
+/// Widens the local window horizontally so that every hit within `range_m` of the body lies in
+/// it wherever the body is in its submap (3 of the 5 submaps from the body), logged. A window
+/// already that wide is kept; so is one whose widening the configuration's limits refuse (the
+/// window's 2e8 voxels, the awareness scratch box): the hits beyond it are then counted and said.
+void sizeWindowForRange(double range_m, MapConfig* config) {
+  LocalMapConfig& local_map = config->local_map;
+  const int needed = static_cast<int>(std::ceil(range_m / (3.0 * local_map.resolution_m) - 1e-9)) *
+                     LocalMapConfig::kSubmapsPerAxis;
+  const Eigen::Vector3i before = local_map.size_cells;
+  for (int a = 0; a < 2; ++a) local_map.size_cells[a] = std::max(local_map.size_cells[a], needed);
+  if (local_map.size_cells == before) return;
+  if (!config->validate().empty()) {
+    spdlog::warn("--max-range {} m: a local window of {} x {} voxels would hold it, more than the "
+                 "configuration's limits allow; hits farther than {:.1f} m are counted, not mapped",
+                 range_m, needed, needed, 0.6 * std::min(before.x(), before.y()) * local_map.resolution_m);
+    local_map.size_cells = before;
+    return;
+  }
+  spdlog::info("--max-range {} m: the local window grows from {} x {} to {} x {} voxels ({:.1f} x "
+               "{:.1f} m) so that every hit in range is mapped",
+               range_m, before.x(), before.y(), local_map.size_cells.x(), local_map.size_cells.y(),
+               local_map.size_cells.x() * local_map.resolution_m,
+               local_map.size_cells.y() * local_map.resolution_m);
+}
+
+/// --max-range applied (the awareness grid and the local window grow to reach it), the engine made synchronous and
 /// the planning layers limited to what the outputs need.
 void adjustConfig(const Options& o, MapConfig* config) {
   if (o.max_range_m > 0.0) {
@@ -346,6 +418,7 @@ void adjustConfig(const Options& o, MapConfig* config) {
     if (config->awareness.radius_m() < o.max_range_m) {
       config->awareness.rho_cells = static_cast<int>(std::ceil(o.max_range_m / config->awareness.rho_cell_m));
     }
+    sizeWindowForRange(o.max_range_m, config);
   }
   if (config->pipeline.threaded) {
     spdlog::warn("pipeline.threaded: the replay runs synchronously (every frame is mapped, in order)");
@@ -454,6 +527,42 @@ void mapCloudSequence(const Options& o, const io::CloudSequenceOptions& cloud_op
                clouds.poseCount(), replay->resolution_m(), replay->engine.config().awareness.max_range_m);
   mapFrames(o, source, replay);
 }
+
+#if MLMAP_HAVE_BAG
+/// Maps the frames of --bag, its inputs named by the options or chosen from the bag.
+void mapBag(const Options& o, Replay* replay) {
+  std::shared_ptr<const bag::BagReader> reader = bag::openBag(o.bag_path);  // its errors name the file
+  spdlog::info("{}: {} messages on {} topics:\n{}", o.bag_path, reader->entries().size(),
+               reader->topics().size(), reader->describeTopics());
+  bag::BagFrameSourceOptions options;
+  options.inputs.cloud_topics = o.cloud_topics;
+  options.inputs.depth_topic = o.depth_topic;
+  options.inputs.camera_info_topic = o.camera_info_topic;
+  options.inputs.pose_topic = o.pose_topic;
+  options.inputs.pose_from_tf = !o.world_frame.empty() && o.pose_topic.empty();
+  options.world_frame = o.world_frame;
+  options.body_frame = o.body_frame;
+  std::optional<bag::BagFrameSource> opened;
+  try {
+    opened.emplace(reader, options);
+  } catch (const std::runtime_error& e) {  // the library names its options; say the replay's
+    throw std::runtime_error(std::string(e.what()) +
+                             "\n(mlmap_replay: --cloud-topic, --depth-topic, --camera-info-topic, "
+                             "--pose-topic, --world-frame, --body-frame)");
+  }
+  const bag::BagFrameSource& source = *opened;
+  for (const std::string& w : source.warnings()) spdlog::warn("{}", w);
+  if (source.unpairedCount() > 0) {
+    spdlog::warn("{} input messages have no pose within {} s of their stamp and are skipped",
+                 source.unpairedCount(), options.pose_tolerance_s);
+  }
+  spdlog::info("mapping {} of {} with {} poses at {} m, max range {} m",
+               frameCount(o, source.size()), source.describe(), source.poseCount(),
+               replay->resolution_m(), replay->engine.config().awareness.max_range_m);
+  replay->info = {o.bag_path, "bag", "poses at the messages' stamps", source.unpairedCount(), 0};
+  mapFrames(o, source, replay);
+}
+#endif
 
 /// Flies the simulator through --scenario (or the built-in room) and scores the map.
 void flySimulator(const Options& o, Replay* replay) {
@@ -578,11 +687,15 @@ int replaySource(const Options& o) {
   adjustConfig(o, &config);
   if (!validConfig(config)) return 2;
   std::filesystem::create_directories(o.out_dir);
-  if (!o.save_map_path.empty()) eval::checkSaveMapTarget(o.save_map_path);  // before the run
+  if (!o.save_map_path.empty()) eval::checkSaveMapTarget(o.save_map_path, o.overwrite);  // before the run
 
   Replay replay(config, o.out_dir);
   if (kind == eval::DataKind::kFrameDirectory) {
     mapFrameDirectory(o, &replay);
+#if MLMAP_HAVE_BAG
+  } else if (!o.bag_path.empty()) {
+    mapBag(o, &replay);
+#endif
   } else if (kind == eval::DataKind::kPointClouds) {
     mapCloudSequence(o, *cloud_options, &replay);
   } else {

@@ -198,12 +198,14 @@ std::size_t peakRssBytes() {
   return static_cast<std::size_t>(usage.ru_maxrss) * 1024u;  // Linux: kilobytes
 }
 
-void checkSaveMapTarget(const std::string& path) {
+void checkSaveMapTarget(const std::string& path, bool overwrite) {
   const std::filesystem::path target(path);
   const std::filesystem::path folder = target.has_parent_path() ? target.parent_path() : ".";
   if (!std::filesystem::is_directory(folder)) {
     throw std::runtime_error("--save-map: folder '" + folder.string() + "' does not exist");
   }
+  const std::string conflict = io::outputConflict(path, {}, overwrite, "--overwrite");
+  if (!conflict.empty()) throw std::runtime_error("--save-map: " + conflict);
 }
 
 void saveMap(const MapEngine& engine, const std::string& path) {

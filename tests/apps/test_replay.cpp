@@ -181,8 +181,9 @@ TEST(Replay, VoxelIndicesAreFloorOfCoordinateOverResolution) {
 
 TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
   // A wall 2 m away and one 15 m away beside it, in range (20 m) but beyond the 19 m window's
-  // half width:
-  // the far wall's hits cannot be mapped, and the summary, the log and stats.json say how many.
+  // reach (3 submaps, 11.4 m) when the configuration fixes the window: the far wall's hits
+  // cannot be mapped, and the summary, the log and stats.json say how many. With --max-range the
+  // replay sizes the window itself, and both walls are mapped.
   const std::string dir = ::testing::TempDir() + "/mlmap_replay_outside";
   fs::remove_all(dir);
   fs::create_directories(dir + "/clouds");
@@ -197,9 +198,12 @@ TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
       dir + "/clouds/scan_a.ply",
       mlmap::testing::makePly(points, mlmap::testing::PlyFormat::kAscii, true));
   mlmap::testing::writeFile(dir + "/poses.csv", "t,x,y,z,qx,qy,qz,qw\n1,0,0,0,0,0,0,1\n");
-  const std::string command = std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir +
-                              "/clouds' --poses '" + dir +
-                              "/poses.csv' --resolution 0.1 --max-range 20 --out '" + dir + "/out'";
+  mlmap::testing::writeFile(dir + "/fixed.yaml",
+                            "local_map: {resolution_m: 0.1, size_cells: [190, 190, 70]}\n"
+                            "awareness: {max_range_m: 20, rho_cells: 200}\n");
+  const std::string source = std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir +
+                             "/clouds' --poses '" + dir + "/poses.csv'";
+  const std::string command = source + " --config '" + dir + "/fixed.yaml' --out '" + dir + "/out'";
   ASSERT_EQ(run(command, dir + "/replay.log"), 0) << readText(dir + "/replay.log");
   const std::string stats = readText(dir + "/out/stats.json");
   EXPECT_EQ(jsonInt(stats, "hits_beyond_local_map"), 21 * 11);  // every point of the far wall
@@ -214,6 +218,24 @@ TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
   EXPECT_NE(log.find("fell outside the local window and were not mapped"), std::string::npos)
       << log;
   EXPECT_EQ(jsonInt(readText(dir + "/out/report.json"), "hits_beyond_local_map"), 21 * 11);
+
+  // --max-range 20: the window grows to hold the range, and every hit is mapped.
+  ASSERT_EQ(run(source + " --resolution 0.1 --max-range 20 --out '" + dir + "/sized'",
+                dir + "/sized.log"),
+            0)
+      << readText(dir + "/sized.log");
+  const std::string sized = readText(dir + "/sized/stats.json");
+  EXPECT_EQ(jsonInt(sized, "hits_beyond_local_map"), 0);
+  EXPECT_EQ(jsonInt(sized, "hits_outside_window"), 0);
+  EXPECT_EQ(jsonInt(sized, "hit_voxels"), 2 * 21 * 11);
+  std::size_t far = 0;
+  for (const VoxelIndex& v : io::readVoxelText(dir + "/sized/occupied_voxels.txt")) {
+    far += v.x() == 150 ? 1 : 0;
+  }
+  EXPECT_EQ(far, 21u * 11u) << "the far wall, 15 m away";
+  EXPECT_NE(readText(dir + "/sized.log").find("the local window grows from 190 x 190 to 335 x 335"),
+            std::string::npos)
+      << readText(dir + "/sized.log");
 }
 
 TEST(Replay, BadInputIsRefusedWithAMessage) {

@@ -71,9 +71,10 @@ struct MapOutputs {
 std::vector<std::string> writeMapOutputs(const MapOutputs& outputs, const EngineStats& stats,
                                          const std::vector<VoxelIndex>& occupied, double resolution_m);
 
-/// Refuses a --save-map target whose folder does not exist, before a run rather than after it.
-/// @throws std::runtime_error naming the folder.
-void checkSaveMapTarget(const std::string& path);
+/// Refuses a --save-map target whose folder does not exist, or that is an existing mlmap map
+/// while `overwrite` (--overwrite) is false: before a run rather than after it.
+/// @throws std::runtime_error naming the folder or the file.
+void checkSaveMapTarget(const std::string& path, bool overwrite);
 /// Saves the engine's map (local + global layers, mlmap/map_io/map_file.h) to `path` and prints its
 /// size and the time taken. @throws std::runtime_error when it cannot be saved.
 void saveMap(const MapEngine& engine, const std::string& path);
