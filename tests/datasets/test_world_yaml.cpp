@@ -245,7 +245,7 @@ TEST(WorldYaml, SyntaxErrorsAndMissingFiles) {
   expectErrorContains("world: {boxes: [\n", "not valid YAML");
   expectErrorContains("frame_rate_hz: 10\nframe_rate_hz: 20\n",
                       "line 2: key 'frame_rate_hz' appears twice (first on line 1)");
-  expectErrorContains("frame_rate_hz: 10\n---\nframe_rate_hz: 20\n", "2 YAML documents");
+  expectErrorContains("frame_rate_hz: 10\n---\nframe_rate_hz: 20\n", "more than one YAML document");
   const std::string missing = "/nonexistent/dir/no_such_world.yaml";
   try {
     (void)loadScenarioYaml(missing);

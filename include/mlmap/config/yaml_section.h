@@ -5,6 +5,7 @@
 /// every problem is collected so that one run reports all of them. Used by the engine loader
 /// (config_yaml.h) and by loaders of other sections of the same file (mlmap_node's `dds`).
 
+#include <yaml-cpp/eventhandler.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cstdint>
@@ -122,62 +123,95 @@ class Section {
 
 /// Appends to `errors` every key that appears twice in a mapping of `node` or below it, as
 /// "line L: key '<path>' appears twice (first on line M)" (YAML forbids it; yaml-cpp would
-/// silently keep the first value). Nesting deeper than `max_depth` is an error too.
+/// silently keep the first value). Nesting deeper than `max_depth`, or more nodes than
+/// `*node_budget` (aliases can make a small text a huge tree), is an error too.
 inline void findDuplicateKeys(const YAML::Node& node, const std::string& path, int max_depth,
-                              std::vector<std::string>* errors) {
+                              long* node_budget, std::vector<std::string>* errors) {
+  if (--*node_budget < 0) return;  // reported once by the caller
   if (max_depth < 0) {
     errors->push_back("line " + std::to_string(node.Mark().line + 1) + ": '" + path +
                       "' is nested too deeply for a configuration");
     return;
   }
   if (node.IsSequence()) {
-    for (std::size_t i = 0; i < node.size(); ++i) {
-      findDuplicateKeys(node[i], path + "[" + std::to_string(i) + "]", max_depth - 1, errors);
+    std::size_t i = 0;
+    for (const YAML::Node& item : node) {
+      findDuplicateKeys(item, path + "[" + std::to_string(i++) + "]", max_depth - 1, node_budget,
+                        errors);
     }
     return;
   }
   if (!node.IsMap()) return;
+  std::set<std::string> seen_keys;
   std::vector<std::pair<std::string, int>> seen;  // key, line (1-based)
   for (const auto& entry : node) {
     const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : "<complex key>";
     const int line = entry.first.Mark().line + 1;
     const std::string key_path = path.empty() ? key : path + "." + key;
-    for (const auto& [other, other_line] : seen) {
-      if (other == key) {
-        errors->push_back("line " + std::to_string(line) + ": key '" + key_path +
-                          "' appears twice (first on line " + std::to_string(other_line) + ")");
-        break;
+    if (!seen_keys.insert(key).second) {
+      for (const auto& [other, other_line] : seen) {
+        if (other == key) {
+          errors->push_back("line " + std::to_string(line) + ": key '" + key_path +
+                            "' appears twice (first on line " + std::to_string(other_line) + ")");
+          break;
+        }
       }
     }
     seen.emplace_back(key, line);
-    findDuplicateKeys(entry.second, key_path, max_depth - 1, errors);
+    findDuplicateKeys(entry.second, key_path, max_depth - 1, node_budget, errors);
   }
+}
+
+/// A YAML event handler that ignores every event: counts documents without building them.
+class YamlEventSink : public YAML::EventHandler {
+ public:
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t, const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+};
+
+/// True when `text` holds more than one YAML document. At most two are parsed (yaml-cpp's
+/// LoadAll() can loop forever on malformed text).
+inline bool hasSecondYamlDocument(const std::string& text) {
+  std::istringstream stream(text);
+  YAML::Parser parser(stream);
+  YamlEventSink sink;
+  return parser.HandleNextDocument(sink) && parser.HandleNextDocument(sink);
 }
 
 /// Parses one YAML document strictly: a syntax error, a second document ("---") or a key that
 /// appears twice in a mapping throws std::runtime_error "<source_name>: ..." naming the line.
 inline YAML::Node parseYamlDocument(const std::string& text, const std::string& source_name) {
-  std::vector<YAML::Node> documents;
+  YAML::Node root;
   try {
-    documents = YAML::LoadAll(text);
+    root = YAML::Load(text);
+    if (hasSecondYamlDocument(text)) {
+      throw std::runtime_error(source_name + ": more than one YAML document (separated by "
+                               "'---'); a configuration is one document: merge them or remove "
+                               "the extra ones");
+    }
   } catch (const YAML::Exception& e) {
     throw std::runtime_error(source_name + ": not valid YAML: " + e.what());
   }
-  if (documents.size() > 1) {
-    throw std::runtime_error(source_name + ": " + std::to_string(documents.size()) +
-                             " YAML documents (separated by '---'); a configuration is one "
-                             "document: merge them or remove the extra ones");
-  }
-  if (documents.empty()) return YAML::Node();
   std::vector<std::string> errors;
   constexpr int kMaxDepth = 32;
-  findDuplicateKeys(documents.front(), "", kMaxDepth, &errors);
+  long node_budget = 100000;  // configurations have a few hundred nodes
+  findDuplicateKeys(root, "", kMaxDepth, &node_budget, &errors);
+  if (node_budget < 0) errors.push_back("more than 100000 YAML nodes: too large for a configuration");
   if (!errors.empty()) {
     std::string m = source_name + ": not a valid configuration:";
     for (const std::string& e : errors) m += "\n  " + e;
     throw std::runtime_error(m);
   }
-  return documents.front();
+  return root;
 }
 
 /// The whole text of a configuration file. Throws std::runtime_error "<path>: cannot open the
