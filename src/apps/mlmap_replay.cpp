@@ -203,12 +203,14 @@ struct Options {
   std::string extrinsic_text;  ///< --extrinsic: the sensor in the pose frame, "x y z qx qy qz qw"
   std::string scenario_path;   ///< --scenario: simulator world + flight (empty: the built-in room)
   std::string bag_path;        ///< --bag: a ROS 2 bag (folder with metadata.yaml, .mcap or .db3)
+#if MLMAP_HAVE_BAG
   std::vector<std::string> cloud_topics;  ///< --cloud-topic (empty: chosen from the bag)
   std::string depth_topic;        ///< --depth-topic
   std::string camera_info_topic;  ///< --camera-info-topic
   std::string pose_topic;         ///< --pose-topic (PoseStamped or Odometry)
   std::string world_frame;        ///< --world-frame: poses from /tf, this frame to --body-frame
   std::string body_frame = "base_link";  ///< --body-frame
+#endif
   std::string config_path;     ///< --config: engine configuration YAML (empty: defaults)
   double resolution_m = 0.0;   ///< --resolution (0: the config's, or the kind's default)
   double max_range_m = 0.0;    ///< --max-range (0: the config's)

@@ -1,5 +1,7 @@
 #include "mlmap/apps/stop_signal.h"
 
+#include <pthread.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -20,9 +22,16 @@ static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs l
 [[noreturn]] void exitBySignal(int signo) {
   static const char kMessage[] = "stop signal during start-up: exiting at once (nothing to save yet)\n";
   (void)!::write(STDERR_FILENO, kMessage, sizeof kMessage - 1);
+  // The default action, with the signal unblocked (it is blocked while its handler runs), ends
+  // the process as killed by it.
   std::signal(signo, SIG_DFL);
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, signo);
+  ::pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
   std::raise(signo);
-  ::_exit(128 + signo);  // not reached: the default action of SIGINT / SIGTERM ends the process
+  // cppcheck-suppress unreachableCode ; raise() returns if the signal stays blocked elsewhere
+  ::_exit(128 + signo);
 }
 
 extern "C" void onStopSignal(int signo) {
