@@ -393,15 +393,15 @@ void planningForOutputs(const Options& o, MapConfig* config) {
 /// window's 2e8 voxels, the awareness scratch box): the hits beyond it are then counted and said.
 void sizeWindowForRange(double range_m, MapConfig* config) {
   LocalMapConfig& local_map = config->local_map;
-  const int needed = static_cast<int>(std::ceil(range_m / (3.0 * local_map.resolution_m) - 1e-9)) *
-                     LocalMapConfig::kSubmapsPerAxis;
+  const int needed = local_map.horizontalCellsForRange(range_m);
   const Eigen::Vector3i before = local_map.size_cells;
+  const double reach_before_m = local_map.horizontalReach_m();
   for (int a = 0; a < 2; ++a) local_map.size_cells[a] = std::max(local_map.size_cells[a], needed);
   if (local_map.size_cells == before) return;
   if (!config->validate().empty()) {
     spdlog::warn("--max-range {} m: a local window of {} x {} voxels would hold it, more than the "
                  "configuration's limits allow; hits farther than {:.1f} m are counted, not mapped",
-                 range_m, needed, needed, 0.6 * std::min(before.x(), before.y()) * local_map.resolution_m);
+                 range_m, needed, needed, reach_before_m);
     local_map.size_cells = before;
     return;
   }

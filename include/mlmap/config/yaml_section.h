@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -142,22 +143,16 @@ inline void findDuplicateKeys(const YAML::Node& node, const std::string& path, i
     return;
   }
   if (!node.IsMap()) return;
-  std::set<std::string> seen_keys;
-  std::vector<std::pair<std::string, int>> seen;  // key, line (1-based)
+  std::map<std::string, int> first_line;  // key -> the line (1-based) it first appears on
   for (const auto& entry : node) {
     const std::string key = entry.first.IsScalar() ? entry.first.Scalar() : "<complex key>";
     const int line = entry.first.Mark().line + 1;
     const std::string key_path = path.empty() ? key : path + "." + key;
-    if (!seen_keys.insert(key).second) {
-      for (const auto& [other, other_line] : seen) {
-        if (other == key) {
-          errors->push_back("line " + std::to_string(line) + ": key '" + key_path +
-                            "' appears twice (first on line " + std::to_string(other_line) + ")");
-          break;
-        }
-      }
+    const auto [first, inserted] = first_line.emplace(key, line);
+    if (!inserted) {
+      errors->push_back("line " + std::to_string(line) + ": key '" + key_path +
+                        "' appears twice (first on line " + std::to_string(first->second) + ")");
     }
-    seen.emplace_back(key, line);
     findDuplicateKeys(entry.second, key_path, max_depth - 1, node_budget, errors);
   }
 }

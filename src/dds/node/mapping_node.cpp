@@ -144,15 +144,14 @@ struct MappingNode::Impl {
   /// beyond 3 submaps is said at start, with the window that would hold it.
   void warnIfRangeExceedsWindow() {
     const LocalMapConfig& lm = config.map.local_map;
-    const int cells = std::min(lm.size_cells.x(), lm.size_cells.y());
-    const double reach_m = 0.6 * cells * lm.resolution_m;  // 3 of the 5 submaps
     const double range_m = config.map.awareness.max_range_m;
-    if (range_m <= reach_m) return;
-    const int needed = static_cast<int>(std::ceil(range_m / (3.0 * lm.resolution_m) - 1e-9)) * 5;
+    if (range_m <= lm.horizontalReach_m()) return;
+    const int needed = lm.horizontalCellsForRange(range_m);
     std::ostringstream m;
     m << "awareness.max_range_m (" << range_m << " m) reaches beyond the local window: hits "
-      << "farther than " << reach_m << " m from the body are never mapped, only counted; "
-      << "local_map.size_cells " << needed << " x " << needed << " horizontally holds the range";
+      << "farther than " << lm.horizontalReach_m() << " m from the body are never mapped, only "
+      << "counted; local_map.size_cells " << needed << " x " << needed
+      << " horizontally holds the range";
     log.always(LogLevel::kWarning, m.str());
   }
 
