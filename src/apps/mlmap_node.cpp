@@ -48,14 +48,20 @@ void logNodeMessage(LogLevel level, const std::string& message) {
               message);
 }
 
-/// Logs the domain, namespace and input topics the node listens on.
+/// Logs the domain, discovery, namespace and input topics the node listens on.
 void logInputs(const mlmap::dds::NodeConfig& config, const mlmap::dds::MappingNode& node) {
+  // Resolved as the participant was (the configuration was validated before).
+  std::string discovery = mlmap::dds::toString(mlmap::dds::resolveDiscoveryRange(config.dds));
+  for (const std::string& peer : mlmap::dds::resolveStaticPeers(config.dds)) {
+    discovery += (discovery.find(" peers ") == std::string::npos ? " peers " : ";") + peer;
+  }
   std::string inputs;
   const mlmap::dds::TopicNames& t = config.dds.topics;
   for (const std::string* name : {&t.cloud, &t.depth_image, &t.camera_info, &t.pose, &t.odometry}) {
     if (!name->empty()) inputs += (inputs.empty() ? "" : ", ") + mlmap::dds::ddsTopicName(config.dds.ns, *name);
   }
-  spdlog::info("mapping on DDS domain {} (namespace '{}'), inputs: {}", node.domainId(), config.dds.ns, inputs);
+  spdlog::info("mapping on DDS domain {} (discovery {}, namespace '{}'), inputs: {}", node.domainId(),
+               discovery, config.dds.ns, inputs);
 }
 
 /// One progress line: frames, timings and memory.

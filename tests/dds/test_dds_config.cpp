@@ -190,11 +190,14 @@ TEST(ResolveDomainId, InvalidEnvironmentValueIsAnErrorNamingTheVariable) {
   EXPECT_EQ(resolveDomainId(config), 3);
 }
 
-TEST(ResolveDiscoveryRange, ConfigThenEnvironmentThenSystemDefault) {
+TEST(ResolveDiscoveryRange, ConfigThenEnvironmentThenSubnetAsRcl) {
   DdsConfig config;
   {
     ScopedEnv env("ROS_AUTOMATIC_DISCOVERY_RANGE", std::nullopt);
+    EXPECT_EQ(resolveDiscoveryRange(config), DiscoveryRange::kSubnet);
+    config.discovery_range = "SYSTEM_DEFAULT";
     EXPECT_EQ(resolveDiscoveryRange(config), DiscoveryRange::kSystemDefault);
+    config.discovery_range = "";
   }
   {
     ScopedEnv env("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST");

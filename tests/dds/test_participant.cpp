@@ -26,8 +26,10 @@
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <random>
@@ -508,6 +510,115 @@ TEST(Participant, OffAddsNoPeersAndNoMulticastSoTwoParticipantsNeverMeet) {
   // The same pair finds itself within this window when discovery works (LOCALHOST test below).
   EXPECT_FALSE(waitFor([&] { return writerMatched(writer) || readerMatched(reader); },
                        std::chrono::milliseconds(1500)));
+}
+
+// ---- ROS_AUTOMATIC_DISCOVERY_RANGE with a profile, and ROS_STATIC_PEERS (as Jazzy) ----------
+
+bool hasPeer(const frtps::LocatorList_t& peers, const std::string& address) {
+  return std::any_of(peers.begin(), peers.end(), [&](const frtps::Locator_t& l) {
+    return l.kind == LOCATOR_KIND_UDPv4 && frtps::IPLocator::toIPv4string(l) == address;
+  });
+}
+
+TEST(ParticipantSetup, LocalhostKeepsAProfilesTransportsAndAddsLoopbackUdpAsJazzy) {
+  ASSERT_TRUE(loadTestProfiles());
+  ScopedEnv peers("ROS_STATIC_PEERS", std::nullopt);
+  DdsConfig config = localhostConfig(158);
+  config.participant_profile = "mlmap_test_loopback_no_peers";
+  config.large_data = false;
+  const ParticipantSetup setup = participantSetup(config, "test");
+  const auto& transports = setup.qos.transport().user_transports;
+  EXPECT_FALSE(setup.qos.transport().use_builtin_transports);
+  // The profile's UDPv4 (its 8 MB receive buffer) stays, mlmap's loopback UDPv4 is added; the
+  // profile's SHM is left out (dds.shared_memory false), which is said.
+  ASSERT_EQ(transports.size(), 2u);
+  const auto profile_udp = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(transports[0]);
+  const auto added_udp = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(transports[1]);
+  ASSERT_NE(profile_udp, nullptr);
+  ASSERT_NE(added_udp, nullptr);
+  EXPECT_EQ(profile_udp->receiveBufferSize, 8388608u);
+  EXPECT_EQ(added_udp->maxInitialPeersRange, kLocalhostMaxInitialPeersRange);
+  EXPECT_EQ(added_udp->interfaceWhiteList, std::vector<std::string>{"127.0.0.1"});
+  EXPECT_EQ(onlyTransport<SharedMemTransportDescriptor>(setup.qos), nullptr);
+  EXPECT_EQ(setup.warnings.size(), 1u);
+  const auto& builtin = setup.qos.wire_protocol().builtin;
+  EXPECT_TRUE(builtin.metatrafficMulticastLocatorList.empty());
+  EXPECT_TRUE(isLoopbackOnly(builtin.initialPeersList));
+  // With the profile's SHM asked for, it stays and mlmap adds its own, as rmw_fastrtps does.
+  config.shared_memory = true;
+  const ParticipantSetup with_shm = participantSetup(config, "test");
+  EXPECT_EQ(with_shm.qos.transport().user_transports.size(), 4u);
+  EXPECT_TRUE(with_shm.warnings.empty());
+  // And a participant accepts it.
+  config.shared_memory = false;
+  EXPECT_TRUE(createParticipant(config, "test"));
+}
+
+TEST(ParticipantSetup, StaticPeersJoinTheInitialPeersForLocalhostAndSubnetOnly) {
+  DdsConfig config = localhostConfig(158);
+  ScopedEnv env("ROS_STATIC_PEERS", " 127.0.0.2 ;;10.1.2.3; ");
+  {
+    const ParticipantSetup setup = participantSetup(config, "test");
+    EXPECT_EQ(setup.static_peers, (std::vector<std::string>{"127.0.0.2", "10.1.2.3"}));
+    const auto& peers = setup.qos.wire_protocol().builtin.initialPeersList;
+    EXPECT_EQ(peers.size(), 3u);
+    EXPECT_TRUE(hasPeer(peers, "127.0.0.1"));
+    EXPECT_TRUE(hasPeer(peers, "127.0.0.2"));
+    EXPECT_TRUE(hasPeer(peers, "10.1.2.3"));
+    // A peer on another host must be reachable: the added UDPv4 is not confined to loopback.
+    const auto udp = onlyTransport<UDPv4TransportDescriptor>(setup.qos);
+    ASSERT_NE(udp, nullptr);
+    EXPECT_TRUE(udp->interfaceWhiteList.empty());
+    EXPECT_TRUE(setup.warnings.empty());
+  }
+  {
+    config.discovery_range = "SUBNET";
+    const ParticipantSetup setup = participantSetup(config, "test");
+    const auto& peers = setup.qos.wire_protocol().builtin.initialPeersList;
+    EXPECT_EQ(peers.size(), 3u);  // the peers and the default multicast address
+    EXPECT_TRUE(hasPeer(peers, "239.255.0.1"));
+    EXPECT_FALSE(hasPeer(peers, "127.0.0.1"));
+  }
+  for (const char* range : {"OFF", "SYSTEM_DEFAULT"}) {
+    SCOPED_TRACE(range);
+    config.discovery_range = range;
+    const ParticipantSetup setup = participantSetup(config, "test");
+    const auto& peers = setup.qos.wire_protocol().builtin.initialPeersList;
+    EXPECT_FALSE(hasPeer(peers, "127.0.0.2"));
+    ASSERT_EQ(setup.warnings.size(), 1u);
+    EXPECT_NE(setup.warnings[0].find("static peers are ignored"), std::string::npos);
+  }
+  // The config key wins over the environment.
+  config.discovery_range = "LOCALHOST";
+  config.static_peers = "127.0.0.3";
+  const ParticipantSetup from_key = participantSetup(config, "test");
+  const auto& peers = from_key.qos.wire_protocol().builtin.initialPeersList;
+  EXPECT_TRUE(hasPeer(peers, "127.0.0.3"));
+  EXPECT_FALSE(hasPeer(peers, "127.0.0.2"));
+}
+
+TEST(ParticipantSetup, BadStaticPeersAreClearErrors) {
+  DdsConfig config = localhostConfig(158);
+  const auto error_of = [&](const std::string& peers) {
+    config.static_peers = peers;
+    try {
+      participantSetup(config, "test");
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error_of("no-such-host.invalid").find("'no-such-host.invalid'"), std::string::npos);
+  EXPECT_NE(error_of("10.0.0.1 10.0.0.2").find("separated by ';'"), std::string::npos);
+  EXPECT_NE(error_of(std::string(300, 'a')).find("longer than 255"), std::string::npos);
+  std::string many;
+  for (int i = 0; i <= static_cast<int>(kMaxStaticPeers); ++i) many += "10.0.0.1;";
+  EXPECT_NE(error_of(many).find("more than 64"), std::string::npos);
+  // validate() reports the same for the config key.
+  config.static_peers = "a b";
+  const std::vector<std::string> errors = config.validate();
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("dds.static_peers"), std::string::npos) << errors[0];
 }
 
 TEST(Participant, OneTypeNameHasOneImplementationPerParticipant) {

@@ -3,11 +3,13 @@
 /// Configuration of the DDS component (the `dds` section of the node's YAML file) and the ROS 2
 /// naming rules it follows.
 ///
-/// Resolution order for the domain and the discovery range, as ROS 2 does: the config value when
-/// set, else the environment (ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE), else the ROS 2
-/// default (domain 0, SUBNET). FASTRTPS_DEFAULT_PROFILES_FILE is read by Fast DDS itself; a
+/// Resolution order for the domain, the discovery range and the static peers, as ROS 2 does: the
+/// config value when set, else the environment (ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE,
+/// ROS_STATIC_PEERS), else the ROS 2 default (domain 0, SUBNET, no peers).
+/// FASTRTPS_DEFAULT_PROFILES_FILE is read by Fast DDS itself; a
 /// `profiles_file` in the config is loaded on top of it.
 
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <utility>
@@ -17,8 +19,8 @@ namespace mlmap::dds {
 
 /// ROS_AUTOMATIC_DISCOVERY_RANGE.
 enum class DiscoveryRange {
-  kSystemDefault,  ///< not set anywhere: SUBNET
-  kLocalhost,      ///< UDPv4 on 127.0.0.1 only, unicast discovery to 127.0.0.1 (no multicast)
+  kSystemDefault,  ///< SYSTEM_DEFAULT: the middleware's own defaults (the static peers ignored)
+  kLocalhost,      ///< unicast discovery to 127.0.0.1 (and the static peers), no multicast
   kSubnet,         ///< Fast DDS built-in transports, multicast discovery (a vehicle LAN)
   kOff,            ///< no automatic discovery: no multicast, and only the profile's own initial
                    ///< peers are contacted (none added); peers that list this host still find it
@@ -41,6 +43,7 @@ struct TopicNames {
   std::string local_map = "mlmap/local_map/occupied";    ///< key local_map (output)
   std::string global_map = "mlmap/global_map/occupied";  ///< key global_map (output)
   std::string grid = "mlmap/grid";                       ///< key grid (output)
+  std::string map_grid = "mlmap/map";                    ///< key map_grid (output)
   std::string esdf_slice = "mlmap/esdf/slice";           ///< key esdf_slice (output)
   std::string esdf_block = "mlmap/esdf/block";           ///< key esdf_block (output)
   std::string status = "mlmap/status";                   ///< key status (output)
@@ -60,6 +63,10 @@ struct TopicNames {
     v.key("global_map", c.global_map, "",
           "out: PointCloud2, TRANSIENT_LOCAL (late joiners get the last one)");
     v.key("grid", c.grid, "", "out: nav_msgs/OccupancyGrid, TRANSIENT_LOCAL");
+    v.key("map_grid", c.map_grid, "",
+          "out: OccupancyGrid with a fixed origin that grows in 64-cell chunks as the vehicle\n"
+          "explores (every rolling grid's known cells, the latest winning): a static map for\n"
+          "a global costmap (nav2's static layer, docs/planners.md)");
     v.key("esdf_slice", c.esdf_slice, "", "out: PointCloud2 with `intensity` = signed distance [m]");
     v.key("esdf_block", c.esdf_block, "", "out: mlmap_msgs/VoxelBlock");
     v.key("status", c.status, "", "out: mlmap_msgs/Status");
@@ -73,6 +80,7 @@ struct PublishRates {
   double local_map_hz = 5.0;   ///< key local_map_hz
   double global_map_hz = 0.5;  ///< key global_map_hz
   double grid_hz = 2.0;        ///< key grid_hz
+  double map_grid_hz = 0.5;    ///< key map_grid_hz
   double esdf_hz = 2.0;        ///< key esdf_hz
   double status_hz = 1.0;      ///< key status_hz
 
@@ -83,6 +91,7 @@ struct PublishRates {
     v.key("local_map_hz", c.local_map_hz, "Hz", "topics.local_map");
     v.key("global_map_hz", c.global_map_hz, "Hz", "topics.global_map");
     v.key("grid_hz", c.grid_hz, "Hz", "topics.grid");
+    v.key("map_grid_hz", c.map_grid_hz, "Hz", "topics.map_grid");
     v.key("esdf_hz", c.esdf_hz, "Hz", "topics.esdf_slice and topics.esdf_block");
     v.key("status_hz", c.status_hz, "Hz", "topics.status");
   }
@@ -165,6 +174,7 @@ struct DdsConfig {
   int domain_id = -1;                          ///< key domain_id
   std::string ns;                              ///< key ns
   std::string discovery_range;                 ///< key discovery_range
+  std::string static_peers;                    ///< key static_peers ("a;b", as ROS_STATIC_PEERS)
   std::string profiles_file;                   ///< key profiles_file (its is_default_profile unused)
   std::string participant_profile;             ///< key participant_profile
   bool large_data = true;                      ///< key large_data
@@ -200,6 +210,9 @@ struct DdsConfig {
           "LOCALHOST: UDPv4 on 127.0.0.1 only, unicast discovery (up to 32 participants).\n"
           "SUBNET: the profile's (default: Fast DDS's) transports, multicast discovery.\n"
           "OFF: no multicast, only the profile's own initial peers.");
+    v.key("static_peers", c.static_peers, "",
+          "hosts to discover by unicast, \"a;b\" (names or IPv4 addresses), with LOCALHOST or\n"
+          "SUBNET (radio links without multicast); \"\": ROS_STATIC_PEERS, else none");
     v.key("profiles_file", c.profiles_file, "",
           "Fast DDS XML profiles to load, e.g. config/dds/udp_only.xml (\"\" for none)");
     v.key("participant_profile", c.participant_profile, "",
@@ -253,7 +266,20 @@ std::string ddsTopicName(const std::string& ns, const std::string& name);
 /// Throws std::invalid_argument when ROS_DOMAIN_ID is set but not an integer in 0..232.
 int resolveDomainId(const DdsConfig& config);
 /// The discovery range to use: config value if set, else ROS_AUTOMATIC_DISCOVERY_RANGE, else
-/// kSystemDefault. Throws std::invalid_argument on an unknown value.
+/// kSubnet (rcl's default). Throws std::invalid_argument on an unknown value (where rcl warns and
+/// assumes LOCALHOST).
 DiscoveryRange resolveDiscoveryRange(const DdsConfig& config);
+/// Longest static peer name ROS 2 accepts (RMW_DISCOVERY_OPTIONS_STATIC_PEERS_MAX_LENGTH - 1).
+inline constexpr std::size_t kMaxStaticPeerLength = 255;
+/// Most static peers mlmap accepts (each costs maxInitialPeersRange announcement ports).
+inline constexpr std::size_t kMaxStaticPeers = 64;
+/// The static peers to use: config value `static_peers` if set, else ROS_STATIC_PEERS, split at
+/// ';' as rcl does (empty entries dropped, surrounding spaces trimmed). Throws
+/// std::invalid_argument naming the source when an entry is longer than kMaxStaticPeerLength,
+/// contains whitespace, or there are more than kMaxStaticPeers (rcl skips too-long entries with a
+/// warning; a peer silently dropped is a vehicle never found, so mlmap refuses).
+std::vector<std::string> resolveStaticPeers(const DdsConfig& config);
+/// `text` split at ';' as resolveStaticPeers() does; `source` names it in errors.
+std::vector<std::string> parseStaticPeers(const std::string& text, const std::string& source);
 
 }  // namespace mlmap::dds

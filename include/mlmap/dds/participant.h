@@ -46,13 +46,19 @@ using ParticipantPtr = std::unique_ptr<eprosima::fastdds::dds::DomainParticipant
 /// DDS participant is 2.9).
 ///
 /// Discovery range:
-/// - kLocalhost: the transports are replaced by UDPv4 restricted to 127.0.0.1 (interface white
-///   list, maxInitialPeersRange 32; plus SHM with `shared_memory`), no multicast locators,
-///   metatraffic unicast on 127.0.0.1 and the initial peers exactly {127.0.0.1}: up to 32
-///   participants on the host find each other, nothing leaves the host. The profile's user-data
-///   locators are dropped too (Fast DDS then listens on 127.0.0.1); its other settings (discovery
-///   protocol, discovery servers, ...) stay. Stricter than rmw_fastrtps, which keeps the built-in
-///   transports and only confines discovery.
+/// - kLocalhost, as Jazzy's rmw_fastrtps_cpp applies it on top of the base QoS (also a
+///   profile's): the built-in transports are switched off, the profile's own transports are
+///   kept, and a UDPv4 transport with maxInitialPeersRange 32 is added (plus SHM with
+///   `shared_memory`); the multicast discovery locators are removed, a unicast one is added, and
+///   127.0.0.1 joins the initial peers: up to 32 participants on the host find each other with no
+///   multicast. mlmap's one difference: without static peers the added UDPv4 transport is
+///   restricted to 127.0.0.1 and so is the discovery locator, so nothing mlmap adds listens on
+///   another interface (rmw_fastrtps's listens on all of them).
+/// - Static peers (resolveStaticPeers: `static_peers`, else ROS_STATIC_PEERS), as Jazzy's
+///   rmw_fastrtps_cpp: with kLocalhost or kSubnet each peer's IPv4 address (names resolved) joins
+///   the initial peers (port 0: the domain's well-known ports, maxInitialPeersRange of them), and
+///   with kSubnet the default multicast address 239.255.0.1 too; with kOff or kSystemDefault they
+///   are ignored with a warning. A name that does not resolve is an error.
 /// - kSubnet / kSystemDefault: the profile's transports and discovery are left as they are (but
 ///   for shared memory, above).
 /// - kOff: the profile's transports stay (but for shared memory); multicast locators (discovery
@@ -81,9 +87,11 @@ ParticipantPtr createParticipant(const DdsConfig& config, const std::string& nam
 struct ParticipantSetup {
   int domain_id = 0;
   DiscoveryRange discovery_range = DiscoveryRange::kSystemDefault;  ///< as resolved
+  std::vector<std::string> static_peers;  ///< as resolved (resolveStaticPeers)
   SecuritySetup security;  ///< as resolved (its properties are in qos when enabled)
   eprosima::fastdds::dds::DomainParticipantQos qos;
-  /// What createParticipant() prints as warnings (a profile's transport left out).
+  /// What createParticipant() prints as warnings (a profile's transport left out, static peers
+  /// ignored by the discovery range).
   std::vector<std::string> warnings;
 };
 /// Resolves the domain, the discovery range and the QoS exactly as createParticipant() does

@@ -2,6 +2,7 @@
 
 #include "mlmap/core/key_list.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <cmath>
@@ -292,6 +293,11 @@ std::vector<std::string> DdsConfig::validate() const {
                      ": must be empty, LOCALHOST, SUBNET, OFF or SYSTEM_DEFAULT (got " +
                      discovery_range + ")");
   }
+  try {
+    parseStaticPeers(static_peers, key(static_peers));
+  } catch (const std::invalid_argument& e) {
+    errors.emplace_back(e.what());
+  }
   if (!profiles_file.empty() && participant_profile.empty()) {
     errors.push_back(key(participant_profile) + ": must name the participant profile to use from " +
                      key(profiles_file) + " (" + profiles_file + "), e.g. mlmap_loopback");
@@ -366,12 +372,51 @@ DiscoveryRange resolveDiscoveryRange(const DdsConfig& config) {
     return range;
   }
   const std::string env = environment("ROS_AUTOMATIC_DISCOVERY_RANGE");
-  if (env.empty()) return DiscoveryRange::kSystemDefault;
+  if (env.empty()) return DiscoveryRange::kSubnet;  // rcl's default when nothing sets it
   if (!parseDiscoveryRange(env, &range)) {
     throw std::invalid_argument(std::string("ROS_AUTOMATIC_DISCOVERY_RANGE must be LOCALHOST, "
                                             "SUBNET, OFF or SYSTEM_DEFAULT (got '") + env + "')");
   }
   return range;
+}
+
+std::vector<std::string> parseStaticPeers(const std::string& text, const std::string& source) {
+  std::vector<std::string> peers;
+  std::size_t begin = 0;
+  while (begin <= text.size()) {
+    std::size_t end = text.find(';', begin);
+    if (end == std::string::npos) end = text.size();
+    std::string peer = text.substr(begin, end - begin);
+    const auto is_space = [](char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; };
+    while (!peer.empty() && is_space(peer.back())) peer.pop_back();
+    std::size_t first = 0;
+    while (first < peer.size() && is_space(peer[first])) ++first;
+    peer.erase(0, first);
+    begin = end + 1;
+    if (peer.empty()) continue;
+    if (peer.size() > kMaxStaticPeerLength) {
+      throw std::invalid_argument(source + ": a static peer is longer than " +
+                                  std::to_string(kMaxStaticPeerLength) + " characters ('" +
+                                  peer.substr(0, 40) + "...')");
+    }
+    if (std::any_of(peer.begin(), peer.end(), is_space)) {
+      throw std::invalid_argument(source + ": static peers are separated by ';', not spaces (got '" +
+                                  peer + "')");
+    }
+    if (peers.size() == kMaxStaticPeers) {
+      throw std::invalid_argument(source + ": more than " + std::to_string(kMaxStaticPeers) +
+                                  " static peers");
+    }
+    peers.push_back(std::move(peer));
+  }
+  return peers;
+}
+
+std::vector<std::string> resolveStaticPeers(const DdsConfig& config) {
+  if (!config.static_peers.empty()) {
+    return parseStaticPeers(config.static_peers, ddsKey(config, config.static_peers));
+  }
+  return parseStaticPeers(environment("ROS_STATIC_PEERS"), "ROS_STATIC_PEERS");
 }
 
 }  // namespace mlmap::dds

@@ -73,24 +73,60 @@ TransportPtr builtinUdp(const fdds::TransportConfigQos& transport) {
   return udp;
 }
 
-void useLoopbackOnly(bool shared_memory, fdds::DomainParticipantQos* qos) {
+/// IPv4 locator of `host` (a name or an address; port 0: Fast DDS tries the domain's well-known
+/// ports). Throws std::runtime_error naming `source` when the name does not resolve to IPv4.
+frtps::Locator_t staticPeerLocator(const std::string& host, const std::string& source) {
+  frtps::Locator_t locator;
+  locator.kind = LOCATOR_KIND_UDPv4;
+  if (frtps::IPLocator::isIPv4(host)) {
+    frtps::IPLocator::setIPv4(locator, host);
+    return locator;
+  }
+  const auto resolved = frtps::IPLocator::resolveNameDNS(host);
+  if (resolved.first.empty()) {
+    throw std::runtime_error(source + ": cannot resolve static peer '" + host +
+                             "' to an IPv4 address");
+  }
+  frtps::IPLocator::setIPv4(locator, *resolved.first.begin());
+  return locator;
+}
+
+/// ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST as Jazzy's rmw_fastrtps_cpp applies it on top of the
+/// base QoS (the profile's): no multicast discovery locators; the built-in transports off; the
+/// profile's own transports kept and a UDPv4 transport added (maxInitialPeersRange 32, plus SHM
+/// with `shared_memory`); 127.0.0.1 added to the initial peers. mlmap's one difference: without
+/// static peers, the added UDPv4 transport and the discovery locator are confined to 127.0.0.1
+/// (nothing mlmap adds listens on another interface).
+void applyLocalhostRange(bool shared_memory, bool has_static_peers, fdds::DomainParticipantQos* qos) {
   fdds::TransportConfigQos& transport = qos->transport();
   transport.use_builtin_transports = false;
-  transport.user_transports.clear();
   if (shared_memory) transport.user_transports.push_back(std::make_shared<SharedMemTransportDescriptor>());
   auto udp = std::make_shared<UDPv4TransportDescriptor>();
-  udp->interfaceWhiteList = {kLoopbackAddress};
+  if (!has_static_peers) udp->interfaceWhiteList = {kLoopbackAddress};
   udp->maxInitialPeersRange = kLocalhostMaxInitialPeersRange;
   transport.user_transports.push_back(udp);
 
   fdds::WireProtocolConfigQos& wire = qos->wire_protocol();
   wire.builtin.metatrafficMulticastLocatorList.clear();
-  wire.builtin.metatrafficUnicastLocatorList.clear();
-  wire.builtin.metatrafficUnicastLocatorList.push_back(loopbackLocator());
-  wire.builtin.initialPeersList.clear();
+  // A unicast locator, so that Fast DDS does not add the default multicast one.
+  wire.builtin.metatrafficUnicastLocatorList.push_back(has_static_peers ? frtps::Locator_t()
+                                                                        : loopbackLocator());
   wire.builtin.initialPeersList.push_back(loopbackLocator());
-  wire.default_multicast_locator_list.clear();
-  wire.default_unicast_locator_list.clear();  // Fast DDS picks one per transport
+}
+
+/// ROS_STATIC_PEERS as Jazzy's rmw_fastrtps_cpp applies them (LOCALHOST and SUBNET only): each
+/// peer's IPv4 address joins the initial peers; with SUBNET, the default multicast address too
+/// (Fast DDS adds it only to an empty list).
+void addStaticPeers(const std::vector<std::string>& peers, DiscoveryRange range,
+                    fdds::DomainParticipantQos* qos) {
+  frtps::LocatorList_t& initial = qos->wire_protocol().builtin.initialPeersList;
+  for (const std::string& peer : peers) initial.push_back(staticPeerLocator(peer, "static peers"));
+  if (range == DiscoveryRange::kSubnet && !peers.empty()) {
+    frtps::Locator_t multicast;
+    multicast.kind = LOCATOR_KIND_UDPv4;
+    frtps::IPLocator::setIPv4(multicast, 239, 255, 0, 1);
+    initial.push_back(multicast);
+  }
 }
 
 /// Makes the built-in transports explicit (UDPv4, plus SHM with `shared_memory`) so that they can
@@ -224,6 +260,7 @@ ParticipantSetup participantSetup(const DdsConfig& config, const std::string& na
   try {
     setup.domain_id = resolveDomainId(config);
     setup.discovery_range = resolveDiscoveryRange(config);
+    setup.static_peers = resolveStaticPeers(config);
     setup.security = resolveSecurity(config.security);
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(e.what());
@@ -232,15 +269,28 @@ ParticipantSetup participantSetup(const DdsConfig& config, const std::string& na
   qos = baseQos(config);
   if (!name.empty()) qos.name(name);
 
+  const bool has_peers = !setup.static_peers.empty();
   switch (setup.discovery_range) {
     case DiscoveryRange::kLocalhost:
-      useLoopbackOnly(config.shared_memory, &qos);
-      break;
-    case DiscoveryRange::kOff:
-      withoutAutomaticDiscovery(&qos);
+      applyLocalhostRange(config.shared_memory, has_peers, &qos);
+      addStaticPeers(setup.static_peers, setup.discovery_range, &qos);
       break;
     case DiscoveryRange::kSubnet:
+      addStaticPeers(setup.static_peers, setup.discovery_range, &qos);
+      break;  // else the profile's (or Fast DDS's) transports and multicast discovery
+    case DiscoveryRange::kOff:
+      withoutAutomaticDiscovery(&qos);
+      if (has_peers) {
+        setup.warnings.emplace_back(
+            "the discovery range is OFF: the static peers are ignored (as ROS 2 does)");
+      }
+      break;
     case DiscoveryRange::kSystemDefault:
+      if (has_peers) {
+        setup.warnings.emplace_back(
+            "the discovery range is SYSTEM_DEFAULT: the static peers are ignored (as Jazzy's "
+            "rmw_fastrtps_cpp does); set it to SUBNET or LOCALHOST to use them");
+      }
       break;  // the profile's (or Fast DDS's) transports and multicast discovery
   }
   const std::string profile = config.participant_profile.empty()
