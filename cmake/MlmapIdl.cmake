@@ -11,7 +11,7 @@
 # `pose_` vs type `Pose_`), absolute paths (relative ones silently give empty headers), one run
 # over every file (it writes the code of included files too; a run per file would race in
 # parallel builds), and outputs moved into <pkg>/msg/ afterwards because it writes them flat.
-find_program(FASTDDSGEN_EXECUTABLE fastddsgen REQUIRED)
+find_program(FASTDDSGEN_EXECUTABLE fastddsgen REQUIRED)  # found already by MlmapDdsSupport
 
 function(mlmap_idl_library target)
   cmake_parse_arguments(ARG "" "IDL_ROOT" "" ${ARGN})

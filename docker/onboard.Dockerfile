@@ -21,7 +21,7 @@ COPY idl ./idl
 COPY include ./include
 COPY src ./src
 COPY config ./config
-RUN cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DMLMAP_BUILD_APPS=OFF -DMLMAP_BUILD_TESTS=OFF \
+RUN cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DMLMAP_BUILD_APPS=OFF -DMLMAP_BUILD_TESTS=OFF -DMLMAP_BUILD_DDS=ON \
  && cmake --build build -j2 --target mlmap_node
 ENV PATH=/opt/mlmap/build:$PATH
 # ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE and FASTRTPS_DEFAULT_PROFILES_FILE work as for a

@@ -21,7 +21,7 @@ COPY include ./include
 COPY src ./src
 COPY tests ./tests
 COPY config ./config
-RUN cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DMLMAP_BUILD_TESTS=OFF \
+RUN cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DMLMAP_BUILD_TESTS=OFF -DMLMAP_BUILD_DDS=ON \
  && cmake --build build -j2 --target mlmap_demo mlmap_node mlmap_sensor_publisher mlmap_inspect
 ENV PATH=/opt/mlmap/build:$PATH
 CMD ["mlmap_sensor_publisher", "--config", "config/mlmap_node.yaml"]

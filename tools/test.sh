@@ -49,7 +49,7 @@ echo "== 1. the whole suite under AddressSanitizer + UndefinedBehaviorSanitizer 
 freshIfNotNinja build-asan
 CC=clang-14 CXX=clang++-14 cmake -G Ninja -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O2 -gline-tables-only -DNDEBUG" -DMLMAP_WERROR=ON \
-  -DMLMAP_BUILD_TESTS=ON -DMLMAP_SANITIZE=address,undefined -DMLMAP_FUZZ=ON >/dev/null
+  -DMLMAP_BUILD_TESTS=ON -DMLMAP_BUILD_DDS=ON -DMLMAP_SANITIZE=address,undefined -DMLMAP_FUZZ=ON >/dev/null
 cmake --build build-asan -j2
 endPart "build, clang + ASan + UBSan"
 lint_log=build-asan/lint.log

@@ -19,7 +19,7 @@ import sys
 import xml.etree.ElementTree as ElementTree
 
 from catkin_pkg.package import parse_package
-from mlmap_bridge import checks
+from mlmap_bridge import checks, launch_support
 from mlmap_bridge.parameters import defaults
 import pytest
 import yaml
@@ -108,7 +108,7 @@ def test_bridge_manifest_declares_every_import():
     package = _package(BRIDGE)
     exec_depends = {d.name for d in package.exec_depends}
     test_depends = {d.name for d in package.test_depends} | exec_depends
-    sources = list((BRIDGE / 'mlmap_bridge').glob('*.py')) + [BRIDGE / 'launch/bridge.launch.py']
+    sources = list((BRIDGE / 'mlmap_bridge').glob('*.py')) + list((BRIDGE / 'launch').glob('*.py'))
     for files, declared in ((sources, exec_depends),
                             (list((BRIDGE / 'test').glob('*.py')), test_depends)):
         for path in files:
@@ -141,14 +141,37 @@ def test_colcon_installs_the_bridge_where_ros2_finds_it(tmp_path):
                      'share/ament_index/resource_index/packages/mlmap_bridge',
                      'share/mlmap_bridge/package.xml', 'share/mlmap_bridge/config/bridge.yaml',
                      'share/mlmap_bridge/launch/bridge.launch.py',
+                     'share/mlmap_bridge/launch/mlmap.launch.py',
                      'share/mlmap_bridge/rviz/mlmap.rviz'):
         assert (prefix / relative).is_file(), relative
     site = next(prefix.glob('lib/python3*/site-packages'))
-    probe = ('from mlmap_bridge import checks, conversions, markers, parameters; '
+    probe = ('from mlmap_bridge import checks, conversions, launch_support, markers, parameters; '
              'print(conversions.__file__)')
     out = subprocess.run([SYSTEM_PYTHON, '-c', probe], env={'PYTHONPATH': str(site)},
                          check=True, capture_output=True, text=True).stdout
     assert out.startswith(str(site))
+
+
+@pytest.mark.skipif(not os.environ.get('MLMAP_BIN_DIR'),
+                    reason='MLMAP_BIN_DIR (the build) not given')
+def test_the_launch_finds_the_installed_node_configuration(tmp_path):
+    """mlmap.launch.py's default node_config is the one `cmake --install` (colcon) puts under a
+    prefix of the workspace's environment, and the node runs with its defaults when none is."""
+    # The programs land at the top of the build tree, so MLMAP_BIN_DIR is the build tree.
+    subprocess.run(['cmake', '--install', os.environ['MLMAP_BIN_DIR'],
+                    '--prefix', str(tmp_path / 'mlmap')], check=True, capture_output=True)
+    installed = tmp_path / 'mlmap' / launch_support.NODE_CONFIG
+    assert installed.read_text() == (REPO / 'config' / 'mlmap_node.yaml').read_text()
+    assert (tmp_path / 'mlmap' / 'bin' / 'mlmap_node').is_file()
+    environ = {'CMAKE_PREFIX_PATH': os.pathsep.join(['/nonexistent', str(tmp_path / 'mlmap')])}
+    assert launch_support.installed_node_config(environ) == str(installed)
+    assert launch_support.installed_node_config({}) == ''
+    assert launch_support.node_command('mlmap_node', str(installed)) == \
+        ['mlmap_node', '--config', str(installed)]
+    assert launch_support.node_command('mlmap_node', '') == ['mlmap_node']
+    launch = (BRIDGE / 'launch' / 'mlmap.launch.py').read_text()
+    for argument in ('node_config', 'node_executable', 'node', 'bridge', 'params_file', 'rviz'):
+        assert f"DeclareLaunchArgument(\n            '{argument}'" in launch, argument
 
 
 # ---- Topics, types and frames against mlmap_node -------------------------------------------
@@ -180,7 +203,7 @@ def _documented_outputs():
 def test_checker_expects_every_documented_output_with_its_type_and_durability():
     """checks.NODE_TOPICS is idl/README.md's output table: topics, types, latching."""
     documented = _documented_outputs()
-    assert len(documented) == 9
+    assert len(documented) == 10
     expected = [(e.topic, e.type_name, e.latched) for e in checks.NODE_TOPICS]
     assert sorted(expected) == sorted(documented)
 
@@ -375,7 +398,7 @@ def test_readme_gives_the_ground_station_commands():
                     'source ~/mlmap_ws/install/setup.bash',
                     'ros2 launch mlmap_bridge bridge.launch.py',
                     'rviz2 -d tools/ros2/mlmap_bridge/rviz/mlmap.rviz',
-                    'bash docker/run_integration_test.sh', '-DMLMAP_BUILD_TESTS=OFF'):
+                    'bash docker/run_integration_test.sh', '-DBUILD_TESTING=OFF'):
         assert command in section, command
     assert (REPO / 'tools/ros2/mlmap_bridge/rviz/mlmap.rviz').is_file()
     started = re.search(r'docker compose -f docker/compose.yaml up -d ([\w ]+)', section)
