@@ -13,6 +13,7 @@
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
 #include "mlmap_msgs/msg/Status_PubSubTypes.h"
+#include "nav_msgs/msg/OccupancyGrid_PubSubTypes.h"
 #include "nav_msgs/msg/Odometry_PubSubTypes.h"
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
 
@@ -521,6 +522,118 @@ TEST(MappingNodeOutput, SubscribersWithIncompatibleQosAreLoggedWithThePolicyAndC
             1);
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   EXPECT_EQ(node.counters().subscribers_incompatible, 1u) << "only the TRANSIENT_LOCAL reader";
+}
+
+/// The last sample a TakeListener delivered, kept for inspection.
+template <typename T>
+struct LastSample {
+  std::mutex mutex;
+  std::vector<T> all;
+  TakeListener<T> listener{[this](T&& sample) {
+                             std::lock_guard<std::mutex> lock(mutex);
+                             all.push_back(std::move(sample));
+                           },
+                           [](const std::string&) {}};
+  std::vector<T> samples() {
+    std::lock_guard<std::mutex> lock(mutex);
+    return all;
+  }
+};
+
+/// Value of the OccupancyGrid cell holding world point (x, y); -2 outside the grid.
+int gridValueAt(const nav_msgs::OccupancyGrid_& grid, double x_m, double y_m) {
+  const auto& info = grid.info_();
+  const int cx = static_cast<int>(std::floor((x_m - info.origin_().position_().x_()) / info.resolution_()));
+  const int cy = static_cast<int>(std::floor((y_m - info.origin_().position_().y_()) / info.resolution_()));
+  if (cx < 0 || cy < 0 || cx >= static_cast<int>(info.width_()) || cy >= static_cast<int>(info.height_())) {
+    return -2;
+  }
+  return grid.data_()[static_cast<std::size_t>(cy) * info.width_() + static_cast<std::size_t>(cx)];
+}
+
+// The fixed-origin map grid (nav2's static layer) keeps every wall the vehicle passed, also
+// those the rolling grid (the local window) has left behind; its origin only moves by whole
+// chunks towards -x / -y, and where the final rolling grid knows a cell the map agrees with it.
+TEST(MappingNodeOutput, TheMapGridKeepsWhatTheRollingGridLeftBehindOnAFixedLattice) {
+  constexpr int kDomain = 179;
+  NodeConfig config = nodeConfig(kDomain);
+  config.dds.rates.map_grid_hz = 50.0;
+  config.dds.rates.grid_hz = 50.0;
+  LastSample<nav_msgs::OccupancyGrid_> maps;
+  LastSample<nav_msgs::OccupancyGrid_> grids;
+  const ParticipantPtr ground = createParticipant(localhostConfig(kDomain), "ground");
+  fdds::Subscriber* subscriber = ground->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+  ASSERT_NE(createReader<nav_msgs::OccupancyGrid_PubSubType>(
+                subscriber, "rt/" + config.dds.topics.map_grid, reliableReaderQos(true, 100),
+                &maps.listener),
+            nullptr);
+  ASSERT_NE(createReader<nav_msgs::OccupancyGrid_PubSubType>(
+                subscriber, "rt/" + config.dds.topics.grid, reliableReaderQos(true, 100),
+                &grids.listener),
+            nullptr);
+  std::vector<double> walls_x;
+  {
+    MappingNode node(config, [](LogLevel, const std::string&) {});
+    SensorSide sensor(kDomain, config);
+    ASSERT_TRUE(sensor.matched(node));
+    const Eigen::Quaterniond level = Eigen::Quaterniond::Identity();
+    for (int i = 0; i < 12; ++i) {  // 3 m a second along +x: 33 m, beyond the 19 m window
+      const double x_m = 3.0 * i;
+      const double stamp_s = 1.0 + i;
+      sensor.pose(stamp_s - 0.01, level, x_m);
+      sensor.pose(stamp_s + 0.01, level, x_m);
+      sensor.cloud(sensor.wallCloud(stamp_s));
+      ASSERT_TRUE(mapped(node, static_cast<std::uint64_t>(i + 1)));
+      walls_x.push_back(x_m + 3.0);
+      std::this_thread::sleep_for(std::chrono::milliseconds(60));  // a grid per frame
+    }
+  }  // the node publishes its final state as it stops
+  ASSERT_TRUE(waitFor([&] { return !maps.samples().empty() && !grids.samples().empty(); }));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const std::vector<nav_msgs::OccupancyGrid_> all_maps = maps.samples();
+  const nav_msgs::OccupancyGrid_& map = all_maps.back();
+  const nav_msgs::OccupancyGrid_ grid = grids.samples().back();
+  const double res = map.info_().resolution_();
+  const double chunk_m = 64 * res;
+  double first_x = 0.0;
+  double first_y = 0.0;
+  for (std::size_t k = 0; k < all_maps.size(); ++k) {
+    const auto& origin = all_maps[k].info_().origin_().position_();
+    EXPECT_NEAR(std::remainder(origin.x_(), chunk_m), 0.0, 1e-6);
+    EXPECT_NEAR(std::remainder(origin.y_(), chunk_m), 0.0, 1e-6);
+    EXPECT_EQ(all_maps[k].info_().width_() % 64, 0u);
+    if (k == 0) {
+      first_x = origin.x_();
+      first_y = origin.y_();
+    }
+    EXPECT_LE(origin.x_(), first_x + 1e-9);
+    EXPECT_LE(origin.y_(), first_y + 1e-9);
+  }
+  // Every wall is an obstacle in the map; the first ones are no longer in the rolling grid.
+  int walls_outside_rolling_grid = 0;
+  for (const double x_m : walls_x) {
+    const bool in_map = gridValueAt(map, x_m - 0.5 * res, 0.05) == 100 ||
+                        gridValueAt(map, x_m + 0.5 * res, 0.05) == 100;
+    EXPECT_TRUE(in_map) << "wall at x = " << x_m;
+    walls_outside_rolling_grid += gridValueAt(grid, x_m, 0.05) == -2 ? 1 : 0;
+  }
+  EXPECT_GE(walls_outside_rolling_grid, 3);
+  // Where the final rolling grid knows a cell, the map holds its value.
+  const auto& g = grid.info_();
+  std::size_t compared = 0;
+  std::size_t mismatches = 0;
+  for (std::uint32_t cy = 0; cy < g.height_(); ++cy) {
+    for (std::uint32_t cx = 0; cx < g.width_(); ++cx) {
+      const int value = grid.data_()[cy * g.width_() + cx];
+      if (value < 0) continue;
+      const double x_m = g.origin_().position_().x_() + (cx + 0.5) * g.resolution_();
+      const double y_m = g.origin_().position_().y_() + (cy + 0.5) * g.resolution_();
+      if (gridValueAt(map, x_m, y_m) != value) ++mismatches;
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 100u);
+  EXPECT_EQ(mismatches, 0u) << "of " << compared;
 }
 
 /// Fast DDS's delivery between participants of one process, which bypasses transports and

@@ -21,6 +21,7 @@ enum Reason : int {
   kReasonEngine,
   kReasonDds,
   kReasonQos,
+  kReasonMapGrid,
   kReasonCount
 };
 

@@ -5,6 +5,7 @@
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/participant.h"
 #include "mlmap/dds/ros_conversions.h"
+#include "mlmap/planning/fixed_origin_grid.h"
 
 #include "mlmap_msgs/msg/Status_PubSubTypes.h"
 #include "mlmap_msgs/msg/VoxelBlock_PubSubTypes.h"
@@ -150,6 +151,46 @@ class GridOutput : public OutputOperation {
   RateGate gate_;
   std::string world_;
   std::shared_ptr<const ProjectedGrid> sent_;  ///< held, so a new grid never reuses its address
+};
+
+/// The fixed-origin grid (a global costmap's static map): every new rolling grid is absorbed,
+/// the grid goes out at map_grid_hz when it changed, and with the final state.
+class MapGridOutput : public OutputOperation {
+ public:
+  MapGridOutput(const CountedWriter& writer, const DdsConfig& dds, NodeLog& log)
+      : writer_(writer), gate_(dds.rates.map_grid_hz), world_(dds.world_frame), log_(log) {}
+  void publish(const PublishRound& round) override {
+    const auto& snap = round.snap;
+    if (!writer_ || !snap) return;
+    if (snap->gridPtr() != absorbed_ && !snap->grid().cells.empty()) {
+      absorbed_ = snap->gridPtr();
+      const std::uint64_t dropped = map_.cellsDropped();
+      if (!map_.absorb(snap->grid())) {
+        log_.limited(LogLevel::kWarning, kReasonMapGrid,
+                     "map grid: a rolling grid of another resolution was not absorbed");
+      } else if (map_.cellsDropped() > dropped) {
+        log_.limited(LogLevel::kWarning, kReasonMapGrid,
+                     "map grid: it reached its limit of " +
+                         std::to_string(FixedOriginGrid::kDefaultMaxCells) + " cells; " +
+                         std::to_string(map_.cellsDropped()) + " known cells beyond it are not in it");
+      }
+    }
+    if (map_.changes() == sent_changes_ || !(round.last || gate_.due())) return;
+    gate_.mark();
+    sent_changes_ = map_.changes();
+    nav_msgs::OccupancyGrid_ msg =
+        toOccupancyGrid(map_.grid(), map_.grid().band_min_z_m, snap->stamp_s(), world_);
+    writer_.write(&msg);
+  }
+
+ private:
+  CountedWriter writer_;
+  RateGate gate_;
+  std::string world_;
+  NodeLog& log_;
+  FixedOriginGrid map_;
+  std::shared_ptr<const ProjectedGrid> absorbed_;  ///< held, so a new grid never reuses its address
+  std::uint64_t sent_changes_ = 0;
 };
 
 /// The ESDF, when the planning thread made a new one, at esdf_hz: the whole block and a slice at
@@ -308,14 +349,16 @@ Outputs::Outputs(fdds::Publisher* publisher, const DdsConfig& dds, const Transfo
       writer(CloudType(), n.global_map, r.global_map_hz, latchedWriterQos());
   const CountedWriter grid =
       writer(nav_msgs::OccupancyGrid_PubSubType(), n.grid, r.grid_hz, latchedWriterQos());
+  const CountedWriter map_grid =
+      writer(nav_msgs::OccupancyGrid_PubSubType(), n.map_grid, r.map_grid_hz, latchedWriterQos());
   const CountedWriter slice = writer(CloudType(), n.esdf_slice, r.esdf_hz, reliableWriterQos(2));
   const CountedWriter block =
       writer(mlmap_msgs::VoxelBlock_PubSubType(), n.esdf_block, r.esdf_hz, reliableWriterQos(2));
   const CountedWriter status =
       writer(mlmap_msgs::Status_PubSubType(), n.status, r.status_hz, reliableWriterQos(10));
   has_global_ = static_cast<bool>(global);
-  writers_ = {global.get(),    grid.get(),      local.get(), status.get(), tf.get(),
-              tf_static.get(), awareness.get(), block.get(), slice.get()};
+  writers_ = {global.get(),    grid.get(),      map_grid.get(), local.get(), status.get(),
+              tf.get(),        tf_static.get(), awareness.get(), block.get(), slice.get()};
 
   operations_.push_back(std::make_unique<LayerCopyOutput>(awareness, &LayerMailbox::News::awareness,
                                                           dds.world_frame));
@@ -324,6 +367,7 @@ Outputs::Outputs(fdds::Publisher* publisher, const DdsConfig& dds, const Transfo
   operations_.push_back(std::make_unique<TfOutput>(tf, dds));
   operations_.push_back(std::make_unique<LocalMapOutput>(local, dds));
   operations_.push_back(std::make_unique<GridOutput>(grid, dds));
+  operations_.push_back(std::make_unique<MapGridOutput>(map_grid, dds, log));
   operations_.push_back(std::make_unique<EsdfOutput>(block, slice, dds));
   operations_.push_back(std::make_unique<StatusOutput>(status, dds, engine, counters, started));
 

@@ -282,6 +282,7 @@ NODE_TOPICS = (
     Expectation('/mlmap/status', 'mlmap_msgs/msg/Status', False, check_status),
     Expectation('/tf', 'tf2_msgs/msg/TFMessage', False, check_tf),
     Expectation('/tf_static', 'tf2_msgs/msg/TFMessage', True, check_tf_static),
+    Expectation('/mlmap/map', 'nav_msgs/msg/OccupancyGrid', True, check_grid),
 )
 BRIDGE_TOPICS = (
     Expectation('/mlmap/viz/awareness', MARKERS, False, check_cube_markers),

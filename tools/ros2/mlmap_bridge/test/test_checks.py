@@ -288,9 +288,9 @@ def test_verdict():
 
 
 def test_every_layer_of_the_node_and_the_bridge_is_expected():
-    """The checker waits for all nine node outputs and all bridge outputs, each once."""
+    """The checker waits for all ten node outputs and all bridge outputs, each once."""
     topics = [e.topic for e in ck.EXPECTED_TOPICS]
-    assert len(topics) == len(set(topics)) == 9 + len(CLOUD_LAYERS) + 3
+    assert len(topics) == len(set(topics)) == 10 + len(CLOUD_LAYERS) + 3
     prefix = defaults()['output_prefix']
     for layer in CLOUD_LAYERS:
         e = next(e for e in ck.BRIDGE_TOPICS if e.topic == f'{prefix}/{layer.name}')

@@ -75,7 +75,23 @@ def test_rviz_shows_every_output_in_the_world_frame():
         assert qos['Durability Policy'] == ('Transient Local' if latched else 'Volatile'), topic
 
 
-@pytest.mark.parametrize('relative', ['launch/bridge.launch.py', 'config/bridge.yaml',
+def test_rviz_shows_the_node_topics_without_the_bridge():
+    """The node's own grid and occupied voxels, each with the node writer's QoS."""
+    _, displays = _displays()
+    node = {e.topic: e for e in checks.NODE_TOPICS}
+    expected = {'/mlmap/grid': 'Map', '/mlmap/global_map/occupied': 'PointCloud2',
+                '/mlmap/local_map/occupied': 'PointCloud2'}
+    for topic, kind in expected.items():
+        display = displays[topic]
+        assert display['Class'] == f'rviz_default_plugins/{kind}' and display['Enabled'], topic
+        qos = display['Topic']
+        assert qos['Reliability Policy'] == 'Reliable', topic
+        assert qos['Durability Policy'] == ('Transient Local' if node[topic].latched
+                                            else 'Volatile'), topic
+
+
+@pytest.mark.parametrize('relative', ['launch/bridge.launch.py', 'launch/mlmap.launch.py',
+                                      'config/bridge.yaml',
                                       'rviz/mlmap.rviz', 'resource/mlmap_bridge'])
 def test_installed_files_exist(relative):
     """setup.py installs these by glob; a missing one would silently not be installed."""
