@@ -208,6 +208,28 @@ def test_checker_expects_every_documented_output_with_its_type_and_durability():
     assert sorted(expected) == sorted(documented)
 
 
+def test_nav2_costmaps_read_the_node_grids_with_matching_qos():
+    """config/nav2/costmaps.yaml: a static layer on each of the node's grids, TRANSIENT_LOCAL
+    subscriptions (the grids are latched), the node's frames and resolution."""
+    costmaps = _yaml(REPO / 'config' / 'nav2' / 'costmaps.yaml')
+    node = {e.topic: e for e in checks.NODE_TOPICS}
+    dds = _yaml(REPO / 'config' / 'mlmap_node.yaml')['dds']
+    resolution = _yaml(REPO / 'config' / 'mlmap.yaml')['local_map']['resolution_m']
+    expected = {'global_costmap': ('/' + dds['topics']['map_grid'], False),
+                'local_costmap': ('/' + dds['topics']['grid'], True)}
+    for name, (topic, rolling) in expected.items():
+        params = costmaps[name][name]['ros__parameters']
+        assert params['rolling_window'] is rolling, name
+        assert params['global_frame'] == dds['world_frame'], name
+        assert params['robot_base_frame'] == dds['body_frame'], name
+        assert params['resolution'] == resolution, name
+        static = params[params['plugins'][0]]
+        assert static['plugin'] == 'nav2_costmap_2d::StaticLayer', name
+        assert static['map_topic'] == topic, name
+        assert node[topic].type_name == 'nav_msgs/msg/OccupancyGrid' and node[topic].latched
+        assert static['map_subscribe_transient_local'] is True, name
+
+
 # ---- Containers ---------------------------------------------------------------------------------
 
 def _compose():
