@@ -19,7 +19,11 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <map>
+#include <thread>
 #include <mutex>
 #include <optional>
 #include <set>
@@ -333,6 +337,26 @@ TEST(RosGraph, RosoutHasRclsQosAndCarriesTheNodesLogLines) {
   ASSERT_TRUE(discovery);
   EXPECT_EQ(discovery->reliability, fdds::RELIABLE_RELIABILITY_QOS);
   EXPECT_EQ(discovery->durability, fdds::TRANSIENT_LOCAL_DURABILITY_QOS);
+}
+
+}  // namespace
+}  // namespace mlmap::dds
+
+namespace mlmap::dds {
+namespace {
+
+// One run of tests/dds/discovery_latency.sh: a participant created in a process of its own (as a
+// one-shot ROS 2 command is) on MLMAP_PROBE_DOMAIN, timed until it learns of mlmap_node's status
+// writer. Prints "PROBE <ms>". Skipped without the variable (the script sets it).
+TEST(DiscoveryProbe, TimeUntilANewParticipantSeesTheNodesWriters) {
+  const char* domain = std::getenv("MLMAP_PROBE_DOMAIN");  // NOLINT(concurrency-mt-unsafe)
+  if (domain == nullptr) GTEST_SKIP() << "run by tests/dds/discovery_latency.sh";
+  const auto start = std::chrono::steady_clock::now();
+  Observer observer(std::atoi(domain));
+  ASSERT_TRUE(waitFor([&] { return observer.log.on("rt/mlmap/status", true).has_value(); },
+                      std::chrono::seconds(10)));
+  std::printf("PROBE %.1f\n",
+              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
 }
 
 }  // namespace

@@ -36,6 +36,7 @@
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -485,6 +486,47 @@ int defaultDomainId() {
 
 }  // namespace
 
+/// `discover`: how long a newly created participant takes to learn of a writer on `topic` (as a
+/// one-shot ROS 2 command such as `ros2 topic info` does: it only sees what discovery delivered).
+struct DiscoverOptions {
+  std::string topic = "rt/mlmap/status";
+  double timeout_s = 5.0;
+};
+
+/// Creates a participant, reads the DCPSPublication built-in topic until a writer on the topic
+/// appears, prints "discovered <topic> after <ms> ms" and returns 0; 3 when it timed out.
+int discover(int domain_id, const DiscoverOptions& o) {
+  const Clock::time_point start = Clock::now();
+  const dds_entity_t participant = createParticipant(domain_id);
+  const dds_entity_t reader = check(
+      dds_create_reader(participant, DDS_BUILTIN_TOPIC_DCPSPUBLICATION, nullptr, nullptr),
+      "cannot read the DCPSPublication built-in topic");
+  const Clock::time_point deadline = start + std::chrono::duration_cast<Clock::duration>(
+                                                 std::chrono::duration<double>(o.timeout_s));
+  int rc = 3;
+  while (rc == 3 && Clock::now() < deadline && !g_stop) {
+    void* samples[kTakeBatch] = {};
+    dds_sample_info_t infos[kTakeBatch];
+    const int32_t n = dds_take(reader, samples, infos, kTakeBatch, kTakeBatch);
+    for (int32_t i = 0; i < n; ++i) {
+      const auto* endpoint = static_cast<const dds_builtintopic_endpoint_t*>(samples[i]);
+      if (infos[i].valid_data && endpoint->topic_name != nullptr && o.topic == endpoint->topic_name) {
+        rc = 0;
+      }
+    }
+    if (n > 0) dds_return_loan(reader, samples, n);
+    if (rc == 3) std::this_thread::sleep_for(std::chrono::microseconds(200));
+  }
+  const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  dds_delete(participant);
+  if (rc == 0) {
+    std::printf("discovered %s after %.1f ms\n", o.topic.c_str(), ms);
+  } else {
+    std::printf("did not discover %s within %.1f ms\n", o.topic.c_str(), ms);
+  }
+  return rc;
+}
+
 int main(int argc, char** argv) {
   CLI::App app{"mlmap_cyclone_peer: a Cyclone DDS peer of mlmap_node for interoperability tests"};
   app.require_subcommand(1);
@@ -524,12 +566,21 @@ int main(int argc, char** argv) {
                       "seconds to wait for the node's readers")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  DiscoverOptions discover_options;
+  CLI::App* discover_cmd =
+      app.add_subcommand("discover", "time until a new participant learns of a writer on a topic");
+  discover_cmd->add_option("--topic", discover_options.topic, "DDS topic of the writer")
+      ->capture_default_str();
+  discover_cmd->add_option("--timeout", discover_options.timeout_s, "give up after this many seconds")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
 
   try {
     if (domain_id < 0) domain_id = defaultDomainId();
+    if (discover_cmd->parsed()) return discover(domain_id, discover_options);
     return listen_cmd->parsed() ? listen(domain_id, listen_options) : fly(domain_id, fly_options);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());

@@ -9,6 +9,7 @@
 #include "node_log.h"
 #include "outputs.h"
 
+#include "mlmap/dds/discovery_pacing.h"
 #include "mlmap/dds/ros_graph.h"
 
 #include <unistd.h>
@@ -54,6 +55,7 @@ struct MappingNode::Impl {
   std::unique_ptr<node::MapPersistence> persistence;
   ParticipantPtr participant;
   std::unique_ptr<DiscoveryInfoPublisher> graph;
+  std::unique_ptr<DiscoveryPacing> pacing;  ///< new peers learn of the endpoints at once
   std::unique_ptr<node::Outputs> outputs;
   node::InputQueue queue;
   std::unique_ptr<node::InputReaders> readers;
@@ -93,6 +95,7 @@ struct MappingNode::Impl {
       rosout = std::move(writer);
     }
     graph = std::make_unique<DiscoveryInfoPublisher>(participant.get(), kNodeName, node_namespace);
+    pacing = std::make_unique<DiscoveryPacing>(participant.get());
     graph->announce({publisher}, {subscriber});
 
     logMemoryEstimate();
@@ -220,6 +223,7 @@ struct MappingNode::Impl {
       std::lock_guard<std::mutex> lock(rosout_mutex);
       rosout.reset();  // from here on the log goes to the sink only
     }
+    pacing.reset();  // the participant's listener, removed before the participant goes
     // Readers and writers first (their listeners die with the parts), then everything else.
     participant.reset();
     readers.reset();
