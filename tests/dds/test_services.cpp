@@ -16,6 +16,7 @@
 
 #include "dds_test_support.h"
 #include "raw_type.h"
+#include "service_client.h"
 
 #include "rcl_interfaces/srv/DescribeParameters_PubSubTypes.h"
 #include "rcl_interfaces/srv/GetParameterTypes_PubSubTypes.h"
@@ -53,6 +54,7 @@ namespace rcl_srv = ::rcl_interfaces::srv::dds_;
 namespace rcl_msg = ::rcl_interfaces::msg::dds_;
 namespace std_srv = ::std_srvs::srv::dds_;
 using test_support::localhostConfig;
+using test_support::RmwFastrtpsStyleClient;
 using test_support::waitFor;
 
 constexpr const char* kNode = "mlmap_node";
@@ -309,80 +311,6 @@ TEST(ParameterTable, ListFollowsRclcppsPrefixesAndDepth) {
 }
 
 // --- A client as rmw_fastrtps_cpp's, against a running node --------------------------------------
-
-/// What rmw_fastrtps_cpp's client does (Jazzy, rmw_request.cpp / rmw_response.cpp): writes the
-/// request with its reply reader's GUID as the related sample identity, takes every reply and keeps
-/// the ones whose related sample identity names its reader (or its writer) and whose sequence
-/// number is the request's.
-template <class ReqPubSub, class RespPubSub>
-class RmwFastrtpsStyleClient {
- public:
-  using Request = typename ReqPubSub::type;
-  using Response = typename RespPubSub::type;
-
-  RmwFastrtpsStyleClient(fdds::DomainParticipant* participant, const ServiceTopics& topics) {
-    publisher_ = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
-    subscriber_ = participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
-    writer_ = createWriter<ReqPubSub>(publisher_, topics.request, serviceWriterQos());
-    reader_ = createReader<RespPubSub>(subscriber_, topics.reply, serviceReaderQos(), nullptr);
-  }
-
-  /// True once both endpoints matched the server (what rclcpp's service_is_ready checks).
-  bool ready() const {
-    return test_support::writerMatched(writer_) && test_support::readerMatched(reader_);
-  }
-
-  /// Calls the service; nothing when no reply came within `timeout`.
-  std::optional<Response> call(const Request& request, std::chrono::milliseconds timeout =
-                                                           std::chrono::milliseconds(10000)) {
-    rtps::WriteParams params;
-    params.related_sample_identity().writer_guid() = reader_->guid();
-    if (!writer_->write(const_cast<Request*>(&request), params)) return std::nullopt;
-    const rtps::SequenceNumber_t sequence = params.sample_identity().sequence_number();
-    const rtps::GUID_t reply_reader = reader_->guid();
-    const rtps::GUID_t request_writer = writer_->guid();
-    const auto deadline = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < deadline) {
-      Response response;
-      fdds::SampleInfo info;
-      if (reader_->take_next_sample(&response, &info) !=
-          eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
-        reader_->wait_for_unread_message(eprosima::fastrtps::Duration_t(0, 20000000));
-        continue;
-      }
-      if (!info.valid_data) continue;
-      const rtps::GUID_t& to = info.related_sample_identity.writer_guid();
-      if (to != reply_reader && to != request_writer) {
-        ++foreign_replies_;  // another client's reply on the shared topic
-        continue;
-      }
-      if (info.related_sample_identity.sequence_number() != sequence) continue;
-      return response;
-    }
-    return std::nullopt;
-  }
-
-  /// The first call after ready(): repeated (1 s per attempt) until answered. The client's writer
-  /// can match the node's reader before that reader has matched the writer, and a VOLATILE reader
-  /// drops what it receives before; rmw_fastrtps_cpp's clients have the same race, so a test calls
-  /// its first request this way and every later one once.
-  std::optional<Response> callUntilAnswered(const Request& request) {
-    for (int attempt = 0; attempt < 10; ++attempt) {
-      if (auto response = call(request, std::chrono::milliseconds(1000))) return response;
-    }
-    return std::nullopt;
-  }
-
-  /// Replies to other clients that this one took and dropped.
-  int foreignReplies() const { return foreign_replies_; }
-
- private:
-  fdds::Publisher* publisher_ = nullptr;
-  fdds::Subscriber* subscriber_ = nullptr;
-  fdds::DataWriter* writer_ = nullptr;
-  fdds::DataReader* reader_ = nullptr;
-  int foreign_replies_ = 0;
-};
 
 using TriggerClient = RmwFastrtpsStyleClient<std_srv::Trigger_Request_PubSubType,
                                              std_srv::Trigger_Response_PubSubType>;
