@@ -25,12 +25,19 @@ class RmwFastrtpsStyleClient {
   using Request = typename ReqPubSub::type;
   using Response = typename RespPubSub::type;
 
+  /// A client of the service on `topics`. Its reply reader keeps the last `reply_depth` replies
+  /// not yet taken (rmw's services default: 10). Every client's reader receives the replies to
+  /// every client: one that takes late while another calls fast can lose its own reply from a
+  /// 10-deep history (a property of rmw_fastrtps_cpp's framing, whose clients have the same
+  /// depth), so tests of concurrent clients give a deeper one.
   RmwFastrtpsStyleClient(eprosima::fastdds::dds::DomainParticipant* participant,
-                         const ServiceTopics& topics) {
+                         const ServiceTopics& topics, int reply_depth = 10) {
     publisher_ = participant->create_publisher(eprosima::fastdds::dds::PUBLISHER_QOS_DEFAULT);
     subscriber_ = participant->create_subscriber(eprosima::fastdds::dds::SUBSCRIBER_QOS_DEFAULT);
     writer_ = createWriter<ReqPubSub>(publisher_, topics.request, serviceWriterQos());
-    reader_ = createReader<RespPubSub>(subscriber_, topics.reply, serviceReaderQos(), nullptr);
+    eprosima::fastdds::dds::DataReaderQos reader_qos = serviceReaderQos();
+    reader_qos.history().depth = reply_depth;
+    reader_ = createReader<RespPubSub>(subscriber_, topics.reply, reader_qos, nullptr);
   }
 
   /// True once both endpoints matched the server (what rclcpp's service_is_ready checks).

@@ -629,12 +629,15 @@ TEST(NodeServices, ConcurrentClientsEachGetTheirOwnReplyAndMalformedRequestsAreC
   // each must get the values of its own names, every time.
   const ParticipantPtr a_participant = createParticipant(localhostConfig(219), "client_a");
   const ParticipantPtr b_participant = createParticipant(localhostConfig(219), "client_b");
-  GetClient a(a_participant.get(), topics);
-  GetClient b(b_participant.get(), topics);
-  ASSERT_TRUE(waitFor([&] { return a.ready() && b.ready(); }));
+  // Replies to both go to both readers: a client that takes late on a loaded machine while the
+  // other calls fast would lose its own reply from rmw's 10-deep history (service_client.h).
+  constexpr int kReplyDepth = 100;
+  GetClient a(a_participant.get(), topics, kReplyDepth);
+  GetClient b(b_participant.get(), topics, kReplyDepth);
+  ASSERT_TRUE(waitFor([&] { return a.ready() && b.ready(); })) << "the clients did not match";
   rcl_srv::GetParameters_Request_ nothing;
-  ASSERT_TRUE(a.callUntilAnswered(nothing));
-  ASSERT_TRUE(b.callUntilAnswered(nothing));
+  ASSERT_TRUE(a.callUntilAnswered(nothing)) << "no answer to client a";
+  ASSERT_TRUE(b.callUntilAnswered(nothing)) << "no answer to client b";
   constexpr int kCalls = 20;
   std::atomic<int> a_right{0}, b_right{0};
   auto run = [&](GetClient& client, const std::string& name, ParameterType type,
@@ -670,14 +673,21 @@ TEST(NodeServices, ConcurrentClientsEachGetTheirOwnReplyAndMalformedRequestsAreC
   fdds::Publisher* publisher = raw->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
   fdds::DataWriter* raw_writer = publisher->create_datawriter(topic, serviceWriterQos());
   ASSERT_NE(raw_writer, nullptr);
-  ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(raw_writer); }));
+  ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(raw_writer); }))
+      << "the raw writer did not match";
   test_support::RawBytes bad = test_support::CdrBytes().u32(0x7fffffffu).bytes();
-  ASSERT_TRUE(raw_writer->write(&bad));
-  EXPECT_TRUE(waitFor([&] { return node.serviceCounters().requests_malformed >= 1; }));
+  // Written until counted: the node's reader may match this writer after the writer matched it
+  // (see callUntilAnswered()), and drops what came before.
+  EXPECT_TRUE(waitFor([&] {
+    if (node.serviceCounters().requests_malformed >= 1) return true;
+    raw_writer->write(&bad);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    return node.serviceCounters().requests_malformed >= 1;
+  })) << "the malformed request was not counted";
   rcl_srv::GetParameters_Request_ request;
   request.names_({"dds.ns"});
   const auto after = a.call(request);
-  ASSERT_TRUE(after);
+  ASSERT_TRUE(after) << "no answer after the malformed request";
   EXPECT_EQ(after->values_().size(), 1u);
 }
 
