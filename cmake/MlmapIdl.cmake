@@ -4,8 +4,10 @@
 #   mlmap_idl_library(<target> IDL_ROOT <dir> [PACKAGES <pkg>...])
 #
 # Each <dir>/<pkg>/msg/<Name>_.idl yields <build>/idl_gen/<pkg>/msg/<Name>_{.h,.cxx,PubSubTypes.h,
-# PubSubTypes.cxx}; the generated headers include each other as "<pkg>/msg/<Name>_.h", so the
-# target exports <build>/idl_gen as its include directory.
+# PubSubTypes.cxx}, and each service <dir>/<pkg>/srv/<Name>_.idl (its <Name>_Request_ and
+# <Name>_Response_ structs) the same four files under <pkg>/srv/; the generated headers include
+# each other as "<pkg>/msg/<Name>_.h", so the target exports <build>/idl_gen as its include
+# directory.
 #
 # fastddsgen 2.3 pitfalls handled here (see ../shared/reference/dds-ros2-wire.md): -cs (member
 # `pose_` vs type `Pose_`), absolute paths (relative ones silently give empty headers), one run
@@ -16,7 +18,7 @@ find_program(FASTDDSGEN_EXECUTABLE fastddsgen REQUIRED)  # found already by Mlma
 function(mlmap_idl_library target)
   cmake_parse_arguments(ARG "" "IDL_ROOT" "" ${ARGN})
   get_filename_component(root "${ARG_IDL_ROOT}" ABSOLUTE)
-  file(GLOB idl_files CONFIGURE_DEPENDS "${root}/*/msg/*_.idl")
+  file(GLOB idl_files CONFIGURE_DEPENDS "${root}/*/msg/*_.idl" "${root}/*/srv/*_.idl")
   set(gen_dir "${CMAKE_CURRENT_BINARY_DIR}/idl_gen")
   set(flat_dir "${gen_dir}/_flat")
   set(outputs "")
@@ -25,15 +27,16 @@ function(mlmap_idl_library target)
   set(seen "")
   foreach(idl IN LISTS idl_files)
     get_filename_component(name "${idl}" NAME_WE)
-    get_filename_component(msg_dir "${idl}" DIRECTORY)
-    get_filename_component(pkg_dir "${msg_dir}" DIRECTORY)
+    get_filename_component(kind_dir "${idl}" DIRECTORY)  # <pkg>/msg or <pkg>/srv
+    get_filename_component(kind "${kind_dir}" NAME)
+    get_filename_component(pkg_dir "${kind_dir}" DIRECTORY)
     get_filename_component(pkg "${pkg_dir}" NAME)
     if(name IN_LIST seen)
       message(FATAL_ERROR "IDL type name ${name} appears in two packages; fastddsgen writes flat")
     endif()
     list(APPEND seen "${name}")
     foreach(suffix .h .cxx PubSubTypes.h PubSubTypes.cxx)
-      set(out "${gen_dir}/${pkg}/msg/${name}${suffix}")
+      set(out "${gen_dir}/${pkg}/${kind}/${name}${suffix}")
       list(APPEND outputs "${out}")
       list(APPEND moves COMMAND ${CMAKE_COMMAND} -E copy_if_different "${flat_dir}/${name}${suffix}" "${out}")
       if(suffix MATCHES "cxx$")

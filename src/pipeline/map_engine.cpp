@@ -238,7 +238,7 @@ void MapEngine::localStep(const MeasurementBatch& batch) {
   }
   if (observers_.global) {
     const LocalMapCounters& c = local_.counters();
-    observers_.global(global_, batch.stamp_s, c.submaps_retired + c.submaps_restored);
+    observers_.global(global_, batch.stamp_s, c.submaps_retired + c.submaps_restored + clears_);
   }
   const std::size_t global_bytes = global_.memoryBytes();
   const std::size_t planning_bytes = planning_.memoryBytes();
@@ -403,6 +403,42 @@ void MapEngine::restoreState(const MapState& state) {
   if (!config_.pipeline.planning_layers) return;
   planning_.update(local_, global_, frames_integrated_, state.last_stamp_s, state.T_W_B);
   planning_.flush();
+}
+
+void MapEngine::clear() {
+  // Threaded: wait until no frame is queued or in flight, and keep the queue locked so that
+  // neither stage starts one while the layers are emptied (both take this lock first).
+  std::unique_lock<std::mutex> idle;
+  if (config_.pipeline.threaded) {
+    idle = std::unique_lock<std::mutex>(queue_mutex_);
+    queue_cv_.wait(idle, [&] { return stopping_ || (inputs_.empty() && in_flight_ == 0); });
+  }
+  double stamp_s = 0.0;
+  Transform T_W_B = Transform::Identity();
+  std::uint64_t version = 0;
+  {
+    std::lock_guard<std::mutex> lock(layers_mutex_);
+    global_.clear();
+    local_.restoreWindow(LocalWindow{});  // an empty window unplaces the map
+    ++clears_;
+    stamp_s = last_mapped_stamp_s_;
+    T_W_B = last_T_W_B_;
+    const LocalMapCounters& c = local_.counters();
+    version = c.submaps_retired + c.submaps_restored + clears_;
+  }
+  {
+    std::lock_guard<std::mutex> lock(stats_mutex_);
+    stats_.global_voxels = 0;
+    stats_.global_submaps = 0;
+    stats_.memory.global_bytes = global_.memoryBytes();
+    stats_.memory.local_bytes = local_.memoryBytes();
+  }
+  if (config_.pipeline.planning_layers) {
+    planning_.update(local_, global_, frames_integrated_, stamp_s, T_W_B);
+    planning_.flush();
+    if (observers_.snapshot) observers_.snapshot(frames_integrated_, stamp_s);
+  }
+  if (observers_.global) observers_.global(global_, stamp_s, version);
 }
 
 }  // namespace mlmap

@@ -579,3 +579,79 @@ TEST(MapEngine, EsdfIsRateLimitedByFrameStamps) {
 
 }  // namespace
 }  // namespace mlmap
+
+namespace mlmap {
+namespace {
+
+/// Frames that fly along x, 1 m per frame (30 frames go far enough to retire submaps to the
+/// global map), from `t0_s`.
+std::vector<PointCloudFrame> flightAlongX(double t0_s, int frames) {
+  std::vector<PointCloudFrame> out;
+  out.reserve(static_cast<std::size_t>(frames));
+  for (int i = 0; i < frames; ++i) {
+    out.push_back(cloudAt(t0_s + 0.1 * i, Eigen::Vector3d(1.0 * i, 0.0, 1.0)));
+  }
+  return out;
+}
+
+/// clear() empties both layers (and the snapshot), keeps the stamp order, and the next frames
+/// map as in a new engine: the reference is a fresh engine given only those frames.
+void checkClearEmptiesAndMapsAgain(bool threaded) {
+  MapConfig config = configAt(0.2);
+  config.pipeline.threaded = threaded;
+  config.pipeline.input_queue_capacity = 1000;  // nothing dropped
+  std::uint64_t last_version = 0;
+  std::size_t last_global_voxels = 0;
+  EngineObservers observers;
+  observers.global = [&](const GlobalMap& map, double, std::uint64_t version) {
+    last_version = version;
+    last_global_voxels = map.voxelCount();
+  };
+  MapEngine engine(config, {}, observers);
+  for (PointCloudFrame& f : flightAlongX(0.0, 30)) {
+    ASSERT_EQ(engine.submit(std::move(f)), FrameStatus::kAccepted);
+  }
+  engine.flush();
+  ASSERT_FALSE(engine.occupiedVoxels().empty());
+  ASSERT_GT(engine.globalMap().voxelCount(), 0u) << "the flight must retire submaps";
+  const std::uint64_t version_before = last_version;
+
+  engine.clear();
+  EXPECT_TRUE(engine.occupiedVoxels().empty());
+  EXPECT_EQ(engine.globalMap().voxelCount(), 0u);
+  EXPECT_EQ(engine.stats().global_voxels, 0u);
+  const MapState state = engine.exportState();
+  EXPECT_TRUE(state.global_submaps.empty());
+  EXPECT_EQ(state.window.size.prod(), 0) << "the window is unplaced";
+  EXPECT_NE(last_version, version_before) << "the global observer hears of the change";
+  EXPECT_EQ(last_global_voxels, 0u);
+  const std::shared_ptr<const MapSnapshot> snap = engine.snapshot();
+  ASSERT_NE(snap, nullptr);
+  EXPECT_EQ(snap->window().size.prod(), 0);
+  // The stamp order holds: a frame older than the last one mapped is still refused.
+  EXPECT_EQ(engine.submit(cloudAt(1.0, Eigen::Vector3d(0, 0, 1))), FrameStatus::kOutOfOrder);
+
+  MapConfig fresh_config = config;
+  MapEngine fresh(fresh_config);
+  for (PointCloudFrame& f : flightAlongX(10.0, 10)) {
+    PointCloudFrame copy = f;
+    ASSERT_EQ(engine.submit(std::move(f)), FrameStatus::kAccepted);
+    ASSERT_EQ(fresh.submit(std::move(copy)), FrameStatus::kAccepted);
+  }
+  engine.flush();
+  fresh.flush();
+  const std::vector<VoxelIndex> after = engine.occupiedVoxels();
+  EXPECT_FALSE(after.empty()) << "the next frames map again";
+  EXPECT_EQ(after, fresh.occupiedVoxels());
+}
+
+TEST(MapEngine, ClearEmptiesTheMapAndTheNextFramesMapAgainSynchronous) {
+  checkClearEmptiesAndMapsAgain(false);
+}
+
+TEST(MapEngine, ClearEmptiesTheMapAndTheNextFramesMapAgainThreaded) {
+  checkClearEmptiesAndMapsAgain(true);
+}
+
+}  // namespace
+}  // namespace mlmap

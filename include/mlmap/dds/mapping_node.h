@@ -15,6 +15,7 @@
 
 #include "mlmap/dds/node_config.h"
 #include "mlmap/dds/participant.h"
+#include "mlmap/dds/ros_services.h"
 #include "mlmap/pipeline/map_engine.h"
 #include "mlmap/core/pose_buffer.h"
 
@@ -74,6 +75,8 @@ class MappingNode {
   [[nodiscard]] std::shared_ptr<const MapSnapshot> snapshot() const;
   /// The domain the participant joined.
   [[nodiscard]] int domainId() const;
+  /// What the node's ROS 2 services (~/save_map, ~/clear_map, the parameter services) counted.
+  [[nodiscard]] ServiceCounters serviceCounters() const;
 
  private:
   struct Impl;

@@ -153,6 +153,15 @@ class MapEngine {
   /// state does not fit this engine (voxel size, window size or log-odds model differ from the
   /// configuration, or its data is inconsistent); the message names what differs.
   void restoreState(const MapState& state);
+  /// Empties the local and the global map (what planners, the 2D grid, the ESDF and a map file
+  /// hold): the window is unplaced, so the next mapped frame places it around the body again and
+  /// maps from nothing. Frames queued before the call are mapped first, then cleared (threaded
+  /// mode: it waits until the engine is idle, holding off new frames meanwhile; synchronous mode:
+  /// call it between two submit() calls). Then publishes an empty snapshot and calls the
+  /// `global` observer with a new version. The awareness map (the sensor's view of the last
+  /// frames, rebuilt with each frame) is kept, and so are the stamp order (later frames must
+  /// still be newer than the last one mapped) and the counters. Any thread.
+  void clear();
 
  private:
   using Input = std::variant<PointCloudFrame, DepthFrame>;
@@ -180,6 +189,7 @@ class MapEngine {
   double last_mapped_stamp_s_ = 0.0;
   Transform last_T_W_B_ = Transform::Identity();
   std::uint64_t frames_restored_ = 0;  // frames mapped before the state restored last
+  std::uint64_t clears_ = 0;           // clear() calls: part of the global observer's version
 
   // Statistics, guarded by stats_mutex_.
   mutable std::mutex stats_mutex_;

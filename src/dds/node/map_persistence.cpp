@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 namespace mlmap::dds::node {
@@ -68,9 +69,14 @@ void MapPersistence::checkSavePath(bool loaded) {
       "map_file.overwrite: true");
 }
 
-void MapPersistence::save(const char* why) {
+MapPersistence::SaveOutcome MapPersistence::save(const char* why) {
   const std::string& path = options_.save_path;
+  std::lock_guard<std::mutex> one_at_a_time(save_mutex_);
+  SaveOutcome outcome;
   try {
+    if (path.empty()) {
+      throw std::runtime_error("no map file is configured (map_file.save_path is empty)");
+    }
     const auto start = SteadyClock::now();
     const MapState state = engine_.exportState();
     io::saveMapFile(state, path);
@@ -79,14 +85,15 @@ void MapPersistence::save(const char* why) {
     m << std::fixed << std::setprecision(1) << why << ": saved the map to '" << path << "' in "
       << msSince(start) << " ms (" << state.frames_mapped << " frames mapped, "
       << state.globalVoxelCount() << " global voxels)";
-    log_.always(LogLevel::kInfo, m.str());
+    outcome = {true, m.str()};
+    log_.always(LogLevel::kInfo, outcome.message);
   } catch (const std::exception& e) {
     counters_.mapSaved(false);
-    log_.always(LogLevel::kError, std::string(why) +
-                                      ": map not saved (the previous file, if any, is "
-                                      "unchanged): " +
-                                      e.what());
+    outcome = {false, std::string(why) +
+                          ": map not saved (the previous file, if any, is unchanged): " + e.what()};
+    log_.always(LogLevel::kError, outcome.message);
   }
+  return outcome;
 }
 
 void MapPersistence::startPeriodicSaves() {

@@ -11,6 +11,7 @@
 
 #include <condition_variable>
 #include <mutex>
+#include <string>
 #include <thread>
 
 namespace mlmap::dds::node {
@@ -31,9 +32,15 @@ class MapPersistence {
   /// corrupt, too large, or made with another resolution, window or log-odds model), or when
   /// save_path names an existing file that was not loaded and map_file.overwrite is false.
   bool load();
+  /// What a save did: whether the file was written, and the line logged about it.
+  struct SaveOutcome {
+    bool ok = false;      ///< the file was written
+    std::string message;  ///< what happened (the path and the size, or why it failed)
+  };
   /// Saves to save_path (atomically: the previous file stays when this fails); logs the outcome,
-  /// never throws. `why` starts the log line ("shutdown", "periodic save").
-  void save(const char* why);
+  /// never throws. `why` starts the log line ("shutdown", "periodic save"). Saves from several
+  /// threads (periodic, shutdown, the save_map service) run one at a time.
+  SaveOutcome save(const char* why);
   /// Saves every save_period_s from a thread of its own (nothing when the period is 0).
   void startPeriodicSaves();
   /// Stops the periodic saves (waits for one under way). Idempotent.
@@ -50,6 +57,7 @@ class MapPersistence {
   CounterSink& counters_;
   NodeLog& log_;
   std::thread thread_;
+  std::mutex save_mutex_;  ///< one save at a time
   std::mutex mutex_;
   std::condition_variable cv_;
   bool stop_ = false;

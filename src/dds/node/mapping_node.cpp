@@ -7,6 +7,7 @@
 #include "layer_mailbox.h"
 #include "map_persistence.h"
 #include "node_log.h"
+#include "node_services.h"
 #include "outputs.h"
 
 #include "mlmap/dds/discovery_pacing.h"
@@ -41,10 +42,11 @@ constexpr const char* kNodeName = "mlmap_node";
 
 /// The node's parts, composed: the engine; its map file; the inputs (readers -> queue -> the
 /// input thread's pairing); the outputs (layer mailbox -> the publishing thread's operations);
-/// its place in the ROS 2 graph (ros_discovery_info, /rosout); the counters and the log every
-/// part writes to.
+/// its place in the ROS 2 graph (ros_discovery_info, /rosout); its services (save, clear, the
+/// read-only parameters); the counters and the log every part writes to.
 struct MappingNode::Impl {
   NodeConfig config;
+  NodeConfig effective;     ///< what the node runs with (effectiveNodeConfig): the parameters
   std::mutex rosout_mutex;  ///< guards rosout against its deletion in stop()
   std::unique_ptr<RosoutWriter> rosout;
   node::NodeLog log;
@@ -60,13 +62,19 @@ struct MappingNode::Impl {
   node::InputQueue queue;
   std::unique_ptr<node::InputReaders> readers;
   std::unique_ptr<node::FramePairer> pairer;
+  std::unique_ptr<node::NodeServices> services;
+  /// Set by ~/clear_map: the emptied global map goes out at once, whatever the rate limit.
+  std::atomic<bool> force_global_publish{false};
   std::thread input_thread;
   bool setup_done = false;  ///< the map is loaded (if asked) and the node runs: it may be saved
   std::atomic<bool> stopped{false};
   int domain_id = -1;
 
   Impl(const NodeConfig& c, const LogSink& sink)
-      : config(c), log(teeToRosout(sink)), mailbox(c.dds.rates) {}
+      : config(c),
+        effective(effectiveNodeConfig(c)),
+        log(teeToRosout(sink)),
+        mailbox(c.dds.rates) {}
 
   /// `sink`, and /rosout once the node has its writer there.
   LogSink teeToRosout(const LogSink& sink) {
@@ -110,6 +118,9 @@ struct MappingNode::Impl {
                                               counters, log, started);
     pairer = std::make_unique<node::FramePairer>(config.dds, T_B_S, *engine, counters, log);
     readers = std::make_unique<node::InputReaders>(subscriber, config.dds, queue, counters, log);
+    services = std::make_unique<node::NodeServices>(publisher, subscriber, node_namespace,
+                                                    kNodeName, effective, *engine, *persistence,
+                                                    log, [this] { force_global_publish = true; });
     graph->announce({publisher}, {subscriber});  // the ROS graph learns of the new endpoints
     warnAboutMissingInputs(loaded);
     if (loaded) {
@@ -121,6 +132,7 @@ struct MappingNode::Impl {
     input_thread = std::thread([this] { inputLoop(); });
     outputs->start();
     persistence->startPeriodicSaves();
+    services->start();
     setup_done = true;
   }
 
@@ -176,14 +188,13 @@ struct MappingNode::Impl {
 
   /// The engine, both stages threaded (Figure 5), its layers copied into the mailbox.
   std::unique_ptr<MapEngine> makeEngine() {
-    MapConfig map_config = config.map;
-    map_config.pipeline.threaded = true;
+    const MapConfig& map_config = effective.map;  // both stages threaded
     EngineObservers observers;
     observers.awareness = [this](const AwarenessMap& map, double stamp_s, const Transform&) {
       mailbox.copyAwareness(map, stamp_s);
     };
     observers.global = [this](const GlobalMap& map, double stamp_s, std::uint64_t version) {
-      mailbox.copyGlobal(map, stamp_s, version);
+      mailbox.copyGlobal(map, stamp_s, version, force_global_publish.exchange(false));
     };
     observers.snapshot = [this](std::uint64_t, double) { mailbox.announceSnapshot(); };
     return std::make_unique<MapEngine>(
@@ -210,6 +221,7 @@ struct MappingNode::Impl {
 
   void stop() {
     if (stopped.exchange(true)) return;
+    if (services) services->stop();  // no save or clear from here on
     queue.close();
     if (input_thread.joinable()) input_thread.join();  // drains the hand-over queue
     if (persistence) persistence->stopPeriodicSaves();
@@ -228,6 +240,7 @@ struct MappingNode::Impl {
     participant.reset();
     readers.reset();
     outputs.reset();
+    services.reset();
   }
 
   /// The engine is idle: the global map's last state goes out, whatever the rate limit.
@@ -264,5 +277,9 @@ std::shared_ptr<const MapSnapshot> MappingNode::snapshot() const {
 }
 
 int MappingNode::domainId() const { return impl_->domain_id; }
+
+ServiceCounters MappingNode::serviceCounters() const {
+  return impl_->services ? impl_->services->counters() : ServiceCounters{};
+}
 
 }  // namespace mlmap::dds

@@ -1,0 +1,373 @@
+#include "mlmap/dds/ros_services.h"
+
+#include "mlmap/core/key_list.h"
+#include "mlmap/dds/participant.h"
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <optional>
+#include <utility>
+
+namespace mlmap::dds {
+
+namespace fdds = eprosima::fastdds::dds;
+namespace rtps = eprosima::fastrtps::rtps;
+namespace rcl_msg = ::rcl_interfaces::msg::dds_;
+namespace rcl_srv = ::rcl_interfaces::srv::dds_;
+
+namespace {
+
+/// rmw_qos_profile_services_default's depth.
+constexpr int kServiceDepth = 10;
+/// The RTPS entity kind bit that readers have and writers do not (RTPS 9.3.1.2).
+constexpr std::uint8_t kEntityIdIsReaderBit = 0x04;
+
+}  // namespace
+
+ServiceTopics privateServiceTopics(const std::string& node_namespace, const std::string& node_name,
+                                   const std::string& service) {
+  std::string base = node_namespace;
+  if (base.empty() || base.back() != '/') base += '/';
+  base += node_name + "/" + service;  // "/ns/node/service"
+  return {"rq" + base + "Request", "rr" + base + "Reply"};
+}
+
+fdds::DataReaderQos serviceReaderQos() {
+  fdds::DataReaderQos qos = reliableReaderQos(false, kServiceDepth);
+  qos.data_sharing().off();
+  return qos;
+}
+
+fdds::DataWriterQos serviceWriterQos() { return reliableWriterQos(kServiceDepth); }
+
+RequestId requestIdOf(const fdds::SampleInfo& info) {
+  RequestId id;
+  id.request_writer = info.sample_identity.writer_guid();
+  id.sequence = info.sample_identity.sequence_number();
+  const rtps::GUID_t& reader = info.related_sample_identity.writer_guid();
+  id.reply_to = reader != rtps::GUID_t::unknown() ? reader : id.request_writer;
+  return id;
+}
+
+bool isReaderGuid(const rtps::GUID_t& guid) {
+  return (guid.entityId.value[3] & kEntityIdIsReaderBit) != 0;
+}
+
+rtps::WriteParams replyWriteParams(const RequestId& id) {
+  rtps::WriteParams params;
+  params.related_sample_identity().writer_guid() = id.reply_to;
+  params.related_sample_identity().sequence_number() = id.sequence;
+  return params;
+}
+
+// --- ServiceHost ---------------------------------------------------------------------------------
+
+void ServiceHost::ReplyWriter::on_publication_matched(
+    fdds::DataWriter*, const fdds::PublicationMatchedStatus& status) {
+  const rtps::GUID_t reader = rtps::iHandle2GUID(status.last_subscription_handle);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (status.current_count_change > 0) {
+      readers_.insert(reader);
+    } else if (status.current_count_change < 0) {
+      readers_.erase(reader);
+    }
+  }
+  cv_.notify_all();
+}
+
+bool ServiceHost::ReplyWriter::waitForReader(const rtps::GUID_t& reader,
+                                             std::chrono::nanoseconds timeout) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  return cv_.wait_for(lock, timeout, [&] { return readers_.count(reader) > 0; });
+}
+
+ServiceHost::ServiceHost(fdds::Publisher* publisher, fdds::Subscriber* subscriber,
+                         std::function<void(const std::string&)> on_problem)
+    : publisher_(publisher), subscriber_(subscriber), on_problem_(std::move(on_problem)) {}
+
+ServiceHost::~ServiceHost() { stop(); }
+
+void ServiceHost::start() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (thread_.joinable() || stopping_) return;
+  thread_ = std::thread([this] { run(); });
+}
+
+void ServiceHost::stop() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+    jobs_.clear();
+  }
+  cv_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+ServiceCounters ServiceHost::counters() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return counters_;
+}
+
+void ServiceHost::post(std::function<void()> job) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (stopping_) return;
+    jobs_.push_back(std::move(job));
+  }
+  cv_.notify_all();
+}
+
+void ServiceHost::run() {
+  for (;;) {
+    std::function<void()> job;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      cv_.wait(lock, [this] { return stopping_ || !jobs_.empty(); });
+      if (stopping_) return;
+      job = std::move(jobs_.front());
+      jobs_.pop_front();
+    }
+    job();
+  }
+}
+
+void ServiceHost::countMalformed(const std::string& topic) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++counters_.requests_malformed;
+  }
+  if (on_problem_) on_problem_("cannot decode a request on " + topic + " (malformed CDR): dropped");
+}
+
+void ServiceHost::sendReply(ReplyWriter& out, void* reply, const RequestId& id) {
+  // As rmw_fastrtps_cpp: a reply addressed to the client's reader waits (up to the writer's
+  // max_blocking_time) until that reader is matched, or it could be sent before the client can
+  // receive it.
+  if (isReaderGuid(id.reply_to)) {
+    const auto& blocking = out.writer->get_qos().reliability().max_blocking_time;
+    const std::chrono::nanoseconds timeout =
+        std::chrono::seconds(blocking.seconds) + std::chrono::nanoseconds(blocking.nanosec);
+    if (!out.waitForReader(id.reply_to, timeout)) {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        ++counters_.replies_unmatched;
+      }
+      if (on_problem_) {
+        on_problem_("no reply sent on " + out.writer->get_topic()->get_name() +
+                    ": the client's reply reader did not match in time");
+      }
+      return;
+    }
+  }
+  rtps::WriteParams params = replyWriteParams(id);
+  const bool written = out.writer->write(reply, params);
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (written) {
+    ++counters_.requests;
+  } else {
+    ++counters_.replies_unmatched;
+  }
+}
+
+// --- Parameters ----------------------------------------------------------------------------------
+
+NodeConfig effectiveNodeConfig(const NodeConfig& config) {
+  NodeConfig effective = config;
+  effective.map.pipeline.threaded = true;
+  return effective;
+}
+
+namespace {
+
+rcl_msg::ParameterValue_ typed(ParameterType type) {
+  rcl_msg::ParameterValue_ value;
+  value.type_(static_cast<std::uint8_t>(type));
+  return value;
+}
+
+rcl_msg::ParameterValue_ parameterValue(double v) {
+  rcl_msg::ParameterValue_ value = typed(ParameterType::kDouble);
+  value.double_value_(v);
+  return value;
+}
+rcl_msg::ParameterValue_ parameterValue(int v) {
+  rcl_msg::ParameterValue_ value = typed(ParameterType::kInteger);
+  value.integer_value_(v);
+  return value;
+}
+rcl_msg::ParameterValue_ parameterValue(std::uint32_t v) {
+  rcl_msg::ParameterValue_ value = typed(ParameterType::kInteger);
+  value.integer_value_(static_cast<std::int64_t>(v));
+  return value;
+}
+rcl_msg::ParameterValue_ parameterValue(bool v) {
+  rcl_msg::ParameterValue_ value = typed(ParameterType::kBool);
+  value.bool_value_(v);
+  return value;
+}
+rcl_msg::ParameterValue_ parameterValue(const std::string& v) {
+  rcl_msg::ParameterValue_ value = typed(ParameterType::kString);
+  value.string_value_(v);
+  return value;
+}
+rcl_msg::ParameterValue_ parameterValue(UnknownAs v) {
+  return parameterValue(std::string(toString(v)));
+}
+rcl_msg::ParameterValue_ parameterValue(const std::optional<bool>& v) {
+  return v ? parameterValue(*v) : typed(ParameterType::kNotSet);
+}
+template <class Scalar, int kRows>
+rcl_msg::ParameterValue_ parameterValue(const Eigen::Matrix<Scalar, kRows, 1>& v) {
+  if constexpr (std::is_integral_v<Scalar>) {
+    rcl_msg::ParameterValue_ value = typed(ParameterType::kIntegerArray);
+    for (int i = 0; i < kRows; ++i) value.integer_array_value_().push_back(v[i]);
+    return value;
+  } else {
+    rcl_msg::ParameterValue_ value = typed(ParameterType::kDoubleArray);
+    for (int i = 0; i < kRows; ++i) value.double_array_value_().push_back(v[i]);
+    return value;
+  }
+}
+
+/// Collects every key of a config struct as (dotted name, value, description).
+template <class Entry>
+class ParameterCollector {
+ public:
+  ParameterCollector(std::map<std::string, Entry>* out, std::string path)
+      : out_(out), path_(std::move(path)) {}
+
+  template <class T>
+  void key(const char* name, const T& field, const char* unit, const char* doc) {
+    Entry& e = (*out_)[path_.empty() ? std::string(name) : path_ + "." + name];
+    e.value = parameterValue(field);
+    e.description = doc;
+    std::replace(e.description.begin(), e.description.end(), '\n', ' ');
+    if (*unit != '\0') e.description += std::string(" [") + unit + "]";
+  }
+  template <class S>
+  void section(const char* name, const S& sub, const char* /*doc*/) {
+    ParameterCollector nested(out_, path_.empty() ? std::string(name) : path_ + "." + name);
+    visitConfig(sub, nested);
+  }
+
+ private:
+  std::map<std::string, Entry>* out_;
+  std::string path_;
+};
+
+/// The part of `name` after `prefix` + ".", or nothing when `name` is not under `prefix`.
+bool isUnder(const std::string& name, const std::string& prefix) {
+  return name.size() > prefix.size() + 1 && name.compare(0, prefix.size(), prefix) == 0 &&
+         name[prefix.size()] == '.';
+}
+
+std::uint64_t dotsIn(const std::string& text, std::size_t from = 0) {
+  return static_cast<std::uint64_t>(
+      std::count(text.begin() + static_cast<std::ptrdiff_t>(from), text.end(), '.'));
+}
+
+}  // namespace
+
+ParameterTable::ParameterTable(const NodeConfig& config) {
+  ParameterCollector<Entry> collector(&entries_, "");
+  visitConfig(config, collector);
+}
+
+std::vector<std::string> ParameterTable::names() const {
+  std::vector<std::string> out;
+  out.reserve(entries_.size());
+  for (const auto& [name, entry] : entries_) out.push_back(name);
+  return out;
+}
+
+rcl_srv::ListParameters_Response_ ParameterTable::list(
+    const rcl_srv::ListParameters_Request_& request) const {
+  // rclcpp's NodeParameters::list_parameters (Jazzy): depth counts the separators below a prefix.
+  const std::uint64_t depth = request.depth_();
+  const bool recursive = depth == 0;  // ListParameters DEPTH_RECURSIVE
+  rcl_srv::ListParameters_Response_ response;
+  std::vector<std::string>& names = response.result_().names_();
+  std::vector<std::string>& prefixes = response.result_().prefixes_();
+  for (const auto& entry : entries_) {
+    const std::string& name = entry.first;
+    const bool get_all = request.prefixes_().empty() && (recursive || dotsIn(name) < depth);
+    const bool prefix_matches = std::any_of(
+        request.prefixes_().begin(), request.prefixes_().end(), [&](const std::string& p) {
+          if (name == p) return true;
+          return isUnder(name, p) && (recursive || dotsIn(name, p.size()) < depth);
+        });
+    if (!get_all && !prefix_matches) continue;
+    names.push_back(name);
+    const std::size_t last = name.find_last_of('.');
+    if (last == std::string::npos) continue;
+    const std::string prefix = name.substr(0, last);
+    if (std::find(prefixes.begin(), prefixes.end(), prefix) == prefixes.end())
+      prefixes.push_back(prefix);
+  }
+  return response;
+}
+
+rcl_srv::GetParameters_Response_ ParameterTable::get(
+    const rcl_srv::GetParameters_Request_& request) const {
+  rcl_srv::GetParameters_Response_ response;
+  for (const std::string& name : request.names_()) {
+    const auto it = entries_.find(name);
+    if (it == entries_.end()) return {};
+    response.values_().push_back(it->second.value);
+  }
+  return response;
+}
+
+rcl_srv::DescribeParameters_Response_ ParameterTable::describe(
+    const rcl_srv::DescribeParameters_Request_& request) const {
+  rcl_srv::DescribeParameters_Response_ response;
+  for (const std::string& name : request.names_()) {
+    const auto it = entries_.find(name);
+    if (it == entries_.end()) return {};
+    rcl_msg::ParameterDescriptor_ d;
+    d.name_(name);
+    d.type_(it->second.value.type_());
+    d.description_(it->second.description);
+    d.additional_constraints_(
+        "read-only: mlmap_node's configuration file; "
+        "change it there and restart the node");
+    d.read_only_(true);
+    response.descriptors_().push_back(std::move(d));
+  }
+  return response;
+}
+
+rcl_srv::GetParameterTypes_Response_ ParameterTable::types(
+    const rcl_srv::GetParameterTypes_Request_& request) const {
+  rcl_srv::GetParameterTypes_Response_ response;
+  for (const std::string& name : request.names_()) {
+    const auto it = entries_.find(name);
+    response.types_().push_back(it == entries_.end()
+                                    ? static_cast<std::uint8_t>(ParameterType::kNotSet)
+                                    : it->second.value.type_());
+  }
+  return response;
+}
+
+rcl_srv::SetParameters_Response_ ParameterTable::set(
+    const rcl_srv::SetParameters_Request_& request) const {
+  rcl_srv::SetParameters_Response_ response;
+  for (const rcl_msg::Parameter_& p : request.parameters_()) {
+    rcl_msg::SetParametersResult_ result;
+    result.successful_(false);
+    if (entries_.count(p.name_()) == 0) {
+      result.reason_("parameter '" + p.name_() + "' cannot be set because it was not declared");
+    } else {
+      result.reason_("parameter '" + p.name_() +
+                     "' is read-only: mlmap_node's parameters show its "
+                     "configuration file; "
+                     "change the file and restart the node");
+    }
+    response.results_().push_back(std::move(result));
+  }
+  return response;
+}
+
+}  // namespace mlmap::dds
