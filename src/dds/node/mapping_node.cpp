@@ -8,6 +8,7 @@
 #include "map_persistence.h"
 #include "node_log.h"
 #include "outputs.h"
+#include "tf_listener.h"
 
 #include "mlmap/dds/ros_graph.h"
 
@@ -54,6 +55,7 @@ struct MappingNode::Impl {
   std::unique_ptr<node::MapPersistence> persistence;
   ParticipantPtr participant;
   std::unique_ptr<DiscoveryInfoPublisher> graph;
+  std::unique_ptr<node::TfListener> tf;  ///< rt/tf and rt/tf_static, when the config needs them
   std::unique_ptr<node::Outputs> outputs;
   node::InputQueue queue;
   std::unique_ptr<node::InputReaders> readers;
@@ -103,9 +105,11 @@ struct MappingNode::Impl {
     const bool loaded = persistence->load();
 
     const Transform T_B_S = config.map.sensor.T_B_S();
-    outputs = std::make_unique<node::Outputs>(publisher, config.dds, T_B_S, *engine, mailbox,
-                                              counters, log, started);
-    pairer = std::make_unique<node::FramePairer>(config.dds, T_B_S, *engine, counters, log);
+    tf = std::make_unique<node::TfListener>(subscriber, config.dds,
+                                            node::Outputs::ownEdges(config.dds), counters, log);
+    outputs = std::make_unique<node::Outputs>(publisher, config.dds, T_B_S, tf.get(), *engine,
+                                              mailbox, counters, log, started);
+    pairer = std::make_unique<node::FramePairer>(config.dds, T_B_S, tf.get(), *engine, counters, log);
     readers = std::make_unique<node::InputReaders>(subscriber, config.dds, queue, counters, log);
     graph->announce({publisher}, {subscriber});  // the ROS graph learns of the new endpoints
     warnAboutMissingInputs(loaded);
@@ -224,6 +228,7 @@ struct MappingNode::Impl {
     participant.reset();
     readers.reset();
     outputs.reset();
+    tf.reset();
   }
 
   /// The engine is idle: the global map's last state goes out, whatever the rate limit.
