@@ -11,6 +11,7 @@
 #include "dds_test_support.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
+#include "mlmap_msgs/msg/Status_PubSubTypes.h"
 #include "nav_msgs/msg/Odometry_PubSubTypes.h"
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
 #include "tf2_msgs/msg/TFMessage_PubSubTypes.h"
@@ -45,8 +46,8 @@ struct Edge {
   bool is_static;
 };
 
-/// Records every transform on rt/tf and rt/tf_static (absolute, as tf2 listens), and has a
-/// reader on `<ns>/tf` to show that nothing is published there.
+/// Records every transform on rt/tf and rt/tf_static (absolute, as tf2 listens) and the node's
+/// latest status, and has a reader on `<ns>/tf` to show that nothing is published there.
 class TfRecorder {
  public:
   explicit TfRecorder(int domain_id, const std::string& ns = "")
@@ -61,6 +62,18 @@ class TfRecorder {
       namespaced_ = readers_.add<TfType>(ddsTopicName(ns, "tf"), reliableReaderQos(false, 100),
                                          [](TfMessage&&) {});
     }
+    readers_.add<mlmap_msgs::Status_PubSubType>(
+        ddsTopicName(ns, TopicNames{}.status), reliableReaderQos(false, 10),
+        [this](mlmap_msgs::Status_&& status) {
+          std::lock_guard<std::mutex> lock(mutex_);
+          status_ = std::move(status);
+        });
+  }
+
+  /// The node's latest mlmap_msgs/Status (all zero before the first).
+  [[nodiscard]] mlmap_msgs::Status_ status() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return status_;
   }
 
   /// Publishers rt/tf's reader matches now.
@@ -110,6 +123,7 @@ class TfRecorder {
   fdds::DataReader* namespaced_ = nullptr;
   mutable std::mutex mutex_;
   std::vector<Edge> edges_;
+  mlmap_msgs::Status_ status_;
 };
 
 /// What a recorder received, for a failure's message.
@@ -282,8 +296,8 @@ struct TreeCase {
   bool odometry_input;  ///< pose from nav_msgs/Odometry instead of PoseStamped
   bool robot_publishes_odom;
   std::set<std::pair<std::string, std::string>> expected;
-  std::string ns;            ///< dds.ns and dds.frame_prefix both
-  std::string odometry_child = "base_link";  ///< the Odometry's child_frame_id
+  std::string ns;              ///< dds.ns and dds.frame_prefix both
+  std::string odometry_child;  ///< the Odometry's child_frame_id
 };
 
 // For each mode, the node and a robot publish what they would on a real vehicle; a tf2 listener
@@ -295,17 +309,19 @@ TEST(TfModes, EachModePublishesItsEdgesAndEveryChildKeepsOneParent) {
   constexpr int kDomain = 230;
   const std::vector<TreeCase> cases = {
       {"world_body, sensor frame published (the simulator)", "world_body", true, false, false,
-       {{"map", "base_link"}, {"base_link", "camera_depth_optical_frame"}}},
+       {{"map", "base_link"}, {"base_link", "camera_depth_optical_frame"}}, "", "base_link"},
       {"map_odom (a localisation over the robot's EKF)", "map_odom", false, false, true,
-       {{"map", "odom"}, {"odom", "base_link"}}},
-      {"none (the pose source owns the TF)", "none", false, false, true, {{"odom", "base_link"}}},
+       {{"map", "odom"}, {"odom", "base_link"}}, "", "base_link"},
+      {"none (the pose source owns the TF)", "none", false, false, true, {{"odom", "base_link"}},
+       "", "base_link"},
       {"auto with an odometry input: none; its child frame not the body", "auto", false, true,
        true, {{"odom", "base_link"}}, "", "base_footprint"},
-      {"auto with a pose input: world_body", "auto", false, false, false, {{"map", "base_link"}}},
+      {"auto with a pose input: world_body", "auto", false, false, false, {{"map", "base_link"}},
+       "", "base_link"},
       {"world_body under the namespace uav1 with its frame prefix", "world_body", true, false,
        false,
        {{"map", "uav1/base_link"}, {"uav1/base_link", "uav1/camera_depth_optical_frame"}},
-       "uav1"},
+       "uav1", "base_link"},
   };
   for (const TreeCase& c : cases) {
     // Fast DDS gives a new participant the lowest free participant id, and so the GUID prefix of
@@ -375,6 +391,10 @@ TEST(TfModes, EachModePublishesItsEdgesAndEveryChildKeepsOneParent) {
     const bool mismatch = c.odometry_input && c.odometry_child != frames.body;
     EXPECT_EQ(counters.odometry_child_frame_mismatch, mismatch ? 6u : 0u)
         << "two poses a frame, 3 frames";
+    if (mismatch) {  // the status carries it too (status_hz 1)
+      EXPECT_TRUE(waitFor([&] { return recorder.status().odometry_child_frame_mismatch_() == 6; }));
+      EXPECT_EQ(recorder.status().version_(), 2u);
+    }
     std::lock_guard<std::mutex> lock(mutex);
     int warned = 0;
     for (const std::string& line : lines) {

@@ -268,7 +268,7 @@ class StatusOutput : public OutputOperation {
     mlmap_msgs::Status_ m;
     m.header_().stamp_(toRosTime(stamp_s));
     m.header_().frame_id_(world_);
-    m.version_(1);
+    m.version_(2);
     m.uptime_s_(secondsBetween(started_, Clock::now()));
     m.frames_in_(s.frames_in);
     m.frames_mapped_(s.frames_mapped);
@@ -292,6 +292,10 @@ class StatusOutput : public OutputOperation {
     m.global_bytes_(s.memory.global_bytes);
     m.planning_bytes_(s.memory.planning_bytes);
     m.global_voxels_(s.global_voxels);
+    m.frames_unexpected_frame_id_(c.frames_unexpected_frame_id);
+    m.frames_unresolved_frame_id_(c.frames_unresolved_frame_id);
+    m.odometry_child_frame_mismatch_(c.odometry_child_frame_mismatch);
+    m.tf_odom_missing_(c.tf_odom_missing);
     return m;
   }
 

@@ -21,7 +21,8 @@ from .markers import CUBE_LIST, TEXT_VIEW_FACING
 from .parameters import in_namespace
 
 FLOAT32 = 7
-SUPPORTED_VERSION = 1
+SUPPORTED_VERSION = 1         # mlmap_msgs/VoxelBlock
+SUPPORTED_STATUS_VERSION = 2  # mlmap_msgs/Status (the frame checks' counters since 2)
 MAX_COORDINATE_M = 1.0e5   # a map coordinate beyond this is garbage, not a place
 GRID_TOLERANCE = 0.01      # voxels: how far from (i + 0.5) * edge a centre may sit
 
@@ -183,8 +184,8 @@ def check_voxel_block(msg, frames: Frames) -> List[str]:
 
 def check_status(msg, frames: Frames) -> List[str]:
     """Check a mlmap_msgs/Status: version, frames mapped, consistent counters and timings."""
-    if int(msg.version) != SUPPORTED_VERSION:
-        return [f'layout version {msg.version}, expected {SUPPORTED_VERSION}']
+    if int(msg.version) != SUPPORTED_STATUS_VERSION:
+        return [f'layout version {msg.version}, expected {SUPPORTED_STATUS_VERSION}']
     problems = _frame(msg.header, frames.world)
     if not msg.uptime_s > 0:
         problems.append(f'uptime {msg.uptime_s}')
