@@ -71,8 +71,8 @@ PoseBufferConfig poseBufferConfig(const DdsConfig& dds);
 /// Runs the mapping node until destroyed (or stop()).
 class MappingNode {
  public:
-  /// Creates the participant, the engine, the readers and writers, publishes rt/tf_static and
-  /// starts the threads. Throws std::invalid_argument (bad config) or std::runtime_error (DDS).
+  /// Creates the participant, the engine, the readers and writers, publishes rt/tf_static (with
+  /// dds.publish_sensor_tf) and starts the threads. Throws std::invalid_argument (bad config) or std::runtime_error (DDS).
   explicit MappingNode(const NodeConfig& config, const LogSink& log = {});
   ~MappingNode();
   MappingNode(const MappingNode&) = delete;
