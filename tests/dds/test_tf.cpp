@@ -324,9 +324,8 @@ TEST(TfModes, EachModePublishesItsEdgesAndEveryChildKeepsOneParent) {
        "uav1", "base_link"},
   };
   for (const TreeCase& c : cases) {
-    // Fast DDS gives a new participant the lowest free participant id, and so the GUID prefix of
-    // one just deleted in this process: the last case's goodbyes must be handled first, or they
-    // undo the discovery of the new participants.
+    // A precaution, not a measured need: the last case's participants say goodbye before new
+    // ones (which may take their freed participant ids) join the same domain in this process.
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
     SCOPED_TRACE(c.name);
     NodeConfig config = nodeConfig(kDomain);
