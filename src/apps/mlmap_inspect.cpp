@@ -128,12 +128,14 @@ struct Subscription {
     participant.reset();
     readers.reset();
   }
-  /// Adds a reader of `PubSubType` on the node's topic `name` and expects `name` to arrive.
+  /// Adds a reader of `PubSubType` on the node's topic `name` (in the namespace unless
+  /// `absolute`, as tf and tf_static are) and expects `name` to arrive.
   template <typename PubSubType>
   void add(const std::string& name, const fdds::DataReaderQos& qos,
-           std::function<void(typename PubSubType::type&&)> sink) {
+           std::function<void(typename PubSubType::type&&)> sink, bool absolute = false) {
     expected.push_back(name);
-    readers->add<PubSubType>(mlmap::dds::ddsTopicName(ns, name), qos, std::move(sink));
+    readers->add<PubSubType>(mlmap::dds::ddsTopicName(absolute ? "" : ns, name), qos,
+                             std::move(sink));
   }
 };
 
@@ -212,6 +214,8 @@ void subscribeStatusAndTf(const mlmap::dds::DdsConfig& dds, Subscription* sub, R
           rx->status = std::move(msg);
         });
   }
+  // The trajectory is world -> body, which the node sends in tf_mode world_body only.
+  if (mlmap::dds::resolveTfMode(dds) != mlmap::dds::TfMode::kWorldBody) return;
   sub->add<::tf2_msgs::msg::dds_::TFMessage_PubSubType>(
       "tf", mlmap::dds::reliableReaderQos(false, 100), [rx](::tf2_msgs::msg::dds_::TFMessage_&& msg) {
         std::lock_guard<std::mutex> lock(rx->mutex);
@@ -221,7 +225,8 @@ void subscribeStatusAndTf(const mlmap::dds::DdsConfig& dds, Subscription* sub, R
           const auto& p = t.transform_().translation_();
           rx->trajectory_W.emplace_back(p.x_(), p.y_(), p.z_());
         }
-      });
+      },
+      /*absolute=*/true);
 }
 
 /// Joins the node's DDS graph and subscribes to every layer the configuration enables.

@@ -64,6 +64,20 @@ void logInputs(const mlmap::dds::NodeConfig& config, const mlmap::dds::MappingNo
                discovery, config.dds.ns, inputs);
 }
 
+/// The frame checks' counters, when one is not zero: a frame_id or child_frame_id the node did
+/// not expect, or the robot's odometry missing on /tf (docs/dds-and-ros2.md, TF).
+void logFrameChecks(const mlmap::dds::NodeCounters& c) {
+  if (c.frames_unexpected_frame_id + c.frames_unresolved_frame_id +
+          c.odometry_child_frame_mismatch + c.tf_odom_missing == 0) {
+    return;
+  }
+  spdlog::warn("frame checks: {} frames in an unexpected frame_id, {} frames with an unresolved "
+               "frame_id (dropped), {} odometry child_frame_id mismatches, {} poses without the "
+               "robot's odom -> body; {} transforms received",
+               c.frames_unexpected_frame_id, c.frames_unresolved_frame_id,
+               c.odometry_child_frame_mismatch, c.tf_odom_missing, c.tf_transforms_received);
+}
+
 /// One progress line: frames, timings and memory.
 void logProgress(const mlmap::dds::MappingNode& node) {
   const EngineStats s = node.engineStats();
@@ -73,6 +87,7 @@ void logProgress(const mlmap::dds::MappingNode& node) {
                c.clouds_received + c.images_received, s.frames_mapped, c.frames_without_pose,
                c.inputs_malformed, s.total.median_ms, s.total.p99_ms,
                static_cast<double>(s.memory.total()) / 1e6);
+  logFrameChecks(c);
 }
 
 /// Maps until --duration or a stop signal, with a progress line every --report-every seconds.
@@ -104,6 +119,7 @@ int stopAndReport(const mlmap::dds::NodeConfig& config, mlmap::dds::MappingNode&
                c.frames_engine_rejected, c.frames_without_pose + c.frames_future,
                c.frames_across_pose_jump, c.inputs_malformed, c.poses_rejected, c.messages_published,
                c.map_saves, c.map_saves_failed);
+  logFrameChecks(c);
   if (!config.map_file.save_path.empty() && c.last_map_save_failed) {
     // The map of this run is lost unless a supervisor notices: say so in the exit status.
     spdlog::error("the map was not saved to '{}' at shutdown (see above)", config.map_file.save_path);

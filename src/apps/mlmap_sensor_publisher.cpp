@@ -26,9 +26,11 @@
 #include "mlmap/datasets/world_yaml.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
+#include "nav_msgs/msg/Odometry_PubSubTypes.h"
 #include "sensor_msgs/msg/CameraInfo_PubSubTypes.h"
 #include "sensor_msgs/msg/Image_PubSubTypes.h"
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
+#include "tf2_msgs/msg/TFMessage_PubSubTypes.h"
 
 #include "security_options.h"
 
@@ -226,8 +228,10 @@ struct SensorFeed {
 void checkTopics(const Options& o, const mlmap::dds::TopicNames& topics) {
   const bool depth_mode = o.mode == "depth";
   const std::string& sensor_topic = depth_mode ? topics.depth_image : topics.cloud;
-  if (sensor_topic.empty() || topics.pose.empty() || (depth_mode && topics.camera_info.empty())) {
-    throw std::runtime_error("the configuration disables the " + o.mode + " or pose topic");
+  const bool no_pose = topics.pose.empty() && topics.odometry.empty();
+  if (sensor_topic.empty() || no_pose || (depth_mode && topics.camera_info.empty())) {
+    throw std::runtime_error("the configuration disables the " + o.mode +
+                             " or pose topic (dds.topics.pose and dds.topics.odometry)");
   }
 }
 
@@ -258,16 +262,23 @@ SensorFeed openSource(const Options& o, const mlmap::dds::NodeConfig& config) {
   source.frames = o.max_frames > 0 ? std::min(o.max_frames, available) : available;
   source.speed = o.speed;
   source.depth_mode = o.mode == "depth";
-  source.sensor_frame = config.dds.sensor_frame;
+  source.sensor_frame = mlmap::dds::resolveFrames(config.dds).sensor;
   return source;
 }
 
-/// The writers of the sensor (cloud, or image + camera info) and pose topics.
+/// The writers of the sensor (cloud, or image + camera info) and pose topics, and the robot's
+/// own TF.
 struct Writers {
   mlmap::dds::ParticipantPtr participant;
   fdds::DataWriter* sensor = nullptr;
-  fdds::DataWriter* info = nullptr;  ///< depth mode only
-  fdds::DataWriter* pose = nullptr;
+  fdds::DataWriter* info = nullptr;      ///< depth mode only
+  fdds::DataWriter* pose = nullptr;      ///< PoseStamped, when dds.topics.pose is set
+  fdds::DataWriter* odometry = nullptr;  ///< Odometry, when dds.topics.odometry is set
+  /// rt/tf, when the node leaves the pose's TF to the robot (tf_mode none: world -> body, as an
+  /// odometry owning its TF; map_odom: odom -> body, an odometry that equals the pose).
+  fdds::DataWriter* tf = nullptr;
+  /// rt/tf_static with the sensor's mounting, when the node reads it from there.
+  fdds::DataWriter* tf_static = nullptr;
   std::uint32_t cloud_bytes = 0;     ///< every cloud's serialised size, with data-sharing
   std::string sensor_topic;          ///< the sensor's DDS topic name
 };
@@ -289,8 +300,30 @@ void createSensorWriter(const mlmap::dds::DdsConfig& dds, const SensorFeed& sour
   }
 }
 
-/// Joins the DDS graph and creates the writers.
-Writers createWriters(const mlmap::dds::DdsConfig& dds, const SensorFeed& source) {
+/// What a robot publishes on TF besides mlmap_node, as the node's configuration expects it: the
+/// pose's TF when the node publishes none or only map -> odom (rt/tf, absolute), and the sensor's
+/// mounting on rt/tf_static when the node reads it from there (as robot_state_publisher or a
+/// camera driver would, latched).
+void createRobotTf(const mlmap::dds::DdsConfig& dds, const Transform& T_B_S, fdds::Publisher* publisher,
+                   Writers* w) {
+  using TfType = ::tf2_msgs::msg::dds_::TFMessage_PubSubType;
+  if (mlmap::dds::resolveTfMode(dds) != mlmap::dds::TfMode::kWorldBody) {
+    w->tf = mlmap::dds::createWriter<TfType>(publisher, mlmap::dds::ddsTopicName("", "tf"),
+                                             mlmap::dds::reliableWriterQos(100));
+  }
+  if (mlmap::dds::resolveExtrinsicSource(dds) == mlmap::dds::ExtrinsicSource::kTfStatic) {
+    w->tf_static = mlmap::dds::createWriter<TfType>(
+        publisher, mlmap::dds::ddsTopicName("", "tf_static"), mlmap::dds::latchedWriterQos());
+    const mlmap::dds::FrameNames frames = mlmap::dds::resolveFrames(dds);
+    ::tf2_msgs::msg::dds_::TFMessage_ mounting;
+    mounting.transforms_().push_back(
+        mlmap::dds::toTransformStamped(T_B_S, 0.0, frames.body, frames.sensor));
+    w->tf_static->write(&mounting);
+  }
+}
+
+/// Joins the DDS graph and creates the writers. `T_B_S`: the sensor's mounting (sensor.*).
+Writers createWriters(const mlmap::dds::DdsConfig& dds, const SensorFeed& source, const Transform& T_B_S) {
   Writers w;
   w.participant = mlmap::dds::createParticipant(dds, "mlmap_sensor_publisher");
   fdds::Publisher* publisher = w.participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
@@ -308,8 +341,15 @@ Writers createWriters(const mlmap::dds::DdsConfig& dds, const SensorFeed& source
     w.info = mlmap::dds::createWriter<mlmap::dds::sensor_msgs::CameraInfo_PubSubType>(
         publisher, mlmap::dds::ddsTopicName(dds.ns, topics.camera_info), qos);
   }
-  w.pose = mlmap::dds::createWriter<mlmap::dds::geometry_msgs::PoseStamped_PubSubType>(
-      publisher, mlmap::dds::ddsTopicName(dds.ns, topics.pose), qos);
+  if (!topics.pose.empty()) {
+    w.pose = mlmap::dds::createWriter<mlmap::dds::geometry_msgs::PoseStamped_PubSubType>(
+        publisher, mlmap::dds::ddsTopicName(dds.ns, topics.pose), qos);
+  }
+  if (!topics.odometry.empty()) {
+    w.odometry = mlmap::dds::createWriter<mlmap::dds::nav_msgs::Odometry_PubSubType>(
+        publisher, mlmap::dds::ddsTopicName(dds.ns, topics.odometry), qos);
+  }
+  createRobotTf(dds, T_B_S, publisher, &w);
   return w;
 }
 
@@ -333,8 +373,9 @@ bool waitForReaders(const std::vector<fdds::DataWriter*>& writers, double timeou
 /// returns the number of subscribers of the sensor topic. A writer can see its match before the
 /// reader has matched it: a short grace period after.
 int waitForSubscribers(const Writers& w, double wait_s) {
-  std::vector<fdds::DataWriter*> writers = {w.sensor, w.pose};
+  std::vector<fdds::DataWriter*> writers = {w.sensor, w.pose != nullptr ? w.pose : w.odometry};
   if (w.info != nullptr) writers.push_back(w.info);
+  if (w.tf_static != nullptr) writers.push_back(w.tf_static);  // the node needs it for every frame
   const bool matched = waitForReaders(writers, wait_s);
   if (matched) std::this_thread::sleep_for(std::chrono::milliseconds(250));
   fdds::PublicationMatchedStatus sensor_matched;
@@ -380,7 +421,9 @@ class Streamer {
  public:
   Streamer(const SensorFeed& source, const Writers& writers, const mlmap::dds::DdsConfig& dds,
            double pose_rate_hz)
-      : source_(source), writers_(writers), world_frame_(dds.world_frame),
+      : source_(source), writers_(writers), frames_(mlmap::dds::resolveFrames(dds)),
+        tf_parent_(mlmap::dds::resolveTfMode(dds) == mlmap::dds::TfMode::kMapOdom ? frames_.odom
+                                                                                 : frames_.world),
         pose_period_s_(1.0 / pose_rate_hz), start_(Clock::now()), wall0_s_(mlmap::dds::wallClockNow_s()) {}
 
   /// Sends frame `i` at its capture time, with the poses up to it.
@@ -406,9 +449,22 @@ class Streamer {
   [[nodiscard]] const StreamStats& stats() const { return stats_; }
 
  private:
+  /// T_W_B as a PoseStamped or an Odometry (child: the body frame), and the robot's TF of it.
   void publishPose(const Transform& T_W_B, double stamp_s) {
-    mlmap::dds::geometry_msgs::PoseStamped_ pose = mlmap::dds::toPoseStamped(T_W_B, stamp_s, world_frame_);
-    writers_.pose->write(&pose);
+    mlmap::dds::geometry_msgs::PoseStamped_ pose = mlmap::dds::toPoseStamped(T_W_B, stamp_s, frames_.world);
+    if (writers_.pose != nullptr) writers_.pose->write(&pose);
+    if (writers_.odometry != nullptr) {
+      mlmap::dds::nav_msgs::Odometry_ odometry;
+      odometry.header_(pose.header_());
+      odometry.child_frame_id_(frames_.body);
+      odometry.pose_().pose_(pose.pose_());
+      writers_.odometry->write(&odometry);
+    }
+    if (writers_.tf != nullptr) {  // an odometry that equals the pose (map_odom: map -> odom = I)
+      ::tf2_msgs::msg::dds_::TFMessage_ tf;
+      tf.transforms_().push_back(mlmap::dds::toTransformStamped(T_W_B, stamp_s, tf_parent_, frames_.body));
+      writers_.tf->write(&tf);
+    }
   }
   void publishPosesFor(const PreparedFrame& frame, double stamp_s) {
     if (source_.simulator == nullptr) {
@@ -432,7 +488,8 @@ class Streamer {
 
   const SensorFeed& source_;
   const Writers& writers_;
-  std::string world_frame_;
+  mlmap::dds::FrameNames frames_;
+  std::string tf_parent_;  ///< parent of the robot's TF of the pose: world, or odom in map_odom
   double pose_period_s_;
   Clock::time_point start_;
   double wall0_s_;
@@ -475,7 +532,7 @@ int run(const Options& o) {
     mlmap::dds::NodeConfig config = mlmap::dds::nodeConfigOrDefaults(o.config_path);
     o.security.apply(&config.dds.security);
     const SensorFeed source = openSource(o, config);
-    const Writers writers = createWriters(config.dds, source);
+    const Writers writers = createWriters(config.dds, source, config.map.sensor.T_B_S());
     const int subscribers = waitForSubscribers(writers, o.wait_s);
     std::vector<PreparedFrame> prerendered;
     if (o.prerender) prerendered = prerenderFrames(source);

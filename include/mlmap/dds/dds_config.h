@@ -166,6 +166,31 @@ struct SecuritySetup {
 /// file); with Permissive the same problems give a warning and an unsecured setup, as rmw.
 SecuritySetup resolveSecurity(const SecurityConfig& config);
 
+/// What the node publishes on /tf (key `tf_mode`; REP-105 frames, see docs/dds-and-ros2.md).
+enum class TfMode {
+  kNone,       ///< nothing: another node (an odometry, an EKF, a localisation) owns the tree
+  kMapOdom,    ///< world -> odom = T_W_B * inverse(T_O_B), T_O_B from the robot's own /tf
+  kWorldBody,  ///< world -> body = T_W_B (a vehicle with nothing else, as the simulator)
+};
+/// Parses "none", "map_odom", "world_body" (exactly). False otherwise ("auto" is resolved by
+/// resolveTfMode()).
+bool parseTfMode(const std::string& text, TfMode* mode);
+const char* toString(TfMode mode);
+
+/// Where the sensor's mounting T_B_S of each cloud or image comes from (key `sensor_extrinsic`).
+enum class ExtrinsicSource {
+  kConfig,    ///< sensor.* of the config; a message in another frame than sensor_frame is counted
+  kTfStatic,  ///< /tf_static (robot_state_publisher, a camera driver): body -> the message's frame_id
+};
+
+/// The frame names the node uses, the prefix applied (resolveFrames()).
+struct FrameNames {
+  std::string world;   ///< frame_id of the maps (not prefixed: the frame vehicles share)
+  std::string odom;    ///< the robot's odometry frame (REP-105 `odom`)
+  std::string body;    ///< the vehicle's body (REP-105 `base_link`)
+  std::string sensor;  ///< the configured sensor frame
+};
+
 /// The `dds` section. Keys, units and meanings: visit().
 struct DdsConfig {
   /// Its top-level section in the node's YAML file (NodeConfig::visitNodeSections()).
@@ -186,8 +211,13 @@ struct DdsConfig {
   /// reach the node through a transport as before.
   bool data_sharing = true;
   std::string world_frame = "map";                          ///< key world_frame
+  std::string odom_frame = "odom";                          ///< key odom_frame
   std::string body_frame = "base_link";                     ///< key body_frame
   std::string sensor_frame = "camera_depth_optical_frame";  ///< key sensor_frame
+  std::string frame_prefix;                                 ///< key frame_prefix
+  std::string tf_mode = "auto";                             ///< key tf_mode (resolveTfMode())
+  bool publish_sensor_tf = false;                           ///< key publish_sensor_tf
+  std::string sensor_extrinsic = "config";                  ///< key sensor_extrinsic
   TopicNames topics;                           ///< section topics
   PublishRates rates;                          ///< section rates
   double pose_tolerance_s = 0.05;              ///< key pose_tolerance_s
@@ -226,9 +256,33 @@ struct DdsConfig {
     v.key("data_sharing", c.data_sharing, "",
           "read same-host clouds from a Fast DDS writer that offers data-sharing\n"
           "(mlmap_sensor_publisher) in its shared memory, with no transport copies");
-    v.key("world_frame", c.world_frame, "", "frame_id of the maps, parent on rt/tf");
-    v.key("body_frame", c.body_frame, "", "child on rt/tf, parent of the sensor on rt/tf_static");
-    v.key("sensor_frame", c.sensor_frame, "", "child on rt/tf_static (sensor.* gives T_B_S)");
+    v.key("world_frame", c.world_frame, "",
+          "frame_id of the maps (REP-105 map); the parent tf_mode\n"
+          "publishes on /tf");
+    v.key("odom_frame", c.odom_frame, "",
+          "the robot's odometry frame (REP-105 odom): tf_mode map_odom\n"
+          "reads odom -> body on /tf and publishes world -> odom");
+    v.key("body_frame", c.body_frame, "",
+          "the vehicle (REP-105 base_link): the pose's child frame,\n"
+          "Odometry's child_frame_id");
+    v.key("sensor_frame", c.sensor_frame, "",
+          "frame_id of the clouds and images; with publish_sensor_tf\n"
+          "the child of body on /tf_static (sensor.* gives T_B_S)");
+    v.key("frame_prefix", c.frame_prefix, "",
+          "per-vehicle prefix of odom_frame, body_frame and sensor_frame:\n"
+          "uav1 -> uav1/base_link (\"\": none); world_frame is used as written");
+    v.key("tf_mode", c.tf_mode, "",
+          "what the node publishes on /tf. none: nothing (another node\n"
+          "owns the tree); map_odom: world -> odom (the robot publishes\n"
+          "odom -> body); world_body: world -> body (nothing else does);\n"
+          "auto: none when topics.odometry is set, else world_body");
+    v.key("publish_sensor_tf", c.publish_sensor_tf, "",
+          "publish body -> sensor (sensor.*) on /tf_static, latched;\n"
+          "false when a camera driver or robot_state_publisher does");
+    v.key("sensor_extrinsic", c.sensor_extrinsic, "",
+          "config: T_B_S from sensor.* (a message in another frame is\n"
+          "counted and warned about); tf_static: body -> each message's\n"
+          "frame_id, from /tf_static");
     v.section("topics", c.topics, "ROS topic names relative to ns; \"\" disables that input or output");
     v.section("rates", c.rates,
               "outputs are published at most this often, and only when changed; 0 disables");
@@ -254,9 +308,21 @@ struct DdsConfig {
   /// pose_tolerance_s, pose_buffer_s, max_future_s, max_pose_speed_mps,
   /// max_pose_rotation_rate_dps finite and > 0; esdf_slice_height_m finite;
   /// participant_profile set when profiles_file is; camera_info set when depth_image is;
-  /// security as SecurityConfig::validate().
+  /// security as SecurityConfig::validate(); frame_prefix empty or a frame without a trailing
+  /// '/'; tf_mode auto or parseable; sensor_extrinsic config or tf_static, and not tf_static with
+  /// publish_sensor_tf (the node would read back its own transform); the frames of the resolved
+  /// tf_mode distinct.
   [[nodiscard]] std::vector<std::string> validate() const;
 };
+
+/// The TF mode to use: `tf_mode`, where "auto" is kNone when topics.odometry is set (the
+/// odometry's source owns its TF) and kWorldBody otherwise. Throws std::invalid_argument on an
+/// unknown value.
+TfMode resolveTfMode(const DdsConfig& config);
+/// `sensor_extrinsic` parsed. Throws std::invalid_argument on an unknown value.
+ExtrinsicSource resolveExtrinsicSource(const DdsConfig& config);
+/// The frame names with frame_prefix applied ("uav1" + "base_link" -> "uav1/base_link").
+FrameNames resolveFrames(const DdsConfig& config);
 
 /// The DDS topic of a ROS topic: "rt/" + ns + "/" + name (a leading '/' of name or ns and double
 /// slashes are dropped). Example: ("uav1", "cloud") -> "rt/uav1/cloud".

@@ -49,6 +49,20 @@ struct NodeCounters {
   /// Subscribers of the node's outputs that request a QoS their writer does not offer (each
   /// logged with the policy): they receive nothing.
   std::uint64_t subscribers_incompatible = 0;
+  /// Transforms taken from rt/tf and rt/tf_static (when the node listens: tf_mode map_odom,
+  /// sensor_extrinsic tf_static); malformed ones count in inputs_malformed instead.
+  std::uint64_t tf_transforms_received = 0;
+  /// tf_mode map_odom: poses whose odom -> body transform the robot's /tf did not give (in time),
+  /// so no world -> odom was published for them.
+  std::uint64_t tf_odom_missing = 0;
+  /// sensor_extrinsic config: clouds / images whose frame_id is not the sensor frame (mapped with
+  /// the configured extrinsic all the same).
+  std::uint64_t frames_unexpected_frame_id = 0;
+  /// sensor_extrinsic tf_static: clouds / images whose frame_id no chain of transforms joins to
+  /// the body frame (dropped).
+  std::uint64_t frames_unresolved_frame_id = 0;
+  /// Odometry messages whose child_frame_id is not the body frame (used all the same).
+  std::uint64_t odometry_child_frame_mismatch = 0;
 };
 
 /// The node's pairing of clouds and depth images with poses, from the `dds` section:
@@ -58,8 +72,8 @@ PoseBufferConfig poseBufferConfig(const DdsConfig& dds);
 /// Runs the mapping node until destroyed (or stop()).
 class MappingNode {
  public:
-  /// Creates the participant, the engine, the readers and writers, publishes rt/tf_static and
-  /// starts the threads. Throws std::invalid_argument (bad config) or std::runtime_error (DDS).
+  /// Creates the participant, the engine, the readers and writers, publishes rt/tf_static (with
+  /// dds.publish_sensor_tf) and starts the threads. Throws std::invalid_argument (bad config) or std::runtime_error (DDS).
   explicit MappingNode(const NodeConfig& config, const LogSink& log = {});
   ~MappingNode();
   MappingNode(const MappingNode&) = delete;

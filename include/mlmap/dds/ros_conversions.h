@@ -106,6 +106,13 @@ DecodeStatus decodePose(const nav_msgs::Odometry_& msg, double* stamp_s, Transfo
 geometry_msgs::PoseStamped_ toPoseStamped(const Transform& T_W_B, double stamp_s,
                                           const std::string& frame_id);
 
+/// Stamp and T_parent_child of a TransformStamped: kBadStamp when nanosec >= 1e9, kBadPose when
+/// a value is not finite or the quaternion norm is not within 1e-3 of 1 (it is normalised), or
+/// when the parent or child frame is empty or they are equal. On error the outputs are left
+/// untouched.
+DecodeStatus decodeTransform(const geometry_msgs::TransformStamped_& msg, double* stamp_s,
+                             Transform* T_parent_child);
+
 /// A TransformStamped parent -> child carrying T_parent_child.
 geometry_msgs::TransformStamped_ toTransformStamped(const Transform& T_parent_child, double stamp_s,
                                                     const std::string& parent_frame,

@@ -15,10 +15,13 @@ double stampOf(const std::variant<PointCloudFrame, DepthFrame>& frame) {
 
 }  // namespace
 
-FramePairer::FramePairer(const DdsConfig& dds, const Transform& T_B_S, MapEngine& engine,
-                         CounterSink& counters, NodeLog& log)
+FramePairer::FramePairer(const DdsConfig& dds, const Transform& T_B_S, const TfListener* tf,
+                         MapEngine& engine, CounterSink& counters, NodeLog& log)
     : dds_(dds),
+      frames_(resolveFrames(dds)),
+      extrinsic_(resolveExtrinsicSource(dds)),
       T_B_S_(T_B_S),
+      tf_(tf),
       engine_(engine),
       counters_(counters),
       log_(log),
@@ -42,9 +45,9 @@ void FramePairer::handle(CloudSample& msg) {
   }
   if (!msg.status.ok()) return malformed("PointCloud2", msg.status);  // decoded when taken
   PointCloudFrame frame;
-  frame.points_S = std::move(msg.points_S);
   frame.stamp_s = toSeconds(msg.header_().stamp_());
-  frame.T_B_S = T_B_S_;
+  if (!extrinsicFor(msg.header_().frame_id_(), frame.stamp_s, &frame.T_B_S)) return;
+  frame.points_S = std::move(msg.points_S);
   place(Frame(std::move(frame)));
 }
 
@@ -63,8 +66,40 @@ void FramePairer::handle(sensor_msgs::Image_& msg) {
   const DecodeStatus status = decodeDepthImage(msg, camera_info_, &frame);
   if (!status.ok()) return malformed("depth Image", status);
   frame.stamp_s = toSeconds(msg.header_().stamp_());
-  frame.T_B_S = T_B_S_;
+  if (!extrinsicFor(msg.header_().frame_id_(), frame.stamp_s, &frame.T_B_S)) return;
   place(Frame(std::move(frame)));
+}
+
+bool FramePairer::extrinsicFor(const std::string& frame_id, double stamp_s, Transform* T_B_S) {
+  if (extrinsic_ == ExtrinsicSource::kConfig) {
+    *T_B_S = T_B_S_;
+    if (frame_id != frames_.sensor) {
+      counters_.add(&NodeCounters::frames_unexpected_frame_id);
+      log_.limited(LogLevel::kWarning, kReasonFrameId,
+                   "a frame in '" + frame_id + "', not the sensor frame '" + frames_.sensor +
+                       "': mapped with the configured extrinsic (sensor.*); set dds.sensor_frame, "
+                       "or dds.sensor_extrinsic tf_static");
+    }
+    return true;
+  }
+  const TfBuffer::Lookup found =
+      tf_ == nullptr ? TfBuffer::Lookup::kUnknownFrame
+                     : tf_->lookup(frames_.body, frame_id, stamp_s, T_B_S);
+  if (found == TfBuffer::Lookup::kFound) return true;
+  counters_.add(&NodeCounters::frames_unresolved_frame_id);
+  log_.limited(LogLevel::kWarning, kReasonFrameId,
+               "dropped a frame in '" + frame_id + "': no transform from the body frame '" +
+                   frames_.body + "' on /tf_static (" + toString(found) + ")");
+  return false;
+}
+
+void FramePairer::checkChildFrame(const nav_msgs::Odometry_& msg) {
+  if (msg.child_frame_id_() == frames_.body) return;
+  counters_.add(&NodeCounters::odometry_child_frame_mismatch);
+  log_.limited(LogLevel::kWarning, kReasonChildFrame,
+               "an Odometry with child_frame_id '" + msg.child_frame_id_() +
+                   "', not the body frame '" + frames_.body +
+                   "': its pose is used as the body's; set dds.body_frame (and dds.frame_prefix)");
 }
 
 void FramePairer::handle(sensor_msgs::CameraInfo_& msg) {
@@ -81,6 +116,7 @@ void FramePairer::handle(PoseMsg& msg) {
   counters_.add(&NodeCounters::poses_received);
   const DecodeStatus status = decodePose(msg, &stamp_s, &T_W_B);
   if (!status.ok()) return malformed("pose", status);
+  checkChildFrame(msg);
   addPose(stamp_s, T_W_B);
 }
 

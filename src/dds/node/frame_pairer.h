@@ -6,6 +6,7 @@
 #include "counter_sink.h"
 #include "input_queue.h"
 #include "node_log.h"
+#include "tf_listener.h"
 
 #include "mlmap/core/pose_buffer.h"
 #include "mlmap/dds/dds_config.h"
@@ -27,8 +28,12 @@ class FramePairer {
   static constexpr std::size_t kMaxPending = 8;  ///< decoded frames waiting for their pose
   static constexpr double kPoseWait_s = 0.5;     ///< wall time a frame may wait for its pose
 
-  /// `T_B_S`: the sensor's mounting, given to every frame. `engine` receives the paired frames.
-  FramePairer(const DdsConfig& dds, const Transform& T_B_S, MapEngine& engine,
+  /// `T_B_S`: the sensor's configured mounting. With sensor_extrinsic tf_static each frame's
+  /// mounting is instead looked up in `tf` (body -> the message's frame_id; a frame it cannot
+  /// resolve is dropped and counted); with config a frame in another frame than the sensor frame
+  /// is counted. `engine` receives the paired frames. `tf` may be null with sensor_extrinsic
+  /// config.
+  FramePairer(const DdsConfig& dds, const Transform& T_B_S, const TfListener* tf, MapEngine& engine,
               CounterSink& counters, NodeLog& log);
 
   /// Takes one input: a frame is paired or waits, a pose may release waiting frames, a camera
@@ -52,6 +57,12 @@ class FramePairer {
   template <typename PoseMsg>
   void handle(PoseMsg& msg);
   void malformed(const char* what, const DecodeStatus& status);
+  /// The mounting of a frame in `frame_id` stamped `stamp_s` (see the constructor); false when
+  /// it has none (counted and logged).
+  bool extrinsicFor(const std::string& frame_id, double stamp_s, Transform* T_B_S);
+  /// Counts and logs an Odometry whose child frame is not the body frame.
+  void checkChildFrame(const nav_msgs::Odometry_& msg);
+  void checkChildFrame(const geometry_msgs::PoseStamped_&) {}
   void addPose(double stamp_s, const Transform& T_W_B);
   void place(Frame&& frame);
   /// Submits the frame when its pose is known; kPending leaves it to the caller.
@@ -61,7 +72,10 @@ class FramePairer {
   void noPose(double stamp_s);
 
   const DdsConfig& dds_;
+  FrameNames frames_;
+  ExtrinsicSource extrinsic_;
   Transform T_B_S_;
+  const TfListener* tf_;
   MapEngine& engine_;
   CounterSink& counters_;
   NodeLog& log_;

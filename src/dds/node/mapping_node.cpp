@@ -9,6 +9,7 @@
 #include "node_log.h"
 #include "node_services.h"
 #include "outputs.h"
+#include "tf_listener.h"
 
 #include "mlmap/dds/discovery_pacing.h"
 #include "mlmap/dds/ros_graph.h"
@@ -58,6 +59,7 @@ struct MappingNode::Impl {
   ParticipantPtr participant;
   std::unique_ptr<DiscoveryInfoPublisher> graph;
   std::unique_ptr<DiscoveryPacing> pacing;  ///< new peers learn of the endpoints at once
+  std::unique_ptr<node::TfListener> tf;  ///< rt/tf and rt/tf_static, when the config needs them
   std::unique_ptr<node::Outputs> outputs;
   node::InputQueue queue;
   std::unique_ptr<node::InputReaders> readers;
@@ -114,9 +116,11 @@ struct MappingNode::Impl {
     const bool loaded = persistence->load();
 
     const Transform T_B_S = config.map.sensor.T_B_S();
-    outputs = std::make_unique<node::Outputs>(publisher, config.dds, T_B_S, *engine, mailbox,
-                                              counters, log, started);
-    pairer = std::make_unique<node::FramePairer>(config.dds, T_B_S, *engine, counters, log);
+    tf = std::make_unique<node::TfListener>(subscriber, config.dds,
+                                            node::Outputs::ownEdges(config.dds), counters, log);
+    outputs = std::make_unique<node::Outputs>(publisher, config.dds, T_B_S, tf.get(), *engine,
+                                              mailbox, counters, log, started);
+    pairer = std::make_unique<node::FramePairer>(config.dds, T_B_S, tf.get(), *engine, counters, log);
     readers = std::make_unique<node::InputReaders>(subscriber, config.dds, queue, counters, log);
     services = std::make_unique<node::NodeServices>(publisher, subscriber, node_namespace,
                                                     kNodeName, effective, *engine, *persistence,
@@ -241,6 +245,7 @@ struct MappingNode::Impl {
     readers.reset();
     outputs.reset();
     services.reset();
+    tf.reset();
   }
 
   /// The engine is idle: the global map's last state goes out, whatever the rate limit.

@@ -22,6 +22,9 @@ enum Reason : int {
   kReasonDds,
   kReasonQos,
   kReasonMapGrid,
+  kReasonFrameId,     ///< a cloud / image frame_id not the sensor frame, or not resolved
+  kReasonChildFrame,  ///< an Odometry child_frame_id not the body frame
+  kReasonTfMissing,   ///< map_odom: odom -> body missing at a pose's stamp
   kReasonCount
 };
 

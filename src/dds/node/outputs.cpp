@@ -13,6 +13,7 @@
 #include "tf2_msgs/msg/TFMessage_PubSubTypes.h"
 
 #include <cstdint>
+#include <sstream>
 
 namespace mlmap::dds::node {
 namespace {
@@ -68,24 +69,77 @@ class LayerCopyOutput : public OutputOperation {
   std::string world_;
 };
 
-/// rt/tf: world -> body of each new snapshot.
+/// rt/tf of each new snapshot: world -> body (tf_mode world_body), or world -> odom =
+/// T_W_B * inverse(T_O_B) with T_O_B from the robot's own /tf at the pose's stamp (map_odom). A
+/// stamp the robot's odometry has not reached yet is tried again for kOdomWait_s.
 class TfOutput : public OutputOperation {
  public:
-  TfOutput(const CountedWriter& writer, const DdsConfig& dds)
-      : writer_(writer), world_(dds.world_frame), body_(dds.body_frame) {}
+  /// How long a pose may wait for the robot's odom -> body at its stamp (wall time) [s].
+  static constexpr double kOdomWait_s = 0.5;
+
+  TfOutput(const CountedWriter& writer, const DdsConfig& dds, const TfListener* tf,
+           CounterSink& counters, NodeLog& log)
+      : writer_(writer),
+        mode_(resolveTfMode(dds)),
+        frames_(resolveFrames(dds)),
+        tf_(tf),
+        counters_(counters),
+        log_(log) {}
   void publish(const PublishRound& round) override {
-    if (!round.snap || round.snap->frame() == frame_) return;
-    frame_ = round.snap->frame();
+    if (!writer_ || !round.snap || round.snap->frame() == frame_) return;
+    const double stamp_s = round.snap->stamp_s();
     TfMessage tf;
-    tf.transforms_().push_back(
-        toTransformStamped(round.snap->T_W_B(), round.snap->stamp_s(), world_, body_));
+    if (mode_ == TfMode::kWorldBody) {
+      tf.transforms_().push_back(
+          toTransformStamped(round.snap->T_W_B(), stamp_s, frames_.world, frames_.body));
+    } else {
+      Transform T_O_B;
+      const TfBuffer::Lookup found = tf_ == nullptr
+                                         ? TfBuffer::Lookup::kUnknownFrame
+                                         : tf_->lookup(frames_.odom, frames_.body, stamp_s, &T_O_B);
+      if (found != TfBuffer::Lookup::kFound) {
+        if (found == TfBuffer::Lookup::kNotYet && !round.last && mayWait(round.snap->frame())) {
+          return;  // the robot's odometry may still come
+        }
+        frame_ = round.snap->frame();
+        odomMissing(stamp_s, found);
+        return;
+      }
+      const Transform T_W_O = round.snap->T_W_B() * T_O_B.inverse();
+      tf.transforms_().push_back(toTransformStamped(T_W_O, stamp_s, frames_.world, frames_.odom));
+    }
+    frame_ = round.snap->frame();
     writer_.write(&tf);
   }
 
  private:
+  /// True while the snapshot of `frame` may still wait for the robot's odometry.
+  bool mayWait(std::uint64_t frame) {
+    const Clock::time_point now = Clock::now();
+    if (frame != waiting_frame_) {
+      waiting_frame_ = frame;
+      waiting_since_ = now;
+    }
+    return secondsBetween(waiting_since_, now) < kOdomWait_s;
+  }
+  void odomMissing(double stamp_s, TfBuffer::Lookup why) {
+    counters_.add(&NodeCounters::tf_odom_missing);
+    std::ostringstream m;
+    m << "no " << frames_.world << " -> " << frames_.odom << " for the pose stamped " << std::fixed
+      << stamp_s << ": the robot's " << frames_.odom << " -> " << frames_.body << " on /tf: "
+      << toString(why);
+    log_.limited(LogLevel::kWarning, kReasonTfMissing, m.str());
+  }
+
   CountedWriter writer_;
-  std::string world_, body_;
+  TfMode mode_;
+  FrameNames frames_;
+  const TfListener* tf_;
+  CounterSink& counters_;
+  NodeLog& log_;
   std::uint64_t frame_ = 0;
+  std::uint64_t waiting_frame_ = 0;
+  Clock::time_point waiting_since_;
 };
 
 /// The local window's occupied voxel centres.
@@ -255,7 +309,7 @@ class StatusOutput : public OutputOperation {
     mlmap_msgs::Status_ m;
     m.header_().stamp_(toRosTime(stamp_s));
     m.header_().frame_id_(world_);
-    m.version_(1);
+    m.version_(2);
     m.uptime_s_(secondsBetween(started_, Clock::now()));
     m.frames_in_(s.frames_in);
     m.frames_mapped_(s.frames_mapped);
@@ -279,6 +333,10 @@ class StatusOutput : public OutputOperation {
     m.global_bytes_(s.memory.global_bytes);
     m.planning_bytes_(s.memory.planning_bytes);
     m.global_voxels_(s.global_voxels);
+    m.frames_unexpected_frame_id_(c.frames_unexpected_frame_id);
+    m.frames_unresolved_frame_id_(c.frames_unresolved_frame_id);
+    m.odometry_child_frame_mismatch_(c.odometry_child_frame_mismatch);
+    m.tf_odom_missing_(c.tf_odom_missing);
     return m;
   }
 
@@ -315,9 +373,19 @@ void IncompatibleQosListener::on_offered_incompatible_qos(
           qosPolicyName(status.last_policy_id) + offered + "); it receives nothing");
 }
 
+std::set<std::pair<std::string, std::string>> Outputs::ownEdges(const DdsConfig& dds) {
+  const FrameNames f = resolveFrames(dds);
+  std::set<std::pair<std::string, std::string>> edges;
+  const TfMode mode = resolveTfMode(dds);
+  if (mode == TfMode::kWorldBody) edges.insert({f.world, f.body});
+  if (mode == TfMode::kMapOdom) edges.insert({f.world, f.odom});
+  if (dds.publish_sensor_tf) edges.insert({f.body, f.sensor});
+  return edges;
+}
+
 Outputs::Outputs(fdds::Publisher* publisher, const DdsConfig& dds, const Transform& T_B_S,
-                 MapEngine& engine, LayerMailbox& mailbox, CounterSink& counters, NodeLog& log,
-                 Clock::time_point started)
+                 const TfListener* tf_listener, MapEngine& engine, LayerMailbox& mailbox,
+                 CounterSink& counters, NodeLog& log, Clock::time_point started)
     : mailbox_(mailbox),
       engine_(engine),
       log_(log),
@@ -339,8 +407,15 @@ Outputs::Outputs(fdds::Publisher* publisher, const DdsConfig& dds, const Transfo
             : createWriter<PubSubType>(publisher, ddsTopicName(dds.ns, name), qos, &qos_listener_);
     return CountedWriter(w, counters, log);
   };
-  const CountedWriter tf = writer(TfType(), "tf", 1.0, reliableWriterQos(100));
-  const CountedWriter tf_static = writer(TfType(), "tf_static", 1.0, latchedWriterQos());
+  // tf and tf_static are absolute, as tf2 listens to them: a namespace does not apply.
+  auto tf_writer = [&](const char* name, bool on, const fdds::DataWriterQos& qos) {
+    fdds::DataWriter* w =
+        on ? createWriter<TfType>(publisher, ddsTopicName("", name), qos, &qos_listener_) : nullptr;
+    return CountedWriter(w, counters, log);
+  };
+  const CountedWriter tf =
+      tf_writer("tf", resolveTfMode(dds) != TfMode::kNone, reliableWriterQos(100));
+  const CountedWriter tf_static = tf_writer("tf_static", dds.publish_sensor_tf, latchedWriterQos());
   const CountedWriter awareness =
       writer(CloudType(), n.awareness, r.awareness_hz, reliableWriterQos(2));
   const CountedWriter local =
@@ -364,18 +439,19 @@ Outputs::Outputs(fdds::Publisher* publisher, const DdsConfig& dds, const Transfo
                                                           dds.world_frame));
   operations_.push_back(
       std::make_unique<LayerCopyOutput>(global, &LayerMailbox::News::global, dds.world_frame));
-  operations_.push_back(std::make_unique<TfOutput>(tf, dds));
+  operations_.push_back(std::make_unique<TfOutput>(tf, dds, tf_listener, counters, log));
   operations_.push_back(std::make_unique<LocalMapOutput>(local, dds));
   operations_.push_back(std::make_unique<GridOutput>(grid, dds));
   operations_.push_back(std::make_unique<MapGridOutput>(map_grid, dds, log));
   operations_.push_back(std::make_unique<EsdfOutput>(block, slice, dds));
   operations_.push_back(std::make_unique<StatusOutput>(status, dds, engine, counters, started));
 
-  // The sensor's mounting, latched for late joiners.
-  TfMessage mounting;
-  mounting.transforms_().push_back(
-      toTransformStamped(T_B_S, 0.0, dds.body_frame, dds.sensor_frame));
-  tf_static.get()->write(&mounting);
+  if (tf_static) {  // the sensor's mounting, latched for late joiners
+    const FrameNames f = resolveFrames(dds);
+    TfMessage mounting;
+    mounting.transforms_().push_back(toTransformStamped(T_B_S, 0.0, f.body, f.sensor));
+    tf_static.write(&mounting);
+  }
 }
 
 Outputs::~Outputs() { finish(); }

@@ -7,6 +7,7 @@
 #include "counter_sink.h"
 #include "layer_mailbox.h"
 #include "node_log.h"
+#include "tf_listener.h"
 
 #include "mlmap/dds/dds_config.h"
 #include "mlmap/pipeline/map_engine.h"
@@ -18,8 +19,10 @@
 #include <chrono>
 #include <functional>
 #include <memory>
+#include <set>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace mlmap::dds::node {
@@ -70,14 +73,20 @@ class IncompatibleQosListener : public eprosima::fastdds::dds::DataWriterListene
 };
 
 /// The writers of the configured outputs (an output whose name is empty or whose rate is 0 has
-/// none), rt/tf and the latched rt/tf_static, and the publishing thread.
+/// none), rt/tf (unless tf_mode is none) and the latched rt/tf_static (with publish_sensor_tf),
+/// and the publishing thread. tf and tf_static are absolute topics, whatever the namespace.
 class Outputs {
  public:
-  /// Creates every writer in `publisher` and publishes rt/tf_static (the sensor's mounting
-  /// T_B_S, latched for late joiners). `started`: the node's start (the status's uptime).
+  /// Creates every writer in `publisher` and, with publish_sensor_tf, publishes rt/tf_static
+  /// (the sensor's mounting T_B_S, latched for late joiners). `tf`: where tf_mode map_odom
+  /// looks up odom -> body (may be null otherwise). `started`: the node's start (the status's
+  /// uptime).
   Outputs(eprosima::fastdds::dds::Publisher* publisher, const DdsConfig& dds,
-          const Transform& T_B_S, MapEngine& engine, LayerMailbox& mailbox, CounterSink& counters,
-          NodeLog& log, std::chrono::steady_clock::time_point started);
+          const Transform& T_B_S, const TfListener* tf, MapEngine& engine, LayerMailbox& mailbox,
+          CounterSink& counters, NodeLog& log, std::chrono::steady_clock::time_point started);
+
+  /// The (parent, child) edges the node publishes on rt/tf and rt/tf_static with `dds`.
+  static std::set<std::pair<std::string, std::string>> ownEdges(const DdsConfig& dds);
   ~Outputs();
   Outputs(const Outputs&) = delete;
   Outputs& operator=(const Outputs&) = delete;

@@ -303,8 +303,41 @@ std::vector<std::string> DdsConfig::validate() const {
                      key(profiles_file) + " (" + profiles_file + "), e.g. mlmap_loopback");
   }
   checkFrame(key(world_frame), world_frame, &errors);
+  checkFrame(key(odom_frame), odom_frame, &errors);
   checkFrame(key(body_frame), body_frame, &errors);
   checkFrame(key(sensor_frame), sensor_frame, &errors);
+  if (!frame_prefix.empty()) {
+    checkFrame(key(frame_prefix), frame_prefix, &errors);
+    if (frame_prefix.back() == '/') {
+      errors.push_back(key(frame_prefix) + ": give it without the trailing '/' (got " +
+                       frame_prefix + ")");
+    }
+  }
+  TfMode mode{};
+  const bool mode_ok = tf_mode == "auto" || parseTfMode(tf_mode, &mode);
+  if (!mode_ok) {
+    errors.push_back(key(tf_mode) + ": must be auto, none, map_odom or world_body (got " +
+                     tf_mode + ")");
+  }
+  if (sensor_extrinsic != "config" && sensor_extrinsic != "tf_static") {
+    errors.push_back(key(sensor_extrinsic) + ": must be config or tf_static (got " +
+                     sensor_extrinsic + ")");
+  } else if (sensor_extrinsic == "tf_static" && publish_sensor_tf) {
+    errors.push_back(key(publish_sensor_tf) + ": must be false when " + key(sensor_extrinsic) +
+                     " is tf_static (the node would read back the transform it publishes)");
+  }
+  if (mode_ok) {
+    const FrameNames f = resolveFrames(*this);
+    const TfMode resolved = resolveTfMode(*this);
+    if (resolved != TfMode::kNone && f.world == f.body) {
+      errors.push_back(key(world_frame) + " and " + key(body_frame) + ": must differ with " +
+                       key(tf_mode) + " " + toString(resolved) + " (both " + f.world + ")");
+    }
+    if (resolved == TfMode::kMapOdom && (f.odom == f.world || f.odom == f.body)) {
+      errors.push_back(key(odom_frame) + ": must differ from the world and body frames with " +
+                       key(tf_mode) + " map_odom (got " + f.odom + ")");
+    }
+  }
 
   TopicChecker topic_checker(key(topics), &errors);
   visitConfig(topics, topic_checker);
@@ -326,6 +359,57 @@ std::vector<std::string> DdsConfig::validate() const {
   }
   security.validate(&errors);
   return errors;
+}
+
+bool parseTfMode(const std::string& text, TfMode* mode) {
+  if (text == "none") {
+    *mode = TfMode::kNone;
+  } else if (text == "map_odom") {
+    *mode = TfMode::kMapOdom;
+  } else if (text == "world_body") {
+    *mode = TfMode::kWorldBody;
+  } else {
+    return false;
+  }
+  return true;
+}
+
+const char* toString(TfMode mode) {
+  switch (mode) {
+    case TfMode::kNone:
+      return "none";
+    case TfMode::kMapOdom:
+      return "map_odom";
+    case TfMode::kWorldBody:
+      return "world_body";
+  }
+  return "?";
+}
+
+TfMode resolveTfMode(const DdsConfig& config) {
+  if (config.tf_mode == "auto") {
+    return config.topics.odometry.empty() ? TfMode::kWorldBody : TfMode::kNone;
+  }
+  TfMode mode{};
+  if (!parseTfMode(config.tf_mode, &mode)) {
+    throw std::invalid_argument("dds.tf_mode: unknown value '" + config.tf_mode + "'");
+  }
+  return mode;
+}
+
+ExtrinsicSource resolveExtrinsicSource(const DdsConfig& config) {
+  if (config.sensor_extrinsic == "config") return ExtrinsicSource::kConfig;
+  if (config.sensor_extrinsic == "tf_static") return ExtrinsicSource::kTfStatic;
+  throw std::invalid_argument("dds.sensor_extrinsic: unknown value '" + config.sensor_extrinsic +
+                              "'");
+}
+
+FrameNames resolveFrames(const DdsConfig& config) {
+  const auto prefixed = [&config](const std::string& frame) {
+    return config.frame_prefix.empty() ? frame : config.frame_prefix + "/" + frame;
+  };
+  return FrameNames{config.world_frame, prefixed(config.odom_frame), prefixed(config.body_frame),
+                    prefixed(config.sensor_frame)};
 }
 
 std::string ddsTopicName(const std::string& ns, const std::string& name) {

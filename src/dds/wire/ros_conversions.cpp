@@ -458,6 +458,23 @@ DecodeStatus decodePose(const nav_msgs::Odometry_& msg, double* stamp_s, Transfo
   return decodePoseFields(msg.header_().stamp_(), msg.pose_().pose_(), stamp_s, T_W_B);
 }
 
+DecodeStatus decodeTransform(const geometry_msgs::TransformStamped_& msg, double* stamp_s,
+                             Transform* T_parent_child) {
+  const std::string& parent = msg.header_().frame_id_();
+  const std::string& child = msg.child_frame_id_();
+  if (parent.empty() || child.empty() || parent == child) {
+    return fail(DecodeError::kBadPose, "transform '" + parent + "' -> '" + child +
+                                           "': frames must be set and differ");
+  }
+  geometry_msgs::Pose_ pose;
+  const auto& t = msg.transform_().translation_();
+  pose.position_().x_(t.x_());
+  pose.position_().y_(t.y_());
+  pose.position_().z_(t.z_());
+  pose.orientation_(msg.transform_().rotation_());
+  return decodePoseFields(msg.header_().stamp_(), pose, stamp_s, T_parent_child);
+}
+
 namespace {
 /// Writes T's translation and (normalised) rotation into a ROS Point / Vector3 and Quaternion.
 template <typename XyzMsg, typename QuaternionMsg>

@@ -33,7 +33,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from .conversions import CloudLayoutError, LatestThrottle, status_text
 from .markers import cloud_layer_markers, marker_array, MessageTypes, text_marker
-from .parameters import CLOUD_LAYERS, CloudLayer, PARAMETERS
+from .parameters import CLOUD_LAYERS, CloudLayer, in_namespace, PARAMETERS, prefixed_frame
 
 TYPES = MessageTypes(Marker=Marker, MarkerArray=MarkerArray, Point=Point,
                      ColorRGBA=ColorRGBA, Header=Header)
@@ -66,6 +66,12 @@ class MlmapBridge(Node):
                                    ParameterDescriptor(description=p.description))
         self.settings: Dict[str, Any] = {
             p.name: self.get_parameter(p.name).value for p in PARAMETERS}
+        namespace = self.settings['namespace']
+        for name in self.settings:  # mlmap_node's topics and the outputs under its namespace
+            if name.endswith('_topic') or name == 'output_prefix':
+                self.settings[name] = in_namespace(namespace, self.settings[name])
+        self._body_frame = prefixed_frame(self.settings['frame_prefix'],
+                                          self.settings['body_frame'])
         self._output_prefix = self.settings['output_prefix'].rstrip('/')
         self._throttled: List[tuple] = []  # (throttle, handler) pairs the timer polls
         self._previous_status: Optional[Status] = None
@@ -146,7 +152,7 @@ class MlmapBridge(Node):
         text = status_text(status, self._previous_status)
         self._previous_status = status
         self._status_markers.publish(marker_array(TYPES, text_marker(
-            TYPES, self.settings['body_frame'], 'status', text,
+            TYPES, self._body_frame, 'status', text,
             float(self.settings['text_height_m']), float(self.settings['text_offset_z_m']))))
         self._status_text.publish(String(data=text))
 

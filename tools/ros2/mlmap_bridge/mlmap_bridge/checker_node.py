@@ -19,8 +19,9 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from rclpy.utilities import remove_ros_args
 from rosidl_runtime_py.utilities import get_message
 
-from .checks import (check_topic_list, EXPECTED_TOPICS, Frames, NODE_TOPICS,
-                     parse_topic_list, TopicResult, verdict)
+from .checks import (bridge_topics, check_topic_list, Frames, node_topics, parse_topic_list,
+                     TopicResult, verdict)
+from .parameters import prefixed_frame
 
 TOPIC_LIST_COMMAND = ['ros2', 'topic', 'list', '-t', '--no-daemon', '--spin-time', '5']
 
@@ -60,10 +61,23 @@ def main(argv: Optional[List[str]] = None) -> int:
                         help='seconds to wait for a plausible sample on every topic')
     parser.add_argument('--node-only', action='store_true',
                         help='check mlmap_node outputs only (no bridge running)')
+    parser.add_argument('--namespace', default='',
+                        help="mlmap_node's dds.ns (and the bridge's namespace parameter)")
+    parser.add_argument('--viz-prefix', default='/mlmap/viz',
+                        help="the bridge's output_prefix parameter")
+    parser.add_argument('--world-frame', default=Frames.world, help="mlmap_node's dds.world_frame")
+    parser.add_argument('--body-frame', default=Frames.body, help="mlmap_node's dds.body_frame")
+    parser.add_argument('--sensor-frame', default=Frames.sensor,
+                        help="mlmap_node's dds.sensor_frame")
+    parser.add_argument('--frame-prefix', default='',
+                        help="mlmap_node's dds.frame_prefix (of the body and sensor frames)")
     args = parser.parse_args(remove_ros_args(sys.argv if argv is None else argv)[1:])
-    expected = NODE_TOPICS if args.node_only else EXPECTED_TOPICS
+    expected = node_topics(args.namespace)
+    if not args.node_only:
+        expected += bridge_topics(args.namespace, args.viz_prefix)
     results = [TopicResult(e) for e in expected]
-    frames = Frames()
+    frames = Frames(args.world_frame, prefixed_frame(args.frame_prefix, args.body_frame),
+                    prefixed_frame(args.frame_prefix, args.sensor_frame))
 
     rclpy.init(args=sys.argv if argv is None else argv)
     node = Node('mlmap_check')

@@ -18,9 +18,11 @@ import numpy as np
 
 from .conversions import CloudLayoutError, grid_spacing, read_cloud_fields
 from .markers import CUBE_LIST, TEXT_VIEW_FACING
+from .parameters import in_namespace
 
 FLOAT32 = 7
-SUPPORTED_VERSION = 1
+SUPPORTED_VERSION = 1         # mlmap_msgs/VoxelBlock
+SUPPORTED_STATUS_VERSION = 2  # mlmap_msgs/Status (the frame checks' counters since 2)
 MAX_COORDINATE_M = 1.0e5   # a map coordinate beyond this is garbage, not a place
 GRID_TOLERANCE = 0.01      # voxels: how far from (i + 0.5) * edge a centre may sit
 
@@ -29,7 +31,10 @@ Check = Callable[[object, 'Frames'], List[str]]
 
 @dataclass(frozen=True)
 class Frames:
-    """The frames mlmap_node was configured with (dds.world_frame, body_frame, sensor_frame)."""
+    """The frames mlmap_node was configured with (dds.world_frame, body_frame, sensor_frame).
+
+    The body and sensor frames carry dds.frame_prefix when the node has one.
+    """
 
     world: str = 'map'
     body: str = 'base_link'
@@ -179,8 +184,8 @@ def check_voxel_block(msg, frames: Frames) -> List[str]:
 
 def check_status(msg, frames: Frames) -> List[str]:
     """Check a mlmap_msgs/Status: version, frames mapped, consistent counters and timings."""
-    if int(msg.version) != SUPPORTED_VERSION:
-        return [f'layout version {msg.version}, expected {SUPPORTED_VERSION}']
+    if int(msg.version) != SUPPORTED_STATUS_VERSION:
+        return [f'layout version {msg.version}, expected {SUPPORTED_STATUS_VERSION}']
     problems = _frame(msg.header, frames.world)
     if not msg.uptime_s > 0:
         problems.append(f'uptime {msg.uptime_s}')
@@ -271,28 +276,48 @@ class Expectation:
 CLOUD = 'sensor_msgs/msg/PointCloud2'
 MARKERS = 'visualization_msgs/msg/MarkerArray'
 
-# mlmap_node's outputs (idl/README.md, default names) and the bridge's (default parameters).
-NODE_TOPICS = (
-    Expectation('/mlmap/awareness/occupied', CLOUD, False, check_awareness_cloud),
-    Expectation('/mlmap/local_map/occupied', CLOUD, False, check_occupied_cloud),
-    Expectation('/mlmap/global_map/occupied', CLOUD, True, check_occupied_cloud),
-    Expectation('/mlmap/grid', 'nav_msgs/msg/OccupancyGrid', True, check_grid),
-    Expectation('/mlmap/esdf/slice', CLOUD, False, check_esdf_slice),
-    Expectation('/mlmap/esdf/block', 'mlmap_msgs/msg/VoxelBlock', False, check_voxel_block),
-    Expectation('/mlmap/status', 'mlmap_msgs/msg/Status', False, check_status),
-    Expectation('/tf', 'tf2_msgs/msg/TFMessage', False, check_tf),
-    Expectation('/tf_static', 'tf2_msgs/msg/TFMessage', True, check_tf_static),
-    Expectation('/mlmap/map', 'nav_msgs/msg/OccupancyGrid', True, check_grid),
-)
-BRIDGE_TOPICS = (
-    Expectation('/mlmap/viz/awareness', MARKERS, False, check_cube_markers),
-    Expectation('/mlmap/viz/local_map', MARKERS, False, check_cube_markers),
-    Expectation('/mlmap/viz/global_map', MARKERS, True, check_cube_markers),
-    Expectation('/mlmap/viz/esdf_slice', MARKERS, False, check_cube_markers),
-    Expectation('/mlmap/viz/grid', 'nav_msgs/msg/OccupancyGrid', True, check_grid),
-    Expectation('/mlmap/viz/status', MARKERS, False, check_status_markers),
-    Expectation('/mlmap/viz/status_text', 'std_msgs/msg/String', False, check_status_text),
-)
+
+def node_topics(namespace: str = '') -> Tuple[Expectation, ...]:
+    """Return mlmap_node's outputs (idl/README.md, default names) under its dds.ns `namespace`.
+
+    tf and tf_static stay absolute, as tf2 listens to them.
+    """
+
+    def ns(topic: str) -> str:
+        return in_namespace(namespace, topic)
+    return (
+        Expectation(ns('/mlmap/awareness/occupied'), CLOUD, False, check_awareness_cloud),
+        Expectation(ns('/mlmap/local_map/occupied'), CLOUD, False, check_occupied_cloud),
+        Expectation(ns('/mlmap/global_map/occupied'), CLOUD, True, check_occupied_cloud),
+        Expectation(ns('/mlmap/grid'), 'nav_msgs/msg/OccupancyGrid', True, check_grid),
+        Expectation(ns('/mlmap/esdf/slice'), CLOUD, False, check_esdf_slice),
+        Expectation(ns('/mlmap/esdf/block'), 'mlmap_msgs/msg/VoxelBlock', False,
+                    check_voxel_block),
+        Expectation(ns('/mlmap/status'), 'mlmap_msgs/msg/Status', False, check_status),
+        Expectation('/tf', 'tf2_msgs/msg/TFMessage', False, check_tf),
+        Expectation('/tf_static', 'tf2_msgs/msg/TFMessage', True, check_tf_static),
+        Expectation(ns('/mlmap/map'), 'nav_msgs/msg/OccupancyGrid', True, check_grid),
+    )
+
+
+def bridge_topics(namespace: str = '',
+                  output_prefix: str = '/mlmap/viz') -> Tuple[Expectation, ...]:
+    """Return the bridge's outputs with its parameters `namespace` and `output_prefix`."""
+    prefix = in_namespace(namespace, output_prefix).rstrip('/')
+    return (
+        Expectation(f'{prefix}/awareness', MARKERS, False, check_cube_markers),
+        Expectation(f'{prefix}/local_map', MARKERS, False, check_cube_markers),
+        Expectation(f'{prefix}/global_map', MARKERS, True, check_cube_markers),
+        Expectation(f'{prefix}/esdf_slice', MARKERS, False, check_cube_markers),
+        Expectation(f'{prefix}/grid', 'nav_msgs/msg/OccupancyGrid', True, check_grid),
+        Expectation(f'{prefix}/status', MARKERS, False, check_status_markers),
+        Expectation(f'{prefix}/status_text', 'std_msgs/msg/String', False, check_status_text),
+    )
+
+
+# The defaults: mlmap_node's outputs without a namespace and the bridge's default parameters.
+NODE_TOPICS = node_topics()
+BRIDGE_TOPICS = bridge_topics()
 EXPECTED_TOPICS = NODE_TOPICS + BRIDGE_TOPICS
 
 

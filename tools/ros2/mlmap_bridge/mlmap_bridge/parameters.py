@@ -66,6 +66,12 @@ PARAMETERS = (
               '(MarkerArray with a text) and /status_text (std_msgs/String)'),
     Parameter('body_frame', 'base_link',
               'frame the status text floats above (mlmap_node dds.body_frame)'),
+    Parameter('namespace', '',
+              "mlmap_node's dds.ns: the *_topic parameters and output_prefix (written as "
+              'without a namespace) are taken under /<namespace>; "" for none'),
+    Parameter('frame_prefix', '',
+              "mlmap_node's dds.frame_prefix: body_frame becomes <frame_prefix>/<body_frame>; "
+              '"" for none'),
     # Rates: the bridge converts a layer at most this often [Hz]; 0: every message.
     Parameter('awareness_max_rate_hz', 5.0, 'most awareness conversions per second; 0: all'),
     Parameter('local_map_max_rate_hz', 2.0, 'most local-map conversions per second; 0: all'),
@@ -97,3 +103,19 @@ PARAMETERS = (
 def defaults() -> Dict[str, Value]:
     """Map every parameter name to its default."""
     return {p.name: p.default for p in PARAMETERS}
+
+
+def in_namespace(namespace: str, topic: str) -> str:
+    """Return `topic` (a name of mlmap_node's without its namespace) under /<namespace>.
+
+    As mlmap_node names its topics rt/<ns>/<name>: ('uav1', '/mlmap/grid') -> '/uav1/mlmap/grid';
+    an empty namespace leaves the topic as it is, and an empty topic (disabled) stays empty.
+    """
+    if not topic or not namespace.strip('/'):
+        return topic
+    return '/' + namespace.strip('/') + '/' + topic.lstrip('/')
+
+
+def prefixed_frame(prefix: str, frame: str) -> str:
+    """Return `frame` with mlmap_node's dds.frame_prefix ('uav1', 'base_link': uav1/base_link)."""
+    return f'{prefix.strip("/")}/{frame}' if prefix.strip('/') else frame

@@ -62,13 +62,15 @@ def voxel_block(values=None, **changes):
 
 def status(**changes):
     """A mlmap_msgs/Status-like object of a node that has mapped frames."""
-    values = dict(header=fake_msgs.Header(frame_id='map'), version=1, uptime_s=12.5,
+    values = dict(header=fake_msgs.Header(frame_id='map'), version=2, uptime_s=12.5,
                   frames_in=40, frames_mapped=38, frames_dropped=1, frames_rejected=1,
                   clouds_malformed=0, clouds_without_pose=0, poses_rejected=0,
                   points_rejected=3, awareness_median_ms=5.0, awareness_p99_ms=7.0,
                   local_global_median_ms=0.2, local_global_p99_ms=0.3, total_median_ms=5.2,
                   total_p99_ms=7.3, esdf_last_ms=4.0, awareness_bytes=1000, local_bytes=600000,
-                  global_bytes=10, planning_bytes=3000, global_voxels=2)
+                  global_bytes=10, planning_bytes=3000, global_voxels=2,
+                  frames_unexpected_frame_id=0, frames_unresolved_frame_id=0,
+                  odometry_child_frame_mismatch=0, tf_odom_missing=0)
     values.update(changes)
     return SimpleNamespace(**values)
 
@@ -183,7 +185,7 @@ def test_voxel_block():
 def test_status():
     """A node that mapped frames, with consistent counters and timings."""
     assert ck.check_status(status(), FRAMES) == []
-    assert ck.check_status(status(version=3), FRAMES) == ['layout version 3, expected 1']
+    assert ck.check_status(status(version=3), FRAMES) == ['layout version 3, expected 2']
     assert ck.check_status(status(frames_mapped=0, frames_in=0), FRAMES) == [
         'no frame mapped yet']
     assert ck.check_status(status(frames_mapped=50), FRAMES)
@@ -237,7 +239,7 @@ def test_the_checker_accepts_the_bridge_status_outputs():
     array = mk.marker_array(TYPES, mk.text_marker(TYPES, 'base_link', 'status', text, 0.25, 1.5))
     assert ck.check_status_markers(array, FRAMES) == []
     assert ck.check_status_text(SimpleNamespace(data=text), FRAMES) == []
-    unknown = status_text(status(version=2))
+    unknown = status_text(status(version=1))
     assert ck.check_status_text(SimpleNamespace(data=unknown), FRAMES)
     world_text = mk.marker_array(TYPES, mk.text_marker(TYPES, 'map', 'status', text, 0.2, 1.0))
     assert ck.check_status_markers(world_text, FRAMES)

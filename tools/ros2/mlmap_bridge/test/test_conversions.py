@@ -188,13 +188,15 @@ def test_thin_evenly():
 # ---- Status text ----------------------------------------------------------------------------
 
 def _status(**changes):
-    values = dict(version=1, uptime_s=75.0, frames_in=120, frames_mapped=110, frames_dropped=4,
+    values = dict(version=2, uptime_s=75.0, frames_in=120, frames_mapped=110, frames_dropped=4,
                   frames_rejected=1, clouds_malformed=2, clouds_without_pose=3, poses_rejected=0,
                   points_rejected=77, awareness_median_ms=5.84, awareness_p99_ms=7.1,
                   local_global_median_ms=0.17, local_global_p99_ms=0.34, total_median_ms=6.02,
                   total_p99_ms=7.44, esdf_last_ms=4.6, awareness_bytes=15_000_000,
                   local_bytes=631_750, global_bytes=2048, planning_bytes=1_300_000,
-                  global_voxels=149)
+                  global_voxels=149, frames_unexpected_frame_id=0,
+                  frames_unresolved_frame_id=0, odometry_child_frame_mismatch=0,
+                  tf_odom_missing=0)
     values.update(changes)
     return SimpleNamespace(**values)
 
@@ -208,6 +210,10 @@ def test_status_text_reports_frames_timings_and_memory():
     assert 'total 6.0/7.4' in text and 'ESDF 4.6' in text
     assert 'awareness 15.0 MB' in text and 'local 631.8 kB' in text
     assert 'global 2.0 kB (149 voxels)' in text and 'planning 1.3 MB' in text
+    assert 'frame checks' not in text, 'only when a frame check counted something'
+    checked = cv.status_text(_status(frames_unresolved_frame_id=3, tf_odom_missing=1))
+    assert ('frame checks: frame_id unexpected 0, unresolved 3; odometry child frame 0; '
+            'odom -> body missing 1') in checked
 
 
 def test_status_text_gives_the_mapping_rate_from_the_previous_status():
@@ -222,8 +228,8 @@ def test_status_text_gives_the_mapping_rate_from_the_previous_status():
 
 def test_status_of_an_unknown_version_is_not_read():
     """idl/README.md: a reader refuses a layout version it does not know."""
-    text = cv.status_text(_status(version=2))
-    assert 'layout version 2 unknown' in text and 'frames' not in text
+    text = cv.status_text(_status(version=1))
+    assert 'layout version 1 unknown' in text and 'frames' not in text
 
 
 def test_formatting():

@@ -3,7 +3,8 @@
 from pathlib import Path
 
 from mlmap_bridge import checks
-from mlmap_bridge.parameters import CLOUD_LAYERS, defaults, PARAMETERS
+from mlmap_bridge.parameters import (CLOUD_LAYERS, defaults, in_namespace, PARAMETERS,
+                                     prefixed_frame)
 import pytest
 import yaml
 
@@ -96,3 +97,21 @@ def test_rviz_shows_the_node_topics_without_the_bridge():
 def test_installed_files_exist(relative):
     """setup.py installs these by glob; a missing one would silently not be installed."""
     assert (PACKAGE / relative).is_file()
+
+
+def test_namespace_and_frame_prefix_follow_mlmap_node():
+    """dds.ns puts the node's topics (and the bridge's outputs) under /<ns>; tf stays absolute;
+    dds.frame_prefix prefixes the body and sensor frames."""
+    assert in_namespace('', '/mlmap/grid') == '/mlmap/grid'
+    assert in_namespace('uav1', '/mlmap/grid') == '/uav1/mlmap/grid'
+    assert in_namespace('/uav1/', 'mlmap/viz') == '/uav1/mlmap/viz'
+    assert in_namespace('uav1', '') == '', 'a disabled topic stays disabled'
+    assert prefixed_frame('', 'base_link') == 'base_link'
+    assert prefixed_frame('uav1', 'base_link') == 'uav1/base_link'
+    node = {e.topic for e in checks.node_topics('uav1')}
+    assert '/uav1/mlmap/status' in node and '/tf' in node and '/tf_static' in node
+    assert not any(t.startswith('/mlmap/') for t in node)
+    default_outputs = (e.topic for e in checks.BRIDGE_TOPICS)
+    assert {e.topic for e in checks.bridge_topics('uav1')} == {
+        t.replace('/mlmap/viz', '/uav1/mlmap/viz') for t in default_outputs}
+    assert checks.node_topics() == checks.NODE_TOPICS
