@@ -178,6 +178,7 @@ TEST(SecureGraph, OnlyPermittedPeersReadTheLayersAndOnlyTheSensorFeedsTheNode) {
   NodeConfig node_config;
   node_config.dds = peerConfig(kDomain, "/mlmap/node");
   node_config.dds.rates.local_map_hz = 20.0;
+  node_config.dds.publish_sensor_tf = true;  // the latched tf_static tells when a peer is in
   MappingNode node(node_config);
   const Transform T_B_S = node_config.map.sensor.T_B_S();
 
