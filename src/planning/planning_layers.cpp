@@ -19,7 +19,8 @@ PlanningLayers::PlanningLayers(const MapConfig& config, bool own_thread)
     : config_(config),
       own_thread_(own_thread && config.esdf.enabled),
       snapshot_(std::make_shared<const MapSnapshot>(nullptr, nullptr, nullptr, 0, 0.0,
-                                                    Transform::Identity())) {
+                                                    Transform::Identity())),
+      esdf_(config.esdf) {
   if (own_thread_) thread_ = std::thread([this] { planningLoop(); });
 }
 
@@ -278,15 +279,50 @@ std::shared_ptr<const EsdfMap> PlanningLayers::computeEsdf(const EsdfJob& job) {
       for (int z = 0; z < size.z(); ++z) *out++ = model.state(column[z]);
     }
   }
-  const std::shared_ptr<EsdfMap> esdf = reuse(&esdf_pool_, config_.esdf);
-  const bool ok = esdf->compute(esdf_box_);
-  std::size_t bytes = esdf_box_.states.capacity() * sizeof(Occupancy);
-  for (const auto& e : esdf_pool_) bytes += e->memoryBytes();
+  const bool ok = esdf_.update(esdf_box_);
+  std::shared_ptr<const EsdfMap> published = ok ? publishEsdfCopy() : nullptr;
+  std::size_t bytes = esdf_box_.states.capacity() * sizeof(Occupancy) + esdf_.memoryBytes();
+  for (const EsdfCopy& c : esdf_copies_) {
+    bytes += c.map->memoryBytes() + c.pending.capacity() * sizeof(std::uint32_t);
+  }
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     stats_.esdf_bytes = bytes;
+    stats_.esdf_full += ok && esdf_.lastUpdate().full ? 1 : 0;
   }
-  return ok ? esdf : nullptr;
+  return published;
+}
+
+std::shared_ptr<const EsdfMap> PlanningLayers::publishEsdfCopy() {
+  // Past this many changed cells a copy is refreshed whole (a contiguous copy is then cheaper).
+  const std::size_t whole_above = esdf_.distances().size() / 8;
+  const EsdfMap::UpdateStats& u = esdf_.lastUpdate();
+  const std::vector<std::uint32_t>& changed = esdf_.changedCells();
+  const bool whole = u.full || u.shifted || changed.size() > whole_above;
+  for (EsdfCopy& c : esdf_copies_) {
+    if (c.stale) continue;
+    if (whole || c.pending.size() + changed.size() > whole_above) {
+      c.stale = true;
+      c.pending.clear();
+    } else {
+      c.pending.insert(c.pending.end(), changed.begin(), changed.end());
+    }
+  }
+  EsdfCopy* copy = nullptr;
+  for (EsdfCopy& c : esdf_copies_) {
+    if (c.map.use_count() == 1) {  // no snapshot holds it (see reuse())
+      copy = &c;
+      break;
+    }
+  }
+  if (copy == nullptr) {
+    esdf_copies_.push_back({std::make_shared<EsdfMap>(config_.esdf), {}, true});
+    copy = &esdf_copies_.back();
+  }
+  if (copy->stale || !copy->map->copyCells(esdf_, copy->pending)) copy->map->copyFrom(esdf_);
+  copy->pending.clear();
+  copy->stale = false;
+  return copy->map;
 }
 
 void PlanningLayers::planningLoop() {
