@@ -299,7 +299,7 @@ struct MapConfig {
 struct MemoryEstimate {
   std::size_t local_bytes = 0;      ///< the local map's window: 2 bytes of log-odds per voxel
   std::size_t snapshot_bytes = 0;   ///< two window copies for planners (one read, one filled)
-  std::size_t esdf_bytes = 0;       ///< two ESDF buffers over the box (0 when esdf.enabled is off)
+  std::size_t esdf_bytes = 0;       ///< the ESDF and its published copies (0 when esdf.enabled is off)
   /// The cylindrical grid and the free-space scratch box (a frame's point buffers add about
   /// 12 bytes per point: 3.7 MB for a 640 x 480 depth image).
   std::size_t awareness_bytes = 0;
