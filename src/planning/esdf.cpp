@@ -450,26 +450,30 @@ bool EsdfMap::update(const OccupancyBox& box) {
   for (int a = 0; a < 3; ++a) {
     if (std::abs(delta[a]) >= size_[a]) return compute(box);
   }
-  // Many changes: the full compute is cheaper (and uses every thread).
-  const std::size_t cells = box.states.size();
-  const std::size_t budget = cells / kFullFraction;
-  if (delta.isZero()) {
-    std::size_t changed = 0;
-    const std::uint8_t* now = reinterpret_cast<const std::uint8_t*>(box.states.data());
-    const std::uint8_t* kept = kept_states_.data();
-    for (std::size_t i = 0; i < cells && changed <= budget; i += 4096) {
-      const std::size_t n = std::min<std::size_t>(4096, cells - i);
-      if (std::memcmp(now + i, kept + i, n) == 0) continue;
-      for (std::size_t j = 0; j < n; ++j) changed += now[i + j] != kept[i + j] ? 1 : 0;
-    }
-    if (changed > budget) return compute(box);
-  }
   last_update_ = UpdateStats{};
   last_update_.full = false;
   if (!delta.isZero()) {
     shiftKept(delta);
     min_index_ = box.min_index;
     last_update_.shifted = true;
+  }
+  // The changed voxels; many of them (unmoved box): the full compute is cheaper (and uses
+  // every thread).
+  const std::size_t cells = box.states.size();
+  const std::size_t budget = last_update_.shifted ? cells : cells / kFullFraction;
+  const auto* now = reinterpret_cast<const std::uint8_t*>(box.states.data());
+  const std::uint8_t* kept = kept_states_.data();
+  changed_states_.clear();
+  for (std::size_t i = 0; i < cells;) {
+    const std::size_t n = std::min<std::size_t>(64, cells - i);
+    if (std::memcmp(now + i, kept + i, n) == 0) {
+      i += n;
+      continue;
+    }
+    for (const std::size_t end = i + n; i < end; ++i) {
+      if (now[i] != kept[i]) changed_states_.push_back(static_cast<std::uint32_t>(i));
+    }
+    if (changed_states_.size() > budget) return compute(box);
   }
   updateChanged(box);
   return true;
@@ -493,51 +497,54 @@ void EsdfMap::updateChanged(const OccupancyBox& box) {
   Scratch* scratch = &scratch_[0];
   UpdateStats& u = last_update_;
   changed_cells_.clear();
-  dirty_rows_.assign(static_cast<std::size_t>(ny), 0);
   dirty_y_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(nz), 0);
   dirty_z_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), 0);
   row_buffer_.resize(static_cast<std::size_t>(nx) * static_cast<std::size_t>(nz));
 
-  // Changed states: their rows are swept again; their unknown bits follow (all of them after a
-  // shift, whose bits were not shifted).
+  // Changed states: their rows are swept again over the z range of the row's changes; their
+  // unknown bits follow (all of them after a shift, whose bits were not shifted).
   std::uint8_t* kept = kept_states_.data();
-  for (std::size_t i = 0; i < cells;) {
-    const std::size_t n = std::min<std::size_t>(64, cells - i);
-    if (std::memcmp(states + i, kept + i, n) == 0) {
-      i += n;
-      continue;
+  row_z_lo_.assign(static_cast<std::size_t>(ny), nz);
+  row_z_hi_.assign(static_cast<std::size_t>(ny), -1);
+  for (const std::uint32_t c : changed_states_) {
+    const std::size_t i = c;
+    const std::size_t x = i / slab;
+    const std::size_t r = i - x * slab;
+    const std::size_t y = r / static_cast<std::size_t>(nz);
+    const int z = static_cast<int>(r - y * static_cast<std::size_t>(nz));
+    row_z_lo_[y] = std::min(row_z_lo_[y], z);
+    row_z_hi_[y] = std::max(row_z_hi_[y], z);
+    if (!u.shifted && (states[i] == kUnknown) != (kept[i] == kUnknown)) {
+      unknown_bits_[(x * slab_bits_ + r) >> 6] ^= std::uint64_t{1} << ((x * slab_bits_ + r) & 63);
+      changed_cells_.push_back(c);
     }
-    for (const std::size_t end = i + n; i < end; ++i) {
-      if (states[i] == kept[i]) continue;
-      const std::size_t x = i / slab;
-      const std::size_t r = i - x * slab;
-      dirty_rows_[r / static_cast<std::size_t>(nz)] = 1;
-      ++u.changed_states;
-      if (!u.shifted && (states[i] == kUnknown) != (kept[i] == kUnknown)) {
-        unknown_bits_[(x * slab_bits_ + r) >> 6] ^= std::uint64_t{1} << ((x * slab_bits_ + r) & 63);
-        changed_cells_.push_back(static_cast<std::uint32_t>(i));
-      }
-      kept[i] = states[i];
-    }
+    kept[i] = states[i];
   }
+  u.changed_states = changed_states_.size();
   if (u.shifted) {
     for (int x = 0; x < nx; ++x) writeUnknownBits(states, x);
   }
 
-  // Pass 1, row by row; changed results mark their y lines.
+  // Pass 1, row by row over the changed z range; changed results mark their y lines.
+  const std::int32_t unknown_is_obstacle = config_.unknown_as == UnknownAs::kOccupied ? 1 : 0;
   for (int y = 0; y < ny; ++y) {
-    if (dirty_rows_[static_cast<std::size_t>(y)] == 0) continue;
+    const int z_lo = row_z_lo_[static_cast<std::size_t>(y)];
+    const int z_hi = row_z_hi_[static_cast<std::size_t>(y)];
+    if (z_hi < z_lo) continue;
     ++u.rows_swept;
-    sweepRow(states, y, row_buffer_.data(), scratch);
+    const int n = z_hi - z_lo + 1;
+    const std::size_t row = static_cast<std::size_t>(y) * nz + static_cast<std::size_t>(z_lo);
+    sweepBlock(states + row, slab, row_buffer_.data(), static_cast<std::size_t>(n), nx, n,
+               scratch->near_free.data(), scratch->near_obstacle.data(), unknown_is_obstacle,
+               cap_d_, inf_);
     for (int x = 0; x < nx; ++x) {
-      const std::int32_t* fresh = row_buffer_.data() + static_cast<std::size_t>(x) * nz;
-      std::int32_t* old = pass1_.data() + static_cast<std::size_t>(x) * slab +
-                          static_cast<std::size_t>(y) * nz;
-      if (std::memcmp(fresh, old, static_cast<std::size_t>(nz) * sizeof(std::int32_t)) == 0) {
+      const std::int32_t* fresh = row_buffer_.data() + static_cast<std::size_t>(x) * n;
+      std::int32_t* old = pass1_.data() + static_cast<std::size_t>(x) * slab + row;
+      if (std::memcmp(fresh, old, static_cast<std::size_t>(n) * sizeof(std::int32_t)) == 0) {
         continue;
       }
-      std::uint8_t* dirty = dirty_y_.data() + static_cast<std::size_t>(x) * nz;
-      for (int z = 0; z < nz; ++z) {
+      std::uint8_t* dirty = dirty_y_.data() + static_cast<std::size_t>(x) * nz + z_lo;
+      for (int z = 0; z < n; ++z) {
         if (fresh[z] != old[z]) {
           old[z] = fresh[z];
           dirty[z] = 1;
@@ -599,15 +606,6 @@ void EsdfMap::sweepRows(const std::uint8_t* states, int y_begin, int y_end, Scra
                scratch->near_free.data(), scratch->near_obstacle.data(), unknown_is_obstacle,
                cap_d_, inf_);
   }
-}
-
-void EsdfMap::sweepRow(const std::uint8_t* states, int y, std::int32_t* out, Scratch* scratch) {
-  const int nz = size_.z();
-  const std::size_t slab = static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(nz);
-  const std::int32_t unknown_is_obstacle = config_.unknown_as == UnknownAs::kOccupied ? 1 : 0;
-  sweepBlock(states + static_cast<std::size_t>(y) * nz, slab, out, static_cast<std::size_t>(nz),
-             size_.x(), nz, scratch->near_free.data(), scratch->near_obstacle.data(),
-             unknown_is_obstacle, cap_d_, inf_);
 }
 
 void EsdfMap::transformYLine(int x, int z, std::int32_t* line, Scratch* scratch) const {
@@ -769,8 +767,10 @@ std::size_t EsdfMap::memoryBytes() const {
                       unknown_bits_.capacity() * sizeof(std::uint64_t) +
                       (pass1_.capacity() + pass2_.capacity() + row_buffer_.capacity()) *
                           sizeof(std::int32_t) +
-                      kept_states_.capacity() + dirty_rows_.capacity() + dirty_y_.capacity() +
-                      dirty_z_.capacity() + changed_cells_.capacity() * sizeof(std::uint32_t) +
+                      kept_states_.capacity() + dirty_y_.capacity() +
+                      dirty_z_.capacity() +
+                      (changed_cells_.capacity() + changed_states_.capacity()) * sizeof(std::uint32_t) +
+                      (row_z_lo_.capacity() + row_z_hi_.capacity()) * sizeof(int) +
                       metres_table_.capacity() * sizeof(float) +
                       scratch_.capacity() * sizeof(Scratch);
   for (const Scratch& s : scratch_) {

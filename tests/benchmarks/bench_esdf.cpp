@@ -200,6 +200,9 @@ struct StreamRow {
   int shifted = 0;
   int full = 0;
   double changed_states = 0.0;  ///< median per frame
+  double rows = 0.0;            ///< median rows swept again per frame
+  double y_lines = 0.0;         ///< median y lines transformed again per frame
+  double z_lines = 0.0;         ///< median z lines transformed again per frame
   double update_median_ms = 0.0;
   double update_p99_ms = 0.0;
   double update_max_ms = 0.0;
@@ -246,6 +249,9 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
   std::vector<double> same_box_ms;
   std::vector<double> edt_ms;
   std::vector<double> changed;
+  std::vector<double> rows;
+  std::vector<double> y_lines;
+  std::vector<double> z_lines;
 #if defined(MLMAP_HAVE_DYNAMICEDT3D)
   const double cap_cells = config.max_distance_m / boxes[0].resolution_m;
   const int cap_sq = static_cast<int>(std::lround(cap_cells * cap_cells));
@@ -264,6 +270,9 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
     row.shifted += u.shifted ? 1 : 0;
     row.full += u.full ? 1 : 0;
     changed.push_back(static_cast<double>(u.changed_states));
+    rows.push_back(static_cast<double>(u.rows_swept));
+    y_lines.push_back(static_cast<double>(u.y_lines));
+    z_lines.push_back(static_cast<double>(u.z_lines));
     start = Clock::now();
     if (!full.compute(box)) return row;
     full_ms.push_back(msSince(start));
@@ -317,6 +326,9 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
   }
   row.updates = static_cast<int>(update_ms.size());
   row.changed_states = percentile(&changed, 0.5);
+  row.rows = percentile(&rows, 0.5);
+  row.y_lines = percentile(&y_lines, 0.5);
+  row.z_lines = percentile(&z_lines, 0.5);
   row.update_median_ms = percentile(&update_ms, 0.5);
   row.update_p99_ms = percentile(&update_ms, 0.99);
   row.update_max_ms = percentile(&update_ms, 1.0);
@@ -334,27 +346,29 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
 void printStream(const StreamRow& r, std::FILE* json, bool last) {
   if (json == nullptr) {
     std::printf("%-10s %-9s %4d %4d %4d %8.0f %7.3f %7.3f %7.3f %7.3f %7.3f %4d | %4d %8.3f %8.3f "
-                "%7.3f %6.1fx  mismatched %zu of %zu (max %.3f m)\n",
+                "%7.3f %6.1fx  mismatched %zu of %zu (max %.3f m); lines %.0f %.0f %.0f\n",
                 r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full,
                 r.changed_states, r.update_median_ms, r.update_p99_ms, r.update_max_ms,
                 r.full_median_ms, r.full_p99_ms, r.mismatched_frames, r.edt_updates,
                 r.edt_median_ms, r.edt_p99_ms, r.same_box_median_ms,
                 r.same_box_median_ms > 0.0 ? r.edt_median_ms / r.same_box_median_ms : 0.0,
-                r.edt_mismatched, r.edt_compared, r.edt_max_error_m);
+                r.edt_mismatched, r.edt_compared, r.edt_max_error_m, r.rows, r.y_lines, r.z_lines);
     return;
   }
   std::fprintf(json,
                "  {\"case\": \"%s\", \"unknown_as\": \"%s\", \"updates\": %d, \"shifted\": %d, "
                "\"full\": %d, \"changed_states_median\": %.0f, "
+               "\"lines_median\": {\"x_rows\": %.0f, \"y\": %.0f, \"z\": %.0f}, "
                "\"update_ms\": {\"median\": %.4f, \"p99\": %.4f, \"max\": %.4f}, "
                "\"compute_ms\": {\"median\": %.4f, \"p99\": %.4f}, \"mismatched_frames\": %d, "
                "\"dynamicedt3d\": {\"updates\": %d, \"median_ms\": %.4f, \"p99_ms\": %.4f, "
                "\"ours_same_frames_median_ms\": %.4f, \"compared\": %zu, \"mismatched\": %zu, "
                "\"max_error_m\": %.4f}}%s\n",
                r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full,
-               r.changed_states, r.update_median_ms, r.update_p99_ms, r.update_max_ms,
-               r.full_median_ms, r.full_p99_ms, r.mismatched_frames, r.edt_updates,
-               r.edt_median_ms, r.edt_p99_ms, r.same_box_median_ms, r.edt_compared,
+               r.changed_states, r.rows, r.y_lines, r.z_lines, r.update_median_ms,
+               r.update_p99_ms, r.update_max_ms, r.full_median_ms, r.full_p99_ms,
+               r.mismatched_frames, r.edt_updates, r.edt_median_ms, r.edt_p99_ms,
+               r.same_box_median_ms, r.edt_compared,
                r.edt_mismatched, r.edt_max_error_m, last ? "" : ",");
 }
 

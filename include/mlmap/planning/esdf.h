@@ -232,8 +232,6 @@ class EsdfMap {
   void clear();
   /// Pass 1 (x, two sweeps) over the y rows [y_begin, y_end): 1D distances into pass1_.
   void sweepRows(const std::uint8_t* states, int y_begin, int y_end, Scratch* scratch);
-  /// Pass 1 over y row y alone, into `out` (nx * nz values, x-major).
-  void sweepRow(const std::uint8_t* states, int y, std::int32_t* out, Scratch* scratch);
   /// Pass 2 (y, into pass2_) and pass 3 (z) over the x slabs [x_begin, x_end), writing the field
   /// in metres and the unknown mask.
   void transformSlabs(const std::uint8_t* states, int x_begin, int x_end, Scratch* scratch);
@@ -284,7 +282,9 @@ class EsdfMap {
   bool kept_ = false;  ///< pass1_, pass2_ and kept_states_ hold the current box
   UpdateStats last_update_;
   std::vector<std::uint32_t> changed_cells_;
-  std::vector<std::uint8_t> dirty_rows_;    ///< per y: the x pass sweeps the row again
+  std::vector<std::uint32_t> changed_states_;  ///< offsets of the states update() found changed
+  std::vector<int> row_z_lo_;               ///< per y: lowest z of a changed state (nz: none)
+  std::vector<int> row_z_hi_;               ///< per y: highest z of a changed state (-1: none)
   std::vector<std::uint8_t> dirty_y_;       ///< per (x, z): the y line is transformed again
   std::vector<std::uint8_t> dirty_z_;       ///< per (x, y): the z line is transformed again
   std::vector<std::int32_t> row_buffer_;    ///< one y row of pass 1 (nx * nz)
