@@ -81,7 +81,17 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
 
   std::shared_ptr<const EsdfMap> esdf;
   double esdf_ms = -1.0;
-  const EsdfJob job{window, body_W, frame};
+  EsdfJob job{window, body_W, frame, local.changeClock(), {}};
+  if (decision.due) {
+    constexpr int kN = LocalMapConfig::kSubmapsPerAxis;
+    const SubmapIndex first = local.submapOf(window->min_index);
+    job.submap_stamps.reserve(static_cast<std::size_t>(kN) * kN * kN);
+    for (int sx = 0; sx < kN; ++sx)
+      for (int sy = 0; sy < kN; ++sy)
+        for (int sz = 0; sz < kN; ++sz) {
+          job.submap_stamps.push_back(local.submapStateChangedAt(first + SubmapIndex(sx, sy, sz)));
+        }
+  }
   const bool compute_here = decision.due && !own_thread_;
   if (compute_here) {
     const Clock::time_point esdf_start = Clock::now();
@@ -259,26 +269,57 @@ VoxelIndex PlanningLayers::esdfBoxMin(const LocalWindow& window, const Eigen::Ve
   return box_min;
 }
 
-std::shared_ptr<const EsdfMap> PlanningLayers::computeEsdf(const EsdfJob& job) {
+void PlanningLayers::fillEsdfBox(const EsdfJob& job) {
   const LocalWindow& window = *job.window;
   Eigen::Vector3i size;
   const VoxelIndex box_min = esdfBoxMin(window, job.body_W, &size);
-  esdf_box_.reset(box_min, size, window.resolution_m);
+  const Eigen::Vector3i cells = window.size / LocalMapConfig::kSubmapsPerAxis;
+  constexpr int kN = LocalMapConfig::kSubmapsPerAxis;
+  const bool in_place = esdf_box_filled_ && box_min == esdf_box_.min_index &&
+                        size == esdf_box_.size && window.min_index == esdf_box_window_ &&
+                        window.resolution_m == esdf_box_.resolution_m &&
+                        job.submap_stamps.size() == static_cast<std::size_t>(kN * kN * kN) &&
+                        window.size == cells * kN;
+  if (!in_place) esdf_box_.reset(box_min, size, window.resolution_m);
   const LogOddsModel& model = window.model;
-  Occupancy* out = esdf_box_.states.data();
-  for (int x = 0; x < size.x(); ++x) {
-    for (int y = 0; y < size.y(); ++y) {
-      const VoxelIndex first(box_min.x() + x, box_min.y() + y, box_min.z());
-      const VoxelIndex r = first - window.min_index;
-      const LogOddsQ* column =
-          window.log_odds.data() +
-          (static_cast<std::size_t>(r.x()) * static_cast<std::size_t>(window.size.y()) +
-           static_cast<std::size_t>(r.y())) *
-              static_cast<std::size_t>(window.size.z()) +
-          static_cast<std::size_t>(r.z());
-      for (int z = 0; z < size.z(); ++z) *out++ = model.state(column[z]);
+  // Fills the box voxels of window-relative [lo, hi) (clipped to the box).
+  const auto fill = [&](const VoxelIndex& lo_window, const VoxelIndex& hi_window) {
+    const VoxelIndex lo = (window.min_index + lo_window).cwiseMax(box_min);
+    const VoxelIndex hi = (window.min_index + hi_window).cwiseMin(box_min + size);
+    if ((hi.array() <= lo.array()).any()) return;
+    for (int x = lo.x(); x < hi.x(); ++x) {
+      for (int y = lo.y(); y < hi.y(); ++y) {
+        const VoxelIndex r = VoxelIndex(x, y, lo.z()) - window.min_index;
+        const LogOddsQ* column =
+            window.log_odds.data() +
+            (static_cast<std::size_t>(r.x()) * static_cast<std::size_t>(window.size.y()) +
+             static_cast<std::size_t>(r.y())) *
+                static_cast<std::size_t>(window.size.z()) +
+            static_cast<std::size_t>(r.z());
+        Occupancy* out = &esdf_box_.at(VoxelIndex(x, y, lo.z()));
+        for (int z = 0; z < hi.z() - lo.z(); ++z) out[z] = model.state(column[z]);
+      }
     }
+  };
+  if (!in_place) {
+    fill(VoxelIndex::Zero(), window.size);
+  } else {
+    std::size_t i = 0;
+    for (int sx = 0; sx < kN; ++sx)
+      for (int sy = 0; sy < kN; ++sy)
+        for (int sz = 0; sz < kN; ++sz, ++i) {
+          if (job.submap_stamps[i] <= esdf_box_clock_) continue;
+          const VoxelIndex lo = VoxelIndex(sx, sy, sz).cwiseProduct(cells);
+          fill(lo, lo + cells);
+        }
   }
+  esdf_box_filled_ = true;
+  esdf_box_window_ = window.min_index;
+  esdf_box_clock_ = job.clock;
+}
+
+std::shared_ptr<const EsdfMap> PlanningLayers::computeEsdf(const EsdfJob& job) {
+  fillEsdfBox(job);
   const bool ok = esdf_.update(esdf_box_);
   std::shared_ptr<const EsdfMap> published = ok ? publishEsdfCopy() : nullptr;
   std::size_t bytes = esdf_box_.states.capacity() * sizeof(Occupancy) + esdf_.memoryBytes();

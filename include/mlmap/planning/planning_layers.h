@@ -70,7 +70,14 @@ class PlanningLayers {
     std::shared_ptr<const LocalWindow> window;
     Eigen::Vector3d body_W = Eigen::Vector3d::Zero();
     std::uint64_t frame = 0;
+    /// The local map's change clock and its submaps' state stamps (x-major, z fastest, over
+    /// the window's submaps) when the window was copied: which parts of the box to refill.
+    std::uint64_t clock = 0;
+    std::vector<std::uint64_t> submap_stamps;
   };
+  /// Fills esdf_box_ from the job's window: only the submaps whose states changed since the
+  /// last fill when the window and the box are where they were, else all of it.
+  void fillEsdfBox(const EsdfJob& job);
   std::shared_ptr<const EsdfMap> computeEsdf(const EsdfJob& job);
   /// Whether this frame's ESDF is computed, and why not.
   struct EsdfDecision {
@@ -133,6 +140,9 @@ class PlanningLayers {
   EsdfMap esdf_;
   std::vector<EsdfCopy> esdf_copies_;
   OccupancyBox esdf_box_;
+  bool esdf_box_filled_ = false;                     // esdf_box_ holds a window's states
+  VoxelIndex esdf_box_window_ = VoxelIndex::Zero();  // min_index of the window it was filled from
+  std::uint64_t esdf_box_clock_ = 0;                 // that window's change clock
 
   mutable std::mutex stats_mutex_;
   PlanningStats stats_;
