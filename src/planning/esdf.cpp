@@ -475,7 +475,7 @@ bool EsdfMap::update(const OccupancyBox& box) {
     }
     if (changed_states_.size() > budget) return compute(box);
   }
-  updateChanged(box);
+  updateChanged(box, delta);
   return true;
 }
 
@@ -486,7 +486,7 @@ void EsdfMap::shiftKept(const VoxelIndex& delta) {
   shiftBox(&field_, size_, delta, kUnseenField);
 }
 
-void EsdfMap::updateChanged(const OccupancyBox& box) {
+void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
   const int nx = size_.x();
   const int ny = size_.y();
   const int nz = size_.z();
@@ -497,8 +497,31 @@ void EsdfMap::updateChanged(const OccupancyBox& box) {
   Scratch* scratch = &scratch_[0];
   UpdateStats& u = last_update_;
   changed_cells_.clear();
-  dirty_y_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(nz), 0);
-  dirty_z_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), 0);
+  dirty_y_lo_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(nz), ny);
+  dirty_y_hi_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(nz), -1);
+  dirty_z_lo_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), nz);
+  dirty_z_hi_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), -1);
+  // A changed input at i changes outputs within reach = cap_d_ + 1 of it (a site's parabola
+  // within the cap, or a run boundary next to it); those outputs depend on inputs within reach
+  // of them. So lines are transformed again over [lo - 2 reach, hi + 2 reach] and compared over
+  // [lo - reach, hi + reach]: the parabolas cut off at the ends lie beyond the cap there.
+  const int reach = cap_d_ + 1;
+  // After a shift along y (z), the voxels removed on one side change the y (z) pass's results
+  // next to that face, with no changed input there: that face counts as changed.
+  if (shift.y() != 0) {
+    const int face = shift.y() > 0 ? 0 : ny - 1;
+    for (std::size_t i = 0; i < dirty_y_lo_.size(); ++i) {
+      dirty_y_lo_[i] = std::min(dirty_y_lo_[i], face);
+      dirty_y_hi_[i] = std::max(dirty_y_hi_[i], face);
+    }
+  }
+  if (shift.z() != 0) {
+    const int face = shift.z() > 0 ? 0 : nz - 1;
+    for (std::size_t i = 0; i < dirty_z_lo_.size(); ++i) {
+      dirty_z_lo_[i] = std::min(dirty_z_lo_[i], face);
+      dirty_z_hi_[i] = std::max(dirty_z_hi_[i], face);
+    }
+  }
   row_buffer_.resize(static_cast<std::size_t>(nx) * static_cast<std::size_t>(nz));
 
   // Changed states: their rows are swept again over the z range of the row's changes; their
@@ -543,11 +566,13 @@ void EsdfMap::updateChanged(const OccupancyBox& box) {
       if (std::memcmp(fresh, old, static_cast<std::size_t>(n) * sizeof(std::int32_t)) == 0) {
         continue;
       }
-      std::uint8_t* dirty = dirty_y_.data() + static_cast<std::size_t>(x) * nz + z_lo;
+      int* lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz + z_lo;
+      int* hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz + z_lo;
       for (int z = 0; z < n; ++z) {
         if (fresh[z] != old[z]) {
           old[z] = fresh[z];
-          dirty[z] = 1;
+          lo[z] = std::min(lo[z], y);
+          hi[z] = std::max(hi[z], y);
         }
       }
     }
@@ -556,18 +581,25 @@ void EsdfMap::updateChanged(const OccupancyBox& box) {
   // Pass 2, the marked y lines; changed results mark their z lines.
   std::int32_t* line = scratch->line.data();
   for (int x = 0; x < nx; ++x) {
-    const std::uint8_t* dirty = dirty_y_.data() + static_cast<std::size_t>(x) * nz;
+    const int* dirty_lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz;
+    const int* dirty_hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz;
     std::int32_t* slab_values = pass2_.data() + static_cast<std::size_t>(x) * slab;
-    std::uint8_t* mark = dirty_z_.data() + static_cast<std::size_t>(x) * ny;
+    int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
+    int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
     for (int z = 0; z < nz; ++z) {
-      if (dirty[z] == 0) continue;
+      if (dirty_hi[z] < dirty_lo[z]) continue;
       ++u.y_lines;
-      transformYLine(x, z, line, scratch);
-      for (int y = 0; y < ny; ++y) {
+      const int begin = std::max(0, dirty_lo[z] - 2 * reach);
+      const int end = std::min(ny, dirty_hi[z] + 2 * reach + 1);
+      transformYLine(x, z, begin, end, line, scratch);
+      const int y_end = std::min(ny, dirty_hi[z] + reach + 1);
+      for (int y = std::max(0, dirty_lo[z] - reach); y < y_end; ++y) {
         std::int32_t& old = slab_values[static_cast<std::size_t>(y) * nz + z];
-        if (line[y] != old) {
-          old = line[y];
-          mark[y] = 1;
+        const std::int32_t fresh = line[y - begin];
+        if (fresh != old) {
+          old = fresh;
+          mark_lo[y] = std::min(mark_lo[y], z);
+          mark_hi[y] = std::max(mark_hi[y], z);
         }
       }
     }
@@ -575,15 +607,19 @@ void EsdfMap::updateChanged(const OccupancyBox& box) {
 
   // Pass 3, the marked z lines, into the field.
   for (int x = 0; x < nx; ++x) {
-    const std::uint8_t* mark = dirty_z_.data() + static_cast<std::size_t>(x) * ny;
+    const int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
+    const int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
     for (int y = 0; y < ny; ++y) {
-      if (mark[y] == 0) continue;
+      if (mark_hi[y] < mark_lo[y]) continue;
       ++u.z_lines;
-      transformZLine(x, y, line, scratch);
+      const int begin = std::max(0, mark_lo[y] - 2 * reach);
+      const int end = std::min(nz, mark_hi[y] + 2 * reach + 1);
+      transformZLine(x, y, begin, end, line, scratch);
       const std::size_t first = static_cast<std::size_t>(x) * slab + static_cast<std::size_t>(y) * nz;
       float* field = field_.data() + first;
-      for (int z = 0; z < nz; ++z) {
-        const float m = metres(line[z]);
+      const int z_end = std::min(nz, mark_hi[y] + reach + 1);
+      for (int z = std::max(0, mark_lo[y] - reach); z < z_end; ++z) {
+        const float m = metres(line[z - begin]);
         if (m != field[z]) {
           field[z] = m;
           changed_cells_.push_back(static_cast<std::uint32_t>(first + static_cast<std::size_t>(z)));
@@ -608,10 +644,12 @@ void EsdfMap::sweepRows(const std::uint8_t* states, int y_begin, int y_end, Scra
   }
 }
 
-void EsdfMap::transformYLine(int x, int z, std::int32_t* line, Scratch* scratch) const {
-  const int ny = size_.y();
+void EsdfMap::transformYLine(int x, int z, int begin, int end, std::int32_t* line,
+                             Scratch* scratch) const {
+  const int ny = end - begin;
   const int nz = size_.z();
-  const std::int32_t* in = pass1_.data() + static_cast<std::size_t>(x) * ny * nz + z;
+  const std::int32_t* in = pass1_.data() +
+                           (static_cast<std::size_t>(x) * size_.y() + begin) * nz + z;
   for (int y = 0; y < ny; ++y) line[y] = in[static_cast<std::ptrdiff_t>(y) * nz];
   if (narrow_keys_) {
     transformLine<std::int32_t, std::int32_t*, true>(
@@ -626,12 +664,13 @@ void EsdfMap::transformYLine(int x, int z, std::int32_t* line, Scratch* scratch)
   }
 }
 
-void EsdfMap::transformZLine(int x, int y, std::int32_t* line, Scratch* scratch) const {
-  const int ny = size_.y();
-  const int nz = size_.z();
-  std::memcpy(line, pass2_.data() + (static_cast<std::size_t>(x) * ny + y) * nz,
+void EsdfMap::transformZLine(int x, int y, int begin, int end, std::int32_t* line,
+                             Scratch* scratch) const {
+  const int nz = end - begin;
+  std::memcpy(line,
+              pass2_.data() + (static_cast<std::size_t>(x) * size_.y() + y) * size_.z() + begin,
               static_cast<std::size_t>(nz) * sizeof(std::int32_t));
-  if (nz == 1) return;
+  if (size_.z() == 1) return;  // (as compute(): no z pass)
   if (narrow_keys_) {
     transformLine<std::int32_t, std::int32_t*, false>(
         line, nz, cap_sq_, cap_d_,
@@ -674,7 +713,7 @@ void EsdfMap::transformSlabs(const std::uint8_t* states, int x_begin, int x_end,
     // Pass 3 line by line, into the field in metres.
     float* field = field_.data() + first;
     for (int y = 0; y < ny; ++y) {
-      transformZLine(x, y, line, scratch);
+      transformZLine(x, y, 0, nz, line, scratch);
       float* out = field + static_cast<std::size_t>(y) * nz;
       if (table != nullptr) {
         for (int z = 0; z < nz; ++z) out[z] = table[line[z]];
@@ -767,8 +806,9 @@ std::size_t EsdfMap::memoryBytes() const {
                       unknown_bits_.capacity() * sizeof(std::uint64_t) +
                       (pass1_.capacity() + pass2_.capacity() + row_buffer_.capacity()) *
                           sizeof(std::int32_t) +
-                      kept_states_.capacity() + dirty_y_.capacity() +
-                      dirty_z_.capacity() +
+                      kept_states_.capacity() +
+                      (dirty_y_lo_.capacity() + dirty_y_hi_.capacity() + dirty_z_lo_.capacity() +
+                       dirty_z_hi_.capacity()) * sizeof(int) +
                       (changed_cells_.capacity() + changed_states_.capacity()) * sizeof(std::uint32_t) +
                       (row_z_lo_.capacity() + row_z_hi_.capacity()) * sizeof(int) +
                       metres_table_.capacity() * sizeof(float) +

@@ -237,10 +237,13 @@ class EsdfMap {
   void transformSlabs(const std::uint8_t* states, int x_begin, int x_end, Scratch* scratch);
   /// The unknown bits of x slab x from the box states.
   void writeUnknownBits(const std::uint8_t* states, int x);
-  /// Transforms one y line (from pass1_ at (x, z)) into `line` (ny values).
-  void transformYLine(int x, int z, std::int32_t* line, Scratch* scratch) const;
-  /// Transforms one z line (from pass2_ at (x, y)) into `line` (nz values).
-  void transformZLine(int x, int y, std::int32_t* line, Scratch* scratch) const;
+  /// Transforms the part [begin, end) of one y line (pass1_ at (x, z)) as a line of its own,
+  /// into `line` (end - begin values).
+  void transformYLine(int x, int z, int begin, int end, std::int32_t* line,
+                      Scratch* scratch) const;
+  /// The same for the part [begin, end) of one z line (pass2_ at (x, y)).
+  void transformZLine(int x, int y, int begin, int end, std::int32_t* line,
+                      Scratch* scratch) const;
   /// Signed squared voxel distance (or +-inf_) -> clamped signed metres (table when there).
   [[nodiscard]] float metres(std::int32_t value) const {
     return metres_table_.empty() ? slowMetres(value) : metres_table_[value + inf_];
@@ -249,8 +252,9 @@ class EsdfMap {
   void prepare(const OccupancyBox& box);
   /// Shifts the kept state by `delta` voxels (new min - old min); new voxels are marked unseen.
   void shiftKept(const VoxelIndex& delta);
-  /// The incremental part of update(): box has the kept geometry (after any shift).
-  void updateChanged(const OccupancyBox& box);
+  /// The incremental part of update(): box has the kept geometry after a shift by `shift`
+  /// voxels (zero: none).
+  void updateChanged(const OccupancyBox& box, const VoxelIndex& shift);
   /// Signed squared voxel distance (or +-inf_) -> clamped signed metres, without the table.
   /// Needs cap_sq_, inf_ and resolution_m_ of the current compute().
   [[nodiscard]] float slowMetres(std::int32_t value) const;
@@ -285,8 +289,10 @@ class EsdfMap {
   std::vector<std::uint32_t> changed_states_;  ///< offsets of the states update() found changed
   std::vector<int> row_z_lo_;               ///< per y: lowest z of a changed state (nz: none)
   std::vector<int> row_z_hi_;               ///< per y: highest z of a changed state (-1: none)
-  std::vector<std::uint8_t> dirty_y_;       ///< per (x, z): the y line is transformed again
-  std::vector<std::uint8_t> dirty_z_;       ///< per (x, y): the z line is transformed again
+  std::vector<int> dirty_y_lo_;  ///< per (x, z): lowest y where pass 1 changed (ny: none)
+  std::vector<int> dirty_y_hi_;  ///< per (x, z): highest y where pass 1 changed (-1: none)
+  std::vector<int> dirty_z_lo_;  ///< per (x, y): lowest z where pass 2 changed (nz: none)
+  std::vector<int> dirty_z_hi_;  ///< per (x, y): highest z where pass 2 changed (-1: none)
   std::vector<std::int32_t> row_buffer_;    ///< one y row of pass 1 (nx * nz)
   std::vector<float> metres_table_;    ///< slowMetres(v) at [v + inf_] (when the cap is small)
   std::vector<Scratch> scratch_;       ///< one per thread
