@@ -529,6 +529,10 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
   std::uint8_t* kept = kept_states_.data();
   row_z_lo_.assign(static_cast<std::size_t>(ny), nz);
   row_z_hi_.assign(static_cast<std::size_t>(ny), -1);
+  // x range of a row's changes; after a shift along x the face it removed counts as changed.
+  const int x_face = shift.x() > 0 ? 0 : nx - 1;
+  row_x_lo_.assign(static_cast<std::size_t>(ny), shift.x() != 0 ? x_face : nx);
+  row_x_hi_.assign(static_cast<std::size_t>(ny), shift.x() != 0 ? x_face : -1);
   for (const std::uint32_t c : changed_states_) {
     const std::size_t i = c;
     const std::size_t x = i / slab;
@@ -537,6 +541,8 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
     const int z = static_cast<int>(r - y * static_cast<std::size_t>(nz));
     row_z_lo_[y] = std::min(row_z_lo_[y], z);
     row_z_hi_[y] = std::max(row_z_hi_[y], z);
+    row_x_lo_[y] = std::min(row_x_lo_[y], static_cast<int>(x));
+    row_x_hi_[y] = std::max(row_x_hi_[y], static_cast<int>(x));
     if (!u.shifted && (states[i] == kUnknown) != (kept[i] == kUnknown)) {
       unknown_bits_[(x * slab_bits_ + r) >> 6] ^= std::uint64_t{1} << ((x * slab_bits_ + r) & 63);
       changed_cells_.push_back(c);
@@ -548,7 +554,8 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
     for (int x = 0; x < nx; ++x) writeUnknownBits(states, x);
   }
 
-  // Pass 1, row by row over the changed z range; changed results mark their y lines.
+  // Pass 1, row by row over the changed z range and the x range the changes reach (as for the
+  // lines below); changed results mark their y lines.
   const std::int32_t unknown_is_obstacle = config_.unknown_as == UnknownAs::kOccupied ? 1 : 0;
   for (int y = 0; y < ny; ++y) {
     const int z_lo = row_z_lo_[static_cast<std::size_t>(y)];
@@ -557,11 +564,17 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
     ++u.rows_swept;
     const int n = z_hi - z_lo + 1;
     const std::size_t row = static_cast<std::size_t>(y) * nz + static_cast<std::size_t>(z_lo);
-    sweepBlock(states + row, slab, row_buffer_.data(), static_cast<std::size_t>(n), nx, n,
-               scratch->near_free.data(), scratch->near_obstacle.data(), unknown_is_obstacle,
-               cap_d_, inf_);
-    for (int x = 0; x < nx; ++x) {
-      const std::int32_t* fresh = row_buffer_.data() + static_cast<std::size_t>(x) * n;
+    const int x_lo = row_x_lo_[static_cast<std::size_t>(y)];
+    const int x_hi = row_x_hi_[static_cast<std::size_t>(y)];
+    const int x_begin = std::max(0, x_lo - 2 * reach);
+    const int x_end = std::min(nx, x_hi + 2 * reach + 1);
+    sweepBlock(states + static_cast<std::size_t>(x_begin) * slab + row, slab, row_buffer_.data(),
+               static_cast<std::size_t>(n), x_end - x_begin, n, scratch->near_free.data(),
+               scratch->near_obstacle.data(), unknown_is_obstacle, cap_d_, inf_);
+    const int compare_end = std::min(nx, x_hi + reach + 1);
+    for (int x = std::max(0, x_lo - reach); x < compare_end; ++x) {
+      const std::int32_t* fresh =
+          row_buffer_.data() + static_cast<std::size_t>(x - x_begin) * static_cast<std::size_t>(n);
       std::int32_t* old = pass1_.data() + static_cast<std::size_t>(x) * slab + row;
       if (std::memcmp(fresh, old, static_cast<std::size_t>(n) * sizeof(std::int32_t)) == 0) {
         continue;
@@ -810,7 +823,8 @@ std::size_t EsdfMap::memoryBytes() const {
                       (dirty_y_lo_.capacity() + dirty_y_hi_.capacity() + dirty_z_lo_.capacity() +
                        dirty_z_hi_.capacity()) * sizeof(int) +
                       (changed_cells_.capacity() + changed_states_.capacity()) * sizeof(std::uint32_t) +
-                      (row_z_lo_.capacity() + row_z_hi_.capacity()) * sizeof(int) +
+                      (row_z_lo_.capacity() + row_z_hi_.capacity() + row_x_lo_.capacity() +
+                       row_x_hi_.capacity()) * sizeof(int) +
                       metres_table_.capacity() * sizeof(float) +
                       scratch_.capacity() * sizeof(Scratch);
   for (const Scratch& s : scratch_) {

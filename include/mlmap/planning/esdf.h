@@ -289,6 +289,8 @@ class EsdfMap {
   std::vector<std::uint32_t> changed_states_;  ///< offsets of the states update() found changed
   std::vector<int> row_z_lo_;               ///< per y: lowest z of a changed state (nz: none)
   std::vector<int> row_z_hi_;               ///< per y: highest z of a changed state (-1: none)
+  std::vector<int> row_x_lo_;               ///< per y: lowest x of a changed state
+  std::vector<int> row_x_hi_;               ///< per y: highest x of a changed state
   std::vector<int> dirty_y_lo_;  ///< per (x, z): lowest y where pass 1 changed (ny: none)
   std::vector<int> dirty_y_hi_;  ///< per (x, z): highest y where pass 1 changed (-1: none)
   std::vector<int> dirty_z_lo_;  ///< per (x, y): lowest z where pass 2 changed (nz: none)
