@@ -275,10 +275,11 @@ void PlanningLayers::fillEsdfBox(const EsdfJob& job) {
   const VoxelIndex box_min = esdfBoxMin(window, job.body_W, &size);
   const Eigen::Vector3i cells = window.size / LocalMapConfig::kSubmapsPerAxis;
   constexpr int kN = LocalMapConfig::kSubmapsPerAxis;
+  constexpr std::size_t kSubmaps = static_cast<std::size_t>(kN) * kN * kN;
   const bool in_place = esdf_box_filled_ && box_min == esdf_box_.min_index &&
                         size == esdf_box_.size && window.min_index == esdf_box_window_ &&
                         window.resolution_m == esdf_box_.resolution_m &&
-                        job.submap_stamps.size() == static_cast<std::size_t>(kN * kN * kN) &&
+                        job.submap_stamps.size() == kSubmaps &&
                         window.size == cells * kN;
   if (!in_place) esdf_box_.reset(box_min, size, window.resolution_m);
   const LogOddsModel& model = window.model;
