@@ -595,7 +595,7 @@ TEST(MapEngine, IncrementalEsdfEqualsAFullRecomputeAfterEveryFrame) {
       const EsdfMap reference = fullEsdfOf(*snap, config.esdf);
       ASSERT_EQ(snap->esdf()->minIndex(), reference.minIndex()) << "frame " << done;
       ASSERT_TRUE(snap->esdf()->distances() == reference.distances()) << "frame " << done;
-      const Eigen::Vector3i n = reference.size();
+      const Eigen::Vector3i& n = reference.size();
       for (int x = 0; x < n.x(); ++x) {
         for (int y = 0; y < n.y(); ++y) {
           for (int z = 0; z < n.z(); ++z) {
@@ -631,7 +631,7 @@ TEST(MapEngine, IncrementalEsdfEqualsAFullRecomputeAfterEveryFrame) {
   }
 }
 
-// The ESDF is recomputed at most at its rate (frame stamps) and the skips are counted.
+// The ESDF is updated at most at its rate (frame stamps) and the skips are counted.
 TEST(MapEngine, EsdfIsRateLimitedByFrameStamps) {
   const io::Scenario scenario = io::defaultScenario();
   MapConfig config;

@@ -641,7 +641,7 @@ void expectSameField(const EsdfMap& actual, const EsdfMap& expected, const std::
       ADD_FAILURE() << what << ": cell " << i << ": " << a[i] << ", full recompute " << e[i];
     }
   }
-  const Eigen::Vector3i n = expected.size();
+  const Eigen::Vector3i& n = expected.size();
   for (int x = 0; x < n.x(); ++x) {
     for (int y = 0; y < n.y(); ++y) {
       for (int z = 0; z < n.z(); ++z) {

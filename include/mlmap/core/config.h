@@ -247,7 +247,7 @@ struct EsdfConfig {
           "threads of one computation, the caller's included\n"
           "(on its own planning thread when pipeline.threaded)");
     v.key("max_rate_hz", c.max_rate_hz, "Hz",
-          "recomputed at most this often (frame stamps), only when a voxel state\n"
+          "updated at most this often (frame stamps), only when a voxel state\n"
           "changed in the window or the box moved; 0: at every change");
     v.key("box_size_m", c.box_size_m, "m",
           "box centred on the body; 0 on an axis: the whole local map along it");
