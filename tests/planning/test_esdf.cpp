@@ -606,12 +606,14 @@ class ChangingWorld {
   }
 
  private:
-  [[nodiscard]] Occupancy at(const VoxelIndex& v) const {
-    return states_[static_cast<std::size_t>((v.x() * size_.y() + v.y()) * size_.z() + v.z())];
+  [[nodiscard]] std::size_t offset(const VoxelIndex& v) const {
+    return (static_cast<std::size_t>(v.x()) * static_cast<std::size_t>(size_.y()) +
+            static_cast<std::size_t>(v.y())) *
+               static_cast<std::size_t>(size_.z()) +
+           static_cast<std::size_t>(v.z());
   }
-  Occupancy& at(const VoxelIndex& v) {
-    return states_[static_cast<std::size_t>((v.x() * size_.y() + v.y()) * size_.z() + v.z())];
-  }
+  [[nodiscard]] Occupancy at(const VoxelIndex& v) const { return states_[offset(v)]; }
+  Occupancy& at(const VoxelIndex& v) { return states_[offset(v)]; }
   void fill(const VoxelIndex& lo, const VoxelIndex& hi, Occupancy state) {
     for (int x = std::max(0, lo.x()); x <= std::min(size_.x() - 1, hi.x()); ++x) {
       for (int y = std::max(0, lo.y()); y <= std::min(size_.y() - 1, hi.y()); ++y) {
@@ -628,7 +630,7 @@ class ChangingWorld {
   VoxelIndex person_ = VoxelIndex(3, 0, 0);
 };
 
-/// Every cell value and unknown bit of `actual` equals those of `expected` (bit for bit).
+/// Every cell value and unknown bit of `actual` equals those of `expected` (exactly).
 void expectSameField(const EsdfMap& actual, const EsdfMap& expected, const std::string& what) {
   ASSERT_EQ(actual.minIndex(), expected.minIndex()) << what;
   ASSERT_EQ(actual.size(), expected.size()) << what;
@@ -637,7 +639,7 @@ void expectSameField(const EsdfMap& actual, const EsdfMap& expected, const std::
   ASSERT_EQ(a.size(), e.size()) << what;
   int failures = 0;
   for (std::size_t i = 0; i < e.size(); ++i) {
-    if (std::memcmp(&a[i], &e[i], sizeof(float)) != 0 && ++failures <= 5) {
+    if (a[i] != e[i] && ++failures <= 5) {  // (never NaN)
       ADD_FAILURE() << what << ": cell " << i << ": " << a[i] << ", full recompute " << e[i];
     }
   }
