@@ -33,11 +33,16 @@
 /// of the x pass and of the y pass. A new box of the same size and resolution is compared with
 /// the kept one; only the x lines (swept a y row at a time) holding a changed voxel are swept
 /// again, only the y lines where the x pass's result changed are transformed again, and only
-/// the z lines where the y pass's result changed; each line is transformed by the same code as
-/// in compute(), so the field is bit-identical to a full recompute. A box that moved (the window
-/// slid) by less than its size is shifted first: the kept part stays and the new slabs count as
-/// changed. The cost follows what changed: a depth frame's few thousand changed voxels touch a
-/// small part of the lines.
+/// the z lines where the y pass's result changed. A changed input reaches outputs within
+/// cap_d + 1 voxels of it (a parabola within the cap, or a run boundary next to it), so each
+/// line is transformed only over twice that around its changed inputs, and its results are kept
+/// within once that, where the parabolas cut off at the part's ends lie beyond the cap. Each
+/// part goes through the same code as in compute() (exact integer arithmetic, invariant under
+/// translation), so the field is bit-identical to a full recompute. A box that moved (the window
+/// slid) by less than its size is shifted first: the kept part stays, the new slabs count as
+/// changed, and so does the face the move removed (its neighbours there are gone). More than
+/// 1/16 of the box changed (e.g. a map load) is computed whole. The cost follows what changed:
+/// a depth frame's few thousand changed voxels touch a part of the lines.
 
 #include "mlmap/core/config.h"
 #include "mlmap/core/types.h"
@@ -137,8 +142,9 @@ class EsdfMap {
 
   /// Brings the field to `box`, exactly as compute(box) would, doing only the work the changes
   /// since the last compute() or update() need (see the file comment). Falls back to compute()
-  /// when there is no kept box (first call, after a failed call, after copyFrom()) or when the
-  /// size or resolution differs or the box moved by its size or more. Same return value and
+  /// when there is no kept box (first call, after a failed call, after copyFrom()), when the
+  /// size or resolution differs, when the box moved by its size or more, or when more than 1/16
+  /// of an unmoved box changed (the full compute is then cheaper). Same return value and
   /// failure behaviour as compute(). Single-threaded except in the fallback.
   [[nodiscard]] bool update(const OccupancyBox& box);
   /// What the last compute() or update() did.
