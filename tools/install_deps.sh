@@ -23,6 +23,7 @@ packages=(
 programs=(
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev  # depth PNGs, map pictures
   liboctomap-dev                       # OctoMap: .bt export (mlmap_map_tool), the side-by-side comparison
+  libdynamicedt3d-dev                  # DynamicEDT3D: the ESDF benchmark's side-by-side comparison
   fastdds-tools                        # `fastdds discovery` (config/dds/discovery_server_client.xml)
   nlohmann-json3-dev                   # JSON files: report.json, stats.json, summary.json
   libzstd-dev liblz4-dev libsqlite3-dev  # ROS 2 bags: MCAP chunks (zstd, lz4), sqlite3 .db3 files

@@ -265,20 +265,71 @@ void transformLine(Line line, int n, std::int32_t cap, std::int32_t cap_d,
   }
 }
 
-/// Pass 2 (y, stride nz) and pass 3 (z, contiguous) over one x slab of ny x nz voxels. Pass 2
-/// also squares the x pass's distances, so it runs even when ny = 1. The slab stays in cache.
-template <typename Key>
-void transformSlab(std::int32_t* a, int ny, int nz, std::int32_t cap, std::int32_t cap_d,
-                   const LineBuffers<Key>& buffers) {
-  for (int z = 0; z < nz; ++z) {
-    transformLine<Key, StridedLine, true>(StridedLine{a + z, nz}, ny, cap, cap_d, buffers);
+/// Pass 1 over a block of `n` consecutive voxels of every x slab (one or more y rows, z
+/// fastest): states at states + x * state_stride, results at out + x * out_stride.
+void sweepBlock(const std::uint8_t* states, std::size_t state_stride, std::int32_t* out,
+                std::size_t out_stride, int nx, int n, std::int32_t* near_free,
+                std::int32_t* near_obstacle, std::int32_t unknown_is_obstacle, std::int32_t cap_d,
+                std::int32_t inf) {
+  constexpr std::int32_t kFar = std::int32_t{1} << 24;  // beyond any cap_d
+  std::fill(near_free, near_free + n, -kFar);
+  std::fill(near_obstacle, near_obstacle + n, -kFar);
+  for (int x = 0; x < nx; ++x) {
+    sweepForward(states + static_cast<std::size_t>(x) * state_stride,
+                 out + static_cast<std::size_t>(x) * out_stride, near_free, near_obstacle, n, x,
+                 unknown_is_obstacle);
   }
-  if (nz == 1) return;
-  for (int y = 0; y < ny; ++y) {
-    transformLine<Key, std::int32_t*, false>(a + static_cast<std::ptrdiff_t>(y) * nz, nz, cap,
-                                             cap_d, buffers);
+  std::fill(near_free, near_free + n, nx - 1 + kFar);
+  std::fill(near_obstacle, near_obstacle + n, nx - 1 + kFar);
+  for (int x = nx - 1; x >= 0; --x) {
+    sweepBackward(out + static_cast<std::size_t>(x) * out_stride, near_free, near_obstacle, n, x,
+                  cap_d, inf);
   }
 }
+
+/// Shifts a box-shaped array (x-major, z fastest) of `size` voxels so that new voxel v holds
+/// old voxel v + delta; voxels with no old counterpart get `unseen`. In place: each position is
+/// read (as the source of position p - offset) before it is written.
+template <typename T>
+void shiftBox(std::vector<T>* values, const Eigen::Vector3i& size, const VoxelIndex& delta,
+              T unseen) {
+  const std::ptrdiff_t nx = size.x();
+  const std::ptrdiff_t ny = size.y();
+  const std::ptrdiff_t nz = size.z();
+  const std::ptrdiff_t offset = (delta.x() * ny + delta.y()) * nz + delta.z();
+  if (offset == 0) return;
+  T* v = values->data();
+  const std::ptrdiff_t z_lo = std::max<std::ptrdiff_t>(0, -delta.z());
+  const std::ptrdiff_t z_hi = std::min<std::ptrdiff_t>(nz, nz - delta.z());
+  const auto run = [&](std::ptrdiff_t x, std::ptrdiff_t y) {
+    T* dst = v + (x * ny + y) * nz;
+    const std::ptrdiff_t sx = x + delta.x();
+    const std::ptrdiff_t sy = y + delta.y();
+    if (sx < 0 || sx >= nx || sy < 0 || sy >= ny || z_lo >= z_hi) {
+      std::fill(dst, dst + nz, unseen);
+      return;
+    }
+    std::memmove(dst + z_lo, dst + z_lo + offset, static_cast<std::size_t>(z_hi - z_lo) * sizeof(T));
+    std::fill(dst, dst + z_lo, unseen);
+    std::fill(dst + z_hi, dst + nz, unseen);
+  };
+  if (offset > 0) {
+    for (std::ptrdiff_t x = 0; x < nx; ++x)
+      for (std::ptrdiff_t y = 0; y < ny; ++y) run(x, y);
+  } else {
+    for (std::ptrdiff_t x = nx - 1; x >= 0; --x)
+      for (std::ptrdiff_t y = ny - 1; y >= 0; --y) run(x, y);
+  }
+}
+
+/// Kept-state value of a voxel that was not in the kept box (differs from every state).
+constexpr std::uint8_t kUnseenState = 0xFF;
+/// Pass-buffer value of a voxel that was not in the kept box (no pass produces it).
+constexpr std::int32_t kUnseenPass = std::numeric_limits<std::int32_t>::min();
+/// Field value of a voxel that was not in the kept box (beyond any clamp).
+constexpr float kUnseenField = std::numeric_limits<float>::lowest();
+/// update() recomputes the whole field when more than 1 / kFullFraction of the voxels changed.
+constexpr std::size_t kFullFraction = 16;
 
 }  // namespace
 
@@ -291,13 +342,11 @@ void EsdfMap::clear() {
   field_.clear();  // capacities are kept
   unknown_bits_.clear();
   slab_bits_ = 0;
+  kept_ = false;
+  changed_cells_.clear();
 }
 
-bool EsdfMap::compute(const OccupancyBox& box) {
-  if (!wellFormed(box)) {
-    clear();
-    return false;
-  }
+void EsdfMap::prepare(const OccupancyBox& box) {
   min_index_ = box.min_index;
   size_ = box.size;
   resolution_m_ = box.resolution_m;
@@ -310,7 +359,7 @@ bool EsdfMap::compute(const OccupancyBox& box) {
   step_x_ = nx > 1 ? static_cast<std::ptrdiff_t>(ny) * nz : 0;
 
   // Squared voxel distances above cap_sq_ are beyond max_distance_m (cap_sq_ > (max / res)^2),
-  // or beyond anything the box holds; the work buffer stores them as inf_.
+  // or beyond anything the box holds; the work buffers store them as inf_.
   const double max_cells = config_.max_distance_m / resolution_m_;
   const double box_sq = static_cast<double>(nx - 1) * (nx - 1) +
                         static_cast<double>(ny - 1) * (ny - 1) +
@@ -331,123 +380,422 @@ bool EsdfMap::compute(const OccupancyBox& box) {
     metres_table_.clear();
   }
 
-  // Buffers (grown only; a failed allocation leaves the map empty).
+  // Buffers (grown only).
   const int threads = std::max(1, config_.num_threads);
+  const std::size_t cells = box.states.size();
+  field_.resize(cells);
+  const std::size_t slab_words = (static_cast<std::size_t>(ny) * nz + 63) / 64;
+  slab_bits_ = slab_words * 64;
+  unknown_bits_.resize(slab_words * static_cast<std::size_t>(nx));
+  pass1_.resize(cells);
+  pass2_.resize(cells);
+  kept_states_.resize(cells);
+  if (scratch_.size() < static_cast<std::size_t>(threads)) {
+    scratch_.resize(static_cast<std::size_t>(threads));
+  }
+  const std::size_t longest = static_cast<std::size_t>(std::max(ny, nz)) + 1;
+  const std::size_t row_block =
+      static_cast<std::size_t>(std::min(kRowBlock, ny)) * static_cast<std::size_t>(nz);
+  for (Scratch& s : scratch_) {
+    if (s.near_free.size() < row_block) {
+      s.near_free.resize(row_block);
+      s.near_obstacle.resize(row_block);
+    }
+    if (s.runs.size() >= longest) continue;
+    for (std::vector<std::int32_t>* v :
+         {&s.runs, &s.out_sites, &s.in_sites, &s.out_keys32, &s.in_keys32, &s.line}) {
+      v->resize(longest);
+    }
+    s.out_keys64.resize(longest);
+    s.in_keys64.resize(longest);
+  }
+}
+
+bool EsdfMap::compute(const OccupancyBox& box) {
+  if (!wellFormed(box)) {
+    clear();
+    return false;
+  }
   try {
-    const std::size_t cells = box.states.size();
-    field_.resize(cells);
-    const std::size_t slab_words = (static_cast<std::size_t>(ny) * nz + 63) / 64;
-    slab_bits_ = slab_words * 64;
-    unknown_bits_.resize(slab_words * static_cast<std::size_t>(nx));
-    work_.resize(cells);
-    if (scratch_.size() < static_cast<std::size_t>(threads)) {
-      scratch_.resize(static_cast<std::size_t>(threads));
-    }
-    const std::size_t longest = static_cast<std::size_t>(std::max(ny, nz)) + 1;
-    const std::size_t row_block =
-        static_cast<std::size_t>(std::min(kRowBlock, ny)) * static_cast<std::size_t>(nz);
-    for (Scratch& s : scratch_) {
-      if (s.near_free.size() < row_block) {
-        s.near_free.resize(row_block);
-        s.near_obstacle.resize(row_block);
-      }
-      if (s.runs.size() >= longest) continue;
-      for (std::vector<std::int32_t>* v :
-           {&s.runs, &s.out_sites, &s.in_sites, &s.out_keys32, &s.in_keys32}) {
-        v->resize(longest);
-      }
-      s.out_keys64.resize(longest);
-      s.in_keys64.resize(longest);
-    }
+    prepare(box);
   } catch (...) {
     clear();
     throw;
   }
-
-  parallelFor(ny, threads, [this, &box](int t, int b, int e) {
-    sweepRows(box, b, e, &scratch_[static_cast<std::size_t>(t)]);
+  const int threads = std::max(1, config_.num_threads);
+  const auto* states = reinterpret_cast<const std::uint8_t*>(box.states.data());
+  std::memcpy(kept_states_.data(), states, box.states.size());
+  parallelFor(size_.y(), threads, [this, states](int t, int b, int e) {
+    sweepRows(states, b, e, &scratch_[static_cast<std::size_t>(t)]);
   });
-  parallelFor(nx, threads, [this, &box](int t, int b, int e) {
-    transformSlabs(box, b, e, &scratch_[static_cast<std::size_t>(t)]);
+  parallelFor(size_.x(), threads, [this, states](int t, int b, int e) {
+    transformSlabs(states, b, e, &scratch_[static_cast<std::size_t>(t)]);
   });
+  kept_ = true;
+  last_update_ = UpdateStats{};
+  last_update_.changed_states = box.states.size();
+  last_update_.rows_swept = static_cast<std::size_t>(size_.y());
+  last_update_.y_lines = static_cast<std::size_t>(size_.x()) * static_cast<std::size_t>(size_.z());
+  last_update_.z_lines = static_cast<std::size_t>(size_.x()) * static_cast<std::size_t>(size_.y());
+  last_update_.changed_cells = box.states.size();
+  changed_cells_.clear();
   return true;
 }
 
-void EsdfMap::sweepRows(const OccupancyBox& box, int y_begin, int y_end, Scratch* scratch) {
+bool EsdfMap::update(const OccupancyBox& box) {
+  if (!kept_ || !wellFormed(box) || box.size != size_ || box.resolution_m != resolution_m_) {
+    return compute(box);
+  }
+  const VoxelIndex delta = box.min_index - min_index_;
+  for (int a = 0; a < 3; ++a) {
+    if (std::abs(delta[a]) >= size_[a]) return compute(box);
+  }
+  last_update_ = UpdateStats{};
+  last_update_.full = false;
+  if (!delta.isZero()) {
+    shiftKept(delta);
+    min_index_ = box.min_index;
+    last_update_.shifted = true;
+  }
+  // The changed voxels; many of them (unmoved box): the full compute is cheaper (and uses
+  // every thread).
+  const std::size_t cells = box.states.size();
+  const std::size_t budget = last_update_.shifted ? cells : cells / kFullFraction;
+  const auto* now = reinterpret_cast<const std::uint8_t*>(box.states.data());
+  const std::uint8_t* kept = kept_states_.data();
+  changed_states_.clear();
+  for (std::size_t i = 0; i < cells;) {
+    const std::size_t n = std::min<std::size_t>(64, cells - i);
+    if (std::memcmp(now + i, kept + i, n) == 0) {
+      i += n;
+      continue;
+    }
+    for (const std::size_t end = i + n; i < end; ++i) {
+      if (now[i] != kept[i]) changed_states_.push_back(static_cast<std::uint32_t>(i));
+    }
+    if (changed_states_.size() > budget) return compute(box);
+  }
+  updateChanged(box, delta);
+  return true;
+}
+
+void EsdfMap::shiftKept(const VoxelIndex& delta) {
+  shiftBox(&kept_states_, size_, delta, kUnseenState);
+  shiftBox(&pass1_, size_, delta, kUnseenPass);
+  shiftBox(&pass2_, size_, delta, kUnseenPass);
+  shiftBox(&field_, size_, delta, kUnseenField);
+}
+
+void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
   const int nx = size_.x();
   const int ny = size_.y();
   const int nz = size_.z();
   const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
-  const std::int32_t unknown_is_obstacle = config_.unknown_as == UnknownAs::kOccupied ? 1 : 0;
-  constexpr std::int32_t kFar = std::int32_t{1} << 24;  // beyond any cap_d
-  std::int32_t* near_free = scratch->near_free.data();
-  std::int32_t* near_obstacle = scratch->near_obstacle.data();
+  const std::size_t cells = box.states.size();
   const auto* states = reinterpret_cast<const std::uint8_t*>(box.states.data());
+  constexpr auto kUnknown = static_cast<std::uint8_t>(Occupancy::kUnknown);
+  Scratch* scratch = &scratch_[0];
+  UpdateStats& u = last_update_;
+  changed_cells_.clear();
+  dirty_y_lo_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(nz), ny);
+  dirty_y_hi_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(nz), -1);
+  dirty_z_lo_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), nz);
+  dirty_z_hi_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), -1);
+  // A changed input at i changes outputs within reach = cap_d_ + 1 of it (a site's parabola
+  // within the cap, or a run boundary next to it); those outputs depend on inputs within reach
+  // of them. So lines are transformed again over [lo - 2 reach, hi + 2 reach] and compared over
+  // [lo - reach, hi + reach]: the parabolas cut off at the ends lie beyond the cap there.
+  const int reach = cap_d_ + 1;
+  // After a shift along y (z), the voxels removed on one side change the y (z) pass's results
+  // next to that face, with no changed input there: that face counts as changed.
+  if (shift.y() != 0) {
+    const int face = shift.y() > 0 ? 0 : ny - 1;
+    for (std::size_t i = 0; i < dirty_y_lo_.size(); ++i) {
+      dirty_y_lo_[i] = std::min(dirty_y_lo_[i], face);
+      dirty_y_hi_[i] = std::max(dirty_y_hi_[i], face);
+    }
+  }
+  if (shift.z() != 0) {
+    const int face = shift.z() > 0 ? 0 : nz - 1;
+    for (std::size_t i = 0; i < dirty_z_lo_.size(); ++i) {
+      dirty_z_lo_[i] = std::min(dirty_z_lo_[i], face);
+      dirty_z_hi_[i] = std::max(dirty_z_hi_[i], face);
+    }
+  }
+  row_buffer_.resize(static_cast<std::size_t>(nx) * static_cast<std::size_t>(nz));
+
+  // Changed states: their rows are swept again over the z range of the row's changes; their
+  // unknown bits follow (all of them after a shift, whose bits were not shifted).
+  std::uint8_t* kept = kept_states_.data();
+  row_z_lo_.assign(static_cast<std::size_t>(ny), nz);
+  row_z_hi_.assign(static_cast<std::size_t>(ny), -1);
+  // x range of a row's changes; after a shift along x the face it removed counts as changed.
+  const int x_face = shift.x() > 0 ? 0 : nx - 1;
+  row_x_lo_.assign(static_cast<std::size_t>(ny), shift.x() != 0 ? x_face : nx);
+  row_x_hi_.assign(static_cast<std::size_t>(ny), shift.x() != 0 ? x_face : -1);
+  for (const std::uint32_t c : changed_states_) {
+    const std::size_t i = c;
+    const std::size_t x = i / slab;
+    const std::size_t r = i - x * slab;
+    const std::size_t y = r / static_cast<std::size_t>(nz);
+    const int z = static_cast<int>(r - y * static_cast<std::size_t>(nz));
+    row_z_lo_[y] = std::min(row_z_lo_[y], z);
+    row_z_hi_[y] = std::max(row_z_hi_[y], z);
+    row_x_lo_[y] = std::min(row_x_lo_[y], static_cast<int>(x));
+    row_x_hi_[y] = std::max(row_x_hi_[y], static_cast<int>(x));
+    if (!u.shifted && (states[i] == kUnknown) != (kept[i] == kUnknown)) {
+      unknown_bits_[(x * slab_bits_ + r) >> 6] ^= std::uint64_t{1} << ((x * slab_bits_ + r) & 63);
+      changed_cells_.push_back(c);
+    }
+    kept[i] = states[i];
+  }
+  u.changed_states = changed_states_.size();
+  if (u.shifted) {
+    for (int x = 0; x < nx; ++x) writeUnknownBits(states, x);
+  }
+
+  // Pass 1, row by row over the changed z range and the x range the changes reach (as for the
+  // lines below); changed results mark their y lines.
+  const std::int32_t unknown_is_obstacle = config_.unknown_as == UnknownAs::kOccupied ? 1 : 0;
+  for (int y = 0; y < ny; ++y) {
+    const int z_lo = row_z_lo_[static_cast<std::size_t>(y)];
+    const int z_hi = row_z_hi_[static_cast<std::size_t>(y)];
+    if (z_hi < z_lo) continue;
+    ++u.rows_swept;
+    const int n = z_hi - z_lo + 1;
+    const std::size_t row = static_cast<std::size_t>(y) * nz + static_cast<std::size_t>(z_lo);
+    const int x_lo = row_x_lo_[static_cast<std::size_t>(y)];
+    const int x_hi = row_x_hi_[static_cast<std::size_t>(y)];
+    const int x_begin = std::max(0, x_lo - 2 * reach);
+    const int x_end = std::min(nx, x_hi + 2 * reach + 1);
+    sweepBlock(states + static_cast<std::size_t>(x_begin) * slab + row, slab, row_buffer_.data(),
+               static_cast<std::size_t>(n), x_end - x_begin, n, scratch->near_free.data(),
+               scratch->near_obstacle.data(), unknown_is_obstacle, cap_d_, inf_);
+    const int compare_end = std::min(nx, x_hi + reach + 1);
+    for (int x = std::max(0, x_lo - reach); x < compare_end; ++x) {
+      const std::int32_t* fresh =
+          row_buffer_.data() + static_cast<std::size_t>(x - x_begin) * static_cast<std::size_t>(n);
+      std::int32_t* old = pass1_.data() + static_cast<std::size_t>(x) * slab + row;
+      if (std::memcmp(fresh, old, static_cast<std::size_t>(n) * sizeof(std::int32_t)) == 0) {
+        continue;
+      }
+      int* lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz + z_lo;
+      int* hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz + z_lo;
+      for (int z = 0; z < n; ++z) {
+        if (fresh[z] != old[z]) {
+          old[z] = fresh[z];
+          lo[z] = std::min(lo[z], y);
+          hi[z] = std::max(hi[z], y);
+        }
+      }
+    }
+  }
+
+  // Pass 2, the marked y lines; changed results mark their z lines.
+  std::int32_t* line = scratch->line.data();
+  for (int x = 0; x < nx; ++x) {
+    const int* dirty_lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz;
+    const int* dirty_hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz;
+    std::int32_t* slab_values = pass2_.data() + static_cast<std::size_t>(x) * slab;
+    int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
+    int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
+    for (int z = 0; z < nz; ++z) {
+      if (dirty_hi[z] < dirty_lo[z]) continue;
+      ++u.y_lines;
+      const int begin = std::max(0, dirty_lo[z] - 2 * reach);
+      const int end = std::min(ny, dirty_hi[z] + 2 * reach + 1);
+      transformYLine(x, z, begin, end, line, scratch);
+      const int y_end = std::min(ny, dirty_hi[z] + reach + 1);
+      for (int y = std::max(0, dirty_lo[z] - reach); y < y_end; ++y) {
+        std::int32_t& old = slab_values[static_cast<std::size_t>(y) * nz + z];
+        const std::int32_t fresh = line[y - begin];
+        if (fresh != old) {
+          old = fresh;
+          mark_lo[y] = std::min(mark_lo[y], z);
+          mark_hi[y] = std::max(mark_hi[y], z);
+        }
+      }
+    }
+  }
+
+  // Pass 3, the marked z lines, into the field.
+  for (int x = 0; x < nx; ++x) {
+    const int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
+    const int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
+    for (int y = 0; y < ny; ++y) {
+      if (mark_hi[y] < mark_lo[y]) continue;
+      ++u.z_lines;
+      const int begin = std::max(0, mark_lo[y] - 2 * reach);
+      const int end = std::min(nz, mark_hi[y] + 2 * reach + 1);
+      transformZLine(x, y, begin, end, line, scratch);
+      const std::size_t first = static_cast<std::size_t>(x) * slab + static_cast<std::size_t>(y) * nz;
+      float* field = field_.data() + first;
+      const int z_end = std::min(nz, mark_hi[y] + reach + 1);
+      for (int z = std::max(0, mark_lo[y] - reach); z < z_end; ++z) {
+        const float m = metres(line[z - begin]);
+        if (m != field[z]) {
+          field[z] = m;
+          changed_cells_.push_back(static_cast<std::uint32_t>(first + static_cast<std::size_t>(z)));
+        }
+      }
+    }
+  }
+  u.changed_cells = u.shifted ? cells : changed_cells_.size();
+}
+
+void EsdfMap::sweepRows(const std::uint8_t* states, int y_begin, int y_end, Scratch* scratch) {
+  const int nz = size_.z();
+  const std::size_t slab = static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(nz);
+  const std::int32_t unknown_is_obstacle = config_.unknown_as == UnknownAs::kOccupied ? 1 : 0;
   // kRowBlock rows (y) at a time: each x step then reads one contiguous run of the arrays.
   for (int y0 = y_begin; y0 < y_end; y0 += kRowBlock) {
     const std::size_t row = static_cast<std::size_t>(y0) * nz;
     const int n = std::min(kRowBlock, y_end - y0) * nz;
-    std::fill(near_free, near_free + n, -kFar);
-    std::fill(near_obstacle, near_obstacle + n, -kFar);
-    for (int x = 0; x < nx; ++x) {
-      const std::size_t base = static_cast<std::size_t>(x) * slab + row;
-      sweepForward(states + base, work_.data() + base, near_free, near_obstacle, n, x,
-                   unknown_is_obstacle);
-    }
-    std::fill(near_free, near_free + n, nx - 1 + kFar);
-    std::fill(near_obstacle, near_obstacle + n, nx - 1 + kFar);
-    for (int x = nx - 1; x >= 0; --x) {
-      sweepBackward(work_.data() + static_cast<std::size_t>(x) * slab + row, near_free,
-                    near_obstacle, n, x, cap_d_, inf_);
-    }
+    sweepBlock(states + row, slab, pass1_.data() + row, slab, size_.x(), n,
+               scratch->near_free.data(), scratch->near_obstacle.data(), unknown_is_obstacle,
+               cap_d_, inf_);
   }
 }
 
-void EsdfMap::transformSlabs(const OccupancyBox& box, int x_begin, int x_end, Scratch* scratch) {
+void EsdfMap::transformYLine(int x, int z, int begin, int end, std::int32_t* line,
+                             Scratch* scratch) const {
+  const int ny = end - begin;
+  const int nz = size_.z();
+  const std::int32_t* in = pass1_.data() +
+                           (static_cast<std::size_t>(x) * size_.y() + begin) * nz + z;
+  for (int y = 0; y < ny; ++y) line[y] = in[static_cast<std::ptrdiff_t>(y) * nz];
+  if (narrow_keys_) {
+    transformLine<std::int32_t, std::int32_t*, true>(
+        line, ny, cap_sq_, cap_d_,
+        {scratch->runs.data(), scratch->out_sites.data(), scratch->out_keys32.data(),
+         scratch->in_sites.data(), scratch->in_keys32.data()});
+  } else {
+    transformLine<std::int64_t, std::int32_t*, true>(
+        line, ny, cap_sq_, cap_d_,
+        {scratch->runs.data(), scratch->out_sites.data(), scratch->out_keys64.data(),
+         scratch->in_sites.data(), scratch->in_keys64.data()});
+  }
+}
+
+void EsdfMap::transformZLine(int x, int y, int begin, int end, std::int32_t* line,
+                             Scratch* scratch) const {
+  const int nz = end - begin;
+  std::memcpy(line,
+              pass2_.data() + (static_cast<std::size_t>(x) * size_.y() + y) * size_.z() + begin,
+              static_cast<std::size_t>(nz) * sizeof(std::int32_t));
+  if (size_.z() == 1) return;  // (as compute(): no z pass)
+  if (narrow_keys_) {
+    transformLine<std::int32_t, std::int32_t*, false>(
+        line, nz, cap_sq_, cap_d_,
+        {scratch->runs.data(), scratch->out_sites.data(), scratch->out_keys32.data(),
+         scratch->in_sites.data(), scratch->in_keys32.data()});
+  } else {
+    transformLine<std::int64_t, std::int32_t*, false>(
+        line, nz, cap_sq_, cap_d_,
+        {scratch->runs.data(), scratch->out_sites.data(), scratch->out_keys64.data(),
+         scratch->in_sites.data(), scratch->in_keys64.data()});
+  }
+}
+
+void EsdfMap::transformSlabs(const std::uint8_t* states, int x_begin, int x_end,
+                             Scratch* scratch) {
   const int ny = size_.y();
   const int nz = size_.z();
   const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
   const float* table = metres_table_.empty() ? nullptr : metres_table_.data() + inf_;
-  const auto* states = reinterpret_cast<const std::uint8_t*>(box.states.data());
-  constexpr auto kUnknown = static_cast<std::uint8_t>(Occupancy::kUnknown);
+  std::int32_t* line = scratch->line.data();
   for (int x = x_begin; x < x_end; ++x) {
     const std::size_t first = static_cast<std::size_t>(x) * slab;
-    std::int32_t* a = work_.data() + first;
-    if (narrow_keys_) {
-      transformSlab<std::int32_t>(a, ny, nz, cap_sq_, cap_d_,
-                                  {scratch->runs.data(), scratch->out_sites.data(),
-                                   scratch->out_keys32.data(), scratch->in_sites.data(),
-                                   scratch->in_keys32.data()});
-    } else {
-      transformSlab<std::int64_t>(a, ny, nz, cap_sq_, cap_d_,
-                                  {scratch->runs.data(), scratch->out_sites.data(),
-                                   scratch->out_keys64.data(), scratch->in_sites.data(),
-                                   scratch->in_keys64.data()});
-    }
-    // Metres and the unknown mask, contiguous.
-    float* field = field_.data() + first;
-    if (table != nullptr) {
-      for (std::size_t i = 0; i < slab; ++i) field[i] = table[a[i]];
-    } else {
-      for (std::size_t i = 0; i < slab; ++i) field[i] = slowMetres(a[i]);
-    }
-    // The unknown bits of the slab (its own words).
-    const std::uint8_t* slab_states = states + first;
-    std::uint64_t* words = unknown_bits_.data() + static_cast<std::size_t>(x) * (slab_bits_ / 64);
-    std::size_t i = 0;
-    for (; i + 64 <= slab; i += 64) {
-      std::uint64_t word = 0;
-      for (std::size_t g = 0; g < 64; g += 8) word |= zeroBytes8(slab_states + i + g) << g;
-      words[i / 64] = word;
-    }
-    if (i < slab) {
-      std::uint64_t word = 0;
-      for (std::size_t b = 0; i + b < slab; ++b) {
-        word |= static_cast<std::uint64_t>(slab_states[i + b] == kUnknown ? 1 : 0) << b;
+    // Pass 2 in place on a copy of pass 1's slab (the slab stays in cache).
+    std::int32_t* a = pass2_.data() + first;
+    std::memcpy(a, pass1_.data() + first, slab * sizeof(std::int32_t));
+    for (int z = 0; z < nz; ++z) {
+      const StridedLine y_line{a + z, nz};
+      if (narrow_keys_) {
+        transformLine<std::int32_t, StridedLine, true>(
+            y_line, ny, cap_sq_, cap_d_,
+            {scratch->runs.data(), scratch->out_sites.data(), scratch->out_keys32.data(),
+             scratch->in_sites.data(), scratch->in_keys32.data()});
+      } else {
+        transformLine<std::int64_t, StridedLine, true>(
+            y_line, ny, cap_sq_, cap_d_,
+            {scratch->runs.data(), scratch->out_sites.data(), scratch->out_keys64.data(),
+             scratch->in_sites.data(), scratch->in_keys64.data()});
       }
-      words[i / 64] = word;
     }
+    // Pass 3 line by line, into the field in metres.
+    float* field = field_.data() + first;
+    for (int y = 0; y < ny; ++y) {
+      transformZLine(x, y, 0, nz, line, scratch);
+      float* out = field + static_cast<std::size_t>(y) * nz;
+      if (table != nullptr) {
+        for (int z = 0; z < nz; ++z) out[z] = table[line[z]];
+      } else {
+        for (int z = 0; z < nz; ++z) out[z] = slowMetres(line[z]);
+      }
+    }
+    writeUnknownBits(states, x);
   }
+}
+
+void EsdfMap::writeUnknownBits(const std::uint8_t* states, int x) {
+  constexpr auto kUnknown = static_cast<std::uint8_t>(Occupancy::kUnknown);
+  const std::size_t slab = static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(size_.z());
+  const std::uint8_t* slab_states = states + static_cast<std::size_t>(x) * slab;
+  std::uint64_t* words = unknown_bits_.data() + static_cast<std::size_t>(x) * (slab_bits_ / 64);
+  std::size_t i = 0;
+  for (; i + 64 <= slab; i += 64) {
+    std::uint64_t word = 0;
+    for (std::size_t g = 0; g < 64; g += 8) word |= zeroBytes8(slab_states + i + g) << g;
+    words[i / 64] = word;
+  }
+  if (i < slab) {
+    std::uint64_t word = 0;
+    for (std::size_t b = 0; i + b < slab; ++b) {
+      word |= static_cast<std::uint64_t>(slab_states[i + b] == kUnknown ? 1 : 0) << b;
+    }
+    words[i / 64] = word;
+  }
+}
+
+void EsdfMap::copyFrom(const EsdfMap& source) {
+  config_ = source.config_;
+  min_index_ = source.min_index_;
+  size_ = source.size_;
+  resolution_m_ = source.resolution_m_;
+  inv_resolution_ = source.inv_resolution_;
+  step_x_ = source.step_x_;
+  step_y_ = source.step_y_;
+  step_z_ = source.step_z_;
+  cap_sq_ = source.cap_sq_;
+  inf_ = source.inf_;
+  cap_d_ = source.cap_d_;
+  narrow_keys_ = source.narrow_keys_;
+  field_ = source.field_;
+  unknown_bits_ = source.unknown_bits_;
+  slab_bits_ = source.slab_bits_;
+  kept_ = false;
+  last_update_ = source.last_update_;
+  changed_cells_.clear();
+}
+
+bool EsdfMap::copyCells(const EsdfMap& source, const std::vector<std::uint32_t>& offsets) {
+  if (source.min_index_ != min_index_ || source.size_ != size_ ||
+      source.resolution_m_ != resolution_m_ || source.slab_bits_ != slab_bits_ ||
+      source.field_.size() != field_.size()) {
+    return false;
+  }
+  const std::size_t slab = static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(size_.z());
+  for (const std::uint32_t o : offsets) {
+    if (o >= field_.size()) continue;
+    field_[o] = source.field_[o];
+    const std::size_t x = o / slab;
+    const std::size_t bit = x * slab_bits_ + (o - x * slab);
+    const std::uint64_t mask = std::uint64_t{1} << (bit & 63);
+    std::uint64_t& word = unknown_bits_[bit >> 6];
+    word = (word & ~mask) | (source.unknown_bits_[bit >> 6] & mask);
+  }
+  return true;
 }
 
 float EsdfMap::slowMetres(std::int32_t value) const {
@@ -469,13 +817,20 @@ float EsdfMap::distanceAt(const VoxelIndex& world_index) const {
 std::size_t EsdfMap::memoryBytes() const {
   std::size_t bytes = field_.capacity() * sizeof(float) +
                       unknown_bits_.capacity() * sizeof(std::uint64_t) +
-                      work_.capacity() * sizeof(std::int32_t) +
+                      (pass1_.capacity() + pass2_.capacity() + row_buffer_.capacity()) *
+                          sizeof(std::int32_t) +
+                      kept_states_.capacity() +
+                      (dirty_y_lo_.capacity() + dirty_y_hi_.capacity() + dirty_z_lo_.capacity() +
+                       dirty_z_hi_.capacity()) * sizeof(int) +
+                      (changed_cells_.capacity() + changed_states_.capacity()) * sizeof(std::uint32_t) +
+                      (row_z_lo_.capacity() + row_z_hi_.capacity() + row_x_lo_.capacity() +
+                       row_x_hi_.capacity()) * sizeof(int) +
                       metres_table_.capacity() * sizeof(float) +
                       scratch_.capacity() * sizeof(Scratch);
   for (const Scratch& s : scratch_) {
     bytes += (s.runs.capacity() + s.out_sites.capacity() + s.in_sites.capacity() +
               s.out_keys32.capacity() + s.in_keys32.capacity() + s.near_free.capacity() +
-              s.near_obstacle.capacity()) *
+              s.near_obstacle.capacity() + s.line.capacity()) *
                  sizeof(std::int32_t) +
              (s.out_keys64.capacity() + s.in_keys64.capacity()) * sizeof(std::int64_t);
   }

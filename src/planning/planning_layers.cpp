@@ -19,7 +19,8 @@ PlanningLayers::PlanningLayers(const MapConfig& config, bool own_thread)
     : config_(config),
       own_thread_(own_thread && config.esdf.enabled),
       snapshot_(std::make_shared<const MapSnapshot>(nullptr, nullptr, nullptr, 0, 0.0,
-                                                    Transform::Identity())) {
+                                                    Transform::Identity())),
+      esdf_(config.esdf) {
   if (own_thread_) thread_ = std::thread([this] { planningLoop(); });
 }
 
@@ -80,7 +81,17 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
 
   std::shared_ptr<const EsdfMap> esdf;
   double esdf_ms = -1.0;
-  const EsdfJob job{window, body_W, frame};
+  EsdfJob job{window, body_W, frame, local.changeClock(), {}};
+  if (decision.due) {
+    constexpr int kN = LocalMapConfig::kSubmapsPerAxis;
+    const SubmapIndex first = local.submapOf(window->min_index);
+    job.submap_stamps.reserve(static_cast<std::size_t>(kN) * kN * kN);
+    for (int sx = 0; sx < kN; ++sx)
+      for (int sy = 0; sy < kN; ++sy)
+        for (int sz = 0; sz < kN; ++sz) {
+          job.submap_stamps.push_back(local.submapStateChangedAt(first + SubmapIndex(sx, sy, sz)));
+        }
+  }
   const bool compute_here = decision.due && !own_thread_;
   if (compute_here) {
     const Clock::time_point esdf_start = Clock::now();
@@ -258,35 +269,102 @@ VoxelIndex PlanningLayers::esdfBoxMin(const LocalWindow& window, const Eigen::Ve
   return box_min;
 }
 
-std::shared_ptr<const EsdfMap> PlanningLayers::computeEsdf(const EsdfJob& job) {
+void PlanningLayers::fillEsdfBox(const EsdfJob& job) {
   const LocalWindow& window = *job.window;
   Eigen::Vector3i size;
   const VoxelIndex box_min = esdfBoxMin(window, job.body_W, &size);
-  esdf_box_.reset(box_min, size, window.resolution_m);
+  const Eigen::Vector3i cells = window.size / LocalMapConfig::kSubmapsPerAxis;
+  constexpr int kN = LocalMapConfig::kSubmapsPerAxis;
+  constexpr std::size_t kSubmaps = static_cast<std::size_t>(kN) * kN * kN;
+  const bool in_place = esdf_box_filled_ && box_min == esdf_box_.min_index &&
+                        size == esdf_box_.size && window.min_index == esdf_box_window_ &&
+                        window.resolution_m == esdf_box_.resolution_m &&
+                        job.submap_stamps.size() == kSubmaps &&
+                        window.size == cells * kN;
+  if (!in_place) esdf_box_.reset(box_min, size, window.resolution_m);
   const LogOddsModel& model = window.model;
-  Occupancy* out = esdf_box_.states.data();
-  for (int x = 0; x < size.x(); ++x) {
-    for (int y = 0; y < size.y(); ++y) {
-      const VoxelIndex first(box_min.x() + x, box_min.y() + y, box_min.z());
-      const VoxelIndex r = first - window.min_index;
-      const LogOddsQ* column =
-          window.log_odds.data() +
-          (static_cast<std::size_t>(r.x()) * static_cast<std::size_t>(window.size.y()) +
-           static_cast<std::size_t>(r.y())) *
-              static_cast<std::size_t>(window.size.z()) +
-          static_cast<std::size_t>(r.z());
-      for (int z = 0; z < size.z(); ++z) *out++ = model.state(column[z]);
+  // Fills the box voxels of window-relative [lo, hi) (clipped to the box).
+  const auto fill = [&](const VoxelIndex& lo_window, const VoxelIndex& hi_window) {
+    const VoxelIndex lo = (window.min_index + lo_window).cwiseMax(box_min);
+    const VoxelIndex hi = (window.min_index + hi_window).cwiseMin(box_min + size);
+    if ((hi.array() <= lo.array()).any()) return;
+    for (int x = lo.x(); x < hi.x(); ++x) {
+      for (int y = lo.y(); y < hi.y(); ++y) {
+        const VoxelIndex r = VoxelIndex(x, y, lo.z()) - window.min_index;
+        const LogOddsQ* column =
+            window.log_odds.data() +
+            (static_cast<std::size_t>(r.x()) * static_cast<std::size_t>(window.size.y()) +
+             static_cast<std::size_t>(r.y())) *
+                static_cast<std::size_t>(window.size.z()) +
+            static_cast<std::size_t>(r.z());
+        Occupancy* out = &esdf_box_.at(VoxelIndex(x, y, lo.z()));
+        for (int z = 0; z < hi.z() - lo.z(); ++z) out[z] = model.state(column[z]);
+      }
     }
+  };
+  if (!in_place) {
+    fill(VoxelIndex::Zero(), window.size);
+  } else {
+    std::size_t i = 0;
+    for (int sx = 0; sx < kN; ++sx)
+      for (int sy = 0; sy < kN; ++sy)
+        for (int sz = 0; sz < kN; ++sz, ++i) {
+          if (job.submap_stamps[i] <= esdf_box_clock_) continue;
+          const VoxelIndex lo = VoxelIndex(sx, sy, sz).cwiseProduct(cells);
+          fill(lo, lo + cells);
+        }
   }
-  const std::shared_ptr<EsdfMap> esdf = reuse(&esdf_pool_, config_.esdf);
-  const bool ok = esdf->compute(esdf_box_);
-  std::size_t bytes = esdf_box_.states.capacity() * sizeof(Occupancy);
-  for (const auto& e : esdf_pool_) bytes += e->memoryBytes();
+  esdf_box_filled_ = true;
+  esdf_box_window_ = window.min_index;
+  esdf_box_clock_ = job.clock;
+}
+
+std::shared_ptr<const EsdfMap> PlanningLayers::computeEsdf(const EsdfJob& job) {
+  fillEsdfBox(job);
+  const bool ok = esdf_.update(esdf_box_);
+  std::shared_ptr<const EsdfMap> published = ok ? publishEsdfCopy() : nullptr;
+  std::size_t bytes = esdf_box_.states.capacity() * sizeof(Occupancy) + esdf_.memoryBytes();
+  for (const EsdfCopy& c : esdf_copies_) {
+    bytes += c.map->memoryBytes() + c.pending.capacity() * sizeof(std::uint32_t);
+  }
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
     stats_.esdf_bytes = bytes;
+    stats_.esdf_full += ok && esdf_.lastUpdate().full ? 1 : 0;
   }
-  return ok ? esdf : nullptr;
+  return published;
+}
+
+std::shared_ptr<const EsdfMap> PlanningLayers::publishEsdfCopy() {
+  // Past this many changed cells a copy is refreshed whole (a contiguous copy is then cheaper).
+  const std::size_t whole_above = esdf_.distances().size() / 8;
+  const EsdfMap::UpdateStats& u = esdf_.lastUpdate();
+  const std::vector<std::uint32_t>& changed = esdf_.changedCells();
+  const bool whole = u.full || u.shifted || changed.size() > whole_above;
+  for (EsdfCopy& c : esdf_copies_) {
+    if (c.stale) continue;
+    if (whole || c.pending.size() + changed.size() > whole_above) {
+      c.stale = true;
+      c.pending.clear();
+    } else {
+      c.pending.insert(c.pending.end(), changed.begin(), changed.end());
+    }
+  }
+  EsdfCopy* copy = nullptr;
+  for (EsdfCopy& c : esdf_copies_) {
+    if (c.map.use_count() == 1) {  // no snapshot holds it (see reuse())
+      copy = &c;
+      break;
+    }
+  }
+  if (copy == nullptr) {
+    esdf_copies_.push_back({std::make_shared<EsdfMap>(config_.esdf), {}, true});
+    copy = &esdf_copies_.back();
+  }
+  if (copy->stale || !copy->map->copyCells(esdf_, copy->pending)) copy->map->copyFrom(esdf_);
+  copy->pending.clear();
+  copy->stale = false;
+  return copy->map;
 }
 
 void PlanningLayers::planningLoop() {

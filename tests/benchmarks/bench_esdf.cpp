@@ -2,19 +2,33 @@
 // of distance + gradient queries. The box is the simulator's default room rasterised around a
 // point of the default flight: occupied where a static solid touches the voxel, free elsewhere,
 // unknown beyond a plane 5 m ahead (x), below the floor slab and outside the room's footprint
-// (never seen), so both unknown policies have work to do. Figures, not pass/fail.
+// (never seen), so both unknown policies have work to do.
+//
+// Then the streamed part: the engine maps the default flight (depth camera, moving person) at
+// 0.2 m and 0.1 m over a 19 x 19 x 7 m window; the window's states after every frame are kept,
+// and the ESDF is brought from one frame's box to the next by EsdfMap::update() (incremental,
+// the window's moves included), by compute() (whole, one thread) and, where built with it, by
+// DynamicEDT3D fed the same obstacle changes (only between frames where the window stays, as it
+// cannot move its grid). Distances are compared cell by cell. Figures, not pass/fail.
 
 #include "mlmap/core/stopwatch.h"
+#include "mlmap/datasets/world_yaml.h"
+#include "mlmap/eval/sim_flight.h"
 #include "mlmap/planning/esdf.h"
 #include "mlmap/sim/world.h"
 #include "../support/random_draws.h"
 
 #include <CLI/CLI.hpp>
 
+#if defined(MLMAP_HAVE_DYNAMICEDT3D)
+#include <dynamicEDT3D/dynamicEDT3D.h>
+#endif
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <random>
 #include <string>
 #include <thread>
@@ -147,6 +161,217 @@ void print(const Row& r, std::FILE* json, bool last) {
                r.memory_bytes, r.mqueries_random, r.mqueries_path, last ? "" : ",");
 }
 
+/// The window's states after each frame of the default flight mapped at `res` over a
+/// 19 x 19 x 7 m window (the first `frames` frames).
+std::vector<OccupancyBox> streamedBoxes(double res, int frames) {
+  const io::Scenario scenario = io::defaultScenario();
+  MapConfig config;
+  config.local_map.resolution_m = res;
+  const int n = static_cast<int>(std::lround(19.0 / res / 5.0)) * 5;
+  config.local_map.size_cells = {n, n, static_cast<int>(std::lround(7.0 / res / 5.0)) * 5};
+  config.pipeline.planning_layers = false;
+  MapEngine engine(config);
+  std::vector<OccupancyBox> boxes;
+  LocalWindow window;
+  eval::FlightOptions options;
+  options.max_frames = frames;
+  options.progress = [&](int, int) {
+    engine.localMap().copyWindow(&window);
+    OccupancyBox box;
+    box.reset(window.min_index, window.size, window.resolution_m);
+    for (std::size_t i = 0; i < box.states.size(); ++i) {
+      box.states[i] = window.model.state(window.log_odds[i]);
+    }
+    boxes.push_back(std::move(box));
+  };
+  eval::flyScenario(scenario, engine, options);
+  return boxes;
+}
+
+bool isObstacle(Occupancy s, UnknownAs unknown_as) {
+  return s == Occupancy::kOccupied ||
+         (s == Occupancy::kUnknown && unknown_as == UnknownAs::kOccupied);
+}
+
+struct StreamRow {
+  std::string name;
+  std::string unknown_as;
+  int updates = 0;
+  int shifted = 0;
+  int full = 0;
+  double changed_states = 0.0;  ///< median per frame
+  double rows = 0.0;            ///< median rows swept again per frame
+  double y_lines = 0.0;         ///< median y lines transformed again per frame
+  double z_lines = 0.0;         ///< median z lines transformed again per frame
+  double update_median_ms = 0.0;
+  double update_p99_ms = 0.0;
+  double update_max_ms = 0.0;
+  double full_median_ms = 0.0;
+  double full_p99_ms = 0.0;
+  int mismatched_frames = 0;  ///< frames where update() differs from compute() (must be 0)
+  int edt_updates = 0;
+  double edt_median_ms = -1.0;
+  double edt_p99_ms = -1.0;
+  double same_box_median_ms = 0.0;  ///< update() on the frames DynamicEDT3D is timed on
+  std::size_t edt_compared = 0;
+  std::size_t edt_mismatched = 0;
+  double edt_max_error_m = 0.0;
+};
+
+#if defined(MLMAP_HAVE_DYNAMICEDT3D)
+/// DynamicEDT3D over one box's geometry, its obstacles set from the box.
+std::unique_ptr<DynamicEDT3D> edtFor(const OccupancyBox& box, UnknownAs unknown_as, int cap_sq) {
+  auto edt = std::make_unique<DynamicEDT3D>(cap_sq);
+  edt->initializeEmpty(box.size.x(), box.size.y(), box.size.z(), true);
+  for (int x = 0; x < box.size.x(); ++x)
+    for (int y = 0; y < box.size.y(); ++y)
+      for (int z = 0; z < box.size.z(); ++z)
+        if (isObstacle(box.states[(static_cast<std::size_t>(x) * box.size.y() + y) * box.size.z() +
+                                  z],
+                       unknown_as)) {
+          edt->occupyCell(x, y, z);
+        }
+  edt->update(true);
+  return edt;
+}
+#endif
+
+StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes,
+                 UnknownAs unknown_as, bool with_edt, int edt_compare_every) {
+  StreamRow row{name, toString(unknown_as)};
+  EsdfConfig config;
+  config.unknown_as = unknown_as;
+  EsdfMap incremental(config);
+  EsdfMap full(config);
+  if (boxes.size() < 2 || !incremental.update(boxes[0]) || !full.compute(boxes[0])) return row;
+  std::vector<double> update_ms;
+  std::vector<double> full_ms;
+  std::vector<double> same_box_ms;
+  std::vector<double> edt_ms;
+  std::vector<double> changed;
+  std::vector<double> rows;
+  std::vector<double> y_lines;
+  std::vector<double> z_lines;
+#if defined(MLMAP_HAVE_DYNAMICEDT3D)
+  const double cap_cells = config.max_distance_m / boxes[0].resolution_m;
+  const int cap_sq = static_cast<int>(std::lround(cap_cells * cap_cells));
+  std::unique_ptr<DynamicEDT3D> edt;
+  if (with_edt) edt = edtFor(boxes[0], unknown_as, cap_sq);
+#else
+  (void)with_edt;
+  (void)edt_compare_every;
+#endif
+  for (std::size_t f = 1; f < boxes.size(); ++f) {
+    const OccupancyBox& box = boxes[f];
+    Clock::time_point start = Clock::now();
+    if (!incremental.update(box)) return row;
+    update_ms.push_back(msSince(start));
+    const EsdfMap::UpdateStats& u = incremental.lastUpdate();
+    row.shifted += u.shifted ? 1 : 0;
+    row.full += u.full ? 1 : 0;
+    changed.push_back(static_cast<double>(u.changed_states));
+    rows.push_back(static_cast<double>(u.rows_swept));
+    y_lines.push_back(static_cast<double>(u.y_lines));
+    z_lines.push_back(static_cast<double>(u.z_lines));
+    start = Clock::now();
+    if (!full.compute(box)) return row;
+    full_ms.push_back(msSince(start));
+    row.mismatched_frames += incremental.distances() == full.distances() ? 0 : 1;
+#if defined(MLMAP_HAVE_DYNAMICEDT3D)
+    if (!with_edt) continue;
+    const OccupancyBox& before = boxes[f - 1];
+    if (box.min_index != before.min_index || box.size != before.size) {
+      edt = edtFor(box, unknown_as, cap_sq);  // the window moved: a new grid (not timed)
+      continue;
+    }
+    same_box_ms.push_back(update_ms.back());
+    start = Clock::now();
+    for (std::size_t i = 0; i < box.states.size(); ++i) {
+      const bool now = isObstacle(box.states[i], unknown_as);
+      if (now == isObstacle(before.states[i], unknown_as)) continue;
+      const int x = static_cast<int>(i / (static_cast<std::size_t>(box.size.y()) * box.size.z()));
+      const int y = static_cast<int>((i / box.size.z()) % box.size.y());
+      const int z = static_cast<int>(i % box.size.z());
+      if (now) {
+        edt->occupyCell(x, y, z);
+      } else {
+        edt->clearCell(x, y, z);
+      }
+    }
+    edt->update(true);
+    edt_ms.push_back(msSince(start));
+    if (edt_compare_every <= 0 || edt_ms.size() % static_cast<std::size_t>(edt_compare_every) != 0) {
+      continue;
+    }
+    // Distances to obstacles at the non-obstacle voxels (DynamicEDT3D's field), both clamped.
+    const float max_m = static_cast<float>(config.max_distance_m);
+    for (int x = 0; x < box.size.x(); ++x) {
+      for (int y = 0; y < box.size.y(); ++y) {
+        for (int z = 0; z < box.size.z(); ++z) {
+          const std::size_t i = (static_cast<std::size_t>(x) * box.size.y() + y) * box.size.z() + z;
+          if (isObstacle(box.states[i], unknown_as)) continue;
+          const float theirs = std::min(
+              static_cast<float>(std::sqrt(static_cast<double>(edt->getSQCellDistance(x, y, z))) *
+                                 box.resolution_m),
+              max_m);
+          const float ours = incremental.distances()[i];
+          const double error = std::abs(static_cast<double>(theirs) - ours);
+          ++row.edt_compared;
+          if (error > 1e-5) ++row.edt_mismatched;
+          row.edt_max_error_m = std::max(row.edt_max_error_m, error);
+        }
+      }
+    }
+#endif
+  }
+  row.updates = static_cast<int>(update_ms.size());
+  row.changed_states = percentile(&changed, 0.5);
+  row.rows = percentile(&rows, 0.5);
+  row.y_lines = percentile(&y_lines, 0.5);
+  row.z_lines = percentile(&z_lines, 0.5);
+  row.update_median_ms = percentile(&update_ms, 0.5);
+  row.update_p99_ms = percentile(&update_ms, 0.99);
+  row.update_max_ms = percentile(&update_ms, 1.0);
+  row.full_median_ms = percentile(&full_ms, 0.5);
+  row.full_p99_ms = percentile(&full_ms, 0.99);
+  if (!edt_ms.empty()) {
+    row.edt_updates = static_cast<int>(edt_ms.size());
+    row.edt_median_ms = percentile(&edt_ms, 0.5);
+    row.edt_p99_ms = percentile(&edt_ms, 0.99);
+    row.same_box_median_ms = percentile(&same_box_ms, 0.5);
+  }
+  return row;
+}
+
+void printStream(const StreamRow& r, std::FILE* json, bool last) {
+  if (json == nullptr) {
+    std::printf("%-10s %-9s %4d %4d %4d %8.0f %7.3f %7.3f %7.3f %7.3f %7.3f %4d | %4d %8.3f %8.3f "
+                "%7.3f %6.1fx  mismatched %zu of %zu (max %.3f m); lines %.0f %.0f %.0f\n",
+                r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full,
+                r.changed_states, r.update_median_ms, r.update_p99_ms, r.update_max_ms,
+                r.full_median_ms, r.full_p99_ms, r.mismatched_frames, r.edt_updates,
+                r.edt_median_ms, r.edt_p99_ms, r.same_box_median_ms,
+                r.same_box_median_ms > 0.0 ? r.edt_median_ms / r.same_box_median_ms : 0.0,
+                r.edt_mismatched, r.edt_compared, r.edt_max_error_m, r.rows, r.y_lines, r.z_lines);
+    return;
+  }
+  std::fprintf(json,
+               "  {\"case\": \"%s\", \"unknown_as\": \"%s\", \"updates\": %d, \"shifted\": %d, "
+               "\"full\": %d, \"changed_states_median\": %.0f, "
+               "\"lines_median\": {\"x_rows\": %.0f, \"y\": %.0f, \"z\": %.0f}, "
+               "\"update_ms\": {\"median\": %.4f, \"p99\": %.4f, \"max\": %.4f}, "
+               "\"compute_ms\": {\"median\": %.4f, \"p99\": %.4f}, \"mismatched_frames\": %d, "
+               "\"dynamicedt3d\": {\"updates\": %d, \"median_ms\": %.4f, \"p99_ms\": %.4f, "
+               "\"ours_same_frames_median_ms\": %.4f, \"compared\": %zu, \"mismatched\": %zu, "
+               "\"max_error_m\": %.4f}}%s\n",
+               r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full,
+               r.changed_states, r.rows, r.y_lines, r.z_lines, r.update_median_ms,
+               r.update_p99_ms, r.update_max_ms, r.full_median_ms, r.full_p99_ms,
+               r.mismatched_frames, r.edt_updates, r.edt_median_ms, r.edt_p99_ms,
+               r.same_box_median_ms, r.edt_compared,
+               r.edt_mismatched, r.edt_max_error_m, last ? "" : ",");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -159,6 +384,17 @@ int main(int argc, char** argv) {
   app.add_option("--queries", queries, "timed queries per case and column")
       ->check(CLI::Range(1, 1000000000))->capture_default_str();
   app.add_option("--json", json_path, "also write the figures as JSON");
+  int frames = 150;
+  bool with_edt = true;
+  int edt_compare_every = 10;
+  bool only_streamed = false;
+  app.add_option("--frames", frames, "streamed frames of the default flight (0: none)")
+      ->check(CLI::Range(0, 100000))->capture_default_str();
+  app.add_flag("!--no-dynamicedt3d", with_edt, "skip DynamicEDT3D in the streamed part");
+  app.add_option("--compare-every", edt_compare_every,
+                 "compare with DynamicEDT3D's distances every N of its updates (0: never)")
+      ->capture_default_str();
+  app.add_flag("--streamed-only", only_streamed, "skip the single-box part");
   CLI11_PARSE(app, argc, argv);
 
   const sim::World world = sim::World::defaultRoom();
@@ -194,11 +430,36 @@ int main(int argc, char** argv) {
               "median", "p99", "MB", "random", "paths");
 
   std::vector<Row> rows;
-  for (const Scene& s : scenes) {
+  for (const Scene& s : only_streamed ? std::vector<Scene>{} : scenes) {
     for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
       for (const int threads : {1, 2}) {
         rows.push_back(run(s.name, s.box, policy, threads, repeats, queries));
         print(rows.back(), nullptr, false);
+      }
+    }
+  }
+
+  std::vector<StreamRow> stream_rows;
+  if (frames > 0) {
+#if !defined(MLMAP_HAVE_DYNAMICEDT3D)
+    with_edt = false;
+    std::printf("\n(built without DynamicEDT3D: install libdynamicedt3d-dev and reconfigure)\n");
+#endif
+    std::printf("\nStreamed: %d frames of the default flight, 19 x 19 x 7 m window; per frame "
+                "(one thread)\n",
+                frames);
+    std::printf("%-10s %-9s %4s %4s %4s %8s %23s %15s %4s | %s\n", "", "", "", "", "",
+                "changed", "update() ms", "compute() ms", "", "DynamicEDT3D (same frames)");
+    std::printf("%-10s %-9s %4s %4s %4s %8s %7s %7s %7s %7s %7s %4s | %4s %8s %8s %7s %7s\n",
+                "res", "unknown", "n", "move", "full", "states", "median", "p99", "max",
+                "median", "p99", "diff", "n", "median", "p99", "ours", "ratio");
+    for (const double res : {0.2, 0.1}) {
+      const std::vector<OccupancyBox> boxes = streamedBoxes(res, frames);
+      char name[32];
+      std::snprintf(name, sizeof(name), "%.1f m", res);
+      for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+        stream_rows.push_back(stream(name, boxes, policy, with_edt, edt_compare_every));
+        printStream(stream_rows.back(), nullptr, false);
       }
     }
   }
@@ -208,9 +469,13 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s: cannot write\n", json_path.c_str());
       return 1;
     }
-    std::fprintf(json, "[\n");
+    std::fprintf(json, "{\"boxes\": [\n");
     for (std::size_t i = 0; i < rows.size(); ++i) print(rows[i], json, i + 1 == rows.size());
-    std::fprintf(json, "]\n");
+    std::fprintf(json, "], \"streamed\": [\n");
+    for (std::size_t i = 0; i < stream_rows.size(); ++i) {
+      printStream(stream_rows[i], json, i + 1 == stream_rows.size());
+    }
+    std::fprintf(json, "]}\n");
     std::fclose(json);
   }
   return 0;

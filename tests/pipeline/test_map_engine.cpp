@@ -557,7 +557,81 @@ TEST(PlanningLayers, EsdfIsRecomputedOnlyWhenAStateInsideItsBoxChanged) {
   EXPECT_EQ(layers.snapshot()->esdf()->size(), Eigen::Vector3i(5, 5, 5));
 }
 
-// The ESDF is recomputed at most at its rate (frame stamps) and the skips are counted.
+/// The ESDF of the snapshot's window computed whole, as the engine's box (the whole window).
+EsdfMap fullEsdfOf(const MapSnapshot& snap, const EsdfConfig& config) {
+  const LocalWindow& window = snap.window();
+  OccupancyBox box;
+  box.reset(window.min_index, window.size, window.resolution_m);
+  for (std::size_t i = 0; i < box.states.size(); ++i) {
+    box.states[i] = window.model.state(window.log_odds[i]);
+  }
+  EsdfMap reference(config);
+  EXPECT_TRUE(reference.compute(box));
+  return reference;
+}
+
+// The ESDF is updated incrementally (only what changed voxels reach, the kept part of a moved
+// window shifted) and published as copies brought up to date cell by cell; after every frame
+// of a long sliding flight (the moving person, both unknown policies), across window shifts and
+// after loading an older map, the snapshot's field equals a full recompute bit for bit.
+TEST(MapEngine, IncrementalEsdfEqualsAFullRecomputeAfterEveryFrame) {
+  const io::Scenario scenario = test::cheapScenario();
+  const int frames = eval::frameCount(scenario);
+  ASSERT_GE(frames, 80);
+  for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+    SCOPED_TRACE(toString(policy));
+    MapConfig config = test::smallWindowConfig();
+    config.esdf.max_rate_hz = 0.0;
+    config.esdf.unknown_as = policy;
+    config.projected_grid.enabled = false;
+    MapEngine engine(config);
+    VoxelIndex last_min = VoxelIndex::Zero();
+    int window_moves = 0;
+    int checked = 0;
+    const auto check = [&](int done) {
+      const auto snap = engine.snapshot();
+      ASSERT_NE(snap->esdf(), nullptr) << "frame " << done;
+      // (A frame that changed no state in the box leaves the field of an earlier frame.)
+      const EsdfMap reference = fullEsdfOf(*snap, config.esdf);
+      ASSERT_EQ(snap->esdf()->minIndex(), reference.minIndex()) << "frame " << done;
+      ASSERT_TRUE(snap->esdf()->distances() == reference.distances()) << "frame " << done;
+      const Eigen::Vector3i& n = reference.size();
+      for (int x = 0; x < n.x(); ++x) {
+        for (int y = 0; y < n.y(); ++y) {
+          for (int z = 0; z < n.z(); ++z) {
+            const VoxelIndex g = reference.minIndex() + VoxelIndex(x, y, z);
+            ASSERT_EQ(snap->esdf()->isUnknown(g), reference.isUnknown(g)) << "frame " << done;
+          }
+        }
+      }
+      window_moves += snap->window().min_index != last_min ? 1 : 0;
+      last_min = snap->window().min_index;
+      ++checked;
+    };
+    eval::FlightOptions options;
+    options.progress = [&](int done, int) { check(done); };
+    const int half = frames / 2;
+    options.max_frames = half;
+    ASSERT_EQ(eval::flyScenario(scenario, engine, options).frames, half);
+    const MapState early = engine.exportState();  // the map at the middle of the flight
+    options.start_time_s = eval::frameTime(scenario, half);
+    options.max_frames = frames - half;
+    ASSERT_EQ(eval::flyScenario(scenario, engine, options).frames, frames - half);
+    // A map load (the middle's map, elsewhere than the window now), then flying on from there.
+    engine.restoreState(early);
+    check(frames);
+    options.max_frames = 20;
+    ASSERT_EQ(eval::flyScenario(scenario, engine, options).frames, 20);
+
+    const PlanningStats p = engine.stats().planning;
+    EXPECT_EQ(checked, frames + 21);
+    EXPECT_GT(window_moves, 10) << "the window slides";
+    EXPECT_GT(p.esdf_updates, static_cast<std::uint64_t>(frames));
+    EXPECT_LT(p.esdf_full * 4, p.esdf_updates) << "most updates are incremental";
+  }
+}
+
+// The ESDF is updated at most at its rate (frame stamps) and the skips are counted.
 TEST(MapEngine, EsdfIsRateLimitedByFrameStamps) {
   const io::Scenario scenario = io::defaultScenario();
   MapConfig config;

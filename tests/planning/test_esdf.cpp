@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -545,6 +546,212 @@ TEST(Esdf, MalformedBoxIsRejectedAndLeavesTheMapEmpty) {
   EXPECT_FALSE(map.compute(bad));
   EXPECT_TRUE(map.compute(box));
   EXPECT_TRUE(map.query({0.3, 0.3, 0.3}).valid);
+}
+
+/// A world of states larger than the box, changed step by step: blobs of occupied voxels appear
+/// and disappear, unknown voxels become known, a box-shaped "person" walks across it, and single
+/// voxels flip between all three states.
+class ChangingWorld {
+ public:
+  ChangingWorld(const Eigen::Vector3i& size, std::uint32_t seed) : size_(size), rng_(seed) {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    states_.resize(static_cast<std::size_t>(size.prod()));
+    for (Occupancy& s : states_) {
+      const double r = u(rng_);
+      s = r < 0.03 ? Occupancy::kOccupied : (r < 0.4 ? Occupancy::kUnknown : Occupancy::kFree);
+    }
+  }
+  /// One step of changes.
+  void step() {
+    std::uniform_int_distribution<int> pick(0, 1 << 20);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    // A blob appears or disappears (obstacles appearing and disappearing).
+    const VoxelIndex c(pick(rng_) % size_.x(), pick(rng_) % size_.y(), pick(rng_) % size_.z());
+    const int radius = 1 + pick(rng_) % 3;
+    const Occupancy blob = u(rng_) < 0.5 ? Occupancy::kOccupied : Occupancy::kFree;
+    fill(c - VoxelIndex::Constant(radius), c + VoxelIndex::Constant(radius), blob);
+    // Unknown space seen: a slab of unknown voxels becomes free with a few occupied.
+    const VoxelIndex s(pick(rng_) % size_.x(), pick(rng_) % size_.y(), pick(rng_) % size_.z());
+    for (int x = s.x(); x < std::min(size_.x(), s.x() + 4); ++x) {
+      for (int y = s.y(); y < std::min(size_.y(), s.y() + 6); ++y) {
+        for (int z = s.z(); z < std::min(size_.z(), s.z() + 3); ++z) {
+          Occupancy& v = at({x, y, z});
+          if (v == Occupancy::kUnknown) v = u(rng_) < 0.1 ? Occupancy::kOccupied : Occupancy::kFree;
+        }
+      }
+    }
+    // The person: a 2 x 2 x 5 box moving one voxel along y per step, leaving free space.
+    fill(person_, person_ + VoxelIndex(1, 1, 4), Occupancy::kFree);
+    person_.y() = (person_.y() + 1) % size_.y();
+    fill(person_, person_ + VoxelIndex(1, 1, 4), Occupancy::kOccupied);
+    // Single flips, any state to any state.
+    for (int i = 0; i < 20; ++i) {
+      at({pick(rng_) % size_.x(), pick(rng_) % size_.y(), pick(rng_) % size_.z()}) =
+          static_cast<Occupancy>(pick(rng_) % 3);
+    }
+  }
+  /// The box of `box_size` voxels at world index `min_index` (inside the world).
+  [[nodiscard]] OccupancyBox box(const VoxelIndex& min_index, const Eigen::Vector3i& box_size,
+                                 double res) const {
+    OccupancyBox b;
+    b.reset(min_index, box_size, res);
+    for (int x = 0; x < box_size.x(); ++x) {
+      for (int y = 0; y < box_size.y(); ++y) {
+        for (int z = 0; z < box_size.z(); ++z) {
+          b.at(min_index + VoxelIndex(x, y, z)) = at(min_index + VoxelIndex(x, y, z));
+        }
+      }
+    }
+    return b;
+  }
+
+ private:
+  [[nodiscard]] std::size_t offset(const VoxelIndex& v) const {
+    return (static_cast<std::size_t>(v.x()) * static_cast<std::size_t>(size_.y()) +
+            static_cast<std::size_t>(v.y())) *
+               static_cast<std::size_t>(size_.z()) +
+           static_cast<std::size_t>(v.z());
+  }
+  [[nodiscard]] Occupancy at(const VoxelIndex& v) const { return states_[offset(v)]; }
+  Occupancy& at(const VoxelIndex& v) { return states_[offset(v)]; }
+  void fill(const VoxelIndex& lo, const VoxelIndex& hi, Occupancy state) {
+    for (int x = std::max(0, lo.x()); x <= std::min(size_.x() - 1, hi.x()); ++x) {
+      for (int y = std::max(0, lo.y()); y <= std::min(size_.y() - 1, hi.y()); ++y) {
+        for (int z = std::max(0, lo.z()); z <= std::min(size_.z() - 1, hi.z()); ++z) {
+          at({x, y, z}) = state;
+        }
+      }
+    }
+  }
+
+  Eigen::Vector3i size_;
+  std::mt19937 rng_;
+  std::vector<Occupancy> states_;
+  VoxelIndex person_ = VoxelIndex(3, 0, 0);
+};
+
+/// Every cell value and unknown bit of `actual` equals those of `expected` (exactly).
+void expectSameField(const EsdfMap& actual, const EsdfMap& expected, const std::string& what) {
+  ASSERT_EQ(actual.minIndex(), expected.minIndex()) << what;
+  ASSERT_EQ(actual.size(), expected.size()) << what;
+  const std::vector<float>& a = actual.distances();
+  const std::vector<float>& e = expected.distances();
+  ASSERT_EQ(a.size(), e.size()) << what;
+  int failures = 0;
+  for (std::size_t i = 0; i < e.size(); ++i) {
+    if (a[i] != e[i] && ++failures <= 5) {  // (never NaN)
+      ADD_FAILURE() << what << ": cell " << i << ": " << a[i] << ", full recompute " << e[i];
+    }
+  }
+  const Eigen::Vector3i& n = expected.size();
+  for (int x = 0; x < n.x(); ++x) {
+    for (int y = 0; y < n.y(); ++y) {
+      for (int z = 0; z < n.z(); ++z) {
+        const VoxelIndex g = expected.minIndex() + VoxelIndex(x, y, z);
+        if (actual.isUnknown(g) != expected.isUnknown(g) && ++failures <= 5) {
+          ADD_FAILURE() << what << ": unknown bit of (" << x << ", " << y << ", " << z << ")";
+        }
+      }
+    }
+  }
+  EXPECT_EQ(failures, 0) << what;
+}
+
+// update() after every step of a changing world, with the box sliding by small and large steps
+// (and once by more than its size), equals a full compute() bit for bit; so does a copy kept up
+// to date with copyCells(changedCells()). Both unknown policies, a clamp reached and one not,
+// 32- and 64-bit envelope keys, a box one voxel thick.
+TEST(Esdf, IncrementalUpdatesEqualAFullRecomputeAfterEveryStep) {
+  struct Case {
+    Eigen::Vector3i box_size;
+    double max_m;
+  };
+  const Case cases[] = {{{31, 27, 17}, 0.65}, {{24, 33, 12}, 100.0}, {{40, 37, 1}, 0.9}};
+  std::mt19937 rng(5);
+  for (const Case& c : cases) {
+    for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+      std::ostringstream what_case;
+      what_case << "box " << c.box_size.transpose() << ", max " << c.max_m << " m, "
+                << toString(policy);
+      SCOPED_TRACE(what_case.str());
+      const Eigen::Vector3i world_size = c.box_size * 2 + Eigen::Vector3i::Ones();
+      ChangingWorld world(world_size, static_cast<std::uint32_t>(rng()));
+      EsdfMap incremental(config(c.max_m, policy));
+      EsdfMap full(config(c.max_m, policy));
+      EsdfMap copy(config(c.max_m, policy));
+      VoxelIndex min_index = VoxelIndex::Zero();
+      std::uniform_int_distribution<int> pick(0, 99);
+      std::size_t incremental_steps = 0;
+      std::size_t shifted_steps = 0;
+      for (int step = 0; step < 60; ++step) {
+        world.step();
+        const int kind = pick(rng);
+        VoxelIndex delta = VoxelIndex::Zero();
+        if (kind < 25) {  // slide by a few voxels on one or more axes
+          for (int a = 0; a < 3; ++a) delta[a] = pick(rng) % 7 - 3;
+        } else if (kind < 30) {  // slide by most of the box
+          delta.x() = c.box_size.x() - 1;
+        }
+        if (step == 40) delta.y() = c.box_size.y();  // beyond the box: computed whole
+        for (int a = 0; a < 3; ++a) {
+          min_index[a] = std::clamp(min_index[a] + delta[a], 0, world_size[a] - c.box_size[a]);
+        }
+        const OccupancyBox box = world.box(min_index, c.box_size, 0.1);
+        ASSERT_TRUE(incremental.update(box));
+        ASSERT_TRUE(full.compute(box));
+        const EsdfMap::UpdateStats& u = incremental.lastUpdate();
+        incremental_steps += u.full ? 0 : 1;
+        shifted_steps += u.shifted ? 1 : 0;
+        if (step == 0) {
+          EXPECT_TRUE(u.full);
+        }
+        if (u.full || u.shifted) {
+          copy.copyFrom(incremental);
+        } else {
+          ASSERT_TRUE(copy.copyCells(incremental, incremental.changedCells()));
+        }
+        const std::string what = "step " + std::to_string(step);
+        expectSameField(incremental, full, what);
+        expectSameField(copy, full, what + " (copy)");
+        if (HasFailure()) return;
+      }
+      EXPECT_GT(incremental_steps, 30u);
+      EXPECT_GT(shifted_steps, 2u);
+    }
+  }
+}
+
+// The incremental path touches only what a change can reach: one voxel turned occupied in a
+// free box far from everything re-sweeps one row and re-transforms only lines within the clamp.
+TEST(Esdf, OneChangedVoxelTouchesOnlyLinesWithinTheClamp) {
+  OccupancyBox box;
+  box.reset({0, 0, 0}, {60, 50, 40}, 0.1, Occupancy::kFree);
+  EsdfMap map(config(0.5, UnknownAs::kOccupied));  // 5 voxels
+  ASSERT_TRUE(map.update(box));
+  box.at({30, 25, 20}) = Occupancy::kOccupied;
+  ASSERT_TRUE(map.update(box));
+  const EsdfMap::UpdateStats& u = map.lastUpdate();
+  EXPECT_FALSE(u.full);
+  EXPECT_EQ(u.changed_states, 1u);
+  EXPECT_EQ(u.rows_swept, 1u);
+  EXPECT_LE(u.y_lines, 11u);       // x within +-5 of the voxel, z = 20
+  EXPECT_LE(u.z_lines, 11u * 11u);  // x and y within +-5
+  EXPECT_GT(u.changed_cells, 100u);
+  EsdfMap full(config(0.5, UnknownAs::kOccupied));
+  ASSERT_TRUE(full.compute(box));
+  expectSameField(map, full, "one voxel");
+  // Nothing changed: nothing is done.
+  ASSERT_TRUE(map.update(box));
+  EXPECT_EQ(map.lastUpdate().rows_swept, 0u);
+  EXPECT_EQ(map.lastUpdate().changed_cells, 0u);
+  // A malformed box empties the map and the next update computes whole.
+  OccupancyBox bad = box;
+  bad.states.pop_back();
+  EXPECT_FALSE(map.update(bad));
+  EXPECT_TRUE(map.empty());
+  ASSERT_TRUE(map.update(box));
+  EXPECT_TRUE(map.lastUpdate().full);
+  expectSameField(map, full, "after a malformed box");
 }
 
 TEST(EsdfConfig, DefaultsAreValid) {

@@ -247,7 +247,7 @@ struct EsdfConfig {
           "threads of one computation, the caller's included\n"
           "(on its own planning thread when pipeline.threaded)");
     v.key("max_rate_hz", c.max_rate_hz, "Hz",
-          "recomputed at most this often (frame stamps), only when a voxel state\n"
+          "updated at most this often (frame stamps), only when a voxel state\n"
           "changed in the window or the box moved; 0: at every change");
     v.key("box_size_m", c.box_size_m, "m",
           "box centred on the body; 0 on an axis: the whole local map along it");
@@ -299,7 +299,7 @@ struct MapConfig {
 struct MemoryEstimate {
   std::size_t local_bytes = 0;      ///< the local map's window: 2 bytes of log-odds per voxel
   std::size_t snapshot_bytes = 0;   ///< two window copies for planners (one read, one filled)
-  std::size_t esdf_bytes = 0;       ///< two ESDF buffers over the box (0 when esdf.enabled is off)
+  std::size_t esdf_bytes = 0;       ///< the ESDF and its published copies (0 when esdf.enabled is off)
   /// The cylindrical grid and the free-space scratch box (a frame's point buffers add about
   /// 12 bytes per point: 3.7 MB for a 640 x 480 depth image).
   std::size_t awareness_bytes = 0;

@@ -28,6 +28,21 @@
 /// (max_distance_m / resolution_m)^2 are treated as infinite, which keeps the clamped result
 /// exact. Linear in the number of voxels; one sqrt (a table lookup) per voxel; no allocation
 /// after the first compute() of the largest box.
+///
+/// Incremental updates (update()): the map keeps the box it was computed from and the results
+/// of the x pass and of the y pass. A new box of the same size and resolution is compared with
+/// the kept one; only the x lines (swept a y row at a time) holding a changed voxel are swept
+/// again, only the y lines where the x pass's result changed are transformed again, and only
+/// the z lines where the y pass's result changed. A changed input reaches outputs within
+/// cap_d + 1 voxels of it (a parabola within the cap, or a run boundary next to it), so each
+/// line is transformed only over twice that around its changed inputs, and its results are kept
+/// within once that, where the parabolas cut off at the part's ends lie beyond the cap. Each
+/// part goes through the same code as in compute() (exact integer arithmetic, invariant under
+/// translation), so the field is bit-identical to a full recompute. A box that moved (the window
+/// slid) by less than its size is shifted first: the kept part stays, the new slabs count as
+/// changed, and so does the face the move removed (its neighbours there are gone). More than
+/// 1/16 of the box changed (e.g. a map load) is computed whole. The cost follows what changed:
+/// a depth frame's few thousand changed voxels touch a part of the lines.
 
 #include "mlmap/core/config.h"
 #include "mlmap/core/types.h"
@@ -113,6 +128,40 @@ class EsdfMap {
   /// result is bit-identical to one thread. std::bad_alloc propagates, leaving the map empty.
   [[nodiscard]] bool compute(const OccupancyBox& box);
 
+  /// What the last compute() or update() did.
+  struct UpdateStats {
+    bool full = true;                   ///< the whole field was computed (compute(), or update()
+                                        ///< without a kept box of the same size and resolution)
+    bool shifted = false;               ///< the kept box was shifted to the new one's place
+    std::size_t changed_states = 0;     ///< voxels whose state differed from the kept box
+    std::size_t rows_swept = 0;         ///< y rows swept again by the x pass
+    std::size_t y_lines = 0;            ///< y lines transformed again
+    std::size_t z_lines = 0;            ///< z lines transformed again
+    std::size_t changed_cells = 0;      ///< cells whose value or unknown bit changed
+  };
+
+  /// Brings the field to `box`, exactly as compute(box) would, doing only the work the changes
+  /// since the last compute() or update() need (see the file comment). Falls back to compute()
+  /// when there is no kept box (first call, after a failed call, after copyFrom()), when the
+  /// size or resolution differs, when the box moved by its size or more, or when more than 1/16
+  /// of an unmoved box changed (the full compute is then cheaper). Same return value and
+  /// failure behaviour as compute(). Single-threaded except in the fallback.
+  [[nodiscard]] bool update(const OccupancyBox& box);
+  /// What the last compute() or update() did.
+  [[nodiscard]] const UpdateStats& lastUpdate() const { return last_update_; }
+  /// Box offsets (OccupancyBox order) of the cells whose value or unknown bit the last update()
+  /// changed; meaningful only when lastUpdate().full and lastUpdate().shifted are both false.
+  [[nodiscard]] const std::vector<std::uint32_t>& changedCells() const { return changed_cells_; }
+  /// Makes this map a copy of `source`'s field (geometry, values, unknown bits, configuration)
+  /// without its kept box: a following update() on this map is a full compute. For publishing
+  /// a field while `source` goes on updating.
+  void copyFrom(const EsdfMap& source);
+  /// Copies from `source` the cells at `offsets` (value and unknown bit). Both maps must have
+  /// the same geometry (checked: false and nothing copied otherwise); offsets beyond the box are
+  /// ignored. Brings a copy made by copyFrom() up to date after source.update() by its
+  /// changedCells().
+  bool copyCells(const EsdfMap& source, const std::vector<std::uint32_t>& offsets);
+
   /// Trilinear distance and its analytic gradient at a world point (metres). The 8-cell stencil
   /// is clamped at the box border so any point inside the box works: within half a voxel of a
   /// box face the value is held constant across that face (gradient component 0 along its
@@ -156,8 +205,8 @@ class EsdfMap {
   [[nodiscard]] const std::vector<float>& distances() const { return field_; }
   /// The configuration in use.
   [[nodiscard]] const EsdfConfig& config() const { return config_; }
-  /// Bytes held by the field (4 per voxel), the unknown mask (1 bit per voxel) and the reusable
-  /// work buffers (4 per voxel and a little per thread).
+  /// Bytes held by the field (4 per voxel), the unknown mask (1 bit per voxel), the kept box and
+  /// the x and y passes' results (9 per voxel, none in a copy) and a little per thread.
   [[nodiscard]] std::size_t memoryBytes() const;
 
  private:
@@ -172,6 +221,7 @@ class EsdfMap {
     std::vector<std::int64_t> in_keys64;      ///< (inside envelope)
     std::vector<std::int32_t> near_free;      ///< x pass: nearest non-obstacle x per (y, z)
     std::vector<std::int32_t> near_obstacle;  ///< x pass: nearest obstacle x per (y, z)
+    std::vector<std::int32_t> line;           ///< one y or z line being transformed
   };
 
   /// Unknown bit of box-relative voxel (x, y, z) (inside the box).
@@ -186,11 +236,31 @@ class EsdfMap {
   }
   /// Empties the map (size 0, every query invalid); keeps the buffers' capacity.
   void clear();
-  /// Pass 1 (x, two sweeps) over the y rows [y_begin, y_end): 1D distances.
-  void sweepRows(const OccupancyBox& box, int y_begin, int y_end, Scratch* scratch);
-  /// Pass 2 (y) and pass 3 (z) over the x slabs [x_begin, x_end), writing the field in metres
-  /// and the unknown mask.
-  void transformSlabs(const OccupancyBox& box, int x_begin, int x_end, Scratch* scratch);
+  /// Pass 1 (x, two sweeps) over the y rows [y_begin, y_end): 1D distances into pass1_.
+  void sweepRows(const std::uint8_t* states, int y_begin, int y_end, Scratch* scratch);
+  /// Pass 2 (y, into pass2_) and pass 3 (z) over the x slabs [x_begin, x_end), writing the field
+  /// in metres and the unknown mask.
+  void transformSlabs(const std::uint8_t* states, int x_begin, int x_end, Scratch* scratch);
+  /// The unknown bits of x slab x from the box states.
+  void writeUnknownBits(const std::uint8_t* states, int x);
+  /// Transforms the part [begin, end) of one y line (pass1_ at (x, z)) as a line of its own,
+  /// into `line` (end - begin values).
+  void transformYLine(int x, int z, int begin, int end, std::int32_t* line,
+                      Scratch* scratch) const;
+  /// The same for the part [begin, end) of one z line (pass2_ at (x, y)).
+  void transformZLine(int x, int y, int begin, int end, std::int32_t* line,
+                      Scratch* scratch) const;
+  /// Signed squared voxel distance (or +-inf_) -> clamped signed metres (table when there).
+  [[nodiscard]] float metres(std::int32_t value) const {
+    return metres_table_.empty() ? slowMetres(value) : metres_table_[value + inf_];
+  }
+  /// Sets the size-dependent constants (cap, table, query steps) for the box; allocates.
+  void prepare(const OccupancyBox& box);
+  /// Shifts the kept state by `delta` voxels (new min - old min); new voxels are marked unseen.
+  void shiftKept(const VoxelIndex& delta);
+  /// The incremental part of update(): box has the kept geometry after a shift by `shift`
+  /// voxels (zero: none).
+  void updateChanged(const OccupancyBox& box, const VoxelIndex& shift);
   /// Signed squared voxel distance (or +-inf_) -> clamped signed metres, without the table.
   /// Needs cap_sq_, inf_ and resolution_m_ of the current compute().
   [[nodiscard]] float slowMetres(std::int32_t value) const;
@@ -213,7 +283,25 @@ class EsdfMap {
   /// 64-bit word (slab_bits_ apart) so that threads never share a word.
   std::vector<std::uint64_t> unknown_bits_;
   std::size_t slab_bits_ = 0;
-  std::vector<std::int32_t> work_;     ///< +d^2 (non-obstacle) / -d^2 (obstacle), in voxels
+  /// Pass 1's result: +d (non-obstacle) / -d (obstacle) along x, in voxels, or +-inf_.
+  std::vector<std::int32_t> pass1_;
+  /// Pass 2's result: +d^2 / -d^2 over the y-x plane, in voxels, or +-inf_.
+  std::vector<std::int32_t> pass2_;
+  /// The box states of the last compute() / update() (what update() compares with).
+  std::vector<std::uint8_t> kept_states_;
+  bool kept_ = false;  ///< pass1_, pass2_ and kept_states_ hold the current box
+  UpdateStats last_update_;
+  std::vector<std::uint32_t> changed_cells_;
+  std::vector<std::uint32_t> changed_states_;  ///< offsets of the states update() found changed
+  std::vector<int> row_z_lo_;               ///< per y: lowest z of a changed state (nz: none)
+  std::vector<int> row_z_hi_;               ///< per y: highest z of a changed state (-1: none)
+  std::vector<int> row_x_lo_;               ///< per y: lowest x of a changed state
+  std::vector<int> row_x_hi_;               ///< per y: highest x of a changed state
+  std::vector<int> dirty_y_lo_;  ///< per (x, z): lowest y where pass 1 changed (ny: none)
+  std::vector<int> dirty_y_hi_;  ///< per (x, z): highest y where pass 1 changed (-1: none)
+  std::vector<int> dirty_z_lo_;  ///< per (x, y): lowest z where pass 2 changed (nz: none)
+  std::vector<int> dirty_z_hi_;  ///< per (x, y): highest z where pass 2 changed (-1: none)
+  std::vector<std::int32_t> row_buffer_;    ///< one y row of pass 1 (nx * nz)
   std::vector<float> metres_table_;    ///< slowMetres(v) at [v + inf_] (when the cap is small)
   std::vector<Scratch> scratch_;       ///< one per thread
 };

@@ -4,8 +4,10 @@
 /// and publishes it as MapSnapshot objects. Owned by the engine; update() runs on the local-global
 /// stage, snapshot() on any thread.
 ///
-/// The ESDF is recomputed only when a voxel state changed inside its box or the box moved, and
-/// at most at esdf.max_rate_hz (stamps of the frames). With `own_thread` it is computed on a planning
+/// The ESDF is updated only when a voxel state changed inside its box or the box moved, and
+/// at most at esdf.max_rate_hz (stamps of the frames); the update is incremental
+/// (EsdfMap::update(): only what the changed voxels can affect, the kept part of a moved box
+/// shifted), and a planner gets a copy of the field that is brought up to date cell by cell. With `own_thread` it is computed on a planning
 /// thread of its own so that mapping never waits for it; a frame that finds the thread busy
 /// replaces the one waiting (latest only, counted). Otherwise it runs inside update().
 
@@ -28,7 +30,8 @@ struct PlanningStats {
   std::uint64_t snapshots = 0;           ///< snapshots published
   std::uint64_t grid_updates = 0;        ///< 2D grid changed (rebuilt or updated in part)
   std::uint64_t grid_rebuilds = 0;       ///< of those, rebuilt whole (window or band moved)
-  std::uint64_t esdf_updates = 0;        ///< ESDF recomputed
+  std::uint64_t esdf_updates = 0;        ///< ESDF updated (incrementally or whole)
+  std::uint64_t esdf_full = 0;           ///< of those, computed whole (first, load, many changes)
   std::uint64_t esdf_unchanged = 0;      ///< skipped: no state change in the box, box still
   std::uint64_t esdf_rate_limited = 0;   ///< skipped: sooner than 1 / esdf.max_rate_hz
   std::uint64_t esdf_superseded = 0;     ///< planning thread busy: a newer frame took its place
@@ -67,7 +70,14 @@ class PlanningLayers {
     std::shared_ptr<const LocalWindow> window;
     Eigen::Vector3d body_W = Eigen::Vector3d::Zero();
     std::uint64_t frame = 0;
+    /// The local map's change clock and its submaps' state stamps (x-major, z fastest, over
+    /// the window's submaps) when the window was copied: which parts of the box to refill.
+    std::uint64_t clock = 0;
+    std::vector<std::uint64_t> submap_stamps;
   };
+  /// Fills esdf_box_ from the job's window: only the submaps whose states changed since the
+  /// last fill when the window and the box are where they were, else all of it.
+  void fillEsdfBox(const EsdfJob& job);
   std::shared_ptr<const EsdfMap> computeEsdf(const EsdfJob& job);
   /// Whether this frame's ESDF is computed, and why not.
   struct EsdfDecision {
@@ -117,9 +127,22 @@ class PlanningLayers {
   Eigen::Vector3i esdf_box_size_ = Eigen::Vector3i::Zero();  // zero: no ESDF yet
   double esdf_stamp_s_ = -1e300;
 
-  // ESDF computation (planning thread, or the local-global stage without one).
-  std::vector<std::shared_ptr<EsdfMap>> esdf_pool_;
+  // ESDF computation (planning thread, or the local-global stage without one). The field is
+  // updated incrementally in esdf_ (never published); snapshots get pooled copies of it, each
+  // brought up to date by copying the cells changed since it was last filled.
+  struct EsdfCopy {
+    std::shared_ptr<EsdfMap> map;
+    std::vector<std::uint32_t> pending;  // cells esdf_ changed since map was filled
+    bool stale = true;                   // map must be copied whole
+  };
+  /// The published copy of esdf_ after an update (reusing a copy no snapshot holds).
+  std::shared_ptr<const EsdfMap> publishEsdfCopy();
+  EsdfMap esdf_;
+  std::vector<EsdfCopy> esdf_copies_;
   OccupancyBox esdf_box_;
+  bool esdf_box_filled_ = false;                     // esdf_box_ holds a window's states
+  VoxelIndex esdf_box_window_ = VoxelIndex::Zero();  // min_index of the window it was filled from
+  std::uint64_t esdf_box_clock_ = 0;                 // that window's change clock
 
   mutable std::mutex stats_mutex_;
   PlanningStats stats_;
