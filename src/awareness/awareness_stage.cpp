@@ -286,6 +286,9 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
                                    PointCounters* counters) {
   const FrameGeometry g = beginFrame(stamp_s, T_W_B, T_B_S, batch);
   collectEnds(source, g, counters);
+  for (const End& e : outside_) {
+    if (!e.cut) batch->far_hits.push_back(voxelIndexOf(e.p_W, config_.local_map.resolution_m));
+  }
   // Occupied list (unique voxels).
   for (const End& e : ends_) {
     if (!e.cut) batch->hits.push_back({e.voxel + g.box_origin, e.p_W});
@@ -320,6 +323,7 @@ AwarenessStage::FrameGeometry AwarenessStage::beginFrame(double stamp_s, const T
   box_dims_ = g.dims;
   batch->free.reset(g.box_origin, g.dims);
   batch->hits.clear();
+  batch->far_hits.clear();
   batch->stamp_s = stamp_s;
   batch->T_W_B = T_W_B;
   batch->sensor_origin_W = o_W;

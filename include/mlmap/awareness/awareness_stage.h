@@ -22,7 +22,8 @@ struct PointCounters {
   std::uint64_t rejected_too_close = 0;  ///< closer than awareness.min_range_m (incl. zero range)
   std::uint64_t beyond_max_range = 0;    ///< cut at max_range_m: clear their ray, are no hit
   /// Within range but farther from the sensor than the local map can hold (3 submaps beyond the
-  /// body's): they mark the awareness map and clear their ray, and are not mapped.
+  /// body's): they mark the awareness map and clear their ray, and their voxels get a hit in the
+  /// global map (MeasurementBatch::far_hits).
   std::uint64_t hits_beyond_local_map = 0;
   std::uint64_t sampled_out = 0;         ///< left out by sample_count
   std::uint64_t hit_voxels = 0;          ///< occupied measurements (unique voxels)

@@ -83,6 +83,11 @@ struct EngineStats {
   MemoryUsage memory;
   std::size_t global_voxels = 0;
   std::size_t global_submaps = 0;
+  /// Hit voxel updates beyond the local window (its hits_outside_window and the points'
+  /// hits_beyond_local_map, one per voxel and frame) applied to the global map instead.
+  std::uint64_t hits_to_global = 0;
+  /// Hits in range that no layer could hold (beyond the global map's submap index range).
+  std::uint64_t hits_lost = 0;
   PlanningStats planning;      ///< snapshots, 2D grid and ESDF (not part of `total`)
 };
 
@@ -170,8 +175,12 @@ class MapEngine {
   AwarenessStage awareness_;
   LocalMap local_;
   GlobalMap global_;
+  LogOddsModel log_odds_model_;
+  std::vector<VoxelIndex> beyond_window_;  // a frame's hits outside the window (scratch)
   PlanningLayers planning_;
   std::uint64_t frames_integrated_ = 0;  // local-global stage only (written under layers_mutex_)
+  std::uint64_t hits_to_global_ = 0;     // EngineStats::hits_to_global (same stage)
+  std::uint64_t hits_lost_ = 0;          // EngineStats::hits_lost (same stage)
 
   // Guards local_ and global_ against exportState() while the local-global stage writes them,
   // and the state of the last mapped frame.
