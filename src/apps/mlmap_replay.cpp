@@ -392,7 +392,8 @@ void planningForOutputs(const Options& o, MapConfig* config) {
 /// Widens the local window horizontally so that every hit within `range_m` of the body lies in
 /// it wherever the body is in its submap (3 of the 5 submaps from the body), logged. A window
 /// already that wide is kept; so is one whose widening the configuration's limits refuse (the
-/// window's 2e8 voxels, the awareness scratch box): the hits beyond it are then counted and said.
+/// window's 2e8 voxels, the awareness scratch box): the hits beyond it then go to the global map
+/// as hits only, counted and said.
 void sizeWindowForRange(double range_m, MapConfig* config) {
   LocalMapConfig& local_map = config->local_map;
   const int needed = local_map.horizontalCellsForRange(range_m);
@@ -402,7 +403,8 @@ void sizeWindowForRange(double range_m, MapConfig* config) {
   if (local_map.size_cells == before) return;
   if (!config->validate().empty()) {
     spdlog::warn("--max-range {} m: a local window of {} x {} voxels would hold it, more than the "
-                 "configuration's limits allow; hits farther than {:.1f} m are counted, not mapped",
+                 "configuration's limits allow; hits farther than {:.1f} m go to the global map as "
+                 "hits only (their free space is not mapped)",
                  range_m, needed, needed, reach_before_m);
     local_map.size_cells = before;
     return;

@@ -247,10 +247,7 @@ void MapEngine::localStep(const MeasurementBatch& batch) {
     planning_.update(local_, global_, frames_integrated_, batch.stamp_s, batch.T_W_B);
     if (observers_.snapshot) observers_.snapshot(frames_integrated_, batch.stamp_s);
   }
-  if (observers_.global) {
-    const LocalMapCounters& c = local_.counters();
-    observers_.global(global_, batch.stamp_s, c.submaps_retired + c.submaps_restored);
-  }
+  if (observers_.global) observers_.global(global_, batch.stamp_s, global_.modifications());
   const std::size_t global_bytes = global_.memoryBytes();
   const std::size_t planning_bytes = planning_.memoryBytes();
   std::lock_guard<std::mutex> lock(stats_mutex_);

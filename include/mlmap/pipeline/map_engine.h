@@ -99,9 +99,10 @@ struct EngineStats {
 struct EngineObservers {
   /// After the awareness update of every frame (awareness thread).
   std::function<void(const AwarenessMap& map, double stamp_s, const Transform& T_W_B)> awareness;
-  /// After the local-global update of every frame (local-global thread). `version` counts the
-  /// submap moves between the local and the global map so far: the global map changed exactly
-  /// when it differs from the previous call's.
+  /// After the local-global update of every frame (local-global thread). `version` is the
+  /// global map's modifications() (submap moves between the local and the global map, hits
+  /// beyond the window): the global map changed exactly when it differs from the previous
+  /// call's.
   std::function<void(const GlobalMap& map, double stamp_s, std::uint64_t version)> global;
   /// After the snapshot of every mapped frame is published (local-global thread, before
   /// `global`): from then on snapshot() returns it or a newer one. `frame` is its
