@@ -402,10 +402,11 @@ void sizeWindowForRange(double range_m, MapConfig* config) {
   for (int a = 0; a < 2; ++a) local_map.size_cells[a] = std::max(local_map.size_cells[a], needed);
   if (local_map.size_cells == before) return;
   if (!config->validate().empty()) {
-    spdlog::warn("--max-range {} m: a local window of {} x {} voxels would hold it, more than the "
-                 "configuration's limits allow; hits farther than {:.1f} m go to the global map as "
-                 "hits only (their free space is not mapped)",
-                 range_m, needed, needed, reach_before_m);
+    spdlog::warn(
+        "--max-range {} m: a local window of {} x {} voxels would hold it, more than the "
+        "configuration's limits allow; hits farther than {:.1f} m go to the global map as "
+        "hits only (their free space is not mapped)",
+        range_m, needed, needed, reach_before_m);
     local_map.size_cells = before;
     return;
   }

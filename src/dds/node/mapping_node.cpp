@@ -61,8 +61,8 @@ struct MappingNode::Impl {
   std::thread input_thread;
   bool setup_done = false;  ///< the map is loaded (if asked) and the node runs: it may be saved
   std::uint64_t idle_global_version = 0;  ///< the global map's version handed over when idle
-  static constexpr int kIdlePolls = 20;     ///< empty 50 ms polls of the input queue: idle
-  int idle_polls = 0;                       ///< empty polls since the last input
+  static constexpr int kIdlePolls = 20;   ///< empty 50 ms polls of the input queue: idle
+  int idle_polls = 0;                     ///< empty polls since the last input
   std::atomic<bool> stopped{false};
   int domain_id = -1;
 
