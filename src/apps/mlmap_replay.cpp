@@ -150,6 +150,8 @@ eval::Json countersJson(const RunInfo& info, const EngineStats& s, const std::ve
           {"hit_voxels", s.points.hit_voxels},
           {"hits_beyond_local_map", s.points.hits_beyond_local_map},
           {"hits_outside_window", s.local.hits_outside_window},
+          {"hits_to_global_map", s.hits_to_global},
+          {"hits_lost", s.hits_lost},
           {"free_outside_window", s.local.outside_window - s.local.hits_outside_window},
           {"free_voxels", s.points.free_voxels},
           {"occupied_voxels", occupied},
@@ -390,7 +392,8 @@ void planningForOutputs(const Options& o, MapConfig* config) {
 /// Widens the local window horizontally so that every hit within `range_m` of the body lies in
 /// it wherever the body is in its submap (3 of the 5 submaps from the body), logged. A window
 /// already that wide is kept; so is one whose widening the configuration's limits refuse (the
-/// window's 2e8 voxels, the awareness scratch box): the hits beyond it are then counted and said.
+/// window's 2e8 voxels, the awareness scratch box): the hits beyond it then go to the global map
+/// as hits only, counted and said.
 void sizeWindowForRange(double range_m, MapConfig* config) {
   LocalMapConfig& local_map = config->local_map;
   const int needed = local_map.horizontalCellsForRange(range_m);
@@ -399,9 +402,11 @@ void sizeWindowForRange(double range_m, MapConfig* config) {
   for (int a = 0; a < 2; ++a) local_map.size_cells[a] = std::max(local_map.size_cells[a], needed);
   if (local_map.size_cells == before) return;
   if (!config->validate().empty()) {
-    spdlog::warn("--max-range {} m: a local window of {} x {} voxels would hold it, more than the "
-                 "configuration's limits allow; hits farther than {:.1f} m are counted, not mapped",
-                 range_m, needed, needed, reach_before_m);
+    spdlog::warn(
+        "--max-range {} m: a local window of {} x {} voxels would hold it, more than the "
+        "configuration's limits allow; hits farther than {:.1f} m go to the global map as "
+        "hits only (their free space is not mapped)",
+        range_m, needed, needed, reach_before_m);
     local_map.size_cells = before;
     return;
   }
@@ -600,20 +605,25 @@ void flySimulator(const Options& o, Replay* replay) {
                   "simulator", "simulated poses", 0, 0};
 }
 
-/// Prints the hits the engine could not map: points in range beyond what the local map holds
-/// around the body, and hit voxels outside its window; a warning on the log says how to keep them.
+/// Prints the hits outside the local window: points in range beyond what the local map holds
+/// around the body and hit voxels outside its window, whose occupied evidence went to the global
+/// map (their free space is not mapped), and hits no layer could hold; a warning on the log says
+/// how to map them whole.
 void printHitsNotMapped(const EngineStats& s) {
   const std::uint64_t points = s.points.hits_beyond_local_map;
   const std::uint64_t voxels = s.local.hits_outside_window;
   std::printf(
-      "  hits not mapped      %llu points beyond the local map's reach, %llu hit voxels outside "
-      "its window\n",
-      static_cast<unsigned long long>(points), static_cast<unsigned long long>(voxels));
+      "  beyond the window    %llu points beyond the local map's reach, %llu hit voxels outside "
+      "its window: %llu hit updates to the global map, %llu hits lost\n",
+      static_cast<unsigned long long>(points), static_cast<unsigned long long>(voxels),
+      static_cast<unsigned long long>(s.hits_to_global),
+      static_cast<unsigned long long>(s.hits_lost));
   if (points + voxels > 0) {
     spdlog::warn(
-        "{} points in range and {} hit voxels fell outside the local window and were not "
-        "mapped: a larger local_map.size_cells (--config) keeps them",
-        points, voxels);
+        "{} points in range and {} hit voxels fell outside the local window: their hits went to "
+        "the global map ({} updates, {} lost), their free space was not mapped; a larger "
+        "local_map.size_cells (--config, or --max-range) maps them whole",
+        points, voxels, s.hits_to_global, s.hits_lost);
   }
 }
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <numeric>
+#include <thread>
 
 // countBits() gets a popcnt clone next to the portable one, picked at load time (GCC ifunc).
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && \
@@ -43,10 +44,11 @@ std::uint32_t hashKey(std::uint32_t key) {
 
 // VoxelBitset::count() with the popcnt instruction where the CPU has it: the portable build
 // calls libgcc's __popcountdi2 for every word (2 M instructions per frame at 0.1 m).
-MLMAP_POPCNT_CLONES std::size_t countBits(const VoxelBitset& bits) {
-  const std::size_t words = static_cast<std::size_t>(bits.dims().x()) *
-                            static_cast<std::size_t>(bits.dims().y()) * bits.wordsPerRow();
-  const std::uint64_t* w = bits.data();
+// Counts the set bits of the rows with box x in [x_begin, x_end).
+MLMAP_POPCNT_CLONES std::size_t countBits(const VoxelBitset& bits, int x_begin, int x_end) {
+  const std::size_t plane = static_cast<std::size_t>(bits.dims().y()) * bits.wordsPerRow();
+  const std::uint64_t* w = bits.data() + static_cast<std::size_t>(x_begin) * plane;
+  const std::size_t words = static_cast<std::size_t>(std::max(x_end - x_begin, 0)) * plane;
   std::size_t n = 0;
   for (std::size_t i = 0; i < words; ++i) n += static_cast<std::size_t>(__builtin_popcountll(w[i]));
   return n;
@@ -284,13 +286,15 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
                                    PointCounters* counters) {
   const FrameGeometry g = beginFrame(stamp_s, T_W_B, T_B_S, batch);
   collectEnds(source, g, counters);
+  for (const End& e : outside_) {
+    if (!e.cut) batch->far_hits.push_back(voxelIndexOf(e.p_W, config_.local_map.resolution_m));
+  }
   // Occupied list (unique voxels).
   for (const End& e : ends_) {
     if (!e.cut) batch->hits.push_back({e.voxel + g.box_origin, e.p_W});
   }
   updateAwarenessMap(T_W_B.translation());
   carve(g.origin_vox, batch);
-  batch->free_count = countBits(batch->free);
   counters->hit_voxels = batch->hits.size();
   counters->free_voxels = batch->free_count;
 }
@@ -319,6 +323,7 @@ AwarenessStage::FrameGeometry AwarenessStage::beginFrame(double stamp_s, const T
   box_dims_ = g.dims;
   batch->free.reset(g.box_origin, g.dims);
   batch->hits.clear();
+  batch->far_hits.clear();
   batch->stamp_s = stamp_s;
   batch->T_W_B = T_W_B;
   batch->sensor_origin_W = o_W;
@@ -487,7 +492,6 @@ void AwarenessStage::updateAwarenessMap(const Eigen::Vector3d& body_W) {
 }
 
 void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
-  VoxelBitset& free = batch->free;
   ends_.insert(ends_.end(), outside_.begin(), outside_.end());  // hits are listed already
   // Bin index on level L with n = 2^lg bins per face side: (face n + iu) n + iv.
   const int n0 = bins_per_face_side_;
@@ -590,13 +594,14 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
       }
     }
   }
+  cones_.clear();
   for (int level = level_count - 1; level >= 0; --level) {
     const std::vector<Bin>* parents =
         level + 1 < level_count ? &bins_[static_cast<std::size_t>(level) + 1] : nullptr;
     for (const Bin& bin : bins_[static_cast<std::size_t>(level)]) {
       if (!(bin.reach > 0.0) || bin.box.min.x() > bin.box.max.x()) continue;
       const double parent_reach = parents != nullptr ? (*parents)[bin.parent].reach : 0.0;
-      if (bin.reach > parent_reach) carveCone(o, bin.box, parent_reach / bin.reach, &free);
+      if (bin.reach > parent_reach) cones_.push_back({bin.box, parent_reach / bin.reach});
     }
   }
   // Each member carves the rest of its own cone. The nearest member of its bin has nothing left
@@ -606,14 +611,72 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
   for (const End& e : ends_) {
     const double s_min = e.near > 0.0 ? finest[e.bin].reach / e.near : 0.0;
     if (s_min >= 1.0 && !e.cut) continue;
-    carveCone(o, e.points, s_min, &free);
+    cones_.push_back({e.points, s_min});
+  }
+  carveCones(o, batch);
+}
+
+void AwarenessStage::carveRange(const Eigen::Vector3d& o, int x_begin, int x_end,
+                                MeasurementBatch* batch, std::size_t* free_count) const {
+  VoxelBitset& free = batch->free;
+  const bool whole = x_begin <= 0 && x_end >= free.dims().x();
+  for (const Cone& cone : cones_) {
+    if (whole) {
+      carveCone(o, cone.box, cone.s_min, &free);
+      continue;
+    }
+    // The cone's part s in [s_min, 1] lies between its sections at s_min and 1 (linear in s):
+    // skip it when that lies outside the range with a voxel to spare (the call is exact).
+    const double s0 = std::max(cone.s_min, 0.0);
+    const double near_lo = o.x() + s0 * (cone.box.min.x() - o.x());
+    const double near_hi = o.x() + s0 * (cone.box.max.x() - o.x());
+    const double lo = std::min({near_lo, near_hi, static_cast<double>(cone.box.min.x())});
+    const double hi = std::max({near_lo, near_hi, static_cast<double>(cone.box.max.x())});
+    if (hi + 1.0 < x_begin || lo - 1.0 >= x_end) continue;
+    carveCone(o, cone.box, cone.s_min, x_begin, x_end, &free);
   }
   // A hit wins over a miss.
   for (const HitMeasurement& h : batch->hits) {
     const VoxelIndex r = h.index - free.origin();
+    if (r.x() < x_begin || r.x() >= x_end) continue;
     free.data()[free.rowWord(r.x(), r.y()) + static_cast<std::size_t>(r.z() >> 6)] &=
         ~(std::uint64_t{1} << (r.z() & 63));
   }
+  *free_count = countBits(free, x_begin, x_end);
+}
+
+void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batch) {
+  const int threads = std::max(1, config_.awareness.num_threads);
+  const int dim_x = batch->free.dims().x();
+  if (threads == 1 || cones_.size() < 2 * static_cast<std::size_t>(threads)) {
+    carveRange(o, 0, dim_x, batch, &batch->free_count);
+    return;
+  }
+  // Each thread owns a range of box x: it marks only there, so no two write the same word and
+  // the union is what one thread marks. The ranges split the cones' centres evenly (cones
+  // straddling a border are walked by both sides, each marking its part).
+  std::vector<double>& centres = range_scratch_;
+  centres.clear();
+  for (const Cone& cone : cones_) centres.push_back(0.5 * (cone.box.min.x() + cone.box.max.x()));
+  std::vector<int> borders(static_cast<std::size_t>(threads) + 1, 0);
+  borders.back() = dim_x;
+  for (int t = 1; t < threads; ++t) {
+    const auto nth = centres.begin() + static_cast<std::ptrdiff_t>(centres.size() * t / threads);
+    std::nth_element(centres.begin(), nth, centres.end());
+    borders[static_cast<std::size_t>(t)] = std::clamp(floorToInt(*nth), borders[t - 1], dim_x);
+  }
+  std::vector<std::size_t> counts(static_cast<std::size_t>(threads), 0);
+  std::vector<std::thread> workers;
+  workers.reserve(static_cast<std::size_t>(threads) - 1);
+  for (int t = 1; t < threads; ++t) {
+    workers.emplace_back([&, t] {
+      const auto ut = static_cast<std::size_t>(t);
+      carveRange(o, borders[ut], borders[ut + 1], batch, &counts[ut]);
+    });
+  }
+  carveRange(o, borders[0], borders[1], batch, &counts[0]);
+  for (std::thread& w : workers) w.join();
+  batch->free_count = std::accumulate(counts.begin(), counts.end(), std::size_t{0});
 }
 
 std::size_t AwarenessStage::memoryBytes() const {
@@ -622,10 +685,11 @@ std::size_t AwarenessStage::memoryBytes() const {
     bins += slots_[l].capacity() * sizeof(BinSlot) + bins_[l].capacity() * sizeof(Bin);
   }
   return bins + map_.memoryBytes() + ends_.capacity() * sizeof(End) +
-         outside_.capacity() * sizeof(End) +
-         table_.capacity() * sizeof(Slot) +
+         outside_.capacity() * sizeof(End) + cones_.capacity() * sizeof(Cone) +
+         range_scratch_.capacity() * sizeof(double) + table_.capacity() * sizeof(Slot) +
          sample_indices_.capacity() * sizeof(std::uint32_t) +
-         keys_.capacity() * sizeof(std::uint32_t) + box_coords_.capacity() * sizeof(box_coords_[0]) + block_xyz_.capacity() * sizeof(float);
+         keys_.capacity() * sizeof(std::uint32_t) +
+         box_coords_.capacity() * sizeof(box_coords_[0]) + block_xyz_.capacity() * sizeof(float);
 }
 
 }  // namespace mlmap

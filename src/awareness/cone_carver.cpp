@@ -65,21 +65,21 @@ struct Walk {
   double inv_na, inv_fa;  // 1 / near face, 1 / far face offset along A
   double off_lo, off_hi;  // slab i overlaps s in [(i + off_lo - oa) / fa, (i + off_hi - oa) / na]
   double s0;
-  V2 base_lo, coef_lo, limit_lo;  // (o_b, o_c), (lo_b, lo_c), (0, 0)
-  V2 base_hi, coef_hi, limit_hi;  // (-o_b, -o_c), (-hi_b, -hi_c), (-dim_b, -dim_c)
+  V2 base_lo, coef_lo, limit_lo;  // (o_b, o_c), (lo_b, lo_c), (first b, first c) marked
+  V2 base_hi, coef_hi, limit_hi;  // (-o_b, -o_c), (-hi_b, -hi_c), -(end b, end c) marked
   // Unclamped slabs: (b, c) of o + s lo + e and of o + s hi - e as a + i * slope.
   V2 first_at0, first_slope;
-  V2 last_at0, last_slope, last_limit;  // last_limit: (dim_b, dim_c) - 0.5
+  V2 last_at0, last_slope, last_limit;  // last_limit: (end b, end c) - 0.5
 };
 
 // Marks slabs i_begin..i_end (inside the box along A). Templated on A so that each slab's
 // rectangle maps to whole z runs (or, along z, to one bit per row) with no per-voxel index math.
-template <int A>
+template <int A, bool kClipX>
 void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std::size_t stride_x,
                std::size_t stride_y) {
   const V2 eps = {kEdgeEpsilon, kEdgeEpsilon};
-  const V2 zero = {0.0, 0.0};
   const V2 one = {1.0, 1.0};
+  const V2 first_floor = kClipX ? w.limit_lo : V2{0.0, 0.0};  // the first voxels marked
   for (int i = i_begin; i <= i_end; ++i) {
     const double s_lo_free = (static_cast<double>(i) + w.off_lo - w.oa) * w.inv_fa;
     const double s_hi_free = (static_cast<double>(i) + w.off_hi - w.oa) * w.inv_na;
@@ -87,9 +87,9 @@ void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std:
     I2 last;
     if (s_lo_free >= w.s0 && s_hi_free <= 1.0) {
       // Unclamped: the bounds are affine in i. Truncation is floor here: `first` is clamped to
-      // >= 0 first, `last` to >= -1 and shifted by one.
+      // the first voxel marked (>= 0) first, `last` to >= -1 and shifted by one.
       const V2 vi = {static_cast<double>(i), static_cast<double>(i)};
-      first = __builtin_convertvector(vmax(w.first_at0 + vi * w.first_slope, zero), I2);
+      first = __builtin_convertvector(vmax(w.first_at0 + vi * w.first_slope, first_floor), I2);
       const V2 x_last = vmax(vmin(w.last_at0 + vi * w.last_slope, w.last_limit), -one) + one;
       last = __builtin_convertvector(x_last, I2) - 1;
     } else {
@@ -125,11 +125,23 @@ void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std:
     }
   }
 }
-}  // namespace
 
-std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
-                      VoxelBitset* free) {
+// carveCone() on box x in [x_begin, x_end); kClipX false: the whole box (x_begin 0, x_end the
+// box's), the hot path, where the limits fold into constants.
+template <bool kClipX>
+std::size_t carveConeIn(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
+                        int x_begin, int x_end, VoxelBitset* free) {
   const Eigen::Vector3i& dims = free->dims();
+  if constexpr (kClipX) {
+    x_begin = std::max(x_begin, 0);
+    x_end = std::min(x_end, dims.x());
+  } else {
+    x_begin = 0;
+    x_end = dims.x();
+  }
+  // The voxels marked along each axis: [first, end).
+  const Eigen::Vector3i first_marked(x_begin, 0, 0);
+  const Eigen::Vector3i end_marked(x_end, dims.y(), dims.z());
   // Per axis, the section at s spans [o + s * lo, o + s * hi].
   const Eigen::Vector3d lo = box.min.cast<double>() - origin;
   const Eigen::Vector3d hi = box.max.cast<double>() - origin;
@@ -150,8 +162,8 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
   if (a < 0) {
     // The origin lies inside the box: the cone is the box's hull with the origin; mark the
     // voxels of the box (a sensor inside an end voxel).
-    const Eigen::Vector3i v0 = box.min.array().floor().cast<int>().max(0);
-    const Eigen::Vector3i v1 = box.max.array().floor().cast<int>().min(dims.array() - 1);
+    const Eigen::Vector3i v0 = box.min.array().floor().cast<int>().max(first_marked.array());
+    const Eigen::Vector3i v1 = box.max.array().floor().cast<int>().min(end_marked.array() - 1);
     if (v0.y() > v1.y() || v0.z() > v1.z()) return 1;
     for (int x = v0.x(); x <= v1.x(); ++x)
       markRuns(words + free->rowWord(x, v0.y()), stride_y, v1.y() - v0.y() + 1, v0.z(), v1.z());
@@ -172,10 +184,10 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
   w.s0 = std::max(s_min, 0.0);
   w.base_lo = V2{origin[b], origin[c]};
   w.coef_lo = V2{lo[b], lo[c]};
-  w.limit_lo = V2{0.0, 0.0};
+  w.limit_lo = V2{static_cast<double>(first_marked[b]), static_cast<double>(first_marked[c])};
   w.base_hi = V2{-origin[b], -origin[c]};
   w.coef_hi = V2{-hi[b], -hi[c]};
-  w.limit_hi = V2{-static_cast<double>(dims[b]), -static_cast<double>(dims[c])};
+  w.limit_hi = V2{-static_cast<double>(end_marked[b]), -static_cast<double>(end_marked[c])};
   // Unclamped slab i: s_lo = i / fa + (off_lo - oa) / fa and s_hi = i / na + (off_hi - oa) / na.
   // The section's low bound on an axis takes s_lo where lo >= 0 (its minimum over [s_lo, s_hi]),
   // s_hi otherwise; the high bound s_hi where hi >= 0, s_lo otherwise.
@@ -190,7 +202,7 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
     w.first_slope[lane] = lo[k] * (lo_takes_s_lo ? w.inv_fa : w.inv_na);
     w.last_at0[lane] = origin[k] + (hi[k] * (hi_takes_s_lo ? s_lo_at0 : s_hi_at0) - kEdgeEpsilon);
     w.last_slope[lane] = hi[k] * (hi_takes_s_lo ? w.inv_fa : w.inv_na);
-    w.last_limit[lane] = static_cast<double>(dims[k]) - 0.5;
+    w.last_limit[lane] = static_cast<double>(end_marked[k]) - 0.5;
   }
   // Slabs from the one holding s0 to the one holding the far face; at least the first (when s0
   // lies beyond the far face).
@@ -198,12 +210,24 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
   const int i_last = floorToInt(w.oa + fa - (forward ? kEdgeEpsilon : -kEdgeEpsilon));
   const int i_far = forward ? std::max(i_last, i_first) : std::min(i_last, i_first);
   const std::size_t slabs = static_cast<std::size_t>(std::abs(i_far - i_first)) + 1;
-  const int i_begin = std::max(std::min(i_first, i_far), 0);
-  const int i_end = std::min(std::max(i_first, i_far), dims[a] - 1);
-  if (a == 0) walkSlabs<0>(w, i_begin, i_end, words, stride_x, stride_y);
-  if (a == 1) walkSlabs<1>(w, i_begin, i_end, words, stride_x, stride_y);
-  if (a == 2) walkSlabs<2>(w, i_begin, i_end, words, stride_x, stride_y);
+  const int i_begin = std::max(std::min(i_first, i_far), first_marked[a]);
+  const int i_end = std::min(std::max(i_first, i_far), end_marked[a] - 1);
+  if (a == 0) walkSlabs<0, kClipX>(w, i_begin, i_end, words, stride_x, stride_y);
+  if (a == 1) walkSlabs<1, kClipX>(w, i_begin, i_end, words, stride_x, stride_y);
+  if (a == 2) walkSlabs<2, kClipX>(w, i_begin, i_end, words, stride_x, stride_y);
   return slabs;
+}
+
+}  // namespace
+
+std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
+                      VoxelBitset* free) {
+  return carveConeIn<false>(origin, box, s_min, 0, 0, free);
+}
+
+std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
+                      int x_begin, int x_end, VoxelBitset* free) {
+  return carveConeIn<true>(origin, box, s_min, x_begin, x_end, free);
 }
 
 std::size_t carveCone(const Eigen::Vector3d& origin, const Eigen::Vector3i& end, VoxelBitset* free) {

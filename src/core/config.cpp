@@ -50,6 +50,8 @@ void AwarenessConfig::validate(std::vector<std::string>* errors) const {
           "must be > min_range_m", max_range_m, errors);
   require(sample_count >= 0, sectionKey(*this, sample_count), "must be >= 0 (0 = all points)",
           sample_count, errors);
+  require(num_threads >= 1 && num_threads <= kMaxThreads, sectionKey(*this, num_threads),
+          "must be in [1, 64]", num_threads, errors);
 }
 
 void LogOddsConfig::validate(std::vector<std::string>* errors) const {

@@ -58,6 +58,8 @@ Json reportJson(const std::string& source, const EngineStats& s, std::size_t occ
                       {"hit_voxels", s.points.hit_voxels},
                       {"hits_beyond_local_map", s.points.hits_beyond_local_map},
                       {"hits_outside_window", s.local.hits_outside_window},
+                      {"hits_to_global_map", s.hits_to_global},
+                      {"hits_lost", s.hits_lost},
                       {"free_voxels", s.points.free_voxels}};
   if (accuracy != nullptr) {
     report["accuracy"] = {{"precision", accuracy->precision},

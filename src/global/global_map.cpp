@@ -1,5 +1,7 @@
 #include "mlmap/global/global_map.h"
 
+#include <algorithm>
+
 namespace mlmap {
 namespace {
 constexpr int kBits = 21;
@@ -58,6 +60,69 @@ bool GlobalMap::take(const SubmapIndex& submap, std::vector<VoxelRecord>* record
   *records = std::move(it->second);
   submaps_.erase(it);
   return true;
+}
+
+std::size_t GlobalMap::addHits(std::vector<VoxelIndex>* hits, const LogOddsModel& model,
+                               std::uint64_t* lost) {
+  // Sorted by (submap, offset): each submap's hits in one run, merged into its sorted records.
+  struct Keyed {
+    std::uint64_t submap;
+    std::uint32_t offset;
+    bool operator<(const Keyed& o) const {
+      return submap != o.submap ? submap < o.submap : offset < o.offset;
+    }
+    bool operator==(const Keyed& o) const { return submap == o.submap && offset == o.offset; }
+  };
+  std::vector<Keyed> keyed;
+  keyed.reserve(hits->size());
+  for (const VoxelIndex& v : *hits) {
+    SubmapIndex m;
+    for (int a = 0; a < 3; ++a) {
+      const int q = v[a] / submap_cells_[a];
+      m[a] = v[a] % submap_cells_[a] < 0 ? q - 1 : q;
+    }
+    if ((m.array() < -kSubmapIndexLimit).any() || (m.array() >= kSubmapIndexLimit).any()) {
+      ++*lost;
+      continue;
+    }
+    const Eigen::Vector3i r = v - m.cwiseProduct(submap_cells_);
+    keyed.push_back({pack(m), static_cast<std::uint32_t>(r.x()) * plane_ +
+                                  static_cast<std::uint32_t>(r.y() * submap_cells_.z() + r.z())});
+  }
+  std::sort(keyed.begin(), keyed.end());
+  keyed.erase(std::unique(keyed.begin(), keyed.end()), keyed.end());
+  hits->clear();
+  if (keyed.empty()) return 0;
+  ++modifications_;
+  std::vector<VoxelRecord> added;
+  for (std::size_t first = 0; first < keyed.size();) {
+    std::size_t last = first;
+    while (last < keyed.size() && keyed[last].submap == keyed[first].submap) ++last;
+    std::vector<VoxelRecord>& records = submaps_[keyed[first].submap];
+    added.clear();
+    for (std::size_t i = first; i < last; ++i) {
+      auto it =
+          std::lower_bound(records.begin(), records.end(), keyed[i].offset,
+                           [](const VoxelRecord& r, std::uint32_t o) { return r.offset < o; });
+      if (it != records.end() && it->offset == keyed[i].offset) {
+        model.hit(it->log_odds);
+      } else {
+        LogOddsQ v = kUnknownLogOdds;
+        model.hit(v);
+        added.push_back({keyed[i].offset, v});
+      }
+    }
+    if (!added.empty()) {
+      const auto middle = static_cast<std::ptrdiff_t>(records.size());
+      records.insert(records.end(), added.begin(), added.end());
+      std::inplace_merge(
+          records.begin(), records.begin() + middle, records.end(),
+          [](const VoxelRecord& a, const VoxelRecord& b) { return a.offset < b.offset; });
+      voxel_count_ += added.size();
+    }
+    first = last;
+  }
+  return keyed.size();
 }
 
 const std::vector<VoxelRecord>* GlobalMap::find(const SubmapIndex& submap) const {

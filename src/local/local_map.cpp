@@ -455,10 +455,15 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
         const int wrap = size_.z() - base;  // the first bit past the wrap
         const std::uint64_t before_wrap =
             wrap >= 64 ? bits : wrap <= 0 ? 0 : bits & ((std::uint64_t{1} << wrap) - 1);
-        column_changed |= missRun(column, base, before_wrap, now, submaps_changed_at,
-                                  submaps_state_changed_at);
-        column_changed |= missRun(column, base - size_.z(), bits & ~before_wrap, now,
-                                  submaps_changed_at, submaps_state_changed_at);
+        // Past the wrap is rare: no call (and no setting up of its constants) for nothing.
+        if (before_wrap != 0) {
+          column_changed |= missRun(column, base, before_wrap, now, submaps_changed_at,
+                                    submaps_state_changed_at);
+        }
+        if (bits != before_wrap) {
+          column_changed |= missRun(column, base - size_.z(), bits & ~before_wrap, now,
+                                    submaps_changed_at, submaps_state_changed_at);
+        }
       }
       if (column_changed) column_changed_at_[torus_column] = now;
     }

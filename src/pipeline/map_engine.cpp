@@ -76,6 +76,7 @@ MapEngine::MapEngine(const MapConfig& config, LogSink log, EngineObservers obser
       awareness_(config_),
       local_(config_.local_map, config_.log_odds),
       global_(config_.local_map.submap_cells(), config_.local_map.resolution_m),
+      log_odds_model_(config_.log_odds),
       planning_(config_, config_.pipeline.threaded && config_.pipeline.planning_layers) {
   if (config_.pipeline.threaded) {
     for (int i = 0; i < config_.pipeline.batch_queue_capacity + 1; ++i) {
@@ -226,6 +227,16 @@ void MapEngine::localStep(const MeasurementBatch& batch) {
     std::lock_guard<std::mutex> lock(layers_mutex_);
     local_.recenter(batch.T_W_B.translation(), &global_);
     local_.integrate(batch);
+    // Hits the window cannot hold keep their occupied evidence in the global map.
+    beyond_window_.assign(batch.far_hits.begin(), batch.far_hits.end());
+    for (const HitMeasurement& h : batch.hits) {
+      if (!local_.contains(h.index)) beyond_window_.push_back(h.index);
+    }
+    std::uint64_t lost = 0;
+    const std::size_t to_global =
+        beyond_window_.empty() ? 0 : global_.addHits(&beyond_window_, log_odds_model_, &lost);
+    hits_to_global_ += to_global;
+    hits_lost_ += lost;
     has_mapped_stamp_ = true;
     last_mapped_stamp_s_ = batch.stamp_s;
     last_T_W_B_ = batch.T_W_B;
@@ -236,10 +247,7 @@ void MapEngine::localStep(const MeasurementBatch& batch) {
     planning_.update(local_, global_, frames_integrated_, batch.stamp_s, batch.T_W_B);
     if (observers_.snapshot) observers_.snapshot(frames_integrated_, batch.stamp_s);
   }
-  if (observers_.global) {
-    const LocalMapCounters& c = local_.counters();
-    observers_.global(global_, batch.stamp_s, c.submaps_retired + c.submaps_restored + clears_);
-  }
+  if (observers_.global) observers_.global(global_, batch.stamp_s, global_.modifications());
   const std::size_t global_bytes = global_.memoryBytes();
   const std::size_t planning_bytes = planning_.memoryBytes();
   std::lock_guard<std::mutex> lock(stats_mutex_);
@@ -250,6 +258,8 @@ void MapEngine::localStep(const MeasurementBatch& batch) {
   stats_.memory.global_bytes = global_bytes;
   stats_.global_voxels = global_.voxelCount();
   stats_.global_submaps = global_.submapCount();
+  stats_.hits_to_global = hits_to_global_;
+  stats_.hits_lost = hits_lost_;
   local_ms_.add(ms);
   total_ms_.add(ms + batch.awareness_ms);
 }
@@ -420,11 +430,9 @@ void MapEngine::clear() {
     std::lock_guard<std::mutex> lock(layers_mutex_);
     global_.clear();
     local_.restoreWindow(LocalWindow{});  // an empty window unplaces the map
-    ++clears_;
     stamp_s = last_mapped_stamp_s_;
     T_W_B = last_T_W_B_;
-    const LocalMapCounters& c = local_.counters();
-    version = c.submaps_retired + c.submaps_restored + clears_;
+    version = global_.modifications();  // clear() counts as a modification
   }
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);

@@ -181,9 +181,10 @@ TEST(Replay, VoxelIndicesAreFloorOfCoordinateOverResolution) {
 
 TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
   // A wall 2 m away and one 15 m away beside it, in range (20 m) but beyond the 19 m window's
-  // reach (3 submaps, 11.4 m) when the configuration fixes the window: the far wall's hits
-  // cannot be mapped, and the summary, the log and stats.json say how many. With --max-range the
-  // replay sizes the window itself, and both walls are mapped.
+  // reach (3 submaps, 11.4 m) when the configuration fixes the window: the far wall's hits go to
+  // the global map (its free space is not mapped), and the summary, the log and stats.json say
+  // how many. With --max-range the replay sizes the window itself, and both walls are mapped in
+  // the window.
   const std::string dir = ::testing::TempDir() + "/mlmap_replay_outside";
   fs::remove_all(dir);
   fs::create_directories(dir + "/clouds");
@@ -209,14 +210,22 @@ TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
   EXPECT_EQ(jsonInt(stats, "hits_beyond_local_map"), 21 * 11);  // every point of the far wall
   EXPECT_EQ(jsonInt(stats, "hits_outside_window"), 0);
   EXPECT_EQ(jsonInt(stats, "hit_voxels"), 21 * 11);  // the near wall's
-  for (const VoxelIndex& v : io::readVoxelText(dir + "/out/occupied_voxels.txt"))
-    EXPECT_EQ(v.x(), 20);
+  EXPECT_EQ(jsonInt(stats, "hits_to_global_map"), 21 * 11);  // the far wall's, one per voxel
+  EXPECT_EQ(jsonInt(stats, "hits_lost"), 0);
+  std::size_t near_wall = 0;
+  std::size_t far_wall = 0;
+  for (const VoxelIndex& v : io::readVoxelText(dir + "/out/occupied_voxels.txt")) {
+    EXPECT_TRUE(v.x() == 20 || v.x() == 150) << v.transpose();
+    (v.x() == 20 ? near_wall : far_wall) += 1;
+  }
+  EXPECT_EQ(near_wall, 21u * 11u);
+  EXPECT_EQ(far_wall, 21u * 11u);  // in the global map
   const std::string log = readText(dir + "/replay.log");
-  EXPECT_NE(log.find("hits not mapped      231 points beyond the local map's reach, 0 hit voxels"),
+  EXPECT_NE(log.find("beyond the window    231 points beyond the local map's reach, 0 hit voxels "
+                     "outside its window: 231 hit updates to the global map, 0 hits lost"),
             std::string::npos)
       << log;
-  EXPECT_NE(log.find("fell outside the local window and were not mapped"), std::string::npos)
-      << log;
+  EXPECT_NE(log.find("their free space was not mapped"), std::string::npos) << log;
   EXPECT_EQ(jsonInt(readText(dir + "/out/report.json"), "hits_beyond_local_map"), 21 * 11);
 
   // --max-range 20: the window grows to hold the range, and every hit is mapped.

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -128,6 +129,67 @@ TEST(ConeCarver, CarvesLittleMoreThanTheRays) {
 float referenceFloatBelow(double x) {
   const float f = static_cast<float>(x);
   return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+}
+
+// Threads split the box by x: the cone clipped to each of a partition of x
+// ranges marks, over the ranges, exactly the bits of the whole cone, and
+// nothing outside its range. Cones of every dominant axis, with and without a
+// tail start, some with the origin inside the box, some reaching past the
+// bitset's box.
+TEST(ConeCarver, XRangesOfAPartitionMarkTheWholeConeBitForBit) {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> coord(-4.0, kBox + 4.0);
+  std::uniform_real_distribution<double> size(0.0, 3.0);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::uniform_int_distribution<int> cut(0, kBox);
+  VoxelBitset whole;
+  VoxelBitset parts;
+  VoxelBitset part;
+  int compared = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Eigen::Vector3d origin = test::draw3(coord, rng);
+    const Eigen::Vector3d corner = trial % 50 == 0
+                                       ? Eigen::Vector3d(origin - Eigen::Vector3d::Constant(0.3))
+                                       : test::draw3(coord, rng);  // origin inside, or not
+    const Eigen::Vector3f lo = corner.cast<float>();
+    const Eigen::Vector3f hi = lo + Eigen::Vector3d(size(rng), size(rng), size(rng)).cast<float>();
+    const VoxelSpaceBox box{lo, hi};
+    const double s_min = trial % 3 == 0 ? 0.0 : unit(rng);
+    whole.reset(VoxelIndex::Zero(), Eigen::Vector3i::Constant(kBox));
+    const std::size_t slabs = carveCone(origin, box, s_min, &whole);
+    // A partition of [0, kBox) into up to four ranges (some empty), and one
+    // range past the box.
+    int borders[5] = {0, cut(rng), cut(rng), cut(rng), kBox};
+    std::sort(borders + 1, borders + 4);
+    parts.reset(VoxelIndex::Zero(), Eigen::Vector3i::Constant(kBox));
+    for (int r = 0; r < 4; ++r) {
+      part.reset(VoxelIndex::Zero(), Eigen::Vector3i::Constant(kBox));
+      EXPECT_EQ(carveCone(origin, box, s_min, borders[r], borders[r + 1], &part), slabs);
+      for (int x = 0; x < kBox; ++x) {
+        for (int y = 0; y < kBox; ++y) {
+          for (int z = 0; z < kBox; ++z) {
+            if (!part.test(x, y, z)) continue;
+            ASSERT_TRUE(x >= borders[r] && x < borders[r + 1])
+                << "marked outside its range, trial " << trial;
+            parts.testAndSet(x, y, z);
+          }
+        }
+      }
+    }
+    part.reset(VoxelIndex::Zero(), Eigen::Vector3i::Constant(kBox));
+    carveCone(origin, box, s_min, kBox, kBox + 10, &part);
+    EXPECT_EQ(part.count(), 0u);
+    ASSERT_EQ(parts.count(), whole.count()) << "trial " << trial;
+    for (int x = 0; x < kBox; ++x) {
+      for (int y = 0; y < kBox; ++y) {
+        for (int z = 0; z < kBox; ++z) {
+          ASSERT_EQ(parts.test(x, y, z), whole.test(x, y, z)) << "trial " << trial;
+        }
+      }
+    }
+    compared += whole.count() > 0 ? 1 : 0;
+  }
+  EXPECT_GT(compared, 1000);
 }
 
 TEST(ConeCarver, FloatBelowIsTheLargestFloatNotAboveItsArgument) {

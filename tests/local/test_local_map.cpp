@@ -410,6 +410,71 @@ TEST(LocalMap, SlidingRoundTripKeepsOccupiedVoxelsWhereTheyWere) {
   EXPECT_EQ(global.voxelCount(), 0u);
 }
 
+// Hits beyond the window go to the global map (GlobalMap::addHits): against a std::map of the
+// voxels hit, one hit per distinct voxel and call, over calls that hit new and stored voxels of
+// the same submaps in any order; hits past the submap index range are counted lost. A submap
+// that enters the window brings them into the local map.
+TEST(LocalGlobal, HitsBeyondTheWindowReachTheGlobalMapAndComeBackWithTheirSubmap) {
+  const LocalMapConfig config = smallMap();
+  const LogOddsConfig log_odds;
+  const LogOddsModel model(log_odds);
+  GlobalMap global(config.submap_cells(), config.resolution_m);
+  std::map<test::Key, LogOddsQ> reference;
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> coord(-9, 9);
+  std::uint64_t lost = 0;
+  std::uint64_t expected_lost = 0;
+  for (int call = 0; call < 30; ++call) {
+    std::vector<VoxelIndex> hits;
+    std::set<test::Key> distinct;
+    for (int i = 0; i < 40; ++i) {
+      const int x = coord(rng);
+      const int y = coord(rng);
+      const int z = coord(rng) / 3;
+      const VoxelIndex v(x + 40, y, z);  // far from the window placed below
+      hits.push_back(v);
+      if (i % 7 == 0) hits.push_back(v);  // repeated in a call: one hit
+      distinct.insert(test::key(v));
+    }
+    if (call % 10 == 0) {  // a submap index past the limit: no layer holds it
+      hits.emplace_back(2 * GlobalMap::kSubmapIndexLimit * config.submap_cells().x(), 0, 0);
+      ++expected_lost;
+    }
+    std::shuffle(hits.begin(), hits.end(), rng);
+    EXPECT_EQ(global.addHits(&hits, model, &lost), distinct.size());
+    EXPECT_TRUE(hits.empty());
+    for (const test::Key& k : distinct) {
+      auto it = reference.emplace(k, kUnknownLogOdds).first;
+      model.hit(it->second);
+    }
+  }
+  EXPECT_EQ(lost, expected_lost);
+  ASSERT_EQ(global.voxelCount(), reference.size());
+  std::map<test::Key, LogOddsQ> stored;
+  global.forEachSubmap([&](const SubmapIndex& m, const std::vector<VoxelRecord>& records) {
+    EXPECT_TRUE(std::is_sorted(
+        records.begin(), records.end(),
+        [](const VoxelRecord& a, const VoxelRecord& b) { return a.offset < b.offset; }));
+    const Eigen::Vector3i n = config.submap_cells();
+    for (const VoxelRecord& r : records) {
+      const int x = static_cast<int>(r.offset) / (n.y() * n.z());
+      const int y = static_cast<int>(r.offset) / n.z() % n.y();
+      const int z = static_cast<int>(r.offset) % n.z();
+      stored[test::key(m.cwiseProduct(n) + VoxelIndex(x, y, z))] = r.log_odds;
+    }
+  });
+  EXPECT_EQ(stored, reference);
+  // The window flies there: every stored hit is in the local map, as the reference has it.
+  LocalMap map(config, log_odds);
+  map.recenter(Eigen::Vector3d(40.5, 0.5, 0.5), &global);
+  for (const auto& [k, v] : reference) {
+    if (!map.contains(test::index(k))) continue;
+    double l = 0.0;
+    ASSERT_TRUE(map.logOdds(test::index(k), &l));
+    EXPECT_EQ(l, dequantizeLogOdds(v));
+  }
+}
+
 TEST(LocalGlobal, GlobalMemoryGrowsWithOccupiedVoxelsNotWithTheAreaFlown) {
   LocalMapConfig config;
   config.resolution_m = 0.2;

@@ -22,7 +22,8 @@ struct PointCounters {
   std::uint64_t rejected_too_close = 0;  ///< closer than awareness.min_range_m (incl. zero range)
   std::uint64_t beyond_max_range = 0;    ///< cut at max_range_m: clear their ray, are no hit
   /// Within range but farther from the sensor than the local map can hold (3 submaps beyond the
-  /// body's): they mark the awareness map and clear their ray, and are not mapped.
+  /// body's): they mark the awareness map and clear their ray, and their voxels get a hit in the
+  /// global map (MeasurementBatch::far_hits).
   std::uint64_t hits_beyond_local_map = 0;
   std::uint64_t sampled_out = 0;         ///< left out by sample_count
   std::uint64_t hit_voxels = 0;          ///< occupied measurements (unique voxels)
@@ -112,13 +113,30 @@ class AwarenessStage {
   };
   /// The entry of a box key (voxel index | kCutFlag), added when new.
   std::uint32_t findOrAddEnd(std::uint32_t key);
+  /// The frame's free space: lists the cones of the direction bins and of the ends, carves them
+  /// (carveCones()) and sets batch->free_count.
   void carve(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch);
+  /// A cone to carve: the part s in [s_min, 1] of the cone from the sensor to `box`.
+  struct Cone {
+    VoxelSpaceBox box{};
+    double s_min = 0.0;
+  };
+  /// Carves cones_ into batch->free, clears the hits and counts the free voxels: on the calling
+  /// thread, or split by box x over awareness.num_threads threads (the same bits either way).
+  void carveCones(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch);
+  /// The part of carveCones() with box x in [x_begin, x_end): marks the cones' voxels there,
+  /// clears the hits there and counts the free voxels there into `free_count`. Writes only the
+  /// bitset's rows of that range.
+  void carveRange(const Eigen::Vector3d& origin_vox, int x_begin, int x_end,
+                  MeasurementBatch* batch, std::size_t* free_count) const;
 
   MapConfig config_;
   AwarenessMap map_;
   Eigen::Vector3i box_dims_ = Eigen::Vector3i::Zero();  // scratch box of the current frame
   std::vector<End> ends_;           // inside the scratch box, one per voxel
   std::vector<End> outside_;        // beyond the box (the local map cannot hold them), per point
+  std::vector<Cone> cones_;         // this frame's cones, bins first (coarse to fine), then ends
+  std::vector<double> range_scratch_;  // the cones' x centres, for splitting them over threads
   // Open-addressing table: linear box index (+ cut flag) -> index in ends_, valid when stamped.
   struct Slot {
     std::uint32_t stamp = 0;

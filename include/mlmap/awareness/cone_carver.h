@@ -46,6 +46,12 @@ inline float floatBelow(double x) {
 std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
                       VoxelBitset* free);
 
+/// The same, marking only the voxels with box x in [x_begin, x_end): exactly the voxels of the
+/// whole cone in that range, so that threads owning disjoint x ranges of `free` together mark
+/// what one call marks.
+std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
+                      int x_begin, int x_end, VoxelBitset* free);
+
 /// The cone to a whole voxel `end`, the end voxel included (for a ray whose end is only known to
 /// lie somewhere in `end`).
 std::size_t carveCone(const Eigen::Vector3d& origin, const Eigen::Vector3i& end, VoxelBitset* free);

@@ -41,6 +41,7 @@ struct AwarenessConfig {
   double max_range_m = 10.0;      ///< key max_range_m
   int sample_count = 0;           ///< key sample_count (the paper's SAMPLE_CNT)
   std::uint32_t sample_seed = 1;  ///< key sample_seed
+  int num_threads = 1;            ///< key num_threads
 
   /// The keys of the `awareness` section (see the file comment).
   template <class Self, class V>
@@ -58,7 +59,12 @@ struct AwarenessConfig {
     v.key("sample_count", c.sample_count, "",
           "0: every valid point counts; N: N random points per frame (paper: 500)");
     v.key("sample_seed", c.sample_seed, "", "seed of that random choice");
+    v.key("num_threads", c.num_threads, "",
+          "threads carving a frame's free space, the caller's included (the same map with any)");
   }
+
+  /// Upper bound of num_threads.
+  static constexpr int kMaxThreads = 64;
 
   [[nodiscard]] double radius_m() const { return rho_cells * rho_cell_m; }
   [[nodiscard]] double phi_cell_rad() const;

@@ -26,6 +26,9 @@ struct MeasurementBatch {
   std::vector<HitMeasurement> hits;          ///< occupied list, unique voxels
   VoxelBitset free;                          ///< free list as a set over a box around the sensor
   std::size_t free_count = 0;                ///< number of bits set in `free`
+  /// Voxels of hits in range beyond the free set's box (farther than the local map reaches from
+  /// the body), one per point: their occupied evidence goes to the global map.
+  std::vector<VoxelIndex> far_hits;
   double awareness_ms = 0.0;                 ///< time the awareness stage spent on the frame
 };
 

@@ -40,6 +40,12 @@ class GlobalMap {
   bool take(const SubmapIndex& submap, std::vector<VoxelRecord>* records);
   /// Removes every stored submap.
   void clear();
+  /// Applies one hit (`model`) to each distinct voxel of `hits` (world voxel indices; sorted and
+  /// made unique in place): hits outside the local window, whose submaps are retired. A voxel not
+  /// stored yet starts unknown. Returns the number of voxels updated; hits whose submap index
+  /// lies beyond kSubmapIndexLimit are left out and added to `*lost`.
+  std::size_t addHits(std::vector<VoxelIndex>* hits, const LogOddsModel& model,
+                      std::uint64_t* lost);
   /// Voxels of one submap, or nullptr.
   [[nodiscard]] const std::vector<VoxelRecord>* find(const SubmapIndex& submap) const;
 

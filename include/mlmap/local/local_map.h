@@ -25,7 +25,7 @@ struct LocalMapCounters {
   std::uint64_t hits_applied = 0;         ///< occupied updates inside the window
   std::uint64_t misses_applied = 0;       ///< free updates inside the window
   std::uint64_t outside_window = 0;       ///< measurements outside the window (dropped)
-  std::uint64_t hits_outside_window = 0;  ///< of them, occupied updates: hits not mapped
+  std::uint64_t hits_outside_window = 0;  ///< of them, hits (MapEngine: to the global map)
   std::uint64_t shifts = 0;               ///< one-submap re-centrings
   std::uint64_t resets = 0;               ///< jumps too far for a shift: whole window retired
   std::uint64_t submaps_retired = 0;      ///< submaps handed to the global map

@@ -83,6 +83,11 @@ struct EngineStats {
   MemoryUsage memory;
   std::size_t global_voxels = 0;
   std::size_t global_submaps = 0;
+  /// Hit voxel updates beyond the local window (its hits_outside_window and the points'
+  /// hits_beyond_local_map, one per voxel and frame) applied to the global map instead.
+  std::uint64_t hits_to_global = 0;
+  /// Hits in range that no layer could hold (beyond the global map's submap index range).
+  std::uint64_t hits_lost = 0;
   PlanningStats planning;      ///< snapshots, 2D grid and ESDF (not part of `total`)
 };
 
@@ -94,9 +99,10 @@ struct EngineStats {
 struct EngineObservers {
   /// After the awareness update of every frame (awareness thread).
   std::function<void(const AwarenessMap& map, double stamp_s, const Transform& T_W_B)> awareness;
-  /// After the local-global update of every frame (local-global thread). `version` counts the
-  /// submap moves between the local and the global map so far: the global map changed exactly
-  /// when it differs from the previous call's.
+  /// After the local-global update of every frame (local-global thread). `version` is the
+  /// global map's modifications() (submap moves between the local and the global map, hits
+  /// beyond the window): the global map changed exactly when it differs from the previous
+  /// call's.
   std::function<void(const GlobalMap& map, double stamp_s, std::uint64_t version)> global;
   /// After the snapshot of every mapped frame is published (local-global thread, before
   /// `global`): from then on snapshot() returns it or a newer one. `frame` is its
@@ -179,8 +185,12 @@ class MapEngine {
   AwarenessStage awareness_;
   LocalMap local_;
   GlobalMap global_;
+  LogOddsModel log_odds_model_;
+  std::vector<VoxelIndex> beyond_window_;  // a frame's hits outside the window (scratch)
   PlanningLayers planning_;
   std::uint64_t frames_integrated_ = 0;  // local-global stage only (written under layers_mutex_)
+  std::uint64_t hits_to_global_ = 0;     // EngineStats::hits_to_global (same stage)
+  std::uint64_t hits_lost_ = 0;          // EngineStats::hits_lost (same stage)
 
   // Guards local_ and global_ against exportState() while the local-global stage writes them,
   // and the state of the last mapped frame.
@@ -189,7 +199,6 @@ class MapEngine {
   double last_mapped_stamp_s_ = 0.0;
   Transform last_T_W_B_ = Transform::Identity();
   std::uint64_t frames_restored_ = 0;  // frames mapped before the state restored last
-  std::uint64_t clears_ = 0;           // clear() calls: part of the global observer's version
 
   // Statistics, guarded by stats_mutex_.
   mutable std::mutex stats_mutex_;

@@ -69,6 +69,9 @@ struct MappingNode::Impl {
   std::atomic<bool> force_global_publish{false};
   std::thread input_thread;
   bool setup_done = false;  ///< the map is loaded (if asked) and the node runs: it may be saved
+  std::uint64_t idle_global_version = 0;  ///< the global map's version handed over when idle
+  static constexpr int kIdlePolls = 20;   ///< empty 50 ms polls of the input queue: idle
+  int idle_polls = 0;                     ///< empty polls since the last input
   std::atomic<bool> stopped{false};
   int domain_id = -1;
 
@@ -215,7 +218,10 @@ struct MappingNode::Impl {
       std::optional<node::Input> input = queue.pop(std::chrono::milliseconds(50));
       if (!input) {
         if (queue.finished()) break;
+        // A second without input (20 polls): the stream paused or ended.
+        if (++idle_polls == kIdlePolls) handOverIdleGlobalMap();
       } else {
+        idle_polls = 0;
         pairer->handle(*input);
       }
       pairer->expireWaiting();
@@ -248,13 +254,24 @@ struct MappingNode::Impl {
     tf.reset();
   }
 
+  /// No input for a while: the global map's changes that the rate limit held back (hits beyond
+  /// the window change it in most frames) go out, once per change.
+  void handOverIdleGlobalMap() {
+    if (!engine || !outputs || !outputs->publishesGlobalMap()) return;
+    engine->flush();  // the input thread is the only submitter: the engine is idle after it
+    const std::uint64_t version = engine->globalMap().modifications();
+    if (version == idle_global_version) return;
+    idle_global_version = version;
+    handOverFinalGlobalMap();
+  }
+
   /// The engine is idle: the global map's last state goes out, whatever the rate limit.
   void handOverFinalGlobalMap() {
     const EngineStats s = engine->stats();
     if (!outputs || !outputs->publishesGlobalMap() || s.frames_mapped == 0) return;
     const std::shared_ptr<const MapSnapshot> snap = engine->snapshot();
     mailbox.copyGlobal(engine->globalMap(), snap ? snap->stamp_s() : 0.0,
-                       s.local.submaps_retired + s.local.submaps_restored, true);
+                       engine->globalMap().modifications(), true);
   }
 };
 
