@@ -71,7 +71,8 @@ ROSDEP_KEYS = {'Eigen3': 'eigen', 'Threads': None, 'yaml-cpp': 'yaml-cpp',
                'OpenCVLite': 'libopencv-dev', 'CLI11': 'cli11', 'spdlog': 'spdlog',
                'fastcdr': 'fastcdr', 'fastrtps': 'fastrtps', 'GTest': 'gtest',
                'octomap': 'octomap', 'nlohmann_json': 'nlohmann-json-dev',
-               'PkgConfig': 'pkg-config', 'SQLite3': 'libsqlite3-dev'}
+               'PkgConfig': 'pkg-config', 'SQLite3': 'libsqlite3-dev',
+               'dynamicEDT3D': 'dynamic_edt_3d'}
 
 
 def test_root_manifest_depends_on_everything_cmake_finds():
