@@ -28,9 +28,6 @@ for tool in ip tc unshare nsenter; do
 done
 rm -rf "$out" && mkdir -p "$out"
 
-# Each namespace lives as long as a process holding it (no `ip netns add`: it needs / to be a
-# mount point, which a chroot's is not); `nsenter -n` runs a program in it and execs, so $! is
-# the program's pid and signals reach it.
 tag=mlmap$$
 pids=()
 cleanup() {
@@ -38,18 +35,10 @@ cleanup() {
   wait 2>/dev/null
 }
 trap cleanup EXIT
-unshare -n sleep 3600 & on=$!; pids+=("$on")
-unshare -n sleep 3600 & ground=$!; pids+=("$ground")
-# Never configure the host's own network: wait until both holders are in namespaces of their own.
-for holder in $on $ground; do
-  for _ in $(seq 100); do
-    [ "$(readlink /proc/$holder/ns/net)" != "$(readlink /proc/self/ns/net)" ] && break
-    sleep 0.05
-  done
-  [ "$(readlink /proc/$holder/ns/net)" != "$(readlink /proc/self/ns/net)" ] ||
-    { echo "FAIL: unshare -n made no network namespace"; exit 1; }
-done
-in_ns() { local ns=$1; shift; nsenter -t "$ns" -n "$@"; }
+# shellcheck source=../support/netns.sh
+source "$here/../support/netns.sh"
+netns_new; on=$netns_pid
+netns_new; ground=$netns_pid
 set -e
 ip link add "${tag}a" type veth peer name "${tag}b"
 ip link set "${tag}a" netns "$on"

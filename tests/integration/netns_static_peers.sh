@@ -9,6 +9,7 @@
 # Needs root (unshare, nsenter, ip), as the other namespace tests.
 set -uo pipefail
 bin=$1 out=$2
+here=$(cd "$(dirname "$0")" && pwd)
 export ROS_DOMAIN_ID=$3
 unset FASTRTPS_DEFAULT_PROFILES_FILE ROS_STATIC_PEERS ROS_SECURITY_ENABLE ROS_SECURITY_KEYSTORE \
   ROS_SECURITY_STRATEGY ROS_SECURITY_ENCLAVE_OVERRIDE
@@ -24,17 +25,10 @@ cleanup() {
   wait 2>/dev/null
 }
 trap cleanup EXIT
-unshare -n sleep 3600 & vehicle=$!; pids+=("$vehicle")
-unshare -n sleep 3600 & ground=$!; pids+=("$ground")
-for holder in $vehicle $ground; do   # never configure the host's own network
-  for _ in $(seq 100); do
-    [ "$(readlink /proc/$holder/ns/net)" != "$(readlink /proc/self/ns/net)" ] && break
-    sleep 0.05
-  done
-  [ "$(readlink /proc/$holder/ns/net)" != "$(readlink /proc/self/ns/net)" ] ||
-    { echo "FAIL: unshare -n made no network namespace"; exit 1; }
-done
-in_ns() { local ns=$1; shift; nsenter -t "$ns" -n "$@"; }
+# shellcheck source=../support/netns.sh
+source "$here/../support/netns.sh"
+netns_new; vehicle=$netns_pid
+netns_new; ground=$netns_pid
 set -e
 ip link add "${tag}v" type veth peer name "${tag}g"
 ip link set "${tag}v" netns "$vehicle"
