@@ -27,6 +27,7 @@ cleanup() {
 trap cleanup EXIT
 # shellcheck source=../support/netns.sh
 source "$here/../support/netns.sh"
+netns_pid=""
 netns_new; vehicle=$netns_pid
 netns_new; ground=$netns_pid
 set -e

@@ -17,6 +17,7 @@ netns_new() {
   done
   [ "$(readlink /proc/$holder/ns/net)" != "$(readlink /proc/self/ns/net)" ] ||
     { echo "FAIL: unshare -n made no network namespace"; exit 1; }
+  # shellcheck disable=SC2034  # read by the script that sources this file
   netns_pid=$holder
 }
 

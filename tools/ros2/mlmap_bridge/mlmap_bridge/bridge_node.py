@@ -61,9 +61,9 @@ class MlmapBridge(Node):
     def __init__(self):
         """Declare the parameters and create every enabled subscription and publisher."""
         super().__init__('mlmap_bridge')
-        for p in PARAMETERS:
+        for p in PARAMETERS:  # read once here: read-only, so `ros2 param set` says so
             self.declare_parameter(p.name, p.default,
-                                   ParameterDescriptor(description=p.description))
+                                   ParameterDescriptor(description=p.description, read_only=True))
         self.settings: Dict[str, Any] = {
             p.name: self.get_parameter(p.name).value for p in PARAMETERS}
         namespace = self.settings['namespace']

@@ -1,6 +1,7 @@
 """The parameter table, config/bridge.yaml and rviz/mlmap.rviz agree with each other."""
 
 from pathlib import Path
+import re
 
 from mlmap_bridge import checks
 from mlmap_bridge.parameters import (CLOUD_LAYERS, defaults, in_namespace, PARAMETERS,
@@ -115,3 +116,13 @@ def test_namespace_and_frame_prefix_follow_mlmap_node():
     assert {e.topic for e in checks.bridge_topics('uav1')} == {
         t.replace('/mlmap/viz', '/uav1/mlmap/viz') for t in default_outputs}
     assert checks.node_topics() == checks.NODE_TOPICS
+
+
+def test_the_node_declares_every_parameter_read_only():
+    """The bridge reads its parameters once at start, so it declares them read-only (a `ros2
+    param set` is refused with the reason instead of being accepted and ignored). No rclpy
+    runs here: the declaration in bridge_node.py is read as written."""
+    source = (Path(__file__).resolve().parents[1] / 'mlmap_bridge' / 'bridge_node.py').read_text()
+    declarations = re.findall(r'self\.declare_parameter\((.*?)\)\)', source, re.S)
+    assert declarations, 'no parameter declaration found'
+    assert all('read_only=True' in d for d in declarations), declarations
