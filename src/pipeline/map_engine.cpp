@@ -424,7 +424,7 @@ void MapEngine::clear() {
     queue_cv_.wait(idle, [&] { return stopping_ || (inputs_.empty() && in_flight_ == 0); });
   }
   double stamp_s = 0.0;
-  Transform T_W_B = Transform::Identity();
+  Transform T_W_B;  // set under the lock below
   std::uint64_t version = 0;
   {
     std::lock_guard<std::mutex> lock(layers_mutex_);

@@ -352,19 +352,38 @@ std::shared_ptr<const EsdfMap> PlanningLayers::publishEsdfCopy() {
   }
   EsdfCopy* copy = nullptr;
   for (EsdfCopy& c : esdf_copies_) {
-    if (c.map.use_count() == 1) {  // no snapshot holds it (see reuse())
+    std::lock_guard<std::mutex> lock(c.lease->mutex);
+    if (!c.lease->held) {  // no snapshot holds it
+      c.lease->held = true;
       copy = &c;
       break;
     }
   }
   if (copy == nullptr) {
-    esdf_copies_.push_back({std::make_shared<EsdfMap>(config_.esdf), {}, true});
+    EsdfCopy fresh;
+    fresh.map = std::make_shared<EsdfMap>(config_.esdf);
+    esdf_copies_.push_back(std::move(fresh));
     copy = &esdf_copies_.back();
+    copy->lease->held = true;  // not yet shared with any other thread
   }
   if (copy->stale || !copy->map->copyCells(esdf_, copy->pending)) copy->map->copyFrom(esdf_);
   copy->pending.clear();
   copy->stale = false;
-  return copy->map;
+  // What snapshots hold: the copy, and a release that hands it back to the pool.
+  struct Holder {
+    Holder(std::shared_ptr<EsdfMap> m, std::shared_ptr<EsdfLease> l)
+        : map(std::move(m)), lease(std::move(l)) {}
+    Holder(const Holder&) = delete;
+    Holder& operator=(const Holder&) = delete;
+    ~Holder() {
+      std::lock_guard<std::mutex> lock(lease->mutex);
+      lease->held = false;
+    }
+    std::shared_ptr<EsdfMap> map;
+    std::shared_ptr<EsdfLease> lease;
+  };
+  const auto holder = std::make_shared<const Holder>(copy->map, copy->lease);
+  return std::shared_ptr<const EsdfMap>(holder, holder->map.get());
 }
 
 void PlanningLayers::planningLoop() {

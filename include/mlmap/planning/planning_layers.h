@@ -130,8 +130,16 @@ class PlanningLayers {
   // ESDF computation (planning thread, or the local-global stage without one). The field is
   // updated incrementally in esdf_ (never published); snapshots get pooled copies of it, each
   // brought up to date by copying the cells changed since it was last filled.
+  /// Whether a published copy is still held by a snapshot. The last holder's release clears
+  /// `held` under the mutex, so the planning thread's next write to the copy happens after
+  /// every read of it (a plain use_count() check gives no such order).
+  struct EsdfLease {
+    std::mutex mutex;
+    bool held = false;
+  };
   struct EsdfCopy {
     std::shared_ptr<EsdfMap> map;
+    std::shared_ptr<EsdfLease> lease = std::make_shared<EsdfLease>();
     std::vector<std::uint32_t> pending;  // cells esdf_ changed since map was filled
     bool stale = true;                   // map must be copied whole
   };
