@@ -14,6 +14,7 @@
 #include <iostream>
 #include <optional>
 #include <thread>
+#include <vector>
 
 namespace {
 
@@ -52,9 +53,8 @@ void logNodeMessage(LogLevel level, const std::string& message) {
 void logInputs(const mlmap::dds::NodeConfig& config, const mlmap::dds::MappingNode& node) {
   // Resolved as the participant was (the configuration was validated before).
   std::string discovery = mlmap::dds::toString(mlmap::dds::resolveDiscoveryRange(config.dds));
-  for (const std::string& peer : mlmap::dds::resolveStaticPeers(config.dds)) {
-    discovery += (discovery.find(" peers ") == std::string::npos ? " peers " : ";") + peer;
-  }
+  const std::vector<std::string> peers = mlmap::dds::resolveStaticPeers(config.dds);
+  for (std::size_t i = 0; i < peers.size(); ++i) discovery += (i == 0 ? " peers " : ";") + peers[i];
   std::string inputs;
   const mlmap::dds::TopicNames& t = config.dds.topics;
   for (const std::string* name : {&t.cloud, &t.depth_image, &t.camera_info, &t.pose, &t.odometry}) {

@@ -524,9 +524,9 @@ TEST(MappingNodeOutput, SubscribersWithIncompatibleQosAreLoggedWithThePolicyAndC
   EXPECT_EQ(node.counters().subscribers_incompatible, 1u) << "only the TRANSIENT_LOCAL reader";
 }
 
-/// The last sample a TakeListener delivered, kept for inspection.
+/// Every sample a TakeListener delivered, in order, kept for inspection.
 template <typename T>
-struct LastSample {
+struct Samples {
   std::mutex mutex;
   std::vector<T> all;
   TakeListener<T> listener{[this](T&& sample) {
@@ -559,8 +559,8 @@ TEST(MappingNodeOutput, TheMapGridKeepsWhatTheRollingGridLeftBehindOnAFixedLatti
   NodeConfig config = nodeConfig(kDomain);
   config.dds.rates.map_grid_hz = 50.0;
   config.dds.rates.grid_hz = 50.0;
-  LastSample<nav_msgs::OccupancyGrid_> maps;
-  LastSample<nav_msgs::OccupancyGrid_> grids;
+  Samples<nav_msgs::OccupancyGrid_> maps;
+  Samples<nav_msgs::OccupancyGrid_> grids;
   const ParticipantPtr ground = createParticipant(localhostConfig(kDomain), "ground");
   fdds::Subscriber* subscriber = ground->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
   ASSERT_NE(createReader<nav_msgs::OccupancyGrid_PubSubType>(

@@ -29,14 +29,8 @@ done
 rm -rf "$out" && mkdir -p "$out"
 
 tag=mlmap$$
-pids=()
-cleanup() {
-  for p in "${pids[@]}"; do kill -9 "$p" 2>/dev/null; done
-  wait 2>/dev/null
-}
-trap cleanup EXIT
 # shellcheck source=../support/netns.sh
-source "$here/../support/netns.sh"
+source "$here/../support/netns.sh"   # pids, killed on exit; netns_new; in_ns
 netns_pid=""
 netns_new; on=$netns_pid
 netns_new; ground=$netns_pid

@@ -19,14 +19,8 @@ for tool in ip unshare nsenter; do
 done
 rm -rf "$out" && mkdir -p "$out"
 tag=mlsp$$
-pids=()
-cleanup() {
-  for p in "${pids[@]}"; do kill -9 "$p" 2>/dev/null; done
-  wait 2>/dev/null
-}
-trap cleanup EXIT
 # shellcheck source=../support/netns.sh
-source "$here/../support/netns.sh"
+source "$here/../support/netns.sh"   # pids, killed on exit; netns_new; in_ns
 netns_pid=""
 netns_new; vehicle=$netns_pid
 netns_new; ground=$netns_pid
@@ -66,6 +60,8 @@ kill -INT "$node"; wait "$node"; node_rc=$?
 for f in node_without inspect_without node_with inspect_with; do echo "== $f"; cat "$out/$f.log"; done
 echo "without peers: inspect $without_rc; with peers: inspect $with_rc, node $node_rc"
 [ $without_rc -ne 0 ] || fail "the status crossed without static peers: the test does not isolate them"
+grep -q "mlmap/status *expected, nothing received" "$out/inspect_without.log" ||
+  fail "without static peers the ground station failed for another reason than no discovery"
 [ $with_rc -eq 0 ] || fail "ROS_STATIC_PEERS=10.78.0.2: the ground station got no status"
 [ $node_rc -eq 0 ] || fail "mlmap_node did not stop cleanly"
 echo "OK: the static peer carried discovery over a link without multicast"

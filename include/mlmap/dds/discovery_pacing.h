@@ -22,9 +22,7 @@
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
 
-#include <atomic>
 #include <chrono>
-#include <cstdint>
 
 namespace mlmap::dds {
 
@@ -44,16 +42,12 @@ class DiscoveryPacing : public eprosima::fastdds::dds::DomainParticipantListener
   DiscoveryPacing(const DiscoveryPacing&) = delete;
   DiscoveryPacing& operator=(const DiscoveryPacing&) = delete;
 
-  /// New participants paced so far.
-  [[nodiscard]] std::uint64_t participantsPaced() const { return paced_; }
-
   void on_participant_discovery(eprosima::fastdds::dds::DomainParticipant* participant,
                                 eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override;
 
  private:
   eprosima::fastdds::dds::DomainParticipant* participant_;
   std::chrono::milliseconds delay_;
-  std::atomic<std::uint64_t> paced_{0};
 };
 
 }  // namespace mlmap::dds

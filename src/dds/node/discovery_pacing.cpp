@@ -19,7 +19,6 @@ void DiscoveryPacing::on_participant_discovery(fdds::DomainParticipant*,
                                                rtps::ParticipantDiscoveryInfo&& info) {
   if (info.status != rtps::ParticipantDiscoveryInfo::DISCOVERED_PARTICIPANT) return;
   std::this_thread::sleep_for(delay_);  // Fast DDS answers the new participant when this returns
-  ++paced_;
 }
 
 }  // namespace mlmap::dds
