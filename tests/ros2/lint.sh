@@ -5,7 +5,7 @@
 # manifests and the RViz config are checked by test_ground_station_files.py and the bridge's tests.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-python_dirs=(tools/ros2 tests/ros2)
+python_dirs=(tools/ros2 tests/ros2 tests/benchmarks)
 shell_scripts=(docker/run_integration_test.sh docker/ground_entrypoint.sh tests/ros2/lint.sh)
 # The project's other scripts: warnings and errors (quoting, word splitting), not style.
 other_scripts=(tools/*.sh tests/dds/*.sh tests/interop/*.sh tests/integration/*.sh tests/faults/*.sh

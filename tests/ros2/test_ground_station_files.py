@@ -101,7 +101,7 @@ def _imports(path: Path):
 
 
 PYTHON_KEYS = {'numpy': 'python3-numpy', 'pytest': 'python3-pytest', 'yaml': 'python3-yaml'}
-TEST_HELPERS = {'cloud_helpers', 'fake_msgs', 'mlmap_bridge'}
+TEST_HELPERS = {'cloud_helpers', 'fake_msgs', 'marker_reader', 'mlmap_bridge'}
 
 
 def test_bridge_manifest_declares_every_import():
@@ -207,6 +207,16 @@ def test_checker_expects_every_documented_output_with_its_type_and_durability():
     assert len(documented) == 10
     expected = [(e.topic, e.type_name, e.latched) for e in checks.NODE_TOPICS]
     assert sorted(expected) == sorted(documented)
+
+
+def test_checker_rates_are_the_node_default_rates():
+    """Each rate the checker holds the node to is that topic's rates.* in mlmap_node.yaml."""
+    dds = _yaml(REPO / 'config' / 'mlmap_node.yaml')['dds']
+    rate_of = {'awareness': 'awareness_hz', 'local_map': 'local_map_hz', 'grid': 'grid_hz',
+               'esdf_slice': 'esdf_hz', 'esdf_block': 'esdf_hz', 'status': 'status_hz'}
+    expected = {'/' + dds['topics'][topic]: dds['rates'][rate] for topic, rate in rate_of.items()}
+    checked = {e.topic: e.nominal_hz for e in checks.NODE_TOPICS if e.nominal_hz > 0}
+    assert checked == expected
 
 
 def test_nav2_costmaps_read_the_node_grids_with_matching_qos():

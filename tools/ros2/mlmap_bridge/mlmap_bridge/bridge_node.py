@@ -11,15 +11,15 @@ In (mlmap_node's defaults; QoS as idl/README.md lists the writers):
                                                   still gets the last one
   mlmap_msgs/Status                               RELIABLE, KEEP_LAST 10 (small, 1 Hz)
 Out (under output_prefix, RELIABLE so RViz's default subscriptions match):
-  <layer> MarkerArray cube lists (heights / distances as colours), grid (passed through,
-  latched like the input), status (a text above the vehicle) and status_text (String).
+  <layer> MarkerArray cube lists (heights / distances as colours; serialised from numpy
+  arrays, no Python object per voxel), grid (passed through, latched like the input),
+  status (a text above the vehicle) and status_text (String).
 """
 
 from functools import partial
 import time
 from typing import Any, Dict, List, Optional
 
-from geometry_msgs.msg import Point
 from mlmap_msgs.msg import Status
 from nav_msgs.msg import OccupancyGrid
 from rcl_interfaces.msg import ParameterDescriptor
@@ -28,15 +28,14 @@ from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import PointCloud2
-from std_msgs.msg import ColorRGBA, Header, String
+from std_msgs.msg import Header, String
 from visualization_msgs.msg import Marker, MarkerArray
 
 from .conversions import CloudLayoutError, LatestThrottle, status_text
 from .markers import cloud_layer_markers, marker_array, MessageTypes, text_marker
 from .parameters import CLOUD_LAYERS, CloudLayer, in_namespace, PARAMETERS, prefixed_frame
 
-TYPES = MessageTypes(Marker=Marker, MarkerArray=MarkerArray, Point=Point,
-                     ColorRGBA=ColorRGBA, Header=Header)
+TYPES = MessageTypes(Marker=Marker, MarkerArray=MarkerArray, Header=Header)
 
 
 def _qos(depth: int, reliable: bool, latched: bool) -> QoSProfile:
@@ -115,9 +114,12 @@ class MlmapBridge(Node):
         self.get_logger().info(f'{topic} -> {output}')
 
     def _publish_cloud_layer(self, layer: CloudLayer, publisher, cloud: PointCloud2) -> None:
-        """Convert one cloud into markers; a malformed cloud is logged, not shown."""
+        """Convert one cloud into markers; a malformed cloud is logged, not shown.
+
+        The markers come serialised (no Python object per voxel); rclpy publishes bytes as is.
+        """
         try:
-            markers = cloud_layer_markers(TYPES, layer, cloud, self.settings)
+            markers = cloud_layer_markers(layer, cloud, self.settings)
         except (CloudLayoutError, ValueError) as error:
             self.get_logger().warning(f'{layer.name}: {error}', throttle_duration_sec=5.0)
             return

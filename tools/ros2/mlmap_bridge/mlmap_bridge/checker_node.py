@@ -1,17 +1,20 @@
 """ROS 2 program `mlmap_check`: the verdict of the container integration test.
 
 Subscribes to every mlmap_node output and every bridge output (checks.EXPECTED_TOPICS) with
-the type the topic must have, feeds each sample to its plausibility check (checks.py, unit
-tested without ROS), waits until every topic passed or the time is up, then runs
-`ros2 topic list -t` and checks that it lists each topic with its type. Prints one line per
-topic and exits 0 when everything passed, 1 otherwise.
+the type the topic must have (BEST_EFFORT where the bridge reads so, RELIABLE elsewhere), feeds
+each sample to its plausibility check and notes its arrival time and stamp (checks.py, unit
+tested without ROS). It waits until every topic passed and the rates were observed for
+--rate-window seconds, or the time is up; then it asks the ROS graph: `ros2 topic list -t`
+lists each topic with its type, `ros2 node list` lists mlmap_node once, and
+`ros2 topic info -v` shows mlmap_node's publisher of each of its topics with the type hash and
+QoS. Prints one line per topic and exits 0 when everything passed, 1 otherwise.
 """
 
 import argparse
 import subprocess
 import sys
 import time
-from typing import List, Optional
+from typing import List, Optional, Tuple
 
 import rclpy
 from rclpy.node import Node
@@ -19,35 +22,51 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from rclpy.utilities import remove_ros_args
 from rosidl_runtime_py.utilities import get_message
 
-from .checks import (bridge_topics, check_topic_list, Frames, node_topics, parse_topic_list,
-                     TopicResult, verdict)
+from .checks import (bridge_topics, check_node_list, check_topic_info, check_topic_list,
+                     Expectation, Frames, MAX_AGE_S, node_topics, parse_node_list,
+                     parse_topic_list, RATE_FRACTION, sample_stamp_s, TopicResult, verdict)
 from .parameters import prefixed_frame
 
-TOPIC_LIST_COMMAND = ['ros2', 'topic', 'list', '-t', '--no-daemon', '--spin-time', '5']
+DIRECT = ['--no-daemon', '--spin-time', '5']  # each command discovers the graph itself
 
 
 def _subscribe(node: Node, result: TopicResult, frames: Frames) -> None:
-    """Subscribe to one expected topic; RELIABLE so large samples survive a lossy UDP path."""
+    """Subscribe to one expected topic with the bridge's reliability, noting each arrival."""
     e = result.expectation
     qos = QoSProfile(
-        depth=1, history=HistoryPolicy.KEEP_LAST, reliability=ReliabilityPolicy.RELIABLE,
+        depth=1, history=HistoryPolicy.KEEP_LAST,
+        reliability=ReliabilityPolicy.RELIABLE if e.reliable else ReliabilityPolicy.BEST_EFFORT,
         durability=DurabilityPolicy.TRANSIENT_LOCAL if e.latched else DurabilityPolicy.VOLATILE)
 
     def on_sample(msg):
-        result.record(e.check(msg, frames))
+        result.record(e.check(msg, frames), time.time(), sample_stamp_s(msg))
 
     node.create_subscription(get_message(e.type_name), e.topic, on_sample, qos)
 
 
-def _topic_list_problems(expected) -> List[str]:
-    """Run `ros2 topic list -t` and compare it with the expected topics and types."""
+def _run(command: List[str]) -> Tuple[Optional[str], List[str]]:
+    """Run a ros2 command; return its output, or None and why it failed."""
     try:
-        listed = subprocess.run(TOPIC_LIST_COMMAND, capture_output=True, text=True,
-                                timeout=60, check=True).stdout
+        output = subprocess.run(command, capture_output=True, text=True, timeout=60,
+                                check=True).stdout
     except (OSError, subprocess.SubprocessError) as error:
-        return [f'`{" ".join(TOPIC_LIST_COMMAND)}` failed: {error}']
-    print(listed, flush=True)
-    return check_topic_list(parse_topic_list(listed), expected)
+        return None, [f'`{" ".join(command)}` failed: {error}']
+    print(f'$ {" ".join(command)}\n{output}', flush=True)
+    return output, []
+
+
+def _graph_problems(expected: List[Expectation], node_topics_: List[Expectation],
+                    namespace: str) -> List[str]:
+    """Ask the ROS graph about the topics, the node and the node's publishers."""
+    listed, problems = _run(['ros2', 'topic', 'list', '-t'] + DIRECT)
+    if listed is not None:
+        problems += check_topic_list(parse_topic_list(listed), expected)
+    nodes, failed = _run(['ros2', 'node', 'list'] + DIRECT)
+    problems += failed if nodes is None else check_node_list(parse_node_list(nodes), namespace)
+    for e in node_topics_:
+        info, failed = _run(['ros2', 'topic', 'info', '-v', e.topic] + DIRECT)
+        problems += failed if info is None else check_topic_info(info, e, namespace)
+    return problems
 
 
 def main(argv: Optional[List[str]] = None) -> int:
@@ -71,8 +90,16 @@ def main(argv: Optional[List[str]] = None) -> int:
                         help="mlmap_node's dds.sensor_frame")
     parser.add_argument('--frame-prefix', default='',
                         help="mlmap_node's dds.frame_prefix (of the body and sensor frames)")
+    parser.add_argument('--rate-window', type=float, default=10.0,
+                        help='seconds to observe the rates for, from the first sample')
+    parser.add_argument('--rate-fraction', type=float, default=RATE_FRACTION,
+                        help="least share of mlmap_node's default rate a topic must keep "
+                             '(0: rates not checked)')
+    parser.add_argument('--max-age', type=float, default=MAX_AGE_S,
+                        help='seconds a sample may arrive after its stamp (the youngest one)')
     args = parser.parse_args(remove_ros_args(sys.argv if argv is None else argv)[1:])
-    expected = node_topics(args.namespace)
+    own = node_topics(args.namespace)
+    expected = own
     if not args.node_only:
         expected += bridge_topics(args.namespace, args.viz_prefix)
     results = [TopicResult(e) for e in expected]
@@ -83,13 +110,16 @@ def main(argv: Optional[List[str]] = None) -> int:
     node = Node('mlmap_check')
     for result in results:
         _subscribe(node, result, frames)
-    deadline = time.monotonic() + args.timeout
-    while rclpy.ok() and time.monotonic() < deadline and not all(r.passed for r in results):
+    start = time.monotonic()
+    deadline = start + args.timeout
+    while rclpy.ok() and time.monotonic() < deadline and not (
+            all(r.passed for r in results) and time.monotonic() - start >= args.rate_window):
         rclpy.spin_once(node, timeout_sec=0.2)
     node.destroy_node()
     rclpy.try_shutdown()
 
-    passed, report = verdict(results, _topic_list_problems(expected))
+    passed, report = verdict(results, _graph_problems(expected, own, args.namespace),
+                             args.rate_fraction, args.max_age)
     print(report, flush=True)
     return 0 if passed else 1
 

@@ -17,7 +17,7 @@ from typing import Callable, Dict, Iterable, List, Optional, Tuple
 import numpy as np
 
 from .conversions import CloudLayoutError, grid_spacing, read_cloud_fields
-from .markers import CUBE_LIST, TEXT_VIEW_FACING
+from .marker_cdr import CUBE_LIST, TEXT_VIEW_FACING
 from .parameters import in_namespace
 
 FLOAT32 = 7
@@ -25,6 +25,9 @@ SUPPORTED_VERSION = 1         # mlmap_msgs/VoxelBlock
 SUPPORTED_STATUS_VERSION = 2  # mlmap_msgs/Status (the frame checks' counters since 2)
 MAX_COORDINATE_M = 1.0e5   # a map coordinate beyond this is garbage, not a place
 GRID_TOLERANCE = 0.01      # voxels: how far from (i + 0.5) * edge a centre may sit
+RATE_FRACTION = 0.5        # a topic keeps its rate at half its nominal rate or more
+MAX_AGE_S = 2.0            # fresh: the youngest sample's stamp at most this old on arrival
+NODE_NAME = 'mlmap_node'
 
 Check = Callable[[object, 'Frames'], List[str]]
 
@@ -265,12 +268,15 @@ def check_status_text(msg, frames: Frames) -> List[str]:
 
 @dataclass(frozen=True)
 class Expectation:
-    """A topic that must reach ROS 2: its type, whether it is latched, and its check."""
+    """A topic that must reach ROS 2: its type, QoS, rate, freshness and its check."""
 
     topic: str
     type_name: str      # as `ros2 topic list -t` prints it
     latched: bool       # published TRANSIENT_LOCAL: subscribe so, to get the latched sample
     check: Check
+    reliable: bool = True   # False: subscribed BEST_EFFORT, as the bridge reads it
+    nominal_hz: float = 0.0  # mlmap_node's default rate (rates.*); 0: the rate is not checked
+    fresh: bool = True      # the samples carry the stamp of recent data (checked on arrival)
 
 
 CLOUD = 'sensor_msgs/msg/PointCloud2'
@@ -286,16 +292,23 @@ def node_topics(namespace: str = '') -> Tuple[Expectation, ...]:
     def ns(topic: str) -> str:
         return in_namespace(namespace, topic)
     return (
-        Expectation(ns('/mlmap/awareness/occupied'), CLOUD, False, check_awareness_cloud),
-        Expectation(ns('/mlmap/local_map/occupied'), CLOUD, False, check_occupied_cloud),
+        Expectation(ns('/mlmap/awareness/occupied'), CLOUD, False, check_awareness_cloud,
+                    reliable=False, nominal_hz=10.0),
+        Expectation(ns('/mlmap/local_map/occupied'), CLOUD, False, check_occupied_cloud,
+                    reliable=False, nominal_hz=5.0),
+        # Sent only when it changed: no rate of its own.
         Expectation(ns('/mlmap/global_map/occupied'), CLOUD, True, check_occupied_cloud),
-        Expectation(ns('/mlmap/grid'), 'nav_msgs/msg/OccupancyGrid', True, check_grid),
-        Expectation(ns('/mlmap/esdf/slice'), CLOUD, False, check_esdf_slice),
+        Expectation(ns('/mlmap/grid'), 'nav_msgs/msg/OccupancyGrid', True, check_grid,
+                    nominal_hz=2.0),
+        Expectation(ns('/mlmap/esdf/slice'), CLOUD, False, check_esdf_slice,
+                    reliable=False, nominal_hz=2.0),
         Expectation(ns('/mlmap/esdf/block'), 'mlmap_msgs/msg/VoxelBlock', False,
-                    check_voxel_block),
-        Expectation(ns('/mlmap/status'), 'mlmap_msgs/msg/Status', False, check_status),
+                    check_voxel_block, nominal_hz=2.0),
+        Expectation(ns('/mlmap/status'), 'mlmap_msgs/msg/Status', False, check_status,
+                    nominal_hz=1.0),
         Expectation('/tf', 'tf2_msgs/msg/TFMessage', False, check_tf),
-        Expectation('/tf_static', 'tf2_msgs/msg/TFMessage', True, check_tf_static),
+        # The mounting: stamped once, when it was first published.
+        Expectation('/tf_static', 'tf2_msgs/msg/TFMessage', True, check_tf_static, fresh=False),
         Expectation(ns('/mlmap/map'), 'nav_msgs/msg/OccupancyGrid', True, check_grid),
     )
 
@@ -304,14 +317,16 @@ def bridge_topics(namespace: str = '',
                   output_prefix: str = '/mlmap/viz') -> Tuple[Expectation, ...]:
     """Return the bridge's outputs with its parameters `namespace` and `output_prefix`."""
     prefix = in_namespace(namespace, output_prefix).rstrip('/')
+    # The overlay text has a zero stamp (RViz places it with the latest TF); a String has none.
     return (
         Expectation(f'{prefix}/awareness', MARKERS, False, check_cube_markers),
         Expectation(f'{prefix}/local_map', MARKERS, False, check_cube_markers),
         Expectation(f'{prefix}/global_map', MARKERS, True, check_cube_markers),
         Expectation(f'{prefix}/esdf_slice', MARKERS, False, check_cube_markers),
         Expectation(f'{prefix}/grid', 'nav_msgs/msg/OccupancyGrid', True, check_grid),
-        Expectation(f'{prefix}/status', MARKERS, False, check_status_markers),
-        Expectation(f'{prefix}/status_text', 'std_msgs/msg/String', False, check_status_text),
+        Expectation(f'{prefix}/status', MARKERS, False, check_status_markers, fresh=False),
+        Expectation(f'{prefix}/status_text', 'std_msgs/msg/String', False, check_status_text,
+                    fresh=False),
     )
 
 
@@ -346,45 +361,178 @@ def check_topic_list(topics: Dict[str, List[str]],
     return problems
 
 
+def sample_stamp_s(msg) -> Optional[float]:
+    """Return the newest header stamp of a sample [s], or None when it carries none (or zero).
+
+    A message with a header gives its stamp; a TFMessage or MarkerArray the newest of its
+    transforms' or markers' stamps.
+    """
+    headers = []
+    if hasattr(msg, 'header'):
+        headers = [msg.header]
+    elif hasattr(msg, 'transforms'):
+        headers = [t.header for t in msg.transforms]
+    elif hasattr(msg, 'markers'):
+        headers = [m.header for m in msg.markers]
+    stamps = [h.stamp.sec + h.stamp.nanosec * 1e-9 for h in headers]
+    stamps = [t for t in stamps if t > 0]
+    return max(stamps) if stamps else None
+
+
 @dataclass
 class TopicResult:
-    """What the checker saw on one topic."""
+    """What the checker saw on one topic: plausibility, arrival times and ages."""
 
     expectation: Expectation
     samples: int = 0
     passed: bool = False
     last_problems: Tuple[str, ...] = ('no sample received',)
+    first_arrival_s: Optional[float] = None
+    last_arrival_s: Optional[float] = None
+    youngest_age_s: Optional[float] = None
 
-    def record(self, problems: List[str]) -> None:
-        """Count a sample; one plausible sample passes the topic for good.
+    def record(self, problems: List[str], received_s: Optional[float] = None,
+               stamp_s: Optional[float] = None) -> None:
+        """Count a sample received at received_s (wall clock [s]) with stamp_s (or None).
 
-        Early samples may fairly fail (a status before the first frame is mapped, a grid
-        still all unknown), so a failure after a pass changes nothing.
+        One plausible sample passes the topic for good: early samples may fairly fail (a
+        status before the first frame is mapped, a grid still all unknown), so a failure
+        after a pass changes nothing.
         """
         self.samples += 1
         if not problems:
             self.passed = True
         elif not self.passed:
             self.last_problems = tuple(problems)
+        if received_s is not None:
+            if self.first_arrival_s is None:
+                self.first_arrival_s = received_s
+            self.last_arrival_s = received_s
+            if stamp_s is not None:
+                age = received_s - stamp_s
+                if self.youngest_age_s is None or age < self.youngest_age_s:
+                    self.youngest_age_s = age
+
+    def rate_hz(self) -> Optional[float]:
+        """Return the samples per second between the first and last arrival (None below 3)."""
+        if self.samples < 3 or self.last_arrival_s <= self.first_arrival_s:
+            return None
+        return (self.samples - 1) / (self.last_arrival_s - self.first_arrival_s)
+
+    def timing_problems(self, rate_fraction: float = RATE_FRACTION,
+                        max_age_s: float = MAX_AGE_S) -> List[str]:
+        """Check the rate (at least rate_fraction of nominal) and freshness of the samples.
+
+        A latched first sample may be old, so freshness looks at the youngest sample: the
+        topic is fresh when some sample arrived at most max_age_s after its stamp (a stamp
+        ahead of the receiver's clock by more than max_age_s is a clock problem, reported too).
+        """
+        e, problems = self.expectation, []
+        if e.nominal_hz > 0 and rate_fraction > 0 and self.samples:
+            rate = self.rate_hz()
+            wanted = rate_fraction * e.nominal_hz
+            if rate is None or rate < wanted:
+                got = 'too few samples' if rate is None else f'{rate:.2f} Hz'
+                problems.append(f'rate {got}, expected >= {wanted:.2f} Hz '
+                                f'({rate_fraction:g} of {e.nominal_hz:g} Hz)')
+        if e.fresh and self.samples:
+            age = self.youngest_age_s
+            if age is None:
+                problems.append('no sample carries a stamp')
+            elif not -max_age_s <= age <= max_age_s:
+                problems.append(f'stale: the youngest sample arrived {age:.2f} s after its '
+                                f'stamp (at most {max_age_s:g} s)')
+        return problems
 
 
-def verdict(results: Iterable[TopicResult], topic_list_problems: List[str]) -> Tuple[bool, str]:
-    """Return (passed, report): one line per topic, then the `ros2 topic list` findings."""
+def parse_node_list(output: str) -> List[str]:
+    """Parse `ros2 node list` output (one fully qualified node name a line)."""
+    return [line.strip() for line in output.splitlines() if line.strip().startswith('/')]
+
+
+def node_fqn(namespace: str = '') -> str:
+    """Return the fully qualified name of mlmap_node in its dds.ns namespace."""
+    return in_namespace(namespace, f'/{NODE_NAME}')
+
+
+def check_node_list(names: List[str], namespace: str = '') -> List[str]:
+    """mlmap_node is in the graph, exactly once."""
+    count = names.count(node_fqn(namespace))
+    if count != 1:
+        return [f'{node_fqn(namespace)} listed {count} times among {names}']
+    return []
+
+
+def parse_topic_info(output: str) -> Tuple[Optional[int], List[Dict[str, str]]]:
+    """Parse `ros2 topic info -v`: the publisher count and each endpoint's "Key: value" lines.
+
+    Endpoints are the blocks that start with "Node name:"; nested QoS lines (indented) are kept
+    under their own keys ("Reliability", "Durability", ...).
+    """
+    count, endpoints = None, []
+    for line in output.splitlines():
+        key, sep, value = line.strip().partition(':')
+        if not sep:
+            continue
+        value = value.strip()
+        if key == 'Publisher count':
+            count = int(value)
+        elif key == 'Node name':
+            endpoints.append({key: value})
+        elif endpoints:
+            endpoints[-1].setdefault(key, value)
+    return count, endpoints
+
+
+def check_topic_info(output: str, e: Expectation, namespace: str = '') -> List[str]:
+    """mlmap_node's publisher of e is in `ros2 topic info -v`: its node, type, hash and QoS."""
+    count, endpoints = parse_topic_info(output)
+    if not count:
+        return [f'{e.topic}: publisher count {count}']
+    node_ns = '/' + namespace.strip('/')
+    ours = [p for p in endpoints if p.get('Endpoint type') == 'PUBLISHER'
+            and p.get('Node name') == NODE_NAME and p.get('Node namespace') == node_ns]
+    if not ours:
+        return [f'{e.topic}: no publisher of node {node_fqn(namespace)} among {count}']
+    p, problems = ours[0], []
+    if p.get('Topic type') != e.type_name:
+        problems.append(f'{e.topic}: type {p.get("Topic type")}, expected {e.type_name}')
+    if not p.get('Topic type hash', '').startswith('RIHS01_'):
+        problems.append(f'{e.topic}: type hash {p.get("Topic type hash")!r}')
+    if p.get('Reliability') != 'RELIABLE':
+        problems.append(f'{e.topic}: reliability {p.get("Reliability")}, expected RELIABLE')
+    durability = 'TRANSIENT_LOCAL' if e.latched else 'VOLATILE'
+    if p.get('Durability') != durability:
+        problems.append(f'{e.topic}: durability {p.get("Durability")}, expected {durability}')
+    return problems
+
+
+def verdict(results: Iterable[TopicResult], graph_problems: List[str],
+            rate_fraction: float = RATE_FRACTION,
+            max_age_s: float = MAX_AGE_S) -> Tuple[bool, str]:
+    """Return (passed, report): one line per topic, then the ROS graph's findings.
+
+    A topic passes when one sample was plausible and its rate and freshness hold;
+    graph_problems are what `ros2 topic list`, `ros2 node list` and `ros2 topic info` found.
+    """
     lines, failed, count = [], 0, 0
     for r in results:
         count += 1
         e = r.expectation
-        if r.passed:
-            lines.append(f'PASS {e.topic} [{e.type_name}] ({r.samples} samples)')
+        problems = ([] if r.passed else list(r.last_problems)) + r.timing_problems(
+            rate_fraction, max_age_s)
+        rate = r.rate_hz()
+        seen = f'{r.samples} samples' + (f', {rate:.1f} Hz' if rate is not None else '')
+        if not problems:
+            lines.append(f'PASS {e.topic} [{e.type_name}] ({seen})')
         else:
             failed += 1
-            lines.append(f'FAIL {e.topic} [{e.type_name}] ({r.samples} samples): '
-                         + '; '.join(r.last_problems))
-    for problem in topic_list_problems:
-        lines.append(f'FAIL ros2 topic list: {problem}')
-    if not topic_list_problems:
-        lines.append('PASS ros2 topic list: every topic with its type')
-    passed = failed == 0 and not topic_list_problems
+            lines.append(f'FAIL {e.topic} [{e.type_name}] ({seen}): ' + '; '.join(problems))
+    for problem in graph_problems:
+        lines.append(f'FAIL ROS graph: {problem}')
+    if not graph_problems:
+        lines.append('PASS ROS graph: topics with their types, the node, its publishers')
+    passed = failed == 0 and not graph_problems
     lines.append(f'{"PASSED" if passed else "FAILED"}: {count - failed} of {count} topics '
-                 f'plausible, topic list {"ok" if not topic_list_problems else "wrong"}')
+                 f'plausible, ROS graph {"ok" if not graph_problems else "wrong"}')
     return passed, '\n'.join(lines)

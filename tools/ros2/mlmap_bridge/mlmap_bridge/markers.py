@@ -1,7 +1,8 @@
 """Builds the RViz2 messages of the bridge from numpy arrays, without importing rclpy.
 
-The message classes come in as arguments (`MessageTypes`): the node passes the real ones
-(visualization_msgs/Marker, geometry_msgs/Point, ...), the tests pass strict stand-ins that
+The cube lists of the map layers are serialised straight from numpy arrays (marker_cdr.py):
+no Python object per voxel. The small text marker is filled into message classes that come in
+as arguments (`MessageTypes`): the node passes the real ones, the tests strict stand-ins that
 check field names and Python types as rclpy's generated classes do. So the code that fills
 markers runs in the unit tests, and only the topic wiring is left to bridge_node.py.
 """
@@ -9,17 +10,10 @@ markers runs in the unit tests, and only the topic wiring is left to bridge_node
 from dataclasses import dataclass
 from typing import Any, Mapping
 
-import numpy as np
-
 from .conversions import cloud_xyz, distance_colors, grid_spacing, height_colors
 from .conversions import read_cloud_fields, thin_evenly
+from .marker_cdr import ADD, cube_list_array, TEXT_VIEW_FACING
 from .parameters import CloudLayer
-
-# visualization_msgs/Marker constants.
-CUBE_LIST = 6
-TEXT_VIEW_FACING = 9
-ADD = 0
-DELETE = 2
 
 # mlmap's default local_map.resolution_m: the cube edge when a cloud does not show its own.
 DEFAULT_VOXEL_EDGE_M = 0.2
@@ -31,37 +25,7 @@ class MessageTypes:
 
     Marker: Any
     MarkerArray: Any
-    Point: Any
-    ColorRGBA: Any
     Header: Any
-
-
-def cube_list(types: MessageTypes, header, ns: str, xyz: np.ndarray, rgba: np.ndarray,
-              size_m: float):
-    """Make a CUBE_LIST marker with one cube of edge size_m per point, each its own colour.
-
-    An empty cloud gives a DELETE of the same marker, so RViz drops what it showed before.
-    """
-    if len(xyz) != len(rgba):
-        raise ValueError(f'{len(xyz)} points but {len(rgba)} colours')
-    marker = types.Marker()
-    marker.header = header
-    marker.ns = ns
-    marker.id = 0
-    if len(xyz) == 0:
-        marker.action = DELETE
-        return marker
-    if not size_m > 0:
-        raise ValueError(f'cube size must be positive, got {size_m}')
-    marker.type = CUBE_LIST
-    marker.action = ADD
-    marker.pose.orientation.w = 1.0
-    marker.scale.x = marker.scale.y = marker.scale.z = float(size_m)
-    marker.color.r = marker.color.g = marker.color.b = marker.color.a = 1.0
-    marker.points = [types.Point(x=x, y=y, z=z) for x, y, z in np.asarray(xyz, float).tolist()]
-    marker.colors = [types.ColorRGBA(r=r, g=g, b=b, a=a)
-                     for r, g, b, a in np.asarray(rgba, float).tolist()]
-    return marker
 
 
 def text_marker(types: MessageTypes, frame_id: str, ns: str, text: str, height_m: float,
@@ -93,10 +57,11 @@ def marker_array(types: MessageTypes, *markers):
     return array
 
 
-def cloud_layer_markers(types: MessageTypes, layer: CloudLayer, cloud,
-                        settings: Mapping[str, Any]):
-    """Turn one PointCloud2 of a mlmap layer into the MarkerArray RViz shows.
+def cloud_layer_markers(layer: CloudLayer, cloud, settings: Mapping[str, Any]) -> bytes:
+    """Turn one PointCloud2 of a mlmap layer into the MarkerArray RViz shows, serialised.
 
+    The result is a CDR MarkerArray with one cube list (marker_cdr.cube_list_array), which
+    rclpy's Publisher.publish() takes as is.
     settings holds the bridge's parameters by name (max_cubes, the layer's cube size,
     height_min_m / height_max_m, esdf_max_distance_m). Cubes are coloured by height, or by
     the `intensity` field (the ESDF distance) for a layer coloured by distance. The cube edge
@@ -121,4 +86,6 @@ def cloud_layer_markers(types: MessageTypes, layer: CloudLayer, cloud,
     else:
         rgba = height_colors(xyz[:, 2], float(settings['height_min_m']),
                              float(settings['height_max_m']))
-    return marker_array(types, cube_list(types, cloud.header, layer.name, xyz, rgba, size_m))
+    stamp = cloud.header.stamp
+    return cube_list_array(stamp.sec, stamp.nanosec, cloud.header.frame_id, layer.name, xyz,
+                           rgba, size_m)

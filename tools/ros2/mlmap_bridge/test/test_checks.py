@@ -11,12 +11,12 @@ from mlmap_bridge import checks as ck
 from mlmap_bridge import markers as mk
 from mlmap_bridge.conversions import status_text
 from mlmap_bridge.parameters import CLOUD_LAYERS, defaults
+from marker_reader import read_marker_array
 import numpy as np
 import pytest
 
 FRAMES = ck.Frames()
 TYPES = mk.MessageTypes(Marker=fake_msgs.Marker, MarkerArray=fake_msgs.MarkerArray,
-                        Point=fake_msgs.Point, ColorRGBA=fake_msgs.ColorRGBA,
                         Header=fake_msgs.Header)
 XYZ = [field('x', 0, FLOAT32), field('y', 4, FLOAT32), field('z', 8, FLOAT32)]
 XYZI = XYZ + [field('intensity', 12, FLOAT32)]
@@ -212,15 +212,16 @@ def test_tf_and_tf_static():
 def test_the_checker_accepts_what_the_bridge_builds(layer):
     """Each cloud layer through cloud_layer_markers passes check_cube_markers."""
     cloud = esdf_slice() if layer.color_by == 'distance' else occupied_cloud()
-    array = mk.cloud_layer_markers(TYPES, layer, cloud, defaults())
+    array = read_marker_array(mk.cloud_layer_markers(layer, cloud, defaults()))
     assert ck.check_cube_markers(array, FRAMES) == []
 
 
 def test_cube_marker_defects_are_reported():
     """No cube list, a DELETE only, colours missing or out of range, zero size."""
-    good = mk.cloud_layer_markers(TYPES, CLOUD_LAYERS[1], occupied_cloud(), defaults())
-    deleted = mk.cloud_layer_markers(TYPES, CLOUD_LAYERS[1], make_cloud([], XYZ, 12, width=0),
-                                     defaults())
+    good = read_marker_array(mk.cloud_layer_markers(CLOUD_LAYERS[1], occupied_cloud(),
+                                                    defaults()))
+    deleted = read_marker_array(mk.cloud_layer_markers(
+        CLOUD_LAYERS[1], make_cloud([], XYZ, 12, width=0), defaults()))
     assert ck.check_cube_markers(deleted, FRAMES)
     fewer_colors = copy.deepcopy(good)
     fewer_colors.markers[0].colors = fewer_colors.markers[0].colors[:-1]
@@ -270,23 +271,166 @@ def test_topic_list_parsing_and_check():
 
 def test_verdict():
     """A topic passes once one sample passed; the report names what failed and why."""
-    grid_result = ck.TopicResult(ck.NODE_TOPICS[3])
-    grid_result.record(['every cell unknown'])
-    grid_result.record([])
-    grid_result.record(['every cell unknown'])
+    grid_result = ck.TopicResult(ck.NODE_TOPICS[2])  # global map: no rate, stamps checked
+    grid_result.record(['every cell unknown'], 100.0, 99.9)
+    grid_result.record([], 101.0, 100.9)
+    grid_result.record(['every cell unknown'], 102.0, 101.9)
     status_result = ck.TopicResult(ck.NODE_TOPICS[6])
     status_result.record(['no frame mapped yet'])
     silent = ck.TopicResult(ck.NODE_TOPICS[0])
     passed, report = ck.verdict([grid_result, status_result, silent], [])
     assert not passed
     lines = report.splitlines()
-    assert lines[0] == 'PASS /mlmap/grid [nav_msgs/msg/OccupancyGrid] (3 samples)'
+    assert lines[0] == ('PASS /mlmap/global_map/occupied [sensor_msgs/msg/PointCloud2] '
+                        '(3 samples, 1.0 Hz)')
     assert lines[1].startswith('FAIL /mlmap/status') and 'no frame mapped yet' in lines[1]
     assert lines[2].endswith('(0 samples): no sample received')
-    assert lines[-1] == 'FAILED: 1 of 3 topics plausible, topic list ok'
+    assert lines[-1] == 'FAILED: 1 of 3 topics plausible, ROS graph ok'
     passed, report = ck.verdict([grid_result], ['/tf missing from `ros2 topic list`'])
-    assert not passed and 'FAIL ros2 topic list: /tf missing' in report
+    assert not passed and 'FAIL ROS graph: /tf missing' in report
     assert ck.verdict([grid_result], [])[0]
+
+
+def _fed(expectation, rate_hz, count, age_s=0.05, start_s=1000.0):
+    """A TopicResult that got count plausible samples at rate_hz, each age_s after its stamp."""
+    result = ck.TopicResult(expectation)
+    for i in range(count):
+        received = start_s + i / rate_hz
+        result.record([], received, received - age_s)
+    return result
+
+
+def test_rates_are_checked_against_half_the_nominal_rate():
+    """The awareness layer (10 Hz nominal) passes at 6 Hz, fails at 4 Hz or with 2 samples."""
+    awareness = ck.NODE_TOPICS[0]
+    assert awareness.nominal_hz == 10.0
+    assert _fed(awareness, 6.0, 20).timing_problems() == []
+    assert _fed(awareness, 6.0, 20).rate_hz() == pytest.approx(6.0)
+    slow = _fed(awareness, 4.0, 20).timing_problems()
+    assert len(slow) == 1 and 'rate 4.00 Hz, expected >= 5.00 Hz' in slow[0]
+    assert 'too few samples' in _fed(awareness, 6.0, 2).timing_problems()[0]
+    assert _fed(awareness, 4.0, 20).timing_problems(rate_fraction=0) == []  # disabled
+    passed, report = ck.verdict([_fed(awareness, 4.0, 20)], [])
+    assert not passed and 'rate 4.00 Hz' in report.splitlines()[0]
+
+
+def test_freshness_is_the_youngest_samples_age():
+    """Stale data, stamps from the future and stampless samples fail; a latched old first
+    sample followed by fresh ones passes; tf_static and the overlay text are exempt."""
+    local = ck.NODE_TOPICS[1]
+    assert _fed(local, 5.0, 10, age_s=0.3).timing_problems() == []
+    stale = _fed(local, 5.0, 10, age_s=5.0).timing_problems()
+    assert len(stale) == 1 and 'stale: the youngest sample arrived 5.00 s' in stale[0]
+    assert 'stale' in _fed(local, 5.0, 10, age_s=-3.0).timing_problems()[0]
+    assert _fed(local, 5.0, 10, age_s=5.0).timing_problems(max_age_s=6.0) == []
+    latched = ck.TopicResult(ck.NODE_TOPICS[2])
+    latched.record([], 50.0, 10.0)  # a map mapped 40 s before the checker started
+    latched.record([], 52.0, 51.9)
+    assert latched.timing_problems() == []
+    stampless = ck.TopicResult(local)
+    for i in range(5):
+        stampless.record([], 10.0 + i / 5.0, None)
+    assert stampless.timing_problems() == ['no sample carries a stamp']
+    tf_static = next(e for e in ck.NODE_TOPICS if e.topic == '/tf_static')
+    old_static = ck.TopicResult(tf_static)
+    old_static.record([], 100.0, 1.0)
+    assert old_static.timing_problems() == []
+    assert not any(e.fresh for e in ck.BRIDGE_TOPICS if e.topic.endswith(('status', 'text')))
+
+
+def test_sample_stamps():
+    """A header's stamp; the newest of a TFMessage's or MarkerArray's; None when zero."""
+    def header(sec, nanosec=0):
+        return SimpleNamespace(stamp=SimpleNamespace(sec=sec, nanosec=nanosec))
+    assert ck.sample_stamp_s(SimpleNamespace(header=header(3, 500_000_000))) == 3.5
+    tf = SimpleNamespace(transforms=[SimpleNamespace(header=header(4)),
+                                     SimpleNamespace(header=header(7))])
+    assert ck.sample_stamp_s(tf) == 7.0
+    assert ck.sample_stamp_s(SimpleNamespace(markers=[SimpleNamespace(header=header(0))])) is None
+    assert ck.sample_stamp_s(SimpleNamespace(data='text')) is None
+
+
+def test_the_checker_reads_heavy_layers_best_effort_as_the_bridge_does():
+    """BEST_EFFORT exactly on the topics the bridge subscribes to BEST_EFFORT."""
+    best_effort = {e.topic for e in ck.NODE_TOPICS if not e.reliable}
+    by_topic = {defaults()[f'{layer.name}_topic']: layer for layer in CLOUD_LAYERS}
+    assert best_effort == {topic for topic, layer in by_topic.items() if not layer.latched}
+    assert all(e.reliable for e in ck.BRIDGE_TOPICS)
+
+
+# ---- `ros2 node list` and `ros2 topic info -v` --------------------------------------------
+
+NODE_LIST = """/mlmap_bridge
+/mlmap_node
+/uav1/mlmap_node
+"""
+
+TOPIC_INFO = """Type: sensor_msgs/msg/PointCloud2
+
+Publisher count: 1
+
+Node name: mlmap_node
+Node namespace: /
+Topic type: sensor_msgs/msg/PointCloud2
+Topic type hash: RIHS01_9198cabf7da3796ae6fe19c4cb3bdd3525492988c70522628af5daa124bae2b5
+Endpoint type: PUBLISHER
+GID: 01.0f.9b.33.10.00.00.00.00.00.00.00.00.00.03.03
+QoS profile:
+  Reliability: RELIABLE
+  History (Depth): UNKNOWN
+  Durability: VOLATILE
+  Lifespan: Infinite
+  Deadline: Infinite
+  Liveliness: AUTOMATIC
+  Liveliness lease duration: Infinite
+
+Subscription count: 1
+
+Node name: mlmap_bridge
+Node namespace: /
+Topic type: sensor_msgs/msg/PointCloud2
+Topic type hash: RIHS01_9198cabf7da3796ae6fe19c4cb3bdd3525492988c70522628af5daa124bae2b5
+Endpoint type: SUBSCRIPTION
+GID: 01.0f.aa.33.10.00.00.00.00.00.00.00.00.00.04.04
+QoS profile:
+  Reliability: BEST_EFFORT
+  History (Depth): UNKNOWN
+  Durability: VOLATILE
+"""
+
+
+def test_node_list():
+    """mlmap_node once in its namespace; missing or twice is a problem."""
+    names = ck.parse_node_list('WARNING: something\n' + NODE_LIST)
+    assert names == ['/mlmap_bridge', '/mlmap_node', '/uav1/mlmap_node']
+    assert ck.check_node_list(names) == []
+    assert ck.check_node_list(names, 'uav1') == []
+    assert ck.check_node_list(names, 'uav2')
+    assert ck.check_node_list(names + ['/mlmap_node'])
+
+
+def test_topic_info():
+    """The node's publisher with its name, namespace, type, hash and QoS."""
+    local = ck.NODE_TOPICS[1]
+    count, endpoints = ck.parse_topic_info(TOPIC_INFO)
+    assert count == 1 and len(endpoints) == 2
+    assert endpoints[0]['Reliability'] == 'RELIABLE'
+    assert endpoints[1]['Node name'] == 'mlmap_bridge'
+    assert ck.check_topic_info(TOPIC_INFO, local) == []
+    assert 'no publisher of node /uav1/mlmap_node' in ck.check_topic_info(TOPIC_INFO, local,
+                                                                          'uav1')[0]
+    in_uav1 = TOPIC_INFO.replace('Node namespace: /\nTopic', 'Node namespace: /uav1\nTopic', 1)
+    assert ck.check_topic_info(in_uav1, local, 'uav1') == []
+    assert ck.check_topic_info(in_uav1, local)
+    none = TOPIC_INFO.replace('Publisher count: 1', 'Publisher count: 0')
+    assert ck.check_topic_info(none, local) == [f'{local.topic}: publisher count 0']
+    invalid = TOPIC_INFO.replace('RIHS01_9198', 'INVALID', 1)
+    assert 'type hash' in ck.check_topic_info(invalid, local)[0]
+    latched = ck.NODE_TOPICS[2]
+    assert 'durability VOLATILE, expected TRANSIENT_LOCAL' in ck.check_topic_info(
+        TOPIC_INFO, latched)[0]
+    best_effort = TOPIC_INFO.replace('RELIABLE', 'BEST_EFFORT', 1)
+    assert 'reliability BEST_EFFORT' in ck.check_topic_info(best_effort, local)[0]
 
 
 def test_every_layer_of_the_node_and_the_bridge_is_expected():

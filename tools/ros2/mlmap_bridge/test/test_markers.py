@@ -4,12 +4,13 @@ from cloud_helpers import field, FLOAT32, FLOAT64, make_cloud
 import fake_msgs
 from mlmap_bridge import conversions as cv
 from mlmap_bridge import markers as mk
+from mlmap_bridge import marker_cdr
 from mlmap_bridge.parameters import CLOUD_LAYERS, defaults
+from marker_reader import read_marker_array
 import numpy as np
 import pytest
 
 TYPES = mk.MessageTypes(Marker=fake_msgs.Marker, MarkerArray=fake_msgs.MarkerArray,
-                        Point=fake_msgs.Point, ColorRGBA=fake_msgs.ColorRGBA,
                         Header=fake_msgs.Header)
 LAYERS = {layer.name: layer for layer in CLOUD_LAYERS}
 XYZ = [field('x', 0, FLOAT32), field('y', 4, FLOAT32), field('z', 8, FLOAT32)]
@@ -24,11 +25,16 @@ def _voxel_cloud(edge=0.2, count=50, seed=0, intensity=False):
     fields = XYZ + ([field('intensity', 12, FLOAT32)] if intensity else [])
     points = [{'x': float(x), 'y': float(y), 'z': float(z),
                'intensity': float(rng.uniform(-1.0, 3.0))} for x, y, z in centres]
-    return make_cloud(points, fields, 16 if intensity else 12)
+    cloud = make_cloud(points, fields, 16 if intensity else 12)
+    cloud.header.stamp = fake_msgs.Time(sec=12, nanosec=345)
+    return cloud
 
 
-def _marker(array):
-    assert isinstance(array, fake_msgs.MarkerArray) and len(array.markers) == 1
+def _marker(data):
+    """The one marker of a serialised MarkerArray, read back value by value."""
+    assert isinstance(data, bytes)
+    array = read_marker_array(data)
+    assert len(array.markers) == 1
     return array.markers[0]
 
 
@@ -36,13 +42,16 @@ def test_height_layer_gives_one_cube_per_voxel_coloured_by_height():
     """Cubes at the voxel centres, colours of height_colors, edge found in the cloud."""
     cloud = _voxel_cloud(edge=0.15)
     settings = defaults()
-    m = _marker(mk.cloud_layer_markers(TYPES, LAYERS['local_map'], cloud, settings))
+    m = _marker(mk.cloud_layer_markers(LAYERS['local_map'], cloud, settings))
     xyz = cv.cloud_xyz(cloud)
-    assert m.type == mk.CUBE_LIST and m.action == mk.ADD and m.ns == 'local_map'
-    assert m.header is cloud.header
+    assert m.type == marker_cdr.CUBE_LIST and m.action == marker_cdr.ADD
+    assert m.ns == 'local_map' and m.id == 0
+    assert m.header.frame_id == cloud.header.frame_id == 'map'
+    assert (m.header.stamp.sec, m.header.stamp.nanosec) == (12, 345)
     assert [(p.x, p.y, p.z) for p in m.points] == [tuple(p) for p in xyz.tolist()]
     expected = cv.height_colors(xyz[:, 2], settings['height_min_m'], settings['height_max_m'])
-    assert [(c.r, c.g, c.b, c.a) for c in m.colors] == [tuple(c) for c in expected.tolist()]
+    assert [(c.r, c.g, c.b, c.a) for c in m.colors] == [
+        tuple(c) for c in expected.astype(np.float32).tolist()]
     assert (m.scale.x, m.scale.y, m.scale.z) == pytest.approx((0.15, 0.15, 0.15), abs=1e-5)
     assert m.pose.orientation.w == 1.0
 
@@ -51,9 +60,9 @@ def test_distance_layer_is_coloured_by_the_intensity_field():
     """The ESDF slice: colours of distance_colors on the intensity (the distance) field."""
     cloud = _voxel_cloud(intensity=True)
     settings = dict(defaults(), esdf_max_distance_m=1.5)
-    m = _marker(mk.cloud_layer_markers(TYPES, LAYERS['esdf_slice'], cloud, settings))
+    m = _marker(mk.cloud_layer_markers(LAYERS['esdf_slice'], cloud, settings))
     fields = cv.read_cloud_fields(cloud, ('x', 'y', 'z', 'intensity'))
-    expected = cv.distance_colors(fields[:, 3], 1.5)
+    expected = cv.distance_colors(fields[:, 3], 1.5).astype(np.float32)
     assert [(c.r, c.g, c.b, c.a) for c in m.colors] == [tuple(c) for c in expected.tolist()]
     assert len(m.points) == len(fields)
 
@@ -61,24 +70,24 @@ def test_distance_layer_is_coloured_by_the_intensity_field():
 def test_cube_size_parameter_wins_over_the_estimate():
     """A positive size parameter is used as is; the awareness layer has its own."""
     cloud = _voxel_cloud(edge=0.2)
-    m = _marker(mk.cloud_layer_markers(TYPES, LAYERS['global_map'], cloud,
+    m = _marker(mk.cloud_layer_markers(LAYERS['global_map'], cloud,
                                        dict(defaults(), map_cube_size_m=0.33)))
     assert m.scale.x == 0.33
-    m = _marker(mk.cloud_layer_markers(TYPES, LAYERS['awareness'], cloud, defaults()))
+    m = _marker(mk.cloud_layer_markers(LAYERS['awareness'], cloud, defaults()))
     assert m.scale.x == defaults()['awareness_cube_size_m']
 
 
 def test_a_single_voxel_gets_the_default_edge():
     """No two distinct coordinates: mlmap's default voxel edge."""
     cloud = make_cloud([{'x': 0.1, 'y': 0.1, 'z': 0.1}], XYZ, 12)
-    m = _marker(mk.cloud_layer_markers(TYPES, LAYERS['local_map'], cloud, defaults()))
+    m = _marker(mk.cloud_layer_markers(LAYERS['local_map'], cloud, defaults()))
     assert m.scale.x == mk.DEFAULT_VOXEL_EDGE_M and len(m.points) == 1
 
 
 def test_large_clouds_are_thinned_with_the_edge_of_the_whole_cloud():
     """max_cubes bounds the marker; the cube edge still comes from all voxels."""
     cloud = _voxel_cloud(edge=0.1, count=500)
-    m = _marker(mk.cloud_layer_markers(TYPES, LAYERS['local_map'], cloud,
+    m = _marker(mk.cloud_layer_markers(LAYERS['local_map'], cloud,
                                        dict(defaults(), max_cubes=40)))
     assert len(m.points) == len(m.colors) == 40
     assert m.scale.x == pytest.approx(0.1, abs=1e-5)
@@ -87,8 +96,8 @@ def test_large_clouds_are_thinned_with_the_edge_of_the_whole_cloud():
 def test_empty_cloud_deletes_the_marker():
     """Nothing occupied any more: RViz must drop the old cubes."""
     cloud = make_cloud([], XYZ, 12, width=0)
-    m = _marker(mk.cloud_layer_markers(TYPES, LAYERS['local_map'], cloud, defaults()))
-    assert m.action == mk.DELETE and m.ns == 'local_map' and m.points == []
+    m = _marker(mk.cloud_layer_markers(LAYERS['local_map'], cloud, defaults()))
+    assert m.action == marker_cdr.DELETE and m.ns == 'local_map' and m.points == []
 
 
 def test_float64_big_endian_clouds_too():
@@ -96,26 +105,26 @@ def test_float64_big_endian_clouds_too():
     fields = [field('z', 0, FLOAT64), field('x', 8, FLOAT64), field('y', 16, FLOAT64)]
     cloud = make_cloud([{'x': 0.5, 'y': 1.5, 'z': 2.5}, {'x': 0.5, 'y': 1.5, 'z': 2.7}],
                        fields, 24, big_endian=True)
-    m = _marker(mk.cloud_layer_markers(TYPES, LAYERS['local_map'], cloud, defaults()))
+    m = _marker(mk.cloud_layer_markers(LAYERS['local_map'], cloud, defaults()))
     assert [(p.x, p.y, p.z) for p in m.points] == [(0.5, 1.5, 2.5), (0.5, 1.5, 2.7)]
 
 
 def test_cube_list_checks_its_inputs():
     """Mismatched colours or a non-positive size are errors, not broken markers."""
-    header = fake_msgs.Header(frame_id='map')
     with pytest.raises(ValueError):
-        mk.cube_list(TYPES, header, 'a', np.zeros((2, 3)), np.zeros((1, 4)), 0.1)
+        marker_cdr.cube_list_array(0, 0, 'map', 'a', np.zeros((2, 3)), np.zeros((1, 4)), 0.1)
     with pytest.raises(ValueError):
-        mk.cube_list(TYPES, header, 'a', np.zeros((2, 3)), np.zeros((2, 4)), 0.0)
+        marker_cdr.cube_list_array(0, 0, 'map', 'a', np.zeros((2, 3)), np.zeros((2, 4)), 0.0)
     with pytest.raises(ValueError):
-        mk.cloud_layer_markers(TYPES, mk.CloudLayer('x', False, 'rainbow', 'max_cubes'),
+        mk.cloud_layer_markers(mk.CloudLayer('x', False, 'rainbow', 'max_cubes'),
                                _voxel_cloud(), defaults())
 
 
 def test_text_marker_floats_above_the_body_frame():
     """A view-facing text at the body frame, offset up, with a zero stamp (latest TF)."""
     m = mk.text_marker(TYPES, 'base_link', 'status', 'hello\nworld', 0.25, 1.5)
-    assert m.type == mk.TEXT_VIEW_FACING and m.action == mk.ADD and m.text == 'hello\nworld'
+    assert m.type == marker_cdr.TEXT_VIEW_FACING and m.action == marker_cdr.ADD
+    assert m.text == 'hello\nworld'
     assert m.header.frame_id == 'base_link' and m.header.stamp.sec == 0
     assert m.pose.position.z == 1.5 and m.pose.orientation.w == 1.0 and m.scale.z == 0.25
     assert m.color.a == 1.0
