@@ -78,6 +78,16 @@ void logFrameChecks(const mlmap::dds::NodeCounters& c) {
                c.odometry_child_frame_mismatch, c.tf_odom_missing, c.tf_transforms_received);
 }
 
+/// The hits outside the local window, when there are any: their evidence went to the global map
+/// without their free space, or was lost (docs/replay.md: a larger window maps them whole).
+void logHitsOutsideWindow(const EngineStats& s) {
+  if (s.points.hits_beyond_local_map + s.local.hits_outside_window == 0) return;
+  spdlog::warn("outside the local window: {} points in range, {} hit voxels; {} hit updates went "
+               "to the global map without their free space, {} hits lost",
+               s.points.hits_beyond_local_map, s.local.hits_outside_window, s.hits_to_global,
+               s.hits_lost);
+}
+
 /// One progress line: frames, timings and memory.
 void logProgress(const mlmap::dds::MappingNode& node) {
   const EngineStats s = node.engineStats();
@@ -88,6 +98,7 @@ void logProgress(const mlmap::dds::MappingNode& node) {
                c.inputs_malformed, s.total.median_ms, s.total.p99_ms,
                static_cast<double>(s.memory.total()) / 1e6);
   logFrameChecks(c);
+  logHitsOutsideWindow(s);
 }
 
 /// Maps until --duration or a stop signal, with a progress line every --report-every seconds.
@@ -120,6 +131,7 @@ int stopAndReport(const mlmap::dds::NodeConfig& config, mlmap::dds::MappingNode&
                c.frames_across_pose_jump, c.inputs_malformed, c.poses_rejected, c.messages_published,
                c.map_saves, c.map_saves_failed);
   logFrameChecks(c);
+  logHitsOutsideWindow(s);
   if (!config.map_file.save_path.empty() && c.last_map_save_failed) {
     // The map of this run is lost unless a supervisor notices: say so in the exit status.
     spdlog::error("the map was not saved to '{}' at shutdown (see above)", config.map_file.save_path);

@@ -487,7 +487,9 @@ TEST(MappingNodeStart, SaysWhatItsConfigurationWillNotDo) {
   CapturedLog log;
   { MappingNode node(config, log.sink()); }
   EXPECT_EQ(log.count("awareness.max_range_m (30 m) reaches beyond the local window"), 1);
-  EXPECT_EQ(log.count("farther than 11.4 m from the body are never mapped"), 1);
+  EXPECT_EQ(log.count("farther than 11.4 m from the body go to the global map without their free "
+                      "space"),
+            1);
   EXPECT_EQ(log.count("local_map.size_cells 250 x 250 horizontally holds the range"), 1);
   EXPECT_EQ(log.count("no sensor topic is configured"), 1);
   EXPECT_EQ(log.count("memory of the configured layers (global map not included): "), 1);
@@ -522,6 +524,50 @@ TEST(MappingNodeOutput, SubscribersWithIncompatibleQosAreLoggedWithThePolicyAndC
             1);
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   EXPECT_EQ(node.counters().subscribers_incompatible, 1u) << "only the TRANSIENT_LOCAL reader";
+}
+
+// Hits beyond the local window are not dropped without a word: their evidence goes to the
+// global map, and the node's status (layout version 3) says how many, as the engine counted.
+TEST(MappingNodeOutput, TheStatusCountsTheHitsOutsideTheLocalWindow) {
+  constexpr int kDomain = 181;
+  NodeConfig config = nodeConfig(kDomain);
+  config.map.local_map.size_cells = Eigen::Vector3i(15, 15, 35);  // reach 1.8 m; the wall is at 3 m
+  ASSERT_LT(config.map.local_map.horizontalReach_m(), 3.0);
+  const ParticipantPtr ground = createParticipant(localhostConfig(kDomain), "ground");
+  std::mutex mutex;
+  mlmap_msgs::Status_ last;
+  TakeListener<mlmap_msgs::Status_> listener(
+      [&](mlmap_msgs::Status_&& status) {
+        std::lock_guard<std::mutex> lock(mutex);
+        last = std::move(status);
+      },
+      [](const std::string& what) { ADD_FAILURE() << what; });
+  createReader<mlmap_msgs::Status_PubSubType>(ground->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT),
+                                              "rt/" + config.dds.topics.status,
+                                              reliableReaderQos(), &listener);
+  MappingNode node(config);
+  SensorSide sensor(kDomain, config);
+  ASSERT_TRUE(sensor.matched(node));
+  for (std::uint64_t k = 1; k <= 3; ++k) {
+    sensor.frame(700.0 + 0.1 * static_cast<double>(k));
+    ASSERT_TRUE(mapped(node, k));
+  }
+  const EngineStats s = node.engineStats();
+  ASSERT_GT(s.points.hits_beyond_local_map, 0u) << "every point of the wall lies beyond the reach";
+  ASSERT_GT(s.hits_to_global, 0u);
+  const auto status = [&] {
+    std::lock_guard<std::mutex> lock(mutex);
+    return last;
+  };
+  ASSERT_TRUE(waitFor([&] { return status().frames_mapped_() == 3; })) << "no status after 3 frames";
+  const mlmap_msgs::Status_ m = status();
+  EXPECT_EQ(m.version_(), 3u);
+  EXPECT_EQ(m.hits_beyond_local_map_(), s.points.hits_beyond_local_map);
+  EXPECT_EQ(m.hits_outside_window_(), s.local.hits_outside_window);
+  EXPECT_EQ(m.hits_to_global_map_(), s.hits_to_global);
+  EXPECT_EQ(m.hits_lost_(), 0u);
+  EXPECT_EQ(s.hits_lost, 0u);
+  EXPECT_GT(m.global_voxels_(), 0u) << "the wall is in the global map";
 }
 
 /// Every sample a TakeListener delivered, in order, kept for inspection.

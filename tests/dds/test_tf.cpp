@@ -392,7 +392,7 @@ TEST(TfModes, EachModePublishesItsEdgesAndEveryChildKeepsOneParent) {
         << "two poses a frame, 3 frames";
     if (mismatch) {  // the status carries it too (status_hz 1)
       EXPECT_TRUE(waitFor([&] { return recorder.status().odometry_child_frame_mismatch_() == 6; }));
-      EXPECT_EQ(recorder.status().version_(), 2u);
+      EXPECT_EQ(recorder.status().version_(), 3u);
     }
     std::lock_guard<std::mutex> lock(mutex);
     int warned = 0;

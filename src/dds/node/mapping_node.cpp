@@ -161,9 +161,10 @@ struct MappingNode::Impl {
   }
 
   /// The local window is centred on the body's submap (5 per axis): a hit more than 3 submaps
-  /// from the body horizontally lies outside it wherever the body is in its submap, and is
-  /// counted, not mapped (between 2 and 3 submaps it depends on where the body is). A range
-  /// beyond 3 submaps is said at start, with the window that would hold it.
+  /// from the body horizontally lies outside it wherever the body is in its submap (between 2
+  /// and 3 submaps it depends on where the body is); its occupied evidence goes to the global
+  /// map, counted, and its free space is not mapped. A range beyond 3 submaps is said at start,
+  /// with the window that would hold it.
   void warnIfRangeExceedsWindow() {
     const LocalMapConfig& lm = config.map.local_map;
     const double range_m = config.map.awareness.max_range_m;
@@ -171,9 +172,9 @@ struct MappingNode::Impl {
     const int needed = lm.horizontalCellsForRange(range_m);
     std::ostringstream m;
     m << "awareness.max_range_m (" << range_m << " m) reaches beyond the local window: hits "
-      << "farther than " << lm.horizontalReach_m() << " m from the body are never mapped, only "
-      << "counted; local_map.size_cells " << needed << " x " << needed
-      << " horizontally holds the range";
+      << "farther than " << lm.horizontalReach_m() << " m from the body go to the global map "
+      << "without their free space (counted in the status: hits_to_global_map); "
+      << "local_map.size_cells " << needed << " x " << needed << " horizontally holds the range";
     log.always(LogLevel::kWarning, m.str());
   }
 

@@ -309,7 +309,7 @@ class StatusOutput : public OutputOperation {
     mlmap_msgs::Status_ m;
     m.header_().stamp_(toRosTime(stamp_s));
     m.header_().frame_id_(world_);
-    m.version_(2);
+    m.version_(3);
     m.uptime_s_(secondsBetween(started_, Clock::now()));
     m.frames_in_(s.frames_in);
     m.frames_mapped_(s.frames_mapped);
@@ -337,6 +337,10 @@ class StatusOutput : public OutputOperation {
     m.frames_unresolved_frame_id_(c.frames_unresolved_frame_id);
     m.odometry_child_frame_mismatch_(c.odometry_child_frame_mismatch);
     m.tf_odom_missing_(c.tf_odom_missing);
+    m.hits_beyond_local_map_(s.points.hits_beyond_local_map);
+    m.hits_outside_window_(s.local.hits_outside_window);
+    m.hits_to_global_map_(s.hits_to_global);
+    m.hits_lost_(s.hits_lost);
     return m;
   }
 

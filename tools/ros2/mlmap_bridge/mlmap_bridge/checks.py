@@ -22,7 +22,7 @@ from .parameters import in_namespace
 
 FLOAT32 = 7
 SUPPORTED_VERSION = 1         # mlmap_msgs/VoxelBlock
-SUPPORTED_STATUS_VERSION = 2  # mlmap_msgs/Status (the frame checks' counters since 2)
+SUPPORTED_STATUS_VERSION = 3  # mlmap_msgs/Status (frame checks since 2, window hits since 3)
 MAX_COORDINATE_M = 1.0e5   # a map coordinate beyond this is garbage, not a place
 GRID_TOLERANCE = 0.01      # voxels: how far from (i + 0.5) * edge a centre may sit
 RATE_FRACTION = 0.5        # a topic keeps its rate at half its nominal rate or more

@@ -22,7 +22,7 @@ import numpy as np
 POINT_FIELD_TYPES = {1: 'i1', 2: 'u1', 3: 'i2', 4: 'u2', 5: 'i4', 6: 'u4', 7: 'f4', 8: 'f8'}
 
 # The mlmap_msgs layout version this bridge reads (idl/README.md: refuse unknown versions).
-SUPPORTED_STATUS_VERSION = 2
+SUPPORTED_STATUS_VERSION = 3
 
 # Colour scales: (position in [0, 1] or [-1, 1], (r, g, b)), linearly interpolated.
 HEIGHT_SCALE = (
@@ -220,7 +220,7 @@ def status_text(status, previous=None) -> str:
         f'memory: awareness {format_bytes(status.awareness_bytes)}, '
         f'local {format_bytes(status.local_bytes)}, global {format_bytes(status.global_bytes)} '
         f'({status.global_voxels} voxels), planning {format_bytes(status.planning_bytes)}',
-    ] + _frame_check_lines(status))
+    ] + _frame_check_lines(status) + _window_lines(status))
 
 
 def _frame_check_lines(status) -> list:
@@ -231,6 +231,15 @@ def _frame_check_lines(status) -> list:
         return []
     return [f'frame checks: frame_id unexpected {counts[0]}, unresolved {counts[1]}; '
             f'odometry child frame {counts[2]}; odom -> body missing {counts[3]}']
+
+
+def _window_lines(status) -> list:
+    """Return a line on the hits outside the local window when there were any, else none."""
+    if not int(status.hits_beyond_local_map) + int(status.hits_outside_window):
+        return []
+    return [f'outside the window: {status.hits_beyond_local_map} points, '
+            f'{status.hits_outside_window} hit voxels; {status.hits_to_global_map} hits to the '
+            f'global map (no free space), {status.hits_lost} lost']
 
 
 class RateLimiter:

@@ -62,7 +62,7 @@ def voxel_block(values=None, **changes):
 
 def status(**changes):
     """A mlmap_msgs/Status-like object of a node that has mapped frames."""
-    values = dict(header=fake_msgs.Header(frame_id='map'), version=2, uptime_s=12.5,
+    values = dict(header=fake_msgs.Header(frame_id='map'), version=3, uptime_s=12.5,
                   frames_in=40, frames_mapped=38, frames_dropped=1, frames_rejected=1,
                   clouds_malformed=0, clouds_without_pose=0, poses_rejected=0,
                   points_rejected=3, awareness_median_ms=5.0, awareness_p99_ms=7.0,
@@ -70,7 +70,8 @@ def status(**changes):
                   total_p99_ms=7.3, esdf_last_ms=4.0, awareness_bytes=1000, local_bytes=600000,
                   global_bytes=10, planning_bytes=3000, global_voxels=2,
                   frames_unexpected_frame_id=0, frames_unresolved_frame_id=0,
-                  odometry_child_frame_mismatch=0, tf_odom_missing=0)
+                  odometry_child_frame_mismatch=0, tf_odom_missing=0, hits_beyond_local_map=0,
+                  hits_outside_window=0, hits_to_global_map=0, hits_lost=0)
     values.update(changes)
     return SimpleNamespace(**values)
 
@@ -185,7 +186,7 @@ def test_voxel_block():
 def test_status():
     """A node that mapped frames, with consistent counters and timings."""
     assert ck.check_status(status(), FRAMES) == []
-    assert ck.check_status(status(version=3), FRAMES) == ['layout version 3, expected 2']
+    assert ck.check_status(status(version=2), FRAMES) == ['layout version 2, expected 3']
     assert ck.check_status(status(frames_mapped=0, frames_in=0), FRAMES) == [
         'no frame mapped yet']
     assert ck.check_status(status(frames_mapped=50), FRAMES)

@@ -188,7 +188,7 @@ def test_thin_evenly():
 # ---- Status text ----------------------------------------------------------------------------
 
 def _status(**changes):
-    values = dict(version=2, uptime_s=75.0, frames_in=120, frames_mapped=110, frames_dropped=4,
+    values = dict(version=3, uptime_s=75.0, frames_in=120, frames_mapped=110, frames_dropped=4,
                   frames_rejected=1, clouds_malformed=2, clouds_without_pose=3, poses_rejected=0,
                   points_rejected=77, awareness_median_ms=5.84, awareness_p99_ms=7.1,
                   local_global_median_ms=0.17, local_global_p99_ms=0.34, total_median_ms=6.02,
@@ -196,7 +196,8 @@ def _status(**changes):
                   local_bytes=631_750, global_bytes=2048, planning_bytes=1_300_000,
                   global_voxels=149, frames_unexpected_frame_id=0,
                   frames_unresolved_frame_id=0, odometry_child_frame_mismatch=0,
-                  tf_odom_missing=0)
+                  tf_odom_missing=0, hits_beyond_local_map=0, hits_outside_window=0,
+                  hits_to_global_map=0, hits_lost=0)
     values.update(changes)
     return SimpleNamespace(**values)
 
@@ -214,6 +215,11 @@ def test_status_text_reports_frames_timings_and_memory():
     checked = cv.status_text(_status(frames_unresolved_frame_id=3, tf_odom_missing=1))
     assert ('frame checks: frame_id unexpected 0, unresolved 3; odometry child frame 0; '
             'odom -> body missing 1') in checked
+    assert 'outside the window' not in text, 'only when hits fell outside the window'
+    far = cv.status_text(_status(hits_beyond_local_map=500, hits_outside_window=40,
+                                 hits_to_global_map=480, hits_lost=2))
+    assert far.splitlines()[-1] == ('outside the window: 500 points, 40 hit voxels; 480 hits to '
+                                    'the global map (no free space), 2 lost')
 
 
 def test_status_text_gives_the_mapping_rate_from_the_previous_status():
@@ -228,8 +234,9 @@ def test_status_text_gives_the_mapping_rate_from_the_previous_status():
 
 def test_status_of_an_unknown_version_is_not_read():
     """idl/README.md: a reader refuses a layout version it does not know."""
-    text = cv.status_text(_status(version=1))
-    assert 'layout version 1 unknown' in text and 'frames' not in text
+    for old in (1, 2):
+        text = cv.status_text(_status(version=old))
+        assert f'layout version {old} unknown' in text and 'frames' not in text
 
 
 def test_formatting():
