@@ -274,12 +274,36 @@ void parseCamera(const YAML::Node& node, sim::DepthCameraModel* camera) {
   }
 }
 
-Scenario parseRoot(const YAML::Node& root) {
+/// Longest chain of `base` files (a longer one is most likely a cycle).
+constexpr int kMaxBaseDepth = 8;
+
+Scenario loadWithDepth(const std::string& path, int depth);
+
+/// `base` relative to the folder of the file that names it (`dir`; "" for the working folder).
+std::string basePath(const YAML::Node& node, const std::string& dir) {
+  if (!node.IsScalar() || node.Scalar().empty()) {
+    fail("base", "expected a file name, got " + describe(node));
+  }
+  const std::string& name = node.Scalar();
+  return name.front() == '/' || dir.empty() ? name : dir + "/" + name;
+}
+
+/// A section given here replaces the base's whole section (the base's own keys are not merged).
+Scenario parseRoot(const YAML::Node& root, const std::string& dir, int depth) {
   Scenario scenario;
   if (!root || root.IsNull()) return scenario;
-  checkKeys(root, "<root>", {"world", "trajectory", "camera", "frame_rate_hz"});
+  checkKeys(root, "<root>", {"base", "world", "trajectory", "camera", "frame_rate_hz"});
+  if (const YAML::Node base = root["base"]) {
+    if (depth >= kMaxBaseDepth) {
+      fail("base", "more than " + std::to_string(kMaxBaseDepth) + " bases in a chain (a cycle?)");
+    }
+    scenario = loadWithDepth(basePath(base, dir), depth + 1);
+  }
+  if (isPresentMap(root["world"], "world")) scenario.world = sim::World{};
   parseWorld(root["world"], &scenario.world);
+  if (isPresentMap(root["trajectory"], "trajectory")) scenario.trajectory = sim::Trajectory{};
   parseTrajectory(root["trajectory"], &scenario.trajectory);
+  if (isPresentMap(root["camera"], "camera")) scenario.camera = sim::DepthCameraModel{};
   parseCamera(root["camera"], &scenario.camera);
   if (const YAML::Node rate = root["frame_rate_hz"]) {
     scenario.frame_rate_hz = readPositive(rate, "frame_rate_hz");
@@ -287,10 +311,11 @@ Scenario parseRoot(const YAML::Node& root) {
   return scenario;
 }
 
-Scenario parseWithName(const std::string& text, const std::string& source_name) {
+Scenario parseWithName(const std::string& text, const std::string& source_name,
+                       const std::string& dir, int depth) {
   const YAML::Node root = io::parseYamlDocument(text, source_name);  // one document, no duplicates
   try {
-    return parseRoot(root);
+    return parseRoot(root, dir, depth);
   } catch (const ParseError& e) {
     throw std::runtime_error(source_name + ": " + e.what());
   } catch (const YAML::Exception& e) {
@@ -298,20 +323,24 @@ Scenario parseWithName(const std::string& text, const std::string& source_name) 
   }
 }
 
-}  // namespace
-
-Scenario parseScenarioYaml(const std::string& yaml_text, const std::string& source_name) {
-  return parseWithName(yaml_text, source_name);
-}
-
-Scenario loadScenarioYaml(const std::string& path) {
+Scenario loadWithDepth(const std::string& path, int depth) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path + ": cannot open file");
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw std::runtime_error(path + ": read error");
-  return parseWithName(text.str(), path);
+  const std::size_t slash = path.rfind('/');
+  const std::string dir = slash == std::string::npos ? "" : path.substr(0, slash == 0 ? 1 : slash);
+  return parseWithName(text.str(), path, dir, depth);
 }
+
+}  // namespace
+
+Scenario parseScenarioYaml(const std::string& yaml_text, const std::string& source_name) {
+  return parseWithName(yaml_text, source_name, "", 0);
+}
+
+Scenario loadScenarioYaml(const std::string& path) { return loadWithDepth(path, 0); }
 
 Scenario defaultScenario() {
   Scenario scenario;

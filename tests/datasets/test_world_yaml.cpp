@@ -299,5 +299,85 @@ TEST(WorldYaml, BuildingWalkIsAbout250MetresOverThreeFloorsAndKeepsClearOfSolids
   }
 }
 
+// The fleet's three flights (config/worlds/fleet/) share the building's world through `base`,
+// keep clear of its solids, and see different rooms: each flight's positions are mostly far
+// from the others'.
+TEST(WorldYaml, FleetFlightsShareTheBuildingAndKeepClearOfSolids) {
+  const std::string dir = std::string(MLMAP_SOURCE_DIR) + "/config/worlds/";
+  const Scenario building = loadScenarioYaml(dir + "building.yaml");
+  std::vector<std::vector<Eigen::Vector3d>> paths;
+  for (const char* name : {"uav1", "uav2", "uav3"}) {
+    SCOPED_TRACE(name);
+    const Scenario s = loadScenarioYaml(dir + "fleet/" + name + ".yaml");
+    EXPECT_EQ(s.world.boxes().size(), building.world.boxes().size());
+    EXPECT_EQ(s.frame_rate_hz, building.frame_rate_hz);
+    EXPECT_EQ(s.camera.intrinsics.width, building.camera.intrinsics.width);
+    EXPECT_GT(s.trajectory.length_m(), 25.0);
+    EXPECT_LT(s.trajectory.length_m(), building.trajectory.length_m() / 3.0);
+    std::vector<Eigen::Vector3d> path;
+    double min_clearance = 1e9;
+    for (double t = 0.0; t <= s.trajectory.duration_s(); t += 0.05) {
+      path.push_back(s.trajectory.positionAt(t));
+      min_clearance = std::min(min_clearance, s.world.distance(path.back()));
+      EXPECT_LT(path.back().z(), 2.8) << "the ground floor";
+    }
+    EXPECT_GE(min_clearance, 0.5);
+    paths.push_back(path);
+  }
+  for (std::size_t a = 0; a < paths.size(); ++a) {
+    for (std::size_t b = 0; b < paths.size(); ++b) {
+      if (a == b) continue;
+      std::size_t apart = 0;  // positions of a more than 5 m from every position of b
+      for (const Eigen::Vector3d& p : paths[a]) {
+        double nearest = 1e9;
+        for (const Eigen::Vector3d& q : paths[b]) nearest = std::min(nearest, (p - q).norm());
+        apart += nearest > 5.0 ? 1 : 0;
+      }
+      EXPECT_GT(apart, paths[a].size() / 3) << "flight " << a + 1 << " against " << b + 1;
+    }
+  }
+}
+
+/// The error message of loading the scenario file at `path` ("" if it loaded).
+std::string fileError(const std::string& path) {
+  try {
+    (void)loadScenarioYaml(path);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(WorldYaml, ABaseGivesItsSectionsAndASectionGivenReplacesTheBases) {
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / ("mlmap_base_" + std::to_string(std::random_device{}())))
+          .string();
+  std::filesystem::create_directories(dir + "/sub");
+  std::ofstream(dir + "/base.yaml") << "world: {boxes: [{min_m: [0, 0, 0], max_m: [1, 1, 1]}]}\n"
+                                       "trajectory: {waypoints: [{position_m: [3, 0, 0]}, "
+                                       "{position_m: [4, 0, 0]}]}\n"
+                                       "camera: {width: 320}\nframe_rate_hz: 4\n";
+  std::ofstream(dir + "/sub/flight.yaml") << "base: ../base.yaml\n"
+                                             "trajectory: {waypoints: [{position_m: [5, 0, 0]}, "
+                                             "{position_m: [7, 0, 0]}]}\n";
+  const Scenario s = loadScenarioYaml(dir + "/sub/flight.yaml");
+  EXPECT_EQ(s.world.boxes().size(), 1u);
+  EXPECT_EQ(s.camera.intrinsics.width, 320);
+  EXPECT_EQ(s.frame_rate_hz, 4.0);
+  EXPECT_NEAR(s.trajectory.length_m(), 2.0, 1e-12) << "this file's trajectory, not the base's";
+  std::ofstream(dir + "/world_only.yaml") << "base: base.yaml\nworld: {}\n";
+  EXPECT_TRUE(loadScenarioYaml(dir + "/world_only.yaml").world.boxes().empty()) << "replaced";
+  std::ofstream(dir + "/cycle.yaml") << "base: cycle.yaml\n";
+  EXPECT_NE(fileError(dir + "/cycle.yaml").find("bases in a chain (a cycle?)"), std::string::npos)
+      << fileError(dir + "/cycle.yaml");
+  std::ofstream(dir + "/missing.yaml") << "base: nowhere.yaml\n";
+  EXPECT_EQ(fileError(dir + "/missing.yaml"), dir + "/nowhere.yaml: cannot open file");
+  std::ofstream(dir + "/bad_base.yaml") << "base: base.yaml\n";
+  std::ofstream(dir + "/base.yaml") << "world: {boxes: [{min_m: [0, 0, 0], sise_m: 1}]}\n";
+  EXPECT_EQ(fileError(dir + "/bad_base.yaml").rfind(dir + "/base.yaml: world.boxes[0]", 0), 0u)
+      << "the error names the base file: " << fileError(dir + "/bad_base.yaml");
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace mlmap::io

@@ -5,6 +5,7 @@
 /// Layout (every key optional except the ones a primitive or waypoint needs; unknown keys and
 /// bad values are errors). Lengths in metres, angles in degrees, times in seconds:
 /// @code
+/// base: building.yaml         # start from this scenario (relative to this file's folder)
 /// world:
 ///   boxes:        [{min_m: [x, y, z], max_m: [x, y, z]}]
 ///   cylinders:    [{center_xy_m: [x, y], radius_m: r, z_min_m: a, z_max_m: b}]
@@ -18,8 +19,11 @@
 ///          min_depth_m: 0.2, max_depth_m: 15, noise_coeff_per_m: 0.0, seed: 1}
 /// frame_rate_hz: 10
 /// @endcode
-/// Missing sections keep the defaults of Scenario (empty world, empty trajectory, default
-/// DepthCameraModel, 10 Hz). A null value for a section or list counts as absent/empty.
+/// Missing sections keep the base's (with `base`) or the defaults of Scenario (empty world, empty
+/// trajectory, default DepthCameraModel, 10 Hz); a section given replaces the base's whole
+/// section, so several flights can share one world file (config/worlds/fleet/). A null value
+/// for a section or list counts as absent/empty. A chain of bases longer than 8 is an error
+/// (a cycle), and errors in a base name that file.
 
 #include "mlmap/sim/depth_camera.h"
 #include "mlmap/sim/trajectory.h"
@@ -43,7 +47,8 @@ struct Scenario {
 [[nodiscard]] Scenario loadScenarioYaml(const std::string& path);
 
 /// Parses a scenario from YAML text; `source_name` prefixes error messages (as the file name
-/// does in loadScenarioYaml). Throws std::runtime_error on any error.
+/// does in loadScenarioYaml), and a `base` is taken relative to the working folder. Throws
+/// std::runtime_error on any error.
 [[nodiscard]] Scenario parseScenarioYaml(const std::string& yaml_text,
                                          const std::string& source_name = "<string>");
 
