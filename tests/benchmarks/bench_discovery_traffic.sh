@@ -45,39 +45,14 @@ export ROS_DOMAIN_ID=$domain ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET
 unset FASTRTPS_DEFAULT_PROFILES_FILE ROS_STATIC_PEERS ROS_DISCOVERY_SERVER ROS_SECURITY_ENABLE \
   ROS_SECURITY_KEYSTORE ROS_SECURITY_STRATEGY ROS_SECURITY_ENCLAVE_OVERRIDE
 # shellcheck source=../support/netns.sh
-source "$here/../support/netns.sh"   # pids, killed on exit; netns_new; in_ns
-netns_pid=""
+source "$here/../support/netns.sh"   # pids, killed on exit; netns_lan; in_ns
+lan_hub="" lan_ns=() lan_dev=()
 server_ip=10.79.0.254
 
 # link_bytes NS DEV: bytes sent + received on DEV in namespace NS so far.
 link_bytes() {
   in_ns "$1" ip -j -s link show dev "$2" | /usr/bin/python3 -c \
     'import json, sys; s = json.load(sys.stdin)[0]["stats64"]; print(s["rx"]["bytes"] + s["tx"]["bytes"])'
-}
-
-# The fleet's LAN: a hub namespace with a bridge (the server's address on it) and one namespace
-# per vehicle, each on a veth pair into the bridge, multicast on.
-make_lan() {
-  local n=$1 tag=mld$$
-  netns_new; hub=$netns_pid
-  in_ns "$hub" ip link set lo up
-  in_ns "$hub" ip link add "${tag}br" type bridge
-  in_ns "$hub" ip addr add "$server_ip/24" dev "${tag}br"
-  in_ns "$hub" ip link set "${tag}br" up multicast on
-  in_ns "$hub" ip route add 224.0.0.0/4 dev "${tag}br"
-  vehicle_ns=() vehicle_dev=()
-  for k in $(seq "$n"); do
-    netns_new
-    ip link add "${tag}v$k" type veth peer name "${tag}h$k"
-    ip link set "${tag}v$k" netns "$netns_pid"
-    ip link set "${tag}h$k" netns "$hub"
-    in_ns "$hub" ip link set "${tag}h$k" master "${tag}br" up
-    in_ns "$netns_pid" ip link set lo up
-    in_ns "$netns_pid" ip addr add "10.79.0.$k/24" dev "${tag}v$k"
-    in_ns "$netns_pid" ip link set "${tag}v$k" up multicast on
-    in_ns "$netns_pid" ip route add 224.0.0.0/4 dev "${tag}v$k"
-    vehicle_ns+=("$netns_pid") vehicle_dev+=("${tag}v$k")
-  done
 }
 
 # vehicle_config K MODE: the node's configuration of vehicle K (its namespace; the server's
@@ -99,7 +74,8 @@ for mode in $modes; do
   for n in $vehicles; do
     run="$out/${mode}_$n"
     rm -rf "$run" && mkdir -p "$run"
-    make_lan "$n"
+    netns_lan "$n" "mld$$" 10.79.0   # the vehicles at 10.79.0.k, the hub (server) at .254
+    hub=$lan_hub vehicle_ns=("${lan_ns[@]}") vehicle_dev=("${lan_dev[@]}")
     sed "s|<address>127.0.0.1</address>|<address>$server_ip</address>|" \
       "$repo/config/dds/discovery_server_client.xml" > "$run/client.xml"
     run_pids=()

@@ -1,9 +1,8 @@
 # shellcheck shell=bash
 # Network namespaces for the tests that need more than loopback (sourced; needs root).
 # Each namespace lives as long as a process holding it (no `ip netns add`: it needs / to be a
-# mount point, which a chroot's is not); `in_ns PID CMD...` runs CMD in it and execs, so $! of a
-# backgrounded in_ns is the program's pid and signals reach it. Every pid the caller adds to
-# `pids` (the namespace holders are added here) is killed when the script exits.
+# mount point, which a chroot's is not); `in_ns PID CMD...` runs CMD in it. Every pid the caller
+# adds to `pids` (the namespace holders are added here) is killed when the script exits.
 
 pids=()
 netns_cleanup() {
@@ -28,4 +27,36 @@ netns_new() {
   netns_pid=$holder
 }
 
+# Runs CMD in the namespace. In the background, call nsenter itself instead (`nsenter -t NS -n
+# CMD &`): nsenter execs CMD, so $! is the program's pid and the cleanup reaches it.
 in_ns() { local ns=$1; shift; nsenter -t "$ns" -n "$@"; }
+
+# netns_lan N TAG NET: a LAN of N hosts: a hub namespace holding a bridge TAGbr with address
+# NET.254/24 (a ground station or a server runs there), and N namespaces, host k on a veth pair
+# into the bridge with address NET.k/24, multicast on (discovery multicast stays on the bridge).
+# Sets lan_hub (the hub's holder pid), lan_ns (the hosts' holder pids, host k at index k-1) and
+# lan_dev (their interfaces).
+netns_lan() {
+  local n=$1 tag=$2 net=$3 k
+  # shellcheck disable=SC2034  # lan_hub, lan_ns and lan_dev are read by the sourcing script
+  netns_new; lan_hub=$netns_pid
+  in_ns "$lan_hub" ip link set lo up
+  in_ns "$lan_hub" ip link add "${tag}br" type bridge
+  in_ns "$lan_hub" ip addr add "$net.254/24" dev "${tag}br"
+  in_ns "$lan_hub" ip link set "${tag}br" up multicast on
+  in_ns "$lan_hub" ip route add 224.0.0.0/4 dev "${tag}br"
+  lan_ns=() lan_dev=()
+  for k in $(seq "$n"); do
+    netns_new
+    ip link add "${tag}v$k" type veth peer name "${tag}h$k"
+    ip link set "${tag}v$k" netns "$netns_pid"
+    ip link set "${tag}h$k" netns "$lan_hub"
+    in_ns "$lan_hub" ip link set "${tag}h$k" master "${tag}br" up
+    in_ns "$netns_pid" ip link set lo up
+    in_ns "$netns_pid" ip addr add "$net.$k/24" dev "${tag}v$k"
+    in_ns "$netns_pid" ip link set "${tag}v$k" up multicast on
+    in_ns "$netns_pid" ip route add 224.0.0.0/4 dev "${tag}v$k"
+    # shellcheck disable=SC2034
+    lan_ns+=("$netns_pid") lan_dev+=("${tag}v$k")
+  done
+}
