@@ -55,6 +55,8 @@ void logInputs(const mlmap::dds::NodeConfig& config, const mlmap::dds::MappingNo
   std::string discovery = mlmap::dds::toString(mlmap::dds::resolveDiscoveryRange(config.dds));
   const std::vector<std::string> peers = mlmap::dds::resolveStaticPeers(config.dds);
   for (std::size_t i = 0; i < peers.size(); ++i) discovery += (i == 0 ? " peers " : ";") + peers[i];
+  // A profile may change discovery itself (a Discovery Server client): name it.
+  if (!config.dds.participant_profile.empty()) discovery += ", profile " + config.dds.participant_profile;
   std::string inputs;
   const mlmap::dds::TopicNames& t = config.dds.topics;
   for (const std::string* name : {&t.cloud, &t.depth_image, &t.camera_info, &t.pose, &t.odometry}) {
