@@ -663,6 +663,37 @@ void writeDatasetFiles(const Dataset& d, const std::string& dir) {
   }
 }
 
+/// The voxels of a voxel list as mlmap_replay and --octomap-voxels write it (`ix iy iz` per
+/// line, `#` lines skipped). Throws naming the file and line when a line is not three integers.
+std::vector<VoxelIndex> readVoxelList(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot read");
+  std::vector<VoxelIndex> voxels;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    VoxelIndex v;
+    if (!(fields >> v.x() >> v.y() >> v.z())) {
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": not 'ix iy iz': " + line);
+    }
+    voxels.push_back(v);
+  }
+  return voxels;
+}
+
+/// --agreement A B: how two voxel lists agree (A against B), exact and within one cell.
+int printListAgreement(const std::vector<std::string>& paths) {
+  const eval::VoxelAgreement g = eval::compareVoxels(readVoxelList(paths[0]), readVoxelList(paths[1]));
+  std::printf("A %s: %zu voxels; B %s: %zu voxels; both %zu\n", paths[0].c_str(), g.a,
+              paths[1].c_str(), g.b, g.intersection);
+  std::printf("exact:           IoU %.3f, precision %.3f, recall %.3f (A against B)\n", g.iou,
+              g.precision, g.recall);
+  std::printf("within one cell: IoU %.3f, precision %.4f, recall %.4f\n", g.iou_1, g.precision_1,
+              g.recall_1);
+  return 0;
+}
+
 /// What --octomap-replay maps: the files of mlmap_replay's --frames or --clouds + --poses.
 struct OctomapReplayOptions {
   std::string frames_dir;
@@ -791,7 +822,21 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--octomap-voxels", replay.voxels_out,
                  "the OctoMap replay's occupied voxels, as mlmap_replay's occupied_voxels.txt");
+  std::vector<std::string> agreement_lists;
+  app.add_option("--agreement", agreement_lists,
+                 "print how two voxel lists agree (A B: e.g. mlmap_replay's occupied_voxels.txt "
+                 "and --octomap-voxels' file), exact and within one cell, and exit")
+      ->expected(2)
+      ->check(CLI::ExistingFile);
   CLI11_PARSE(app, argc, argv);
+  if (!agreement_lists.empty()) {
+    try {
+      return printListAgreement(agreement_lists);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "mlmap_compare_octomap: %s\n", e.what());
+      return 1;
+    }
+  }
   if (!replay.frames_dir.empty() || !replay.clouds_dir.empty()) {
     if (o.max_range_m > 0.0) replay.max_range_m = o.max_range_m;
     try {
