@@ -143,11 +143,10 @@ TEST(OctomapAgreement, LidarScansAt10cmAnd30mAgreeWithOctomapOffTheVoxelGrid) {
 }
 
 // On the grid the exact cells of the room's faces are a coin toss between the two (the IoU falls
-// to about 0.75), while within one cell the maps still agree: what differs is which side of a
-// voxel face a point on that face falls, not the mapping.
+// to 0.758), while within one cell the maps still agree: what differs is which side of a voxel
+// face a point on that face falls, not the mapping.
 TEST(OctomapAgreement, LidarScansOnTheVoxelGridDifferOnlyWithinOneCell) {
   const eval::VoxelAgreement g = mapLidarScans(Eigen::Vector3d::Zero());
-  EXPECT_LT(g.iou, 0.9);
   EXPECT_GE(g.recall_1, 0.99);
   EXPECT_GE(g.precision_1, 0.99);
 }
