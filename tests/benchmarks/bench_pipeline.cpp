@@ -1,18 +1,22 @@
 // mlmap_bench: per-frame cost of the engine (synchronous mode, one core) on simulated 640x480
-// depth frames and on the shared real RealSense frames. Prints median and p99 per stage and the
-// memory by layer. Figures, not pass/fail: see docs/performance.md.
+// depth frames, on the shared real RealSense frames and on simulated 360-degree LiDAR scans.
+// Prints median and p99 per stage and the memory by layer. Figures, not pass/fail: see
+// docs/performance.md.
 
 #include "mlmap/eval/run_outputs.h"
 #include "mlmap/eval/sim_flight.h"
 #include "mlmap/datasets/frame_directory.h"
 #include "mlmap/pipeline/map_engine.h"
+#include "mlmap/sim/lidar.h"
 
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <type_traits>
 
 namespace {
 
@@ -25,7 +29,7 @@ struct Case {
   MapConfig config;
 };
 
-MapConfig at(double res, Eigen::Vector3i cells) {
+MapConfig at(double res, const Eigen::Vector3i& cells) {
   MapConfig c;
   c.local_map.resolution_m = res;
   c.local_map.size_cells = cells;
@@ -42,19 +46,21 @@ struct Row {
 double quantile(std::vector<double> v, double q) {
   if (v.empty()) return 0.0;
   std::sort(v.begin(), v.end());
-  return v[static_cast<std::size_t>(q * static_cast<double>(v.size() - 1) + 0.5)];
+  return v[static_cast<std::size_t>(std::lround(q * static_cast<double>(v.size() - 1)))];
 }
 
-Row run(const Case& c, const std::vector<DepthFrame>& frames, int repeats) {
+/// Maps `frames` (depth images or clouds) `repeats` times in order, stamped 0.1 s apart.
+template <typename FrameT>
+Row run(const Case& c, const std::vector<FrameT>& frames, int repeats) {
   MapEngine engine(c.config);
   double points = 0.0;
   double stamp = 0.0;
   Row row;
   PlanningStats last;
   for (int r = 0; r < repeats; ++r) {
-    for (DepthFrame f : frames) {
+    for (FrameT f : frames) {
       f.stamp_s = (stamp += 0.1);
-      f.T_B_S = c.config.sensor.T_B_S();
+      if constexpr (std::is_same_v<FrameT, DepthFrame>) f.T_B_S = c.config.sensor.T_B_S();
       engine.submit(std::move(f));
       const PlanningStats p = engine.stats().planning;
       if (p.snapshots > last.snapshots) row.snapshot_ms.push_back(p.last_snapshot_ms);
@@ -113,6 +119,12 @@ int main(int argc, char** argv) {
   app.add_option("--real", real_dir, "RGB-D frame folder ('' to skip)")->capture_default_str();
   app.add_option("--json", json_path, "also write the figures as JSON");
   app.add_option("--only", only, "run only the cases whose name contains this text (e.g. '0.1 m')");
+  int lidar_scans = 60;
+  app.add_option("--lidar-scans", lidar_scans,
+                 "consecutive 10 Hz scans of the simulated 360-degree LiDAR (128 x 640 rays, 30 m) "
+                 "from the start of the flight, mapped at 0.1 m (0: skip)")
+      ->check(CLI::Range(0, 10000))
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
 
   // Render the simulated frames once (the simulator's cost is not measured).
@@ -164,6 +176,27 @@ int main(int argc, char** argv) {
       rows.push_back(run({name, c}, real, repeats));
       print(rows.back(), nullptr, false);
     }
+  }
+  // The LiDAR as mlmap_replay maps it with tests/benchmarks/replay_lidar_30m.yaml: a window that
+  // holds every hit within 30 m, no planning layers (issue 27: <= 15 ms median a scan).
+  const std::string lidar_name = "sim LiDAR 128x640, 0.1 m, 30 m";
+  if (lidar_scans > 0 && selected(lidar_name)) {
+    MapConfig c = at(0.1, {750, 750, 75});
+    c.awareness.max_range_m = 30.0;
+    c.awareness.rho_cells = 300;
+    c.sensor.translation_B_m.setZero();
+    c.pipeline.planning_layers = false;
+    const sim::Lidar lidar;
+    std::vector<PointCloudFrame> scans;
+    for (int i = 0; i < std::min(lidar_scans, total); ++i) {
+      const double t = eval::frameTime(scenario, i);
+      PointCloudFrame f;
+      f.T_W_B = scenario.trajectory.poseAt(t);
+      lidar.render(scenario.world, f.T_W_B, t, &f);
+      scans.push_back(std::move(f));
+    }
+    rows.push_back(run({lidar_name, c}, scans, repeats));
+    print(rows.back(), nullptr, false);
   }
   std::printf("\nplanning layers after each frame (ms; snapshot = window copy + publish):\n");
   std::printf("%-34s %15s %15s %15s %8s\n", "case", "snapshot", "2D grid", "ESDF", "ESDF");

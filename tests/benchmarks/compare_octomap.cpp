@@ -73,6 +73,9 @@ struct Dataset {
   Transform T_B_S = Transform::Identity();
   std::function<Frame(int)> frame;
   std::shared_ptr<const io::Scenario> scenario;  ///< simulated datasets: the ground truth
+  /// Simulated datasets: what every pose was moved by after rendering (the scene's offset from
+  /// the world the ground truth describes).
+  Eigen::Vector3d scene_offset_W = Eigen::Vector3d::Zero();
 };
 
 /// Options shared by every case.
@@ -85,6 +88,7 @@ struct Options {
   std::string mappers = "both";
   std::string out_dir;
   std::vector<double> window_m;  // empty: 2.5 x the range (z: 7.5 m in the simulated worlds)
+  std::vector<double> scene_offset_m;  // simulated datasets: every pose moved by this after rendering
   bool voxels = false;
   bool quiet = false;
 };
@@ -132,18 +136,22 @@ Dataset makeDataset(const std::string& kind, const Options& o) {
   const auto source = [n, total, step](int i) { return step > 0 ? i * step : (i * total) / n; };
   d.window_z_m = 7.5;
   d.scenario = scenario;
+  if (o.scene_offset_m.size() == 3) {
+    d.scene_offset_W = Eigen::Vector3d(o.scene_offset_m[0], o.scene_offset_m[1], o.scene_offset_m[2]);
+  }
   if (lidar) {
     d.default_max_range_m = 30.0;
     d.T_B_S = Transform::Identity();  // LiDAR at the body origin, x forward, z up
     auto sensor = std::make_shared<sim::Lidar>();
     d.description = std::string(building ? "building walk" : "default room flight") +
                     ", simulated LiDAR 128 x 640 rays, 45 deg vertical, 30 m";
-    d.frame = [scenario, sensor, source, T_B_S = d.T_B_S](int i) {
+    d.frame = [scenario, sensor, source, T_B_S = d.T_B_S, offset = d.scene_offset_W](int i) {
       const double t = eval::frameTime(*scenario, source(i));
       Frame f;
       f.cloud.T_W_B = scenario->trajectory.poseAt(t);
       f.cloud.T_B_S = T_B_S;
       sensor->render(scenario->world, f.cloud.T_W_B * T_B_S, t, &f.cloud);
+      f.cloud.T_W_B.pretranslate(offset);
       f.path_m = t * scenario->trajectory.speed_mps();
       return f;
     };
@@ -153,13 +161,14 @@ Dataset makeDataset(const std::string& kind, const Options& o) {
     auto camera = std::make_shared<sim::DepthCamera>(scenario->camera);
     d.description = std::string(building ? "building walk" : "default room flight") +
                     ", simulated 640x480 depth camera";
-    d.frame = [scenario, camera, source, T_B_S = d.T_B_S](int i) {
+    d.frame = [scenario, camera, source, T_B_S = d.T_B_S, offset = d.scene_offset_W](int i) {
       const double t = eval::frameTime(*scenario, source(i));
       Frame f;
       f.is_depth = true;
       f.depth.T_W_B = scenario->trajectory.poseAt(t);
       f.depth.T_B_S = T_B_S;
       camera->render(scenario->world, f.depth.T_W_B * T_B_S, t, &f.depth);
+      f.depth.T_W_B.pretranslate(offset);
       f.path_m = t * scenario->trajectory.speed_mps();
       return f;
     };
@@ -172,6 +181,11 @@ Dataset makeDataset(const std::string& kind, const Options& o) {
     spacing << (n == total ? "; every frame" : "; frames spread over the flight");
   }
   d.description += spacing.str();
+  if (!d.scene_offset_W.isZero()) {
+    std::ostringstream offset;
+    offset << "; scene moved by (" << d.scene_offset_W.transpose() << ") m, off the voxel grid";
+    d.description += offset.str();
+  }
   return d;
 }
 
@@ -390,7 +404,7 @@ CaseResult runCase(const Dataset& d, double resolution_m, const Options& o) {
   r.points_per_frame = points / std::max(1, d.frames);
   if (tree) r.octomap_voxels = octomapOccupied(*tree);
   if (engine && tree) r.agreement = eval::compareVoxels(r.mlmap_voxels, r.octomap_voxels.occupied);
-  if (engine && tree && d.scenario) {
+  if (engine && tree && d.scenario && d.scene_offset_W.isZero()) {
     const sim::World& world = d.scenario->world;
     const eval::VoxelSet a(r.mlmap_voxels.begin(), r.mlmap_voxels.end());
     const eval::VoxelSet b(r.octomap_voxels.occupied.begin(), r.octomap_voxels.occupied.end());
@@ -649,6 +663,37 @@ void writeDatasetFiles(const Dataset& d, const std::string& dir) {
   }
 }
 
+/// The voxels of a voxel list as mlmap_replay and --octomap-voxels write it (`ix iy iz` per
+/// line, `#` lines skipped). Throws naming the file and line when a line is not three integers.
+std::vector<VoxelIndex> readVoxelList(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot read");
+  std::vector<VoxelIndex> voxels;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    VoxelIndex v;
+    if (!(fields >> v.x() >> v.y() >> v.z())) {
+      throw std::runtime_error(path + ":" + std::to_string(number) + ": not 'ix iy iz': " + line);
+    }
+    voxels.push_back(v);
+  }
+  return voxels;
+}
+
+/// --agreement A B: how two voxel lists agree (A against B), exact and within one cell.
+int printListAgreement(const std::vector<std::string>& paths) {
+  const eval::VoxelAgreement g = eval::compareVoxels(readVoxelList(paths[0]), readVoxelList(paths[1]));
+  std::printf("A %s: %zu voxels; B %s: %zu voxels; both %zu\n", paths[0].c_str(), g.a,
+              paths[1].c_str(), g.b, g.intersection);
+  std::printf("exact:           IoU %.3f, precision %.3f, recall %.3f (A against B)\n", g.iou,
+              g.precision, g.recall);
+  std::printf("within one cell: IoU %.3f, precision %.4f, recall %.4f\n", g.iou_1, g.precision_1,
+              g.recall_1);
+  return 0;
+}
+
 /// What --octomap-replay maps: the files of mlmap_replay's --frames or --clouds + --poses.
 struct OctomapReplayOptions {
   std::string frames_dir;
@@ -741,6 +786,12 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->expected(3)
       ->check(CLI::PositiveNumber);
+  app.add_option("--scene-offset", o.scene_offset_m,
+                 "simulated datasets: move every pose by X,Y,Z [m] after rendering, which moves the "
+                 "scene off the voxel grid (the simulated rooms' faces lie on voxel faces, where a "
+                 "point's voxel is a tie that rounding decides); no scoring against the truth then")
+      ->delimiter(',')
+      ->expected(3);
   app.add_option("--realsense", o.realsense_dir, "RGB-D frame directory of the realsense dataset")
       ->capture_default_str();
   app.add_option("--building", o.building_yaml, "scenario YAML of the building walk")->capture_default_str();
@@ -771,7 +822,21 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--octomap-voxels", replay.voxels_out,
                  "the OctoMap replay's occupied voxels, as mlmap_replay's occupied_voxels.txt");
+  std::vector<std::string> agreement_lists;
+  app.add_option("--agreement", agreement_lists,
+                 "print how two voxel lists agree (A B: e.g. mlmap_replay's occupied_voxels.txt "
+                 "and --octomap-voxels' file), exact and within one cell, and exit")
+      ->expected(2)
+      ->check(CLI::ExistingFile);
   CLI11_PARSE(app, argc, argv);
+  if (!agreement_lists.empty()) {
+    try {
+      return printListAgreement(agreement_lists);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "mlmap_compare_octomap: %s\n", e.what());
+      return 1;
+    }
+  }
   if (!replay.frames_dir.empty() || !replay.clouds_dir.empty()) {
     if (o.max_range_m > 0.0) replay.max_range_m = o.max_range_m;
     try {

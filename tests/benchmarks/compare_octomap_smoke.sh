@@ -63,9 +63,9 @@ done
   --octomap-poses "$work/files/lidar/poses.tum" --octomap-resolution 0.2 --max-range 8 \
   --octomap-voxels "$work/octomap_lidar.txt" > "$work/octomap_lidar.log"
 grep -q "octomap replay: 3 frames" "$work/octomap_depth.log"
-/usr/bin/python3 - "$work" <<'PY'
-import sys
-work = sys.argv[1]
+/usr/bin/python3 - "$work" "$build" <<'PY'
+import subprocess, sys
+work, build = sys.argv[1], sys.argv[2]
 def load(path):
     return {tuple(map(int, l.split())) for l in open(path) if l.strip() and not l.startswith('#')}
 def near(v, s):
@@ -79,7 +79,19 @@ for kind in ('depth', 'lidar'):
     assert precision > 0.95 and recall > 0.95, (kind, precision, recall)
     print(f'replay from files, {kind}: mlmap {len(m)}, OctoMap {len(o)} voxels; within one cell '
           f'precision {precision:.3f}, recall {recall:.3f}')
+    # --agreement gives the same figures for the two lists.
+    out = subprocess.run([f'{build}/mlmap_compare_octomap', '--agreement',
+                          f'{work}/replay_{kind}/occupied_voxels.txt', f'{work}/octomap_{kind}.txt'],
+                         capture_output=True, text=True, check=True).stdout
+    assert f'{len(m)} voxels' in out and f'{len(o)} voxels; both {len(m & o)}' in out, out
+    assert f'precision {precision:.4f}, recall {recall:.4f}' in out, out
 PY
+echo "1 2" > "$work/not_a_list.txt"
+if "$build/mlmap_compare_octomap" --agreement "$work/not_a_list.txt" "$work/octomap_lidar.txt" \
+    > "$work/bad.txt" 2>&1; then
+  echo "a malformed voxel list was accepted" >&2; exit 1
+fi
+grep -q "not_a_list.txt:1: not 'ix iy iz'" "$work/bad.txt"
 if "$build/mlmap_compare_octomap" --cases depth:zero --frames 1 > "$work/bad.txt" 2>&1; then
   echo "a bad --cases was accepted" >&2; exit 1
 fi

@@ -201,8 +201,9 @@ void flyAgainstAWholeWorldReference(const FlightShape& shape) {
     }
     ++compared;
   }
-  // Nothing else is known anywhere.
+  // Nothing else is known anywhere; forEachOccupied() lists the occupied ones in x, y, z order.
   std::size_t known_in_window = 0;
+  std::vector<VoxelIndex> occupied;
   for (int x = 0; x < config.size_cells.x(); ++x)
     for (int y = 0; y < config.size_cells.y(); ++y)
       for (int z = 0; z < config.size_cells.z(); ++z) {
@@ -211,7 +212,17 @@ void flyAgainstAWholeWorldReference(const FlightShape& shape) {
           ++known_in_window;
           EXPECT_EQ(reference.count(test::key(g)), 1u) << "stale value at " << g.transpose();
         }
+        if (map.state(g) == Occupancy::kOccupied) occupied.push_back(g);
       }
+  std::vector<VoxelIndex> listed;
+  map.forEachOccupied([&](const VoxelIndex& g, double l) {
+    listed.push_back(g);
+    double stored_l = 0.0;
+    EXPECT_TRUE(map.logOdds(g, &stored_l));
+    EXPECT_EQ(l, stored_l);
+  });
+  EXPECT_EQ(listed, occupied);
+  EXPECT_GT(occupied.size(), 10u);
   EXPECT_EQ(stored.size() + known_in_window, reference.size());
   EXPECT_EQ(map.counters().outside_window, outside + hits_outside);
   EXPECT_EQ(map.counters().hits_outside_window, hits_outside);

@@ -128,6 +128,7 @@ class LocalMap {
       for (int y = 0; y < size_.y(); ++y) {
         const std::size_t column =
             (sx * ny + static_cast<std::size_t>(floorMod(min_index_.y() + y, size_.y()))) * nz;
+        if (!anyOccupied(cells_.data() + column)) continue;  // most columns
         std::size_t sz = z0;
         for (int z = 0; z < size_.z(); ++z) {
           const LogOddsQ v = cells_[column + sz];
@@ -193,6 +194,8 @@ class LocalMap {
   /// Copies into `out` (placed and sized like the window) every column of the window, or with
   /// `all` false those changed after `changed_after`. Returns the number of columns copied.
   int copyColumns(LocalWindow* out, bool all, std::uint64_t changed_after) const;
+  /// Whether any of the size_cells.z voxels of the torus column starting at `column` is occupied.
+  [[nodiscard]] bool anyOccupied(const LogOddsQ* column) const;
   /// Applies a miss to column[base + k] for each set bit k of `bits` (all within the column),
   /// stamping the submaps (`changed_at`, `state_changed_at`: the column's stamps) whose values
   /// or states changed. Returns whether any value changed.
