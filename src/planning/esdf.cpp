@@ -1,5 +1,7 @@
 #include "mlmap/planning/esdf.h"
 
+#include "mlmap/planning/esdf_window_kernel.h"
+
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -371,6 +373,7 @@ void EsdfMap::prepare(const OccupancyBox& box) {
   cap_d_ = static_cast<std::int32_t>(std::sqrt(static_cast<double>(cap_sq_)));
   while (std::int64_t{cap_d_ + 1} * (cap_d_ + 1) <= cap_sq_) ++cap_d_;
   while (std::int64_t{cap_d_} * cap_d_ > cap_sq_) --cap_d_;
+  window_kernel_ = !envelope_only_ && esdf_kernel::windowFits(cap_sq_, cap_d_);
   if (2 * static_cast<std::size_t>(inf_) + 1 <= kMaxLookupEntries) {
     metres_table_.resize(2 * static_cast<std::size_t>(inf_) + 1);
     for (std::size_t i = 0; i < metres_table_.size(); ++i) {
@@ -706,6 +709,21 @@ void EsdfMap::transformSlabs(const std::uint8_t* states, int x_begin, int x_end,
   std::int32_t* line = scratch->line.data();
   for (int x = x_begin; x < x_end; ++x) {
     const std::size_t first = static_cast<std::size_t>(x) * slab;
+    float* field = field_.data() + first;
+    if (window_kernel_ && table != nullptr) {
+      // Both passes on 16-bit copies of the slab (see esdf_window_kernel.h).
+      esdf_kernel::WindowBuffers* buffers = &scratch->window;
+      esdf_kernel::transformSlabY(pass1_.data() + first, ny, nz, cap_sq_, cap_d_,
+                                  pass2_.data() + first, buffers);
+      esdf_kernel::transformSlabZ(ny, nz, cap_sq_, cap_d_, buffers);
+      const std::int16_t* values = buffers->signed_sq.data();  // z-major
+      for (int y = 0; y < ny; ++y) {
+        float* out = field + static_cast<std::size_t>(y) * nz;
+        for (int z = 0; z < nz; ++z) out[z] = table[values[static_cast<std::size_t>(z) * ny + y]];
+      }
+      writeUnknownBits(states, x);
+      continue;
+    }
     // Pass 2 in place on a copy of pass 1's slab (the slab stays in cache).
     std::int32_t* a = pass2_.data() + first;
     std::memcpy(a, pass1_.data() + first, slab * sizeof(std::int32_t));
@@ -724,7 +742,6 @@ void EsdfMap::transformSlabs(const std::uint8_t* states, int x_begin, int x_end,
       }
     }
     // Pass 3 line by line, into the field in metres.
-    float* field = field_.data() + first;
     for (int y = 0; y < ny; ++y) {
       transformZLine(x, y, 0, nz, line, scratch);
       float* out = field + static_cast<std::size_t>(y) * nz;

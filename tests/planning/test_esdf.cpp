@@ -348,6 +348,48 @@ TEST(Esdf, TwoThreadsAreBitIdenticalToOne) {
   }
 }
 
+// The windowed 16-bit passes against the envelope code (both exact): bit-identical fields for
+// clamps from one voxel to the windowed passes' largest, flat boxes (one voxel along an axis)
+// included; beyond that clamp compute() keeps the envelope code.
+TEST(Esdf, WindowedPassesEqualTheEnvelopeCode) {
+  std::mt19937 rng(23);
+  const std::vector<Eigen::Vector3i> sizes = {
+      {31, 45, 27}, {1, 40, 30}, {25, 1, 33}, {30, 41, 1}, {2, 3, 90}, {70, 66, 2}};
+  const std::vector<std::pair<double, double>> densities = {{0.002, 0.0}, {0.05, 0.2},
+                                                            {0.4, 0.1}};
+  for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+    // Clamps of 1, 2, 7, 20 and kMaxWindowCapCells voxels at 0.1 m, then one beyond.
+    for (const double max_m : {0.1, 0.25, 0.7, 2.0, 4.8, 4.95}) {
+      EsdfMap windowed(config(max_m, policy));
+      EsdfMap envelope(config(max_m, policy));
+      envelope.setEnvelopeOnly(true);
+      for (const Eigen::Vector3i& size : sizes) {
+        for (const auto& [p_occ, p_unk] : densities) {
+          const OccupancyBox box = randomBox({-5, 3, -9}, size, 0.1, p_occ, p_unk, &rng);
+          ASSERT_TRUE(windowed.compute(box));
+          ASSERT_TRUE(envelope.compute(box));
+          EXPECT_FALSE(envelope.windowedPasses());
+          // Beyond 4.8 m the clamp (49 voxels) exceeds the windowed passes' unless the box's
+          // diagonal is shorter (that is then the clamp: cap_sq = diagonal^2 + 1).
+          const bool long_diagonal =
+              (size - Eigen::Vector3i::Ones()).squaredNorm() + 1 >= 49 * 49;
+          EXPECT_EQ(windowed.windowedPasses(), max_m < 4.9 || !long_diagonal) << max_m;
+          const std::string what = std::string(toString(policy)) + ", max " +
+                                   std::to_string(max_m) + " m, size " +
+                                   std::to_string(size.x()) + "x" + std::to_string(size.y()) +
+                                   "x" + std::to_string(size.z()) + ", occupied " +
+                                   std::to_string(p_occ);
+          ASSERT_EQ(windowed.distances().size(), box.states.size()) << what;
+          EXPECT_EQ(std::memcmp(windowed.distances().data(), envelope.distances().data(),
+                                box.states.size() * sizeof(float)),
+                    0)
+              << what;
+        }
+      }
+    }
+  }
+}
+
 TEST(Esdf, RecomputingReusesBuffersWithoutStaleValues) {
   std::mt19937 rng(5);
   const OccupancyBox big = randomBox({-5, -5, -5}, {30, 30, 30}, 0.2, 0.1, 0.1, &rng);

@@ -46,6 +46,7 @@
 
 #include "mlmap/core/config.h"
 #include "mlmap/core/types.h"
+#include "mlmap/planning/esdf_window_kernel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -127,6 +128,14 @@ class EsdfMap {
   /// With num_threads > 1 the work is split over that many threads (created per call); the
   /// result is bit-identical to one thread. std::bad_alloc propagates, leaving the map empty.
   [[nodiscard]] bool compute(const OccupancyBox& box);
+
+  /// Makes compute() run its y and z passes with the envelope code even where the windowed
+  /// 16-bit passes apply (see the file comment); both give the same field. For tests and the
+  /// benchmark; takes effect at the next compute().
+  void setEnvelopeOnly(bool envelope_only) { envelope_only_ = envelope_only; }
+  /// True when the last compute() ran the windowed 16-bit y and z passes (the clamp is at most
+  /// esdf_kernel::kMaxWindowCapCells voxels and setEnvelopeOnly() was not set).
+  [[nodiscard]] bool windowedPasses() const { return window_kernel_; }
 
   /// What the last compute() or update() did.
   struct UpdateStats {
@@ -222,6 +231,7 @@ class EsdfMap {
     std::vector<std::int32_t> near_free;      ///< x pass: nearest non-obstacle x per (y, z)
     std::vector<std::int32_t> near_obstacle;  ///< x pass: nearest obstacle x per (y, z)
     std::vector<std::int32_t> line;           ///< one y or z line being transformed
+    esdf_kernel::WindowBuffers window;        ///< the windowed passes' slab buffers
   };
 
   /// Unknown bit of box-relative voxel (x, y, z) (inside the box).
@@ -278,6 +288,8 @@ class EsdfMap {
   std::int32_t inf_ = 1;     ///< cap_sq_ + 1: "farther than the cap" in the work buffer
   std::int32_t cap_d_ = 0;   ///< largest d with d * d <= cap_sq_
   bool narrow_keys_ = true;  ///< the envelope arithmetic of every line fits 32 bits
+  bool envelope_only_ = false;  ///< see setEnvelopeOnly()
+  bool window_kernel_ = false;  ///< compute() runs the windowed y and z passes
   std::vector<float> field_;           ///< clamped signed distance per voxel [m]
   /// One bit per voxel, set where the box voxel was unknown; each x slab starts on a new
   /// 64-bit word (slab_bits_ apart) so that threads never share a word.
