@@ -594,7 +594,21 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
     }
   }
 
+  if (window_kernel_) {
+    updateLinesWindowed(reach, scratch);
+  } else {
+    updateLinesEnvelope(reach, scratch);
+  }
+  u.changed_cells = u.shifted ? cells : changed_cells_.size();
+}
+
+void EsdfMap::updateLinesEnvelope(int reach, Scratch* scratch) {
+  const int nx = size_.x();
+  const int ny = size_.y();
+  const int nz = size_.z();
+  const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
   // Pass 2, the marked y lines; changed results mark their z lines.
+  UpdateStats& u = last_update_;
   std::int32_t* line = scratch->line.data();
   for (int x = 0; x < nx; ++x) {
     const int* dirty_lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz;
@@ -643,7 +657,114 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
       }
     }
   }
-  u.changed_cells = u.shifted ? cells : changed_cells_.size();
+}
+
+void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
+  const int nx = size_.x();
+  const int ny = size_.y();
+  const int nz = size_.z();
+  const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
+  UpdateStats& u = last_update_;
+  esdf_kernel::WindowBuffers* buffers = &scratch->window;
+  std::vector<int>& lanes = scratch->lanes;
+  // Pass 2: per x slab, the marked y lines side by side (one lane each) over the union of
+  // their ranges (each lane's outputs within its own range are exact: a part of a line, see
+  // above); changed results mark their z lines.
+  for (int x = 0; x < nx; ++x) {
+    const int* dirty_lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz;
+    const int* dirty_hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz;
+    lanes.clear();
+    int lo = ny;
+    int hi = -1;
+    for (int z = 0; z < nz; ++z) {
+      if (dirty_hi[z] < dirty_lo[z]) continue;
+      lanes.push_back(z);
+      lo = std::min(lo, dirty_lo[z]);
+      hi = std::max(hi, dirty_hi[z]);
+    }
+    if (lanes.empty()) continue;
+    u.y_lines += lanes.size();
+    const int begin = std::max(0, lo - 2 * reach);
+    const int end = std::min(ny, hi + 2 * reach + 1);
+    const int count = static_cast<int>(lanes.size());
+    const std::size_t n = static_cast<std::size_t>(end - begin) * lanes.size();
+    if (buffers->lines.size() < n) buffers->lines.resize(n);
+    std::int16_t* values = buffers->lines.data();
+    const std::int32_t* in = pass1_.data() + static_cast<std::size_t>(x) * slab;
+    for (int y = begin; y < end; ++y) {
+      const std::int32_t* row = in + static_cast<std::size_t>(y) * nz;
+      std::int16_t* out = values + static_cast<std::size_t>(y - begin) * lanes.size();
+      for (int l = 0; l < count; ++l) {
+        const std::int32_t v = row[lanes[static_cast<std::size_t>(l)]];
+        const std::int32_t a = v < 0 ? -v : v;
+        const std::int32_t sq = a <= cap_d_ ? a * a : inf_;
+        out[l] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
+      }
+    }
+    esdf_kernel::transformLines(values, end - begin, count, cap_sq_, cap_d_, buffers);
+    std::int32_t* slab_values = pass2_.data() + static_cast<std::size_t>(x) * slab;
+    int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
+    int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
+    for (int l = 0; l < count; ++l) {
+      const int z = lanes[static_cast<std::size_t>(l)];
+      const int y_end = std::min(ny, dirty_hi[z] + reach + 1);
+      for (int y = std::max(0, dirty_lo[z] - reach); y < y_end; ++y) {
+        std::int32_t& old = slab_values[static_cast<std::size_t>(y) * nz + z];
+        const std::int32_t fresh = values[static_cast<std::size_t>(y - begin) * lanes.size() + l];
+        if (fresh != old) {
+          old = fresh;
+          mark_lo[y] = std::min(mark_lo[y], z);
+          mark_hi[y] = std::max(mark_hi[y], z);
+        }
+      }
+    }
+  }
+
+  // Pass 3: per x slab, the marked z lines side by side, into the field.
+  for (int x = 0; x < nx; ++x) {
+    const int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
+    const int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
+    lanes.clear();
+    int lo = nz;
+    int hi = -1;
+    for (int y = 0; y < ny; ++y) {
+      if (mark_hi[y] < mark_lo[y]) continue;
+      lanes.push_back(y);
+      lo = std::min(lo, mark_lo[y]);
+      hi = std::max(hi, mark_hi[y]);
+    }
+    if (lanes.empty()) continue;
+    u.z_lines += lanes.size();
+    const int begin = std::max(0, lo - 2 * reach);
+    const int end = std::min(nz, hi + 2 * reach + 1);
+    const int count = static_cast<int>(lanes.size());
+    const std::size_t n = static_cast<std::size_t>(end - begin) * lanes.size();
+    if (buffers->lines.size() < n) buffers->lines.resize(n);
+    std::int16_t* values = buffers->lines.data();
+    const std::size_t first = static_cast<std::size_t>(x) * slab;
+    for (int l = 0; l < count; ++l) {
+      const std::int32_t* in =
+          pass2_.data() + first + static_cast<std::size_t>(lanes[static_cast<std::size_t>(l)]) * nz;
+      for (int z = begin; z < end; ++z) {
+        values[static_cast<std::size_t>(z - begin) * lanes.size() + l] =
+            static_cast<std::int16_t>(in[z]);
+      }
+    }
+    esdf_kernel::transformLines(values, end - begin, count, cap_sq_, cap_d_, buffers);
+    for (int l = 0; l < count; ++l) {
+      const int y = lanes[static_cast<std::size_t>(l)];
+      const std::size_t row = first + static_cast<std::size_t>(y) * nz;
+      float* field = field_.data() + row;
+      const int z_end = std::min(nz, mark_hi[y] + reach + 1);
+      for (int z = std::max(0, mark_lo[y] - reach); z < z_end; ++z) {
+        const float m = metres(values[static_cast<std::size_t>(z - begin) * lanes.size() + l]);
+        if (m != field[z]) {
+          field[z] = m;
+          changed_cells_.push_back(static_cast<std::uint32_t>(row + static_cast<std::size_t>(z)));
+        }
+      }
+    }
+  }
 }
 
 void EsdfMap::sweepRows(const std::uint8_t* states, int y_begin, int y_end, Scratch* scratch) {

@@ -167,16 +167,21 @@ void transformSlabY(const std::int32_t* pass1, int ny, int nz, std::int32_t cap_
 }
 
 MLMAP_WINDOW_CLONES
-void transformSlabZ(int ny, int nz, std::int32_t cap_sq, std::int32_t cap_d,
-                    WindowBuffers* buffers) {
+void transformLines(std::int16_t* values, int n, int lanes, std::int32_t cap_sq,
+                    std::int32_t cap_d, WindowBuffers* buffers) {
   const auto inf = static_cast<std::int16_t>(cap_sq + 1);
-  const std::size_t cells = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
-  std::int16_t* m = prepareBuffers(nz, ny, cap_d, inf, buffers);
-  std::int16_t* values = buffers->signed_sq.data();  // z-major: z lines across the y lanes
+  const std::size_t cells = static_cast<std::size_t>(n) * static_cast<std::size_t>(lanes);
+  std::int16_t* m = prepareBuffers(n, lanes, cap_d, inf, buffers);
   for (std::size_t i = 0; i < cells; ++i) {
     m[i] = static_cast<std::int16_t>(values[i] < 0 ? -values[i] : values[i]);
   }
-  windowPass(values, m, nz, ny, cap_sq, cap_d, buffers);
+  windowPass(values, m, n, lanes, cap_sq, cap_d, buffers);
+}
+
+void transformSlabZ(int ny, int nz, std::int32_t cap_sq, std::int32_t cap_d,
+                    WindowBuffers* buffers) {
+  // z-major: the z lines across the y lanes.
+  transformLines(buffers->signed_sq.data(), nz, ny, cap_sq, cap_d, buffers);
 }
 
 }  // namespace mlmap::esdf_kernel

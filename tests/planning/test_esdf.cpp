@@ -708,7 +708,8 @@ TEST(Esdf, IncrementalUpdatesEqualAFullRecomputeAfterEveryStep) {
     Eigen::Vector3i box_size;
     double max_m;
   };
-  const Case cases[] = {{{31, 27, 17}, 0.65}, {{24, 33, 12}, 100.0}, {{40, 37, 1}, 0.9}};
+  const Case cases[] = {
+      {{31, 27, 17}, 0.65}, {{24, 33, 12}, 100.0}, {{40, 37, 1}, 0.9}, {{47, 45, 26}, 2.0}};
   std::mt19937 rng(5);
   for (const Case& c : cases) {
     for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {

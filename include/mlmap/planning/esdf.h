@@ -232,6 +232,7 @@ class EsdfMap {
     std::vector<std::int32_t> near_obstacle;  ///< x pass: nearest obstacle x per (y, z)
     std::vector<std::int32_t> line;           ///< one y or z line being transformed
     esdf_kernel::WindowBuffers window;        ///< the windowed passes' slab buffers
+    std::vector<int> lanes;                   ///< update(): the lines of a slab transformed
   };
 
   /// Unknown bit of box-relative voxel (x, y, z) (inside the box).
@@ -271,6 +272,11 @@ class EsdfMap {
   /// The incremental part of update(): box has the kept geometry after a shift by `shift`
   /// voxels (zero: none).
   void updateChanged(const OccupancyBox& box, const VoxelIndex& shift);
+  /// The y and z passes of updateChanged() over the lines its x pass marked, `reach` = cap_d_ + 1:
+  /// line by line with the envelope code ...
+  void updateLinesEnvelope(int reach, Scratch* scratch);
+  /// ... or, where the windowed passes apply, a slab's marked lines side by side through them.
+  void updateLinesWindowed(int reach, Scratch* scratch);
   /// Signed squared voxel distance (or +-inf_) -> clamped signed metres, without the table.
   /// Needs cap_sq_, inf_ and resolution_m_ of the current compute().
   [[nodiscard]] float slowMetres(std::int32_t value) const;

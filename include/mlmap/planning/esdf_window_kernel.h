@@ -35,9 +35,17 @@ struct WindowBuffers {
   std::vector<std::int16_t> best;       ///< running minimum per voxel
   std::vector<std::int16_t> near_free;  ///< y pass: last / next non-obstacle y per z
   std::vector<std::int16_t> near_obstacle;  ///< y pass: last / next obstacle y per z
+  std::vector<std::int16_t> lines;       ///< lines gathered by the caller of transformLines()
   std::vector<std::int16_t> transposed;  ///< y pass: the slab's lines being transformed
   std::vector<std::int16_t> signed_sq;   ///< the slab z-major: y pass's result, then z pass's
 };
+
+/// Transforms `lanes` lines of n values side by side, in place: values[i * lanes + l] is value
+/// i of line l, a signed squared distance (+ non-obstacle, - obstacle) or +-inf (cap_sq + 1).
+/// A part of a line may be given: its outputs are then exact where they lie more than cap_d + 1
+/// from the part's cut ends.
+void transformLines(std::int16_t* values, int n, int lanes, std::int32_t cap_sq,
+                    std::int32_t cap_d, WindowBuffers* buffers);
 
 /// The y pass of one x slab: `pass1` holds ny * nz signed distances along x (z fastest; +d
 /// non-obstacle, -d obstacle, or +-inf with inf = cap_sq + 1). Writes the signed squared
