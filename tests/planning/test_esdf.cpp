@@ -471,6 +471,37 @@ TEST(Esdf, GradientMatchesFiniteDifferences) {
 
 // Within half a voxel of a box face the stencil is clamped: the value is that at the border
 // cell-centre plane and the gradient has no component along the face normal.
+// queryBatch() returns query()'s results bit for bit: points inside, on and beyond the box's
+// faces, far away and NaN, in batches shorter and longer than its prefetch distance.
+TEST(Esdf, BatchedQueriesEqualSingleQueries) {
+  std::mt19937 rng(31);
+  const OccupancyBox box = randomBox({-12, 5, -3}, {29, 17, 11}, 0.1, 0.05, 0.2, &rng);
+  EsdfMap map(config(0.7, UnknownAs::kOccupied));
+  ASSERT_TRUE(map.compute(box));
+  const Eigen::Vector3d lo = map.minCorner_W();
+  const Eigen::Vector3d extent = map.maxCorner_W() - lo;
+  std::uniform_real_distribution<double> u(-0.1, 1.1);  // a tenth beyond each face
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 5000; ++i) {
+    points.emplace_back(lo + Eigen::Vector3d(u(rng), u(rng), u(rng)).cwiseProduct(extent));
+  }
+  points.push_back(lo);
+  points.push_back(map.maxCorner_W());
+  points.emplace_back(std::nan(""), 0.0, 0.0);
+  points.emplace_back(1e300, -1e300, 0.0);
+  for (const std::size_t count : {std::size_t{0}, std::size_t{1}, std::size_t{5}, points.size()}) {
+    std::vector<EsdfMap::Query> batch(count);
+    map.queryBatch(points.data() + (points.size() - count), count, batch.data());
+    for (std::size_t i = 0; i < count; ++i) {
+      const Eigen::Vector3d& p = points[points.size() - count + i];
+      const EsdfMap::Query single = map.query(p);
+      ASSERT_EQ(batch[i].valid, single.valid) << p.transpose();
+      ASSERT_EQ(batch[i].distance_m, single.distance_m) << p.transpose();
+      ASSERT_EQ(batch[i].gradient, single.gradient) << p.transpose();
+    }
+  }
+}
+
 TEST(Esdf, BorderHalfCellsHoldTheBorderValue) {
   std::mt19937 rng(4);
   const OccupancyBox box = randomBox({-3, 5, -8}, {9, 7, 6}, 0.25, 0.15, 0.1, &rng);
