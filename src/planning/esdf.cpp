@@ -970,7 +970,13 @@ std::size_t EsdfMap::memoryBytes() const {
               s.out_keys32.capacity() + s.in_keys32.capacity() + s.near_free.capacity() +
               s.near_obstacle.capacity() + s.line.capacity()) *
                  sizeof(std::int32_t) +
-             (s.out_keys64.capacity() + s.in_keys64.capacity()) * sizeof(std::int64_t);
+             (s.out_keys64.capacity() + s.in_keys64.capacity()) * sizeof(std::int64_t) +
+             s.lanes.capacity() * sizeof(int) +
+             (s.window.magnitude.capacity() + s.window.best.capacity() +
+              s.window.near_free.capacity() + s.window.near_obstacle.capacity() +
+              s.window.lines.capacity() + s.window.transposed.capacity() +
+              s.window.signed_sq.capacity()) *
+                 sizeof(std::int16_t);
   }
   return bytes;
 }

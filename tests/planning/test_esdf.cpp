@@ -482,6 +482,7 @@ TEST(Esdf, BatchedQueriesEqualSingleQueries) {
   const Eigen::Vector3d extent = map.maxCorner_W() - lo;
   std::uniform_real_distribution<double> u(-0.1, 1.1);  // a tenth beyond each face
   std::vector<Eigen::Vector3d> points;
+  points.reserve(5004);
   for (int i = 0; i < 5000; ++i) {
     points.emplace_back(lo + Eigen::Vector3d(u(rng), u(rng), u(rng)).cwiseProduct(extent));
   }
