@@ -739,25 +739,31 @@ TEST(Esdf, IncrementalUpdatesEqualAFullRecomputeAfterEveryStep) {
   struct Case {
     Eigen::Vector3i box_size;
     double max_m;
+    bool envelope_only;  ///< setEnvelopeOnly() on both maps (the windowed passes otherwise)
   };
-  const Case cases[] = {
-      {{31, 27, 17}, 0.65}, {{24, 33, 12}, 100.0}, {{40, 37, 1}, 0.9}, {{47, 45, 26}, 2.0}};
+  const Case cases[] = {{{31, 27, 17}, 0.65, false}, {{24, 33, 12}, 100.0, false},
+                        {{40, 37, 1}, 0.9, false},   {{47, 45, 26}, 2.0, false},
+                        {{31, 27, 17}, 0.65, true},  {{24, 33, 12}, 100.0, true}};
   std::mt19937 rng(5);
   for (const Case& c : cases) {
     for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
       std::ostringstream what_case;
       what_case << "box " << c.box_size.transpose() << ", max " << c.max_m << " m, "
-                << toString(policy);
+                << toString(policy) << (c.envelope_only ? ", envelope code" : "");
       SCOPED_TRACE(what_case.str());
       const Eigen::Vector3i world_size = c.box_size * 2 + Eigen::Vector3i::Ones();
       ChangingWorld world(world_size, static_cast<std::uint32_t>(rng()));
       EsdfMap incremental(config(c.max_m, policy));
       EsdfMap full(config(c.max_m, policy));
+      incremental.setEnvelopeOnly(c.envelope_only);
+      full.setEnvelopeOnly(c.envelope_only);
       EsdfMap copy(config(c.max_m, policy));
       VoxelIndex min_index = VoxelIndex::Zero();
       std::uniform_int_distribution<int> pick(0, 99);
       std::size_t incremental_steps = 0;
       std::size_t shifted_steps = 0;
+      std::size_t moved_steps = 0;
+      VoxelIndex previous_min = min_index;
       for (int step = 0; step < 60; ++step) {
         world.step();
         const int kind = pick(rng);
@@ -777,6 +783,15 @@ TEST(Esdf, IncrementalUpdatesEqualAFullRecomputeAfterEveryStep) {
         const EsdfMap::UpdateStats& u = incremental.lastUpdate();
         incremental_steps += u.full ? 0 : 1;
         shifted_steps += u.shifted ? 1 : 0;
+        // A move within the box is shifted with the envelope code, computed whole with the
+        // windowed passes.
+        const bool moved = box.min_index != previous_min && step > 0 && step != 40;
+        if (moved) {
+          ++moved_steps;
+          EXPECT_EQ(u.shifted, !incremental.windowedPasses()) << "step " << step;
+          EXPECT_EQ(u.full, incremental.windowedPasses()) << "step " << step;
+        }
+        previous_min = box.min_index;
         if (step == 0) {
           EXPECT_TRUE(u.full);
         }
@@ -791,7 +806,8 @@ TEST(Esdf, IncrementalUpdatesEqualAFullRecomputeAfterEveryStep) {
         if (HasFailure()) return;
       }
       EXPECT_GT(incremental_steps, 30u);
-      EXPECT_GT(shifted_steps, 2u);
+      EXPECT_GT(moved_steps, 2u);
+      if (c.envelope_only) EXPECT_GT(shifted_steps, 2u);
     }
   }
 }

@@ -27,7 +27,12 @@
 /// passes on one signed buffer, each evaluated only where it is needed. Squared distances beyond
 /// (max_distance_m / resolution_m)^2 are treated as infinite, which keeps the clamped result
 /// exact. Linear in the number of voxels; one sqrt (a table lookup) per voxel; no allocation
-/// after the first compute() of the largest box.
+/// after the first compute() of the largest box. Where that clamp is at most
+/// esdf_kernel::kMaxWindowCapCells voxels (20 at 0.1 m with the default 2 m), the y and z
+/// passes instead take, at each voxel, the minimum over the 2 cap_d + 1 voxels of its line
+/// within the clamp (see esdf_window_kernel.h): 16-bit values, many lines side by side, no
+/// branch on the data, so the compiler vectorises it (AVX2 / AVX-512 builds on x86-64, chosen
+/// at load time); the result is the same, bit for bit.
 ///
 /// Incremental updates (update()): the map keeps the box it was computed from and the results
 /// of the x pass and of the y pass. A new box of the same size and resolution is compared with
@@ -38,10 +43,12 @@
 /// line is transformed only over twice that around its changed inputs, and its results are kept
 /// within once that, where the parabolas cut off at the part's ends lie beyond the cap. Each
 /// part goes through the same code as in compute() (exact integer arithmetic, invariant under
-/// translation), so the field is bit-identical to a full recompute. A box that moved (the window
-/// slid) by less than its size is shifted first: the kept part stays, the new slabs count as
-/// changed, and so does the face the move removed (its neighbours there are gone). More than
-/// 1/16 of the box changed (e.g. a map load) is computed whole. The cost follows what changed:
+/// translation), so the field is bit-identical to a full recompute. With the envelope code (large
+/// clamps), a box that moved (the window slid) by less than its size is shifted first: the kept
+/// part stays, the new slabs count as changed, and so does the face the move removed (its
+/// neighbours there are gone). Where the windowed passes apply, a moved box is computed whole,
+/// which costs less than the shift and the lines it touches. More than 1/16 of the box changed
+/// (e.g. a map load) is computed whole. The cost follows what changed:
 /// a depth frame's few thousand changed voxels touch a part of the lines.
 
 #include "mlmap/core/config.h"
@@ -152,8 +159,9 @@ class EsdfMap {
   /// Brings the field to `box`, exactly as compute(box) would, doing only the work the changes
   /// since the last compute() or update() need (see the file comment). Falls back to compute()
   /// when there is no kept box (first call, after a failed call, after copyFrom()), when the
-  /// size or resolution differs, when the box moved by its size or more, or when more than 1/16
-  /// of an unmoved box changed (the full compute is then cheaper). Same return value and
+  /// size or resolution differs, when the box moved by its size or more, when it moved at all
+  /// and windowedPasses() applies, or when more than 1/16 of an unmoved box changed (the full
+  /// compute is then cheaper). Same return value and
   /// failure behaviour as compute(). Single-threaded except in the fallback.
   [[nodiscard]] bool update(const OccupancyBox& box);
   /// What the last compute() or update() did.
