@@ -33,19 +33,36 @@ inline __attribute__((always_inline)) void relax(std::int16_t* __restrict best,
   }
 }
 
+/// Values per block of relaxWindow().
+constexpr std::size_t kBlock = 64;
+
 /// best[i] = min(best[i], min(m[i - k step], m[i + k step]) + k^2) over [0, n) for
 /// k = 1 .. cap_d: the window, both sides at distance k. Blocks of kBlock values stay in
-/// registers over the whole window (two loads per step, one store per block).
+/// registers over the whole window (two loads per step, one store per block). A block is
+/// skipped when no value of m within its window's reach is below inf (`finite_before[b]`: how
+/// many blocks of m, counted from m - pad, before block b hold one: no candidate can be below
+/// inf then), and its window stops at the first k with k^2 >= every value of the block (every
+/// further candidate is at least k^2).
 inline __attribute__((always_inline)) void relaxWindow(std::int16_t* __restrict best,
                                                        const std::int16_t* __restrict m,
                                                        std::ptrdiff_t step, std::size_t n,
-                                                       std::int32_t cap_d) {
-  constexpr std::size_t kBlock = 64;
+                                                       std::int32_t cap_d, std::size_t pad,
+                                                       const std::int32_t* finite_before) {
   std::size_t i0 = 0;
   for (; i0 + kBlock <= n; i0 += kBlock) {
+    // Blocks of m (from m - pad) that the window of [i0, i0 + kBlock) reads.
+    const std::size_t reach = static_cast<std::size_t>(cap_d) * static_cast<std::size_t>(step);
+    const std::size_t first_block = (pad + i0 - reach) / kBlock;
+    const std::size_t last_block = (pad + i0 + kBlock - 1 + reach) / kBlock;
+    if (finite_before[last_block + 1] == finite_before[first_block]) continue;
     std::int16_t acc[kBlock];
-    for (std::size_t j = 0; j < kBlock; ++j) acc[j] = best[i0 + j];
+    std::int16_t largest = 0;
+    for (std::size_t j = 0; j < kBlock; ++j) {
+      acc[j] = best[i0 + j];
+      largest = std::max(largest, acc[j]);
+    }
     for (std::int32_t k = 1; k <= cap_d; ++k) {
+      if (k * k >= largest) break;
       const std::int16_t* below = m + i0 - step * k;
       const std::int16_t* above = m + i0 + step * k;
       const auto k2 = static_cast<std::int16_t>(k * k);
@@ -53,11 +70,73 @@ inline __attribute__((always_inline)) void relaxWindow(std::int16_t* __restrict 
         const auto candidate = static_cast<std::int16_t>(std::min(below[j], above[j]) + k2);
         acc[j] = std::min(acc[j], candidate);
       }
+      if ((k & 3) == 0) {
+        largest = 0;
+        for (std::size_t j = 0; j < kBlock; ++j) largest = std::max(largest, acc[j]);
+      }
     }
     for (std::size_t j = 0; j < kBlock; ++j) best[i0 + j] = acc[j];
   }
   for (std::int32_t k = 1; k <= cap_d; ++k) {
     relax(best + i0, m + i0, step * k, n - i0, static_cast<std::int16_t>(k * k));
+  }
+}
+
+/// Fills buffers->finite_before for relaxWindow() from the magnitude buffer `m_padded`
+/// (`total` values from its padded start, inf = cap_sq + 1).
+inline __attribute__((always_inline)) void countFiniteBlocks(const std::int16_t* m_padded,
+                                                             std::size_t total, std::int16_t inf,
+                                                             WindowBuffers* buffers) {
+  const std::size_t blocks = (total + kBlock - 1) / kBlock;
+  if (buffers->finite_before.size() < blocks + 2) buffers->finite_before.resize(blocks + 2);
+  std::int32_t* before = buffers->finite_before.data();
+  before[0] = 0;
+  for (std::size_t b = 0; b < blocks; ++b) {
+    const std::size_t begin = b * kBlock;
+    const std::size_t end = std::min(total, begin + kBlock);
+    std::int16_t lowest = inf;
+    for (std::size_t i = begin; i < end; ++i) lowest = std::min(lowest, m_padded[i]);
+    before[b + 1] = before[b] + (lowest < inf ? 1 : 0);
+  }
+  before[blocks + 1] = before[blocks];
+}
+
+/// Forward sweep of one line position y across `lanes` lines: left[l] = distance to the last
+/// voxel of the other kind before y (at most far); updates the last positions of each kind.
+inline __attribute__((always_inline)) void sweepLeft(const std::int16_t* __restrict s,
+                                                     std::int16_t* __restrict left,
+                                                     std::int16_t* __restrict near_free,
+                                                     std::int16_t* __restrict near_obstacle,
+                                                     int lanes, std::int16_t y, std::int16_t far) {
+  for (int l = 0; l < lanes; ++l) {
+    const bool obstacle = s[l] < 0;
+    const std::int16_t f = near_free[l];
+    const std::int16_t o = near_obstacle[l];
+    const auto d = static_cast<std::int16_t>(y - (obstacle ? f : o));
+    left[l] = std::min(d, far);
+    near_free[l] = obstacle ? f : y;
+    near_obstacle[l] = obstacle ? y : o;
+  }
+}
+
+/// Backward sweep of one line position y: best[l] = min(r^2, own[l]) with r the nearer of
+/// left[l] (in best on entry) and the next voxel of the other kind after y.
+inline __attribute__((always_inline)) void sweepRight(const std::int16_t* __restrict s,
+                                                      const std::int16_t* __restrict own,
+                                                      std::int16_t* __restrict best,
+                                                      std::int16_t* __restrict near_free,
+                                                      std::int16_t* __restrict near_obstacle,
+                                                      int lanes, std::int16_t y,
+                                                      std::int16_t far) {
+  for (int l = 0; l < lanes; ++l) {
+    const bool obstacle = s[l] < 0;
+    const std::int16_t f = near_free[l];
+    const std::int16_t o = near_obstacle[l];
+    const auto right = static_cast<std::int16_t>((obstacle ? f : o) - y);
+    const std::int16_t r = std::min(best[l], std::min(right, far));
+    best[l] = std::min(static_cast<std::int16_t>(r * r), own[l]);
+    near_free[l] = obstacle ? f : y;
+    near_obstacle[l] = obstacle ? y : o;
   }
 }
 
@@ -76,37 +155,24 @@ inline __attribute__((always_inline)) void windowPass(std::int16_t* values, std:
   std::int16_t* near_obstacle = buffers->near_obstacle.data();
   // r: distance along the line to the nearest voxel of the other kind (cap_d + 1 when beyond),
   // two sweeps with the last / next position of each kind per lane.
-  const std::int32_t far = cap_d + 1;
+  const auto far = static_cast<std::int16_t>(cap_d + 1);
   std::fill(near_free, near_free + row, static_cast<std::int16_t>(-far));
   std::fill(near_obstacle, near_obstacle + row, static_cast<std::int16_t>(-far));
   for (int y = 0; y < n; ++y) {
-    const std::int16_t* s = values + static_cast<std::size_t>(y) * row;
-    std::int16_t* b = best + static_cast<std::size_t>(y) * row;
-    for (int z = 0; z < lanes; ++z) {
-      const bool obstacle = s[z] < 0;
-      const std::int32_t last = obstacle ? near_free[z] : near_obstacle[z];
-      b[z] = static_cast<std::int16_t>(std::min(y - last, far));
-      near_free[z] = obstacle ? near_free[z] : static_cast<std::int16_t>(y);
-      near_obstacle[z] = obstacle ? static_cast<std::int16_t>(y) : near_obstacle[z];
-    }
+    const std::size_t first = static_cast<std::size_t>(y) * row;
+    sweepLeft(values + first, best + first, near_free, near_obstacle, lanes,
+              static_cast<std::int16_t>(y), far);
   }
   std::fill(near_free, near_free + row, static_cast<std::int16_t>(n - 1 + far));
   std::fill(near_obstacle, near_obstacle + row, static_cast<std::int16_t>(n - 1 + far));
   for (int y = n - 1; y >= 0; --y) {
     const std::size_t first = static_cast<std::size_t>(y) * row;
-    const std::int16_t* s = values + first;
-    std::int16_t* b = best + first;
-    const std::int16_t* own = m + first;
-    for (int z = 0; z < lanes; ++z) {
-      const bool obstacle = s[z] < 0;
-      const std::int32_t next = obstacle ? near_free[z] : near_obstacle[z];
-      const std::int32_t r = std::min<std::int32_t>(b[z], std::min(next - y, far));
-      b[z] = static_cast<std::int16_t>(std::min<std::int32_t>(r * r, own[z]));
-      near_free[z] = obstacle ? near_free[z] : static_cast<std::int16_t>(y);
-      near_obstacle[z] = obstacle ? static_cast<std::int16_t>(y) : near_obstacle[z];
-    }
+    sweepRight(values + first, m + first, best + first, near_free, near_obstacle, lanes,
+               static_cast<std::int16_t>(y), far);
   }
-  relaxWindow(best, m, lanes, cells, cap_d);
+  const std::size_t pad = static_cast<std::size_t>(cap_d) * row;
+  countFiniteBlocks(m - pad, cells + 2 * pad, inf, buffers);
+  relaxWindow(best, m, lanes, cells, cap_d, pad, buffers->finite_before.data());
   for (std::size_t i = 0; i < cells; ++i) {
     const std::int16_t v = best[i] <= cap_sq ? best[i] : inf;
     values[i] = values[i] < 0 ? static_cast<std::int16_t>(-v) : v;

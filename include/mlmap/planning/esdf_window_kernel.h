@@ -35,6 +35,7 @@ struct WindowBuffers {
   std::vector<std::int16_t> best;       ///< running minimum per voxel
   std::vector<std::int16_t> near_free;  ///< y pass: last / next non-obstacle y per z
   std::vector<std::int16_t> near_obstacle;  ///< y pass: last / next obstacle y per z
+  std::vector<std::int32_t> finite_before;  ///< per block of M: blocks before it holding a value
   std::vector<std::int16_t> lines;       ///< lines gathered by the caller of transformLines()
   std::vector<std::int16_t> transposed;  ///< y pass: the slab's lines being transformed
   std::vector<std::int16_t> signed_sq;   ///< the slab z-major: y pass's result, then z pass's
