@@ -671,35 +671,41 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
   UpdateStats& u = last_update_;
   esdf_kernel::WindowBuffers* buffers = &scratch->window;
   std::vector<int>& lanes = scratch->lanes;
-  // Pass 2: per x slab, the marked y lines side by side (one lane each) over the union of
-  // their ranges (each lane's outputs within its own range are exact: a part of a line, see
-  // above); changed results mark their z lines.
+  // Pass 2: per x slab, the y lines of the z span of the marked ones side by side (one lane
+  // each, contiguous in pass1_) over the union of the marked ranges. Each marked lane's outputs
+  // within its own range are exact (a part of a line, see above); the unmarked lanes of the
+  // span are transformed too (the same code, no cost to speak of) but not read back: their
+  // inputs did not change, nor do their results. Changed results mark their z lines.
   for (int x = 0; x < nx; ++x) {
     const int* dirty_lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz;
     const int* dirty_hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz;
-    lanes.clear();
     int lo = ny;
     int hi = -1;
+    int z_first = nz;
+    int z_last = -1;
     for (int z = 0; z < nz; ++z) {
       if (dirty_hi[z] < dirty_lo[z]) continue;
-      lanes.push_back(z);
+      ++u.y_lines;
+      z_first = std::min(z_first, z);
+      z_last = z;
       lo = std::min(lo, dirty_lo[z]);
       hi = std::max(hi, dirty_hi[z]);
     }
-    if (lanes.empty()) continue;
-    u.y_lines += lanes.size();
+    if (z_last < 0) continue;
     const int begin = std::max(0, lo - 2 * reach);
     const int end = std::min(ny, hi + 2 * reach + 1);
-    const int count = static_cast<int>(lanes.size());
-    const std::size_t n = static_cast<std::size_t>(end - begin) * lanes.size();
+    const int count = z_last - z_first + 1;
+    const std::size_t width = static_cast<std::size_t>(count);
+    const std::size_t n = static_cast<std::size_t>(end - begin) * width;
     if (buffers->lines.size() < n) buffers->lines.resize(n);
     std::int16_t* values = buffers->lines.data();
-    const std::int32_t* in = pass1_.data() + static_cast<std::size_t>(x) * slab;
+    const std::int32_t* in = pass1_.data() + static_cast<std::size_t>(x) * slab +
+                             static_cast<std::size_t>(z_first);
     for (int y = begin; y < end; ++y) {
       const std::int32_t* row = in + static_cast<std::size_t>(y) * nz;
-      std::int16_t* out = values + static_cast<std::size_t>(y - begin) * lanes.size();
-      for (int l = 0; l < count; ++l) {
-        const std::int32_t v = row[lanes[static_cast<std::size_t>(l)]];
+      std::int16_t* out = values + static_cast<std::size_t>(y - begin) * width;
+      for (std::size_t l = 0; l < width; ++l) {
+        const std::int32_t v = row[l];
         const std::int32_t a = v < 0 ? -v : v;
         const std::int32_t sq = a <= cap_d_ ? a * a : inf_;
         out[l] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
@@ -709,12 +715,13 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
     std::int32_t* slab_values = pass2_.data() + static_cast<std::size_t>(x) * slab;
     int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
     int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
-    for (int l = 0; l < count; ++l) {
-      const int z = lanes[static_cast<std::size_t>(l)];
+    for (int z = z_first; z <= z_last; ++z) {
+      if (dirty_hi[z] < dirty_lo[z]) continue;
+      const std::size_t l = static_cast<std::size_t>(z - z_first);
       const int y_end = std::min(ny, dirty_hi[z] + reach + 1);
       for (int y = std::max(0, dirty_lo[z] - reach); y < y_end; ++y) {
         std::int32_t& old = slab_values[static_cast<std::size_t>(y) * nz + z];
-        const std::int32_t fresh = values[static_cast<std::size_t>(y - begin) * lanes.size() + l];
+        const std::int32_t fresh = values[static_cast<std::size_t>(y - begin) * width + l];
         if (fresh != old) {
           old = fresh;
           mark_lo[y] = std::min(mark_lo[y], z);
