@@ -111,7 +111,7 @@ EsdfConfig config(double max_m, UnknownAs unknown_as, int threads = 1) {
 
 // Random scenes of several densities and sizes (non-cubic; more y rows than one 32-row block of
 // the x pass), negative and positive corners, both unknown policies, three clamps (one never
-// reached), one and two threads. One map per configuration is reused across the scenes.
+// reached), one and two threads, the windowed passes and the envelope code. One map per configuration is reused across the scenes.
 TEST(Esdf, RandomScenesMatchBruteForce) {
   std::mt19937 rng(11);
   struct Shape {
@@ -129,14 +129,18 @@ TEST(Esdf, RandomScenesMatchBruteForce) {
     UnknownAs policy;
     double max_m;
     int threads;
+    bool envelope_only;  ///< setEnvelopeOnly() (the windowed passes otherwise, where they apply)
   };
   std::vector<Setup> setups;
   std::vector<EsdfMap> maps;
   for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
     for (const double max_m : {0.45, 2.0, 1000.0}) {
       for (const int threads : {1, 2}) {
-        setups.push_back({policy, max_m, threads});
-        maps.emplace_back(config(max_m, policy, threads));
+        for (const bool envelope_only : {false, true}) {
+          setups.push_back({policy, max_m, threads, envelope_only});
+          maps.emplace_back(config(max_m, policy, threads));
+          maps.back().setEnvelopeOnly(envelope_only);
+        }
       }
     }
   }
@@ -151,7 +155,9 @@ TEST(Esdf, RandomScenesMatchBruteForce) {
           ASSERT_TRUE(maps[i].compute(box));
           std::ostringstream what;
           what << "policy " << toString(policy) << ", max " << setups[i].max_m << " m, "
-               << setups[i].threads << " threads, size " << shape.size.transpose()
+               << setups[i].threads << " threads, "
+               << (setups[i].envelope_only ? "envelope code" : "windowed passes") << ", size "
+               << shape.size.transpose()
                << ", occupied " << p_occ << ", unknown " << p_unk;
           expectMatches(maps[i], box, reference, what.str());
         }
