@@ -391,7 +391,15 @@ void EsdfMap::prepare(const OccupancyBox& box) {
   slab_bits_ = slab_words * 64;
   unknown_bits_.resize(slab_words * static_cast<std::size_t>(nx));
   pass1_.resize(cells);
-  pass2_.resize(cells);
+  // Pass 2's results in 16 bits where the windowed passes apply (they fit: at most inf_), in 32
+  // otherwise; the other buffer stays empty.
+  if (window_kernel_) {
+    pass2_.clear();
+    pass2_narrow_.resize(cells);
+  } else {
+    pass2_narrow_.clear();
+    pass2_.resize(cells);
+  }
   kept_states_.resize(cells);
   if (scratch_.size() < static_cast<std::size_t>(threads)) {
     scratch_.resize(static_cast<std::size_t>(threads));
@@ -712,7 +720,7 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
       }
     }
     esdf_kernel::transformLines(values, end - begin, count, cap_sq_, cap_d_, buffers);
-    std::int32_t* slab_values = pass2_.data() + static_cast<std::size_t>(x) * slab;
+    std::int16_t* slab_values = pass2_narrow_.data() + static_cast<std::size_t>(x) * slab;
     int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
     int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
     for (int z = z_first; z <= z_last; ++z) {
@@ -720,8 +728,8 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
       const std::size_t l = static_cast<std::size_t>(z - z_first);
       const int y_end = std::min(ny, dirty_hi[z] + reach + 1);
       for (int y = std::max(0, dirty_lo[z] - reach); y < y_end; ++y) {
-        std::int32_t& old = slab_values[static_cast<std::size_t>(y) * nz + z];
-        const std::int32_t fresh = values[static_cast<std::size_t>(y - begin) * width + l];
+        std::int16_t& old = slab_values[static_cast<std::size_t>(y) * nz + z];
+        const std::int16_t fresh = values[static_cast<std::size_t>(y - begin) * width + l];
         if (fresh != old) {
           old = fresh;
           mark_lo[y] = std::min(mark_lo[y], z);
@@ -754,11 +762,10 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
     std::int16_t* values = buffers->lines.data();
     const std::size_t first = static_cast<std::size_t>(x) * slab;
     for (int l = 0; l < count; ++l) {
-      const std::int32_t* in =
-          pass2_.data() + first + static_cast<std::size_t>(lanes[static_cast<std::size_t>(l)]) * nz;
+      const std::int16_t* in = pass2_narrow_.data() + first +
+                               static_cast<std::size_t>(lanes[static_cast<std::size_t>(l)]) * nz;
       for (int z = begin; z < end; ++z) {
-        values[static_cast<std::size_t>(z - begin) * lanes.size() + l] =
-            static_cast<std::int16_t>(in[z]);
+        values[static_cast<std::size_t>(z - begin) * lanes.size() + l] = in[z];
       }
     }
     esdf_kernel::transformLines(values, end - begin, count, cap_sq_, cap_d_, buffers);
@@ -846,7 +853,7 @@ void EsdfMap::transformSlabs(const std::uint8_t* states, int x_begin, int x_end,
       // Both passes on 16-bit copies of the slab (see esdf_window_kernel.h).
       esdf_kernel::WindowBuffers* buffers = &scratch->window;
       esdf_kernel::transformSlabY(pass1_.data() + first, ny, nz, cap_sq_, cap_d_,
-                                  pass2_.data() + first, buffers);
+                                  pass2_narrow_.data() + first, buffers);
       esdf_kernel::transformSlabZ(ny, nz, cap_sq_, cap_d_, buffers);
       const std::int16_t* values = buffers->signed_sq.data();  // z-major
       for (int y = 0; y < ny; ++y) {
@@ -968,6 +975,7 @@ std::size_t EsdfMap::memoryBytes() const {
                       unknown_bits_.capacity() * sizeof(std::uint64_t) +
                       (pass1_.capacity() + pass2_.capacity() + row_buffer_.capacity()) *
                           sizeof(std::int32_t) +
+                      pass2_narrow_.capacity() * sizeof(std::int16_t) +
                       kept_states_.capacity() +
                       (dirty_y_lo_.capacity() + dirty_y_hi_.capacity() + dirty_z_lo_.capacity() +
                        dirty_z_hi_.capacity()) * sizeof(int) +

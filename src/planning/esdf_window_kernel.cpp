@@ -207,7 +207,7 @@ bool windowFits(std::int32_t cap_sq, std::int32_t cap_d) {
 
 MLMAP_WINDOW_CLONES
 void transformSlabY(const std::int32_t* pass1, int ny, int nz, std::int32_t cap_sq,
-                    std::int32_t cap_d, std::int32_t* pass2, WindowBuffers* buffers) {
+                    std::int32_t cap_d, std::int16_t* pass2, WindowBuffers* buffers) {
   const auto inf = static_cast<std::int16_t>(cap_sq + 1);
   const std::size_t cells = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
   ensure(&buffers->signed_sq, cells);
@@ -225,7 +225,7 @@ void transformSlabY(const std::int32_t* pass1, int ny, int nz, std::int32_t cap_
   windowPass(values, m, ny, nz, cap_sq, cap_d, buffers);
   // Out to pass 2 (y-major) and, transposed, to the z pass's lines (z-major).
   std::int16_t* out = buffers->signed_sq.data();
-  for (std::size_t i = 0; i < cells; ++i) pass2[i] = values[i];
+  std::copy(values, values + cells, pass2);
   for (int y = 0; y < ny; ++y) {
     const std::int16_t* v = values + static_cast<std::size_t>(y) * static_cast<std::size_t>(nz);
     for (int z = 0; z < nz; ++z) out[static_cast<std::size_t>(z) * ny + y] = v[z];

@@ -98,8 +98,7 @@ Row run(const std::string& name, const OccupancyBox& box, UnknownAs unknown_as, 
   config.num_threads = threads;
   EsdfMap map(config);
   map.setEnvelopeOnly(envelope_only);
-  Row row{name, toString(unknown_as), threads};
-  row.passes = envelope_only ? "envelope" : "windowed";
+  Row row{name, toString(unknown_as), threads, envelope_only ? "envelope" : "windowed"};
   if (!map.compute(box)) {  // warm-up: first-time allocation is not measured
     std::fprintf(stderr, "%s: box rejected\n", name.c_str());
     return row;

@@ -813,7 +813,9 @@ TEST(Esdf, IncrementalUpdatesEqualAFullRecomputeAfterEveryStep) {
       }
       EXPECT_GT(incremental_steps, 30u);
       EXPECT_GT(moved_steps, 2u);
-      if (c.envelope_only) EXPECT_GT(shifted_steps, 2u);
+      if (c.envelope_only) {
+        EXPECT_GT(shifted_steps, 2u);
+      }
     }
   }
 }

@@ -232,7 +232,8 @@ class EsdfMap {
   /// The configuration in use.
   [[nodiscard]] const EsdfConfig& config() const { return config_; }
   /// Bytes held by the field (4 per voxel), the unknown mask (1 bit per voxel), the kept box and
-  /// the x and y passes' results (9 per voxel, none in a copy) and a little per thread.
+  /// the x and y passes' results (9 per voxel, 7 with the windowed passes, none in a copy) and a
+  /// little per thread.
   [[nodiscard]] std::size_t memoryBytes() const;
 
  private:
@@ -324,9 +325,11 @@ class EsdfMap {
   std::vector<std::int32_t> pass1_;
   /// Pass 2's result: +d^2 / -d^2 over the y-x plane, in voxels, or +-inf_.
   std::vector<std::int32_t> pass2_;
+  /// The same in 16 bits, where the windowed passes apply (pass2_ is then empty).
+  std::vector<std::int16_t> pass2_narrow_;
   /// The box states of the last compute() / update() (what update() compares with).
   std::vector<std::uint8_t> kept_states_;
-  bool kept_ = false;  ///< pass1_, pass2_ and kept_states_ hold the current box
+  bool kept_ = false;  ///< pass1_, pass 2's results and kept_states_ hold the current box
   UpdateStats last_update_;
   std::vector<std::uint32_t> changed_cells_;
   std::vector<std::uint32_t> changed_states_;  ///< offsets of the states update() found changed
