@@ -81,9 +81,12 @@ inline std::uint64_t zeroBytes8(const std::uint8_t* p) {
 /// Forward sweep over `n` consecutive voxels (a run of z, and of y when rows are blocked) at x:
 /// updates the last non-obstacle / obstacle x of each and writes the signed distance to the last
 /// voxel of the other kind (negative for obstacles). Branch-free, so it vectorises.
-void sweepForward(const std::uint8_t* __restrict states, std::int32_t* __restrict a,
-                  std::int32_t* __restrict last_free, std::int32_t* __restrict last_obstacle, int n,
-                  std::int32_t x, std::int32_t unknown_is_obstacle) {
+inline __attribute__((always_inline)) void sweepForward(const std::uint8_t* __restrict states,
+                                                        std::int32_t* __restrict a,
+                                                        std::int32_t* __restrict last_free,
+                                                        std::int32_t* __restrict last_obstacle,
+                                                        int n, std::int32_t x,
+                                                        std::int32_t unknown_is_obstacle) {
   constexpr auto kUnknown = static_cast<std::uint8_t>(Occupancy::kUnknown);
   constexpr auto kOccupied = static_cast<std::uint8_t>(Occupancy::kOccupied);
   for (int z = 0; z < n; ++z) {
@@ -100,9 +103,11 @@ void sweepForward(const std::uint8_t* __restrict states, std::int32_t* __restric
 
 /// Backward sweep of pass 1: the same towards higher x, keeping the nearer side, capped (+-inf
 /// beyond cap_d). The distance is left unsquared (the y pass squares it).
-void sweepBackward(std::int32_t* __restrict a, std::int32_t* __restrict next_free,
-                   std::int32_t* __restrict next_obstacle, int n, std::int32_t x,
-                   std::int32_t cap_d, std::int32_t inf) {
+inline __attribute__((always_inline)) void sweepBackward(std::int32_t* __restrict a,
+                                                         std::int32_t* __restrict next_free,
+                                                         std::int32_t* __restrict next_obstacle,
+                                                         int n, std::int32_t x,
+                                                         std::int32_t cap_d, std::int32_t inf) {
   for (int z = 0; z < n; ++z) {
     // Branch-free so that it vectorises: m is all ones for an obstacle, 0 otherwise.
     const std::int32_t left = a[z];
@@ -268,7 +273,9 @@ void transformLine(Line line, int n, std::int32_t cap, std::int32_t cap_d,
 }
 
 /// Pass 1 over a block of `n` consecutive voxels of every x slab (one or more y rows, z
-/// fastest): states at states + x * state_stride, results at out + x * out_stride.
+/// fastest): states at states + x * state_stride, results at out + x * out_stride. Built for
+/// AVX2 / AVX-512 too (MLMAP_ESDF_CLONES): its sweeps vectorise.
+MLMAP_ESDF_CLONES
 void sweepBlock(const std::uint8_t* states, std::size_t state_stride, std::int32_t* out,
                 std::size_t out_stride, int nx, int n, std::int32_t* near_free,
                 std::int32_t* near_obstacle, std::int32_t unknown_is_obstacle, std::int32_t cap_d,

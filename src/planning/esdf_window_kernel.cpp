@@ -3,14 +3,6 @@
 #include <algorithm>
 #include <cstddef>
 
-/// On x86-64 the passes are also built for AVX2 and AVX-512 (16 and 32 lanes of 16 bits), one
-/// chosen at load time for the CPU (GCC function multiversioning); elsewhere the baseline build.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define MLMAP_WINDOW_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
-#else
-#define MLMAP_WINDOW_CLONES
-#endif
-
 namespace mlmap::esdf_kernel {
 namespace {
 
@@ -205,7 +197,7 @@ bool windowFits(std::int32_t cap_sq, std::int32_t cap_d) {
   return cap_d >= 1 && cap_d <= kMaxWindowCapCells && 2 * cap_sq + 1 < 32767;
 }
 
-MLMAP_WINDOW_CLONES
+MLMAP_ESDF_CLONES
 void transformSlabY(const std::int32_t* pass1, int ny, int nz, std::int32_t cap_sq,
                     std::int32_t cap_d, std::int16_t* pass2, WindowBuffers* buffers) {
   const auto inf = static_cast<std::int16_t>(cap_sq + 1);
@@ -232,7 +224,7 @@ void transformSlabY(const std::int32_t* pass1, int ny, int nz, std::int32_t cap_
   }
 }
 
-MLMAP_WINDOW_CLONES
+MLMAP_ESDF_CLONES
 void transformLines(std::int16_t* values, int n, int lanes, std::int32_t cap_sq,
                     std::int32_t cap_d, WindowBuffers* buffers) {
   const auto inf = static_cast<std::int16_t>(cap_sq + 1);

@@ -19,6 +19,15 @@
 #include <cstdint>
 #include <vector>
 
+/// Marks a function of the ESDF's passes to be built also for AVX2 and AVX-512 on x86-64 with
+/// GCC, the build chosen at load time for the CPU (function multiversioning); elsewhere, the
+/// baseline build only.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define MLMAP_ESDF_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
+#else
+#define MLMAP_ESDF_CLONES
+#endif
+
 namespace mlmap::esdf_kernel {
 
 /// Largest clamp (in voxels) the windowed passes are used for: their cost grows with cap_d,
