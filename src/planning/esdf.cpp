@@ -1,5 +1,7 @@
 #include "mlmap/planning/esdf.h"
 
+#include "mlmap/planning/esdf_window_kernel.h"
+
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -79,9 +81,12 @@ inline std::uint64_t zeroBytes8(const std::uint8_t* p) {
 /// Forward sweep over `n` consecutive voxels (a run of z, and of y when rows are blocked) at x:
 /// updates the last non-obstacle / obstacle x of each and writes the signed distance to the last
 /// voxel of the other kind (negative for obstacles). Branch-free, so it vectorises.
-void sweepForward(const std::uint8_t* __restrict states, std::int32_t* __restrict a,
-                  std::int32_t* __restrict last_free, std::int32_t* __restrict last_obstacle, int n,
-                  std::int32_t x, std::int32_t unknown_is_obstacle) {
+inline __attribute__((always_inline)) void sweepForward(const std::uint8_t* __restrict states,
+                                                        std::int32_t* __restrict a,
+                                                        std::int32_t* __restrict last_free,
+                                                        std::int32_t* __restrict last_obstacle,
+                                                        int n, std::int32_t x,
+                                                        std::int32_t unknown_is_obstacle) {
   constexpr auto kUnknown = static_cast<std::uint8_t>(Occupancy::kUnknown);
   constexpr auto kOccupied = static_cast<std::uint8_t>(Occupancy::kOccupied);
   for (int z = 0; z < n; ++z) {
@@ -98,9 +103,11 @@ void sweepForward(const std::uint8_t* __restrict states, std::int32_t* __restric
 
 /// Backward sweep of pass 1: the same towards higher x, keeping the nearer side, capped (+-inf
 /// beyond cap_d). The distance is left unsquared (the y pass squares it).
-void sweepBackward(std::int32_t* __restrict a, std::int32_t* __restrict next_free,
-                   std::int32_t* __restrict next_obstacle, int n, std::int32_t x,
-                   std::int32_t cap_d, std::int32_t inf) {
+inline __attribute__((always_inline)) void sweepBackward(std::int32_t* __restrict a,
+                                                         std::int32_t* __restrict next_free,
+                                                         std::int32_t* __restrict next_obstacle,
+                                                         int n, std::int32_t x,
+                                                         std::int32_t cap_d, std::int32_t inf) {
   for (int z = 0; z < n; ++z) {
     // Branch-free so that it vectorises: m is all ones for an obstacle, 0 otherwise.
     const std::int32_t left = a[z];
@@ -266,7 +273,9 @@ void transformLine(Line line, int n, std::int32_t cap, std::int32_t cap_d,
 }
 
 /// Pass 1 over a block of `n` consecutive voxels of every x slab (one or more y rows, z
-/// fastest): states at states + x * state_stride, results at out + x * out_stride.
+/// fastest): states at states + x * state_stride, results at out + x * out_stride. Built for
+/// AVX2 / AVX-512 too (MLMAP_ESDF_CLONES): its sweeps vectorise.
+MLMAP_ESDF_CLONES
 void sweepBlock(const std::uint8_t* states, std::size_t state_stride, std::int32_t* out,
                 std::size_t out_stride, int nx, int n, std::int32_t* near_free,
                 std::int32_t* near_obstacle, std::int32_t unknown_is_obstacle, std::int32_t cap_d,
@@ -371,6 +380,7 @@ void EsdfMap::prepare(const OccupancyBox& box) {
   cap_d_ = static_cast<std::int32_t>(std::sqrt(static_cast<double>(cap_sq_)));
   while (std::int64_t{cap_d_ + 1} * (cap_d_ + 1) <= cap_sq_) ++cap_d_;
   while (std::int64_t{cap_d_} * cap_d_ > cap_sq_) --cap_d_;
+  window_kernel_ = !envelope_only_ && esdf_kernel::windowFits(cap_sq_, cap_d_);
   if (2 * static_cast<std::size_t>(inf_) + 1 <= kMaxLookupEntries) {
     metres_table_.resize(2 * static_cast<std::size_t>(inf_) + 1);
     for (std::size_t i = 0; i < metres_table_.size(); ++i) {
@@ -388,7 +398,15 @@ void EsdfMap::prepare(const OccupancyBox& box) {
   slab_bits_ = slab_words * 64;
   unknown_bits_.resize(slab_words * static_cast<std::size_t>(nx));
   pass1_.resize(cells);
-  pass2_.resize(cells);
+  // Pass 2's results in 16 bits where the windowed passes apply (they fit: at most inf_), in 32
+  // otherwise; the other buffer stays empty.
+  if (window_kernel_) {
+    pass2_.clear();
+    pass2_narrow_.resize(cells);
+  } else {
+    pass2_narrow_.clear();
+    pass2_.resize(cells);
+  }
   kept_states_.resize(cells);
   if (scratch_.size() < static_cast<std::size_t>(threads)) {
     scratch_.resize(static_cast<std::size_t>(threads));
@@ -452,6 +470,10 @@ bool EsdfMap::update(const OccupancyBox& box) {
   }
   last_update_ = UpdateStats{};
   last_update_.full = false;
+  // A moved box, where the windowed passes apply: computing it whole costs less than shifting
+  // the kept buffers and going through the lines the new slabs and the removed faces reach
+  // (about half the box for a window that moves by a fifth of its size).
+  if (!delta.isZero() && window_kernel_) return compute(box);
   if (!delta.isZero()) {
     shiftKept(delta);
     min_index_ = box.min_index;
@@ -591,7 +613,21 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
     }
   }
 
+  if (window_kernel_) {
+    updateLinesWindowed(reach, scratch);
+  } else {
+    updateLinesEnvelope(reach, scratch);
+  }
+  u.changed_cells = u.shifted ? cells : changed_cells_.size();
+}
+
+void EsdfMap::updateLinesEnvelope(int reach, Scratch* scratch) {
+  const int nx = size_.x();
+  const int ny = size_.y();
+  const int nz = size_.z();
+  const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
   // Pass 2, the marked y lines; changed results mark their z lines.
+  UpdateStats& u = last_update_;
   std::int32_t* line = scratch->line.data();
   for (int x = 0; x < nx; ++x) {
     const int* dirty_lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz;
@@ -640,7 +676,120 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
       }
     }
   }
-  u.changed_cells = u.shifted ? cells : changed_cells_.size();
+}
+
+void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
+  const int nx = size_.x();
+  const int ny = size_.y();
+  const int nz = size_.z();
+  const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
+  UpdateStats& u = last_update_;
+  esdf_kernel::WindowBuffers* buffers = &scratch->window;
+  std::vector<int>& lanes = scratch->lanes;
+  // Pass 2: per x slab, the y lines of the z span of the marked ones side by side (one lane
+  // each, contiguous in pass1_) over the union of the marked ranges. Each marked lane's outputs
+  // within its own range are exact (a part of a line, see above); the unmarked lanes of the
+  // span are transformed too (the same code, no cost to speak of) but not read back: their
+  // inputs did not change, nor do their results. Changed results mark their z lines.
+  for (int x = 0; x < nx; ++x) {
+    const int* dirty_lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz;
+    const int* dirty_hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz;
+    int lo = ny;
+    int hi = -1;
+    int z_first = nz;
+    int z_last = -1;
+    for (int z = 0; z < nz; ++z) {
+      if (dirty_hi[z] < dirty_lo[z]) continue;
+      ++u.y_lines;
+      z_first = std::min(z_first, z);
+      z_last = z;
+      lo = std::min(lo, dirty_lo[z]);
+      hi = std::max(hi, dirty_hi[z]);
+    }
+    if (z_last < 0) continue;
+    const int begin = std::max(0, lo - 2 * reach);
+    const int end = std::min(ny, hi + 2 * reach + 1);
+    const int count = z_last - z_first + 1;
+    const std::size_t width = static_cast<std::size_t>(count);
+    const std::size_t n = static_cast<std::size_t>(end - begin) * width;
+    if (buffers->lines.size() < n) buffers->lines.resize(n);
+    std::int16_t* values = buffers->lines.data();
+    const std::int32_t* in = pass1_.data() + static_cast<std::size_t>(x) * slab +
+                             static_cast<std::size_t>(z_first);
+    for (int y = begin; y < end; ++y) {
+      const std::int32_t* row = in + static_cast<std::size_t>(y) * nz;
+      std::int16_t* out = values + static_cast<std::size_t>(y - begin) * width;
+      for (std::size_t l = 0; l < width; ++l) {
+        const std::int32_t v = row[l];
+        const std::int32_t a = v < 0 ? -v : v;
+        const std::int32_t sq = a <= cap_d_ ? a * a : inf_;
+        out[l] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
+      }
+    }
+    esdf_kernel::transformLines(values, end - begin, count, cap_sq_, cap_d_, buffers);
+    std::int16_t* slab_values = pass2_narrow_.data() + static_cast<std::size_t>(x) * slab;
+    int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
+    int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
+    for (int z = z_first; z <= z_last; ++z) {
+      if (dirty_hi[z] < dirty_lo[z]) continue;
+      const std::size_t l = static_cast<std::size_t>(z - z_first);
+      const int y_end = std::min(ny, dirty_hi[z] + reach + 1);
+      for (int y = std::max(0, dirty_lo[z] - reach); y < y_end; ++y) {
+        std::int16_t& old = slab_values[static_cast<std::size_t>(y) * nz + z];
+        const std::int16_t fresh = values[static_cast<std::size_t>(y - begin) * width + l];
+        if (fresh != old) {
+          old = fresh;
+          mark_lo[y] = std::min(mark_lo[y], z);
+          mark_hi[y] = std::max(mark_hi[y], z);
+        }
+      }
+    }
+  }
+
+  // Pass 3: per x slab, the marked z lines side by side, into the field.
+  for (int x = 0; x < nx; ++x) {
+    const int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
+    const int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
+    lanes.clear();
+    int lo = nz;
+    int hi = -1;
+    for (int y = 0; y < ny; ++y) {
+      if (mark_hi[y] < mark_lo[y]) continue;
+      lanes.push_back(y);
+      lo = std::min(lo, mark_lo[y]);
+      hi = std::max(hi, mark_hi[y]);
+    }
+    if (lanes.empty()) continue;
+    u.z_lines += lanes.size();
+    const int begin = std::max(0, lo - 2 * reach);
+    const int end = std::min(nz, hi + 2 * reach + 1);
+    const int count = static_cast<int>(lanes.size());
+    const std::size_t n = static_cast<std::size_t>(end - begin) * lanes.size();
+    if (buffers->lines.size() < n) buffers->lines.resize(n);
+    std::int16_t* values = buffers->lines.data();
+    const std::size_t first = static_cast<std::size_t>(x) * slab;
+    for (int l = 0; l < count; ++l) {
+      const std::int16_t* in = pass2_narrow_.data() + first +
+                               static_cast<std::size_t>(lanes[static_cast<std::size_t>(l)]) * nz;
+      for (int z = begin; z < end; ++z) {
+        values[static_cast<std::size_t>(z - begin) * lanes.size() + l] = in[z];
+      }
+    }
+    esdf_kernel::transformLines(values, end - begin, count, cap_sq_, cap_d_, buffers);
+    for (int l = 0; l < count; ++l) {
+      const int y = lanes[static_cast<std::size_t>(l)];
+      const std::size_t row = first + static_cast<std::size_t>(y) * nz;
+      float* field = field_.data() + row;
+      const int z_end = std::min(nz, mark_hi[y] + reach + 1);
+      for (int z = std::max(0, mark_lo[y] - reach); z < z_end; ++z) {
+        const float m = metres(values[static_cast<std::size_t>(z - begin) * lanes.size() + l]);
+        if (m != field[z]) {
+          field[z] = m;
+          changed_cells_.push_back(static_cast<std::uint32_t>(row + static_cast<std::size_t>(z)));
+        }
+      }
+    }
+  }
 }
 
 void EsdfMap::sweepRows(const std::uint8_t* states, int y_begin, int y_end, Scratch* scratch) {
@@ -706,6 +855,21 @@ void EsdfMap::transformSlabs(const std::uint8_t* states, int x_begin, int x_end,
   std::int32_t* line = scratch->line.data();
   for (int x = x_begin; x < x_end; ++x) {
     const std::size_t first = static_cast<std::size_t>(x) * slab;
+    float* field = field_.data() + first;
+    if (window_kernel_ && table != nullptr) {
+      // Both passes on 16-bit copies of the slab (see esdf_window_kernel.h).
+      esdf_kernel::WindowBuffers* buffers = &scratch->window;
+      esdf_kernel::transformSlabY(pass1_.data() + first, ny, nz, cap_sq_, cap_d_,
+                                  pass2_narrow_.data() + first, buffers);
+      esdf_kernel::transformSlabZ(ny, nz, cap_sq_, cap_d_, buffers);
+      const std::int16_t* values = buffers->signed_sq.data();  // z-major
+      for (int y = 0; y < ny; ++y) {
+        float* out = field + static_cast<std::size_t>(y) * nz;
+        for (int z = 0; z < nz; ++z) out[z] = table[values[static_cast<std::size_t>(z) * ny + y]];
+      }
+      writeUnknownBits(states, x);
+      continue;
+    }
     // Pass 2 in place on a copy of pass 1's slab (the slab stays in cache).
     std::int32_t* a = pass2_.data() + first;
     std::memcpy(a, pass1_.data() + first, slab * sizeof(std::int32_t));
@@ -724,7 +888,6 @@ void EsdfMap::transformSlabs(const std::uint8_t* states, int x_begin, int x_end,
       }
     }
     // Pass 3 line by line, into the field in metres.
-    float* field = field_.data() + first;
     for (int y = 0; y < ny; ++y) {
       transformZLine(x, y, 0, nz, line, scratch);
       float* out = field + static_cast<std::size_t>(y) * nz;
@@ -819,6 +982,7 @@ std::size_t EsdfMap::memoryBytes() const {
                       unknown_bits_.capacity() * sizeof(std::uint64_t) +
                       (pass1_.capacity() + pass2_.capacity() + row_buffer_.capacity()) *
                           sizeof(std::int32_t) +
+                      pass2_narrow_.capacity() * sizeof(std::int16_t) +
                       kept_states_.capacity() +
                       (dirty_y_lo_.capacity() + dirty_y_hi_.capacity() + dirty_z_lo_.capacity() +
                        dirty_z_hi_.capacity()) * sizeof(int) +
@@ -832,7 +996,13 @@ std::size_t EsdfMap::memoryBytes() const {
               s.out_keys32.capacity() + s.in_keys32.capacity() + s.near_free.capacity() +
               s.near_obstacle.capacity() + s.line.capacity()) *
                  sizeof(std::int32_t) +
-             (s.out_keys64.capacity() + s.in_keys64.capacity()) * sizeof(std::int64_t);
+             (s.out_keys64.capacity() + s.in_keys64.capacity()) * sizeof(std::int64_t) +
+             s.lanes.capacity() * sizeof(int) +
+             (s.window.magnitude.capacity() + s.window.best.capacity() +
+              s.window.near_free.capacity() + s.window.near_obstacle.capacity() +
+              s.window.lines.capacity() + s.window.transposed.capacity() +
+              s.window.signed_sq.capacity()) *
+                 sizeof(std::int16_t);
   }
   return bytes;
 }

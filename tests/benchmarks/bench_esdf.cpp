@@ -78,22 +78,27 @@ struct Row {
   std::string name;
   std::string unknown_as;
   int threads = 1;
+  std::string passes;  ///< "windowed" (the default where it applies) or "envelope" (forced)
   double min_ms = 0.0;
   double median_ms = 0.0;
   double p99_ms = 0.0;
   std::size_t memory_bytes = 0;
   double mqueries_random = 0.0;  ///< M queries/s at random points of the box
   double mqueries_path = 0.0;    ///< M queries/s along 2 m segments
+  double mqueries_batch = 0.0;   ///< M queries/s at random points, queryBatch() of 256
   double checksum = 0.0;
+  double random_checksum = 0.0;  ///< query()'s sum at the random points
+  double batch_checksum = 0.0;   ///< queryBatch()'s at the same points (equal)
 };
 
 Row run(const std::string& name, const OccupancyBox& box, UnknownAs unknown_as, int threads,
-        int repeats, int queries) {
+        bool envelope_only, int repeats, int queries) {
   EsdfConfig config;
   config.unknown_as = unknown_as;
   config.num_threads = threads;
   EsdfMap map(config);
-  Row row{name, toString(unknown_as), threads};
+  map.setEnvelopeOnly(envelope_only);
+  Row row{name, toString(unknown_as), threads, envelope_only ? "envelope" : "windowed"};
   if (!map.compute(box)) {  // warm-up: first-time allocation is not measured
     std::fprintf(stderr, "%s: box rejected\n", name.c_str());
     return row;
@@ -140,25 +145,50 @@ Row run(const std::string& name, const OccupancyBox& box, UnknownAs unknown_as, 
     *checksum += sum;
     return queries / seconds / 1e6;
   };
-  row.mqueries_random = throughput(random_points, &row.checksum);
+  row.mqueries_random = throughput(random_points, &row.random_checksum);
   row.mqueries_path = throughput(path_points, &row.checksum);
+  // The same random points through queryBatch(), 256 at a time; its checksum must equal the
+  // loop's (the same results).
+  {
+    constexpr std::size_t kBatch = 256;
+    std::vector<EsdfMap::Query> results(kBatch);
+    double sum = 0.0;
+    const std::size_t mask = random_points.size() - 1;
+    const Clock::time_point start = Clock::now();
+    for (std::size_t i = 0; i < static_cast<std::size_t>(queries); i += kBatch) {
+      const std::size_t n = std::min(kBatch, static_cast<std::size_t>(queries) - i);
+      map.queryBatch(random_points.data() + (i & mask), n, results.data());
+      for (std::size_t j = 0; j < n; ++j) {
+        sum += results[j].distance_m + results[j].gradient.sum() + (results[j].valid ? 1.0 : 0.0);
+      }
+    }
+    const double seconds = msSince(start) / 1e3;
+    row.mqueries_batch = queries / seconds / 1e6;
+    row.batch_checksum = sum;
+  }
   return row;
 }
 
 void print(const Row& r, std::FILE* json, bool last) {
   if (json == nullptr) {
-    std::printf("%-24s %-9s %7d %7.3f %7.3f %7.3f %7.2f %8.1f %8.1f   (checksum %.6g)\n",
-                r.name.c_str(), r.unknown_as.c_str(), r.threads, r.min_ms, r.median_ms, r.p99_ms,
+    std::printf("%-24s %-9s %-8s %7d %7.3f %7.3f %7.3f %7.2f %8.1f %8.1f %8.1f   (checksums "
+                "%.6g, random %.6g, batch %.6g)\n",
+                r.name.c_str(), r.unknown_as.c_str(), r.passes.c_str(), r.threads, r.min_ms,
+                r.median_ms, r.p99_ms,
                 static_cast<double>(r.memory_bytes) / 1e6, r.mqueries_random, r.mqueries_path,
-                r.checksum);
+                r.mqueries_batch, r.checksum, r.random_checksum, r.batch_checksum);
     return;
   }
   std::fprintf(json,
-               "  {\"case\": \"%s\", \"unknown_as\": \"%s\", \"threads\": %d, "
+               "  {\"case\": \"%s\", \"unknown_as\": \"%s\", \"passes\": \"%s\", "
+               "\"threads\": %d, "
                "\"compute_ms\": {\"min\": %.4f, \"median\": %.4f, \"p99\": %.4f}, "
-               "\"memory_bytes\": %zu, \"mqueries_per_s\": {\"random\": %.2f, \"path\": %.2f}}%s\n",
-               r.name.c_str(), r.unknown_as.c_str(), r.threads, r.min_ms, r.median_ms, r.p99_ms,
-               r.memory_bytes, r.mqueries_random, r.mqueries_path, last ? "" : ",");
+               "\"memory_bytes\": %zu, \"mqueries_per_s\": {\"random\": %.2f, \"path\": %.2f, "
+               "\"random_batch\": %.2f}}%s\n",
+               r.name.c_str(), r.unknown_as.c_str(), r.passes.c_str(), r.threads, r.min_ms,
+               r.median_ms, r.p99_ms, r.memory_bytes, r.mqueries_random, r.mqueries_path,
+               r.mqueries_batch,
+               last ? "" : ",");
 }
 
 /// The window's states after each frame of the default flight mapped at `res` over a
@@ -424,18 +454,21 @@ int main(int argc, char** argv) {
   std::printf("max_distance_m %.1f, %d timed compute() per case, %d queries per column, "
               "%u hardware threads\n\n",
               EsdfConfig{}.max_distance_m, repeats, queries, std::thread::hardware_concurrency());
-  std::printf("%-24s %-9s %7s %23s %7s %17s\n", "", "", "", "compute() ms", "memory",
+  std::printf("%-24s %-9s %-8s %7s %23s %7s %26s\n", "", "", "", "", "compute() ms", "memory",
               "M queries/s");
-  std::printf("%-24s %-9s %7s %7s %7s %7s %7s %8s %8s\n", "case", "unknown", "threads", "min",
-              "median", "p99", "MB", "random", "paths");
+  std::printf("%-24s %-9s %-8s %7s %7s %7s %7s %7s %8s %8s %8s\n", "case", "unknown", "passes",
+              "threads", "min", "median", "p99", "MB", "random", "paths", "batch");
 
   std::vector<Row> rows;
   for (const Scene& s : only_streamed ? std::vector<Scene>{} : scenes) {
     for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
       for (const int threads : {1, 2}) {
-        rows.push_back(run(s.name, s.box, policy, threads, repeats, queries));
+        rows.push_back(run(s.name, s.box, policy, threads, false, repeats, queries));
         print(rows.back(), nullptr, false);
       }
+      // compute() with the envelope code for the y and z passes, for the ratio in this run.
+      rows.push_back(run(s.name, s.box, policy, 1, true, repeats, queries));
+      print(rows.back(), nullptr, false);
     }
   }
 

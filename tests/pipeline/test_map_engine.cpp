@@ -575,8 +575,8 @@ EsdfMap fullEsdfOf(const MapSnapshot& snap, const EsdfConfig& config) {
   return reference;
 }
 
-// The ESDF is updated incrementally (only what changed voxels reach, the kept part of a moved
-// window shifted) and published as copies brought up to date cell by cell; after every frame
+// The ESDF is updated incrementally (only what changed voxels reach; a moved window computed
+// whole) and published as copies brought up to date cell by cell; after every frame
 // of a long sliding flight (the moving person, both unknown policies), across window shifts and
 // after loading an older map, the snapshot's field equals a full recompute bit for bit.
 TEST(MapEngine, IncrementalEsdfEqualsAFullRecomputeAfterEveryFrame) {
@@ -632,7 +632,11 @@ TEST(MapEngine, IncrementalEsdfEqualsAFullRecomputeAfterEveryFrame) {
     EXPECT_EQ(checked, frames + 21);
     EXPECT_GT(window_moves, 10) << "the window slides";
     EXPECT_GT(p.esdf_updates, static_cast<std::uint64_t>(frames));
-    EXPECT_LT(p.esdf_full * 4, p.esdf_updates) << "most updates are incremental";
+    // Where the window stayed, the update is incremental; a moved window is computed whole
+    // (EsdfMap::update() with the windowed passes), as are the first frame and the load.
+    EXPECT_LE(p.esdf_full, static_cast<std::uint64_t>(window_moves) + 2)
+        << "the updates of frames where the window stayed are incremental";
+    EXPECT_GT(p.esdf_updates - p.esdf_full, static_cast<std::uint64_t>(frames / 4));
   }
 }
 

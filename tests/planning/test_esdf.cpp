@@ -111,7 +111,7 @@ EsdfConfig config(double max_m, UnknownAs unknown_as, int threads = 1) {
 
 // Random scenes of several densities and sizes (non-cubic; more y rows than one 32-row block of
 // the x pass), negative and positive corners, both unknown policies, three clamps (one never
-// reached), one and two threads. One map per configuration is reused across the scenes.
+// reached), one and two threads, the windowed passes and the envelope code. One map per configuration is reused across the scenes.
 TEST(Esdf, RandomScenesMatchBruteForce) {
   std::mt19937 rng(11);
   struct Shape {
@@ -129,14 +129,18 @@ TEST(Esdf, RandomScenesMatchBruteForce) {
     UnknownAs policy;
     double max_m;
     int threads;
+    bool envelope_only;  ///< setEnvelopeOnly() (the windowed passes otherwise, where they apply)
   };
   std::vector<Setup> setups;
   std::vector<EsdfMap> maps;
   for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
     for (const double max_m : {0.45, 2.0, 1000.0}) {
       for (const int threads : {1, 2}) {
-        setups.push_back({policy, max_m, threads});
-        maps.emplace_back(config(max_m, policy, threads));
+        for (const bool envelope_only : {false, true}) {
+          setups.push_back({policy, max_m, threads, envelope_only});
+          maps.emplace_back(config(max_m, policy, threads));
+          maps.back().setEnvelopeOnly(envelope_only);
+        }
       }
     }
   }
@@ -151,7 +155,9 @@ TEST(Esdf, RandomScenesMatchBruteForce) {
           ASSERT_TRUE(maps[i].compute(box));
           std::ostringstream what;
           what << "policy " << toString(policy) << ", max " << setups[i].max_m << " m, "
-               << setups[i].threads << " threads, size " << shape.size.transpose()
+               << setups[i].threads << " threads, "
+               << (setups[i].envelope_only ? "envelope code" : "windowed passes") << ", size "
+               << shape.size.transpose()
                << ", occupied " << p_occ << ", unknown " << p_unk;
           expectMatches(maps[i], box, reference, what.str());
         }
@@ -348,6 +354,48 @@ TEST(Esdf, TwoThreadsAreBitIdenticalToOne) {
   }
 }
 
+// The windowed 16-bit passes against the envelope code (both exact): bit-identical fields for
+// clamps from one voxel to the windowed passes' largest, flat boxes (one voxel along an axis)
+// included; beyond that clamp compute() keeps the envelope code.
+TEST(Esdf, WindowedPassesEqualTheEnvelopeCode) {
+  std::mt19937 rng(23);
+  const std::vector<Eigen::Vector3i> sizes = {
+      {31, 45, 27}, {1, 40, 30}, {25, 1, 33}, {30, 41, 1}, {2, 3, 90}, {70, 66, 2}};
+  const std::vector<std::pair<double, double>> densities = {{0.002, 0.0}, {0.05, 0.2},
+                                                            {0.4, 0.1}};
+  for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+    // Clamps of 1, 2, 7, 20 and kMaxWindowCapCells voxels at 0.1 m, then one beyond.
+    for (const double max_m : {0.1, 0.25, 0.7, 2.0, 4.8, 4.95}) {
+      EsdfMap windowed(config(max_m, policy));
+      EsdfMap envelope(config(max_m, policy));
+      envelope.setEnvelopeOnly(true);
+      for (const Eigen::Vector3i& size : sizes) {
+        for (const auto& [p_occ, p_unk] : densities) {
+          const OccupancyBox box = randomBox({-5, 3, -9}, size, 0.1, p_occ, p_unk, &rng);
+          ASSERT_TRUE(windowed.compute(box));
+          ASSERT_TRUE(envelope.compute(box));
+          EXPECT_FALSE(envelope.windowedPasses());
+          // Beyond 4.8 m the clamp (49 voxels) exceeds the windowed passes' unless the box's
+          // diagonal is shorter (that is then the clamp: cap_sq = diagonal^2 + 1).
+          const bool long_diagonal =
+              (size - Eigen::Vector3i::Ones()).squaredNorm() + 1 >= 49 * 49;
+          EXPECT_EQ(windowed.windowedPasses(), max_m < 4.9 || !long_diagonal) << max_m;
+          const std::string what = std::string(toString(policy)) + ", max " +
+                                   std::to_string(max_m) + " m, size " +
+                                   std::to_string(size.x()) + "x" + std::to_string(size.y()) +
+                                   "x" + std::to_string(size.z()) + ", occupied " +
+                                   std::to_string(p_occ);
+          ASSERT_EQ(windowed.distances().size(), box.states.size()) << what;
+          EXPECT_EQ(std::memcmp(windowed.distances().data(), envelope.distances().data(),
+                                box.states.size() * sizeof(float)),
+                    0)
+              << what;
+        }
+      }
+    }
+  }
+}
+
 TEST(Esdf, RecomputingReusesBuffersWithoutStaleValues) {
   std::mt19937 rng(5);
   const OccupancyBox big = randomBox({-5, -5, -5}, {30, 30, 30}, 0.2, 0.1, 0.1, &rng);
@@ -429,6 +477,38 @@ TEST(Esdf, GradientMatchesFiniteDifferences) {
 
 // Within half a voxel of a box face the stencil is clamped: the value is that at the border
 // cell-centre plane and the gradient has no component along the face normal.
+// queryBatch() returns query()'s results bit for bit: points inside, on and beyond the box's
+// faces, far away and NaN, in batches shorter and longer than its prefetch distance.
+TEST(Esdf, BatchedQueriesEqualSingleQueries) {
+  std::mt19937 rng(31);
+  const OccupancyBox box = randomBox({-12, 5, -3}, {29, 17, 11}, 0.1, 0.05, 0.2, &rng);
+  EsdfMap map(config(0.7, UnknownAs::kOccupied));
+  ASSERT_TRUE(map.compute(box));
+  const Eigen::Vector3d lo = map.minCorner_W();
+  const Eigen::Vector3d extent = map.maxCorner_W() - lo;
+  std::uniform_real_distribution<double> u(-0.1, 1.1);  // a tenth beyond each face
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(5004);
+  for (int i = 0; i < 5000; ++i) {
+    points.emplace_back(lo + Eigen::Vector3d(u(rng), u(rng), u(rng)).cwiseProduct(extent));
+  }
+  points.push_back(lo);
+  points.push_back(map.maxCorner_W());
+  points.emplace_back(std::nan(""), 0.0, 0.0);
+  points.emplace_back(1e300, -1e300, 0.0);
+  for (const std::size_t count : {std::size_t{0}, std::size_t{1}, std::size_t{5}, points.size()}) {
+    std::vector<EsdfMap::Query> batch(count);
+    map.queryBatch(points.data() + (points.size() - count), count, batch.data());
+    for (std::size_t i = 0; i < count; ++i) {
+      const Eigen::Vector3d& p = points[points.size() - count + i];
+      const EsdfMap::Query single = map.query(p);
+      ASSERT_EQ(batch[i].valid, single.valid) << p.transpose();
+      ASSERT_EQ(batch[i].distance_m, single.distance_m) << p.transpose();
+      ASSERT_EQ(batch[i].gradient, single.gradient) << p.transpose();
+    }
+  }
+}
+
 TEST(Esdf, BorderHalfCellsHoldTheBorderValue) {
   std::mt19937 rng(4);
   const OccupancyBox box = randomBox({-3, 5, -8}, {9, 7, 6}, 0.25, 0.15, 0.1, &rng);
@@ -665,24 +745,31 @@ TEST(Esdf, IncrementalUpdatesEqualAFullRecomputeAfterEveryStep) {
   struct Case {
     Eigen::Vector3i box_size;
     double max_m;
+    bool envelope_only;  ///< setEnvelopeOnly() on both maps (the windowed passes otherwise)
   };
-  const Case cases[] = {{{31, 27, 17}, 0.65}, {{24, 33, 12}, 100.0}, {{40, 37, 1}, 0.9}};
+  const Case cases[] = {{{31, 27, 17}, 0.65, false}, {{24, 33, 12}, 100.0, false},
+                        {{40, 37, 1}, 0.9, false},   {{47, 45, 26}, 2.0, false},
+                        {{31, 27, 17}, 0.65, true},  {{24, 33, 12}, 100.0, true}};
   std::mt19937 rng(5);
   for (const Case& c : cases) {
     for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
       std::ostringstream what_case;
       what_case << "box " << c.box_size.transpose() << ", max " << c.max_m << " m, "
-                << toString(policy);
+                << toString(policy) << (c.envelope_only ? ", envelope code" : "");
       SCOPED_TRACE(what_case.str());
       const Eigen::Vector3i world_size = c.box_size * 2 + Eigen::Vector3i::Ones();
       ChangingWorld world(world_size, static_cast<std::uint32_t>(rng()));
       EsdfMap incremental(config(c.max_m, policy));
       EsdfMap full(config(c.max_m, policy));
+      incremental.setEnvelopeOnly(c.envelope_only);
+      full.setEnvelopeOnly(c.envelope_only);
       EsdfMap copy(config(c.max_m, policy));
       VoxelIndex min_index = VoxelIndex::Zero();
       std::uniform_int_distribution<int> pick(0, 99);
       std::size_t incremental_steps = 0;
       std::size_t shifted_steps = 0;
+      std::size_t moved_steps = 0;
+      VoxelIndex previous_min = min_index;
       for (int step = 0; step < 60; ++step) {
         world.step();
         const int kind = pick(rng);
@@ -702,6 +789,15 @@ TEST(Esdf, IncrementalUpdatesEqualAFullRecomputeAfterEveryStep) {
         const EsdfMap::UpdateStats& u = incremental.lastUpdate();
         incremental_steps += u.full ? 0 : 1;
         shifted_steps += u.shifted ? 1 : 0;
+        // A move within the box is shifted with the envelope code, computed whole with the
+        // windowed passes.
+        const bool moved = box.min_index != previous_min && step > 0 && step != 40;
+        if (moved) {
+          ++moved_steps;
+          EXPECT_EQ(u.shifted, !incremental.windowedPasses()) << "step " << step;
+          EXPECT_EQ(u.full, incremental.windowedPasses()) << "step " << step;
+        }
+        previous_min = box.min_index;
         if (step == 0) {
           EXPECT_TRUE(u.full);
         }
@@ -716,7 +812,10 @@ TEST(Esdf, IncrementalUpdatesEqualAFullRecomputeAfterEveryStep) {
         if (HasFailure()) return;
       }
       EXPECT_GT(incremental_steps, 30u);
-      EXPECT_GT(shifted_steps, 2u);
+      EXPECT_GT(moved_steps, 2u);
+      if (c.envelope_only) {
+        EXPECT_GT(shifted_steps, 2u);
+      }
     }
   }
 }

@@ -27,7 +27,12 @@
 /// passes on one signed buffer, each evaluated only where it is needed. Squared distances beyond
 /// (max_distance_m / resolution_m)^2 are treated as infinite, which keeps the clamped result
 /// exact. Linear in the number of voxels; one sqrt (a table lookup) per voxel; no allocation
-/// after the first compute() of the largest box.
+/// after the first compute() of the largest box. Where that clamp is at most
+/// esdf_kernel::kMaxWindowCapCells voxels (20 at 0.1 m with the default 2 m), the y and z
+/// passes instead take, at each voxel, the minimum over the 2 cap_d + 1 voxels of its line
+/// within the clamp (see esdf_window_kernel.h): 16-bit values, many lines side by side, no
+/// branch on the data, so the compiler vectorises it (AVX2 / AVX-512 builds on x86-64, chosen
+/// at load time); the result is the same, bit for bit.
 ///
 /// Incremental updates (update()): the map keeps the box it was computed from and the results
 /// of the x pass and of the y pass. A new box of the same size and resolution is compared with
@@ -38,14 +43,17 @@
 /// line is transformed only over twice that around its changed inputs, and its results are kept
 /// within once that, where the parabolas cut off at the part's ends lie beyond the cap. Each
 /// part goes through the same code as in compute() (exact integer arithmetic, invariant under
-/// translation), so the field is bit-identical to a full recompute. A box that moved (the window
-/// slid) by less than its size is shifted first: the kept part stays, the new slabs count as
-/// changed, and so does the face the move removed (its neighbours there are gone). More than
-/// 1/16 of the box changed (e.g. a map load) is computed whole. The cost follows what changed:
+/// translation), so the field is bit-identical to a full recompute. With the envelope code (large
+/// clamps), a box that moved (the window slid) by less than its size is shifted first: the kept
+/// part stays, the new slabs count as changed, and so does the face the move removed (its
+/// neighbours there are gone). Where the windowed passes apply, a moved box is computed whole,
+/// which costs less than the shift and the lines it touches. More than 1/16 of the box changed
+/// (e.g. a map load) is computed whole. The cost follows what changed:
 /// a depth frame's few thousand changed voxels touch a part of the lines.
 
 #include "mlmap/core/config.h"
 #include "mlmap/core/types.h"
+#include "mlmap/planning/esdf_window_kernel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -128,6 +136,14 @@ class EsdfMap {
   /// result is bit-identical to one thread. std::bad_alloc propagates, leaving the map empty.
   [[nodiscard]] bool compute(const OccupancyBox& box);
 
+  /// Makes compute() run its y and z passes with the envelope code even where the windowed
+  /// 16-bit passes apply (see the file comment); both give the same field. For tests and the
+  /// benchmark; takes effect at the next compute().
+  void setEnvelopeOnly(bool envelope_only) { envelope_only_ = envelope_only; }
+  /// True when the last compute() ran the windowed 16-bit y and z passes (the clamp is at most
+  /// esdf_kernel::kMaxWindowCapCells voxels and setEnvelopeOnly() was not set).
+  [[nodiscard]] bool windowedPasses() const { return window_kernel_; }
+
   /// What the last compute() or update() did.
   struct UpdateStats {
     bool full = true;                   ///< the whole field was computed (compute(), or update()
@@ -143,8 +159,9 @@ class EsdfMap {
   /// Brings the field to `box`, exactly as compute(box) would, doing only the work the changes
   /// since the last compute() or update() need (see the file comment). Falls back to compute()
   /// when there is no kept box (first call, after a failed call, after copyFrom()), when the
-  /// size or resolution differs, when the box moved by its size or more, or when more than 1/16
-  /// of an unmoved box changed (the full compute is then cheaper). Same return value and
+  /// size or resolution differs, when the box moved by its size or more, when it moved at all
+  /// and windowedPasses() applies, or when more than 1/16 of an unmoved box changed (the full
+  /// compute is then cheaper). Same return value and
   /// failure behaviour as compute(). Single-threaded except in the fallback.
   [[nodiscard]] bool update(const OccupancyBox& box);
   /// What the last compute() or update() did.
@@ -168,6 +185,15 @@ class EsdfMap {
   /// normal). The value therefore always lies between the values of the 8 cells used.
   /// valid = false outside the box or when the point's voxel is unknown. Allocation-free.
   [[nodiscard]] Query query(const Eigen::Vector3d& p_W) const;
+
+  /// query() at `count` points: out[i] = query(points_W[i]), bit for bit. Faster than a loop of
+  /// query() when the points are scattered over a box larger than the CPU's caches: the memory
+  /// each query reads (four cache lines of the field and one of the unknown mask) is prefetched
+  /// kQueryPrefetchAhead points ahead, so the memory latencies of many queries overlap.
+  /// Allocation-free; `out` must hold `count` results.
+  void queryBatch(const Eigen::Vector3d* points_W, std::size_t count, Query* out) const;
+  /// How many points ahead queryBatch() prefetches.
+  static constexpr std::size_t kQueryPrefetchAhead = 12;
 
   /// Cell value of a world voxel [m] (the value at its centre); NaN outside the box.
   [[nodiscard]] float distanceAt(const VoxelIndex& world_index) const;
@@ -206,7 +232,8 @@ class EsdfMap {
   /// The configuration in use.
   [[nodiscard]] const EsdfConfig& config() const { return config_; }
   /// Bytes held by the field (4 per voxel), the unknown mask (1 bit per voxel), the kept box and
-  /// the x and y passes' results (9 per voxel, none in a copy) and a little per thread.
+  /// the x and y passes' results (9 per voxel, 7 with the windowed passes, none in a copy) and a
+  /// little per thread.
   [[nodiscard]] std::size_t memoryBytes() const;
 
  private:
@@ -222,6 +249,8 @@ class EsdfMap {
     std::vector<std::int32_t> near_free;      ///< x pass: nearest non-obstacle x per (y, z)
     std::vector<std::int32_t> near_obstacle;  ///< x pass: nearest obstacle x per (y, z)
     std::vector<std::int32_t> line;           ///< one y or z line being transformed
+    esdf_kernel::WindowBuffers window;        ///< the windowed passes' slab buffers
+    std::vector<int> lanes;                   ///< update(): the lines of a slab transformed
   };
 
   /// Unknown bit of box-relative voxel (x, y, z) (inside the box).
@@ -234,6 +263,8 @@ class EsdfMap {
   [[nodiscard]] std::size_t offsetOf(const VoxelIndex& world_index) const {
     return boxOffset(min_index_, size_, world_index);
   }
+  /// Prefetches what query(p_W) reads (nothing outside the box).
+  void prefetchQuery(const Eigen::Vector3d& p_W) const;
   /// Empties the map (size 0, every query invalid); keeps the buffers' capacity.
   void clear();
   /// Pass 1 (x, two sweeps) over the y rows [y_begin, y_end): 1D distances into pass1_.
@@ -261,6 +292,11 @@ class EsdfMap {
   /// The incremental part of update(): box has the kept geometry after a shift by `shift`
   /// voxels (zero: none).
   void updateChanged(const OccupancyBox& box, const VoxelIndex& shift);
+  /// The y and z passes of updateChanged() over the lines its x pass marked, `reach` = cap_d_ + 1:
+  /// line by line with the envelope code ...
+  void updateLinesEnvelope(int reach, Scratch* scratch);
+  /// ... or, where the windowed passes apply, a slab's marked lines side by side through them.
+  void updateLinesWindowed(int reach, Scratch* scratch);
   /// Signed squared voxel distance (or +-inf_) -> clamped signed metres, without the table.
   /// Needs cap_sq_, inf_ and resolution_m_ of the current compute().
   [[nodiscard]] float slowMetres(std::int32_t value) const;
@@ -278,6 +314,8 @@ class EsdfMap {
   std::int32_t inf_ = 1;     ///< cap_sq_ + 1: "farther than the cap" in the work buffer
   std::int32_t cap_d_ = 0;   ///< largest d with d * d <= cap_sq_
   bool narrow_keys_ = true;  ///< the envelope arithmetic of every line fits 32 bits
+  bool envelope_only_ = false;  ///< see setEnvelopeOnly()
+  bool window_kernel_ = false;  ///< compute() runs the windowed y and z passes
   std::vector<float> field_;           ///< clamped signed distance per voxel [m]
   /// One bit per voxel, set where the box voxel was unknown; each x slab starts on a new
   /// 64-bit word (slab_bits_ apart) so that threads never share a word.
@@ -287,9 +325,11 @@ class EsdfMap {
   std::vector<std::int32_t> pass1_;
   /// Pass 2's result: +d^2 / -d^2 over the y-x plane, in voxels, or +-inf_.
   std::vector<std::int32_t> pass2_;
+  /// The same in 16 bits, where the windowed passes apply (pass2_ is then empty).
+  std::vector<std::int16_t> pass2_narrow_;
   /// The box states of the last compute() / update() (what update() compares with).
   std::vector<std::uint8_t> kept_states_;
-  bool kept_ = false;  ///< pass1_, pass2_ and kept_states_ hold the current box
+  bool kept_ = false;  ///< pass1_, pass 2's results and kept_states_ hold the current box
   UpdateStats last_update_;
   std::vector<std::uint32_t> changed_cells_;
   std::vector<std::uint32_t> changed_states_;  ///< offsets of the states update() found changed
@@ -372,6 +412,54 @@ inline EsdfMap::Query EsdfMap::query(const Eigen::Vector3d& p_W) const {
   const double dz1 = dz10 + ty * (dz11 - dz10);
   q.gradient.z() = (dz0 + tx * (dz1 - dz0)) * kz;
   return q;
+}
+
+inline void EsdfMap::prefetchQuery(const Eigen::Vector3d& p_W) const {
+  constexpr double kMaxGrid = 1073741824.0;  // 2^30 (as query())
+  const double gx = p_W.x() * inv_resolution_;
+  const double gy = p_W.y() * inv_resolution_;
+  const double gz = p_W.z() * inv_resolution_;
+  if (!(std::abs(gx) < kMaxGrid && std::abs(gy) < kMaxGrid && std::abs(gz) < kMaxGrid)) return;
+  const int vx = floorToInt(gx) - min_index_.x();
+  const int vy = floorToInt(gy) - min_index_.y();
+  const int vz = floorToInt(gz) - min_index_.z();
+  if (static_cast<unsigned>(vx) >= static_cast<unsigned>(size_.x()) ||
+      static_cast<unsigned>(vy) >= static_cast<unsigned>(size_.y()) ||
+      static_cast<unsigned>(vz) >= static_cast<unsigned>(size_.z())) {
+    return;
+  }
+  // The stencil's lower corner (as query(), within a voxel of the point's own).
+  const int ix = std::clamp(floorToInt(gx - (static_cast<double>(min_index_.x()) + 0.5)), 0,
+                            std::max(size_.x() - 2, 0));
+  const int iy = std::clamp(floorToInt(gy - (static_cast<double>(min_index_.y()) + 0.5)), 0,
+                            std::max(size_.y() - 2, 0));
+  const int iz = std::clamp(floorToInt(gz - (static_cast<double>(min_index_.z()) + 0.5)), 0,
+                            std::max(size_.z() - 2, 0));
+  const float* c =
+      field_.data() + (static_cast<std::ptrdiff_t>(ix) * size_.y() + iy) * size_.z() + iz;
+#if defined(__GNUC__)
+  __builtin_prefetch(c);
+  __builtin_prefetch(c + step_z_);
+  __builtin_prefetch(c + step_y_ + step_z_);
+  __builtin_prefetch(c + step_x_ + step_z_);
+  __builtin_prefetch(c + step_x_ + step_y_ + step_z_);
+  const std::size_t bit = static_cast<std::size_t>(vx) * slab_bits_ +
+                          static_cast<std::size_t>(vy) * static_cast<std::size_t>(size_.z()) +
+                          static_cast<std::size_t>(vz);
+  __builtin_prefetch(unknown_bits_.data() + (bit >> 6));
+#else
+  (void)c;
+#endif
+}
+
+inline void EsdfMap::queryBatch(const Eigen::Vector3d* points_W, std::size_t count,
+                                Query* out) const {
+  const std::size_t ahead = std::min(count, kQueryPrefetchAhead);
+  for (std::size_t i = 0; i < ahead; ++i) prefetchQuery(points_W[i]);
+  for (std::size_t i = 0; i < count; ++i) {
+    if (i + ahead < count) prefetchQuery(points_W[i + ahead]);
+    out[i] = query(points_W[i]);
+  }
 }
 
 }  // namespace mlmap
