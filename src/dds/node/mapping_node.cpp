@@ -67,6 +67,9 @@ struct MappingNode::Impl {
   std::unique_ptr<node::NodeServices> services;
   /// Set by ~/clear_map: the emptied global map goes out at once, whatever the rate limit.
   std::atomic<bool> force_global_publish{false};
+  /// The frame of the last snapshot announced (local-global thread): the fleet's collection
+  /// pairs the global map with the window of the same frame.
+  std::atomic<std::uint64_t> last_snapshot_frame{0};
   std::thread input_thread;
   bool setup_done = false;  ///< the map is loaded (if asked) and the node runs: it may be saved
   std::uint64_t idle_global_version = 0;  ///< the global map's version handed over when idle
@@ -79,7 +82,7 @@ struct MappingNode::Impl {
       : config(c),
         effective(effectiveNodeConfig(c)),
         log(teeToRosout(sink)),
-        mailbox(c.dds.rates) {}
+        mailbox(c.dds.rates, c.dds.fleet.publish ? c.dds.fleet.rate_hz : 0.0) {}
 
   /// `sink`, and /rosout once the node has its writer there.
   LogSink teeToRosout(const LogSink& sink) {
@@ -202,14 +205,29 @@ struct MappingNode::Impl {
     };
     observers.global = [this](const GlobalMap& map, double stamp_s, std::uint64_t version) {
       mailbox.copyGlobal(map, stamp_s, version, force_global_publish.exchange(false));
+      if (config.dds.fleet.publish) shareWithFleet(map, false);
     };
-    observers.snapshot = [this](std::uint64_t, double) { mailbox.announceSnapshot(); };
+    observers.snapshot = [this](std::uint64_t frame, double) {
+      last_snapshot_frame = frame;
+      mailbox.announceSnapshot();
+    };
     return std::make_unique<MapEngine>(
         map_config,
         [this](LogLevel level, const std::string& m) {
           log.limited(level, node::kReasonEngine, m);
         },
         std::move(observers));
+  }
+
+  /// dds.fleet.publish: hands the global map's changes and the window of the same frame to the
+  /// fleet output (at fleet.rate_hz, or now with `force`). On the local-global thread, or on any
+  /// thread with `force` while the engine is idle. Nothing before the first snapshot, nor while
+  /// the engine's latest snapshot is not the one of `map`'s frame (the planning thread's).
+  void shareWithFleet(const GlobalMap& map, bool force) {
+    std::shared_ptr<const MapSnapshot> snap = engine ? engine->snapshot() : nullptr;
+    if (!snap || snap->frame() == 0) return;
+    if (!force && snap->frame() != last_snapshot_frame) return;
+    mailbox.copyFleet(map, std::move(snap), force);
   }
 
   /// The input thread: takes what the listeners handed over, pairs it, submits it.
@@ -219,7 +237,13 @@ struct MappingNode::Impl {
       if (!input) {
         if (queue.finished()) break;
         // A second without input (20 polls): the stream paused or ended.
-        if (++idle_polls == kIdlePolls) handOverIdleGlobalMap();
+        if (++idle_polls == kIdlePolls) {
+          handOverIdleGlobalMap();
+          if (outputs && outputs->sharesWithFleet()) {
+            engine->flush();  // idle: what the rate held back goes out
+            shareWithFleet(engine->globalMap(), true);
+          }
+        }
       } else {
         idle_polls = 0;
         pairer->handle(*input);
@@ -239,6 +263,7 @@ struct MappingNode::Impl {
       engine->flush();
       if (!config.map_file.save_path.empty() && setup_done) persistence->save("shutdown");
       handOverFinalGlobalMap();
+      if (outputs && outputs->sharesWithFleet()) shareWithFleet(engine->globalMap(), true);
     }
     if (outputs) outputs->finish();  // publishes the final state once, waits for the readers
     {
