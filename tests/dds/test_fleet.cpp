@@ -19,6 +19,7 @@
 #include <gtest/gtest.h>
 
 #include <set>
+#include <thread>
 #include <tuple>
 
 namespace mlmap::dds {
@@ -247,6 +248,60 @@ TEST(FleetDds, MalformedSamplesAreRefusedAndCountedTheMergerKeepsMerging) {
   ASSERT_TRUE(writer->write(&other));
   ASSERT_TRUE(received(merger, bad.size() + 2));
   EXPECT_EQ(merger.stats().samples_rejected, bad.size() + 1);
+}
+
+TEST(FleetDds, MappingNodeSharesItsWholeMapAndTheMergerHoldsIt) {
+  constexpr int kDomain = 143;
+  NodeConfig config;
+  config.dds = localhostConfig(kDomain);
+  config.map = fleet::test_support::fleetMapConfig();
+  config.map.sensor.translation_B_m = Eigen::Vector3d::Zero();  // the LiDAR is the body
+  config.map.sensor.rotation_rpy_deg = Eigen::Vector3d::Zero();
+  config.dds.ns = "uav7";  // the vehicle's name, since fleet.vehicle is empty
+  config.dds.fleet.publish = true;
+  config.dds.fleet.rate_hz = 5.0;
+  FleetMerger merger(mergerConfig(kDomain));
+  merger.start();
+  MappingNode node(config);
+  const ParticipantPtr participant = createParticipant(localhostConfig(kDomain), "sensors");
+  fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  fdds::DataWriter* cloud = createWriter<sensor_msgs::PointCloud2_PubSubType>(
+      publisher, "rt/uav7/cloud", reliableWriterQos(50));
+  fdds::DataWriter* pose = createWriter<geometry_msgs::PoseStamped_PubSubType>(
+      publisher, "rt/uav7/pose", reliableWriterQos(200));
+  ASSERT_TRUE(waitFor([&] {
+    return test_support::writerMatched(cloud) && test_support::writerMatched(pose) &&
+           node.counters().publishers_matched == 2;
+  }));
+  // Stamped 0.1 s apart (a pose more than dds.max_future_s after the newest is suspect).
+  std::vector<PointCloudFrame> frames = fleet::test_support::roomFlight(60);
+  for (std::size_t i = 0; i < frames.size(); ++i) frames[i].stamp_s = 0.1 * static_cast<double>(i + 1);
+  for (const PointCloudFrame& f : frames) {
+    geometry_msgs::PoseStamped_ p = toPoseStamped(f.T_W_B, f.stamp_s, "map");
+    ASSERT_TRUE(pose->write(&p));
+    sensor_msgs::PointCloud2_ c = encodePointCloud2(f.points_S, nullptr, f.stamp_s, "camera_depth_optical_frame");
+    ASSERT_TRUE(cloud->write(&c));
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  }
+  ASSERT_TRUE(waitFor([&] { return node.engineStats().frames_mapped == frames.size(); },
+                      std::chrono::milliseconds(30000)))
+      << node.engineStats().frames_mapped << " mapped, " << node.counters().clouds_received
+      << " clouds, " << node.counters().frames_without_pose << " without pose, "
+      << node.counters().frames_across_pose_jump << " across a jump, "
+      << node.counters().frames_handover_dropped << " dropped, "
+      << node.engineStats().frames_dropped << " dropped by the engine";
+  node.stop();  // the final state goes out, whatever the rate
+  const NodeCounters c = node.counters();
+  EXPECT_GT(c.fleet_submaps_sent, 10u);
+  ASSERT_TRUE(received(merger, c.fleet_submaps_sent));
+  // The same frames through one engine: the node's map, the merger's copy of it.
+  MapEngine engine(config.map);
+  for (const PointCloudFrame& f : frames) ASSERT_EQ(engine.submit(f), FrameStatus::kAccepted);
+  EXPECT_EQ(mergedKeys(merger), keys(engine.occupiedVoxels()));
+  const FleetMergerStats s = merger.stats();
+  ASSERT_EQ(s.vehicles.size(), 1u);
+  EXPECT_EQ(s.vehicles[0].info.name, "uav7");
+  EXPECT_EQ(s.vehicles[0].info.bytes, c.fleet_bytes_sent);
 }
 
 }  // namespace
