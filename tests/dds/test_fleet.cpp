@@ -13,11 +13,16 @@
 #include "mlmap/dds/submap_messages.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
+#include "mlmap_msgs/msg/FleetStatus_PubSubTypes.h"
 #include "mlmap_msgs/msg/Submap_PubSubTypes.h"
+#include "nav_msgs/msg/OccupancyGrid_PubSubTypes.h"
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <map>
+#include <mutex>
 #include <set>
 #include <thread>
 #include <tuple>
@@ -248,6 +253,79 @@ TEST(FleetDds, MalformedSamplesAreRefusedAndCountedTheMergerKeepsMerging) {
   ASSERT_TRUE(writer->write(&other));
   ASSERT_TRUE(received(merger, bad.size() + 2));
   EXPECT_EQ(merger.stats().samples_rejected, bad.size() + 1);
+}
+
+TEST(FleetDds, TheMergedMapReachesRosReadersAsPointCloudGridAndStatusAlsoWhenTheyJoinLate) {
+  constexpr int kDomain = 144;
+  FleetMergerConfig mc = mergerConfig(kDomain);
+  mc.grid_min_z_m = 0.0;
+  mc.grid_max_z_m = 2.0;
+  FleetMerger merger(mc);
+  merger.start();
+  const ParticipantPtr participant = createParticipant(localhostConfig(kDomain), "vehicles");
+  fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  const SubmapGeometry grid{0.2, {16, 16, 6}};
+  SubmapWriter uav1(publisher, "rt/mlmap/submaps", "uav1", grid, "map");
+  SubmapWriter uav2(publisher, "rt/mlmap/submaps", "uav2", grid, "map");
+  ASSERT_TRUE(waitFor([&] {
+    return test_support::writerMatched(uav1.get()) && test_support::writerMatched(uav2.get());
+  }));
+  // Voxel offset 3 (x 0, y 0, z 3: centre 0.7 m) in submap (0, 0, 0) from both, offset 100
+  // (x 1, y 0, z 4) from uav2 only.
+  uav1.write({{SubmapIndex(0, 0, 0), {{3, 2000}}}}, 1.0);
+  uav2.write({{SubmapIndex(0, 0, 0), {{3, 2000}, {100, 3000}}}}, 1.0);
+  ASSERT_TRUE(received(merger, 2));
+  // A ROS 2 reader (TRANSIENT_LOCAL) that joins after the merger published.
+  ASSERT_TRUE(waitFor([&] { return merger.stats().clouds_published > 0; }));
+  const ParticipantPtr ground = createParticipant(localhostConfig(kDomain), "ground");
+  fdds::Subscriber* subscriber = ground->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
+  std::mutex mutex;
+  std::vector<sensor_msgs::PointCloud2_> clouds;
+  std::vector<nav_msgs::OccupancyGrid_> grids;
+  std::vector<::mlmap_msgs::msg::dds_::FleetStatus_> statuses;
+  TakeReaders readers(subscriber, [](const std::string&) {});
+  readers.add<sensor_msgs::PointCloud2_PubSubType>(
+      "rt/mlmap/fleet/occupied", reliableReaderQos(true, 1), [&](sensor_msgs::PointCloud2_&& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        clouds.push_back(std::move(m));
+      });
+  readers.add<nav_msgs::OccupancyGrid_PubSubType>(
+      "rt/mlmap/fleet/grid", reliableReaderQos(true, 1), [&](nav_msgs::OccupancyGrid_&& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        grids.push_back(std::move(m));
+      });
+  readers.add<::mlmap_msgs::msg::dds_::FleetStatus_PubSubType>(
+      "rt/mlmap/fleet/status", reliableReaderQos(false, 10),
+      [&](::mlmap_msgs::msg::dds_::FleetStatus_&& m) {
+        std::lock_guard<std::mutex> lock(mutex);
+        statuses.push_back(std::move(m));
+      });
+  ASSERT_TRUE(waitFor([&] {
+    std::lock_guard<std::mutex> lock(mutex);
+    return !clouds.empty() && !grids.empty() && !statuses.empty();
+  }));
+  std::lock_guard<std::mutex> lock(mutex);
+  const sensor_msgs::PointCloud2_& cloud = clouds.back();
+  std::vector<Eigen::Vector3f> points;
+  ASSERT_TRUE(decodePointCloud2(cloud, &points).ok());
+  ASSERT_EQ(points.size(), 2u);
+  ASSERT_EQ(cloud.fields_().size(), 5u);
+  EXPECT_EQ(cloud.fields_()[4].name_(), "vehicles");
+  std::map<int, std::uint32_t> bits_by_z;  // voxel z index -> vehicle bits
+  for (std::uint32_t i = 0; i < cloud.width_(); ++i) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, cloud.data_().data() + i * cloud.point_step_() + 16, 4);
+    bits_by_z[static_cast<int>(std::floor(points[i].z() / 0.2))] = bits;
+  }
+  EXPECT_EQ(bits_by_z, (std::map<int, std::uint32_t>{{3, 3u}, {4, 2u}}));
+  const nav_msgs::OccupancyGrid_& g = grids.back();
+  EXPECT_EQ(g.info_().width_(), 2u);
+  EXPECT_EQ(g.info_().height_(), 1u);
+  EXPECT_EQ(g.data_(), (std::vector<std::int8_t>{100, 100}));
+  const auto& st = statuses.back();
+  EXPECT_EQ(st.vehicles_(), (std::vector<std::string>{"uav1", "uav2"}));
+  EXPECT_EQ(st.voxels_(), (std::vector<std::uint64_t>{1, 2}));
+  EXPECT_EQ(st.merged_voxels_(), 2u);
 }
 
 TEST(FleetDds, MappingNodeSharesItsWholeMapAndTheMergerHoldsIt) {

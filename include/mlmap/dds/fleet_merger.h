@@ -64,7 +64,7 @@ class FleetMerger {
  public:
   /// Joins the domain, creates the reader and the writers. Throws std::runtime_error (or
   /// std::invalid_argument for a bad config) with the reason.
-  FleetMerger(const FleetMergerConfig& config, LogSink log = {});
+  explicit FleetMerger(const FleetMergerConfig& config, LogSink log = {});
   ~FleetMerger();
   FleetMerger(const FleetMerger&) = delete;
   FleetMerger& operator=(const FleetMerger&) = delete;
