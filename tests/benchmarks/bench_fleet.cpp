@@ -8,6 +8,7 @@
 #include "mlmap/core/stopwatch.h"
 #include "mlmap/dds/ros_conversions.h"
 #include "mlmap/dds/submap_messages.h"
+#include "mlmap/fleet/fleet_map.h"
 #include "mlmap/fleet/submap_share.h"
 #include "mlmap/pipeline/map_engine.h"
 #include "mlmap/sim/lidar.h"
@@ -33,6 +34,7 @@ struct Options {
   int azimuth_steps = 360;
   double range_m = 8.0;
   bool rounds = false;  ///< print every round
+  int merger_vehicles = 8;  ///< vehicles the merger's figure replays the stream as
 };
 
 /// Bytes and submaps of one phase.
@@ -76,6 +78,8 @@ int run(const Options& o) {
   std::uint64_t version = 0;
   std::uint64_t sequence = 0;
   std::vector<double> share_ms;
+  // Every sample as the merger decodes it, to replay as several vehicles below.
+  std::vector<mlmap::dds::DecodedSubmap> stream;
   // Exploring (the loop), settling (the first seconds of hovering: the last scans saturate),
   // hovering.
   constexpr double kSettle_s = 2.0;
@@ -102,8 +106,10 @@ int run(const Options& o) {
     const std::vector<fleet::SubmapUpdate> updates =
         share.changes(std::move(delta), snap ? &snap->window() : nullptr);
     for (const fleet::SubmapUpdate& u : updates) {
-      phase.bytes += mlmap::dds::serializedSubmapBytes(
-          mlmap::dds::toSubmapMessage(u, geometry, "uav1", ++sequence, t, "map"));
+      const auto msg = mlmap::dds::toSubmapMessage(u, geometry, "uav1", ++sequence, t, "map");
+      phase.bytes += mlmap::dds::serializedSubmapBytes(msg);
+      stream.emplace_back();
+      if (!mlmap::dds::decodeSubmapMessage(msg, &stream.back()).empty()) return 1;
     }
     share_ms.push_back(msSince(watch));
     if (o.rounds) std::printf("t %.1f s: %zu submaps\n", t, updates.size());
@@ -131,6 +137,33 @@ int run(const Options& o) {
   std::printf("share step per round (collect, compare, encode): median %.2f ms, p99 %.2f ms over "
               "%zu rounds\n",
               step.median_ms, step.p99_ms, step.samples);
+
+  // The merger: the vehicle's whole stream replayed as `merger_vehicles` vehicles in turn (the
+  // same voxels: the worst case for fusion, every voxel held by all), each sample decoded and
+  // fused as mlmap_fleet does.
+  fleet::FleetMap merged(config.log_odds);
+  merged.acceptGeometry(geometry.resolution_m, geometry.cells);
+  std::vector<double> apply_us;
+  const SteadyClock::time_point merge_start = SteadyClock::now();
+  for (const mlmap::dds::DecodedSubmap& sample : stream) {
+    for (int v = 0; v < o.merger_vehicles; ++v) {
+      std::vector<VoxelRecord> records = sample.records;
+      const SteadyClock::time_point t0 = SteadyClock::now();
+      merged.apply("uav" + std::to_string(v), sample.index, sample.sequence, std::move(records));
+      apply_us.push_back(1000.0 * msSince(t0));
+    }
+  }
+  const double merge_s = msSince(merge_start) / 1000.0;
+  const TimingSummary apply = summarizeTimings(apply_us);  // in us, as apply_us
+  const double samples = static_cast<double>(stream.size() * static_cast<std::size_t>(o.merger_vehicles));
+  std::printf("merger, %d vehicles of this stream: %.0f samples fused in %.2f s wall clock (%.1f %% of "
+              "one core for %.0f s of flight); per sample median %.0f us, p99 %.0f us; %zu fused "
+              "voxels in %.1f MB (%.1f B per voxel and vehicle)\n",
+              o.merger_vehicles, samples, merge_s,
+              100.0 * merge_s / (flight_s + o.hover_s), flight_s + o.hover_s, apply.median_ms,
+              apply.p99_ms, merged.voxelCount(), static_cast<double>(merged.memoryBytes()) / 1e6,
+              static_cast<double>(merged.memoryBytes()) /
+                  static_cast<double>(merged.voxelCount() * static_cast<std::size_t>(o.merger_vehicles)));
   return 0;
 }
 
@@ -147,6 +180,8 @@ int main(int argc, char** argv) {
   app.add_option("--azimuth-steps", o.azimuth_steps, "LiDAR columns")->check(CLI::PositiveNumber);
   app.add_option("--range", o.range_m, "LiDAR and map range [m]")->check(CLI::PositiveNumber);
   app.add_flag("--rounds", o.rounds, "print each share round's submap count");
+  app.add_option("--merger-vehicles", o.merger_vehicles, "vehicles the merger figure replays")
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
   return run(o);
 }
