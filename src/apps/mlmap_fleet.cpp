@@ -44,7 +44,8 @@ void addOptions(CLI::App& app, Options& o) {
       ->check(CLI::PositiveNumber);
   app.add_option("--grid-min-z", o.merger.grid_min_z_m, "the grid's height band, bottom [m]");
   app.add_option("--grid-max-z", o.merger.grid_max_z_m, "the grid's height band, top [m]");
-  app.add_option("--duration", o.duration_s, "stop after this many seconds (0: until SIGINT/SIGTERM)")
+  app.add_option("--duration", o.duration_s,
+                 "stop after this many seconds (0: until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--report-every", o.report_every_s, "seconds between status lines (0: none)")
       ->check(CLI::NonNegativeNumber);

@@ -111,7 +111,8 @@ struct FleetShareConfig {
   template <class Self, class V>
   static void visit(Self& c, V& v) {
     v.key("publish", c.publish, "",
-          "share the map: each changed submap's occupied voxels on `topic` (mlmap_fleet merges them)");
+          "share the map: each changed submap's occupied voxels on `topic`\n"
+          "(mlmap_fleet merges them)");
     v.key("vehicle", c.vehicle, "", "this vehicle's name in the fleet; \"\": the namespace dds.ns");
     v.key("rate_hz", c.rate_hz, "Hz", "changed submaps go out at most this often");
     v.key("topic", c.topic, "", "keyed mlmap_msgs/Submap topic, absolute (never namespaced)");

@@ -6,8 +6,8 @@
 /// Each vehicle sends a submap's whole occupied content whenever it changes (mlmap_msgs/Submap);
 /// its latest content replaces that vehicle's previous contribution to that submap, so evidence
 /// is never counted twice. A fused voxel's log-odds is the sum of the vehicles' log-odds for it,
-/// clamped to the engine's bounds (LogOddsConfig clamp_min, clamp_max): independent observers add their
-/// evidence as the engine adds its frames'. Only occupied voxels travel, so the sum of occupied
+/// clamped to the engine's bounds (LogOddsConfig clamp_min, clamp_max): independent observers
+/// add their evidence as the engine adds its frames'. Only occupied voxels travel, so the sum of occupied
 /// evidence stays occupied: the merged occupied set is the union of the vehicles' occupied sets,
 /// and each voxel keeps a bit per vehicle that holds it (provenance). Memory grows with occupied
 /// voxels: 8 bytes per voxel and vehicle holding it, 16 per fused voxel, plus a few per submap.

@@ -47,7 +47,8 @@ inline constexpr std::size_t kMaxVarintBytes = 5;
 
 /// Encodes `records` (ascending offsets, as GlobalMap holds them), compressed when smaller.
 /// `compression_level`: zstd's level (1 fastest .. 19).
-SubmapPayload encodeSubmapVoxels(const std::vector<VoxelRecord>& records, int compression_level = 3);
+SubmapPayload encodeSubmapVoxels(const std::vector<VoxelRecord>& records,
+                                 int compression_level = 3);
 
 /// Decodes a payload of a submap of `voxels_per_submap` voxels into `records` (ascending
 /// offsets). Allocates at most raw_size bytes, which is checked against voxel_count first

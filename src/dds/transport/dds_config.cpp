@@ -357,7 +357,8 @@ std::vector<std::string> DdsConfig::validate() const {
   RateChecker rate_checker(key(rates), &errors);
   visitConfig(rates, rate_checker);
 
-  if (!std::isfinite(fleet.rate_hz) || fleet.rate_hz < 0.0 || (fleet.publish && fleet.rate_hz == 0.0)) {
+  if (!std::isfinite(fleet.rate_hz) || fleet.rate_hz < 0.0 ||
+      (fleet.publish && fleet.rate_hz == 0.0)) {
     errors.push_back(key(fleet.rate_hz) + ": must be finite and > 0 (>= 0 when " +
                      key(fleet.publish) + " is false) (got " + number(fleet.rate_hz) + ")");
   }
