@@ -137,6 +137,37 @@ const std::vector<VoxelRecord>* GlobalMap::find(const SubmapIndex& submap) const
   return it == submaps_.end() ? nullptr : &it->second.records;
 }
 
+std::size_t GlobalMap::addPrior(const SubmapIndex& submap, const std::vector<VoxelRecord>& prior) {
+  if (prior.empty()) return 0;
+  const std::uint64_t key = pack(submap);
+  auto it = submaps_.find(key);
+  const std::vector<VoxelRecord> none;
+  const std::vector<VoxelRecord>& own = it == submaps_.end() ? none : it->second.records;
+  std::vector<VoxelRecord> merged;
+  merged.reserve(own.size() + prior.size());
+  std::size_t added = 0;
+  auto o = own.begin();
+  for (const VoxelRecord& p : prior) {
+    while (o != own.end() && o->offset < p.offset) merged.push_back(*o++);
+    if (o != own.end() && o->offset == p.offset) continue;  // the own value wins
+    merged.push_back(p);
+    ++added;
+  }
+  merged.insert(merged.end(), o, own.end());
+  if (added == 0) return 0;
+  ++modifications_;
+  voxel_count_ += added;
+  merged.shrink_to_fit();
+  if (it == submaps_.end()) {
+    removed_at_.erase(key);
+    submaps_.emplace(key, Entry{std::move(merged), modifications_});
+  } else {
+    it->second.records = std::move(merged);
+    it->second.modified_at = modifications_;
+  }
+  return added;
+}
+
 std::uint64_t GlobalMap::submapModifiedAt(const SubmapIndex& m) const {
   const std::uint64_t key = pack(m);
   const auto it = submaps_.find(key);

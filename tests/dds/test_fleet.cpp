@@ -314,7 +314,7 @@ TEST(FleetDds, TheMergedMapReachesRosReadersAsPointCloudGridAndStatusAlsoWhenThe
   std::map<int, std::uint32_t> bits_by_z;  // voxel z index -> vehicle bits
   for (std::uint32_t i = 0; i < cloud.width_(); ++i) {
     std::uint32_t bits = 0;
-    std::memcpy(&bits, cloud.data_().data() + i * cloud.point_step_() + 16, 4);
+    std::memcpy(&bits, cloud.data_().data() + std::size_t{i} * cloud.point_step_() + 16, 4);
     bits_by_z[static_cast<int>(std::floor(points[i].z() / 0.2))] = bits;
   }
   EXPECT_EQ(bits_by_z, (std::map<int, std::uint32_t>{{3, 3u}, {4, 2u}}));
@@ -380,6 +380,64 @@ TEST(FleetDds, MappingNodeSharesItsWholeMapAndTheMergerHoldsIt) {
   ASSERT_EQ(s.vehicles.size(), 1u);
   EXPECT_EQ(s.vehicles[0].info.name, "uav7");
   EXPECT_EQ(s.vehicles[0].info.bytes, c.fleet_bytes_sent);
+}
+
+TEST(FleetDds, ANodeTakingTheFleetsSubmapsHasAnotherVehiclesObstaclesOnEntry) {
+  constexpr int kDomain = 145;
+  const MapConfig map_config = fleet::test_support::fleetMapConfig();
+  const std::vector<PointCloudFrame> frames = fleet::test_support::roomFlight(120);
+  // Vehicle uav1 maps the room and shares it; it stays on the domain (its history serves).
+  const ParticipantPtr participant = createParticipant(localhostConfig(kDomain), "uav1");
+  fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  SharingVehicle uav1(publisher, "uav1", map_config);
+  for (const PointCloudFrame& f : frames) uav1.map(f);
+  uav1.share();
+  const fleet::test_support::VoxelValues mapped_by_uav1 =
+      fleet::test_support::engineContent(uav1.engine());
+
+  // Vehicle uav2's node takes the fleet's submaps (and shares nothing).
+  NodeConfig config;
+  config.dds = localhostConfig(kDomain);
+  config.map = map_config;
+  config.map.sensor.translation_B_m = Eigen::Vector3d::Zero();
+  config.map.sensor.rotation_rpy_deg = Eigen::Vector3d::Zero();
+  config.dds.ns = "uav2";
+  config.dds.fleet.subscribe = true;
+  MappingNode node(config);
+  ASSERT_TRUE(waitFor([&] {
+    return node.counters().fleet_priors_received == uav1.writer().samplesWritten();
+  })) << node.counters().fleet_priors_received << " of " << uav1.writer().samplesWritten();
+  EXPECT_EQ(node.counters().fleet_samples_refused, 0u);
+
+  const ParticipantPtr sensors = createParticipant(localhostConfig(kDomain), "uav2_sensors");
+  fdds::Publisher* sensor_publisher = sensors->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  fdds::DataWriter* cloud = createWriter<sensor_msgs::PointCloud2_PubSubType>(
+      sensor_publisher, "rt/uav2/cloud", reliableWriterQos(50));
+  fdds::DataWriter* pose = createWriter<geometry_msgs::PoseStamped_PubSubType>(
+      sensor_publisher, "rt/uav2/pose", reliableWriterQos(200));
+  ASSERT_TRUE(waitFor([&] {
+    return test_support::writerMatched(cloud) && test_support::writerMatched(pose) &&
+           node.counters().publishers_matched == 2;
+  }));
+  // uav2 enters the east room with a sensor that sees nothing but the floor under it.
+  const Transform T_W_B = frames[40].T_W_B;
+  geometry_msgs::PoseStamped_ p = toPoseStamped(T_W_B, 1.0, "map");
+  ASSERT_TRUE(pose->write(&p));
+  sensor_msgs::PointCloud2_ c = encodePointCloud2({Eigen::Vector3f(0.0f, 0.0f, -1.0f)}, nullptr,
+                                                  1.0, "camera_depth_optical_frame");
+  ASSERT_TRUE(cloud->write(&c));
+  ASSERT_TRUE(waitFor([&] { return node.engineStats().frames_mapped == 1; }));
+  EXPECT_EQ(node.engineStats().prior_voxels_added, mapped_by_uav1.size());
+  const std::shared_ptr<const MapSnapshot> snap = node.snapshot();
+  std::size_t inside = 0, held = 0;
+  for (const auto& [g, l] : mapped_by_uav1) {
+    if (!snap->window().contains(g)) continue;
+    ++inside;
+    held += snap->window().state(g) == Occupancy::kOccupied ? 1 : 0;
+  }
+  EXPECT_GT(inside, 1000u);
+  EXPECT_GE(static_cast<double>(held) / static_cast<double>(inside), 0.995)
+      << held << " of " << inside << " of uav1's voxels in uav2's window";
 }
 
 }  // namespace

@@ -76,6 +76,7 @@ TEST(FleetMap, FusesLikeTheSlowReferenceOnRandomStreams) {
         voxels[static_cast<std::uint32_t>(offset(rng))] = static_cast<LogOddsQ>(value(rng));
       }
       std::vector<VoxelRecord> records;
+      records.reserve(voxels.size());
       for (const auto& [o, l] : voxels) records.push_back({o, l});
       if (std::find(order.begin(), order.end(), names[v]) == order.end()) order.push_back(names[v]);
       reference.apply(names[v], m, sent_seq, records);

@@ -10,7 +10,7 @@
 namespace mlmap::fleet {
 namespace {
 
-constexpr std::uint64_t kVoxels = 16 * 16 * 6;
+constexpr std::uint64_t kVoxels = std::uint64_t{16} * 16 * 6;
 
 std::vector<VoxelRecord> randomRecords(std::mt19937* rng, double density) {
   std::vector<VoxelRecord> records;

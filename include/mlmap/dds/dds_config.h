@@ -103,6 +103,7 @@ struct PublishRates {
 /// TRANSIENT_LOCAL, KEEP_LAST 1 per submap, at most `rate_hz` times a second. Keys: visit().
 struct FleetShareConfig {
   bool publish = false;                ///< key publish
+  bool subscribe = false;              ///< key subscribe
   std::string vehicle;                 ///< key vehicle ("": the namespace, resolveFleetVehicle())
   double rate_hz = 1.0;                ///< key rate_hz
   std::string topic = "mlmap/submaps"; ///< key topic
@@ -113,6 +114,9 @@ struct FleetShareConfig {
     v.key("publish", c.publish, "",
           "share the map: each changed submap's occupied voxels on `topic`\n"
           "(mlmap_fleet merges them)");
+    v.key("subscribe", c.subscribe, "",
+          "take the other vehicles' submaps on `topic` as prior knowledge: entering an area\n"
+          "another vehicle mapped restores its obstacles before this sensor sees them");
     v.key("vehicle", c.vehicle, "", "this vehicle's name in the fleet; \"\": the namespace dds.ns");
     v.key("rate_hz", c.rate_hz, "Hz", "changed submaps go out at most this often");
     v.key("topic", c.topic, "", "keyed mlmap_msgs/Submap topic, absolute (never namespaced)");

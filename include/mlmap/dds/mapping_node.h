@@ -67,6 +67,10 @@ struct NodeCounters {
   /// serialized bytes (serializedSubmapBytes(), RTPS headers not included).
   std::uint64_t fleet_submaps_sent = 0;
   std::uint64_t fleet_bytes_sent = 0;
+  /// dds.fleet.subscribe: other vehicles' submaps taken as prior knowledge, and samples refused
+  /// (malformed, another grid; each kind logged once a second at most).
+  std::uint64_t fleet_priors_received = 0;
+  std::uint64_t fleet_samples_refused = 0;
 };
 
 /// The node's pairing of clouds and depth images with poses, from the `dds` section:

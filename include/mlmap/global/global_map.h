@@ -46,6 +46,12 @@ class GlobalMap {
   /// lies beyond kSubmapIndexLimit are left out and added to `*lost`.
   std::size_t addHits(std::vector<VoxelIndex>* hits, const LogOddsModel& model,
                       std::uint64_t* lost);
+  /// Adds another vehicle's occupied voxels of a retired submap as prior knowledge: each voxel of
+  /// `prior` (ascending offsets) that this map does not hold yet is added with its log-odds; the
+  /// voxels this map holds keep theirs (the vehicle's own evidence wins). Stamps the submap when
+  /// a voxel was added. Returns the number added. Not for a submap of the local window (the
+  /// global map does not hold those: MapEngine::addPrior() waits until it leaves).
+  std::size_t addPrior(const SubmapIndex& submap, const std::vector<VoxelRecord>& prior);
   /// Voxels of one submap, or nullptr.
   [[nodiscard]] const std::vector<VoxelRecord>* find(const SubmapIndex& submap) const;
 

@@ -12,7 +12,11 @@
 #include "tf_listener.h"
 
 #include "mlmap/dds/discovery_pacing.h"
+#include "mlmap/dds/entities.h"
 #include "mlmap/dds/ros_graph.h"
+#include "mlmap/dds/submap_messages.h"
+
+#include "mlmap_msgs/msg/Submap_PubSubTypes.h"
 
 #include <unistd.h>
 
@@ -65,6 +69,10 @@ struct MappingNode::Impl {
   std::unique_ptr<node::InputReaders> readers;
   std::unique_ptr<node::FramePairer> pairer;
   std::unique_ptr<node::NodeServices> services;
+  /// dds.fleet.subscribe: the reader of the other vehicles' submaps (deleted after the
+  /// participant, which deletes the reader first).
+  std::unique_ptr<TakeReaders> fleet_readers;
+  std::string fleet_vehicle = resolveFleetVehicle(config.dds);  ///< this vehicle's name
   /// Set by ~/clear_map: the emptied global map goes out at once, whatever the rate limit.
   std::atomic<bool> force_global_publish{false};
   /// The frame of the last snapshot announced (local-global thread): the fleet's collection
@@ -131,6 +139,7 @@ struct MappingNode::Impl {
     services = std::make_unique<node::NodeServices>(publisher, subscriber, node_namespace,
                                                     kNodeName, effective, *engine, *persistence,
                                                     log, [this] { force_global_publish = true; });
+    if (config.dds.fleet.subscribe) subscribeToFleet(subscriber);
     graph->announce({publisher}, {subscriber});  // the ROS graph learns of the new endpoints
     warnAboutMissingInputs(loaded);
     if (loaded) {
@@ -230,6 +239,39 @@ struct MappingNode::Impl {
     mailbox.copyFleet(map, std::move(snap), force);
   }
 
+  /// dds.fleet.subscribe: a reader of the fleet's submaps; the other vehicles' go to the engine
+  /// as prior knowledge (MapEngine::addPrior), this vehicle's own are ignored.
+  void subscribeToFleet(eprosima::fastdds::dds::Subscriber* subscriber) {
+    fleet_readers = std::make_unique<TakeReaders>(subscriber, [this](const std::string& what) {
+      counters.add(&NodeCounters::fleet_samples_refused);
+      log.limited(LogLevel::kWarning, node::kReasonFleet, what);
+    });
+    fleet_readers->add<::mlmap_msgs::msg::dds_::Submap_PubSubType>(
+        ddsTopicName("", config.dds.fleet.topic), submapReaderQos(),
+        [this](::mlmap_msgs::msg::dds_::Submap_&& msg) { takePrior(msg); });
+  }
+
+  /// Fast DDS's listener thread: checks another vehicle's submap and hands it to the engine.
+  void takePrior(const ::mlmap_msgs::msg::dds_::Submap_& msg) {
+    if (msg.vehicle_() == fleet_vehicle) return;
+    DecodedSubmap submap;
+    std::string problem = decodeSubmapMessage(msg, &submap);
+    const LocalMapConfig& lm = config.map.local_map;
+    if (problem.empty() &&
+        (submap.geometry.resolution_m != lm.resolution_m || submap.geometry.cells != lm.submap_cells())) {
+      problem = "another voxel grid than this vehicle's";
+    }
+    if (!problem.empty()) {
+      counters.add(&NodeCounters::fleet_samples_refused);
+      log.limited(LogLevel::kWarning, node::kReasonFleet,
+                  "fleet: a submap of '" + msg.vehicle_().substr(0, kMaxVehicleNameBytes) +
+                      "' refused: " + problem);
+      return;
+    }
+    counters.add(&NodeCounters::fleet_priors_received);
+    engine->addPrior(submap.index, std::move(submap.records));
+  }
+
   /// The input thread: takes what the listeners handed over, pairs it, submits it.
   void inputLoop() {
     for (;;) {
@@ -274,6 +316,7 @@ struct MappingNode::Impl {
     // Readers and writers first (their listeners die with the parts), then everything else.
     participant.reset();
     readers.reset();
+    fleet_readers.reset();
     outputs.reset();
     services.reset();
     tf.reset();

@@ -362,7 +362,7 @@ std::vector<std::string> DdsConfig::validate() const {
     errors.push_back(key(fleet.rate_hz) + ": must be finite and > 0 (>= 0 when " +
                      key(fleet.publish) + " is false) (got " + number(fleet.rate_hz) + ")");
   }
-  if (fleet.publish || !fleet.topic.empty()) {
+  if (fleet.publish || fleet.subscribe || !fleet.topic.empty()) {
     const std::string problem = fleet.topic.empty() ? "empty" : rosNameProblem(fleet.topic);
     if (!problem.empty()) {
       errors.push_back(key(fleet.topic) + ": not a valid ROS topic name: " + problem + " (got '" +
@@ -375,9 +375,10 @@ std::vector<std::string> DdsConfig::validate() const {
       errors.push_back(key(fleet.vehicle) + ": not a valid ROS name: " + problem + " (got '" +
                        fleet.vehicle + "')");
     }
-  } else if (fleet.publish && resolveFleetVehicle(*this).empty()) {
+  } else if ((fleet.publish || fleet.subscribe) && resolveFleetVehicle(*this).empty()) {
     errors.push_back(key(fleet.vehicle) + ": must name the vehicle when " + key(ns) +
-                     " is empty and " + key(fleet.publish) + " is true");
+                     " is empty and " + key(fleet.publish) + " or " + key(fleet.subscribe) +
+                     " is true");
   }
 
   for (const double* positive : {&pose_tolerance_s, &pose_buffer_s, &max_future_s,
