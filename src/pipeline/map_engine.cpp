@@ -230,6 +230,23 @@ std::uint64_t priorKey(const SubmapIndex& m) {
 }
 }  // namespace
 
+PriorVoxels::PriorVoxels(const PriorVoxels& earlier,
+                         const std::vector<std::pair<VoxelIndex, LogOddsQ>>& added)
+    : values_(earlier.values_) {
+  for (const auto& [g, l] : added) values_[g] = l;
+}
+
+bool PriorVoxels::isPrior(const VoxelIndex& g, const LocalWindow& window) const {
+  if (!window.contains(g)) return false;
+  const auto it = values_.find(g);
+  return it != values_.end() && window.at(g) == it->second;
+}
+
+std::shared_ptr<const PriorVoxels> MapEngine::priors() const {
+  std::lock_guard<std::mutex> lock(prior_mutex_);
+  return prior_voxels_;
+}
+
 void MapEngine::addPrior(const SubmapIndex& m, std::vector<VoxelRecord> records) {
   if (records.empty()) return;
   if ((m.array() < -GlobalMap::kSubmapIndexLimit).any() ||
@@ -265,7 +282,10 @@ void MapEngine::addPrior(const SubmapIndex& m, std::vector<VoxelRecord> records)
 void MapEngine::applyPriors() {
   std::lock_guard<std::mutex> lock(prior_mutex_);
   priors_waiting_ = 0;
+  if (priors_.empty()) return;
   const Eigen::Vector3i cells = global_.submapCells();
+  const auto plane = static_cast<std::uint32_t>(cells.y() * cells.z());
+  std::vector<std::pair<VoxelIndex, LogOddsQ>> added;
   for (auto it = priors_.begin(); it != priors_.end();) {
     const SubmapIndex& m = it->second.first;
     if (local_.placed() && local_.contains(m.cwiseProduct(cells))) {
@@ -273,9 +293,29 @@ void MapEngine::applyPriors() {
       ++it;
       continue;
     }
+    // A prior never reaches clamp_max, so the vehicle's own first hit changes it (and marks it
+    // confirmed, PriorVoxels); it stays within the bounds the map keeps.
+    for (VoxelRecord& r : it->second.second) {
+      r.log_odds = static_cast<LogOddsQ>(std::clamp<int>(r.log_odds, log_odds_model_.clampMin(),
+                                                         log_odds_model_.clampMax() - 1));
+    }
+    // The voxels the global map does not hold yet are the ones addPrior() adds.
+    const std::vector<VoxelRecord>* own = global_.find(m);
+    const VoxelIndex base = m.cwiseProduct(cells);
+    for (const VoxelRecord& r : it->second.second) {
+      if (own != nullptr &&
+          std::binary_search(own->begin(), own->end(), r,
+                             [](const VoxelRecord& a, const VoxelRecord& b) { return a.offset < b.offset; })) {
+        continue;
+      }
+      const int x = static_cast<int>(r.offset / plane);
+      const int rest = static_cast<int>(r.offset % plane);
+      added.emplace_back(base + VoxelIndex(x, rest / cells.z(), rest % cells.z()), r.log_odds);
+    }
     prior_voxels_added_ += global_.addPrior(m, it->second.second);
     it = priors_.erase(it);
   }
+  if (!added.empty()) prior_voxels_ = std::make_shared<const PriorVoxels>(*prior_voxels_, added);
 }
 
 void MapEngine::localStep(const MeasurementBatch& batch) {

@@ -59,6 +59,15 @@ TEST(FleetPriors, AVehicleEnteringAnAreaMappedOnlyByAnotherHasItsObstaclesBefore
   EXPECT_GT(west_count, 1000u);
   EXPECT_GE(west, 0.995);
 
+  // The priors are marked for planners: every one in the window, none of b's own voxels.
+  {
+    const std::shared_ptr<const MapSnapshot> snap = b.snapshot();
+    const std::shared_ptr<const PriorVoxels> priors = b.priors();
+    EXPECT_EQ(priors->size(), mapped_by_a.size());
+    std::size_t marked = 0;
+    for (const auto& [g, l] : mapped_by_a) marked += priors->isPrior(g, snap->window()) ? 1 : 0;
+    EXPECT_EQ(marked, west_count);
+  }
   // Its own measurements then update them as usual: a's scans from b's pose give the same map.
   for (int i = 0; i < 5; ++i) {
     PointCloudFrame f = frames[100];
@@ -66,6 +75,19 @@ TEST(FleetPriors, AVehicleEnteringAnAreaMappedOnlyByAnotherHasItsObstaclesBefore
     ASSERT_EQ(b.submit(f), FrameStatus::kAccepted);
   }
   EXPECT_GT(b.stats().local.hits_applied, 0u);
+  {
+    // Measured now: the voxels whose value the own scans changed are no longer priors.
+    const std::shared_ptr<const MapSnapshot> snap = b.snapshot();
+    std::size_t still = 0, inside = 0;
+    for (const auto& [g, l] : mapped_by_a) {
+      if (!snap->window().contains(g)) continue;
+      ++inside;
+      still += b.priors()->isPrior(g, snap->window()) ? 1 : 0;
+    }
+    EXPECT_LT(still, inside);
+    std::printf("after 5 own scans: %zu of %zu prior voxels in the window still unconfirmed\n",
+                still, inside);
+  }
   std::printf("prior voxels: %zu sent, in b's window on entry %.4f of %zu (east), %.4f of %zu "
               "(north-west)\n",
               sent, east, east_count, west, west_count);

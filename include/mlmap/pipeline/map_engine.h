@@ -97,6 +97,33 @@ struct EngineStats {
 };
 
 
+/// The voxels other vehicles' submaps added as prior knowledge (MapEngine::addPrior()), with the
+/// log-odds each came with, for planners to tell them apart: read it next to a snapshot
+/// (MapEngine::priors()). A voxel counts as prior while it holds the value it came with; the
+/// vehicle's own measurements change it (a prior is kept below clamp_max, so even the first own
+/// hit does). Immutable.
+class PriorVoxels {
+ public:
+  PriorVoxels() = default;
+  /// A copy of `earlier` with `added` (world voxel, log-odds) on top.
+  PriorVoxels(const PriorVoxels& earlier, const std::vector<std::pair<VoxelIndex, LogOddsQ>>& added);
+  /// True when `g` came from another vehicle and `window` (a snapshot's) still holds it with
+  /// the value it came with. False outside the window.
+  [[nodiscard]] bool isPrior(const VoxelIndex& g, const LocalWindow& window) const;
+  /// Voxels ever added as priors.
+  [[nodiscard]] std::size_t size() const { return values_.size(); }
+
+ private:
+  struct Hash {
+    std::size_t operator()(const VoxelIndex& g) const {
+      return (static_cast<std::size_t>(static_cast<std::uint32_t>(g.x())) * 73856093u) ^
+             (static_cast<std::size_t>(static_cast<std::uint32_t>(g.y())) * 19349663u) ^
+             (static_cast<std::size_t>(static_cast<std::uint32_t>(g.z())) * 83492791u);
+    }
+  };
+  std::unordered_map<VoxelIndex, LogOddsQ, Hash> values_;
+};
+
 /// Optional observers of the layers the snapshot does not carry, and of each new snapshot,
 /// called on the engine's own threads (the caller's in synchronous mode) while that layer is not
 /// being written. They run inside the mapping loop: copy what you need and return (e.g. a
@@ -169,10 +196,14 @@ class MapEngine {
   /// prior knowledge: before the next frame the local-global stage adds each of them that the
   /// map does not hold (GlobalMap::addPrior(): the vehicle's own evidence wins), so when the
   /// vehicle enters that submap its window is restored with them before its own sensor sees
-  /// them; its measurements then update them as any voxel. A submap of the local window waits
+  /// them; its measurements then update them as any voxel. A prior's log-odds is kept below
+  /// clamp_max (at most clamp_max - 0.001), so the first own hit changes it and priors() no
+  /// longer marks it. A submap of the local window waits
   /// until it leaves the window (the vehicle observes it itself meanwhile); a later prior of the
   /// same submap is merged with a waiting one (the higher log-odds per voxel). Any thread.
   void addPrior(const SubmapIndex& m, std::vector<VoxelRecord> records);
+  /// The voxels added as priors so far (see PriorVoxels): never null, safe from any thread.
+  [[nodiscard]] std::shared_ptr<const PriorVoxels> priors() const;
 
   /// Empties the local and the global map (what planners, the 2D grid, the ESDF and a map file
   /// hold): the window is unplaced, so the next mapped frame places it around the body again and
@@ -210,8 +241,10 @@ class MapEngine {
   std::uint64_t prior_voxels_added_ = 0; // EngineStats::prior_voxels_added (same stage)
   std::size_t priors_waiting_ = 0;       // EngineStats::prior_submaps_waiting (same stage)
 
-  // Priors handed over by addPrior() (any thread), by packed submap index.
-  std::mutex prior_mutex_;
+  // Priors handed over by addPrior() (any thread), by packed submap index, and those added
+  // (published like a snapshot: a pointer swapped under prior_mutex_).
+  mutable std::mutex prior_mutex_;
+  std::shared_ptr<const PriorVoxels> prior_voxels_ = std::make_shared<const PriorVoxels>();
   std::unordered_map<std::uint64_t, std::pair<SubmapIndex, std::vector<VoxelRecord>>> priors_;
 
   // Guards local_ and global_ against exportState() while the local-global stage writes them,
