@@ -321,7 +321,7 @@ std::string FleetMerger::statusLine() const {
   std::ostringstream m;
   m.setf(std::ios::fixed);
   m.precision(1);
-  m << s.vehicles.size() << " vehicles:";
+  m << s.vehicles.size() << (s.vehicles.empty() ? " vehicles" : " vehicles:");
   for (const FleetVehicleStatus& v : s.vehicles) {
     m << " " << v.info.name << " (seen " << v.seconds_since_seen << " s ago, "
       << static_cast<double>(v.info.bytes) / 1e3 << " kB, " << v.info.submaps << " submaps, "
