@@ -15,6 +15,10 @@ at most one request and one response) are derived from them as rosidl does. Thei
 use the DDS naming too (`<pkg>::srv::dds_::<Name>_`, `..._Event_`), though only _Request_ and
 _Response_ go on the wire.
 
+A member may carry the annotation `@key` (mlmap_msgs/Submap: a keyed topic among mlmap's own
+participants); the type description has no notion of keys, so the hash is that of the same
+struct without it, as rosidl computes it for the .msg twin.
+
 The DDS form loses one distinction of the ROS form: `octet` is both ROS `uint8` (and `char`,
 which rosidl maps to uint8) and ROS `byte`. It is read as uint8, what every standard type mlmap
 uses has; a member whose ROS type is `byte` says so with the comment `// ros: byte` on its line.
@@ -71,7 +75,7 @@ IDL_BASIC_TYPES = {
 MODULE_RE = re.compile(r'module\s+(\w+)\s*\{\s*module\s+(msg|srv)\s*\{\s*module\s+dds_\s*\{')
 STRUCT_RE = re.compile(r'struct\s+(\w+)_\s*\{(.*?)\};', re.S)
 MEMBER_RE = re.compile(
-    r'^\s*(?P<type>sequence\s*<\s*(?P<elem>[^,>]+?)\s*(?:,\s*(?P<bound>\d+)\s*)?>'
+    r'^\s*(?:@key\s+)?(?P<type>sequence\s*<\s*(?P<elem>[^,>]+?)\s*(?:,\s*(?P<bound>\d+)\s*)?>'
     r'|[A-Za-z_][\w:]*(?:\s+(?:long|short|double))*(?:\s*<\s*\d+\s*>)?)'
     r'\s+(?P<name>\w+)_\s*(?:\[\s*(?P<size>\d+)\s*\])?\s*;\s*(?://\s*(?P<comment>.*))?$')
 STRING_RE = re.compile(r'^(w?string)(?:\s*<\s*(\d+)\s*>)?$')

@@ -18,6 +18,7 @@ packages=(
   libyaml-cpp-dev                      # configuration files
   libcli11-dev libspdlog-dev           # command line, logging
   libfastrtps-dev libfastcdr-dev fastddsgen  # DDS component (Fast DDS 2.9, ROS 2 wire types)
+  libzstd-dev                          # the fleet's shared submaps (mlmap_node, mlmap_fleet)
 )
 # The offline programs (demo, replay, map tool, sensor publisher, inspector, benchmarks).
 programs=(

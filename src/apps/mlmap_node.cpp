@@ -134,6 +134,12 @@ int stopAndReport(const mlmap::dds::NodeConfig& config, mlmap::dds::MappingNode&
                c.map_saves, c.map_saves_failed);
   logFrameChecks(c);
   logHitsOutsideWindow(s);
+  if (config.dds.fleet.publish || config.dds.fleet.subscribe) {
+    spdlog::info("fleet: {} changed submaps sent ({:.1f} kB), {} submaps of other vehicles taken "
+                 "as priors ({} voxels added), {} refused",
+                 c.fleet_submaps_sent, static_cast<double>(c.fleet_bytes_sent) / 1e3,
+                 c.fleet_priors_received, s.prior_voxels_added, c.fleet_samples_refused);
+  }
   if (!config.map_file.save_path.empty() && c.last_map_save_failed) {
     // The map of this run is lost unless a supervisor notices: say so in the exit status.
     spdlog::error("the map was not saved to '{}' at shutdown (see above)", config.map_file.save_path);

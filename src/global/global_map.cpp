@@ -37,27 +37,31 @@ void GlobalMap::store(const SubmapIndex& submap, std::vector<VoxelRecord>&& reco
   const std::uint64_t key = pack(submap);
   auto it = submaps_.find(key);
   if (it != submaps_.end()) {
-    voxel_count_ -= it->second.size();
+    voxel_count_ -= it->second.records.size();
     if (records.empty()) {
       submaps_.erase(it);
+      removed_at_[key] = modifications_;
       return;
     }
-    it->second = std::move(records);
-    voxel_count_ += it->second.size();
+    it->second.records = std::move(records);
+    it->second.modified_at = modifications_;
+    voxel_count_ += it->second.records.size();
     return;
   }
-  if (records.empty()) return;
+  if (records.empty()) return;  // nothing held, nothing to hold: unchanged
   records.shrink_to_fit();
   voxel_count_ += records.size();
-  submaps_.emplace(key, std::move(records));
+  removed_at_.erase(key);
+  submaps_.emplace(key, Entry{std::move(records), modifications_});
 }
 
 bool GlobalMap::take(const SubmapIndex& submap, std::vector<VoxelRecord>* records) {
   auto it = submaps_.find(pack(submap));
   if (it == submaps_.end()) return false;
   ++modifications_;
-  voxel_count_ -= it->second.size();
-  *records = std::move(it->second);
+  voxel_count_ -= it->second.records.size();
+  *records = std::move(it->second.records);
+  removed_at_[it->first] = modifications_;
   submaps_.erase(it);
   return true;
 }
@@ -98,7 +102,10 @@ std::size_t GlobalMap::addHits(std::vector<VoxelIndex>* hits, const LogOddsModel
   for (std::size_t first = 0; first < keyed.size();) {
     std::size_t last = first;
     while (last < keyed.size() && keyed[last].submap == keyed[first].submap) ++last;
-    std::vector<VoxelRecord>& records = submaps_[keyed[first].submap];
+    Entry& entry = submaps_[keyed[first].submap];
+    if (entry.modified_at == 0) removed_at_.erase(keyed[first].submap);  // a new entry
+    entry.modified_at = modifications_;
+    std::vector<VoxelRecord>& records = entry.records;
     added.clear();
     for (std::size_t i = first; i < last; ++i) {
       auto it =
@@ -127,15 +134,58 @@ std::size_t GlobalMap::addHits(std::vector<VoxelIndex>* hits, const LogOddsModel
 
 const std::vector<VoxelRecord>* GlobalMap::find(const SubmapIndex& submap) const {
   auto it = submaps_.find(pack(submap));
-  return it == submaps_.end() ? nullptr : &it->second;
+  return it == submaps_.end() ? nullptr : &it->second.records;
+}
+
+std::size_t GlobalMap::addPrior(const SubmapIndex& submap, const std::vector<VoxelRecord>& prior) {
+  if (prior.empty()) return 0;
+  const std::uint64_t key = pack(submap);
+  auto it = submaps_.find(key);
+  const std::vector<VoxelRecord> none;
+  const std::vector<VoxelRecord>& own = it == submaps_.end() ? none : it->second.records;
+  std::vector<VoxelRecord> merged;
+  merged.reserve(own.size() + prior.size());
+  std::size_t added = 0;
+  auto o = own.begin();
+  for (const VoxelRecord& p : prior) {
+    while (o != own.end() && o->offset < p.offset) merged.push_back(*o++);
+    if (o != own.end() && o->offset == p.offset) continue;  // the own value wins
+    merged.push_back(p);
+    ++added;
+  }
+  merged.insert(merged.end(), o, own.end());
+  if (added == 0) return 0;
+  ++modifications_;
+  voxel_count_ += added;
+  merged.shrink_to_fit();
+  if (it == submaps_.end()) {
+    removed_at_.erase(key);
+    submaps_.emplace(key, Entry{std::move(merged), modifications_});
+  } else {
+    it->second.records = std::move(merged);
+    it->second.modified_at = modifications_;
+  }
+  return added;
+}
+
+std::uint64_t GlobalMap::submapModifiedAt(const SubmapIndex& m) const {
+  const std::uint64_t key = pack(m);
+  const auto it = submaps_.find(key);
+  if (it != submaps_.end()) return it->second.modified_at;
+  const auto removed = removed_at_.find(key);
+  return removed == removed_at_.end() ? 0 : removed->second;
 }
 
 std::size_t GlobalMap::memoryBytes() const {
   // Node: key + vector header + next pointer + cached hash; plus one pointer per bucket.
-  constexpr std::size_t kNodeBytes =
-      sizeof(std::uint64_t) + sizeof(std::vector<VoxelRecord>) + 2 * sizeof(void*);
-  std::size_t bytes = submaps_.bucket_count() * sizeof(void*) + submaps_.size() * kNodeBytes;
-  for (const auto& entry : submaps_) bytes += entry.second.capacity() * sizeof(VoxelRecord);
+  constexpr std::size_t kNodeBytes = sizeof(std::uint64_t) + sizeof(Entry) + 2 * sizeof(void*);
+  constexpr std::size_t kRemovedNodeBytes = 2 * sizeof(std::uint64_t) + 2 * sizeof(void*);
+  std::size_t bytes = submaps_.bucket_count() * sizeof(void*) + submaps_.size() * kNodeBytes +
+                      removed_at_.bucket_count() * sizeof(void*) +
+                      removed_at_.size() * kRemovedNodeBytes;
+  for (const auto& entry : submaps_) {
+    bytes += entry.second.records.capacity() * sizeof(VoxelRecord);
+  }
   return bytes;
 }
 
@@ -145,7 +195,9 @@ namespace mlmap {
 
 void GlobalMap::clear() {
   ++modifications_;
+  cleared_at_ = modifications_;
   submaps_.clear();
+  removed_at_.clear();
   voxel_count_ = 0;
 }
 

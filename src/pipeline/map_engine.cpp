@@ -221,10 +221,108 @@ void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
   awareness_ms_.add(batch->awareness_ms);
 }
 
+namespace {
+/// A submap index as 64 bits (21 per axis), for the pending priors' map.
+std::uint64_t priorKey(const SubmapIndex& m) {
+  std::uint64_t key = 0;
+  for (int a = 0; a < 3; ++a) key = (key << 21) | (static_cast<std::uint64_t>(m[a] + (1 << 20)) & 0x1fffff);
+  return key;
+}
+}  // namespace
+
+PriorVoxels::PriorVoxels(const PriorVoxels& earlier,
+                         const std::vector<std::pair<VoxelIndex, LogOddsQ>>& added)
+    : values_(earlier.values_) {
+  for (const auto& [g, l] : added) values_[g] = l;
+}
+
+bool PriorVoxels::isPrior(const VoxelIndex& g, const LocalWindow& window) const {
+  if (!window.contains(g)) return false;
+  const auto it = values_.find(g);
+  return it != values_.end() && window.at(g) == it->second;
+}
+
+std::shared_ptr<const PriorVoxels> MapEngine::priors() const {
+  std::lock_guard<std::mutex> lock(prior_mutex_);
+  return prior_voxels_;
+}
+
+void MapEngine::addPrior(const SubmapIndex& m, std::vector<VoxelRecord> records) {
+  if (records.empty()) return;
+  if ((m.array() < -GlobalMap::kSubmapIndexLimit).any() ||
+      (m.array() >= GlobalMap::kSubmapIndexLimit).any()) {
+    return;
+  }
+  std::lock_guard<std::mutex> lock(prior_mutex_);
+  auto [it, inserted] = priors_.try_emplace(priorKey(m), m, std::vector<VoxelRecord>{});
+  if (inserted) {
+    it->second.second = std::move(records);
+    return;
+  }
+  // Merged with the one waiting: the union, the higher log-odds where both hold a voxel.
+  std::vector<VoxelRecord>& waiting = it->second.second;
+  std::vector<VoxelRecord> merged;
+  merged.reserve(waiting.size() + records.size());
+  auto a = waiting.begin();
+  auto b = records.begin();
+  while (a != waiting.end() || b != records.end()) {
+    if (b == records.end() || (a != waiting.end() && a->offset < b->offset)) {
+      merged.push_back(*a++);
+    } else if (a == waiting.end() || b->offset < a->offset) {
+      merged.push_back(*b++);
+    } else {
+      merged.push_back({a->offset, std::max(a->log_odds, b->log_odds)});
+      ++a;
+      ++b;
+    }
+  }
+  waiting = std::move(merged);
+}
+
+void MapEngine::applyPriors() {
+  std::lock_guard<std::mutex> lock(prior_mutex_);
+  priors_waiting_ = 0;
+  if (priors_.empty()) return;
+  const Eigen::Vector3i cells = global_.submapCells();
+  const auto plane = static_cast<std::uint32_t>(cells.y() * cells.z());
+  std::vector<std::pair<VoxelIndex, LogOddsQ>> added;
+  for (auto it = priors_.begin(); it != priors_.end();) {
+    const SubmapIndex& m = it->second.first;
+    if (local_.placed() && local_.contains(m.cwiseProduct(cells))) {
+      ++priors_waiting_;  // the window holds it: it waits until the submap leaves
+      ++it;
+      continue;
+    }
+    // A prior never reaches clamp_max, so the vehicle's own first hit changes it (and marks it
+    // confirmed, PriorVoxels); it stays within the bounds the map keeps.
+    for (VoxelRecord& r : it->second.second) {
+      r.log_odds = static_cast<LogOddsQ>(std::clamp<int>(r.log_odds, log_odds_model_.clampMin(),
+                                                         log_odds_model_.clampMax() - 1));
+    }
+    // The voxels the global map does not hold yet are the ones addPrior() adds.
+    const std::vector<VoxelRecord>* own = global_.find(m);
+    const VoxelIndex base = m.cwiseProduct(cells);
+    for (const VoxelRecord& r : it->second.second) {
+      if (own != nullptr &&
+          std::binary_search(own->begin(), own->end(), r,
+                             [](const VoxelRecord& a, const VoxelRecord& b) { return a.offset < b.offset; })) {
+        continue;
+      }
+      const int x = static_cast<int>(r.offset / plane);
+      const int rest = static_cast<int>(r.offset % plane);
+      added.emplace_back(base + VoxelIndex(x, rest / cells.z(), rest % cells.z()), r.log_odds);
+    }
+    prior_voxels_added_ += global_.addPrior(m, it->second.second);
+    it = priors_.erase(it);
+  }
+  if (!added.empty()) prior_voxels_ = std::make_shared<const PriorVoxels>(*prior_voxels_, added);
+}
+
 void MapEngine::localStep(const MeasurementBatch& batch) {
   const Clock::time_point start = Clock::now();
   {
     std::lock_guard<std::mutex> lock(layers_mutex_);
+    applyPriors();  // before re-centring: a submap entering the window now comes with them
     local_.recenter(batch.T_W_B.translation(), &global_);
     local_.integrate(batch);
     // Hits the window cannot hold keep their occupied evidence in the global map.
@@ -260,6 +358,8 @@ void MapEngine::localStep(const MeasurementBatch& batch) {
   stats_.global_submaps = global_.submapCount();
   stats_.hits_to_global = hits_to_global_;
   stats_.hits_lost = hits_lost_;
+  stats_.prior_voxels_added = prior_voxels_added_;
+  stats_.prior_submaps_waiting = priors_waiting_;
   local_ms_.add(ms);
   total_ms_.add(ms + batch.awareness_ms);
 }

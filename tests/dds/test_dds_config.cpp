@@ -72,6 +72,16 @@ TEST(DdsConfig, EveryBadValueIsNamedByItsKey) {
       {"dds.max_future_s", [](DdsConfig* c) { c->max_future_s = std::nan(""); }},
       {"dds.esdf_slice_height_m",
        [](DdsConfig* c) { c->esdf_slice_height_m = std::numeric_limits<double>::infinity(); }},
+      {"dds.fleet.rate_hz", [](DdsConfig* c) { c->fleet.rate_hz = std::nan(""); }},
+      {"dds.fleet.rate_hz",
+       [](DdsConfig* c) {
+         c->fleet.publish = true;
+         c->fleet.vehicle = "uav1";
+         c->fleet.rate_hz = 0.0;
+       }},
+      {"dds.fleet.topic", [](DdsConfig* c) { c->fleet.topic = "mlmap//submaps"; }},
+      {"dds.fleet.vehicle", [](DdsConfig* c) { c->fleet.vehicle = "uav 1"; }},
+      {"dds.fleet.vehicle", [](DdsConfig* c) { c->fleet.publish = true; }},  // no name, no ns
   };
   for (const Case& test : cases) {
     DdsConfig config;
@@ -80,6 +90,16 @@ TEST(DdsConfig, EveryBadValueIsNamedByItsKey) {
     ASSERT_EQ(problems.size(), 1u) << test.key;
     EXPECT_EQ(problems[0].rfind(std::string(test.key) + ":", 0), 0u) << problems[0];
   }
+}
+
+TEST(DdsConfig, TheFleetVehicleIsItsNameElseTheNamespace) {
+  DdsConfig config;
+  config.ns = "/uav3";
+  EXPECT_EQ(resolveFleetVehicle(config), "uav3");
+  config.fleet.publish = true;
+  EXPECT_TRUE(config.validate().empty());
+  config.fleet.vehicle = "scout";
+  EXPECT_EQ(resolveFleetVehicle(config), "scout");
 }
 
 TEST(DdsConfig, AcceptsTheValuesItDocuments) {

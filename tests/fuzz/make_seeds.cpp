@@ -6,6 +6,7 @@
 
 #include "../support/small_map_state.h"
 #include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/submap_messages.h"
 #include "mlmap/map_io/map_file.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
@@ -180,6 +181,19 @@ void poses() {
   write("fuzz_cdr_pose", "odometry.bin", std::string(1, '\1') + cdr(odometry));
 }
 
+void submaps() {
+  const mlmap::dds::SubmapGeometry grid{0.1, {16, 16, 6}};
+  fleet::SubmapUpdate wall{SubmapIndex(3, -2, 0), {}};
+  for (std::uint32_t o = 0; o < 600; o += 2) wall.records.push_back({o, 3500});  // zstd
+  write("fuzz_cdr_submap", "wall_zstd.bin",
+        cdr(mlmap::dds::toSubmapMessage(wall, grid, "uav1", 7, 12.5, "map")));
+  const fleet::SubmapUpdate few{SubmapIndex(0, 0, 1), {{1, 900}, {700, -120}}};  // raw
+  write("fuzz_cdr_submap", "few_raw.bin",
+        cdr(mlmap::dds::toSubmapMessage(few, grid, "uav2", 8, 13.0, "map")));
+  write("fuzz_cdr_submap", "empty.bin",
+        cdr(mlmap::dds::toSubmapMessage({SubmapIndex(1, 1, 1), {}}, grid, "uav1", 9, 14.0, "map")));
+}
+
 void mapFiles() {
   MapState placed = test::smallMapState();
   write("fuzz_map_file", "small.mlmap", io::encodeMapFile(placed));
@@ -212,6 +226,7 @@ int main(int argc, char** argv) {
   pointClouds();
   depthImages();
   poses();
+  submaps();
   mapFiles();
   return 0;
 }

@@ -97,6 +97,32 @@ struct PublishRates {
   }
 };
 
+/// The `dds.fleet` section: sharing this vehicle's map with the fleet (docs/fleet.md). Each
+/// submap whose occupied content changed goes out as one mlmap_msgs/Submap sample on the keyed
+/// topic `topic` (absolute: the same for every vehicle, whatever its namespace), RELIABLE,
+/// TRANSIENT_LOCAL, KEEP_LAST 1 per submap, at most `rate_hz` times a second. Keys: visit().
+struct FleetShareConfig {
+  bool publish = false;                ///< key publish
+  bool subscribe = false;              ///< key subscribe
+  std::string vehicle;                 ///< key vehicle ("": the namespace, resolveFleetVehicle())
+  double rate_hz = 1.0;                ///< key rate_hz
+  std::string topic = "mlmap/submaps"; ///< key topic
+
+  /// The keys of `dds.fleet`: visitor.key(name, field, unit, doc) for each.
+  template <class Self, class V>
+  static void visit(Self& c, V& v) {
+    v.key("publish", c.publish, "",
+          "share the map: each changed submap's occupied voxels on `topic`\n"
+          "(mlmap_fleet merges them)");
+    v.key("subscribe", c.subscribe, "",
+          "take the other vehicles' submaps on `topic` as prior knowledge: entering an area\n"
+          "another vehicle mapped restores its obstacles before this sensor sees them");
+    v.key("vehicle", c.vehicle, "", "this vehicle's name in the fleet; \"\": the namespace dds.ns");
+    v.key("rate_hz", c.rate_hz, "Hz", "changed submaps go out at most this often");
+    v.key("topic", c.topic, "", "keyed mlmap_msgs/Submap topic, absolute (never namespaced)");
+  }
+};
+
 /// ROS_SECURITY_STRATEGY: what a participant does when security is enabled but its enclave's
 /// files are missing.
 enum class SecurityStrategy {
@@ -227,6 +253,7 @@ struct DdsConfig {
   double max_pose_rotation_rate_dps = 1800.0;  ///< key max_pose_rotation_rate_dps
   double esdf_slice_height_m = 0.0;            ///< key esdf_slice_height_m
   SecurityConfig security;                     ///< section security (off unless enabled)
+  FleetShareConfig fleet;                      ///< section fleet (off unless publish)
 
   /// The keys of the `dds` section: visitor.key(name, field, unit, doc) for each key and
   /// visitor.section(name, sub, doc) for topics, rates and security (see mlmap/core/config.h).
@@ -299,6 +326,7 @@ struct DdsConfig {
           "height of the ESDF slice relative to the body");
     v.section("security", c.security,
               "DDS Security from an SROS2 keystore, as rmw_fastrtps (docs/security.md)");
+    v.section("fleet", c.fleet, "sharing the map with a fleet (docs/fleet.md)");
   }
 
   /// Every problem as "dds.key: what is wrong (got X)". Empty = valid. Checks: domain_id -1 or
@@ -321,6 +349,9 @@ struct DdsConfig {
 TfMode resolveTfMode(const DdsConfig& config);
 /// `sensor_extrinsic` parsed. Throws std::invalid_argument on an unknown value.
 ExtrinsicSource resolveExtrinsicSource(const DdsConfig& config);
+/// The vehicle's name in the fleet: fleet.vehicle when set, else the namespace without its
+/// leading and trailing '/' ("" when both are empty).
+std::string resolveFleetVehicle(const DdsConfig& config);
 /// The frame names with frame_prefix applied ("uav1" + "base_link" -> "uav1/base_link").
 FrameNames resolveFrames(const DdsConfig& config);
 

@@ -63,6 +63,14 @@ struct NodeCounters {
   std::uint64_t frames_unresolved_frame_id = 0;
   /// Odometry messages whose child_frame_id is not the body frame (used all the same).
   std::uint64_t odometry_child_frame_mismatch = 0;
+  /// dds.fleet.publish: mlmap_msgs/Submap samples written (changed submaps) and their
+  /// serialized bytes (serializedSubmapBytes(), RTPS headers not included).
+  std::uint64_t fleet_submaps_sent = 0;
+  std::uint64_t fleet_bytes_sent = 0;
+  /// dds.fleet.subscribe: other vehicles' submaps taken as prior knowledge, and samples refused
+  /// (malformed, another grid; each kind logged once a second at most).
+  std::uint64_t fleet_priors_received = 0;
+  std::uint64_t fleet_samples_refused = 0;
 };
 
 /// The node's pairing of clouds and depth images with poses, from the `dds` section:

@@ -19,6 +19,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <unordered_map>
 #include <variant>
 #include <vector>
 
@@ -88,9 +89,40 @@ struct EngineStats {
   std::uint64_t hits_to_global = 0;
   /// Hits in range that no layer could hold (beyond the global map's submap index range).
   std::uint64_t hits_lost = 0;
+  /// Voxels of other vehicles added as prior knowledge (addPrior()), and the submaps still
+  /// waiting because they lie in the local window.
+  std::uint64_t prior_voxels_added = 0;
+  std::size_t prior_submaps_waiting = 0;
   PlanningStats planning;      ///< snapshots, 2D grid and ESDF (not part of `total`)
 };
 
+
+/// The voxels other vehicles' submaps added as prior knowledge (MapEngine::addPrior()), with the
+/// log-odds each came with, for planners to tell them apart: read it next to a snapshot
+/// (MapEngine::priors()). A voxel counts as prior while it holds the value it came with; the
+/// vehicle's own measurements change it (a prior is kept below clamp_max, so even the first own
+/// hit does). Immutable.
+class PriorVoxels {
+ public:
+  PriorVoxels() = default;
+  /// A copy of `earlier` with `added` (world voxel, log-odds) on top.
+  PriorVoxels(const PriorVoxels& earlier, const std::vector<std::pair<VoxelIndex, LogOddsQ>>& added);
+  /// True when `g` came from another vehicle and `window` (a snapshot's) still holds it with
+  /// the value it came with. False outside the window.
+  [[nodiscard]] bool isPrior(const VoxelIndex& g, const LocalWindow& window) const;
+  /// Voxels ever added as priors.
+  [[nodiscard]] std::size_t size() const { return values_.size(); }
+
+ private:
+  struct Hash {
+    std::size_t operator()(const VoxelIndex& g) const {
+      return (static_cast<std::size_t>(static_cast<std::uint32_t>(g.x())) * 73856093u) ^
+             (static_cast<std::size_t>(static_cast<std::uint32_t>(g.y())) * 19349663u) ^
+             (static_cast<std::size_t>(static_cast<std::uint32_t>(g.z())) * 83492791u);
+    }
+  };
+  std::unordered_map<VoxelIndex, LogOddsQ, Hash> values_;
+};
 
 /// Optional observers of the layers the snapshot does not carry, and of each new snapshot,
 /// called on the engine's own threads (the caller's in synchronous mode) while that layer is not
@@ -159,6 +191,20 @@ class MapEngine {
   /// state does not fit this engine (voxel size, window size or log-odds model differ from the
   /// configuration, or its data is inconsistent); the message names what differs.
   void restoreState(const MapState& state);
+  /// Takes another vehicle's occupied voxels of submap `m` (ascending offsets inside the submap,
+  /// with their log-odds, as GlobalMap holds them; e.g. from the fleet's mlmap_msgs/Submap) as
+  /// prior knowledge: before the next frame the local-global stage adds each of them that the
+  /// map does not hold (GlobalMap::addPrior(): the vehicle's own evidence wins), so when the
+  /// vehicle enters that submap its window is restored with them before its own sensor sees
+  /// them; its measurements then update them as any voxel. A prior's log-odds is kept below
+  /// clamp_max (at most clamp_max - 0.001), so the first own hit changes it and priors() no
+  /// longer marks it. A submap of the local window waits
+  /// until it leaves the window (the vehicle observes it itself meanwhile); a later prior of the
+  /// same submap is merged with a waiting one (the higher log-odds per voxel). Any thread.
+  void addPrior(const SubmapIndex& m, std::vector<VoxelRecord> records);
+  /// The voxels added as priors so far (see PriorVoxels): never null, safe from any thread.
+  [[nodiscard]] std::shared_ptr<const PriorVoxels> priors() const;
+
   /// Empties the local and the global map (what planners, the 2D grid, the ESDF and a map file
   /// hold): the window is unplaced, so the next mapped frame places it around the body again and
   /// maps from nothing. Frames queued before the call are mapped first, then cleared (threaded
@@ -175,6 +221,7 @@ class MapEngine {
   void process(Input& input, MeasurementBatch* batch);
   void awarenessStep(Input& input, MeasurementBatch* batch);
   void localStep(const MeasurementBatch& batch);
+  void applyPriors();
   void awarenessLoop();
   void localLoop();
   FrameStatus enqueue(Input input);
@@ -191,6 +238,14 @@ class MapEngine {
   std::uint64_t frames_integrated_ = 0;  // local-global stage only (written under layers_mutex_)
   std::uint64_t hits_to_global_ = 0;     // EngineStats::hits_to_global (same stage)
   std::uint64_t hits_lost_ = 0;          // EngineStats::hits_lost (same stage)
+  std::uint64_t prior_voxels_added_ = 0; // EngineStats::prior_voxels_added (same stage)
+  std::size_t priors_waiting_ = 0;       // EngineStats::prior_submaps_waiting (same stage)
+
+  // Priors handed over by addPrior() (any thread), by packed submap index, and those added
+  // (published like a snapshot: a pointer swapped under prior_mutex_).
+  mutable std::mutex prior_mutex_;
+  std::shared_ptr<const PriorVoxels> prior_voxels_ = std::make_shared<const PriorVoxels>();
+  std::unordered_map<std::uint64_t, std::pair<SubmapIndex, std::vector<VoxelRecord>>> priors_;
 
   // Guards local_ and global_ against exportState() while the local-global stage writes them,
   // and the state of the last mapped frame.

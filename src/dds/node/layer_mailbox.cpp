@@ -16,8 +16,10 @@ bool RateGate::due() const {
 
 void RateGate::mark() { last_ = Clock::now(); }
 
-LayerMailbox::LayerMailbox(const PublishRates& rates)
-    : awareness_gate_(rates.awareness_hz), global_gate_(rates.global_map_hz) {}
+LayerMailbox::LayerMailbox(const PublishRates& rates, double fleet_rate_hz)
+    : awareness_gate_(rates.awareness_hz),
+      global_gate_(rates.global_map_hz),
+      fleet_gate_(fleet_rate_hz) {}
 
 void LayerMailbox::copyAwareness(const AwarenessMap& map, double stamp_s) {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -50,6 +52,19 @@ void LayerMailbox::copyGlobal(const GlobalMap& map, double stamp_s, std::uint64_
   cv_.notify_one();
 }
 
+void LayerMailbox::copyFleet(const GlobalMap& map, std::shared_ptr<const MapSnapshot> snap,
+                             bool force) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!(force || fleet_gate_.due())) return;
+  fleet_gate_.mark();
+  fleet::GlobalMapDelta delta = fleet::collectGlobalDelta(map, fleet_version_);
+  fleet_version_ = delta.version;
+  fleet_.delta.merge(std::move(delta));
+  fleet_.snap = std::move(snap);
+  fleet_.fresh = true;
+  cv_.notify_one();
+}
+
 void LayerMailbox::announceSnapshot() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -70,12 +85,18 @@ LayerMailbox::News LayerMailbox::take(std::chrono::milliseconds poll) {
   News news;
   std::unique_lock<std::mutex> lock(mutex_);
   cv_.wait_for(lock, poll,
-               [this] { return closed_ || snapshot_fresh_ || awareness_.fresh || global_.fresh; });
+               [this] {
+                 return closed_ || snapshot_fresh_ || awareness_.fresh || global_.fresh ||
+                        fleet_.fresh;
+               });
   news.last = closed_;
   snapshot_fresh_ = false;
   if (awareness_.fresh) std::swap(news.awareness, awareness_);
   if (global_.fresh) std::swap(news.global, global_);
-  awareness_.fresh = global_.fresh = false;
+  if (fleet_.fresh) std::swap(news.fleet, fleet_);
+  awareness_.fresh = global_.fresh = fleet_.fresh = false;
+  fleet_.delta = fleet::GlobalMapDelta{};
+  fleet_.snap.reset();
   return news;
 }
 

@@ -5,13 +5,16 @@
 
 #include "mlmap/awareness/awareness_map.h"
 #include "mlmap/dds/dds_config.h"
+#include "mlmap/fleet/submap_share.h"
 #include "mlmap/global/global_map.h"
+#include "mlmap/planning/map_snapshot.h"
 
 #include <Eigen/Core>
 
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <vector>
 
@@ -39,18 +42,31 @@ struct LayerCopy {
   bool fresh = false;  ///< not taken yet
 };
 
+/// What the fleet output needs of one collection: the global map's changes since the previous
+/// collection and the snapshot (its window) of the same frame.
+struct FleetCopy {
+  fleet::GlobalMapDelta delta;
+  std::shared_ptr<const MapSnapshot> snap;
+  bool fresh = false;  ///< not taken yet
+};
+
 /// The hand-over from the engine's threads (copyAwareness, copyGlobal, announceSnapshot: a copy
 /// and a notify, so mapping never waits for publishing) to the publishing thread (take()).
 /// Thread-safe.
 class LayerMailbox {
  public:
-  explicit LayerMailbox(const PublishRates& rates);
+  /// `fleet_rate_hz`: how often copyFleet() collects (0: never).
+  explicit LayerMailbox(const PublishRates& rates, double fleet_rate_hz = 0.0);
 
   /// Copies the awareness map's occupied cells when awareness_hz allows.
   void copyAwareness(const AwarenessMap& map, double stamp_s);
   /// Copies the global map's voxels when it changed (`version`) and global_map_hz allows (or
   /// `force`).
   void copyGlobal(const GlobalMap& map, double stamp_s, std::uint64_t version, bool force = false);
+  /// Collects the global map's changes since the last collection, with `snap` (the snapshot of
+  /// the frame `map` is at), when fleet_rate_hz allows (or `force`). Earlier collections not
+  /// taken yet are merged with it.
+  void copyFleet(const GlobalMap& map, std::shared_ptr<const MapSnapshot> snap, bool force = false);
   /// A frame's snapshot is out.
   void announceSnapshot();
   /// The publishing thread is to publish once more and end.
@@ -60,6 +76,7 @@ class LayerMailbox {
   struct News {
     LayerCopy awareness;
     LayerCopy global;
+    FleetCopy fleet;
     bool last = false;  ///< closed: publish the final state and end
   };
   /// Waits up to `poll` for news and takes it.
@@ -73,6 +90,9 @@ class LayerMailbox {
   RateGate awareness_gate_;
   RateGate global_gate_;
   std::uint64_t global_version_ = ~std::uint64_t{0};
+  FleetCopy fleet_;
+  RateGate fleet_gate_;
+  std::uint64_t fleet_version_ = 0;  ///< the global map's version at the last collection
   bool snapshot_fresh_ = false;
   bool closed_ = false;
 };

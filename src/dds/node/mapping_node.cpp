@@ -12,7 +12,11 @@
 #include "tf_listener.h"
 
 #include "mlmap/dds/discovery_pacing.h"
+#include "mlmap/dds/entities.h"
 #include "mlmap/dds/ros_graph.h"
+#include "mlmap/dds/submap_messages.h"
+
+#include "mlmap_msgs/msg/Submap_PubSubTypes.h"
 
 #include <unistd.h>
 
@@ -65,8 +69,15 @@ struct MappingNode::Impl {
   std::unique_ptr<node::InputReaders> readers;
   std::unique_ptr<node::FramePairer> pairer;
   std::unique_ptr<node::NodeServices> services;
+  /// dds.fleet.subscribe: the reader of the other vehicles' submaps (deleted after the
+  /// participant, which deletes the reader first).
+  std::unique_ptr<TakeReaders> fleet_readers;
+  std::string fleet_vehicle = resolveFleetVehicle(config.dds);  ///< this vehicle's name
   /// Set by ~/clear_map: the emptied global map goes out at once, whatever the rate limit.
   std::atomic<bool> force_global_publish{false};
+  /// The frame of the last snapshot announced (local-global thread): the fleet's collection
+  /// pairs the global map with the window of the same frame.
+  std::atomic<std::uint64_t> last_snapshot_frame{0};
   std::thread input_thread;
   bool setup_done = false;  ///< the map is loaded (if asked) and the node runs: it may be saved
   std::uint64_t idle_global_version = 0;  ///< the global map's version handed over when idle
@@ -79,7 +90,7 @@ struct MappingNode::Impl {
       : config(c),
         effective(effectiveNodeConfig(c)),
         log(teeToRosout(sink)),
-        mailbox(c.dds.rates) {}
+        mailbox(c.dds.rates, c.dds.fleet.publish ? c.dds.fleet.rate_hz : 0.0) {}
 
   /// `sink`, and /rosout once the node has its writer there.
   LogSink teeToRosout(const LogSink& sink) {
@@ -128,6 +139,7 @@ struct MappingNode::Impl {
     services = std::make_unique<node::NodeServices>(publisher, subscriber, node_namespace,
                                                     kNodeName, effective, *engine, *persistence,
                                                     log, [this] { force_global_publish = true; });
+    if (config.dds.fleet.subscribe) subscribeToFleet(subscriber);
     graph->announce({publisher}, {subscriber});  // the ROS graph learns of the new endpoints
     warnAboutMissingInputs(loaded);
     if (loaded) {
@@ -203,14 +215,62 @@ struct MappingNode::Impl {
     };
     observers.global = [this](const GlobalMap& map, double stamp_s, std::uint64_t version) {
       mailbox.copyGlobal(map, stamp_s, version, force_global_publish.exchange(false));
+      if (config.dds.fleet.publish) shareWithFleet(map, false);
     };
-    observers.snapshot = [this](std::uint64_t, double) { mailbox.announceSnapshot(); };
+    observers.snapshot = [this](std::uint64_t frame, double) {
+      last_snapshot_frame = frame;
+      mailbox.announceSnapshot();
+    };
     return std::make_unique<MapEngine>(
         map_config,
         [this](LogLevel level, const std::string& m) {
           log.limited(level, node::kReasonEngine, m);
         },
         std::move(observers));
+  }
+
+  /// dds.fleet.publish: hands the global map's changes and the window of the same frame to the
+  /// fleet output (at fleet.rate_hz, or now with `force`). On the local-global thread, or on any
+  /// thread with `force` while the engine is idle. Nothing before the first snapshot, nor while
+  /// the engine's latest snapshot is not the one of `map`'s frame (the planning thread's).
+  void shareWithFleet(const GlobalMap& map, bool force) {
+    std::shared_ptr<const MapSnapshot> snap = engine ? engine->snapshot() : nullptr;
+    if (!snap || snap->frame() == 0) return;
+    if (!force && snap->frame() != last_snapshot_frame) return;
+    mailbox.copyFleet(map, std::move(snap), force);
+  }
+
+  /// dds.fleet.subscribe: a reader of the fleet's submaps; the other vehicles' go to the engine
+  /// as prior knowledge (MapEngine::addPrior), this vehicle's own are ignored.
+  void subscribeToFleet(eprosima::fastdds::dds::Subscriber* subscriber) {
+    fleet_readers = std::make_unique<TakeReaders>(subscriber, [this](const std::string& what) {
+      counters.add(&NodeCounters::fleet_samples_refused);
+      log.limited(LogLevel::kWarning, node::kReasonFleet, what);
+    });
+    fleet_readers->add<::mlmap_msgs::msg::dds_::Submap_PubSubType>(
+        ddsTopicName("", config.dds.fleet.topic), submapReaderQos(),
+        [this](::mlmap_msgs::msg::dds_::Submap_&& msg) { takePrior(msg); });
+  }
+
+  /// Fast DDS's listener thread: checks another vehicle's submap and hands it to the engine.
+  void takePrior(const ::mlmap_msgs::msg::dds_::Submap_& msg) {
+    if (msg.vehicle_() == fleet_vehicle) return;
+    DecodedSubmap submap;
+    std::string problem = decodeSubmapMessage(msg, &submap);
+    const LocalMapConfig& lm = config.map.local_map;
+    if (problem.empty() &&
+        (submap.geometry.resolution_m != lm.resolution_m || submap.geometry.cells != lm.submap_cells())) {
+      problem = "another voxel grid than this vehicle's";
+    }
+    if (!problem.empty()) {
+      counters.add(&NodeCounters::fleet_samples_refused);
+      log.limited(LogLevel::kWarning, node::kReasonFleet,
+                  "fleet: a submap of '" + msg.vehicle_().substr(0, kMaxVehicleNameBytes) +
+                      "' refused: " + problem);
+      return;
+    }
+    counters.add(&NodeCounters::fleet_priors_received);
+    engine->addPrior(submap.index, std::move(submap.records));
   }
 
   /// The input thread: takes what the listeners handed over, pairs it, submits it.
@@ -220,7 +280,13 @@ struct MappingNode::Impl {
       if (!input) {
         if (queue.finished()) break;
         // A second without input (20 polls): the stream paused or ended.
-        if (++idle_polls == kIdlePolls) handOverIdleGlobalMap();
+        if (++idle_polls == kIdlePolls) {
+          handOverIdleGlobalMap();
+          if (outputs && outputs->sharesWithFleet()) {
+            engine->flush();  // idle: what the rate held back goes out
+            shareWithFleet(engine->globalMap(), true);
+          }
+        }
       } else {
         idle_polls = 0;
         pairer->handle(*input);
@@ -240,6 +306,7 @@ struct MappingNode::Impl {
       engine->flush();
       if (!config.map_file.save_path.empty() && setup_done) persistence->save("shutdown");
       handOverFinalGlobalMap();
+      if (outputs && outputs->sharesWithFleet()) shareWithFleet(engine->globalMap(), true);
     }
     if (outputs) outputs->finish();  // publishes the final state once, waits for the readers
     {
@@ -250,6 +317,7 @@ struct MappingNode::Impl {
     // Readers and writers first (their listeners die with the parts), then everything else.
     participant.reset();
     readers.reset();
+    fleet_readers.reset();
     outputs.reset();
     services.reset();
     tf.reset();

@@ -25,6 +25,7 @@ enum Reason : int {
   kReasonFrameId,     ///< a cloud / image frame_id not the sensor frame, or not resolved
   kReasonChildFrame,  ///< an Odometry child_frame_id not the body frame
   kReasonTfMissing,   ///< map_odom: odom -> body missing at a pose's stamp
+  kReasonFleet,       ///< dds.fleet.subscribe: another vehicle's submap refused
   kReasonCount
 };
 

@@ -5,6 +5,7 @@
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/participant.h"
 #include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/submap_messages.h"
 #include "mlmap/planning/fixed_origin_grid.h"
 
 #include "mlmap_msgs/msg/Status_PubSubTypes.h"
@@ -284,6 +285,41 @@ class EsdfOutput : public OutputOperation {
   std::shared_ptr<const EsdfMap> sent_;  ///< held, so a new field never reuses its address
 };
 
+/// dds.fleet.publish: the submaps whose occupied content changed since they last went out, from
+/// each collection of the global map's changes and the window of the same frame.
+class FleetOutput : public OutputOperation {
+ public:
+  FleetOutput(std::unique_ptr<SubmapWriter> writer, const Eigen::Vector3i& submap_cells,
+              CounterSink& counters, NodeLog& log)
+      : writer_(std::move(writer)), share_(submap_cells), counters_(counters), log_(log) {}
+  void publish(const PublishRound& round) override {
+    const FleetCopy& copy = round.news.fleet;
+    if (!copy.fresh) return;
+    fleet::GlobalMapDelta delta = copy.delta;
+    const std::vector<fleet::SubmapUpdate> updates =
+        share_.changes(std::move(delta), copy.snap ? &copy.snap->window() : nullptr);
+    if (updates.empty()) return;
+    const std::uint64_t failures = writer_->failures();
+    const std::size_t bytes = writer_->write(updates, copy.snap ? copy.snap->stamp_s() : 0.0);
+    const std::uint64_t failed = writer_->failures() - failures;
+    counters_.add(&NodeCounters::fleet_submaps_sent, updates.size() - failed);
+    counters_.add(&NodeCounters::fleet_bytes_sent, bytes);
+    counters_.add(&NodeCounters::messages_published, updates.size() - failed);
+    if (failed > 0) {
+      log_.limited(LogLevel::kWarning, kReasonDds,
+                   std::to_string(failed) + " submap samples could not be written on " +
+                       writer_->get()->get_topic()->get_name());
+    }
+  }
+  [[nodiscard]] eprosima::fastdds::dds::DataWriter* writer() const { return writer_->get(); }
+
+ private:
+  std::unique_ptr<SubmapWriter> writer_;
+  fleet::SubmapShare share_;
+  CounterSink& counters_;
+  NodeLog& log_;
+};
+
 /// mlmap_msgs/Status at status_hz: the engine's statistics and the node's counters.
 class StatusOutput : public OutputOperation {
  public:
@@ -449,6 +485,18 @@ Outputs::Outputs(fdds::Publisher* publisher, const DdsConfig& dds, const Transfo
   operations_.push_back(std::make_unique<MapGridOutput>(map_grid, dds, log));
   operations_.push_back(std::make_unique<EsdfOutput>(block, slice, dds));
   operations_.push_back(std::make_unique<StatusOutput>(status, dds, engine, counters, started));
+  if (dds.fleet.publish) {
+    const LocalMapConfig& lm = engine.config().local_map;
+    auto fleet = std::make_unique<FleetOutput>(
+        std::make_unique<SubmapWriter>(publisher, ddsTopicName("", dds.fleet.topic),
+                                       resolveFleetVehicle(dds),
+                                       SubmapGeometry{lm.resolution_m, lm.submap_cells()},
+                                       dds.world_frame),
+        lm.submap_cells(), counters, log);
+    writers_.push_back(fleet->writer());
+    operations_.push_back(std::move(fleet));
+    has_fleet_ = true;
+  }
 
   if (tf_static) {  // the sensor's mounting, latched for late joiners
     const FrameNames f = resolveFrames(dds);

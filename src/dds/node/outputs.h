@@ -99,6 +99,8 @@ class Outputs {
   void finish();
   /// A global map is published (the node hands over its last state at shutdown).
   [[nodiscard]] bool publishesGlobalMap() const { return has_global_; }
+  /// The map is shared with the fleet (dds.fleet.publish).
+  [[nodiscard]] bool sharesWithFleet() const { return has_fleet_; }
 
   /// How long the publishing thread waits for news before it checks the rate gates again.
   static constexpr std::chrono::milliseconds kPoll{20};
@@ -116,6 +118,7 @@ class Outputs {
   std::vector<std::unique_ptr<OutputOperation>> operations_;  ///< in publishing order
   std::vector<eprosima::fastdds::dds::DataWriter*> writers_;  ///< every writer, for finish()
   bool has_global_ = false;
+  bool has_fleet_ = false;
   std::thread thread_;
   bool finished_ = false;
 };

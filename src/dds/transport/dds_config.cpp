@@ -244,6 +244,14 @@ SecuritySetup resolveSecurity(const SecurityConfig& config) {
   return setup;
 }
 
+std::string resolveFleetVehicle(const DdsConfig& config) {
+  if (!config.fleet.vehicle.empty()) return config.fleet.vehicle;
+  std::string name = config.ns;
+  while (!name.empty() && name.front() == '/') name.erase(name.begin());
+  while (!name.empty() && name.back() == '/') name.pop_back();
+  return name;
+}
+
 bool parseDiscoveryRange(const std::string& text, DiscoveryRange* range) {
   const std::string u = upper(text);
   if (u == "LOCALHOST") {
@@ -348,6 +356,30 @@ std::vector<std::string> DdsConfig::validate() const {
 
   RateChecker rate_checker(key(rates), &errors);
   visitConfig(rates, rate_checker);
+
+  if (!std::isfinite(fleet.rate_hz) || fleet.rate_hz < 0.0 ||
+      (fleet.publish && fleet.rate_hz == 0.0)) {
+    errors.push_back(key(fleet.rate_hz) + ": must be finite and > 0 (>= 0 when " +
+                     key(fleet.publish) + " is false) (got " + number(fleet.rate_hz) + ")");
+  }
+  if (fleet.publish || fleet.subscribe || !fleet.topic.empty()) {
+    const std::string problem = fleet.topic.empty() ? "empty" : rosNameProblem(fleet.topic);
+    if (!problem.empty()) {
+      errors.push_back(key(fleet.topic) + ": not a valid ROS topic name: " + problem + " (got '" +
+                       fleet.topic + "')");
+    }
+  }
+  if (!fleet.vehicle.empty()) {
+    const std::string problem = rosNameProblem(fleet.vehicle);
+    if (!problem.empty()) {
+      errors.push_back(key(fleet.vehicle) + ": not a valid ROS name: " + problem + " (got '" +
+                       fleet.vehicle + "')");
+    }
+  } else if ((fleet.publish || fleet.subscribe) && resolveFleetVehicle(*this).empty()) {
+    errors.push_back(key(fleet.vehicle) + ": must name the vehicle when " + key(ns) +
+                     " is empty and " + key(fleet.publish) + " or " + key(fleet.subscribe) +
+                     " is true");
+  }
 
   for (const double* positive : {&pose_tolerance_s, &pose_buffer_s, &max_future_s,
                                  &max_pose_speed_mps, &max_pose_rotation_rate_dps}) {

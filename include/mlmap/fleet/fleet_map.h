@@ -1,0 +1,139 @@
+#pragma once
+/// @file
+/// The fleet's merged map (mlmap_fleet): every vehicle's latest content of every submap, fused
+/// voxel by voxel.
+///
+/// Each vehicle sends a submap's whole occupied content whenever it changes (mlmap_msgs/Submap);
+/// its latest content replaces that vehicle's previous contribution to that submap, so evidence
+/// is never counted twice. A fused voxel's log-odds is the sum of the vehicles' log-odds for it,
+/// clamped to the engine's bounds (LogOddsConfig clamp_min, clamp_max): independent observers
+/// add their evidence as the engine adds its frames'. Only occupied voxels travel, so the sum of occupied
+/// evidence stays occupied: the merged occupied set is the union of the vehicles' occupied sets,
+/// and each voxel keeps a bit per vehicle that holds it (provenance). Memory grows with occupied
+/// voxels: 8 bytes per voxel and vehicle holding it, 16 per fused voxel, plus a few per submap.
+
+#include "mlmap/core/log_odds.h"
+#include "mlmap/global/global_map.h"
+#include "mlmap/planning/projected_grid.h"
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace mlmap::fleet {
+
+/// A fused voxel: its offset in the submap, the clamped sum of the vehicles' log-odds, and bit v
+/// set for each vehicle v (FleetMap::vehicles() index) that holds it.
+struct FleetVoxel {
+  std::uint32_t offset = 0;
+  LogOddsQ log_odds = 0;
+  std::uint64_t vehicles = 0;
+};
+
+/// What the merger knows of one vehicle.
+struct FleetVehicle {
+  std::string name;
+  std::uint64_t samples = 0;          ///< submap samples received (applied or not)
+  std::uint64_t bytes = 0;            ///< their payload bytes
+  std::uint64_t samples_applied = 0;  ///< samples that changed its contribution
+  std::uint64_t samples_outdated = 0; ///< older than (or as old as) the content held: ignored
+  std::uint64_t submaps = 0;          ///< submaps where it holds occupied voxels
+  std::uint64_t voxels = 0;           ///< occupied voxels it contributes
+  double last_seen_s = -std::numeric_limits<double>::infinity();  ///< caller's clock [s]
+};
+
+/// How FleetMap::apply() took a sample.
+enum class SubmapApply {
+  kApplied,          ///< the vehicle's contribution to the submap was replaced
+  kOutdated,         ///< its sequence is not newer than the one held: ignored
+  kTooManyVehicles,  ///< a new vehicle beyond kMaxVehicles: ignored
+};
+
+/// The merged map. Not thread-safe.
+class FleetMap {
+ public:
+  /// Vehicles with a provenance bit.
+  static constexpr std::size_t kMaxVehicles = 64;
+
+  /// `log_odds`: the clamping bounds and occupancy threshold (the vehicles' engine config).
+  explicit FleetMap(const LogOddsConfig& log_odds = {});
+
+  /// Adopts the grid of the first sample (voxel edge, voxels per submap and axis) and returns
+  /// true; afterwards true only for the same grid (a fleet shares one world grid; a sample of
+  /// another is refused by the caller).
+  bool acceptGeometry(double resolution_m, const Eigen::Vector3i& submap_cells);
+  /// A grid was adopted.
+  [[nodiscard]] bool hasGeometry() const { return has_geometry_; }
+
+  /// The vehicle's index, registered on first use (-1 beyond kMaxVehicles).
+  int vehicleIndex(const std::string& name);
+  /// Counts a received sample of `vehicle` (`bytes` of payload) at `now_s` (caller's clock).
+  void noteReceived(const std::string& vehicle, std::size_t bytes, double now_s);
+
+  /// Replaces `vehicle`'s content of submap `m` by `records` (ascending offsets inside the
+  /// submap; empty: it holds nothing there now), when `sequence` is newer than the one held
+  /// for that vehicle and submap, and fuses the submap again.
+  SubmapApply apply(const std::string& vehicle, const SubmapIndex& m, std::uint64_t sequence,
+                    std::vector<VoxelRecord>&& records);
+
+  /// Calls f(world voxel index, fused log-odds, vehicle bits) for every occupied fused voxel.
+  template <typename F>
+  void forEachOccupied(F&& f) const {
+    const auto plane = static_cast<std::uint32_t>(submap_cells_.y() * submap_cells_.z());
+    for (const auto& [key, entry] : submaps_) {
+      const VoxelIndex base = submapOf(key).cwiseProduct(submap_cells_);
+      for (const FleetVoxel& v : entry.fused) {
+        if (!model_.isOccupied(v.log_odds)) continue;
+        const int x = static_cast<int>(v.offset / plane);
+        const int rest = static_cast<int>(v.offset % plane);
+        f(VoxelIndex(base.x() + x, base.y() + rest / submap_cells_.z(),
+                     base.z() + rest % submap_cells_.z()),
+          v.log_odds, v.vehicles);
+      }
+    }
+  }
+
+  /// The 2D grid of the occupied voxels whose centres lie in [band_min_z_m, band_max_z_m]:
+  /// 100 where one is, -1 (unknown) elsewhere (free space does not travel), over the occupied
+  /// voxels' extent (an empty grid when there are none).
+  [[nodiscard]] ProjectedGrid projectGrid(double band_min_z_m, double band_max_z_m) const;
+
+  [[nodiscard]] const std::vector<FleetVehicle>& vehicles() const { return vehicles_; }
+  [[nodiscard]] std::size_t voxelCount() const { return voxel_count_; }
+  [[nodiscard]] std::size_t submapCount() const { return submaps_.size(); }
+  /// Bytes held by the contributions, the fused voxels and the hash map's nodes (estimate).
+  [[nodiscard]] std::size_t memoryBytes() const;
+  [[nodiscard]] double resolution_m() const { return resolution_m_; }
+  [[nodiscard]] const Eigen::Vector3i& submapCells() const { return submap_cells_; }
+  [[nodiscard]] const LogOddsModel& model() const { return model_; }
+  /// Changes of the fused map so far (equal values: nothing changed).
+  [[nodiscard]] std::uint64_t changes() const { return changes_; }
+
+ private:
+  /// One vehicle's content of one submap (empty after it sent an empty one: its sequence stays).
+  struct Contribution {
+    int vehicle = 0;
+    std::uint64_t sequence = 0;
+    std::vector<VoxelRecord> records;
+  };
+  struct Entry {
+    std::vector<Contribution> contributions;
+    std::vector<FleetVoxel> fused;
+  };
+  static SubmapIndex submapOf(std::uint64_t key);
+  void fuse(Entry* entry);
+
+  LogOddsModel model_;
+  bool has_geometry_ = false;
+  double resolution_m_ = 0.0;
+  Eigen::Vector3i submap_cells_ = Eigen::Vector3i::Ones();
+  std::vector<FleetVehicle> vehicles_;
+  std::unordered_map<std::string, int> vehicle_index_;
+  std::unordered_map<std::uint64_t, Entry> submaps_;
+  std::size_t voxel_count_ = 0;
+  std::uint64_t changes_ = 0;
+};
+
+}  // namespace mlmap::fleet

@@ -1,0 +1,156 @@
+#include "mlmap/fleet/fleet_map.h"
+
+#include "mlmap/fleet/submap_share.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace mlmap::fleet {
+
+FleetMap::FleetMap(const LogOddsConfig& log_odds) : model_(log_odds) {}
+
+bool FleetMap::acceptGeometry(double resolution_m, const Eigen::Vector3i& submap_cells) {
+  if (!has_geometry_) {
+    if (!(resolution_m > 0.0) || !std::isfinite(resolution_m) || (submap_cells.array() < 1).any()) {
+      return false;
+    }
+    has_geometry_ = true;
+    resolution_m_ = resolution_m;
+    submap_cells_ = submap_cells;
+    return true;
+  }
+  return resolution_m == resolution_m_ && submap_cells == submap_cells_;
+}
+
+int FleetMap::vehicleIndex(const std::string& name) {
+  const auto it = vehicle_index_.find(name);
+  if (it != vehicle_index_.end()) return it->second;
+  if (vehicles_.size() >= kMaxVehicles) return -1;
+  const int index = static_cast<int>(vehicles_.size());
+  vehicles_.push_back(FleetVehicle{});
+  vehicles_.back().name = name;
+  vehicle_index_.emplace(name, index);
+  return index;
+}
+
+void FleetMap::noteReceived(const std::string& vehicle, std::size_t bytes, double now_s) {
+  const int v = vehicleIndex(vehicle);
+  if (v < 0) return;
+  FleetVehicle& info = vehicles_[static_cast<std::size_t>(v)];
+  ++info.samples;
+  info.bytes += bytes;
+  info.last_seen_s = std::max(info.last_seen_s, now_s);
+}
+
+SubmapIndex FleetMap::submapOf(std::uint64_t key) { return unpackSubmap(key); }
+
+SubmapApply FleetMap::apply(const std::string& vehicle, const SubmapIndex& m,
+                            std::uint64_t sequence, std::vector<VoxelRecord>&& records) {
+  const int v = vehicleIndex(vehicle);
+  if (v < 0) return SubmapApply::kTooManyVehicles;
+  FleetVehicle& info = vehicles_[static_cast<std::size_t>(v)];
+  const std::uint64_t key = packSubmap(m);
+  auto it = submaps_.find(key);
+  // An empty sample for a new submap still creates it: its sequence orders later samples.
+  if (it == submaps_.end()) it = submaps_.emplace(key, Entry{}).first;
+  Entry& entry = it->second;
+  auto c = std::find_if(entry.contributions.begin(), entry.contributions.end(),
+                        [v](const Contribution& x) { return x.vehicle == v; });
+  if (c != entry.contributions.end() && sequence <= c->sequence) {
+    ++info.samples_outdated;
+    return SubmapApply::kOutdated;
+  }
+  if (c == entry.contributions.end()) {
+    entry.contributions.push_back(Contribution{v, 0, {}});
+    c = entry.contributions.end() - 1;
+  }
+  const std::size_t before = c->records.size();
+  info.voxels = info.voxels - before + records.size();
+  if (before == 0 && !records.empty()) ++info.submaps;
+  if (before != 0 && records.empty()) --info.submaps;
+  c->sequence = sequence;
+  c->records = std::move(records);
+  c->records.shrink_to_fit();
+  ++info.samples_applied;
+  voxel_count_ -= entry.fused.size();
+  fuse(&entry);
+  voxel_count_ += entry.fused.size();
+  ++changes_;
+  return SubmapApply::kApplied;
+}
+
+void FleetMap::fuse(Entry* entry) {
+  // Every contribution's voxels, by offset: sums and bits per offset.
+  struct Item {
+    std::uint32_t offset;
+    LogOddsQ log_odds;
+    int vehicle;
+  };
+  std::vector<Item> items;
+  for (const Contribution& c : entry->contributions) {
+    for (const VoxelRecord& r : c.records) items.push_back({r.offset, r.log_odds, c.vehicle});
+  }
+  std::sort(items.begin(), items.end(),
+            [](const Item& a, const Item& b) { return a.offset < b.offset; });
+  entry->fused.clear();
+  for (std::size_t i = 0; i < items.size();) {
+    int sum = 0;
+    std::uint64_t bits = 0;
+    std::size_t j = i;
+    for (; j < items.size() && items[j].offset == items[i].offset; ++j) {
+      sum += items[j].log_odds;
+      bits |= std::uint64_t{1} << items[j].vehicle;
+    }
+    const auto clamped = static_cast<LogOddsQ>(
+        std::clamp<int>(sum, model_.clampMin(), model_.clampMax()));
+    entry->fused.push_back({items[i].offset, clamped, bits});
+    i = j;
+  }
+  entry->fused.shrink_to_fit();
+}
+
+ProjectedGrid FleetMap::projectGrid(double band_min_z_m, double band_max_z_m) const {
+  ProjectedGrid grid;
+  grid.resolution_m = resolution_m_;
+  grid.band_min_z_m = band_min_z_m;
+  grid.band_max_z_m = band_max_z_m;
+  int k0 = 0, k1 = 0;
+  bandLayers(band_min_z_m, band_max_z_m, resolution_m_, &k0, &k1);
+  std::vector<Eigen::Vector2i> cells;
+  Eigen::Vector2i lo(std::numeric_limits<int>::max(), std::numeric_limits<int>::max());
+  Eigen::Vector2i hi(std::numeric_limits<int>::min(), std::numeric_limits<int>::min());
+  forEachOccupied([&](const VoxelIndex& g, LogOddsQ, std::uint64_t) {
+    if (g.z() < k0 || g.z() >= k1) return;
+    const Eigen::Vector2i c(g.x(), g.y());
+    cells.push_back(c);
+    lo = lo.cwiseMin(c);
+    hi = hi.cwiseMax(c);
+  });
+  if (cells.empty()) return grid;
+  grid.origin_W = lo.cast<double>() * resolution_m_;
+  grid.width = hi.x() - lo.x() + 1;
+  grid.height = hi.y() - lo.y() + 1;
+  grid.cells.assign(static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height),
+                    ProjectedGrid::kUnknown);
+  for (const Eigen::Vector2i& c : cells) {
+    const Eigen::Vector2i r = c - lo;
+    grid.cells[static_cast<std::size_t>(r.y()) * static_cast<std::size_t>(grid.width) +
+               static_cast<std::size_t>(r.x())] = ProjectedGrid::kOccupied;
+  }
+  return grid;
+}
+
+std::size_t FleetMap::memoryBytes() const {
+  constexpr std::size_t kNodeBytes = sizeof(std::uint64_t) + sizeof(Entry) + 2 * sizeof(void*);
+  std::size_t bytes = submaps_.bucket_count() * sizeof(void*) + submaps_.size() * kNodeBytes;
+  for (const auto& [key, entry] : submaps_) {
+    bytes += entry.contributions.capacity() * sizeof(Contribution) +
+             entry.fused.capacity() * sizeof(FleetVoxel);
+    for (const Contribution& c : entry.contributions) {
+      bytes += c.records.capacity() * sizeof(VoxelRecord);
+    }
+  }
+  return bytes;
+}
+
+}  // namespace mlmap::fleet
