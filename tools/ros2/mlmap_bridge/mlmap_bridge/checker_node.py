@@ -63,7 +63,7 @@ def _graph_problems(expected: List[Expectation], node_topics_: List[Expectation]
         problems += check_topic_list(parse_topic_list(listed), expected)
     nodes, failed = _run(['ros2', 'node', 'list'] + DIRECT)
     problems += failed if nodes is None else check_node_list(parse_node_list(nodes), namespace)
-    for e in node_topics_:
+    for e in (e for e in node_topics_ if e.by_node):  # tf may come from the robot instead
         info, failed = _run(['ros2', 'topic', 'info', '-v', e.topic] + DIRECT)
         problems += failed if info is None else check_topic_info(info, e, namespace)
     return problems
@@ -90,6 +90,9 @@ def main(argv: Optional[List[str]] = None) -> int:
                         help="mlmap_node's dds.sensor_frame")
     parser.add_argument('--frame-prefix', default='',
                         help="mlmap_node's dds.frame_prefix (of the body and sensor frames)")
+    parser.add_argument('--no-tf-static', action='store_true',
+                        help='nobody publishes /tf_static (the node without publish_sensor_tf '
+                             'and no robot_state_publisher): do not expect it')
     parser.add_argument('--rate-window', type=float, default=10.0,
                         help='seconds to observe the rates for, from the first sample')
     parser.add_argument('--rate-fraction', type=float, default=RATE_FRACTION,
@@ -98,7 +101,8 @@ def main(argv: Optional[List[str]] = None) -> int:
     parser.add_argument('--max-age', type=float, default=MAX_AGE_S,
                         help='seconds a sample may arrive after its stamp (the youngest one)')
     args = parser.parse_args(remove_ros_args(sys.argv if argv is None else argv)[1:])
-    own = node_topics(args.namespace)
+    own = tuple(e for e in node_topics(args.namespace)
+                if not (args.no_tf_static and e.topic == '/tf_static'))
     expected = own
     if not args.node_only:
         expected += bridge_topics(args.namespace, args.viz_prefix)

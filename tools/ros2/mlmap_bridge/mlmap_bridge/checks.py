@@ -277,6 +277,9 @@ class Expectation:
     reliable: bool = True   # False: subscribed BEST_EFFORT, as the bridge reads it
     nominal_hz: float = 0.0  # mlmap_node's default rate (rates.*); 0: the rate is not checked
     fresh: bool = True      # the samples carry the stamp of recent data (checked on arrival)
+    # mlmap_node itself publishes it (False: the node or the robot, by dds.tf_mode and
+    # dds.publish_sensor_tf)
+    by_node: bool = True
 
 
 CLOUD = 'sensor_msgs/msg/PointCloud2'
@@ -306,9 +309,10 @@ def node_topics(namespace: str = '') -> Tuple[Expectation, ...]:
                     check_voxel_block, nominal_hz=2.0),
         Expectation(ns('/mlmap/status'), 'mlmap_msgs/msg/Status', False, check_status,
                     nominal_hz=1.0),
-        Expectation('/tf', 'tf2_msgs/msg/TFMessage', False, check_tf),
-        # The mounting: stamped once, when it was first published.
-        Expectation('/tf_static', 'tf2_msgs/msg/TFMessage', True, check_tf_static, fresh=False),
+        Expectation('/tf', 'tf2_msgs/msg/TFMessage', False, check_tf, by_node=False),
+        # The mounting: static, its stamp may be old or zero.
+        Expectation('/tf_static', 'tf2_msgs/msg/TFMessage', True, check_tf_static, fresh=False,
+                    by_node=False),
         Expectation(ns('/mlmap/map'), 'nav_msgs/msg/OccupancyGrid', True, check_grid),
     )
 

@@ -351,6 +351,11 @@ def test_sample_stamps():
     assert ck.sample_stamp_s(SimpleNamespace(data='text')) is None
 
 
+def test_tf_may_come_from_the_robot():
+    """/tf and /tf_static are not required to be mlmap_node's (tf_mode none: the robot's)."""
+    assert {e.topic for e in ck.NODE_TOPICS if not e.by_node} == {'/tf', '/tf_static'}
+
+
 def test_the_checker_reads_heavy_layers_best_effort_as_the_bridge_does():
     """BEST_EFFORT exactly on the topics the bridge subscribes to BEST_EFFORT."""
     best_effort = {e.topic for e in ck.NODE_TOPICS if not e.reliable}
