@@ -21,8 +21,10 @@
 
 /// Marks a function of the ESDF's passes to be built also for AVX2 and AVX-512 on x86-64 with
 /// GCC, the build chosen at load time for the CPU (function multiversioning); elsewhere, the
-/// baseline build only.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+/// baseline build only, and under AddressSanitizer or ThreadSanitizer (their runtimes are not
+/// ready when the ifunc resolvers run at load time: the TSan build crashed before main).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__) && \
+    !defined(__SANITIZE_THREAD__)
 #define MLMAP_ESDF_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
 #else
 #define MLMAP_ESDF_CLONES
