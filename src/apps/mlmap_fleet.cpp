@@ -3,15 +3,12 @@
 // over plain Fast DDS: no ROS installation needed. The work is mlmap::dds::FleetMerger's.
 
 #include "mlmap/apps/stop_signal.h"
-#include "mlmap/core/stopwatch.h"
 #include "mlmap/dds/fleet_merger.h"
 
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
-#include <chrono>
-#include <thread>
 
 namespace {
 
@@ -70,18 +67,8 @@ int run(Options o) {
     spdlog::info("merging the fleet's submaps on DDS domain {} (rt/{}), publishing under '{}'",
                  merger.domainId(), o.merger.submaps_topic, o.merger.dds.ns);
     merger.start();
-    using SteadyClock = std::chrono::steady_clock;
-    const auto start = SteadyClock::now();
-    auto last_report = start;
-    while (!apps::stopRequested()) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-      const auto now = SteadyClock::now();
-      if (o.duration_s > 0 && secondsBetween(start, now) >= o.duration_s) break;
-      if (o.report_every_s > 0 && secondsBetween(last_report, now) >= o.report_every_s) {
-        last_report = now;
-        spdlog::info("{}", merger.statusLine());
-      }
-    }
+    apps::runUntilStopped(o.duration_s, o.report_every_s,
+                          [&] { spdlog::info("{}", merger.statusLine()); });
     spdlog::info("stopping");
     merger.stop();
     spdlog::info("done: {}", merger.statusLine());

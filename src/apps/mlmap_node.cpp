@@ -2,7 +2,6 @@
 // map layers out, over plain Fast DDS: no ROS installation needed on the vehicle.
 
 #include "mlmap/dds/mapping_node.h"
-#include "mlmap/core/stopwatch.h"
 #include "mlmap/dds/node_config.h"
 #include "mlmap/apps/stop_signal.h"
 
@@ -10,10 +9,8 @@
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
-#include <chrono>
 #include <iostream>
 #include <optional>
-#include <thread>
 #include <vector>
 
 namespace {
@@ -105,17 +102,7 @@ void logProgress(const mlmap::dds::MappingNode& node) {
 
 /// Maps until --duration or a stop signal, with a progress line every --report-every seconds.
 void mapUntilStopped(const Options& o, const mlmap::dds::MappingNode& node) {
-  const auto start = SteadyClock::now();
-  auto last_report = start;
-  while (!apps::stopRequested()) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    const auto now = SteadyClock::now();
-    if (o.duration_s > 0 && secondsBetween(start, now) >= o.duration_s) break;
-    if (o.report_every_s > 0 && secondsBetween(last_report, now) >= o.report_every_s) {
-      last_report = now;
-      logProgress(node);
-    }
-  }
+  apps::runUntilStopped(o.duration_s, o.report_every_s, [&] { logProgress(node); });
 }
 
 /// Stops the node and logs its counts; returns the exit status (1 when the map of this run was

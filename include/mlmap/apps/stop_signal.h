@@ -5,6 +5,8 @@
 /// its DDS entities) holds an ExitAtOnceOnStop instead: a signal then ends the process at once,
 /// so a supervisor's SIGTERM works in every phase.
 
+#include <functional>
+
 namespace mlmap::apps {
 
 /// Installs the handler of SIGINT and SIGTERM that sets the stop flag (once per process: later
@@ -16,6 +18,11 @@ void installStopHandler();
 
 /// Sets the stop flag, as the signals do.
 void requestStop();
+
+/// Waits until a stop is requested or `duration_s` seconds have passed (0: no limit), polling
+/// every 50 ms and calling `report` every `report_every_s` seconds (0: never): the main loop of
+/// the programs that serve until stopped (mlmap_node, mlmap_fleet).
+void runUntilStopped(double duration_s, double report_every_s, const std::function<void()>& report);
 
 /// While an object of this class lives, SIGINT and SIGTERM (with installStopHandler() called)
 /// end the process at once, as the signal's default action does (a supervisor sees "terminated

@@ -5,8 +5,10 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <mutex>
+#include <thread>
 
 namespace mlmap::apps {
 namespace {
@@ -61,5 +63,23 @@ ExitAtOnceOnStop::ExitAtOnceOnStop() {
 }
 
 ExitAtOnceOnStop::~ExitAtOnceOnStop() { g_exit_at_once.store(false); }
+
+void runUntilStopped(double duration_s, double report_every_s, const std::function<void()>& report) {
+  using Clock = std::chrono::steady_clock;
+  const auto seconds = [](Clock::time_point from, Clock::time_point to) {
+    return std::chrono::duration<double>(to - from).count();
+  };
+  const auto start = Clock::now();
+  auto last_report = start;
+  while (!stopRequested()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    const auto now = Clock::now();
+    if (duration_s > 0 && seconds(start, now) >= duration_s) break;
+    if (report_every_s > 0 && seconds(last_report, now) >= report_every_s) {
+      last_report = now;
+      report();
+    }
+  }
+}
 
 }  // namespace mlmap::apps
