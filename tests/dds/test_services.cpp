@@ -22,6 +22,7 @@
 #include "rcl_interfaces/srv/GetParameterTypes_PubSubTypes.h"
 #include "rcl_interfaces/srv/GetParameters_PubSubTypes.h"
 #include "rcl_interfaces/srv/ListParameters_PubSubTypes.h"
+#include "rcl_interfaces/srv/SetParametersAtomically_PubSubTypes.h"
 #include "rcl_interfaces/srv/SetParameters_PubSubTypes.h"
 #include "rmw_dds_common/msg/ParticipantEntitiesInfo_PubSubTypes.h"
 #include "std_srvs/srv/Trigger_PubSubTypes.h"
@@ -324,6 +325,9 @@ using TypesClient = RmwFastrtpsStyleClient<rcl_srv::GetParameterTypes_Request_Pu
                                            rcl_srv::GetParameterTypes_Response_PubSubType>;
 using SetClient = RmwFastrtpsStyleClient<rcl_srv::SetParameters_Request_PubSubType,
                                          rcl_srv::SetParameters_Response_PubSubType>;
+using SetAtomicallyClient =
+    RmwFastrtpsStyleClient<rcl_srv::SetParametersAtomically_Request_PubSubType,
+                           rcl_srv::SetParametersAtomically_Response_PubSubType>;
 
 /// A temporary folder removed with the object.
 struct TempDir {
@@ -505,11 +509,26 @@ TEST(NodeServices, EndpointsAsRmwFastrtpsAnnouncesThemAndListedInTheGraph) {
        "rcl_interfaces::srv::dds_::DescribeParameters_Response_",
        "RIHS01_"
        "ad6747319613c6131589e062e095b469a46cc764f7d0f12a001a49e6cd893995"},
-      // No Jazzy vectors for these two: their hashes are the build's own (REP-2011 from idl/).
-      {"get_parameter_types", "rcl_interfaces::srv::dds_::GetParameterTypes_Request_", nullptr,
-       "rcl_interfaces::srv::dds_::GetParameterTypes_Response_", nullptr},
-      {"set_parameters", "rcl_interfaces::srv::dds_::SetParameters_Request_", nullptr,
-       "rcl_interfaces::srv::dds_::SetParameters_Response_", nullptr},
+      // These three as rosidl_generator_type_description wrote them in a ROS 2 Jazzy build of
+      // rcl_interfaces (share/rcl_interfaces/srv/*.json).
+      {"get_parameter_types", "rcl_interfaces::srv::dds_::GetParameterTypes_Request_",
+       "RIHS01_"
+       "87d7ec5ef545d4daa289d500025d31fb2437bc8b8365ca367161c4dac4be33fd",
+       "rcl_interfaces::srv::dds_::GetParameterTypes_Response_",
+       "RIHS01_"
+       "ac1335dce67c478e669434f6ac2fbff34fcd529580f272d3006785ba8b54e47f"},
+      {"set_parameters", "rcl_interfaces::srv::dds_::SetParameters_Request_",
+       "RIHS01_"
+       "130d46386b7e84ea9ecf60608a4d83cbe5e5cb7c6cc5b712b7a4e3a6c254e932",
+       "rcl_interfaces::srv::dds_::SetParameters_Response_",
+       "RIHS01_"
+       "7a0e8140a0b8d98308fa81a5403a766e610af29a239caf54b7553227906fc266"},
+      {"set_parameters_atomically", "rcl_interfaces::srv::dds_::SetParametersAtomically_Request_",
+       "RIHS01_"
+       "db0bd950ed5ed867a0e90b225e44dea382d762c0762ff3e0ee842190042a59e5",
+       "rcl_interfaces::srv::dds_::SetParametersAtomically_Response_",
+       "RIHS01_"
+       "31b1a38c5b0b9d893ee24da45f69638f4561c78461d82d52750f429b534502b8"},
   };
   ASSERT_TRUE(waitFor([&] { return log.endpoints().size() == 2 * expected.size(); }))
       << log.endpoints().size() << " service endpoints discovered";
@@ -570,8 +589,11 @@ TEST(NodeServices, ParametersOverTheWireEqualTheEffectiveConfigEveryKey) {
                           privateServiceTopics(ns, kNode, "describe_parameters"));
   TypesClient types(participant.get(), privateServiceTopics(ns, kNode, "get_parameter_types"));
   SetClient set(participant.get(), privateServiceTopics(ns, kNode, "set_parameters"));
+  SetAtomicallyClient set_atomically(participant.get(),
+                                     privateServiceTopics(ns, kNode, "set_parameters_atomically"));
   ASSERT_TRUE(waitFor([&] {
-    return list.ready() && get.ready() && describe.ready() && types.ready() && set.ready();
+    return list.ready() && get.ready() && describe.ready() && types.ready() && set.ready() &&
+           set_atomically.ready();
   }));
 
   const auto listed = list.callUntilAnswered({});  // `ros2 param list`: no prefixes, recursive
@@ -617,6 +639,25 @@ TEST(NodeServices, ParametersOverTheWireEqualTheEffectiveConfigEveryKey) {
   ASSERT_EQ(refused->results_().size(), 1u);
   EXPECT_FALSE(refused->results_()[0].successful_());
   EXPECT_NE(refused->results_()[0].reason_().find("read-only"), std::string::npos);
+
+  // `ros2 param set` goes through set_parameters; rclpy's client waits for this one as well.
+  rcl_srv::SetParametersAtomically_Request_ set_two;
+  rcl_msg::Parameter_ unknown;
+  unknown.name_("no.such.key");
+  set_two.parameters_({p, unknown});
+  const auto refused_whole = set_atomically.callUntilAnswered(set_two);
+  ASSERT_TRUE(refused_whole);
+  EXPECT_FALSE(refused_whole->result_().successful_());
+  EXPECT_NE(refused_whole->result_().reason_().find("read-only"), std::string::npos)
+      << refused_whole->result_().reason_();
+  set_two.parameters_({unknown});
+  const auto undeclared = set_atomically.callUntilAnswered(set_two);
+  ASSERT_TRUE(undeclared);
+  EXPECT_FALSE(undeclared->result_().successful_());
+  EXPECT_NE(undeclared->result_().reason_().find("not declared"), std::string::npos);
+  const auto nothing = set_atomically.callUntilAnswered({});
+  ASSERT_TRUE(nothing);
+  EXPECT_TRUE(nothing->result_().successful_()) << "an empty request sets nothing, as in rclcpp";
 }
 
 TEST(NodeServices, ConcurrentClientsEachGetTheirOwnReplyAndMalformedRequestsAreCounted) {

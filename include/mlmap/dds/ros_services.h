@@ -28,6 +28,7 @@
 #include "rcl_interfaces/srv/GetParameterTypes_.h"
 #include "rcl_interfaces/srv/GetParameters_.h"
 #include "rcl_interfaces/srv/ListParameters_.h"
+#include "rcl_interfaces/srv/SetParametersAtomically_.h"
 #include "rcl_interfaces/srv/SetParameters_.h"
 
 #include <fastrtps/rtps/common/SampleIdentity.h>
@@ -264,8 +265,15 @@ class ParameterTable {
   /// ~/set_parameters: every parameter refused, with the reason (read-only, or not declared).
   [[nodiscard]] rcl_interfaces::srv::dds_::SetParameters_Response_ set(
       const rcl_interfaces::srv::dds_::SetParameters_Request_& request) const;
+  /// ~/set_parameters_atomically: refused as a whole when it names a parameter (all are
+  /// read-only), with the first parameter's reason; an empty request succeeds, as in rclcpp.
+  [[nodiscard]] rcl_interfaces::srv::dds_::SetParametersAtomically_Response_ setAtomically(
+      const rcl_interfaces::srv::dds_::SetParametersAtomically_Request_& request) const;
 
  private:
+  /// Why `name` cannot be set: read-only, or not declared.
+  [[nodiscard]] std::string refusal(const std::string& name) const;
+
   struct Entry {
     rcl_interfaces::msg::dds_::ParameterValue_ value;
     std::string description;

@@ -4,6 +4,7 @@
 #include "rcl_interfaces/srv/GetParameterTypes_PubSubTypes.h"
 #include "rcl_interfaces/srv/GetParameters_PubSubTypes.h"
 #include "rcl_interfaces/srv/ListParameters_PubSubTypes.h"
+#include "rcl_interfaces/srv/SetParametersAtomically_PubSubTypes.h"
 #include "rcl_interfaces/srv/SetParameters_PubSubTypes.h"
 #include "std_srvs/srv/Trigger_PubSubTypes.h"
 
@@ -52,6 +53,13 @@ NodeServices::NodeServices(eprosima::fastdds::dds::Publisher* publisher,
   host_.add<rcl::SetParameters_Request_PubSubType, rcl::SetParameters_Response_PubSubType>(
       topics("set_parameters"),
       [this](const rcl::SetParameters_Request_& r) { return parameters_.set(r); });
+  // rclpy's parameter client (`ros2 param`) waits for this one too before any call.
+  host_.add<rcl::SetParametersAtomically_Request_PubSubType,
+            rcl::SetParametersAtomically_Response_PubSubType>(
+      topics("set_parameters_atomically"),
+      [this](const rcl::SetParametersAtomically_Request_& r) {
+        return parameters_.setAtomically(r);
+      });
 }
 
 srv::Trigger_Response_ NodeServices::saveMap() {

@@ -3,7 +3,7 @@
 /// mlmap_node's ROS 2 services (rmw_fastrtps_cpp's framing, mlmap/dds/ros_services.h): `~/save_map`
 /// and `~/clear_map` (std_srvs/srv/Trigger) and the read-only parameter services of rcl_interfaces
 /// (`~/list_parameters`, `~/get_parameters`, `~/describe_parameters`, `~/get_parameter_types`,
-/// `~/set_parameters`) over the node's effective configuration.
+/// `~/set_parameters`, `~/set_parameters_atomically`) over the node's effective configuration.
 
 #include "map_persistence.h"
 #include "node_log.h"

@@ -351,22 +351,33 @@ rcl_srv::GetParameterTypes_Response_ ParameterTable::types(
   return response;
 }
 
+std::string ParameterTable::refusal(const std::string& name) const {
+  if (entries_.count(name) == 0) {
+    return "parameter '" + name + "' cannot be set because it was not declared";
+  }
+  return "parameter '" + name +
+         "' is read-only: mlmap_node's parameters show its configuration file; change the file "
+         "and restart the node";
+}
+
 rcl_srv::SetParameters_Response_ ParameterTable::set(
     const rcl_srv::SetParameters_Request_& request) const {
   rcl_srv::SetParameters_Response_ response;
   for (const rcl_msg::Parameter_& p : request.parameters_()) {
     rcl_msg::SetParametersResult_ result;
     result.successful_(false);
-    if (entries_.count(p.name_()) == 0) {
-      result.reason_("parameter '" + p.name_() + "' cannot be set because it was not declared");
-    } else {
-      result.reason_("parameter '" + p.name_() +
-                     "' is read-only: mlmap_node's parameters show its "
-                     "configuration file; "
-                     "change the file and restart the node");
-    }
+    result.reason_(refusal(p.name_()));
     response.results_().push_back(std::move(result));
   }
+  return response;
+}
+
+rcl_srv::SetParametersAtomically_Response_ ParameterTable::setAtomically(
+    const rcl_srv::SetParametersAtomically_Request_& request) const {
+  rcl_srv::SetParametersAtomically_Response_ response;
+  const bool any = !request.parameters_().empty();
+  response.result_().successful_(!any);
+  if (any) response.result_().reason_(refusal(request.parameters_().front().name_()));
   return response;
 }
 
