@@ -22,6 +22,7 @@
 #include <fastdds/dds/topic/TypeSupport.hpp>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+#include <fastrtps/utils/IPFinder.h>
 #include <fastrtps/utils/IPLocator.h>
 #include <fastrtps/xmlparser/XMLProfileManager.h>
 #include <gtest/gtest.h>
@@ -315,7 +316,7 @@ TEST(ShippedProfiles, MissingFileOrProfileIsAClearError) {
 
 // ---- Discovery range and large data --------------------------------------------------------
 
-TEST(ParticipantSetup, LocalhostUsesLoopbackUdpOnlyAndSharedMemoryOnlyWhenAsked) {
+TEST(ParticipantSetup, LocalhostUsesTheHostsOwnAddressesOnlyAndSharedMemoryOnlyWhenAsked) {
   const ParticipantSetup setup = participantSetup(localhostConfig(152), "test");
   EXPECT_EQ(setup.discovery_range, DiscoveryRange::kLocalhost);
   const auto& qos = setup.qos;
@@ -323,13 +324,26 @@ TEST(ParticipantSetup, LocalhostUsesLoopbackUdpOnlyAndSharedMemoryOnlyWhenAsked)
   ASSERT_EQ(qos.transport().user_transports.size(), 1u) << "no SHM unless dds.shared_memory";
   const auto udp = onlyTransport<UDPv4TransportDescriptor>(qos);
   ASSERT_NE(udp, nullptr);
-  EXPECT_EQ(udp->interfaceWhiteList, std::vector<std::string>{"127.0.0.1"});
+  // This host's own addresses, 127.0.0.1 first, listened on and announced (no other).
+  const std::vector<std::string> addresses = localhostAddresses();
+  ASSERT_FALSE(addresses.empty());
+  EXPECT_EQ(addresses.front(), "127.0.0.1");
+  EXPECT_EQ(udp->interfaceWhiteList, addresses);
   EXPECT_EQ(udp->maxInitialPeersRange, kLocalhostMaxInitialPeersRange);
   EXPECT_EQ(udp->receiveBufferSize, kLargeDataSocketBufferBytes);  // large_data defaults to true
   const auto& builtin = qos.wire_protocol().builtin;
   EXPECT_TRUE(builtin.metatrafficMulticastLocatorList.empty());
   EXPECT_TRUE(qos.wire_protocol().default_multicast_locator_list.empty());
-  EXPECT_TRUE(isLoopbackOnly(builtin.metatrafficUnicastLocatorList));
+  for (const frtps::LocatorList_t* list :
+       {&builtin.metatrafficUnicastLocatorList, &qos.wire_protocol().default_unicast_locator_list}) {
+    std::vector<std::string> announced;
+    for (const frtps::Locator_t& l : *list) {
+      EXPECT_EQ(l.kind, LOCATOR_KIND_UDPv4);
+      EXPECT_EQ(l.port, 0u) << "Fast DDS computes the domain's ports";
+      announced.push_back(frtps::IPLocator::toIPv4string(l));
+    }
+    EXPECT_EQ(announced, addresses);
+  }
   ASSERT_EQ(builtin.initialPeersList.size(), 1u);
   EXPECT_TRUE(isLoopbackOnly(builtin.initialPeersList));
   EXPECT_EQ(qos.name().to_string(), "test");
@@ -538,7 +552,7 @@ TEST(ParticipantSetup, LocalhostKeepsAProfilesTransportsAndAddsLoopbackUdpAsJazz
   ASSERT_NE(added_udp, nullptr);
   EXPECT_EQ(profile_udp->receiveBufferSize, 8388608u);
   EXPECT_EQ(added_udp->maxInitialPeersRange, kLocalhostMaxInitialPeersRange);
-  EXPECT_EQ(added_udp->interfaceWhiteList, std::vector<std::string>{"127.0.0.1"});
+  EXPECT_EQ(added_udp->interfaceWhiteList, localhostAddresses());
   EXPECT_EQ(onlyTransport<SharedMemTransportDescriptor>(setup.qos), nullptr);
   EXPECT_EQ(setup.warnings.size(), 1u);
   const auto& builtin = setup.qos.wire_protocol().builtin;
@@ -664,6 +678,68 @@ TEST(Participant, LocalhostParticipantsExchangeALargePointCloudByteExactly) {
     EXPECT_TRUE(received.data_() == sent.data_()) << "payload bytes differ";
     EXPECT_TRUE(received == sent) << "header, fields or layout differ";
   }
+}
+
+// A ROS 2 Jazzy node on rmw_fastrtps_cpp with ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST and no XML
+// profile listens on every interface but announces only its network interface's address (Fast DDS
+// leaves 127.0.0.1 out when the host has another interface); it sends its announcements to
+// 127.0.0.1. Set up as that node here (Fast DDS 2.9, the locators a 2.14 node announced on this
+// VM), it and a LOCALHOST participant of mlmap's must find each other and exchange samples both
+// ways. Skipped on a host with no IPv4 address but 127.0.0.1 (there such a node announces
+// 127.0.0.1).
+TEST(Participant, LocalhostFindsANodeThatAnnouncesOnlyItsNetworkAddress) {
+  deliverThroughTransports();
+  constexpr int kDomain = 163;
+  std::vector<frtps::IPFinder::info_IP> ips;
+  ASSERT_TRUE(frtps::IPFinder::getIPs(&ips, false));
+  std::string network_address;
+  for (const auto& ip : ips) {
+    if (ip.type == frtps::IPFinder::IP4) network_address = ip.name;
+  }
+  if (network_address.empty()) GTEST_SKIP() << "this host has no IPv4 address but 127.0.0.1";
+
+  fdds::DomainParticipantQos jazzy;
+  jazzy.name("jazzy_localhost_node");
+  jazzy.transport().use_builtin_transports = false;
+  auto udp = std::make_shared<UDPv4TransportDescriptor>();
+  udp->maxInitialPeersRange = kLocalhostMaxInitialPeersRange;
+  jazzy.transport().user_transports.push_back(udp);
+  frtps::Locator_t network;
+  network.kind = LOCATOR_KIND_UDPv4;
+  frtps::IPLocator::setIPv4(network, network_address);
+  frtps::Locator_t loopback;
+  loopback.kind = LOCATOR_KIND_UDPv4;
+  frtps::IPLocator::setIPv4(loopback, "127.0.0.1");
+  auto& wire = jazzy.wire_protocol();
+  wire.builtin.metatrafficMulticastLocatorList.clear();
+  wire.builtin.metatrafficUnicastLocatorList.push_back(network);
+  wire.default_unicast_locator_list.push_back(network);
+  wire.builtin.initialPeersList.push_back(loopback);
+  const ParticipantPtr node(
+      fdds::DomainParticipantFactory::get_instance()->create_participant(kDomain, jazzy));
+  ASSERT_TRUE(node);
+  const ParticipantPtr ours = createParticipant(localhostConfig(kDomain), "mlmap");
+  ASSERT_TRUE(ours);
+
+  fdds::DataWriter* to_node = makeWriter(ours.get(), "rt/test/to_node", reliableWriterQos());
+  fdds::DataReader* node_reads = makeReader(node.get(), "rt/test/to_node", reliableReaderQos());
+  fdds::DataWriter* from_node = makeWriter(node.get(), "rt/test/from_node", reliableWriterQos());
+  fdds::DataReader* we_read = makeReader(ours.get(), "rt/test/from_node", reliableReaderQos());
+  ASSERT_TRUE(to_node && node_reads && from_node && we_read);
+  ASSERT_TRUE(waitFor([&] {
+    return writerMatched(to_node) && readerMatched(node_reads) && writerMatched(from_node) &&
+           readerMatched(we_read);
+  })) << "mlmap's LOCALHOST participant and a node announcing only " << network_address
+      << " did not find each other";
+  PointCloud2_ sent = makeCloud(1000, 21, 1);
+  ASSERT_TRUE(to_node->write(&sent));
+  PointCloud2_ received;
+  ASSERT_TRUE(takeCloud(node_reads, &received)) << "no sample reached the node";
+  EXPECT_TRUE(received == sent);
+  sent = makeCloud(1000, 22, 2);
+  ASSERT_TRUE(from_node->write(&sent));
+  ASSERT_TRUE(takeCloud(we_read, &received)) << "no sample from the node arrived";
+  EXPECT_TRUE(received == sent);
 }
 
 TEST(Participant, LatchedWritersLastSampleReachesALateJoiningReader) {

@@ -52,8 +52,9 @@ using ParticipantPtr = std::unique_ptr<eprosima::fastdds::dds::DomainParticipant
 ///   `shared_memory`); the multicast discovery locators are removed, a unicast one is added, and
 ///   127.0.0.1 joins the initial peers: up to 32 participants on the host find each other with no
 ///   multicast. mlmap's one difference: without static peers the added UDPv4 transport is
-///   restricted to 127.0.0.1 and so is the discovery locator, so nothing mlmap adds listens on
-///   another interface (rmw_fastrtps's listens on all of them).
+///   restricted to this host's own addresses (localhostAddresses()) and announces all of them,
+///   127.0.0.1 first (rmw_fastrtps's listens on every interface and announces the network
+///   interfaces' addresses only).
 /// - Static peers (resolveStaticPeers: `static_peers`, else ROS_STATIC_PEERS), as Jazzy's
 ///   rmw_fastrtps_cpp: with kLocalhost or kSubnet each peer's IPv4 address (names resolved) joins
 ///   the initial peers (port 0: the domain's well-known ports, maxInitialPeersRange of them), and
@@ -97,6 +98,13 @@ struct ParticipantSetup {
 /// Resolves the domain, the discovery range and the QoS exactly as createParticipant() does
 /// (loading `profiles_file` when set). Throws std::runtime_error like it.
 ParticipantSetup participantSetup(const DdsConfig& config, const std::string& name);
+
+/// The addresses a kLocalhost participant without static peers listens on and announces:
+/// 127.0.0.1, then this host's other IPv4 addresses (as Fast DDS lists its interfaces). A ROS 2 node
+/// on rmw_fastrtps_cpp with LOCALHOST announces only the latter on a host that has one, and Fast
+/// DDS sends to an address of its own host only when its transport's whitelist holds it (over
+/// loopback then). Datagrams to the host's own addresses never leave it.
+std::vector<std::string> localhostAddresses();
 
 /// The data-sharing domain of mlmap's endpoints: a readers' and a writer's data-sharing is used
 /// only when they list a common domain id, and Fast DDS's automatic id is the host's MAC address

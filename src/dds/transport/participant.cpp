@@ -9,6 +9,7 @@
 #include <fastdds/rtps/transport/UDPv6TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
 #include <fastrtps/config.h>
+#include <fastrtps/utils/IPFinder.h>
 #include <fastrtps/utils/IPLocator.h>
 
 #include <algorithm>
@@ -95,23 +96,34 @@ frtps::Locator_t staticPeerLocator(const std::string& host, const std::string& s
 /// base QoS (the profile's): no multicast discovery locators; the built-in transports off; the
 /// profile's own transports kept and a UDPv4 transport added (maxInitialPeersRange 32, plus SHM
 /// with `shared_memory`); 127.0.0.1 added to the initial peers. mlmap's one difference: without
-/// static peers, the added UDPv4 transport and the discovery locator are confined to 127.0.0.1
-/// (nothing mlmap adds listens on another interface).
+/// static peers, the added UDPv4 transport and the announced locators are confined to this host's
+/// own addresses (localhostAddresses()).
 void applyLocalhostRange(bool shared_memory, bool has_static_peers, fdds::DomainParticipantQos* qos) {
   fdds::TransportConfigQos& transport = qos->transport();
   transport.use_builtin_transports = false;
   if (shared_memory) transport.user_transports.push_back(std::make_shared<SharedMemTransportDescriptor>());
   auto udp = std::make_shared<UDPv4TransportDescriptor>();
-  if (!has_static_peers) udp->interfaceWhiteList = {kLoopbackAddress};
   udp->maxInitialPeersRange = kLocalhostMaxInitialPeersRange;
   transport.user_transports.push_back(udp);
 
   fdds::WireProtocolConfigQos& wire = qos->wire_protocol();
   wire.builtin.metatrafficMulticastLocatorList.clear();
-  // A unicast locator, so that Fast DDS does not add the default multicast one.
-  wire.builtin.metatrafficUnicastLocatorList.push_back(has_static_peers ? frtps::Locator_t()
-                                                                        : loopbackLocator());
   wire.builtin.initialPeersList.push_back(loopbackLocator());
+  if (has_static_peers) {
+    // Any address, computed port: the peers are on other hosts. (A unicast locator, so that Fast
+    // DDS does not add the default multicast one.)
+    wire.builtin.metatrafficUnicastLocatorList.push_back(frtps::Locator_t());
+    return;
+  }
+  const std::vector<std::string> addresses = localhostAddresses();
+  udp->interfaceWhiteList = addresses;
+  for (const std::string& address : addresses) {
+    frtps::Locator_t locator;  // port 0: Fast DDS computes the domain's ports
+    locator.kind = LOCATOR_KIND_UDPv4;
+    frtps::IPLocator::setIPv4(locator, address);
+    wire.builtin.metatrafficUnicastLocatorList.push_back(locator);
+    wire.default_unicast_locator_list.push_back(locator);
+  }
 }
 
 /// ROS_STATIC_PEERS as Jazzy's rmw_fastrtps_cpp applies them (LOCALHOST and SUBNET only): each
@@ -237,6 +249,19 @@ void checkDepth(int depth) {
 }
 
 }  // namespace
+
+std::vector<std::string> localhostAddresses() {
+  std::vector<std::string> addresses{kLoopbackAddress};
+  std::vector<frtps::IPFinder::info_IP> interfaces;
+  if (!frtps::IPFinder::getIPs(&interfaces, false)) return addresses;
+  for (const frtps::IPFinder::info_IP& i : interfaces) {
+    if (i.type == frtps::IPFinder::IP4 &&
+        std::find(addresses.begin(), addresses.end(), i.name) == addresses.end()) {
+      addresses.push_back(i.name);
+    }
+  }
+  return addresses;
+}
 
 std::uint16_t dataSharingDomainId() {
   // FNV-1a of the version text, folded to 16 bits; never 0 (Fast DDS's automatic id of a host
