@@ -3,37 +3,47 @@
 /// Lets a participant that just appeared see this participant's endpoints within milliseconds
 /// instead of up to a few seconds.
 ///
-/// When Fast DDS 2.9 discovers a new participant it answers at once with its own announcement
+/// When Fast DDS 2.9 discovers a new participant it answers with its own announcement (DATA(p))
 /// and, a fraction of a millisecond later, a heartbeat of each built-in endpoint-discovery writer.
-/// A participant that has only just been created often drops that heartbeat (it has not finished
-/// processing the announcement, or setting itself up), and Fast DDS sends the next one only after
-/// its built-in writers' heartbeat period (1 s, not configurable in 2.9) or the peer's own
-/// periodic traffic. Measured against mlmap_node on loopback: a new Fast DDS 2.9 participant saw
-/// its writers after 0.5-2.7 s in 6 of 20 runs, a new Cyclone DDS one after 0.1-1 s in 5 of 20,
-/// so a one-shot `ros2 topic info` (0.5 s) often missed them.
-///
-/// Fast DDS calls the participant listener's on_participant_discovery before it answers a new
-/// participant. Pausing there for kReplyDelay gives the newcomer that time to get ready; the
-/// answer then lands: Fast DDS peers saw the writers within 42 ms in 20 of 20 runs. What is left
-/// for Cyclone DDS peers (3 of 20 runs still 0.4-0.75 s) comes from Fast DDS 2.9 taking Cyclone's
-/// first ACKNACK (base 1, no bits) for a request of nothing and re-arming its 1 s heartbeat
-/// (it recognises the pre-emptive form only with base 0): docs/dds-and-ros2.md.
+/// A peer that drops that heartbeat gets the next one only after the built-in writers' heartbeat
+/// period (1 s, not configurable in 2.9), so a one-shot `ros2 topic info` (0.5 s) would often
+/// miss this participant's endpoints. Two causes, two measures:
+/// - A participant that has only just been created is often not ready for the heartbeat. Fast DDS
+///   calls the participant listener's on_participant_discovery before it answers a new
+///   participant; pausing there for kReplyDelay gives the newcomer that time. Measured against
+///   mlmap_node on loopback: new Fast DDS 2.9 participants saw the writers after 0.5-2.7 s in 6 of
+///   20 runs without the pause, within 42 ms in 20 of 20 with it.
+/// - A Cyclone DDS peer (rmw_cyclonedds_cpp) drops a heartbeat of a writer it does not know yet,
+///   and it learns of this participant's writers from the DATA(p) that arrives just before the
+///   heartbeat, on another of its threads; its first ACKNACK after that (base 1, no bits) is not
+///   one Fast DDS 2.9 answers with a heartbeat. So for a peer of another vendor the pacing has
+///   this participant announce itself during the pause, by changing a counter in its USER_DATA
+///   (`...;announcement=N;`, after the `enclave=` that ROS 2 reads): the peer knows the writers
+///   when the heartbeat comes. Measured with tests/dds/discovery_latency.sh's Cyclone peers: over
+///   0.1 s in 6 of 40 runs (up to 0.72 s) without it, 0 of 70 (max 28 ms) with it.
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
 
 #include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <string>
+#include <thread>
 
 namespace mlmap::dds {
 
-/// The participant listener that paces Fast DDS's answer to new participants (file comment).
-/// It becomes the participant's listener; delete it after the participant is gone or after
-/// removing it (the destructor removes it).
+/// The participant listener that paces Fast DDS's answer to new participants and announces the
+/// participant early to peers of other vendors (file comment). It becomes the participant's
+/// listener; delete it before the participant (the destructor removes it).
 class DiscoveryPacing : public eprosima::fastdds::dds::DomainParticipantListener {
  public:
   /// How long the answer to a new participant waits: far below what a person or a one-shot
   /// command notices, and long enough for a newly created participant to be ready.
   static constexpr std::chrono::milliseconds kReplyDelay{10};
+  /// The USER_DATA key whose value counts the early announcements.
+  static constexpr const char* kAnnouncementKey = "announcement";
 
   /// Takes over `participant`'s listener (discovery callbacks only).
   explicit DiscoveryPacing(eprosima::fastdds::dds::DomainParticipant* participant,
@@ -45,9 +55,26 @@ class DiscoveryPacing : public eprosima::fastdds::dds::DomainParticipantListener
   void on_participant_discovery(eprosima::fastdds::dds::DomainParticipant* participant,
                                 eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override;
 
+  /// How many early announcements were made (peers that appear close together share one).
+  [[nodiscard]] std::uint64_t announcements() const;
+
  private:
+  /// The announcing thread: announces whenever asked, until the pacing is deleted.
+  void run();
+  /// Publishes the participant's USER_DATA with the next announcement count: Fast DDS sends its
+  /// DATA(p) at once to every known participant and to its initial peers.
+  void announce(std::uint64_t count);
+
   eprosima::fastdds::dds::DomainParticipant* participant_;
   std::chrono::milliseconds delay_;
+  std::string user_data_;  ///< the participant's USER_DATA at construction (`enclave=...;`)
+
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;
+  bool asked_ = false;  ///< a peer of another vendor appeared since the last announcement
+  bool stopping_ = false;
+  std::uint64_t announcements_ = 0;
+  std::thread thread_;  ///< last: started when everything above exists
 };
 
 }  // namespace mlmap::dds
