@@ -1,8 +1,8 @@
 #include "mlmap/pictures/map_image.h"
 
 #include "mlmap/core/atomic_file.h"
+#include "mlmap/pictures/png_codec.h"
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -901,17 +901,13 @@ void writePng(const std::string& path, const cv::Mat& image) {
   if (image.empty()) {
     throw std::runtime_error("writePng: refusing to write an empty image to '" + path + "'");
   }
-  std::vector<std::uint8_t> bytes;
+  std::string bytes;
   try {
-    if (!cv::imencode(".png", image, bytes)) {
-      throw std::runtime_error("writePng: cannot encode a " + cv::typeToString(image.type()) +
-                               " image as PNG for '" + path + "'");
-    }
-  } catch (const cv::Exception& e) {
-    throw std::runtime_error("writePng: cannot encode a " + cv::typeToString(image.type()) +
-                             " image as PNG for '" + path + "': " + e.what());
+    bytes = encodePng(image);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error("writePng: cannot write '" + path + "': " + e.what());
   }
-  writeFileAtomically(path, std::string(bytes.begin(), bytes.end()));
+  writeFileAtomically(path, bytes);
 }
 
 }  // namespace mlmap::io
