@@ -60,9 +60,17 @@ bool writeImage(png_structp png, png_infop info, png_uint_32 width, png_uint_32 
   if (setjmp(png_jmpbuf(png)) != 0) return false;
   png_set_IHDR(png, info, width, height, bit_depth, color_type, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_SUB);
   png_set_compression_level(png, Z_BEST_SPEED);
-  png_set_compression_strategy(png, Z_RLE);
+  if (bit_depth == 16) {
+    // Depth images: smooth, so the difference to the left neighbour compresses (OpenCV's way).
+    png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_SUB);
+    png_set_compression_strategy(png, Z_RLE);
+  } else {
+    // Pictures: flat areas and repeated rows; unfiltered, zlib's fastest matching finds them
+    // (a third smaller and faster than the above on a map picture).
+    png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_NONE);
+    png_set_compression_strategy(png, Z_DEFAULT_STRATEGY);
+  }
   png_write_info(png, info);
   if (color_type == PNG_COLOR_TYPE_RGB) png_set_bgr(png);
   if (bit_depth == 16 && kLittleEndian) png_set_swap(png);

@@ -13,8 +13,9 @@
 namespace mlmap::io {
 
 /// Encodes `image` as PNG: 8-bit gray (CV_8UC1), 8-bit BGR (CV_8UC3, stored as RGB) or 16-bit
-/// gray (CV_16UC1). Compressed for speed (zlib level 1, run-length strategy, the "sub" filter:
-/// what OpenCV's imencode does by default), lossless.
+/// gray (CV_16UC1). Lossless, compressed for speed (zlib level 1): 16-bit images with the "sub"
+/// filter and zlib's run-length strategy (OpenCV imencode's default), 8-bit ones unfiltered with
+/// zlib's default strategy (on a map picture a third smaller and faster).
 /// @throws std::runtime_error when the image is empty, of another type, or libpng fails.
 [[nodiscard]] std::string encodePng(const cv::Mat& image);
 
