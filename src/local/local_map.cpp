@@ -428,8 +428,12 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
   const VoxelBitset& free = batch.free;
   const VoxelIndex& origin = free.origin();
   const Eigen::Vector3i& dims = free.dims();
-  const Eigen::Vector3i first = (min_index_ - origin).cwiseMax(0);                   // box-relative
-  const Eigen::Vector3i end = (min_index_ + size_ - origin).cwiseMin(dims);         // exclusive
+  // Rows outside the free set's marked ones hold no bit.
+  const VoxelBitset::Rows& marked = free.markedRows();
+  const Eigen::Vector3i first =
+      (min_index_ - origin).cwiseMax(Eigen::Vector3i(marked.x_begin, marked.y_begin, 0));  // box-relative
+  const Eigen::Vector3i end =
+      (min_index_ + size_ - origin).cwiseMin(Eigen::Vector3i(marked.x_end, marked.y_end, dims.z()));  // exclusive
   const int split = floorMod(min_index_.z(), size_.z());  // torus z of the window's first layer
   const int to_window_z = origin.z() - min_index_.z();    // bit k is window layer k + to_window_z
   std::uint64_t applied = 0;

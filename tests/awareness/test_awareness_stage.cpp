@@ -156,6 +156,51 @@ TEST(AwarenessStage, ThreadsCarveTheSameFreeSetBitForBit) {
   }
 }
 
+// The free set's marked rows (the hull of the frame's cones) hold every bit, so the count, the
+// local map's reading and the next frame's clearing, which look only there, miss nothing: a
+// stage that mapped a wide frame before maps a narrow one to the same bits, over the whole box,
+// as a new stage does, and the narrow frame's marked rows are a small part of the box.
+TEST(AwarenessStage, FreeSetBitsLieInTheMarkedRowsAndNoFrameLeavesBitsBehind) {
+  const MapConfig config = testConfig(0.1);
+  AwarenessStage reused(config);
+  std::mt19937 rng(77);
+  const PointCloudFrame wide = randomCloud(rng, 6000, 8.0);  // all around, some beyond range
+  PointCloudFrame narrow = randomCloud(rng, 3000, 1.5);
+  for (Eigen::Vector3f& p : narrow.points_S) p.x() = std::abs(p.x());  // one side only
+  MeasurementBatch batch;
+  PointCounters counters;
+  reused.process(wide, &batch, &counters);
+  const auto expectBitsInMarkedRows = [](const VoxelBitset& free, const char* label) {
+    const VoxelBitset::Rows& rows = free.markedRows();
+    std::size_t outside = 0;
+    free.forEach([&](int i, int j, int /*k*/) {
+      outside += (i < rows.x_begin || i >= rows.x_end || j < rows.y_begin || j >= rows.y_end) ? 1 : 0;
+    });
+    EXPECT_EQ(outside, 0u) << label;
+  };
+  expectBitsInMarkedRows(batch.free, "wide");
+  EXPECT_EQ(batch.free_count, batch.free.count());
+  reused.process(narrow, &batch, &counters);
+  expectBitsInMarkedRows(batch.free, "narrow");
+
+  AwarenessStage fresh(config);
+  MeasurementBatch reference;
+  fresh.process(narrow, &reference, &counters);
+  ASSERT_EQ(batch.free.origin(), reference.free.origin());
+  ASSERT_EQ(batch.free.dims(), reference.free.dims());
+  const std::size_t words = static_cast<std::size_t>(batch.free.dims().x()) *
+                            static_cast<std::size_t>(batch.free.dims().y()) * batch.free.wordsPerRow();
+  std::size_t differing = 0;
+  for (std::size_t w = 0; w < words; ++w)
+    differing += batch.free.data()[w] != reference.free.data()[w] ? 1 : 0;
+  EXPECT_EQ(differing, 0u);
+  EXPECT_EQ(batch.free_count, batch.free.count());
+  EXPECT_GT(batch.free_count, 1000u);
+  const VoxelBitset::Rows& rows = batch.free.markedRows();
+  const double marked = static_cast<double>(rows.x_end - rows.x_begin) * (rows.y_end - rows.y_begin);
+  EXPECT_LT(marked, 0.5 * batch.free.dims().x() * batch.free.dims().y());
+}
+
 TEST(AwarenessStage, RejectsBadPointsWithCountersAndKeepsGoodOnes) {
   MapConfig config = testConfig(0.2);
   AwarenessStage stage(config);
