@@ -26,11 +26,10 @@ static_assert(kPointOutsideCutKey + 1 == kPointOutsideHitKey &&
               "the point loop tells the keys that are no box voxel by key >= kPointOutsideCutKey");
 // Matches no key: box keys stay below it (the box holds far fewer than 2^31 voxels).
 constexpr std::uint32_t kNoRunKey = kPointOutsideCutKey - 1;
-// A bin's shared cone stops where the bin is this many voxels wide. Thinner bins overlap more:
-// a voxel lies in about ((1 + w) / w)^2 cones of width w, so one voxel wide made every free voxel
-// about six times; two voxels wide cut the carving cost by a third at 0.1 m for 1.09-1.11x
-// over-carving instead of 1.08x (three voxels wide exceed the 1.15x bound).
-constexpr double kBinWidthVoxels = 2.0;
+// A bin's shared cone stops where the bin is awareness.bin_width_voxels wide. Thinner bins overlap
+// more: a voxel lies in about ((1 + w) / w)^2 cones of width w, so one voxel wide made every free
+// voxel about six times; two voxels wide (the default) cut the carving cost by a third at 0.1 m
+// for 1.09-1.11x over-carving instead of 1.08x (three voxels wide exceed the 1.15x bound).
 constexpr std::size_t kProbeAhead = 16;  // points between a table slot's prefetch and its probe
 constexpr int kMaxBinsPerFaceSide = 256;  // finest level 6 x 256^2 bins; slots 4 MB with all levels
 
@@ -124,7 +123,7 @@ AwarenessStage::AwarenessStage(const MapConfig& config)
   // Cube-map face coordinates span [-1, 1]; a bin of width 2 / n subtends at most ~2 / n rad,
   // so it is about a voxel wide at n / 2 voxels away.
   int n = 2;
-  while (n < kMaxBinsPerFaceSide && n < 2.0 * range_voxels / kBinWidthVoxels) n *= 2;
+  while (n < kMaxBinsPerFaceSide && n < 2.0 * range_voxels / config_.awareness.bin_width_voxels) n *= 2;
   bins_per_face_side_ = n;
   for (; n >= 1; n /= 2) {
     slots_.emplace_back(6u * static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
@@ -589,7 +588,7 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
     }
   }
   for (int level = 0; level < level_count; ++level) {
-    const double level_reach = 0.5 * kBinWidthVoxels * (n0 >> level);
+    const double level_reach = 0.5 * config_.awareness.bin_width_voxels * (n0 >> level);
     for (Bin& bin : bins_[static_cast<std::size_t>(level)]) {
       bin.reach = std::min(bin.near, level_reach);
     }

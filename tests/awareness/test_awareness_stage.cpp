@@ -44,8 +44,10 @@ constexpr double kMaxOverCarving = 1.15;
 
 // Every voxel that any ray from the sensor to a point passes through gets a free update, unless
 // it holds a hit of the frame; every hit voxel is listed once, and never also free.
-void expectCompleteCarving(double resolution, int points, std::uint32_t seed) {
-  const MapConfig config = testConfig(resolution);
+void expectCompleteCarving(double resolution, int points, std::uint32_t seed,
+                           double bin_width_voxels = 2.0) {
+  MapConfig config = testConfig(resolution);
+  config.awareness.bin_width_voxels = bin_width_voxels;
   AwarenessStage stage(config);
   std::mt19937 rng(seed);
   const PointCloudFrame frame = randomCloud(rng, points, 8.0);
@@ -111,6 +113,7 @@ TEST(AwarenessStage, CarvingIsCompleteAgainstA3DReferenceWalk) {
   expectCompleteCarving(0.2, 400, 1);
   expectCompleteCarving(0.1, 300, 2);
   expectCompleteCarving(0.05, 150, 3);
+  expectCompleteCarving(0.1, 300, 2, /*bin_width_voxels=*/1.0);  // awareness.bin_width_voxels
 }
 
 // awareness.num_threads splits the carving by box x: the batch (free bits, free
