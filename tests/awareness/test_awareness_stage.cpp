@@ -251,7 +251,7 @@ TEST(AwarenessStage, DepthImageMatchesItsBackProjectedCloud) {
     depth.T_B_S = SensorConfig{}.T_B_S();
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> z(0.3f, 8.0f);  // some beyond max range 6 m
-    const std::size_t n = 80 * 61;
+    const std::size_t n = std::size_t{80} * 61;
     for (std::size_t i = 0; i < n; ++i) {
       const bool hole = i % 7 == 0;
       const float d = z(rng);
@@ -290,9 +290,9 @@ TEST(AwarenessStage, DepthImageMatchesItsBackProjectedCloud) {
       EXPECT_EQ(a.hits[i].p_W, b.hits[i].p_W);
     }
     EXPECT_EQ(a.free_count, b.free_count);
-    EXPECT_TRUE(std::equal(a.free.data(), a.free.data() + a.free.dims().x() * a.free.dims().y() *
-                                                            a.free.wordsPerRow(),
-                           b.free.data()));
+    const std::size_t words = static_cast<std::size_t>(a.free.dims().x()) *
+                              static_cast<std::size_t>(a.free.dims().y()) * a.free.wordsPerRow();
+    EXPECT_TRUE(std::equal(a.free.data(), a.free.data() + words, b.free.data()));
 
     depth.intrinsics.width = 79;  // size no longer matches the data
     EXPECT_FALSE(from_depth.process(depth, &a, &ca));
