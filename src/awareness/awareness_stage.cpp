@@ -61,25 +61,24 @@ MLMAP_POPCNT_CLONES std::size_t countBits(const VoxelBitset& bits, int x_begin, 
 // that hull).
 template <typename Cones>
 VoxelBitset::Rows conesRows(const Eigen::Vector3d& o, const Cones& cones) {
-  double lo_x = std::numeric_limits<double>::infinity();
-  double lo_y = lo_x;
-  double hi_x = -lo_x;
-  double hi_y = -lo_x;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  Eigen::Vector2d lo(kInf, kInf);    // x, y
+  Eigen::Vector2d hi(-kInf, -kInf);
   for (const auto& cone : cones) {
     const double s0 = std::max(cone.s_min, 0.0);
     const double min_x = cone.box.min.x();
     const double max_x = cone.box.max.x();
     const double min_y = cone.box.min.y();
     const double max_y = cone.box.max.y();
-    lo_x = std::min({lo_x, min_x, o.x() + s0 * (min_x - o.x())});
-    hi_x = std::max({hi_x, max_x, o.x() + s0 * (max_x - o.x())});
-    lo_y = std::min({lo_y, min_y, o.y() + s0 * (min_y - o.y())});
-    hi_y = std::max({hi_y, max_y, o.y() + s0 * (max_y - o.y())});
+    lo.x() = std::min({lo.x(), min_x, o.x() + s0 * (min_x - o.x())});
+    hi.x() = std::max({hi.x(), max_x, o.x() + s0 * (max_x - o.x())});
+    lo.y() = std::min({lo.y(), min_y, o.y() + s0 * (min_y - o.y())});
+    hi.y() = std::max({hi.y(), max_y, o.y() + s0 * (max_y - o.y())});
   }
-  if (!(lo_x <= hi_x) || !(lo_y <= hi_y)) return {};  // no cone
+  if (!(lo.x() <= hi.x()) || !(lo.y() <= hi.y())) return {};  // no cone
   // Clamped before the conversion (a cone may reach far outside the box).
   const auto row = [](double v) { return static_cast<int>(std::clamp(std::floor(v), -2.0e9, 2.0e9)); };
-  return {row(lo_x) - 1, row(hi_x) + 2, row(lo_y) - 1, row(hi_y) + 2};
+  return {row(lo.x()) - 1, row(hi.x()) + 2, row(lo.y()) - 1, row(hi.y()) + 2};
 }
 
 // Depth pixels with data, in metres, as points on their rays (backProject()'s arithmetic).
