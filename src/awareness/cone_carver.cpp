@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace mlmap {
 namespace {
 constexpr double kEdgeEpsilon = 1e-9;  // a cone only touching a voxel face does not mark it
@@ -36,9 +40,17 @@ using V2 = double __attribute__((vector_size(16)));
 using M2 = long long __attribute__((vector_size(16)));
 using I2 = int __attribute__((vector_size(8)));
 
+#if defined(__SSE2__)
+// One instruction each: minpd(x, y) is x < y ? x : y and maxpd(x, y) is x > y ? x : y per lane,
+// so with the operands swapped they are std::min and std::max exactly (NaN and signed zeros
+// included); the masks below take four.
+inline V2 vmin(V2 a, V2 b) { return (V2)_mm_min_pd((__m128d)b, (__m128d)a); }  // std::min per lane
+inline V2 vmax(V2 a, V2 b) { return (V2)_mm_max_pd((__m128d)b, (__m128d)a); }  // std::max per lane
+#else
 inline V2 select(M2 mask, V2 a, V2 b) { return (V2)((mask & (M2)a) | (~mask & (M2)b)); }
 inline V2 vmin(V2 a, V2 b) { return select(b < a, b, a); }  // std::min per lane
 inline V2 vmax(V2 a, V2 b) { return select(a < b, b, a); }  // std::max per lane
+#endif
 // floorToInt per lane (|x| < 2^31), as doubles.
 inline V2 vfloor(V2 x) {
   const V2 t = __builtin_convertvector(__builtin_convertvector(x, I2), V2);
