@@ -22,7 +22,8 @@ packages=(
 )
 # The offline programs (demo, replay, map tool, sensor publisher, inspector, benchmarks).
 programs=(
-  libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev  # depth PNGs, map pictures
+  libopencv-core-dev libopencv-imgproc-dev  # map pictures
+  libpng-dev                           # depth PNGs, map pictures (PNG through libpng)
   liboctomap-dev                       # OctoMap: .bt export (mlmap_map_tool), the side-by-side comparison
   libdynamicedt3d-dev                  # DynamicEDT3D: the ESDF benchmark's side-by-side comparison
   fastdds-tools                        # `fastdds discovery` (config/dds/discovery_server_client.xml)
@@ -32,6 +33,7 @@ programs=(
 # The tests and their tools.
 test_tools=(
   libgtest-dev                         # tests
+  libopencv-imgcodecs-dev              # the tests' independent PNG reader and writer
   clang libclang-rt-14-dev llvm-14     # fuzzing: libFuzzer + sanitizer runtimes, llvm-symbolizer (tools/fuzz.sh)
   clang-tidy cppcheck                  # static analysis (tools/lint.sh)
   cyclonedds-dev cyclonedds-tools      # cross-vendor interoperability test (ROS 2's other tier-1 DDS)

@@ -25,6 +25,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <optional>
 
 namespace {
@@ -668,10 +669,10 @@ void writeGrid(const std::string& base, const MapEngine& engine) {
   io::writeGridMap(*snapshot->gridPtr(), base);
 }
 
-/// Writes the outputs, the map first (--save-map, the voxel list), then the 2D grid, the
-/// pictures with report.json and stats.json, and prints the summary. Returns the exit status: 0,
-/// or 3 when no frame was mapped. @throws std::runtime_error naming the file it cannot write;
-/// the files written before it are complete.
+/// Writes the outputs, the map first (--save-map; the voxel list, while the pictures are drawn),
+/// then the 2D grid, the pictures with report.json and stats.json, and prints the summary.
+/// Returns the exit status: 0, or 3 when no frame was mapped. @throws std::runtime_error naming
+/// the file it cannot write; the files written before it are complete.
 int finish(const Options& o, const MapConfig& config, Replay* replay) {
   replay->engine.flush();
   replay->outputs.source = replay->info.source;
@@ -679,9 +680,20 @@ int finish(const Options& o, const MapConfig& config, Replay* replay) {
   const EngineStats s = replay->engine.stats();
   const std::vector<VoxelIndex> occupied = replay->engine.occupiedVoxels();
   if (!o.save_map_path.empty()) eval::saveMap(replay->engine, o.save_map_path);
-  io::writeVoxelText(o.voxels_out, occupied, res);
+  // The voxel list is sorted and written while the pictures are drawn (a second core hides it);
+  // its error, if any, is passed on by get() first.
+  std::future<void> voxels = std::async(std::launch::async, [&o, &occupied, res] {
+    io::writeVoxelText(o.voxels_out, occupied, res);
+  });
   if (!o.grid_out.empty()) writeGrid(o.grid_out, replay->engine);
-  const std::vector<std::string> written = eval::writeMapOutputs(replay->outputs, s, occupied, res);
+  std::vector<std::string> written;
+  try {
+    written = eval::writeMapOutputs(replay->outputs, s, occupied, res);
+  } catch (...) {
+    voxels.get();  // its own error first: the files are written in this order
+    throw;
+  }
+  voxels.get();
   writeStats(o.stats_out, replay->info, config, s, replay->records, occupied.size(),
              replay->timer.peakEngineBytes());
   eval::printSummary(s, res, replay->outputs.scored != nullptr ? &replay->scored.accuracy : nullptr);

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numeric>
 #include <thread>
 
@@ -25,11 +26,10 @@ static_assert(kPointOutsideCutKey + 1 == kPointOutsideHitKey &&
               "the point loop tells the keys that are no box voxel by key >= kPointOutsideCutKey");
 // Matches no key: box keys stay below it (the box holds far fewer than 2^31 voxels).
 constexpr std::uint32_t kNoRunKey = kPointOutsideCutKey - 1;
-// A bin's shared cone stops where the bin is this many voxels wide. Thinner bins overlap more:
-// a voxel lies in about ((1 + w) / w)^2 cones of width w, so one voxel wide made every free voxel
-// about six times; two voxels wide cut the carving cost by a third at 0.1 m for 1.09-1.11x
-// over-carving instead of 1.08x (three voxels wide exceed the 1.15x bound).
-constexpr double kBinWidthVoxels = 2.0;
+// A bin's shared cone stops where the bin is awareness.bin_width_voxels wide. Thinner bins overlap
+// more: a voxel lies in about ((1 + w) / w)^2 cones of width w, so one voxel wide made every free
+// voxel about six times; two voxels wide (the default) cut the carving cost by a third at 0.1 m
+// for 1.09-1.11x over-carving instead of 1.08x (three voxels wide exceed the 1.15x bound).
 constexpr std::size_t kProbeAhead = 16;  // points between a table slot's prefetch and its probe
 constexpr int kMaxBinsPerFaceSide = 256;  // finest level 6 x 256^2 bins; slots 4 MB with all levels
 
@@ -44,14 +44,41 @@ std::uint32_t hashKey(std::uint32_t key) {
 
 // VoxelBitset::count() with the popcnt instruction where the CPU has it: the portable build
 // calls libgcc's __popcountdi2 for every word (2 M instructions per frame at 0.1 m).
-// Counts the set bits of the rows with box x in [x_begin, x_end).
-MLMAP_POPCNT_CLONES std::size_t countBits(const VoxelBitset& bits, int x_begin, int x_end) {
-  const std::size_t plane = static_cast<std::size_t>(bits.dims().y()) * bits.wordsPerRow();
-  const std::uint64_t* w = bits.data() + static_cast<std::size_t>(x_begin) * plane;
-  const std::size_t words = static_cast<std::size_t>(std::max(x_end - x_begin, 0)) * plane;
+// Counts the set bits of the rows with box x in [x_begin, x_end) within `rows`.
+MLMAP_POPCNT_CLONES std::size_t countBits(const VoxelBitset& bits, int x_begin, int x_end,
+                                          const VoxelBitset::Rows& rows) {
+  const std::size_t run = static_cast<std::size_t>(rows.y_end - rows.y_begin) * bits.wordsPerRow();
   std::size_t n = 0;
-  for (std::size_t i = 0; i < words; ++i) n += static_cast<std::size_t>(__builtin_popcountll(w[i]));
+  for (int x = std::max(x_begin, rows.x_begin); x < std::min(x_end, rows.x_end); ++x) {
+    const std::uint64_t* w = bits.data() + bits.rowWord(x, rows.y_begin);
+    for (std::size_t i = 0; i < run; ++i) n += static_cast<std::size_t>(__builtin_popcountll(w[i]));
+  }
   return n;
+}
+
+// The rows that the cones can mark: each cone's part s in [s_min, 1] lies between its sections
+// at s_min and 1 (linear in s), and a voxel to spare on each side (the carving is exact within
+// that hull).
+template <typename Cones>
+VoxelBitset::Rows conesRows(const Eigen::Vector3d& o, const Cones& cones) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  Eigen::Vector2d lo(kInf, kInf);    // x, y
+  Eigen::Vector2d hi(-kInf, -kInf);
+  for (const auto& cone : cones) {
+    const double s0 = std::max(cone.s_min, 0.0);
+    const double min_x = cone.box.min.x();
+    const double max_x = cone.box.max.x();
+    const double min_y = cone.box.min.y();
+    const double max_y = cone.box.max.y();
+    lo.x() = std::min({lo.x(), min_x, o.x() + s0 * (min_x - o.x())});
+    hi.x() = std::max({hi.x(), max_x, o.x() + s0 * (max_x - o.x())});
+    lo.y() = std::min({lo.y(), min_y, o.y() + s0 * (min_y - o.y())});
+    hi.y() = std::max({hi.y(), max_y, o.y() + s0 * (max_y - o.y())});
+  }
+  if (!(lo.x() <= hi.x()) || !(lo.y() <= hi.y())) return {};  // no cone
+  // Clamped before the conversion (a cone may reach far outside the box).
+  const auto row = [](double v) { return static_cast<int>(std::clamp(std::floor(v), -2.0e9, 2.0e9)); };
+  return {row(lo.x()) - 1, row(hi.x()) + 2, row(lo.y()) - 1, row(hi.y()) + 2};
 }
 
 // Depth pixels with data, in metres, as points on their rays (backProject()'s arithmetic).
@@ -95,7 +122,7 @@ AwarenessStage::AwarenessStage(const MapConfig& config)
   // Cube-map face coordinates span [-1, 1]; a bin of width 2 / n subtends at most ~2 / n rad,
   // so it is about a voxel wide at n / 2 voxels away.
   int n = 2;
-  while (n < kMaxBinsPerFaceSide && n < 2.0 * range_voxels / kBinWidthVoxels) n *= 2;
+  while (n < kMaxBinsPerFaceSide && n < 2.0 * range_voxels / config_.awareness.bin_width_voxels) n *= 2;
   bins_per_face_side_ = n;
   for (; n >= 1; n /= 2) {
     slots_.emplace_back(6u * static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
@@ -560,7 +587,7 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
     }
   }
   for (int level = 0; level < level_count; ++level) {
-    const double level_reach = 0.5 * kBinWidthVoxels * (n0 >> level);
+    const double level_reach = 0.5 * config_.awareness.bin_width_voxels * (n0 >> level);
     for (Bin& bin : bins_[static_cast<std::size_t>(level)]) {
       bin.reach = std::min(bin.near, level_reach);
     }
@@ -642,12 +669,15 @@ void AwarenessStage::carveRange(const Eigen::Vector3d& o, int x_begin, int x_end
     free.data()[free.rowWord(r.x(), r.y()) + static_cast<std::size_t>(r.z() >> 6)] &=
         ~(std::uint64_t{1} << (r.z() & 63));
   }
-  *free_count = countBits(free, x_begin, x_end);
+  *free_count = countBits(free, x_begin, x_end, free.markedRows());
 }
 
 void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batch) {
   const int threads = std::max(1, config_.awareness.num_threads);
   const int dim_x = batch->free.dims().x();
+  // Only these rows get bits: the count here, the local map's reading and the next frame's
+  // clearing look only there (a 360-degree scan in a room marks a small part of its box).
+  batch->free.setMarkedRows(conesRows(o, cones_));
   if (threads == 1 || cones_.size() < 2 * static_cast<std::size_t>(threads)) {
     carveRange(o, 0, dim_x, batch, &batch->free_count);
     return;

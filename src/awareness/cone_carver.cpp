@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace mlmap {
 namespace {
 constexpr double kEdgeEpsilon = 1e-9;  // a cone only touching a voxel face does not mark it
@@ -36,9 +40,17 @@ using V2 = double __attribute__((vector_size(16)));
 using M2 = long long __attribute__((vector_size(16)));
 using I2 = int __attribute__((vector_size(8)));
 
+#if defined(__SSE2__)
+// One instruction each: minpd(x, y) is x < y ? x : y and maxpd(x, y) is x > y ? x : y per lane,
+// so with the operands swapped they are std::min and std::max exactly (NaN and signed zeros
+// included); the masks below take four.
+inline V2 vmin(V2 a, V2 b) { return (V2)_mm_min_pd((__m128d)b, (__m128d)a); }  // std::min per lane
+inline V2 vmax(V2 a, V2 b) { return (V2)_mm_max_pd((__m128d)b, (__m128d)a); }  // std::max per lane
+#else
 inline V2 select(M2 mask, V2 a, V2 b) { return (V2)((mask & (M2)a) | (~mask & (M2)b)); }
 inline V2 vmin(V2 a, V2 b) { return select(b < a, b, a); }  // std::min per lane
 inline V2 vmax(V2 a, V2 b) { return select(a < b, b, a); }  // std::max per lane
+#endif
 // floorToInt per lane (|x| < 2^31), as doubles.
 inline V2 vfloor(V2 x) {
   const V2 t = __builtin_convertvector(__builtin_convertvector(x, I2), V2);
@@ -72,58 +84,76 @@ struct Walk {
   V2 last_at0, last_slope, last_limit;  // last_limit: (end b, end c) - 0.5
 };
 
+// Marks slab i's rectangle of voxels (b in [j0, j1], c in [k0, k1]; none when empty).
+template <int A>
+inline void markSlab(int i, I2 first, I2 last, std::uint64_t* words, std::size_t stride_x,
+                     std::size_t stride_y) {
+  const int j0 = first[0];
+  const int k0 = first[1];
+  const int j1 = last[0];
+  const int k1 = last[1];
+  if (j0 > j1 || k0 > k1) return;
+  const std::size_t ui = static_cast<std::size_t>(i);
+  if constexpr (A == 0) {  // b = y, c = z
+    markRuns(words + ui * stride_x + static_cast<std::size_t>(j0) * stride_y, stride_y,
+             j1 - j0 + 1, k0, k1);
+  } else if constexpr (A == 1) {  // b = z, c = x
+    markRuns(words + static_cast<std::size_t>(k0) * stride_x + ui * stride_y, stride_x,
+             k1 - k0 + 1, j0, j1);
+  } else {  // b = x, c = y: one bit of each row
+    const std::uint64_t bit = std::uint64_t{1} << (i & 63);
+    std::uint64_t* column = words + (ui >> 6) + static_cast<std::size_t>(j0) * stride_x;
+    for (int j = j0; j <= j1; ++j, column += stride_x) {
+      std::uint64_t* word = column + static_cast<std::size_t>(k0) * stride_y;
+      for (int k = k0; k <= k1; ++k, word += stride_y) *word |= bit;
+    }
+  }
+}
+
+// Slab i's overlap [s_lo_free, s_hi_free] with the cone's parameter before clamping to
+// [s0, 1]; each end is monotonic in i (a sum and a product by a constant, both rounded
+// monotonically), so the slabs where neither clamps are one run.
+inline bool unclampedSlab(const Walk& w, int i) {
+  const double s_lo_free = (static_cast<double>(i) + w.off_lo - w.oa) * w.inv_fa;
+  const double s_hi_free = (static_cast<double>(i) + w.off_hi - w.oa) * w.inv_na;
+  return s_lo_free >= w.s0 && s_hi_free <= 1.0;
+}
+
 // Marks slabs i_begin..i_end (inside the box along A). Templated on A so that each slab's
 // rectangle maps to whole z runs (or, along z, to one bit per row) with no per-voxel index math.
+// The run of unclamped slabs is found from its two ends (the clamped slabs are the first and
+// last few) and walked without the clamp test.
 template <int A, bool kClipX>
 void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std::size_t stride_x,
                std::size_t stride_y) {
   const V2 eps = {kEdgeEpsilon, kEdgeEpsilon};
   const V2 one = {1.0, 1.0};
   const V2 first_floor = kClipX ? w.limit_lo : V2{0.0, 0.0};  // the first voxels marked
-  for (int i = i_begin; i <= i_end; ++i) {
-    const double s_lo_free = (static_cast<double>(i) + w.off_lo - w.oa) * w.inv_fa;
-    const double s_hi_free = (static_cast<double>(i) + w.off_hi - w.oa) * w.inv_na;
-    I2 first;
-    I2 last;
-    if (s_lo_free >= w.s0 && s_hi_free <= 1.0) {
-      // Unclamped: the bounds are affine in i. Truncation is floor here: `first` is clamped to
-      // the first voxel marked (>= 0) first, `last` to >= -1 and shifted by one.
-      const V2 vi = {static_cast<double>(i), static_cast<double>(i)};
-      first = __builtin_convertvector(vmax(w.first_at0 + vi * w.first_slope, first_floor), I2);
-      const V2 x_last = vmax(vmin(w.last_at0 + vi * w.last_slope, w.last_limit), -one) + one;
-      last = __builtin_convertvector(x_last, I2) - 1;
-    } else {
-      const double s_lo = std::max(s_lo_free, w.s0);
-      const double s_hi = std::min(s_hi_free, 1.0);
-      if (!(s_lo <= s_hi)) continue;
-      const V2 lo_s = {s_lo, s_lo};
-      const V2 hi_s = {s_hi, s_hi};
-      const V2 low = vmax(vfloor(w.base_lo + vmin(lo_s * w.coef_lo, hi_s * w.coef_lo) + eps), w.limit_lo);
-      const V2 high = vmax(vfloor(w.base_hi + vmin(lo_s * w.coef_hi, hi_s * w.coef_hi) + eps), w.limit_hi);
-      first = __builtin_convertvector(low, I2);
-      last = -__builtin_convertvector(high, I2) - 1;
-    }
-    const int j0 = first[0];
-    const int k0 = first[1];
-    const int j1 = last[0];
-    const int k1 = last[1];
-    if (j0 > j1 || k0 > k1) continue;
-    const std::size_t ui = static_cast<std::size_t>(i);
-    if constexpr (A == 0) {  // b = y, c = z
-      markRuns(words + ui * stride_x + static_cast<std::size_t>(j0) * stride_y, stride_y,
-               j1 - j0 + 1, k0, k1);
-    } else if constexpr (A == 1) {  // b = z, c = x
-      markRuns(words + static_cast<std::size_t>(k0) * stride_x + ui * stride_y, stride_x,
-               k1 - k0 + 1, j0, j1);
-    } else {  // b = x, c = y: one bit of each row
-      const std::uint64_t bit = std::uint64_t{1} << (i & 63);
-      std::uint64_t* column = words + (ui >> 6) + static_cast<std::size_t>(j0) * stride_x;
-      for (int j = j0; j <= j1; ++j, column += stride_x) {
-        std::uint64_t* word = column + static_cast<std::size_t>(k0) * stride_y;
-        for (int k = k0; k <= k1; ++k, word += stride_y) *word |= bit;
-      }
-    }
+  // A clamped slab: the general formula.
+  const auto clampedSlab = [&](int i) {
+    const double s_lo = std::max((static_cast<double>(i) + w.off_lo - w.oa) * w.inv_fa, w.s0);
+    const double s_hi = std::min((static_cast<double>(i) + w.off_hi - w.oa) * w.inv_na, 1.0);
+    if (!(s_lo <= s_hi)) return;
+    const V2 lo_s = {s_lo, s_lo};
+    const V2 hi_s = {s_hi, s_hi};
+    const V2 low = vmax(vfloor(w.base_lo + vmin(lo_s * w.coef_lo, hi_s * w.coef_lo) + eps), w.limit_lo);
+    const V2 high = vmax(vfloor(w.base_hi + vmin(lo_s * w.coef_hi, hi_s * w.coef_hi) + eps), w.limit_hi);
+    markSlab<A>(i, __builtin_convertvector(low, I2), -__builtin_convertvector(high, I2) - 1, words,
+                stride_x, stride_y);
+  };
+  int run_begin = i_begin;
+  while (run_begin <= i_end && !unclampedSlab(w, run_begin)) clampedSlab(run_begin++);
+  int run_end = i_end;
+  while (run_end >= run_begin && !unclampedSlab(w, run_end)) --run_end;
+  for (int i = run_begin; i <= run_end; ++i) {
+    // Unclamped: the bounds are affine in i. Truncation is floor here: `first` is clamped to
+    // the first voxel marked (>= 0) first, `last` to >= -1 and shifted by one.
+    const V2 vi = {static_cast<double>(i), static_cast<double>(i)};
+    const I2 first = __builtin_convertvector(vmax(w.first_at0 + vi * w.first_slope, first_floor), I2);
+    const V2 x_last = vmax(vmin(w.last_at0 + vi * w.last_slope, w.last_limit), -one) + one;
+    markSlab<A>(i, first, __builtin_convertvector(x_last, I2) - 1, words, stride_x, stride_y);
   }
+  for (int i = std::max(run_end + 1, run_begin); i <= i_end; ++i) clampedSlab(i);
 }
 
 // carveCone() on box x in [x_begin, x_end); kClipX false: the whole box (x_begin 0, x_end the

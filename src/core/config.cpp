@@ -52,6 +52,8 @@ void AwarenessConfig::validate(std::vector<std::string>* errors) const {
           sample_count, errors);
   require(num_threads >= 1 && num_threads <= kMaxThreads, sectionKey(*this, num_threads),
           "must be in [1, 64]", num_threads, errors);
+  require(std::isfinite(bin_width_voxels) && bin_width_voxels >= 1.0 && bin_width_voxels <= 2.0,
+          sectionKey(*this, bin_width_voxels), "must be in [1, 2] voxels", bin_width_voxels, errors);
 }
 
 void LogOddsConfig::validate(std::vector<std::string>* errors) const {

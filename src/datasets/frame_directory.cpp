@@ -1,9 +1,9 @@
 #include "mlmap/datasets/frame_directory.h"
 
 #include "mlmap/datasets/point_cloud_file.h"
+#include "mlmap/pictures/png_codec.h"
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <cerrno>
@@ -163,21 +163,16 @@ void checkDepthPngHeader(const std::string& bytes, const std::string& path) {
 }
 
 /// Loads a depth PNG and checks it is 16-bit single channel; its header is checked before it
-/// is decoded. Never lets a cv::Exception out.
+/// is decoded.
 cv::Mat loadDepthImage(const std::string& path) {
   const std::string bytes = readFileBytes(path, kMaxDepthFileBytes);
   checkDepthPngHeader(bytes, path);
   cv::Mat image;
   try {
-    const cv::Mat encoded(1, static_cast<int>(bytes.size()), CV_8UC1,
-                          const_cast<char*>(bytes.data()));  // read only: imdecode copies out
-    image = cv::imdecode(encoded, cv::IMREAD_UNCHANGED);
-  } catch (const cv::Exception&) {
-    image = cv::Mat();
-  }
-  if (image.empty()) {
+    image = decodePng(bytes.data(), bytes.size());
+  } catch (const std::runtime_error& e) {
     throw std::runtime_error("FrameDirectory: cannot decode depth image '" + path +
-                             "' (a corrupted PNG)");
+                             "' (a corrupted PNG: " + e.what() + ")");
   }
   if (image.type() != CV_16UC1) {
     throw std::runtime_error("FrameDirectory: depth image '" + path + "' is " +

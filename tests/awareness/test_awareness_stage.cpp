@@ -44,8 +44,10 @@ constexpr double kMaxOverCarving = 1.15;
 
 // Every voxel that any ray from the sensor to a point passes through gets a free update, unless
 // it holds a hit of the frame; every hit voxel is listed once, and never also free.
-void expectCompleteCarving(double resolution, int points, std::uint32_t seed) {
-  const MapConfig config = testConfig(resolution);
+void expectCompleteCarving(double resolution, int points, std::uint32_t seed,
+                           double bin_width_voxels = 2.0) {
+  MapConfig config = testConfig(resolution);
+  config.awareness.bin_width_voxels = bin_width_voxels;
   AwarenessStage stage(config);
   std::mt19937 rng(seed);
   const PointCloudFrame frame = randomCloud(rng, points, 8.0);
@@ -111,6 +113,7 @@ TEST(AwarenessStage, CarvingIsCompleteAgainstA3DReferenceWalk) {
   expectCompleteCarving(0.2, 400, 1);
   expectCompleteCarving(0.1, 300, 2);
   expectCompleteCarving(0.05, 150, 3);
+  expectCompleteCarving(0.1, 300, 2, /*bin_width_voxels=*/1.0);  // awareness.bin_width_voxels
 }
 
 // awareness.num_threads splits the carving by box x: the batch (free bits, free
@@ -154,6 +157,51 @@ TEST(AwarenessStage, ThreadsCarveTheSameFreeSetBitForBit) {
       EXPECT_EQ(ca.hit_voxels, cb.hit_voxels);
     }
   }
+}
+
+// The free set's marked rows (the hull of the frame's cones) hold every bit, so the count, the
+// local map's reading and the next frame's clearing, which look only there, miss nothing: a
+// stage that mapped a wide frame before maps a narrow one to the same bits, over the whole box,
+// as a new stage does, and the narrow frame's marked rows are a small part of the box.
+TEST(AwarenessStage, FreeSetBitsLieInTheMarkedRowsAndNoFrameLeavesBitsBehind) {
+  const MapConfig config = testConfig(0.1);
+  AwarenessStage reused(config);
+  std::mt19937 rng(77);
+  const PointCloudFrame wide = randomCloud(rng, 6000, 8.0);  // all around, some beyond range
+  PointCloudFrame narrow = randomCloud(rng, 3000, 1.5);
+  for (Eigen::Vector3f& p : narrow.points_S) p.x() = std::abs(p.x());  // one side only
+  MeasurementBatch batch;
+  PointCounters counters;
+  reused.process(wide, &batch, &counters);
+  const auto expectBitsInMarkedRows = [](const VoxelBitset& free, const char* label) {
+    const VoxelBitset::Rows& rows = free.markedRows();
+    std::size_t outside = 0;
+    free.forEach([&](int i, int j, int /*k*/) {
+      outside += (i < rows.x_begin || i >= rows.x_end || j < rows.y_begin || j >= rows.y_end) ? 1 : 0;
+    });
+    EXPECT_EQ(outside, 0u) << label;
+  };
+  expectBitsInMarkedRows(batch.free, "wide");
+  EXPECT_EQ(batch.free_count, batch.free.count());
+  reused.process(narrow, &batch, &counters);
+  expectBitsInMarkedRows(batch.free, "narrow");
+
+  AwarenessStage fresh(config);
+  MeasurementBatch reference;
+  fresh.process(narrow, &reference, &counters);
+  ASSERT_EQ(batch.free.origin(), reference.free.origin());
+  ASSERT_EQ(batch.free.dims(), reference.free.dims());
+  const std::size_t words = static_cast<std::size_t>(batch.free.dims().x()) *
+                            static_cast<std::size_t>(batch.free.dims().y()) * batch.free.wordsPerRow();
+  std::size_t differing = 0;
+  for (std::size_t w = 0; w < words; ++w)
+    differing += batch.free.data()[w] != reference.free.data()[w] ? 1 : 0;
+  EXPECT_EQ(differing, 0u);
+  EXPECT_EQ(batch.free_count, batch.free.count());
+  EXPECT_GT(batch.free_count, 1000u);
+  const VoxelBitset::Rows& rows = batch.free.markedRows();
+  const double marked = static_cast<double>(rows.x_end - rows.x_begin) * (rows.y_end - rows.y_begin);
+  EXPECT_LT(marked, 0.5 * batch.free.dims().x() * batch.free.dims().y());
 }
 
 TEST(AwarenessStage, RejectsBadPointsWithCountersAndKeepsGoodOnes) {
@@ -203,7 +251,7 @@ TEST(AwarenessStage, DepthImageMatchesItsBackProjectedCloud) {
     depth.T_B_S = SensorConfig{}.T_B_S();
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> z(0.3f, 8.0f);  // some beyond max range 6 m
-    const std::size_t n = 80 * 61;
+    const std::size_t n = std::size_t{80} * 61;
     for (std::size_t i = 0; i < n; ++i) {
       const bool hole = i % 7 == 0;
       const float d = z(rng);
@@ -242,9 +290,9 @@ TEST(AwarenessStage, DepthImageMatchesItsBackProjectedCloud) {
       EXPECT_EQ(a.hits[i].p_W, b.hits[i].p_W);
     }
     EXPECT_EQ(a.free_count, b.free_count);
-    EXPECT_TRUE(std::equal(a.free.data(), a.free.data() + a.free.dims().x() * a.free.dims().y() *
-                                                            a.free.wordsPerRow(),
-                           b.free.data()));
+    const std::size_t words = static_cast<std::size_t>(a.free.dims().x()) *
+                              static_cast<std::size_t>(a.free.dims().y()) * a.free.wordsPerRow();
+    EXPECT_TRUE(std::equal(a.free.data(), a.free.data() + words, b.free.data()));
 
     depth.intrinsics.width = 79;  // size no longer matches the data
     EXPECT_FALSE(from_depth.process(depth, &a, &ca));

@@ -80,6 +80,12 @@ TEST(ConfigYaml, UnknownKeysAndBadValuesAreClearErrors) {
             std::string::npos);
   EXPECT_NE(errorOf("awareness: {phi_cells: 0}").find("awareness.phi_cells"), std::string::npos);
   EXPECT_NE(errorOf("awareness: {max_range_m: 20}").find("awareness radius"), std::string::npos);
+  for (const char* width : {"0.5", "3", ".nan"}) {
+    EXPECT_NE(errorOf(std::string("awareness: {bin_width_voxels: ") + width + "}")
+                  .find("awareness.bin_width_voxels: must be in [1, 2] voxels"),
+              std::string::npos)
+        << width;
+  }
   EXPECT_NE(errorOf("log_odds: {miss: 0.4}").find("log_odds.miss"), std::string::npos);
   EXPECT_NE(errorOf("local_map: {resolution_m: 0.01, size_cells: [2000, 2000, 50]}")
                 .find("free-space scratch box"),

@@ -6,6 +6,7 @@
 
 #include "mlmap/core/types.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -14,14 +15,50 @@ namespace mlmap {
 /// One bit per voxel of the box [origin, origin + dims). Indices (i, j, k) are box-relative.
 class VoxelBitset {
  public:
-  /// Resizes to the box and clears every bit; memory is reused between frames.
+  /// Resizes to the box and clears every bit; memory is reused between frames. When the size
+  /// stays, only the rows of the marked rectangle (markedRows()) are cleared: the others hold
+  /// no set bit. Afterwards the marked rectangle is the whole box again.
   void reset(const VoxelIndex& origin, const Eigen::Vector3i& dims) {
+    const std::size_t words_per_row = static_cast<std::size_t>((dims.z() + 63) / 64);
+    const std::size_t words =
+        static_cast<std::size_t>(dims.x()) * static_cast<std::size_t>(dims.y()) * words_per_row;
+    if (dims == dims_ && bits_.size() == words && rows_.valid(dims)) {
+      for (int i = rows_.x_begin; i < rows_.x_end; ++i) {
+        std::uint64_t* first = bits_.data() + rowWord(i, rows_.y_begin);
+        std::fill(first, first + static_cast<std::size_t>(rows_.y_end - rows_.y_begin) * words_per_row_,
+                  std::uint64_t{0});
+      }
+    } else {
+      bits_.assign(words, 0);
+    }
     origin_ = origin;
     dims_ = dims;
-    words_per_row_ = static_cast<std::size_t>((dims.z() + 63) / 64);
-    const std::size_t words =
-        static_cast<std::size_t>(dims.x()) * static_cast<std::size_t>(dims.y()) * words_per_row_;
-    bits_.assign(words, 0);
+    words_per_row_ = words_per_row;
+    rows_ = {0, dims.x(), 0, dims.y()};
+  }
+
+  /// A rectangle of (i, j) rows, [x_begin, x_end) x [y_begin, y_end), box-relative.
+  struct Rows {
+    int x_begin = 0;
+    int x_end = 0;
+    int y_begin = 0;
+    int y_end = 0;
+    /// True when it lies inside a box of `dims` (an empty one does too).
+    [[nodiscard]] bool valid(const Eigen::Vector3i& dims) const {
+      return 0 <= x_begin && x_begin <= x_end && x_end <= dims.x() && 0 <= y_begin &&
+             y_begin <= y_end && y_end <= dims.y();
+    }
+  };
+  /// The rows that may hold set bits: the whole box, unless the writer said less with
+  /// setMarkedRows(). Readers need look only there.
+  [[nodiscard]] const Rows& markedRows() const { return rows_; }
+  /// Declares that no bit outside `rows` is set (clamped to the box); the caller's promise,
+  /// which reset() relies on to clear only those rows.
+  void setMarkedRows(const Rows& rows) {
+    rows_.x_begin = std::clamp(rows.x_begin, 0, dims_.x());
+    rows_.x_end = std::clamp(rows.x_end, rows_.x_begin, dims_.x());
+    rows_.y_begin = std::clamp(rows.y_begin, 0, dims_.y());
+    rows_.y_end = std::clamp(rows.y_end, rows_.y_begin, dims_.y());
   }
 
   /// First voxel of the box (world index).
@@ -94,6 +131,7 @@ class VoxelBitset {
   Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
   std::size_t words_per_row_ = 0;
   std::vector<std::uint64_t> bits_;
+  Rows rows_;  ///< no bit set outside (markedRows())
 };
 
 }  // namespace mlmap
