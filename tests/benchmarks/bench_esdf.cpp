@@ -15,6 +15,7 @@
 #include "mlmap/datasets/world_yaml.h"
 #include "mlmap/eval/sim_flight.h"
 #include "mlmap/planning/esdf.h"
+#include "mlmap/planning/esdf_query_grid.h"
 #include "mlmap/sim/world.h"
 #include "../support/random_draws.h"
 
@@ -89,6 +90,12 @@ struct Row {
   double checksum = 0.0;
   double random_checksum = 0.0;  ///< query()'s sum at the random points
   double batch_checksum = 0.0;   ///< queryBatch()'s at the same points (equal)
+  double grid_build_ms = 0.0;    ///< EsdfQueryGrid::build() from the map, median
+  std::size_t grid_bytes = 0;    ///< the query grid's memory
+  double grid_random = 0.0;      ///< M queries/s of EsdfQueryGrid::query() at the random points
+  double grid_path = 0.0;        ///< ... along the segments
+  double grid_batch = 0.0;       ///< ... EsdfQueryGrid::queryBatch() at the random points
+  double grid_max_error_m = 0.0;  ///< largest |grid - exact| distance at the random points
 };
 
 Row run(const std::string& name, const OccupancyBox& box, UnknownAs unknown_as, int threads,
@@ -133,23 +140,22 @@ Row run(const std::string& name, const OccupancyBox& box, UnknownAs unknown_as, 
       path_points.push_back(start + dir * (0.05 * i));
     }
   }
-  const auto throughput = [&](const std::vector<Eigen::Vector3d>& points, double* checksum) {
+  const auto throughput = [&](const auto& source, const std::vector<Eigen::Vector3d>& points,
+                              double* checksum) {
     double sum = 0.0;
     const std::size_t mask = points.size() - 1;
     const Clock::time_point start = Clock::now();
     for (int i = 0; i < queries; ++i) {
-      const EsdfMap::Query q = map.query(points[static_cast<std::size_t>(i) & mask]);
+      const EsdfMap::Query q = source.query(points[static_cast<std::size_t>(i) & mask]);
       sum += q.distance_m + q.gradient.sum() + (q.valid ? 1.0 : 0.0);
     }
     const double seconds = msSince(start) / 1e3;
     *checksum += sum;
     return queries / seconds / 1e6;
   };
-  row.mqueries_random = throughput(random_points, &row.random_checksum);
-  row.mqueries_path = throughput(path_points, &row.checksum);
   // The same random points through queryBatch(), 256 at a time; its checksum must equal the
   // loop's (the same results).
-  {
+  const auto batch_throughput = [&](const auto& source, double* checksum) {
     constexpr std::size_t kBatch = 256;
     std::vector<EsdfMap::Query> results(kBatch);
     double sum = 0.0;
@@ -157,14 +163,36 @@ Row run(const std::string& name, const OccupancyBox& box, UnknownAs unknown_as, 
     const Clock::time_point start = Clock::now();
     for (std::size_t i = 0; i < static_cast<std::size_t>(queries); i += kBatch) {
       const std::size_t n = std::min(kBatch, static_cast<std::size_t>(queries) - i);
-      map.queryBatch(random_points.data() + (i & mask), n, results.data());
+      source.queryBatch(random_points.data() + (i & mask), n, results.data());
       for (std::size_t j = 0; j < n; ++j) {
         sum += results[j].distance_m + results[j].gradient.sum() + (results[j].valid ? 1.0 : 0.0);
       }
     }
     const double seconds = msSince(start) / 1e3;
-    row.mqueries_batch = queries / seconds / 1e6;
-    row.batch_checksum = sum;
+    *checksum = sum;
+    return queries / seconds / 1e6;
+  };
+  row.mqueries_random = throughput(map, random_points, &row.random_checksum);
+  row.mqueries_path = throughput(map, path_points, &row.checksum);
+  row.mqueries_batch = batch_throughput(map, &row.batch_checksum);
+
+  // The quantised query grid: its build from the map, its queries at the same points.
+  EsdfQueryGrid grid;
+  std::vector<double> build_ms;
+  for (int r = 0; r < std::max(3, repeats / 4); ++r) {
+    const Clock::time_point start = Clock::now();
+    grid.build(map);
+    build_ms.push_back(msSince(start));
+  }
+  row.grid_build_ms = percentile(&build_ms, 0.5);
+  row.grid_bytes = grid.memoryBytes();
+  double grid_checksum = 0.0;
+  row.grid_random = throughput(grid, random_points, &grid_checksum);
+  row.grid_path = throughput(grid, path_points, &grid_checksum);
+  row.grid_batch = batch_throughput(grid, &grid_checksum);
+  for (const Eigen::Vector3d& p : random_points) {
+    row.grid_max_error_m = std::max(row.grid_max_error_m,
+                                    std::abs(grid.query(p).distance_m - map.query(p).distance_m));
   }
   return row;
 }
@@ -177,6 +205,10 @@ void print(const Row& r, std::FILE* json, bool last) {
                 r.median_ms, r.p99_ms,
                 static_cast<double>(r.memory_bytes) / 1e6, r.mqueries_random, r.mqueries_path,
                 r.mqueries_batch, r.checksum, r.random_checksum, r.batch_checksum);
+    std::printf("%-24s   query grid: build %.3f ms, %.1f MB, M queries/s random %.1f, paths %.1f, "
+                "batch %.1f; max distance error %.1f um\n",
+                "", r.grid_build_ms, static_cast<double>(r.grid_bytes) / 1e6, r.grid_random,
+                r.grid_path, r.grid_batch, r.grid_max_error_m * 1e6);
     return;
   }
   std::fprintf(json,
@@ -184,11 +216,13 @@ void print(const Row& r, std::FILE* json, bool last) {
                "\"threads\": %d, "
                "\"compute_ms\": {\"min\": %.4f, \"median\": %.4f, \"p99\": %.4f}, "
                "\"memory_bytes\": %zu, \"mqueries_per_s\": {\"random\": %.2f, \"path\": %.2f, "
-               "\"random_batch\": %.2f}}%s\n",
+               "\"random_batch\": %.2f}, \"query_grid\": {\"build_ms\": %.4f, \"bytes\": %zu, "
+               "\"mqueries_per_s\": {\"random\": %.2f, \"path\": %.2f, \"random_batch\": %.2f}, "
+               "\"max_error_m\": %.7f}}%s\n",
                r.name.c_str(), r.unknown_as.c_str(), r.passes.c_str(), r.threads, r.min_ms,
                r.median_ms, r.p99_ms, r.memory_bytes, r.mqueries_random, r.mqueries_path,
-               r.mqueries_batch,
-               last ? "" : ",");
+               r.mqueries_batch, r.grid_build_ms, r.grid_bytes, r.grid_random, r.grid_path,
+               r.grid_batch, r.grid_max_error_m, last ? "" : ",");
 }
 
 /// The window's states after each frame of the default flight mapped at `res` over a

@@ -201,6 +201,9 @@ class EsdfMap {
   [[nodiscard]] bool contains(const VoxelIndex& world_index) const {
     return boxContains(min_index_, size_, world_index);
   }
+  /// True when box-relative voxel (x, y, z) (inside the box, unchecked) was unknown in the box
+  /// given to compute() / update().
+  [[nodiscard]] bool isUnknownCell(int x, int y, int z) const { return unknownBit(x, y, z); }
   /// True when the world voxel is inside the box and was unknown in the box given to compute().
   [[nodiscard]] bool isUnknown(const VoxelIndex& world_index) const {
     if (!contains(world_index)) return false;
