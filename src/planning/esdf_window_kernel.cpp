@@ -198,7 +198,7 @@ bool windowFits(std::int32_t cap_sq, std::int32_t cap_d) {
 }
 
 MLMAP_ESDF_CLONES
-void transformSlabY(const std::int32_t* pass1, int ny, int nz, std::int32_t cap_sq,
+void transformSlabY(const std::int8_t* pass1, int ny, int nz, std::int32_t cap_sq,
                     std::int32_t cap_d, std::int16_t* pass2, WindowBuffers* buffers) {
   const auto inf = static_cast<std::int16_t>(cap_sq + 1);
   const std::size_t cells = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);

@@ -252,6 +252,7 @@ class EsdfMap {
     std::vector<std::int32_t> near_free;      ///< x pass: nearest non-obstacle x per (y, z)
     std::vector<std::int32_t> near_obstacle;  ///< x pass: nearest obstacle x per (y, z)
     std::vector<std::int32_t> line;           ///< one y or z line being transformed
+    std::vector<std::int32_t> sweep;          ///< x pass: 32-bit results before the 8-bit copy
     esdf_kernel::WindowBuffers window;        ///< the windowed passes' slab buffers
     std::vector<int> lanes;                   ///< update(): the lines of a slab transformed
   };
@@ -300,6 +301,9 @@ class EsdfMap {
   void updateLinesEnvelope(int reach, Scratch* scratch);
   /// ... or, where the windowed passes apply, a slab's marked lines side by side through them.
   void updateLinesWindowed(int reach, Scratch* scratch);
+  /// What pass 1 writes for "beyond the cap": inf_, or cap_d_ + 1 where its results are kept in
+  /// 8 bits (the windowed passes read any distance above cap_d_ as beyond).
+  [[nodiscard]] std::int32_t pass1Inf() const { return window_kernel_ ? cap_d_ + 1 : inf_; }
   /// Signed squared voxel distance (or +-inf_) -> clamped signed metres, without the table.
   /// Needs cap_sq_, inf_ and resolution_m_ of the current compute().
   [[nodiscard]] float slowMetres(std::int32_t value) const;
@@ -326,6 +330,9 @@ class EsdfMap {
   std::size_t slab_bits_ = 0;
   /// Pass 1's result: +d (non-obstacle) / -d (obstacle) along x, in voxels, or +-inf_.
   std::vector<std::int32_t> pass1_;
+  /// The same in 8 bits, where the windowed passes apply (pass1_ is then empty), with
+  /// +-(cap_d_ + 1) for beyond the cap: see pass1Inf().
+  std::vector<std::int8_t> pass1_narrow_;
   /// Pass 2's result: +d^2 / -d^2 over the y-x plane, in voxels, or +-inf_.
   std::vector<std::int32_t> pass2_;
   /// The same in 16 bits, where the windowed passes apply (pass2_ is then empty).

@@ -60,9 +60,10 @@ void transformLines(std::int16_t* values, int n, int lanes, std::int32_t cap_sq,
                     std::int32_t cap_d, WindowBuffers* buffers);
 
 /// The y pass of one x slab: `pass1` holds ny * nz signed distances along x (z fastest; +d
-/// non-obstacle, -d obstacle, or +-inf with inf = cap_sq + 1). Writes the signed squared
-/// distances in the y-x plane (or +-inf) to `pass2` (ny * nz) and to buffers->signed_sq.
-void transformSlabY(const std::int32_t* pass1, int ny, int nz, std::int32_t cap_sq,
+/// non-obstacle, -d obstacle; any magnitude above cap_d means beyond the clamp). Writes the
+/// signed squared distances in the y-x plane (or +-inf, inf = cap_sq + 1) to `pass2` (ny * nz)
+/// and to buffers->signed_sq.
+void transformSlabY(const std::int8_t* pass1, int ny, int nz, std::int32_t cap_sq,
                     std::int32_t cap_d, std::int16_t* pass2, WindowBuffers* buffers);
 
 /// The z pass of the slab last given to transformSlabY(): replaces buffers->signed_sq (nz * ny,
