@@ -7,34 +7,30 @@
 namespace mlmap {
 namespace {
 
-/// out[z] = 2 * round(in[z] * inv_step), clamped to +-max_level: a row of cells' values, their
-/// unknown bits still clear. Built for AVX2 / AVX-512 too (it vectorises).
+/// Offset that makes every level positive before truncation (levels lie within +-kMaxLevel).
+constexpr std::int32_t kLevelOffset = EsdfQueryGrid::kMaxLevel + 1;
+
+/// round(level) (half up) clamped to +-kMaxLevel, for |level| <= kMaxLevel + 0.5: truncation
+/// of a positive value, which vectorises (std::nearbyint is a call without SSE4.1).
+inline std::int32_t quantise(double level) {
+  const std::int32_t q = static_cast<std::int32_t>(level + (kLevelOffset + 0.5)) - kLevelOffset;
+  return std::clamp(q, -EsdfQueryGrid::kMaxLevel, EsdfQueryGrid::kMaxLevel);
+}
+
+/// out[z] = 2 * quantise(in[z] * inv_step): a row of cells' values, their unknown bits still
+/// clear. Built for AVX2 / AVX-512 too (it vectorises).
 MLMAP_ESDF_CLONES
-void encodeRow(const float* in, int n, double inv_step, double max_level, std::int16_t* out) {
+void encodeRow(const float* in, int n, double inv_step, std::int16_t* out) {
   for (int z = 0; z < n; ++z) {
-    const double level = std::clamp(std::nearbyint(static_cast<double>(in[z]) * inv_step),
-                                    -max_level, max_level);
-    out[z] = static_cast<std::int16_t>(2 * static_cast<std::int32_t>(level));
+    out[z] = static_cast<std::int16_t>(2 * quantise(static_cast<double>(in[z]) * inv_step));
   }
 }
 
 }  // namespace
 
 std::int16_t EsdfQueryGrid::encode(float distance_m, bool unknown) const {
-  const double level = std::nearbyint(static_cast<double>(distance_m) * inv_step_);
-  const auto q = static_cast<std::int32_t>(
-      std::clamp(level, -static_cast<double>(kMaxLevel), static_cast<double>(kMaxLevel)));
+  const std::int32_t q = quantise(static_cast<double>(distance_m) * inv_step_);
   return static_cast<std::int16_t>(q * 2 + (unknown ? 1 : 0));
-}
-
-std::size_t EsdfQueryGrid::paddedOf(std::size_t offset) const {
-  const std::size_t nz = static_cast<std::size_t>(size_.z());
-  const std::size_t slab = static_cast<std::size_t>(size_.y()) * nz;
-  const std::size_t x = offset / slab;
-  const std::size_t y = (offset - x * slab) / nz;
-  const std::size_t z = offset - x * slab - y * nz;
-  return (x + 1) * static_cast<std::size_t>(stride_x_) + (y + 1) * static_cast<std::size_t>(stride_y_) +
-         (z + 1);
 }
 
 void EsdfQueryGrid::build(const EsdfMap& map) {
@@ -66,7 +62,7 @@ void EsdfQueryGrid::build(const EsdfMap& map) {
     for (int y = 0; y < ny; ++y) {
       const float* in = field + (static_cast<std::size_t>(x) * ny + y) * nz;
       std::int16_t* out = cells + (x + 1) * stride_x_ + (y + 1) * stride_y_;
-      encodeRow(in, nz, inv_step_, kMaxLevel, out + 1);
+      encodeRow(in, nz, inv_step_, out + 1);
       for (int z = 0; z < nz; ++z) {
         out[z + 1] = static_cast<std::int16_t>(out[z + 1] | (map.isUnknownCell(x, y, z) ? 1 : 0));
       }
@@ -121,18 +117,22 @@ bool EsdfQueryGrid::sync(const EsdfMap& map) {
     return false;
   }
   const float* field = map.distances().data();
-  const std::size_t nz = static_cast<std::size_t>(size_.z());
-  const std::size_t slab = static_cast<std::size_t>(size_.y()) * nz;
+  // 32-bit divisions (offsets are 32-bit; kMaxCells keeps the box below 2^28 voxels).
+  const auto nz = static_cast<std::uint32_t>(size_.z());
+  const std::uint32_t slab = static_cast<std::uint32_t>(size_.y()) * nz;
   for (const std::uint32_t offset : map.changedCells()) {
-    const int x = static_cast<int>(offset / slab);
-    const int y = static_cast<int>((offset - static_cast<std::size_t>(x) * slab) / nz);
-    const int z = static_cast<int>(offset - static_cast<std::size_t>(x) * slab -
-                                   static_cast<std::size_t>(y) * nz);
-    const std::int16_t value = encode(field[offset], map.isUnknownCell(x, y, z));
-    cells_[paddedOf(offset)] = value;
-    if (x == 0 || y == 0 || z == 0 || x == size_.x() - 1 || y == size_.y() - 1 ||
-        z == size_.z() - 1) {
-      writePadding(x, y, z, value);
+    const std::uint32_t x = offset / slab;
+    const std::uint32_t r = offset - x * slab;
+    const std::uint32_t y = r / nz;
+    const std::uint32_t z = r - y * nz;
+    const std::int16_t value = encode(field[offset], map.isUnknownCell(static_cast<int>(x),
+                                                                       static_cast<int>(y),
+                                                                       static_cast<int>(z)));
+    cells_[static_cast<std::size_t>(x + 1) * static_cast<std::size_t>(stride_x_) +
+           static_cast<std::size_t>(y + 1) * static_cast<std::size_t>(stride_y_) + z + 1] = value;
+    if (x == 0 || y == 0 || z == 0 || static_cast<int>(x) == size_.x() - 1 ||
+        static_cast<int>(y) == size_.y() - 1 || static_cast<int>(z) == size_.z() - 1) {
+      writePadding(static_cast<int>(x), static_cast<int>(y), static_cast<int>(z), value);
     }
   }
   return true;

@@ -272,6 +272,8 @@ struct StreamRow {
   double update_max_ms = 0.0;
   double full_median_ms = 0.0;
   double full_p99_ms = 0.0;
+  double grid_sync_median_ms = 0.0;  ///< EsdfQueryGrid::sync() after update(), per frame
+  double grid_sync_p99_ms = 0.0;
   int mismatched_frames = 0;  ///< frames where update() differs from compute() (must be 0)
   int edt_updates = 0;
   double edt_median_ms = -1.0;
@@ -308,6 +310,9 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
   EsdfMap incremental(config);
   EsdfMap full(config);
   if (boxes.size() < 2 || !incremental.update(boxes[0]) || !full.compute(boxes[0])) return row;
+  EsdfQueryGrid grid;  // kept up to date with the incremental field
+  grid.build(incremental);
+  std::vector<double> sync_ms;
   std::vector<double> update_ms;
   std::vector<double> full_ms;
   std::vector<double> same_box_ms;
@@ -330,6 +335,9 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
     Clock::time_point start = Clock::now();
     if (!incremental.update(box)) return row;
     update_ms.push_back(msSince(start));
+    start = Clock::now();
+    grid.sync(incremental);
+    sync_ms.push_back(msSince(start));
     const EsdfMap::UpdateStats& u = incremental.lastUpdate();
     row.shifted += u.shifted ? 1 : 0;
     row.full += u.full ? 1 : 0;
@@ -398,6 +406,8 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
   row.update_max_ms = percentile(&update_ms, 1.0);
   row.full_median_ms = percentile(&full_ms, 0.5);
   row.full_p99_ms = percentile(&full_ms, 0.99);
+  row.grid_sync_median_ms = percentile(&sync_ms, 0.5);
+  row.grid_sync_p99_ms = percentile(&sync_ms, 0.99);
   if (!edt_ms.empty()) {
     row.edt_updates = static_cast<int>(edt_ms.size());
     row.edt_median_ms = percentile(&edt_ms, 0.5);
@@ -410,13 +420,15 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
 void printStream(const StreamRow& r, std::FILE* json, bool last) {
   if (json == nullptr) {
     std::printf("%-10s %-9s %4d %4d %4d %8.0f %7.3f %7.3f %7.3f %7.3f %7.3f %4d | %4d %8.3f %8.3f "
-                "%7.3f %6.1fx  mismatched %zu of %zu (max %.3f m); lines %.0f %.0f %.0f\n",
+                "%7.3f %6.1fx  mismatched %zu of %zu (max %.3f m); lines %.0f %.0f %.0f; query "
+                "grid sync %.3f / %.3f ms\n",
                 r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full,
                 r.changed_states, r.update_median_ms, r.update_p99_ms, r.update_max_ms,
                 r.full_median_ms, r.full_p99_ms, r.mismatched_frames, r.edt_updates,
                 r.edt_median_ms, r.edt_p99_ms, r.same_box_median_ms,
                 r.same_box_median_ms > 0.0 ? r.edt_median_ms / r.same_box_median_ms : 0.0,
-                r.edt_mismatched, r.edt_compared, r.edt_max_error_m, r.rows, r.y_lines, r.z_lines);
+                r.edt_mismatched, r.edt_compared, r.edt_max_error_m, r.rows, r.y_lines, r.z_lines,
+                r.grid_sync_median_ms, r.grid_sync_p99_ms);
     return;
   }
   std::fprintf(json,
@@ -424,14 +436,15 @@ void printStream(const StreamRow& r, std::FILE* json, bool last) {
                "\"full\": %d, \"changed_states_median\": %.0f, "
                "\"lines_median\": {\"x_rows\": %.0f, \"y\": %.0f, \"z\": %.0f}, "
                "\"update_ms\": {\"median\": %.4f, \"p99\": %.4f, \"max\": %.4f}, "
-               "\"compute_ms\": {\"median\": %.4f, \"p99\": %.4f}, \"mismatched_frames\": %d, "
+               "\"compute_ms\": {\"median\": %.4f, \"p99\": %.4f}, "
+               "\"query_grid_sync_ms\": {\"median\": %.4f, \"p99\": %.4f}, \"mismatched_frames\": %d, "
                "\"dynamicedt3d\": {\"updates\": %d, \"median_ms\": %.4f, \"p99_ms\": %.4f, "
                "\"ours_same_frames_median_ms\": %.4f, \"compared\": %zu, \"mismatched\": %zu, "
                "\"max_error_m\": %.4f}}%s\n",
                r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full,
                r.changed_states, r.rows, r.y_lines, r.z_lines, r.update_median_ms,
                r.update_p99_ms, r.update_max_ms, r.full_median_ms, r.full_p99_ms,
-               r.mismatched_frames, r.edt_updates, r.edt_median_ms, r.edt_p99_ms,
+               r.grid_sync_median_ms, r.grid_sync_p99_ms, r.mismatched_frames, r.edt_updates, r.edt_median_ms, r.edt_p99_ms,
                r.same_box_median_ms, r.edt_compared,
                r.edt_mismatched, r.edt_max_error_m, last ? "" : ",");
 }

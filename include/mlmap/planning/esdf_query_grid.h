@@ -70,8 +70,6 @@ class EsdfQueryGrid {
  private:
   /// Quantised value of a field value [m] and unknown bit.
   [[nodiscard]] std::int16_t encode(float distance_m, bool unknown) const;
-  /// Padded-buffer position of box-relative cell offset `offset` (OccupancyBox order).
-  [[nodiscard]] std::size_t paddedOf(std::size_t offset) const;
   /// Copies the padding cells next to box-relative cell (x, y, z) from it (a border cell).
   void writePadding(int x, int y, int z, std::int16_t value);
   /// Prefetches what query(p_W) reads (nothing outside the box).
