@@ -898,9 +898,10 @@ void EsdfMap::transformSlabs(const std::uint8_t* states, int x_begin, int x_end,
                                   pass2_narrow_.data() + first, buffers);
       esdf_kernel::transformSlabZ(ny, nz, cap_sq_, cap_d_, buffers);
       const std::int16_t* values = buffers->signed_sq.data();  // z-major
+      const auto lanes = static_cast<std::size_t>(esdf_kernel::paddedLanes(ny));
       for (int y = 0; y < ny; ++y) {
         float* out = field + static_cast<std::size_t>(y) * nz;
-        for (int z = 0; z < nz; ++z) out[z] = table[values[static_cast<std::size_t>(z) * ny + y]];
+        for (int z = 0; z < nz; ++z) out[z] = table[values[static_cast<std::size_t>(z) * lanes + y]];
       }
       writeUnknownBits(states, x);
       continue;

@@ -201,26 +201,43 @@ MLMAP_ESDF_CLONES
 void transformSlabY(const std::int8_t* pass1, int ny, int nz, std::int32_t cap_sq,
                     std::int32_t cap_d, std::int16_t* pass2, WindowBuffers* buffers) {
   const auto inf = static_cast<std::int16_t>(cap_sq + 1);
-  const std::size_t cells = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
-  ensure(&buffers->signed_sq, cells);
-  ensure(&buffers->transposed, cells);
-  std::int16_t* m = prepareBuffers(ny, nz, cap_d, inf, buffers);
+  // The y lines across paddedLanes(nz) lanes, the z lines across paddedLanes(ny).
+  const int z_lanes = paddedLanes(nz);
+  const int y_lanes = paddedLanes(ny);
+  const std::size_t z_row = static_cast<std::size_t>(z_lanes);
+  const std::size_t y_row = static_cast<std::size_t>(y_lanes);
+  ensure(&buffers->signed_sq, static_cast<std::size_t>(nz) * y_row);
+  ensure(&buffers->transposed, static_cast<std::size_t>(ny) * z_row);
+  std::int16_t* m = prepareBuffers(ny, z_lanes, cap_d, inf, buffers);
   std::int16_t* values = buffers->transposed.data();
-  // The x pass's distance squared (it is at most cap_d, or inf), signed.
-  for (std::size_t i = 0; i < cells; ++i) {
-    const std::int32_t v = pass1[i];
-    const std::int32_t a = v < 0 ? -v : v;
-    const std::int32_t sq = a <= cap_d ? a * a : std::int32_t{inf};
-    m[i] = static_cast<std::int16_t>(sq);
-    values[i] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
-  }
-  windowPass(values, m, ny, nz, cap_sq, cap_d, buffers);
-  // Out to pass 2 (y-major) and, transposed, to the z pass's lines (z-major).
-  std::int16_t* out = buffers->signed_sq.data();
-  std::copy(values, values + cells, pass2);
+  // The x pass's distance squared (it is at most cap_d, or inf), signed; +inf in the extra
+  // lanes.
   for (int y = 0; y < ny; ++y) {
-    const std::int16_t* v = values + static_cast<std::size_t>(y) * static_cast<std::size_t>(nz);
-    for (int z = 0; z < nz; ++z) out[static_cast<std::size_t>(z) * ny + y] = v[z];
+    const std::int8_t* in = pass1 + static_cast<std::size_t>(y) * static_cast<std::size_t>(nz);
+    std::int16_t* m_row = m + static_cast<std::size_t>(y) * z_row;
+    std::int16_t* v_row = values + static_cast<std::size_t>(y) * z_row;
+    for (int z = 0; z < nz; ++z) {
+      const std::int32_t v = in[z];
+      const std::int32_t a = v < 0 ? -v : v;
+      const std::int32_t sq = a <= cap_d ? a * a : std::int32_t{inf};
+      m_row[z] = static_cast<std::int16_t>(sq);
+      v_row[z] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
+    }
+    std::fill(m_row + nz, m_row + z_lanes, inf);
+    std::fill(v_row + nz, v_row + z_lanes, inf);
+  }
+  windowPass(values, m, ny, z_lanes, cap_sq, cap_d, buffers);
+  // Out to pass 2 (y-major) and, transposed, to the z pass's lines (z-major, +inf in the extra
+  // lanes).
+  std::int16_t* out = buffers->signed_sq.data();
+  for (int y = 0; y < ny; ++y) {
+    const std::int16_t* v = values + static_cast<std::size_t>(y) * z_row;
+    std::copy(v, v + nz, pass2 + static_cast<std::size_t>(y) * static_cast<std::size_t>(nz));
+    for (int z = 0; z < nz; ++z) out[static_cast<std::size_t>(z) * y_row + y] = v[z];
+  }
+  for (int z = 0; z < nz; ++z) {
+    std::int16_t* row = out + static_cast<std::size_t>(z) * y_row;
+    std::fill(row + ny, row + y_lanes, inf);
   }
 }
 
@@ -239,7 +256,7 @@ void transformLines(std::int16_t* values, int n, int lanes, std::int32_t cap_sq,
 void transformSlabZ(int ny, int nz, std::int32_t cap_sq, std::int32_t cap_d,
                     WindowBuffers* buffers) {
   // z-major: the z lines across the y lanes.
-  transformLines(buffers->signed_sq.data(), nz, ny, cap_sq, cap_d, buffers);
+  transformLines(buffers->signed_sq.data(), nz, paddedLanes(ny), cap_sq, cap_d, buffers);
 }
 
 }  // namespace mlmap::esdf_kernel

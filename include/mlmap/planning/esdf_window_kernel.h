@@ -36,6 +36,12 @@ namespace mlmap::esdf_kernel {
 /// the envelope code's does not.
 constexpr std::int32_t kMaxWindowCapCells = 48;
 
+/// Lanes a slab's lines are laid out across in transformSlabY() and transformSlabZ(): `lines`
+/// rounded up to a multiple of 16 (one AVX2 vector of 16-bit values), so that the per-line
+/// sweeps run in whole vectors with no scalar remainder; the extra lanes hold +inf and are
+/// never read back.
+[[nodiscard]] constexpr int paddedLanes(int lines) { return (lines + 15) / 16 * 16; }
+
 /// True when the windowed passes apply: cap_d <= kMaxWindowCapCells, and inf plus any k^2 of
 /// the window fits a 16-bit signed value.
 [[nodiscard]] bool windowFits(std::int32_t cap_sq, std::int32_t cap_d);
@@ -66,9 +72,9 @@ void transformLines(std::int16_t* values, int n, int lanes, std::int32_t cap_sq,
 void transformSlabY(const std::int8_t* pass1, int ny, int nz, std::int32_t cap_sq,
                     std::int32_t cap_d, std::int16_t* pass2, WindowBuffers* buffers);
 
-/// The z pass of the slab last given to transformSlabY(): replaces buffers->signed_sq (nz * ny,
-/// y fastest: transposed, so that the z lines run across the vector lanes) by the signed
-/// squared distances in 3D (or +-inf).
+/// The z pass of the slab last given to transformSlabY(): replaces buffers->signed_sq (nz rows
+/// of paddedLanes(ny) values, y fastest: transposed, so that the z lines run across the vector
+/// lanes) by the signed squared distances in 3D (or +-inf).
 void transformSlabZ(int ny, int nz, std::int32_t cap_sq, std::int32_t cap_d,
                     WindowBuffers* buffers);
 
