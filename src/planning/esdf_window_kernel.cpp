@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cstddef>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace mlmap::esdf_kernel {
 namespace {
 
@@ -190,6 +194,64 @@ inline __attribute__((always_inline)) std::int16_t* prepareBuffers(int n, int la
   return m;
 }
 
+/// dst[c * dst_stride + r] = src[r * src_stride + c] for r < rows, c < cols (16-bit values):
+/// 8 x 8 blocks through SSE2 registers where there are, the rest one value at a time.
+inline __attribute__((always_inline)) void transpose(const std::int16_t* __restrict src,
+                                                     std::size_t src_stride,
+                                                     std::int16_t* __restrict dst,
+                                                     std::size_t dst_stride, int rows, int cols) {
+  int r0 = 0;
+#if defined(__SSE2__)
+  for (; r0 + 8 <= rows; r0 += 8) {
+    int c0 = 0;
+    for (; c0 + 8 <= cols; c0 += 8) {
+      const std::int16_t* s = src + static_cast<std::size_t>(r0) * src_stride + c0;
+      __m128i a[8];
+      for (std::size_t i = 0; i < 8; ++i) {
+        a[i] = _mm_loadu_si128(reinterpret_cast<const __m128i*>(s + i * src_stride));
+      }
+      // Interleave 16-, 32-, then 64-bit pieces: row i of the result is column i of the block.
+      const __m128i b0 = _mm_unpacklo_epi16(a[0], a[1]);
+      const __m128i b1 = _mm_unpackhi_epi16(a[0], a[1]);
+      const __m128i b2 = _mm_unpacklo_epi16(a[2], a[3]);
+      const __m128i b3 = _mm_unpackhi_epi16(a[2], a[3]);
+      const __m128i b4 = _mm_unpacklo_epi16(a[4], a[5]);
+      const __m128i b5 = _mm_unpackhi_epi16(a[4], a[5]);
+      const __m128i b6 = _mm_unpacklo_epi16(a[6], a[7]);
+      const __m128i b7 = _mm_unpackhi_epi16(a[6], a[7]);
+      const __m128i c0v = _mm_unpacklo_epi32(b0, b2);
+      const __m128i c1v = _mm_unpackhi_epi32(b0, b2);
+      const __m128i c2v = _mm_unpacklo_epi32(b1, b3);
+      const __m128i c3v = _mm_unpackhi_epi32(b1, b3);
+      const __m128i c4v = _mm_unpacklo_epi32(b4, b6);
+      const __m128i c5v = _mm_unpackhi_epi32(b4, b6);
+      const __m128i c6v = _mm_unpacklo_epi32(b5, b7);
+      const __m128i c7v = _mm_unpackhi_epi32(b5, b7);
+      const __m128i out[8] = {_mm_unpacklo_epi64(c0v, c4v), _mm_unpackhi_epi64(c0v, c4v),
+                              _mm_unpacklo_epi64(c1v, c5v), _mm_unpackhi_epi64(c1v, c5v),
+                              _mm_unpacklo_epi64(c2v, c6v), _mm_unpackhi_epi64(c2v, c6v),
+                              _mm_unpacklo_epi64(c3v, c7v), _mm_unpackhi_epi64(c3v, c7v)};
+      std::int16_t* d = dst + static_cast<std::size_t>(c0) * dst_stride + r0;
+      for (std::size_t i = 0; i < 8; ++i) {
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(d + i * dst_stride), out[i]);
+      }
+    }
+    for (; c0 < cols; ++c0) {
+      for (int r = r0; r < r0 + 8; ++r) {
+        dst[static_cast<std::size_t>(c0) * dst_stride + r] =
+            src[static_cast<std::size_t>(r) * src_stride + c0];
+      }
+    }
+  }
+#endif
+  for (int r = r0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      dst[static_cast<std::size_t>(c) * dst_stride + r] =
+          src[static_cast<std::size_t>(r) * src_stride + c];
+    }
+  }
+}
+
 }  // namespace
 
 bool windowFits(std::int32_t cap_sq, std::int32_t cap_d) {
@@ -233,8 +295,8 @@ void transformSlabY(const std::int8_t* pass1, int ny, int nz, std::int32_t cap_s
   for (int y = 0; y < ny; ++y) {
     const std::int16_t* v = values + static_cast<std::size_t>(y) * z_row;
     std::copy(v, v + nz, pass2 + static_cast<std::size_t>(y) * static_cast<std::size_t>(nz));
-    for (int z = 0; z < nz; ++z) out[static_cast<std::size_t>(z) * y_row + y] = v[z];
   }
+  transpose(values, z_row, out, y_row, ny, nz);
   for (int z = 0; z < nz; ++z) {
     std::int16_t* row = out + static_cast<std::size_t>(z) * y_row;
     std::fill(row + ny, row + y_lanes, inf);
