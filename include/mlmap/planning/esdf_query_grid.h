@@ -3,8 +3,9 @@
 /// A copy of an EsdfMap's field made for queries: quantised to 16 bits, padded by one cell per
 /// face, the unknown bit folded into each value. A query reads eight 2-byte cells (four cache
 /// lines at most) of a buffer half the size of the field, with no stencil clamping, no separate
-/// unknown mask and integer index arithmetic, so it costs about a third of EsdfMap::query()'s
-/// instructions.
+/// unknown mask and integer index arithmetic: about two thirds of EsdfMap::query()'s
+/// instructions and half its bytes per voxel, 1.6x the random queries per second at 0.1 m
+/// (mlmap_bench_esdf).
 ///
 /// Error bound. A cell holds q = round(d / step) with step = max_distance_m / kMaxLevel, so
 /// |q * step - d| <= step / 2 for every cell value d of the field (clamped to +-max_distance_m,
