@@ -791,21 +791,26 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
     if (buffers->lines.size() < n) buffers->lines.resize(n);
     std::int16_t* values = buffers->lines.data();
     const std::size_t first = static_cast<std::size_t>(x) * slab;
+    // The marked rows one after another, then transposed to lie side by side (and back).
+    const auto span = static_cast<std::size_t>(end - begin);
+    std::vector<std::int16_t>& gathered = scratch->gathered;
+    if (gathered.size() < n) gathered.resize(n);
     for (int l = 0; l < count; ++l) {
       const std::int16_t* in = pass2_narrow_.data() + first +
                                static_cast<std::size_t>(lanes[static_cast<std::size_t>(l)]) * nz;
-      for (int z = begin; z < end; ++z) {
-        values[static_cast<std::size_t>(z - begin) * lanes.size() + l] = in[z];
-      }
+      std::copy(in + begin, in + end, gathered.data() + static_cast<std::size_t>(l) * span);
     }
+    esdf_kernel::transpose16(gathered.data(), span, values, lanes.size(), count, end - begin);
     esdf_kernel::transformLines(values, end - begin, count, cap_sq_, cap_d_, buffers);
+    esdf_kernel::transpose16(values, lanes.size(), gathered.data(), span, end - begin, count);
     for (int l = 0; l < count; ++l) {
       const int y = lanes[static_cast<std::size_t>(l)];
       const std::size_t row = first + static_cast<std::size_t>(y) * nz;
       float* field = field_.data() + row;
+      const std::int16_t* fresh = gathered.data() + static_cast<std::size_t>(l) * span;
       const int z_end = std::min(nz, mark_hi[y] + reach + 1);
       for (int z = std::max(0, mark_lo[y] - reach); z < z_end; ++z) {
-        const float m = metres(values[static_cast<std::size_t>(z - begin) * lanes.size() + l]);
+        const float m = metres(fresh[z - begin]);
         if (m != field[z]) {
           field[z] = m;
           changed_cells_.push_back(static_cast<std::uint32_t>(row + static_cast<std::size_t>(z)));
@@ -1034,7 +1039,7 @@ std::size_t EsdfMap::memoryBytes() const {
               s.near_obstacle.capacity() + s.line.capacity() + s.sweep.capacity()) *
                  sizeof(std::int32_t) +
              (s.out_keys64.capacity() + s.in_keys64.capacity()) * sizeof(std::int64_t) +
-             s.lanes.capacity() * sizeof(int) +
+             s.lanes.capacity() * sizeof(int) + s.gathered.capacity() * sizeof(std::int16_t) +
              (s.window.magnitude.capacity() + s.window.best.capacity() +
               s.window.near_free.capacity() + s.window.near_obstacle.capacity() +
               s.window.lines.capacity() + s.window.transposed.capacity() +

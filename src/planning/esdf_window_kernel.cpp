@@ -254,6 +254,11 @@ inline __attribute__((always_inline)) void transpose(const std::int16_t* __restr
 
 }  // namespace
 
+void transpose16(const std::int16_t* src, std::size_t src_stride, std::int16_t* dst,
+                 std::size_t dst_stride, int rows, int cols) {
+  transpose(src, src_stride, dst, dst_stride, rows, cols);
+}
+
 bool windowFits(std::int32_t cap_sq, std::int32_t cap_d) {
   // inf + k^2 <= 2 cap_sq + 1 and (cap_d + 1)^2 must fit 16 bits.
   return cap_d >= 1 && cap_d <= kMaxWindowCapCells && 2 * cap_sq + 1 < 32767;

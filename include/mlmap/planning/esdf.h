@@ -259,6 +259,7 @@ class EsdfMap {
     std::vector<std::int32_t> sweep;          ///< x pass: 32-bit results before the 8-bit copy
     esdf_kernel::WindowBuffers window;        ///< the windowed passes' slab buffers
     std::vector<int> lanes;                   ///< update(): the lines of a slab transformed
+    std::vector<std::int16_t> gathered;       ///< update(): those lines one after another
   };
 
   /// Unknown bit of box-relative voxel (x, y, z) (inside the box).

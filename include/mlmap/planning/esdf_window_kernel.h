@@ -16,6 +16,7 @@
 /// lines side by side along y in a transposed copy), so the compiler vectorises them; there is
 /// no branch on the data. The result is bit-identical to the envelope code (both are exact).
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -57,6 +58,11 @@ struct WindowBuffers {
   std::vector<std::int16_t> transposed;  ///< y pass: the slab's lines being transformed
   std::vector<std::int16_t> signed_sq;   ///< the slab z-major: y pass's result, then z pass's
 };
+
+/// dst[c * dst_stride + r] = src[r * src_stride + c] for r < rows, c < cols: a transposition of
+/// 16-bit values, in 8 x 8 blocks through SSE2 registers where it can.
+void transpose16(const std::int16_t* src, std::size_t src_stride, std::int16_t* dst,
+                 std::size_t dst_stride, int rows, int cols);
 
 /// Transforms `lanes` lines of n values side by side, in place: values[i * lanes + l] is value
 /// i of line l, a signed squared distance (+ non-obstacle, - obstacle) or +-inf (cap_sq + 1).
