@@ -739,16 +739,8 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
     std::int16_t* values = buffers->lines.data();
     const std::int8_t* in = pass1_narrow_.data() + static_cast<std::size_t>(x) * slab +
                             static_cast<std::size_t>(z_first);
-    for (int y = begin; y < end; ++y) {
-      const std::int8_t* row = in + static_cast<std::size_t>(y) * nz;
-      std::int16_t* out = values + static_cast<std::size_t>(y - begin) * width;
-      for (std::size_t l = 0; l < width; ++l) {
-        const std::int32_t v = row[l];
-        const std::int32_t a = v < 0 ? -v : v;
-        const std::int32_t sq = a <= cap_d_ ? a * a : inf_;
-        out[l] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
-      }
-    }
+    esdf_kernel::squareDistances(in + static_cast<std::size_t>(begin) * nz, static_cast<std::size_t>(nz),
+                                 end - begin, count, cap_sq_, cap_d_, values);
     esdf_kernel::transformLines(values, end - begin, count, cap_sq_, cap_d_, buffers);
     std::int16_t* slab_values = pass2_narrow_.data() + static_cast<std::size_t>(x) * slab;
     int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
@@ -769,7 +761,9 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
     }
   }
 
-  // Pass 3: per x slab, the marked z lines side by side, into the field.
+  // Pass 3: per x slab, the marked z lines side by side, into the field (the metres table is
+  // there: windowFits() keeps 2 inf_ + 1 below its limit).
+  const float* table = metres_table_.data() + inf_;
   for (int x = 0; x < nx; ++x) {
     const int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
     const int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
@@ -810,7 +804,7 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
       const std::int16_t* fresh = gathered.data() + static_cast<std::size_t>(l) * span;
       const int z_end = std::min(nz, mark_hi[y] + reach + 1);
       for (int z = std::max(0, mark_lo[y] - reach); z < z_end; ++z) {
-        const float m = metres(fresh[z - begin]);
+        const float m = table[fresh[z - begin]];
         if (m != field[z]) {
           field[z] = m;
           changed_cells_.push_back(static_cast<std::uint32_t>(row + static_cast<std::size_t>(z)));
