@@ -19,10 +19,10 @@
 /// On a plane through cell centres the trilinear gradient jumps (the field is continuous, its
 /// gradient is not); there either side's gradient may be returned, as the rounding of the
 /// point's grid coordinate falls, by either query. Everything else is EsdfMap::query()'s
-/// definition: the value is held constant across the
-/// box's faces within half a voxel of them (the padding cells repeat the border cells, so the
-/// gradient's component along the face normal is 0 there), and a point outside the box gives
-/// distance 0, gradient 0 and valid = false.
+/// definition: the value is held constant across the box's faces within half a voxel of them
+/// (the padding cells repeat the border cells, so the gradient's component along the face
+/// normal is 0 there), and a point outside the box gives distance 0, gradient 0 and
+/// valid = false.
 
 #include "mlmap/planning/esdf.h"
 
