@@ -251,7 +251,8 @@ MemoryEstimate estimateMemory(const MapConfig& c) {
   // Bytes per voxel, read off the engine's accounting (docs/performance.md, "Memory").
   constexpr double kLocalPerVoxel = 2.05;      // int16 log-odds plus per-submap bookkeeping
   constexpr double kSnapshotPerVoxel = 4.0;    // two int16 window copies
-  constexpr double kEsdfPerBoxVoxel = 23.6;    // field, passes 1-2, kept states; 2 copies
+  constexpr double kEsdfPerBoxVoxel = 20.6;    // field, passes 1-2 (8 + 16 bits with the
+                                               // windowed passes), kept states; 2 copies
   constexpr double kAwarenessCellBytes = 9.0;  // per cylindrical cell: state, bins, scratch
   MemoryEstimate e;
   const Eigen::Vector3i& n = c.local_map.size_cells;

@@ -8,12 +8,16 @@
 #include <stdexcept>
 #include <system_error>
 #include <thread>
+#include <type_traits>
 
 namespace mlmap {
 namespace {
 
 /// Rows (y) swept together by the x pass.
 constexpr int kRowBlock = 32;
+/// The same where the x pass's results are kept in 8 bits (the windowed passes): its 32-bit
+/// work buffer over the whole x extent of that many rows stays in the L2 cache.
+constexpr int kNarrowRowBlock = 8;
 /// Largest metres lookup table (entries); larger caps use sqrt directly.
 constexpr std::size_t kMaxLookupEntries = std::size_t{1} << 16;
 /// Largest accepted |index| of the box corners (keeps grid coordinates far from int overflow).
@@ -273,13 +277,14 @@ void transformLine(Line line, int n, std::int32_t cap, std::int32_t cap_d,
 }
 
 /// Pass 1 over a block of `n` consecutive voxels of every x slab (one or more y rows, z
-/// fastest): states at states + x * state_stride, results at out + x * out_stride. Built for
-/// AVX2 / AVX-512 too (MLMAP_ESDF_CLONES): its sweeps vectorise.
+/// fastest): states at states + x * state_stride, results at out + x * out_stride; with
+/// `narrow`, each x's results are also written there in 8 bits (narrow + x * narrow_stride;
+/// inf must then fit). Built for AVX2 / AVX-512 too (MLMAP_ESDF_CLONES): its sweeps vectorise.
 MLMAP_ESDF_CLONES
 void sweepBlock(const std::uint8_t* states, std::size_t state_stride, std::int32_t* out,
                 std::size_t out_stride, int nx, int n, std::int32_t* near_free,
                 std::int32_t* near_obstacle, std::int32_t unknown_is_obstacle, std::int32_t cap_d,
-                std::int32_t inf) {
+                std::int32_t inf, std::int8_t* narrow = nullptr, std::size_t narrow_stride = 0) {
   constexpr std::int32_t kFar = std::int32_t{1} << 24;  // beyond any cap_d
   std::fill(near_free, near_free + n, -kFar);
   std::fill(near_obstacle, near_obstacle + n, -kFar);
@@ -291,8 +296,11 @@ void sweepBlock(const std::uint8_t* states, std::size_t state_stride, std::int32
   std::fill(near_free, near_free + n, nx - 1 + kFar);
   std::fill(near_obstacle, near_obstacle + n, nx - 1 + kFar);
   for (int x = nx - 1; x >= 0; --x) {
-    sweepBackward(out + static_cast<std::size_t>(x) * out_stride, near_free, near_obstacle, n, x,
-                  cap_d, inf);
+    std::int32_t* a = out + static_cast<std::size_t>(x) * out_stride;
+    sweepBackward(a, near_free, near_obstacle, n, x, cap_d, inf);
+    if (narrow == nullptr) continue;
+    std::int8_t* to = narrow + static_cast<std::size_t>(x) * narrow_stride;
+    for (int z = 0; z < n; ++z) to[z] = static_cast<std::int8_t>(a[z]);
   }
 }
 
@@ -397,14 +405,17 @@ void EsdfMap::prepare(const OccupancyBox& box) {
   const std::size_t slab_words = (static_cast<std::size_t>(ny) * nz + 63) / 64;
   slab_bits_ = slab_words * 64;
   unknown_bits_.resize(slab_words * static_cast<std::size_t>(nx));
-  pass1_.resize(cells);
-  // Pass 2's results in 16 bits where the windowed passes apply (they fit: at most inf_), in 32
-  // otherwise; the other buffer stays empty.
+  // Pass 1's results in 8 bits (+-(cap_d_ + 1) beyond the cap) and pass 2's in 16 where the
+  // windowed passes apply (they fit), in 32 otherwise; the other buffers stay empty.
   if (window_kernel_) {
+    pass1_.clear();
     pass2_.clear();
+    pass1_narrow_.resize(cells);
     pass2_narrow_.resize(cells);
   } else {
+    pass1_narrow_.clear();
     pass2_narrow_.clear();
+    pass1_.resize(cells);
     pass2_.resize(cells);
   }
   kept_states_.resize(cells);
@@ -418,6 +429,13 @@ void EsdfMap::prepare(const OccupancyBox& box) {
     if (s.near_free.size() < row_block) {
       s.near_free.resize(row_block);
       s.near_obstacle.resize(row_block);
+    }
+    if (window_kernel_) {
+      const std::size_t narrow_block =
+          static_cast<std::size_t>(std::min(kNarrowRowBlock, ny)) * static_cast<std::size_t>(nz);
+      if (s.sweep.size() < narrow_block * static_cast<std::size_t>(nx)) {
+        s.sweep.resize(narrow_block * static_cast<std::size_t>(nx));
+      }
     }
     if (s.runs.size() >= longest) continue;
     for (std::vector<std::int32_t>* v :
@@ -592,23 +610,28 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
     const int x_end = std::min(nx, x_hi + 2 * reach + 1);
     sweepBlock(states + static_cast<std::size_t>(x_begin) * slab + row, slab, row_buffer_.data(),
                static_cast<std::size_t>(n), x_end - x_begin, n, scratch->near_free.data(),
-               scratch->near_obstacle.data(), unknown_is_obstacle, cap_d_, inf_);
+               scratch->near_obstacle.data(), unknown_is_obstacle, cap_d_, pass1Inf());
     const int compare_end = std::min(nx, x_hi + reach + 1);
-    for (int x = std::max(0, x_lo - reach); x < compare_end; ++x) {
+    // Writes the fresh results over the kept ones (32 or 8 bits), marking the changed ones.
+    const auto merge = [&](auto* kept_pass1, int x) {
       const std::int32_t* fresh =
           row_buffer_.data() + static_cast<std::size_t>(x - x_begin) * static_cast<std::size_t>(n);
-      std::int32_t* old = pass1_.data() + static_cast<std::size_t>(x) * slab + row;
-      if (std::memcmp(fresh, old, static_cast<std::size_t>(n) * sizeof(std::int32_t)) == 0) {
-        continue;
-      }
+      auto* old = kept_pass1 + static_cast<std::size_t>(x) * slab + row;
       int* lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz + z_lo;
       int* hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz + z_lo;
       for (int z = 0; z < n; ++z) {
         if (fresh[z] != old[z]) {
-          old[z] = fresh[z];
+          old[z] = static_cast<std::remove_reference_t<decltype(old[z])>>(fresh[z]);
           lo[z] = std::min(lo[z], y);
           hi[z] = std::max(hi[z], y);
         }
+      }
+    };
+    for (int x = std::max(0, x_lo - reach); x < compare_end; ++x) {
+      if (window_kernel_) {
+        merge(pass1_narrow_.data(), x);
+      } else {
+        merge(pass1_.data(), x);
       }
     }
   }
@@ -714,18 +737,10 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
     const std::size_t n = static_cast<std::size_t>(end - begin) * width;
     if (buffers->lines.size() < n) buffers->lines.resize(n);
     std::int16_t* values = buffers->lines.data();
-    const std::int32_t* in = pass1_.data() + static_cast<std::size_t>(x) * slab +
-                             static_cast<std::size_t>(z_first);
-    for (int y = begin; y < end; ++y) {
-      const std::int32_t* row = in + static_cast<std::size_t>(y) * nz;
-      std::int16_t* out = values + static_cast<std::size_t>(y - begin) * width;
-      for (std::size_t l = 0; l < width; ++l) {
-        const std::int32_t v = row[l];
-        const std::int32_t a = v < 0 ? -v : v;
-        const std::int32_t sq = a <= cap_d_ ? a * a : inf_;
-        out[l] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
-      }
-    }
+    const std::int8_t* in = pass1_narrow_.data() + static_cast<std::size_t>(x) * slab +
+                            static_cast<std::size_t>(z_first);
+    esdf_kernel::squareDistances(in + static_cast<std::size_t>(begin) * nz, static_cast<std::size_t>(nz),
+                                 end - begin, count, cap_sq_, cap_d_, values);
     esdf_kernel::transformLines(values, end - begin, count, cap_sq_, cap_d_, buffers);
     std::int16_t* slab_values = pass2_narrow_.data() + static_cast<std::size_t>(x) * slab;
     int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
@@ -746,7 +761,9 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
     }
   }
 
-  // Pass 3: per x slab, the marked z lines side by side, into the field.
+  // Pass 3: per x slab, the marked z lines side by side, into the field (the metres table is
+  // there: windowFits() keeps 2 inf_ + 1 below its limit).
+  const float* table = metres_table_.data() + inf_;
   for (int x = 0; x < nx; ++x) {
     const int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
     const int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
@@ -768,21 +785,26 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
     if (buffers->lines.size() < n) buffers->lines.resize(n);
     std::int16_t* values = buffers->lines.data();
     const std::size_t first = static_cast<std::size_t>(x) * slab;
+    // The marked rows one after another, then transposed to lie side by side (and back).
+    const auto span = static_cast<std::size_t>(end - begin);
+    std::vector<std::int16_t>& gathered = scratch->gathered;
+    if (gathered.size() < n) gathered.resize(n);
     for (int l = 0; l < count; ++l) {
       const std::int16_t* in = pass2_narrow_.data() + first +
                                static_cast<std::size_t>(lanes[static_cast<std::size_t>(l)]) * nz;
-      for (int z = begin; z < end; ++z) {
-        values[static_cast<std::size_t>(z - begin) * lanes.size() + l] = in[z];
-      }
+      std::copy(in + begin, in + end, gathered.data() + static_cast<std::size_t>(l) * span);
     }
+    esdf_kernel::transpose16(gathered.data(), span, values, lanes.size(), count, end - begin);
     esdf_kernel::transformLines(values, end - begin, count, cap_sq_, cap_d_, buffers);
+    esdf_kernel::transpose16(values, lanes.size(), gathered.data(), span, end - begin, count);
     for (int l = 0; l < count; ++l) {
       const int y = lanes[static_cast<std::size_t>(l)];
       const std::size_t row = first + static_cast<std::size_t>(y) * nz;
       float* field = field_.data() + row;
+      const std::int16_t* fresh = gathered.data() + static_cast<std::size_t>(l) * span;
       const int z_end = std::min(nz, mark_hi[y] + reach + 1);
       for (int z = std::max(0, mark_lo[y] - reach); z < z_end; ++z) {
-        const float m = metres(values[static_cast<std::size_t>(z - begin) * lanes.size() + l]);
+        const float m = table[fresh[z - begin]];
         if (m != field[z]) {
           field[z] = m;
           changed_cells_.push_back(static_cast<std::uint32_t>(row + static_cast<std::size_t>(z)));
@@ -796,6 +818,17 @@ void EsdfMap::sweepRows(const std::uint8_t* states, int y_begin, int y_end, Scra
   const int nz = size_.z();
   const std::size_t slab = static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(nz);
   const std::int32_t unknown_is_obstacle = config_.unknown_as == UnknownAs::kOccupied ? 1 : 0;
+  if (window_kernel_) {
+    // kNarrowRowBlock rows at a time through the scratch buffer, out in 8 bits.
+    for (int y0 = y_begin; y0 < y_end; y0 += kNarrowRowBlock) {
+      const std::size_t row = static_cast<std::size_t>(y0) * nz;
+      const int n = std::min(kNarrowRowBlock, y_end - y0) * nz;
+      sweepBlock(states + row, slab, scratch->sweep.data(), static_cast<std::size_t>(n),
+                 size_.x(), n, scratch->near_free.data(), scratch->near_obstacle.data(),
+                 unknown_is_obstacle, cap_d_, pass1Inf(), pass1_narrow_.data() + row, slab);
+    }
+    return;
+  }
   // kRowBlock rows (y) at a time: each x step then reads one contiguous run of the arrays.
   for (int y0 = y_begin; y0 < y_end; y0 += kRowBlock) {
     const std::size_t row = static_cast<std::size_t>(y0) * nz;
@@ -856,16 +889,18 @@ void EsdfMap::transformSlabs(const std::uint8_t* states, int x_begin, int x_end,
   for (int x = x_begin; x < x_end; ++x) {
     const std::size_t first = static_cast<std::size_t>(x) * slab;
     float* field = field_.data() + first;
-    if (window_kernel_ && table != nullptr) {
-      // Both passes on 16-bit copies of the slab (see esdf_window_kernel.h).
+    if (window_kernel_) {
+      // Both passes on 16-bit copies of the slab (see esdf_window_kernel.h); the metres table
+      // is there (windowFits() keeps 2 inf_ + 1 below its limit).
       esdf_kernel::WindowBuffers* buffers = &scratch->window;
-      esdf_kernel::transformSlabY(pass1_.data() + first, ny, nz, cap_sq_, cap_d_,
+      esdf_kernel::transformSlabY(pass1_narrow_.data() + first, ny, nz, cap_sq_, cap_d_,
                                   pass2_narrow_.data() + first, buffers);
       esdf_kernel::transformSlabZ(ny, nz, cap_sq_, cap_d_, buffers);
       const std::int16_t* values = buffers->signed_sq.data();  // z-major
+      const auto lanes = static_cast<std::size_t>(esdf_kernel::paddedLanes(ny));
       for (int y = 0; y < ny; ++y) {
         float* out = field + static_cast<std::size_t>(y) * nz;
-        for (int z = 0; z < nz; ++z) out[z] = table[values[static_cast<std::size_t>(z) * ny + y]];
+        for (int z = 0; z < nz; ++z) out[z] = table[values[static_cast<std::size_t>(z) * lanes + y]];
       }
       writeUnknownBits(states, x);
       continue;
@@ -983,6 +1018,7 @@ std::size_t EsdfMap::memoryBytes() const {
                       (pass1_.capacity() + pass2_.capacity() + row_buffer_.capacity()) *
                           sizeof(std::int32_t) +
                       pass2_narrow_.capacity() * sizeof(std::int16_t) +
+                      pass1_narrow_.capacity() * sizeof(std::int8_t) +
                       kept_states_.capacity() +
                       (dirty_y_lo_.capacity() + dirty_y_hi_.capacity() + dirty_z_lo_.capacity() +
                        dirty_z_hi_.capacity()) * sizeof(int) +
@@ -994,10 +1030,10 @@ std::size_t EsdfMap::memoryBytes() const {
   for (const Scratch& s : scratch_) {
     bytes += (s.runs.capacity() + s.out_sites.capacity() + s.in_sites.capacity() +
               s.out_keys32.capacity() + s.in_keys32.capacity() + s.near_free.capacity() +
-              s.near_obstacle.capacity() + s.line.capacity()) *
+              s.near_obstacle.capacity() + s.line.capacity() + s.sweep.capacity()) *
                  sizeof(std::int32_t) +
              (s.out_keys64.capacity() + s.in_keys64.capacity()) * sizeof(std::int64_t) +
-             s.lanes.capacity() * sizeof(int) +
+             s.lanes.capacity() * sizeof(int) + s.gathered.capacity() * sizeof(std::int16_t) +
              (s.window.magnitude.capacity() + s.window.best.capacity() +
               s.window.near_free.capacity() + s.window.near_obstacle.capacity() +
               s.window.lines.capacity() + s.window.transposed.capacity() +

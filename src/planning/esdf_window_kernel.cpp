@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cstddef>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace mlmap::esdf_kernel {
 namespace {
 
@@ -190,7 +194,88 @@ inline __attribute__((always_inline)) std::int16_t* prepareBuffers(int n, int la
   return m;
 }
 
+/// dst[c * dst_stride + r] = src[r * src_stride + c] for r < rows, c < cols (16-bit values):
+/// 8 x 8 blocks through SSE2 registers where there are, the rest one value at a time.
+inline __attribute__((always_inline)) void transpose(const std::int16_t* __restrict src,
+                                                     std::size_t src_stride,
+                                                     std::int16_t* __restrict dst,
+                                                     std::size_t dst_stride, int rows, int cols) {
+  int r0 = 0;
+#if defined(__SSE2__)
+  for (; r0 + 8 <= rows; r0 += 8) {
+    int c0 = 0;
+    for (; c0 + 8 <= cols; c0 += 8) {
+      const std::int16_t* s = src + static_cast<std::size_t>(r0) * src_stride + c0;
+      __m128i a[8];
+      for (std::size_t i = 0; i < 8; ++i) {
+        a[i] = _mm_loadu_si128(reinterpret_cast<const __m128i*>(s + i * src_stride));
+      }
+      // Interleave 16-, 32-, then 64-bit pieces: row i of the result is column i of the block.
+      const __m128i b0 = _mm_unpacklo_epi16(a[0], a[1]);
+      const __m128i b1 = _mm_unpackhi_epi16(a[0], a[1]);
+      const __m128i b2 = _mm_unpacklo_epi16(a[2], a[3]);
+      const __m128i b3 = _mm_unpackhi_epi16(a[2], a[3]);
+      const __m128i b4 = _mm_unpacklo_epi16(a[4], a[5]);
+      const __m128i b5 = _mm_unpackhi_epi16(a[4], a[5]);
+      const __m128i b6 = _mm_unpacklo_epi16(a[6], a[7]);
+      const __m128i b7 = _mm_unpackhi_epi16(a[6], a[7]);
+      const __m128i c0v = _mm_unpacklo_epi32(b0, b2);
+      const __m128i c1v = _mm_unpackhi_epi32(b0, b2);
+      const __m128i c2v = _mm_unpacklo_epi32(b1, b3);
+      const __m128i c3v = _mm_unpackhi_epi32(b1, b3);
+      const __m128i c4v = _mm_unpacklo_epi32(b4, b6);
+      const __m128i c5v = _mm_unpackhi_epi32(b4, b6);
+      const __m128i c6v = _mm_unpacklo_epi32(b5, b7);
+      const __m128i c7v = _mm_unpackhi_epi32(b5, b7);
+      const __m128i out[8] = {_mm_unpacklo_epi64(c0v, c4v), _mm_unpackhi_epi64(c0v, c4v),
+                              _mm_unpacklo_epi64(c1v, c5v), _mm_unpackhi_epi64(c1v, c5v),
+                              _mm_unpacklo_epi64(c2v, c6v), _mm_unpackhi_epi64(c2v, c6v),
+                              _mm_unpacklo_epi64(c3v, c7v), _mm_unpackhi_epi64(c3v, c7v)};
+      std::int16_t* d = dst + static_cast<std::size_t>(c0) * dst_stride + r0;
+      for (std::size_t i = 0; i < 8; ++i) {
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(d + i * dst_stride), out[i]);
+      }
+    }
+    for (; c0 < cols; ++c0) {
+      for (int r = r0; r < r0 + 8; ++r) {
+        dst[static_cast<std::size_t>(c0) * dst_stride + r] =
+            src[static_cast<std::size_t>(r) * src_stride + c0];
+      }
+    }
+  }
+#endif
+  for (int r = r0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      dst[static_cast<std::size_t>(c) * dst_stride + r] =
+          src[static_cast<std::size_t>(r) * src_stride + c];
+    }
+  }
+}
+
 }  // namespace
+
+void transpose16(const std::int16_t* src, std::size_t src_stride, std::int16_t* dst,
+                 std::size_t dst_stride, int rows, int cols) {
+  transpose(src, src_stride, dst, dst_stride, rows, cols);
+}
+
+MLMAP_ESDF_CLONES
+void squareDistances(const std::int8_t* in, std::size_t in_stride, int rows, int width,
+                     std::int32_t cap_sq, std::int32_t cap_d, std::int16_t* out) {
+  // 16-bit arithmetic (|d| <= 127, d^2 and inf fit), which SSE2 multiplies too.
+  const auto inf = static_cast<std::int16_t>(cap_sq + 1);
+  const auto cap = static_cast<std::int16_t>(cap_d);
+  for (int r = 0; r < rows; ++r) {
+    const std::int8_t* row = in + static_cast<std::size_t>(r) * in_stride;
+    std::int16_t* to = out + static_cast<std::size_t>(r) * static_cast<std::size_t>(width);
+    for (int c = 0; c < width; ++c) {
+      const std::int16_t v = row[c];
+      const auto a = static_cast<std::int16_t>(v < 0 ? -v : v);
+      const auto sq = static_cast<std::int16_t>(a <= cap ? static_cast<std::int16_t>(a * a) : inf);
+      to[c] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
+    }
+  }
+}
 
 bool windowFits(std::int32_t cap_sq, std::int32_t cap_d) {
   // inf + k^2 <= 2 cap_sq + 1 and (cap_d + 1)^2 must fit 16 bits.
@@ -198,29 +283,46 @@ bool windowFits(std::int32_t cap_sq, std::int32_t cap_d) {
 }
 
 MLMAP_ESDF_CLONES
-void transformSlabY(const std::int32_t* pass1, int ny, int nz, std::int32_t cap_sq,
+void transformSlabY(const std::int8_t* pass1, int ny, int nz, std::int32_t cap_sq,
                     std::int32_t cap_d, std::int16_t* pass2, WindowBuffers* buffers) {
   const auto inf = static_cast<std::int16_t>(cap_sq + 1);
-  const std::size_t cells = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
-  ensure(&buffers->signed_sq, cells);
-  ensure(&buffers->transposed, cells);
-  std::int16_t* m = prepareBuffers(ny, nz, cap_d, inf, buffers);
+  // The y lines across paddedLanes(nz) lanes, the z lines across paddedLanes(ny).
+  const int z_lanes = paddedLanes(nz);
+  const int y_lanes = paddedLanes(ny);
+  const std::size_t z_row = static_cast<std::size_t>(z_lanes);
+  const std::size_t y_row = static_cast<std::size_t>(y_lanes);
+  ensure(&buffers->signed_sq, static_cast<std::size_t>(nz) * y_row);
+  ensure(&buffers->transposed, static_cast<std::size_t>(ny) * z_row);
+  std::int16_t* m = prepareBuffers(ny, z_lanes, cap_d, inf, buffers);
   std::int16_t* values = buffers->transposed.data();
-  // The x pass's distance squared (it is at most cap_d, or inf), signed.
-  for (std::size_t i = 0; i < cells; ++i) {
-    const std::int32_t v = pass1[i];
-    const std::int32_t a = v < 0 ? -v : v;
-    const std::int32_t sq = a <= cap_d ? a * a : std::int32_t{inf};
-    m[i] = static_cast<std::int16_t>(sq);
-    values[i] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
-  }
-  windowPass(values, m, ny, nz, cap_sq, cap_d, buffers);
-  // Out to pass 2 (y-major) and, transposed, to the z pass's lines (z-major).
-  std::int16_t* out = buffers->signed_sq.data();
-  std::copy(values, values + cells, pass2);
+  // The x pass's distance squared (it is at most cap_d, or inf), signed; +inf in the extra
+  // lanes.
   for (int y = 0; y < ny; ++y) {
-    const std::int16_t* v = values + static_cast<std::size_t>(y) * static_cast<std::size_t>(nz);
-    for (int z = 0; z < nz; ++z) out[static_cast<std::size_t>(z) * ny + y] = v[z];
+    const std::int8_t* in = pass1 + static_cast<std::size_t>(y) * static_cast<std::size_t>(nz);
+    std::int16_t* m_row = m + static_cast<std::size_t>(y) * z_row;
+    std::int16_t* v_row = values + static_cast<std::size_t>(y) * z_row;
+    for (int z = 0; z < nz; ++z) {
+      const std::int32_t v = in[z];
+      const std::int32_t a = v < 0 ? -v : v;
+      const std::int32_t sq = a <= cap_d ? a * a : std::int32_t{inf};
+      m_row[z] = static_cast<std::int16_t>(sq);
+      v_row[z] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
+    }
+    std::fill(m_row + nz, m_row + z_lanes, inf);
+    std::fill(v_row + nz, v_row + z_lanes, inf);
+  }
+  windowPass(values, m, ny, z_lanes, cap_sq, cap_d, buffers);
+  // Out to pass 2 (y-major) and, transposed, to the z pass's lines (z-major, +inf in the extra
+  // lanes).
+  std::int16_t* out = buffers->signed_sq.data();
+  for (int y = 0; y < ny; ++y) {
+    const std::int16_t* v = values + static_cast<std::size_t>(y) * z_row;
+    std::copy(v, v + nz, pass2 + static_cast<std::size_t>(y) * static_cast<std::size_t>(nz));
+  }
+  transpose(values, z_row, out, y_row, ny, nz);
+  for (int z = 0; z < nz; ++z) {
+    std::int16_t* row = out + static_cast<std::size_t>(z) * y_row;
+    std::fill(row + ny, row + y_lanes, inf);
   }
 }
 
@@ -239,7 +341,7 @@ void transformLines(std::int16_t* values, int n, int lanes, std::int32_t cap_sq,
 void transformSlabZ(int ny, int nz, std::int32_t cap_sq, std::int32_t cap_d,
                     WindowBuffers* buffers) {
   // z-major: the z lines across the y lanes.
-  transformLines(buffers->signed_sq.data(), nz, ny, cap_sq, cap_d, buffers);
+  transformLines(buffers->signed_sq.data(), nz, paddedLanes(ny), cap_sq, cap_d, buffers);
 }
 
 }  // namespace mlmap::esdf_kernel

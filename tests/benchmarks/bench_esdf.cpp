@@ -15,6 +15,7 @@
 #include "mlmap/datasets/world_yaml.h"
 #include "mlmap/eval/sim_flight.h"
 #include "mlmap/planning/esdf.h"
+#include "mlmap/planning/esdf_query_grid.h"
 #include "mlmap/sim/world.h"
 #include "../support/random_draws.h"
 
@@ -89,6 +90,12 @@ struct Row {
   double checksum = 0.0;
   double random_checksum = 0.0;  ///< query()'s sum at the random points
   double batch_checksum = 0.0;   ///< queryBatch()'s at the same points (equal)
+  double grid_build_ms = 0.0;    ///< EsdfQueryGrid::build() from the map, median
+  std::size_t grid_bytes = 0;    ///< the query grid's memory
+  double grid_random = 0.0;      ///< M queries/s of EsdfQueryGrid::query() at the random points
+  double grid_path = 0.0;        ///< ... along the segments
+  double grid_batch = 0.0;       ///< ... EsdfQueryGrid::queryBatch() at the random points
+  double grid_max_error_m = 0.0;  ///< largest |grid - exact| distance at the random points
 };
 
 Row run(const std::string& name, const OccupancyBox& box, UnknownAs unknown_as, int threads,
@@ -133,23 +140,22 @@ Row run(const std::string& name, const OccupancyBox& box, UnknownAs unknown_as, 
       path_points.push_back(start + dir * (0.05 * i));
     }
   }
-  const auto throughput = [&](const std::vector<Eigen::Vector3d>& points, double* checksum) {
+  const auto throughput = [&](const auto& source, const std::vector<Eigen::Vector3d>& points,
+                              double* checksum) {
     double sum = 0.0;
     const std::size_t mask = points.size() - 1;
     const Clock::time_point start = Clock::now();
     for (int i = 0; i < queries; ++i) {
-      const EsdfMap::Query q = map.query(points[static_cast<std::size_t>(i) & mask]);
+      const EsdfMap::Query q = source.query(points[static_cast<std::size_t>(i) & mask]);
       sum += q.distance_m + q.gradient.sum() + (q.valid ? 1.0 : 0.0);
     }
     const double seconds = msSince(start) / 1e3;
     *checksum += sum;
     return queries / seconds / 1e6;
   };
-  row.mqueries_random = throughput(random_points, &row.random_checksum);
-  row.mqueries_path = throughput(path_points, &row.checksum);
   // The same random points through queryBatch(), 256 at a time; its checksum must equal the
   // loop's (the same results).
-  {
+  const auto batch_throughput = [&](const auto& source, double* checksum) {
     constexpr std::size_t kBatch = 256;
     std::vector<EsdfMap::Query> results(kBatch);
     double sum = 0.0;
@@ -157,14 +163,36 @@ Row run(const std::string& name, const OccupancyBox& box, UnknownAs unknown_as, 
     const Clock::time_point start = Clock::now();
     for (std::size_t i = 0; i < static_cast<std::size_t>(queries); i += kBatch) {
       const std::size_t n = std::min(kBatch, static_cast<std::size_t>(queries) - i);
-      map.queryBatch(random_points.data() + (i & mask), n, results.data());
+      source.queryBatch(random_points.data() + (i & mask), n, results.data());
       for (std::size_t j = 0; j < n; ++j) {
         sum += results[j].distance_m + results[j].gradient.sum() + (results[j].valid ? 1.0 : 0.0);
       }
     }
     const double seconds = msSince(start) / 1e3;
-    row.mqueries_batch = queries / seconds / 1e6;
-    row.batch_checksum = sum;
+    *checksum = sum;
+    return queries / seconds / 1e6;
+  };
+  row.mqueries_random = throughput(map, random_points, &row.random_checksum);
+  row.mqueries_path = throughput(map, path_points, &row.checksum);
+  row.mqueries_batch = batch_throughput(map, &row.batch_checksum);
+
+  // The quantised query grid: its build from the map, its queries at the same points.
+  EsdfQueryGrid grid;
+  std::vector<double> build_ms;
+  for (int r = 0; r < std::max(3, repeats / 4); ++r) {
+    const Clock::time_point start = Clock::now();
+    grid.build(map);
+    build_ms.push_back(msSince(start));
+  }
+  row.grid_build_ms = percentile(&build_ms, 0.5);
+  row.grid_bytes = grid.memoryBytes();
+  double grid_checksum = 0.0;
+  row.grid_random = throughput(grid, random_points, &grid_checksum);
+  row.grid_path = throughput(grid, path_points, &grid_checksum);
+  row.grid_batch = batch_throughput(grid, &grid_checksum);
+  for (const Eigen::Vector3d& p : random_points) {
+    row.grid_max_error_m = std::max(row.grid_max_error_m,
+                                    std::abs(grid.query(p).distance_m - map.query(p).distance_m));
   }
   return row;
 }
@@ -177,6 +205,10 @@ void print(const Row& r, std::FILE* json, bool last) {
                 r.median_ms, r.p99_ms,
                 static_cast<double>(r.memory_bytes) / 1e6, r.mqueries_random, r.mqueries_path,
                 r.mqueries_batch, r.checksum, r.random_checksum, r.batch_checksum);
+    std::printf("%-24s   query grid: build %.3f ms, %.1f MB, M queries/s random %.1f, paths %.1f, "
+                "batch %.1f; max distance error %.1f um\n",
+                "", r.grid_build_ms, static_cast<double>(r.grid_bytes) / 1e6, r.grid_random,
+                r.grid_path, r.grid_batch, r.grid_max_error_m * 1e6);
     return;
   }
   std::fprintf(json,
@@ -184,11 +216,13 @@ void print(const Row& r, std::FILE* json, bool last) {
                "\"threads\": %d, "
                "\"compute_ms\": {\"min\": %.4f, \"median\": %.4f, \"p99\": %.4f}, "
                "\"memory_bytes\": %zu, \"mqueries_per_s\": {\"random\": %.2f, \"path\": %.2f, "
-               "\"random_batch\": %.2f}}%s\n",
+               "\"random_batch\": %.2f}, \"query_grid\": {\"build_ms\": %.4f, \"bytes\": %zu, "
+               "\"mqueries_per_s\": {\"random\": %.2f, \"path\": %.2f, \"random_batch\": %.2f}, "
+               "\"max_error_m\": %.7f}}%s\n",
                r.name.c_str(), r.unknown_as.c_str(), r.passes.c_str(), r.threads, r.min_ms,
                r.median_ms, r.p99_ms, r.memory_bytes, r.mqueries_random, r.mqueries_path,
-               r.mqueries_batch,
-               last ? "" : ",");
+               r.mqueries_batch, r.grid_build_ms, r.grid_bytes, r.grid_random, r.grid_path,
+               r.grid_batch, r.grid_max_error_m, last ? "" : ",");
 }
 
 /// The window's states after each frame of the default flight mapped at `res` over a
@@ -238,6 +272,8 @@ struct StreamRow {
   double update_max_ms = 0.0;
   double full_median_ms = 0.0;
   double full_p99_ms = 0.0;
+  double grid_sync_median_ms = 0.0;  ///< EsdfQueryGrid::sync() after update(), per frame
+  double grid_sync_p99_ms = 0.0;
   int mismatched_frames = 0;  ///< frames where update() differs from compute() (must be 0)
   int edt_updates = 0;
   double edt_median_ms = -1.0;
@@ -274,6 +310,9 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
   EsdfMap incremental(config);
   EsdfMap full(config);
   if (boxes.size() < 2 || !incremental.update(boxes[0]) || !full.compute(boxes[0])) return row;
+  EsdfQueryGrid grid;  // kept up to date with the incremental field
+  grid.build(incremental);
+  std::vector<double> sync_ms;
   std::vector<double> update_ms;
   std::vector<double> full_ms;
   std::vector<double> same_box_ms;
@@ -296,6 +335,9 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
     Clock::time_point start = Clock::now();
     if (!incremental.update(box)) return row;
     update_ms.push_back(msSince(start));
+    start = Clock::now();
+    grid.sync(incremental);
+    sync_ms.push_back(msSince(start));
     const EsdfMap::UpdateStats& u = incremental.lastUpdate();
     row.shifted += u.shifted ? 1 : 0;
     row.full += u.full ? 1 : 0;
@@ -364,6 +406,8 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
   row.update_max_ms = percentile(&update_ms, 1.0);
   row.full_median_ms = percentile(&full_ms, 0.5);
   row.full_p99_ms = percentile(&full_ms, 0.99);
+  row.grid_sync_median_ms = percentile(&sync_ms, 0.5);
+  row.grid_sync_p99_ms = percentile(&sync_ms, 0.99);
   if (!edt_ms.empty()) {
     row.edt_updates = static_cast<int>(edt_ms.size());
     row.edt_median_ms = percentile(&edt_ms, 0.5);
@@ -376,13 +420,15 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
 void printStream(const StreamRow& r, std::FILE* json, bool last) {
   if (json == nullptr) {
     std::printf("%-10s %-9s %4d %4d %4d %8.0f %7.3f %7.3f %7.3f %7.3f %7.3f %4d | %4d %8.3f %8.3f "
-                "%7.3f %6.1fx  mismatched %zu of %zu (max %.3f m); lines %.0f %.0f %.0f\n",
+                "%7.3f %6.1fx  mismatched %zu of %zu (max %.3f m); lines %.0f %.0f %.0f; query "
+                "grid sync %.3f / %.3f ms\n",
                 r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full,
                 r.changed_states, r.update_median_ms, r.update_p99_ms, r.update_max_ms,
                 r.full_median_ms, r.full_p99_ms, r.mismatched_frames, r.edt_updates,
                 r.edt_median_ms, r.edt_p99_ms, r.same_box_median_ms,
                 r.same_box_median_ms > 0.0 ? r.edt_median_ms / r.same_box_median_ms : 0.0,
-                r.edt_mismatched, r.edt_compared, r.edt_max_error_m, r.rows, r.y_lines, r.z_lines);
+                r.edt_mismatched, r.edt_compared, r.edt_max_error_m, r.rows, r.y_lines, r.z_lines,
+                r.grid_sync_median_ms, r.grid_sync_p99_ms);
     return;
   }
   std::fprintf(json,
@@ -390,14 +436,15 @@ void printStream(const StreamRow& r, std::FILE* json, bool last) {
                "\"full\": %d, \"changed_states_median\": %.0f, "
                "\"lines_median\": {\"x_rows\": %.0f, \"y\": %.0f, \"z\": %.0f}, "
                "\"update_ms\": {\"median\": %.4f, \"p99\": %.4f, \"max\": %.4f}, "
-               "\"compute_ms\": {\"median\": %.4f, \"p99\": %.4f}, \"mismatched_frames\": %d, "
+               "\"compute_ms\": {\"median\": %.4f, \"p99\": %.4f}, "
+               "\"query_grid_sync_ms\": {\"median\": %.4f, \"p99\": %.4f}, \"mismatched_frames\": %d, "
                "\"dynamicedt3d\": {\"updates\": %d, \"median_ms\": %.4f, \"p99_ms\": %.4f, "
                "\"ours_same_frames_median_ms\": %.4f, \"compared\": %zu, \"mismatched\": %zu, "
                "\"max_error_m\": %.4f}}%s\n",
                r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full,
                r.changed_states, r.rows, r.y_lines, r.z_lines, r.update_median_ms,
                r.update_p99_ms, r.update_max_ms, r.full_median_ms, r.full_p99_ms,
-               r.mismatched_frames, r.edt_updates, r.edt_median_ms, r.edt_p99_ms,
+               r.grid_sync_median_ms, r.grid_sync_p99_ms, r.mismatched_frames, r.edt_updates, r.edt_median_ms, r.edt_p99_ms,
                r.same_box_median_ms, r.edt_compared,
                r.edt_mismatched, r.edt_max_error_m, last ? "" : ",");
 }

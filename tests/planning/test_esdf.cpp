@@ -1,4 +1,5 @@
 #include "mlmap/planning/esdf.h"
+#include "mlmap/planning/esdf_query_grid.h"
 #include "../support/random_draws.h"
 
 #include <gtest/gtest.h>
@@ -851,6 +852,191 @@ TEST(Esdf, OneChangedVoxelTouchesOnlyLinesWithinTheClamp) {
   ASSERT_TRUE(map.update(box));
   EXPECT_TRUE(map.lastUpdate().full);
   expectSameField(map, full, "after a malformed box");
+}
+
+/// Points for comparing queries: uniform over the box and a tenth beyond each face, the box's
+/// corners, cell centres, points within half a voxel of the faces, and points that are no
+/// points (NaN, huge).
+std::vector<Eigen::Vector3d> queryPoints(const EsdfMap& map, int count, std::mt19937* rng) {
+  const Eigen::Vector3d lo = map.minCorner_W();
+  const Eigen::Vector3d extent = map.maxCorner_W() - lo;
+  std::uniform_real_distribution<double> u(-0.1, 1.1);
+  std::uniform_real_distribution<double> inside(0.0, 1.0);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < count; ++i) {
+    points.emplace_back(lo + Eigen::Vector3d(u(*rng), u(*rng), u(*rng)).cwiseProduct(extent));
+    Eigen::Vector3d near_face = lo + test::draw3(inside, *rng).cwiseProduct(extent);
+    const int axis = i % 3;
+    near_face[axis] = (i / 3) % 2 == 0 ? lo[axis] + 0.3 * map.resolution_m()
+                                       : lo[axis] + extent[axis] - 0.3 * map.resolution_m();
+    points.push_back(near_face);
+  }
+  std::uniform_int_distribution<int> cell(0, 1 << 20);
+  for (int i = 0; i < count / 4; ++i) {
+    const VoxelIndex g = map.minIndex() + VoxelIndex(cell(*rng) % map.size().x(),
+                                                     cell(*rng) % map.size().y(),
+                                                     cell(*rng) % map.size().z());
+    points.push_back(voxelCenter(g, map.resolution_m()));
+  }
+  points.push_back(lo);
+  points.push_back(map.maxCorner_W());
+  points.emplace_back(std::nan(""), 0.0, 0.0);
+  points.emplace_back(1e300, -1e300, 0.0);
+  points.emplace_back(0.0, std::numeric_limits<double>::infinity(), 0.0);
+  return points;
+}
+
+/// EsdfQueryGrid::query() equals EsdfMap::query() within the grid's error bounds (validity
+/// exactly), and queryBatch() equals query() bit for bit.
+void expectQueriesWithinBounds(const EsdfQueryGrid& grid, const EsdfMap& map,
+                               const std::vector<Eigen::Vector3d>& points,
+                               const std::string& what) {
+  const double distance_bound = grid.distanceErrorBound_m() + 1e-9;
+  const double gradient_bound = grid.gradientErrorBound() + 1e-9;
+  std::vector<EsdfMap::Query> batch(points.size());
+  grid.queryBatch(points.data(), points.size(), batch.data());
+  int failures = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d& p = points[i];
+    const EsdfMap::Query exact = map.query(p);
+    const EsdfMap::Query fast = grid.query(p);
+    // On a plane through cell centres the trilinear gradient jumps: either side's holds there.
+    bool gradient_ok = true;
+    for (int a = 0; a < 3; ++a) {
+      const double u = p[a] / map.resolution_m() - 0.5;
+      const bool on_centre_plane = std::abs(u - std::round(u)) < 1e-6;
+      gradient_ok = gradient_ok && (on_centre_plane ||
+                                    std::abs(fast.gradient[a] - exact.gradient[a]) <= gradient_bound);
+    }
+    const bool ok = fast.valid == exact.valid &&
+                    std::abs(fast.distance_m - exact.distance_m) <= distance_bound && gradient_ok &&
+                    batch[i].valid == fast.valid && batch[i].distance_m == fast.distance_m &&
+                    batch[i].gradient == fast.gradient;
+    if (!ok && ++failures <= 5) {
+      ADD_FAILURE() << what << ": at " << p.transpose() << ": grid " << fast.distance_m << " ["
+                    << fast.gradient.transpose() << "] valid " << fast.valid << ", exact "
+                    << exact.distance_m << " [" << exact.gradient.transpose() << "] valid "
+                    << exact.valid << ", batch " << batch[i].distance_m;
+    }
+  }
+  EXPECT_EQ(failures, 0) << what;
+}
+
+// The quantised query grid against the exact query on random scenes: boxes one voxel thick
+// along each axis, both policies, clamps of several sizes (one never reached).
+TEST(EsdfQueryGrid, QueriesMatchTheExactQueryWithinTheBound) {
+  struct Shape {
+    VoxelIndex min_index;
+    Eigen::Vector3i size;
+    double res;
+    double max_m;
+  };
+  const Shape shapes[] = {{{-12, 5, -3}, {29, 17, 11}, 0.1, 0.7},
+                          {{3, -8, 100}, {40, 33, 21}, 0.2, 2.0},
+                          {{0, 0, 0}, {1, 9, 13}, 0.15, 1.0},
+                          {{-5, 2, 7}, {11, 1, 6}, 0.1, 0.5},
+                          {{4, 4, -4}, {7, 8, 1}, 0.25, 50.0},
+                          {{0, 0, 0}, {1, 1, 1}, 0.1, 2.0}};
+  std::mt19937 rng(77);
+  for (const Shape& shape : shapes) {
+    for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+      const OccupancyBox box = randomBox(shape.min_index, shape.size, shape.res, 0.06, 0.2, &rng);
+      EsdfMap map(config(shape.max_m, policy));
+      ASSERT_TRUE(map.compute(box));
+      EsdfQueryGrid grid;
+      EXPECT_TRUE(grid.empty());
+      EXPECT_FALSE(grid.query(map.minCorner_W()).valid);
+      grid.build(map);
+      EXPECT_FALSE(grid.empty());
+      EXPECT_NEAR(grid.distanceErrorBound_m(), 0.5 * shape.max_m / EsdfQueryGrid::kMaxLevel,
+                  1e-15);
+      std::ostringstream what;
+      what << "box " << shape.size.transpose() << ", max " << shape.max_m << " m, "
+           << toString(policy);
+      expectQueriesWithinBounds(grid, map, queryPoints(map, 3000, &rng), what.str());
+      // At cell centres away from the faces the distance is the cell's value, quantised.
+      for (int i = 0; i < 50; ++i) {
+        const VoxelIndex g = box.min_index + VoxelIndex(static_cast<int>(rng() % shape.size.x()),
+                                                        static_cast<int>(rng() % shape.size.y()),
+                                                        static_cast<int>(rng() % shape.size.z()));
+        const EsdfMap::Query q = grid.query(voxelCenter(g, shape.res));
+        EXPECT_NEAR(q.distance_m, map.distanceAt(g), grid.distanceErrorBound_m() + 1e-9);
+        EXPECT_EQ(q.valid, !map.isUnknown(g));
+      }
+    }
+  }
+  // An empty map gives an empty grid.
+  EsdfMap empty_map(config(1.0, UnknownAs::kFree));
+  EsdfQueryGrid grid;
+  grid.build(empty_map);
+  EXPECT_TRUE(grid.empty());
+  EXPECT_FALSE(grid.query(Eigen::Vector3d::Zero()).valid);
+}
+
+// A grid kept up to date by sync() after every update() of a changing, sliding world answers
+// bit for bit as a grid built from a full compute(), and copies only the changed cells on the
+// incremental steps (cells on the box's faces included: their padding follows).
+TEST(EsdfQueryGrid, SyncAfterIncrementalUpdatesEqualsAFreshBuild) {
+  const Eigen::Vector3i box_size(31, 27, 17);
+  std::mt19937 rng(9);
+  for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+    for (const bool envelope_only : {false, true}) {
+      SCOPED_TRACE(std::string(toString(policy)) + (envelope_only ? ", envelope code" : ""));
+      const Eigen::Vector3i world_size = box_size * 2 + Eigen::Vector3i::Ones();
+      ChangingWorld world(world_size, static_cast<std::uint32_t>(rng()));
+      EsdfMap incremental(config(0.65, policy));
+      incremental.setEnvelopeOnly(envelope_only);
+      EsdfMap full(config(0.65, policy));
+      EsdfQueryGrid synced;
+      EsdfQueryGrid fresh;
+      VoxelIndex min_index = VoxelIndex::Zero();
+      std::size_t copied_steps = 0;
+      for (int step = 0; step < 40; ++step) {
+        world.step();
+        if (step % 7 == 3) {
+          for (int a = 0; a < 3; ++a) {
+            min_index[a] = std::clamp(min_index[a] + static_cast<int>(rng() % 5) - 2, 0,
+                                      world_size[a] - box_size[a]);
+          }
+        }
+        const OccupancyBox box = world.box(min_index, box_size, 0.1);
+        ASSERT_TRUE(incremental.update(box));
+        ASSERT_TRUE(full.compute(box));
+        const bool copied = synced.sync(incremental);
+        EXPECT_EQ(copied, !incremental.lastUpdate().full && !incremental.lastUpdate().shifted);
+        copied_steps += copied ? 1 : 0;
+        fresh.build(full);
+        const std::vector<Eigen::Vector3d> points = queryPoints(full, 400, &rng);
+        int failures = 0;
+        for (const Eigen::Vector3d& p : points) {
+          const EsdfMap::Query a = synced.query(p);
+          const EsdfMap::Query e = fresh.query(p);
+          if ((a.valid != e.valid || a.distance_m != e.distance_m || a.gradient != e.gradient) &&
+              ++failures <= 5) {
+            ADD_FAILURE() << "step " << step << " at " << p.transpose() << ": synced "
+                          << a.distance_m << " valid " << a.valid << ", fresh " << e.distance_m
+                          << " valid " << e.valid;
+          }
+        }
+        // The face cells (and so the padding) at every cell centre of the faces.
+        for (int y = 0; y < box_size.y(); ++y) {
+          for (int z = 0; z < box_size.z(); ++z) {
+            for (const int x : {0, box_size.x() - 1}) {
+              const Eigen::Vector3d p =
+                  voxelCenter(box.min_index + VoxelIndex(x, y, z), 0.1) +
+                  Eigen::Vector3d(x == 0 ? -0.04 : 0.04, 0.0, 0.0);
+              if (synced.query(p).distance_m != fresh.query(p).distance_m && ++failures <= 5) {
+                ADD_FAILURE() << "step " << step << ": face cell " << x << " " << y << " " << z;
+              }
+            }
+          }
+        }
+        ASSERT_EQ(failures, 0) << "step " << step;
+        expectQueriesWithinBounds(synced, full, points, "step " + std::to_string(step));
+      }
+      EXPECT_GT(copied_steps, 20u);
+    }
+  }
 }
 
 TEST(EsdfConfig, DefaultsAreValid) {

@@ -50,6 +50,9 @@
 /// which costs less than the shift and the lines it touches. More than 1/16 of the box changed
 /// (e.g. a map load) is computed whole. The cost follows what changed:
 /// a depth frame's few thousand changed voxels touch a part of the lines.
+///
+/// For many queries, EsdfQueryGrid (esdf_query_grid.h) keeps a 16-bit copy of the field that
+/// answers within a documented bound of query() at about 1.6x its rate.
 
 #include "mlmap/core/config.h"
 #include "mlmap/core/types.h"
@@ -201,6 +204,9 @@ class EsdfMap {
   [[nodiscard]] bool contains(const VoxelIndex& world_index) const {
     return boxContains(min_index_, size_, world_index);
   }
+  /// True when box-relative voxel (x, y, z) (inside the box, unchecked) was unknown in the box
+  /// given to compute() / update().
+  [[nodiscard]] bool isUnknownCell(int x, int y, int z) const { return unknownBit(x, y, z); }
   /// True when the world voxel is inside the box and was unknown in the box given to compute().
   [[nodiscard]] bool isUnknown(const VoxelIndex& world_index) const {
     if (!contains(world_index)) return false;
@@ -232,7 +238,8 @@ class EsdfMap {
   /// The configuration in use.
   [[nodiscard]] const EsdfConfig& config() const { return config_; }
   /// Bytes held by the field (4 per voxel), the unknown mask (1 bit per voxel), the kept box and
-  /// the x and y passes' results (9 per voxel, 7 with the windowed passes, none in a copy) and a
+  /// the x and y passes' results (9 per voxel, 4 with the windowed passes, which keep them in 8
+  /// and 16 bits; none in a copy) and a
   /// little per thread.
   [[nodiscard]] std::size_t memoryBytes() const;
 
@@ -249,8 +256,10 @@ class EsdfMap {
     std::vector<std::int32_t> near_free;      ///< x pass: nearest non-obstacle x per (y, z)
     std::vector<std::int32_t> near_obstacle;  ///< x pass: nearest obstacle x per (y, z)
     std::vector<std::int32_t> line;           ///< one y or z line being transformed
+    std::vector<std::int32_t> sweep;          ///< x pass: 32-bit results before the 8-bit copy
     esdf_kernel::WindowBuffers window;        ///< the windowed passes' slab buffers
     std::vector<int> lanes;                   ///< update(): the lines of a slab transformed
+    std::vector<std::int16_t> gathered;       ///< update(): those lines one after another
   };
 
   /// Unknown bit of box-relative voxel (x, y, z) (inside the box).
@@ -297,6 +306,9 @@ class EsdfMap {
   void updateLinesEnvelope(int reach, Scratch* scratch);
   /// ... or, where the windowed passes apply, a slab's marked lines side by side through them.
   void updateLinesWindowed(int reach, Scratch* scratch);
+  /// What pass 1 writes for "beyond the cap": inf_, or cap_d_ + 1 where its results are kept in
+  /// 8 bits (the windowed passes read any distance above cap_d_ as beyond).
+  [[nodiscard]] std::int32_t pass1Inf() const { return window_kernel_ ? cap_d_ + 1 : inf_; }
   /// Signed squared voxel distance (or +-inf_) -> clamped signed metres, without the table.
   /// Needs cap_sq_, inf_ and resolution_m_ of the current compute().
   [[nodiscard]] float slowMetres(std::int32_t value) const;
@@ -323,6 +335,9 @@ class EsdfMap {
   std::size_t slab_bits_ = 0;
   /// Pass 1's result: +d (non-obstacle) / -d (obstacle) along x, in voxels, or +-inf_.
   std::vector<std::int32_t> pass1_;
+  /// The same in 8 bits, where the windowed passes apply (pass1_ is then empty), with
+  /// +-(cap_d_ + 1) for beyond the cap: see pass1Inf().
+  std::vector<std::int8_t> pass1_narrow_;
   /// Pass 2's result: +d^2 / -d^2 over the y-x plane, in voxels, or +-inf_.
   std::vector<std::int32_t> pass2_;
   /// The same in 16 bits, where the windowed passes apply (pass2_ is then empty).

@@ -16,6 +16,7 @@
 /// lines side by side along y in a transposed copy), so the compiler vectorises them; there is
 /// no branch on the data. The result is bit-identical to the envelope code (both are exact).
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -36,6 +37,12 @@ namespace mlmap::esdf_kernel {
 /// the envelope code's does not.
 constexpr std::int32_t kMaxWindowCapCells = 48;
 
+/// Lanes a slab's lines are laid out across in transformSlabY() and transformSlabZ(): `lines`
+/// rounded up to a multiple of 16 (one AVX2 vector of 16-bit values), so that the per-line
+/// sweeps run in whole vectors with no scalar remainder; the extra lanes hold +inf and are
+/// never read back.
+[[nodiscard]] constexpr int paddedLanes(int lines) { return (lines + 15) / 16 * 16; }
+
 /// True when the windowed passes apply: cap_d <= kMaxWindowCapCells, and inf plus any k^2 of
 /// the window fits a 16-bit signed value.
 [[nodiscard]] bool windowFits(std::int32_t cap_sq, std::int32_t cap_d);
@@ -52,6 +59,17 @@ struct WindowBuffers {
   std::vector<std::int16_t> signed_sq;   ///< the slab z-major: y pass's result, then z pass's
 };
 
+/// dst[c * dst_stride + r] = src[r * src_stride + c] for r < rows, c < cols: a transposition of
+/// 16-bit values, in 8 x 8 blocks through SSE2 registers where it can.
+void transpose16(const std::int16_t* src, std::size_t src_stride, std::int16_t* dst,
+                 std::size_t dst_stride, int rows, int cols);
+
+/// The y pass's input from the x pass's results: out[r * width + c] = the signed square of
+/// in[r * in_stride + c] (r < rows, c < width), +-inf (cap_sq + 1) where its magnitude is above
+/// cap_d. Built for AVX2 / AVX-512 too (it vectorises).
+void squareDistances(const std::int8_t* in, std::size_t in_stride, int rows, int width,
+                     std::int32_t cap_sq, std::int32_t cap_d, std::int16_t* out);
+
 /// Transforms `lanes` lines of n values side by side, in place: values[i * lanes + l] is value
 /// i of line l, a signed squared distance (+ non-obstacle, - obstacle) or +-inf (cap_sq + 1).
 /// A part of a line may be given: its outputs are then exact where they lie more than cap_d + 1
@@ -60,14 +78,15 @@ void transformLines(std::int16_t* values, int n, int lanes, std::int32_t cap_sq,
                     std::int32_t cap_d, WindowBuffers* buffers);
 
 /// The y pass of one x slab: `pass1` holds ny * nz signed distances along x (z fastest; +d
-/// non-obstacle, -d obstacle, or +-inf with inf = cap_sq + 1). Writes the signed squared
-/// distances in the y-x plane (or +-inf) to `pass2` (ny * nz) and to buffers->signed_sq.
-void transformSlabY(const std::int32_t* pass1, int ny, int nz, std::int32_t cap_sq,
+/// non-obstacle, -d obstacle; any magnitude above cap_d means beyond the clamp). Writes the
+/// signed squared distances in the y-x plane (or +-inf, inf = cap_sq + 1) to `pass2` (ny * nz)
+/// and to buffers->signed_sq.
+void transformSlabY(const std::int8_t* pass1, int ny, int nz, std::int32_t cap_sq,
                     std::int32_t cap_d, std::int16_t* pass2, WindowBuffers* buffers);
 
-/// The z pass of the slab last given to transformSlabY(): replaces buffers->signed_sq (nz * ny,
-/// y fastest: transposed, so that the z lines run across the vector lanes) by the signed
-/// squared distances in 3D (or +-inf).
+/// The z pass of the slab last given to transformSlabY(): replaces buffers->signed_sq (nz rows
+/// of paddedLanes(ny) values, y fastest: transposed, so that the z lines run across the vector
+/// lanes) by the signed squared distances in 3D (or +-inf).
 void transformSlabZ(int ny, int nz, std::int32_t cap_sq, std::int32_t cap_d,
                     WindowBuffers* buffers);
 
