@@ -99,11 +99,13 @@ void FleetMap::fuse(Entry* entry) {
     std::size_t j = i;
     for (; j < items.size() && items[j].offset == items[i].offset; ++j) {
       sum += items[j].log_odds;
-      bits |= std::uint64_t{1} << items[j].vehicle;
+      // A vehicle whose evidence lowers the voxel (free evidence) is no provenance of it.
+      if (items[j].log_odds > 0) bits |= std::uint64_t{1} << items[j].vehicle;
     }
     const auto clamped = static_cast<LogOddsQ>(
         std::clamp<int>(sum, model_.clampMin(), model_.clampMax()));
-    entry->fused.push_back({items[i].offset, clamped, bits});
+    // Only occupied fused voxels are kept: the map holds what the fleet claims occupied.
+    if (model_.isOccupied(clamped)) entry->fused.push_back({items[i].offset, clamped, bits});
     i = j;
   }
   entry->fused.shrink_to_fit();

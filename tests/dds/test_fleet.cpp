@@ -142,11 +142,13 @@ TEST(FleetDds, MergedMapOfTwoVehiclesMatchesOneEngineFedEveryFrame) {
     const std::uint64_t expected = (a.count(k) ? 1u : 0u) | (b.count(k) ? 2u : 0u);
     ASSERT_EQ(bits, expected);
   }
-  // ... and agrees with one engine fed every frame (the target: IoU >= 0.97).
+  // ... and agrees with one engine fed every frame, less than with sharing back (0.97:
+  // FleetAgreement.FreeEvidenceOnOtherVehiclesPriorsBringsTheMergedMapToOneEngines).
   const double agreement = iou(mergedKeys(merger), keys(single.occupiedVoxels()));
   // Where they differ, the merged map holds voxels one vehicle saw occupied and the single
-  // engine cleared with the other half's rays passing through them (free space does not travel):
-  // surface voxels hit at grazing angles. They touch the room's solids: more recall, not errors.
+  // engine cleared with the other half's rays passing through them (neither vehicle took the
+  // other's submaps as priors, so no free evidence travels): surface voxels hit at grazing
+  // angles. They touch the room's solids: more recall, not errors.
   const sim::World world = sim::World::defaultRoom();
   auto precision = [&](const std::set<Key3>& voxels) {
     std::size_t right = 0;
@@ -228,7 +230,7 @@ TEST(FleetDds, MalformedSamplesAreRefusedAndCountedTheMergerKeepsMerging) {
   };
   std::vector<::mlmap_msgs::msg::dds_::Submap_> bad;
   bad.push_back(sample(0));
-  bad.back().version_(2);  // a layout this reader does not know
+  bad.back().version_(kSubmapLayoutVersion + 1);  // a layout this reader does not know
   bad.push_back(sample(1));
   bad.back().raw_size_(0xffffffffu);  // a size that lies
   bad.push_back(sample(2));
