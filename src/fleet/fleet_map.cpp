@@ -42,6 +42,12 @@ void FleetMap::noteReceived(const std::string& vehicle, std::size_t bytes, doubl
   info.last_seen_s = std::max(info.last_seen_s, now_s);
 }
 
+std::uint32_t vehicleColourRgb(int index) {
+  static constexpr std::uint32_t kPalette[] = {0xe6194b, 0x3cb44b, 0x4363d8, 0xf58231,
+                                               0x911eb4, 0x46f0f0, 0xf032e6, 0xbcf60c};
+  return kPalette[static_cast<std::size_t>(std::max(index, 0)) % 8];
+}
+
 SubmapIndex FleetMap::submapOf(std::uint64_t key) { return unpackSubmap(key); }
 
 SubmapApply FleetMap::apply(const std::string& vehicle, const SubmapIndex& m,

@@ -36,6 +36,10 @@ struct FleetVoxel {
   std::uint64_t vehicles = 0;
 };
 
+/// The colour of vehicle `index` (FleetMap::vehicles() order) in the merged map's pictures and
+/// PointCloud2 `rgb`: 0xRRGGBB, eight distinct colours, repeating.
+std::uint32_t vehicleColourRgb(int index);
+
 /// What the merger knows of one vehicle.
 struct FleetVehicle {
   std::string name;
