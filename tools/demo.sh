@@ -16,6 +16,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/install_deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DMLMAP_BUILD_TESTS=OFF -DMLMAP_BUILD_DDS=ON >/dev/null
+cmake --build build -j2 --target mlmap_demo mlmap_node mlmap_sensor_publisher mlmap_inspect
 if [ "${1:-}" = --fleet ]; then
   vehicles=${2:-}
   case "$vehicles" in
@@ -30,7 +31,6 @@ if [ "${1:-}" = --fleet ]; then
   ./build/mlmap_fleet_demo "${scenarios[@]}" --out fleet_output "$@"
   exit 0
 fi
-cmake --build build -j2 --target mlmap_demo mlmap_node mlmap_sensor_publisher mlmap_inspect
 ./build/mlmap_demo --out demo_output "$@"
 
 echo "== the same flight over DDS (loopback only, domain ${MLMAP_DEMO_DOMAIN:-42})"

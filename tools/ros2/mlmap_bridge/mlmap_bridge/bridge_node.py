@@ -10,10 +10,12 @@ In (mlmap_node's defaults; QoS as idl/README.md lists the writers):
                                                   node latches them; a late ground station
                                                   still gets the last one
   mlmap_msgs/Status                               RELIABLE, KEEP_LAST 10 (small, 1 Hz)
+  PointCloud2 fleet map (mlmap_fleet, optional)   RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 1
 Out (under output_prefix, RELIABLE so RViz's default subscriptions match):
   <layer> MarkerArray cube lists (heights / distances as colours; serialised from numpy
   arrays, no Python object per voxel), grid (passed through, latched like the input),
-  status (a text above the vehicle) and status_text (String).
+  status (a text above the vehicle), status_text (String), and fleet_map (cubes in the colour
+  of the vehicle that saw them, latched) when fleet_map_topic is set.
 """
 
 from functools import partial
@@ -32,7 +34,8 @@ from std_msgs.msg import Header, String
 from visualization_msgs.msg import Marker, MarkerArray
 
 from .conversions import CloudLayoutError, LatestThrottle, status_text
-from .markers import cloud_layer_markers, marker_array, MessageTypes, text_marker
+from .markers import cloud_layer_markers, fleet_map_markers, marker_array, MessageTypes
+from .markers import text_marker
 from .parameters import CLOUD_LAYERS, CloudLayer, in_namespace, PARAMETERS, prefixed_frame
 
 TYPES = MessageTypes(Marker=Marker, MarkerArray=MarkerArray, Header=Header)
@@ -67,6 +70,8 @@ class MlmapBridge(Node):
             p.name: self.get_parameter(p.name).value for p in PARAMETERS}
         namespace = self.settings['namespace']
         for name in self.settings:  # mlmap_node's topics and the outputs under its namespace
+            if name == 'fleet_map_topic':  # the merger's: absolute
+                continue
             if name.endswith('_topic') or name == 'output_prefix':
                 self.settings[name] = in_namespace(namespace, self.settings[name])
         self._body_frame = prefixed_frame(self.settings['frame_prefix'],
@@ -78,6 +83,7 @@ class MlmapBridge(Node):
             self._wire_cloud_layer(layer)
         self._wire_grid()
         self._wire_status()
+        self._wire_fleet_map()
         self.create_timer(POLL_PERIOD_S, self._poll)
 
     def _throttle(self, rate_parameter: str, handler):
@@ -135,6 +141,23 @@ class MlmapBridge(Node):
         self.create_subscription(OccupancyGrid, topic,
                                  self._throttle('grid_max_rate_hz', publisher.publish),
                                  LATCHED_IN)
+        self.get_logger().info(f'{topic} -> {output}')
+
+    def _wire_fleet_map(self) -> None:
+        """Subscribe to mlmap_fleet's merged map and publish it coloured by vehicle (if set)."""
+        topic = self.settings['fleet_map_topic']
+        if not topic:
+            return
+        output = f'{self._output_prefix}/fleet_map'
+        publisher = self.create_publisher(MarkerArray, output, LATCHED_OUT)
+
+        def handler(cloud: PointCloud2) -> None:
+            try:
+                publisher.publish(fleet_map_markers(cloud, self.settings))
+            except (CloudLayoutError, ValueError) as error:
+                self.get_logger().warning(f'fleet_map: {error}', throttle_duration_sec=5.0)
+        self.create_subscription(PointCloud2, topic,
+                                 self._throttle('fleet_map_max_rate_hz', handler), LATCHED_IN)
         self.get_logger().info(f'{topic} -> {output}')
 
     def _wire_status(self) -> None:
