@@ -189,7 +189,9 @@ std::vector<SubmapUpdate> SubmapShare::changes(GlobalMapDelta&& delta, const Loc
     const std::uint64_t key = packSubmap(m);
     if (in_window.count(key) != 0) continue;  // the window's content is the current one
     seen.insert(key);
-    std::vector<VoxelRecord> records = ownEvidence(occupied, priorsOf(m), none);
+    const std::vector<VoxelRecord>* held = priorsOf(m);
+    std::vector<VoxelRecord> records =
+        held == nullptr ? std::move(occupied) : ownEvidence(occupied, held, none);
     if (differs(key, records)) out.push_back({m, std::move(records)});
   }
   if (window == nullptr) return out;

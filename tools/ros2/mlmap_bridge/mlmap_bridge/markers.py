@@ -27,6 +27,7 @@ class MessageTypes:
     Marker: Any
     MarkerArray: Any
     Header: Any
+    Point: Any = None  # geometry_msgs/Point, for the vehicles' paths (fleet_paths.py)
 
 
 def text_marker(types: MessageTypes, frame_id: str, ns: str, text: str, height_m: float,
