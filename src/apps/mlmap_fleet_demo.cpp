@@ -102,8 +102,9 @@ void shareRound(Vehicle& v, std::vector<std::unique_ptr<Vehicle>>& all, fleet::F
   v.version = delta.version;
   const std::shared_ptr<const MapSnapshot> snap = v.engine.snapshot();
   const std::shared_ptr<const PriorVoxels> priors = v.engine.priors();
-  for (fleet::SubmapUpdate& u : v.share.changes(std::move(delta), snap ? &snap->window() : nullptr,
-                                                priors.get())) {
+  std::vector<fleet::SubmapUpdate> updates =
+      v.share.changes(std::move(delta), snap ? &snap->window() : nullptr, priors.get());
+  for (fleet::SubmapUpdate& u : updates) {
     v.bytes_sent += fleet::encodeSubmapVoxels(u.records).data.size();
     ++v.submaps_sent;
     if (share_back) {
@@ -199,11 +200,11 @@ void flyFleet(const Options& o, std::vector<std::unique_ptr<Vehicle>>& vehicles,
       if (v->engine.submit(std::move(frame)) == FrameStatus::kAccepted) ++v->frames_mapped;
     }
     if ((i + 1) % share_every == 0) {
-      for (auto& v : vehicles) shareRound(*v, vehicles, fleet, o.share_back);
+      for (const auto& v : vehicles) shareRound(*v, vehicles, fleet, o.share_back);
     }
     bar.update(i + 1, longest);
   }
-  for (auto& v : vehicles) shareRound(*v, vehicles, fleet, o.share_back);
+  for (const auto& v : vehicles) shareRound(*v, vehicles, fleet, o.share_back);
 }
 
 /// Flies the fleet and one engine fed every vehicle's frames, writes the pictures and

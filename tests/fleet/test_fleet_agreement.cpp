@@ -54,8 +54,9 @@ struct Vehicle {
     const std::shared_ptr<const MapSnapshot> snap = engine.snapshot();
     const std::shared_ptr<const PriorVoxels> priors = engine.priors();
     std::size_t bytes = 0;
-    for (SubmapUpdate& u : share.changes(std::move(delta), snap ? &snap->window() : nullptr,
-                                         own_evidence ? priors.get() : nullptr)) {
+    std::vector<SubmapUpdate> updates = share.changes(
+        std::move(delta), snap ? &snap->window() : nullptr, own_evidence ? priors.get() : nullptr);
+    for (SubmapUpdate& u : updates) {
       const SubmapPayload p = encodeSubmapVoxels(u.records);
       bytes += p.data.size();
       std::vector<VoxelRecord> records;
