@@ -7,11 +7,30 @@
 #     it received and summary.json to demo_output/dds/.
 # Extra arguments go to mlmap_demo (see `build/mlmap_demo --help`), e.g.
 #   bash tools/demo.sh --frames ../shared/data/realsense_tabletop
+# With --fleet N (1 .. 3) it instead flies N vehicles at once through the building
+# (config/worlds/fleet/uav1..N.yaml), each with its own engine sharing its submaps as mlmap_node
+# does, merged as mlmap_fleet merges them (in one process, no DDS: docs/fleet.md), and writes
+# fleet_output/: fleet_top.png (the merged map coloured by vehicle), <vehicle>_top.png and
+# summary.json. Further arguments go to mlmap_fleet_demo (`build/mlmap_fleet_demo --help`).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/install_deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DMLMAP_BUILD_TESTS=OFF -DMLMAP_BUILD_DDS=ON >/dev/null
 cmake --build build -j2 --target mlmap_demo mlmap_node mlmap_sensor_publisher mlmap_inspect
+if [ "${1:-}" = --fleet ]; then
+  vehicles=${2:-}
+  case "$vehicles" in
+    1|2|3) ;;
+    *) echo "demo.sh: --fleet takes the number of vehicles, 1 to 3 (config/worlds/fleet/uav1..3.yaml)" >&2
+       exit 2 ;;
+  esac
+  shift 2
+  cmake --build build -j2 --target mlmap_fleet_demo
+  scenarios=()
+  for k in $(seq "$vehicles"); do scenarios+=(--scenario "config/worlds/fleet/uav$k.yaml"); done
+  ./build/mlmap_fleet_demo "${scenarios[@]}" --out fleet_output "$@"
+  exit 0
+fi
 ./build/mlmap_demo --out demo_output "$@"
 
 echo "== the same flight over DDS (loopback only, domain ${MLMAP_DEMO_DOMAIN:-42})"

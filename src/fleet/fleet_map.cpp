@@ -42,6 +42,12 @@ void FleetMap::noteReceived(const std::string& vehicle, std::size_t bytes, doubl
   info.last_seen_s = std::max(info.last_seen_s, now_s);
 }
 
+std::uint32_t vehicleColourRgb(int index) {
+  static constexpr std::uint32_t kPalette[] = {0xe6194b, 0x3cb44b, 0x4363d8, 0xf58231,
+                                               0x911eb4, 0x46f0f0, 0xf032e6, 0xbcf60c};
+  return kPalette[static_cast<std::size_t>(std::max(index, 0)) % 8];
+}
+
 SubmapIndex FleetMap::submapOf(std::uint64_t key) { return unpackSubmap(key); }
 
 SubmapApply FleetMap::apply(const std::string& vehicle, const SubmapIndex& m,
@@ -99,11 +105,13 @@ void FleetMap::fuse(Entry* entry) {
     std::size_t j = i;
     for (; j < items.size() && items[j].offset == items[i].offset; ++j) {
       sum += items[j].log_odds;
-      bits |= std::uint64_t{1} << items[j].vehicle;
+      // A vehicle whose evidence lowers the voxel (free evidence) is no provenance of it.
+      if (items[j].log_odds > 0) bits |= std::uint64_t{1} << items[j].vehicle;
     }
     const auto clamped = static_cast<LogOddsQ>(
         std::clamp<int>(sum, model_.clampMin(), model_.clampMax()));
-    entry->fused.push_back({items[i].offset, clamped, bits});
+    // Only occupied fused voxels are kept: the map holds what the fleet claims occupied.
+    if (model_.isOccupied(clamped)) entry->fused.push_back({items[i].offset, clamped, bits});
     i = j;
   }
   entry->fused.shrink_to_fit();

@@ -127,15 +127,45 @@ bool SubmapShare::differs(std::uint64_t key, const std::vector<VoxelRecord>& con
   return true;
 }
 
-std::vector<SubmapUpdate> SubmapShare::changes(GlobalMapDelta&& delta, const LocalWindow* window) {
+std::vector<SubmapUpdate> SubmapShare::changes(GlobalMapDelta&& delta, const LocalWindow* window,
+                                               const PriorVoxels* priors) {
+  const Eigen::Vector3i cells = submap_cells_;
+  auto priorsOf = [priors](const SubmapIndex& m) {
+    return priors != nullptr ? priors->inSubmap(m) : nullptr;
+  };
+  // A prior voxel the global map does not hold: lowered below occupancy, then retired.
+  auto none = [](std::uint32_t) { return 0; };
   std::vector<SubmapUpdate> out;
   std::unordered_set<std::uint64_t> in_window;
   std::vector<std::uint64_t> window_keys;
   if (window != nullptr) {
-    for (auto& [m, records] : windowSubmaps(*window, submap_cells_)) {
+    for (auto& [m, occupied] : windowSubmaps(*window, cells)) {
       const std::uint64_t key = packSubmap(m);
       in_window.insert(key);
       window_keys.push_back(key);
+      const VoxelIndex base = m.cwiseProduct(cells);
+      const int plane = cells.y() * cells.z();
+      // The window's value of a prior voxel below occupancy (a voxel it never observed keeps
+      // none of this vehicle's evidence: the prior's own value, no change).
+      auto in_window_value = [&](std::uint32_t offset) -> int {
+        const int o = static_cast<int>(offset);
+        const VoxelIndex g = base + VoxelIndex(o / plane, (o % plane) / cells.z(), o % cells.z());
+        return window->at(g);
+      };
+      const std::vector<VoxelRecord>* held = priorsOf(m);
+      std::vector<VoxelRecord> records;
+      if (held == nullptr) {
+        records = std::move(occupied);
+      } else {
+        records = ownEvidence(occupied, held, [&](std::uint32_t offset) {
+          const int v = in_window_value(offset);
+          if (v != kUnknownLogOdds) return v;
+          const auto p = std::lower_bound(
+              held->begin(), held->end(), VoxelRecord{offset, 0},
+              [](const VoxelRecord& a, const VoxelRecord& b) { return a.offset < b.offset; });
+          return static_cast<int>(p->log_odds);
+        });
+      }
       if (differs(key, records)) out.push_back({m, std::move(records)});
     }
   }
@@ -155,17 +185,22 @@ std::vector<SubmapUpdate> SubmapShare::changes(GlobalMapDelta&& delta, const Loc
       seen.insert(key);
     }
   }
-  for (auto& [m, records] : delta.changed) {
+  for (auto& [m, occupied] : delta.changed) {
     const std::uint64_t key = packSubmap(m);
     if (in_window.count(key) != 0) continue;  // the window's content is the current one
     seen.insert(key);
+    const std::vector<VoxelRecord>* held = priorsOf(m);
+    std::vector<VoxelRecord> records =
+        held == nullptr ? std::move(occupied) : ownEvidence(occupied, held, none);
     if (differs(key, records)) out.push_back({m, std::move(records)});
   }
   if (window == nullptr) return out;
   // Submaps that left the window with nothing occupied are not stamped in the global map.
   for (const std::uint64_t key : last_window_) {
     if (in_window.count(key) != 0 || seen.count(key) != 0) continue;
-    if (differs(key, {})) out.push_back({unpackSubmap(key), {}});
+    const SubmapIndex m = unpackSubmap(key);
+    std::vector<VoxelRecord> records = ownEvidence({}, priorsOf(m), none);
+    if (differs(key, records)) out.push_back({m, std::move(records)});
   }
   last_window_ = std::move(window_keys);
   return out;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <iterator>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -228,18 +229,51 @@ std::uint64_t priorKey(const SubmapIndex& m) {
   for (int a = 0; a < 3; ++a) key = (key << 21) | (static_cast<std::uint64_t>(m[a] + (1 << 20)) & 0x1fffff);
   return key;
 }
+
+/// The submap holding world voxel `g` (floor division per axis).
+SubmapIndex submapOfVoxel(const VoxelIndex& g, const Eigen::Vector3i& submap_cells) {
+  SubmapIndex m;
+  for (int a = 0; a < 3; ++a) {
+    const int q = g[a] / submap_cells[a];
+    m[a] = g[a] % submap_cells[a] < 0 ? q - 1 : q;
+  }
+  return m;
+}
 }  // namespace
 
-PriorVoxels::PriorVoxels(const PriorVoxels& earlier,
-                         const std::vector<std::pair<VoxelIndex, LogOddsQ>>& added)
-    : values_(earlier.values_) {
-  for (const auto& [g, l] : added) values_[g] = l;
+PriorVoxels::PriorVoxels(const PriorVoxels& earlier, const Eigen::Vector3i& submap_cells,
+                         const std::vector<std::pair<SubmapIndex, std::vector<VoxelRecord>>>& added)
+    : submap_cells_(submap_cells), submaps_(earlier.submaps_), size_(earlier.size_) {
+  auto by_offset = [](const VoxelRecord& a, const VoxelRecord& b) { return a.offset < b.offset; };
+  for (const auto& [m, records] : added) {
+    std::vector<VoxelRecord>& held = submaps_[priorKey(m)];
+    std::vector<VoxelRecord> merged;  // a voxel added again takes its new value
+    merged.reserve(held.size() + records.size());
+    std::set_union(records.begin(), records.end(), held.begin(), held.end(),
+                   std::back_inserter(merged), by_offset);
+    size_ += merged.size() - held.size();
+    held = std::move(merged);
+  }
 }
 
 bool PriorVoxels::isPrior(const VoxelIndex& g, const LocalWindow& window) const {
   if (!window.contains(g)) return false;
-  const auto it = values_.find(g);
-  return it != values_.end() && window.at(g) == it->second;
+  const SubmapIndex m = submapOfVoxel(g, submap_cells_);
+  const std::vector<VoxelRecord>* held = inSubmap(m);
+  if (held == nullptr) return false;
+  const VoxelIndex t = g - m.cwiseProduct(submap_cells_);
+  const auto offset =
+      static_cast<std::uint32_t>((t.x() * submap_cells_.y() + t.y()) * submap_cells_.z() + t.z());
+  const auto it = std::lower_bound(held->begin(), held->end(), VoxelRecord{offset, 0},
+                                   [](const VoxelRecord& a, const VoxelRecord& b) {
+                                     return a.offset < b.offset;
+                                   });
+  return it != held->end() && it->offset == offset && window.at(g) == it->log_odds;
+}
+
+const std::vector<VoxelRecord>* PriorVoxels::inSubmap(const SubmapIndex& m) const {
+  const auto it = submaps_.find(priorKey(m));
+  return it == submaps_.end() ? nullptr : &it->second;
 }
 
 std::shared_ptr<const PriorVoxels> MapEngine::priors() const {
@@ -248,6 +282,10 @@ std::shared_ptr<const PriorVoxels> MapEngine::priors() const {
 }
 
 void MapEngine::addPrior(const SubmapIndex& m, std::vector<VoxelRecord> records) {
+  // Only occupied evidence is prior knowledge (a fleet sample also carries free evidence).
+  records.erase(std::remove_if(records.begin(), records.end(),
+                               [&](const VoxelRecord& r) { return !log_odds_model_.isOccupied(r.log_odds); }),
+                records.end());
   if (records.empty()) return;
   if ((m.array() < -GlobalMap::kSubmapIndexLimit).any() ||
       (m.array() >= GlobalMap::kSubmapIndexLimit).any()) {
@@ -284,8 +322,7 @@ void MapEngine::applyPriors() {
   priors_waiting_ = 0;
   if (priors_.empty()) return;
   const Eigen::Vector3i cells = global_.submapCells();
-  const auto plane = static_cast<std::uint32_t>(cells.y() * cells.z());
-  std::vector<std::pair<VoxelIndex, LogOddsQ>> added;
+  std::vector<std::pair<SubmapIndex, std::vector<VoxelRecord>>> added;
   for (auto it = priors_.begin(); it != priors_.end();) {
     const SubmapIndex& m = it->second.first;
     if (local_.placed() && local_.contains(m.cwiseProduct(cells))) {
@@ -301,21 +338,22 @@ void MapEngine::applyPriors() {
     }
     // The voxels the global map does not hold yet are the ones addPrior() adds.
     const std::vector<VoxelRecord>* own = global_.find(m);
-    const VoxelIndex base = m.cwiseProduct(cells);
+    std::vector<VoxelRecord> taken;
     for (const VoxelRecord& r : it->second.second) {
       if (own != nullptr &&
           std::binary_search(own->begin(), own->end(), r,
                              [](const VoxelRecord& a, const VoxelRecord& b) { return a.offset < b.offset; })) {
         continue;
       }
-      const int x = static_cast<int>(r.offset / plane);
-      const int rest = static_cast<int>(r.offset % plane);
-      added.emplace_back(base + VoxelIndex(x, rest / cells.z(), rest % cells.z()), r.log_odds);
+      taken.push_back(r);
     }
     prior_voxels_added_ += global_.addPrior(m, it->second.second);
+    if (!taken.empty()) added.emplace_back(m, std::move(taken));
     it = priors_.erase(it);
   }
-  if (!added.empty()) prior_voxels_ = std::make_shared<const PriorVoxels>(*prior_voxels_, added);
+  if (!added.empty()) {
+    prior_voxels_ = std::make_shared<const PriorVoxels>(*prior_voxels_, cells, added);
+  }
 }
 
 void MapEngine::localStep(const MeasurementBatch& batch) {
@@ -492,6 +530,10 @@ void MapEngine::restoreState(const MapState& state) {
   {
     std::lock_guard<std::mutex> lock(layers_mutex_);
     global_.clear();
+    {
+      std::lock_guard<std::mutex> prior_lock(prior_mutex_);  // the loaded map holds none of them
+      prior_voxels_ = std::make_shared<const PriorVoxels>();
+    }
     for (const auto& [m, records] : state.global_submaps) {
       global_.store(m, std::vector<VoxelRecord>(records));
     }
@@ -530,6 +572,11 @@ void MapEngine::clear() {
     std::lock_guard<std::mutex> lock(layers_mutex_);
     global_.clear();
     local_.restoreWindow(LocalWindow{});  // an empty window unplaces the map
+    {
+      // The priors added are gone with the map (ones still waiting are added later as usual).
+      std::lock_guard<std::mutex> prior_lock(prior_mutex_);
+      prior_voxels_ = std::make_shared<const PriorVoxels>();
+    }
     stamp_s = last_mapped_stamp_s_;
     T_W_B = last_T_W_B_;
     version = global_.modifications();  // clear() counts as a modification

@@ -20,6 +20,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <map>
 #include <mutex>
@@ -142,11 +143,13 @@ TEST(FleetDds, MergedMapOfTwoVehiclesMatchesOneEngineFedEveryFrame) {
     const std::uint64_t expected = (a.count(k) ? 1u : 0u) | (b.count(k) ? 2u : 0u);
     ASSERT_EQ(bits, expected);
   }
-  // ... and agrees with one engine fed every frame (the target: IoU >= 0.97).
+  // ... and agrees with one engine fed every frame, less than with sharing back (0.97:
+  // FleetAgreement.FreeEvidenceOnOtherVehiclesPriorsBringsTheMergedMapToOneEngines).
   const double agreement = iou(mergedKeys(merger), keys(single.occupiedVoxels()));
   // Where they differ, the merged map holds voxels one vehicle saw occupied and the single
-  // engine cleared with the other half's rays passing through them (free space does not travel):
-  // surface voxels hit at grazing angles. They touch the room's solids: more recall, not errors.
+  // engine cleared with the other half's rays passing through them (neither vehicle took the
+  // other's submaps as priors, so no free evidence travels): surface voxels hit at grazing
+  // angles. They touch the room's solids: more recall, not errors.
   const sim::World world = sim::World::defaultRoom();
   auto precision = [&](const std::set<Key3>& voxels) {
     std::size_t right = 0;
@@ -228,7 +231,7 @@ TEST(FleetDds, MalformedSamplesAreRefusedAndCountedTheMergerKeepsMerging) {
   };
   std::vector<::mlmap_msgs::msg::dds_::Submap_> bad;
   bad.push_back(sample(0));
-  bad.back().version_(2);  // a layout this reader does not know
+  bad.back().version_(kSubmapLayoutVersion + 1);  // a layout this reader does not know
   bad.push_back(sample(1));
   bad.back().raw_size_(0xffffffffu);  // a size that lies
   bad.push_back(sample(2));
@@ -386,6 +389,8 @@ TEST(FleetDds, ANodeTakingTheFleetsSubmapsHasAnotherVehiclesObstaclesOnEntry) {
   constexpr int kDomain = 145;
   const MapConfig map_config = fleet::test_support::fleetMapConfig();
   const std::vector<PointCloudFrame> frames = fleet::test_support::roomFlight(120);
+  FleetMerger merger(mergerConfig(kDomain));
+  merger.start();
   // Vehicle uav1 maps the room and shares it; it stays on the domain (its history serves).
   const ParticipantPtr participant = createParticipant(localhostConfig(kDomain), "uav1");
   fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
@@ -395,7 +400,7 @@ TEST(FleetDds, ANodeTakingTheFleetsSubmapsHasAnotherVehiclesObstaclesOnEntry) {
   const fleet::test_support::VoxelValues mapped_by_uav1 =
       fleet::test_support::engineContent(uav1.engine());
 
-  // Vehicle uav2's node takes the fleet's submaps (and shares nothing).
+  // Vehicle uav2's node takes the fleet's submaps and shares its own evidence.
   NodeConfig config;
   config.dds = localhostConfig(kDomain);
   config.map = map_config;
@@ -403,6 +408,7 @@ TEST(FleetDds, ANodeTakingTheFleetsSubmapsHasAnotherVehiclesObstaclesOnEntry) {
   config.map.sensor.rotation_rpy_deg = Eigen::Vector3d::Zero();
   config.dds.ns = "uav2";
   config.dds.fleet.subscribe = true;
+  config.dds.fleet.publish = true;
   MappingNode node(config);
   ASSERT_TRUE(waitFor([&] {
     return node.counters().fleet_priors_received == uav1.writer().samplesWritten();
@@ -438,6 +444,36 @@ TEST(FleetDds, ANodeTakingTheFleetsSubmapsHasAnotherVehiclesObstaclesOnEntry) {
   EXPECT_GT(inside, 1000u);
   EXPECT_GE(static_cast<double>(held) / static_cast<double>(inside), 0.995)
       << held << " of " << inside << " of uav1's voxels in uav2's window";
+
+  // uav2 sends its own evidence only: not uav1's voxels back (they would count twice), just
+  // what its one return changed. The merged map is uav1's.
+  node.stop();  // the final state goes out
+  ASSERT_GT(node.counters().fleet_submaps_sent, 0u);
+  // (Samples are not counted: KEEP_LAST 1 per submap may replace a version before it is sent.)
+  auto vehicleOf = [](const FleetMergerStats& s, const std::string& name) {
+    return std::find_if(s.vehicles.begin(), s.vehicles.end(),
+                        [&](const FleetVehicleStatus& v) { return v.info.name == name; });
+  };
+  FleetMergerStats s;
+  ASSERT_TRUE(waitFor([&] {
+    s = merger.stats();
+    const auto a = vehicleOf(s, "uav1");
+    const auto b = vehicleOf(s, "uav2");
+    return a != s.vehicles.end() && a->info.samples >= uav1.writer().samplesWritten() &&
+           b != s.vehicles.end() && b->info.voxels > 0;
+  }, std::chrono::milliseconds(20000)));
+  const auto uav2 = vehicleOf(s, "uav2");
+  EXPECT_LE(uav2->info.voxels, 8u) << "uav2 sent back uav1's priors";
+  const std::set<Key3> merged = mergedKeys(merger);
+  const std::set<Key3> by_uav1 = keys(uav1.engine().occupiedVoxels());
+  std::size_t only_merged = 0, only_uav1 = 0;
+  for (const Key3& k : merged) only_merged += by_uav1.count(k) == 0 ? 1 : 0;
+  for (const Key3& k : by_uav1) only_uav1 += merged.count(k) == 0 ? 1 : 0;
+  std::printf("uav2 contributes %llu voxels; merged %zu, uav1 %zu: %zu only merged, %zu only uav1\n",
+              static_cast<unsigned long long>(uav2->info.voxels), merged.size(), by_uav1.size(),
+              only_merged, only_uav1);
+  EXPECT_LE(only_merged, 1u);  // uav2's one return
+  EXPECT_EQ(only_uav1, 0u);
 }
 
 }  // namespace

@@ -35,19 +35,23 @@ inline MapConfig fleetMapConfig() {
 /// Where the simulator's world lies in the map's world frame (see roomFlight()) [m].
 inline const Eigen::Vector3d kMapFromSimulator_m(0.1, 0.1, 0.1);
 
-/// True when voxel `v` of the map (0.2 m voxels, world shifted by kMapFromSimulator_m) touches a
+/// True when voxel `v` of the map (world shifted by `map_from_simulator_m`) touches a
 /// static solid of World::defaultRoom(), if only with a face: a right "occupied".
-inline bool touchesRoomSolid(const sim::World& world, const VoxelIndex& v, double resolution_m) {
-  const Eigen::Vector3d min_W = v.cast<double>() * resolution_m - kMapFromSimulator_m;
+inline bool touchesRoomSolid(const sim::World& world, const VoxelIndex& v, double resolution_m,
+                             const Eigen::Vector3d& map_from_simulator_m = kMapFromSimulator_m) {
+  const Eigen::Vector3d min_W = v.cast<double>() * resolution_m - map_from_simulator_m;
   return world.intersectsBox(min_W, min_W + Eigen::Vector3d::Constant(resolution_m), 1e-6);
 }
 
 /// `count` LiDAR scans (16 x 360 rays, noise-free) along Trajectory::defaultRoomFlight() through
 /// World::defaultRoom(), evenly spread in time; the LiDAR sits at the body origin. The map's
-/// world frame is the simulator's shifted by (0.1, 0.1, 0.1) m: the room's faces lie on
-/// multiples of 0.1 m, which at 0.2 m voxels would put the floor and walls exactly on voxel
-/// borders, where rounding alone decides between two voxels.
-inline std::vector<PointCloudFrame> roomFlight(int count, double max_range_m = 8.0) {
+/// world frame is the simulator's shifted by `map_from_simulator_m` (default (0.1, 0.1, 0.1) m:
+/// the room's faces lie on multiples of 0.1 m, which at 0.2 m voxels would put the floor and
+/// walls exactly on voxel borders, where rounding alone decides between two voxels; use half a
+/// voxel at 0.1 m).
+inline std::vector<PointCloudFrame> roomFlight(
+    int count, double max_range_m = 8.0,
+    const Eigen::Vector3d& map_from_simulator_m = kMapFromSimulator_m) {
   const sim::World world = sim::World::defaultRoom();
   const sim::Trajectory trajectory = sim::Trajectory::defaultRoomFlight();
   sim::LidarModel model;
@@ -61,7 +65,7 @@ inline std::vector<PointCloudFrame> roomFlight(int count, double max_range_m = 8
     PointCloudFrame& f = frames[static_cast<std::size_t>(i)];
     f.T_W_B = trajectory.poseAt(t);
     lidar.render(world, f.T_W_B, t, &f);
-    f.T_W_B.translation() += kMapFromSimulator_m;
+    f.T_W_B.translation() += map_from_simulator_m;
   }
   return frames;
 }

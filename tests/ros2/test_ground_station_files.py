@@ -438,3 +438,11 @@ def test_readme_gives_the_ground_station_commands():
     assert set(started.group(1).split()) == {'node', 'publisher'}
     assert set(started.group(1).split()) <= set(_compose()['services'])
     assert 'No Docker engine runs on the CI machines' in section
+
+
+def test_the_bridge_colours_vehicles_as_the_merger_does():
+    """fleet_paths.FLEET_PALETTE is fleet::vehicleColourRgb's palette (src/fleet/fleet_map.cpp)."""
+    from mlmap_bridge.fleet_paths import FLEET_PALETTE
+    source = (REPO / 'src' / 'fleet' / 'fleet_map.cpp').read_text()
+    palette = re.search(r'kPalette\[\] = \{([^}]*)\}', source).group(1)
+    assert tuple(int(v, 16) for v in re.findall(r'0x[0-9a-fA-F]+', palette)) == FLEET_PALETTE

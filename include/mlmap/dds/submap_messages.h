@@ -20,7 +20,7 @@
 namespace mlmap::dds {
 
 /// The layout version of mlmap_msgs/Submap this code writes and reads (idl/README.md).
-inline constexpr std::uint32_t kSubmapLayoutVersion = 1;
+inline constexpr std::uint32_t kSubmapLayoutVersion = 2;
 /// Largest submap a reader accepts [voxels] (a 256^3 submap), checked before decoding.
 inline constexpr std::uint64_t kMaxSubmapVoxels = std::uint64_t{1} << 24;
 /// Longest vehicle name [bytes].

@@ -3,14 +3,17 @@
 /// The fleet's merged map (mlmap_fleet): every vehicle's latest content of every submap, fused
 /// voxel by voxel.
 ///
-/// Each vehicle sends a submap's whole occupied content whenever it changes (mlmap_msgs/Submap);
-/// its latest content replaces that vehicle's previous contribution to that submap, so evidence
-/// is never counted twice. A fused voxel's log-odds is the sum of the vehicles' log-odds for it,
-/// clamped to the engine's bounds (LogOddsConfig clamp_min, clamp_max): independent observers
-/// add their evidence as the engine adds its frames'. Only occupied voxels travel, so the sum of occupied
-/// evidence stays occupied: the merged occupied set is the union of the vehicles' occupied sets,
-/// and each voxel keeps a bit per vehicle that holds it (provenance). Memory grows with occupied
-/// voxels: 8 bytes per voxel and vehicle holding it, 16 per fused voxel, plus a few per submap.
+/// Each vehicle sends a submap's content whenever it changes (mlmap_msgs/Submap): its own
+/// evidence there (fleet::ownEvidence(): its occupied voxels' log-odds, less what other vehicles
+/// gave it as priors, and the negative change its rays made to prior voxels they lowered); its
+/// latest content replaces that vehicle's previous contribution to that submap, so evidence is
+/// never counted twice. A fused voxel's log-odds is the sum of the vehicles' contributions,
+/// clamped to the engine's bounds (LogOddsConfig clamp_min, clamp_max): independent observers add
+/// their evidence as the engine adds its frames', and a vehicle that took another's voxel as a
+/// prior and saw through it brings the sum to its own value, as one engine fed both vehicles'
+/// frames in that order would hold. The fused map keeps the occupied voxels, each with a bit per
+/// vehicle whose contribution to it is positive (provenance). Memory grows with the voxels sent:
+/// 8 bytes per voxel and vehicle sending it, 16 per occupied fused voxel, plus a few per submap.
 
 #include "mlmap/core/log_odds.h"
 #include "mlmap/global/global_map.h"
@@ -24,13 +27,18 @@
 
 namespace mlmap::fleet {
 
-/// A fused voxel: its offset in the submap, the clamped sum of the vehicles' log-odds, and bit v
-/// set for each vehicle v (FleetMap::vehicles() index) that holds it.
+/// An occupied fused voxel: its offset in the submap, the clamped sum of the vehicles'
+/// contributions, and bit v set for each vehicle v (FleetMap::vehicles() index) whose
+/// contribution is positive.
 struct FleetVoxel {
   std::uint32_t offset = 0;
   LogOddsQ log_odds = 0;
   std::uint64_t vehicles = 0;
 };
+
+/// The colour of vehicle `index` (FleetMap::vehicles() order) in the merged map's pictures and
+/// PointCloud2 `rgb`: 0xRRGGBB, eight distinct colours, repeating.
+std::uint32_t vehicleColourRgb(int index);
 
 /// What the merger knows of one vehicle.
 struct FleetVehicle {
@@ -40,7 +48,7 @@ struct FleetVehicle {
   std::uint64_t samples_applied = 0;  ///< samples that changed its contribution
   std::uint64_t samples_outdated = 0; ///< older than (or as old as) the content held: ignored
   std::uint64_t submaps = 0;          ///< submaps where it holds occupied voxels
-  std::uint64_t voxels = 0;           ///< occupied voxels it contributes
+  std::uint64_t voxels = 0;           ///< voxels it contributes evidence for
   double last_seen_s = -std::numeric_limits<double>::infinity();  ///< caller's clock [s]
 };
 
@@ -78,7 +86,7 @@ class FleetMap {
   SubmapApply apply(const std::string& vehicle, const SubmapIndex& m, std::uint64_t sequence,
                     std::vector<VoxelRecord>&& records);
 
-  /// Calls f(world voxel index, fused log-odds, vehicle bits) for every occupied fused voxel.
+  /// Calls f(world voxel index, fused log-odds, vehicle bits) for every fused voxel (all occupied).
   template <typename F>
   void forEachOccupied(F&& f) const {
     const auto plane = static_cast<std::uint32_t>(submap_cells_.y() * submap_cells_.z());

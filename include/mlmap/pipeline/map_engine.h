@@ -98,30 +98,32 @@ struct EngineStats {
 
 
 /// The voxels other vehicles' submaps added as prior knowledge (MapEngine::addPrior()), with the
-/// log-odds each came with, for planners to tell them apart: read it next to a snapshot
-/// (MapEngine::priors()). A voxel counts as prior while it holds the value it came with; the
-/// vehicle's own measurements change it (a prior is kept below clamp_max, so even the first own
-/// hit does). Immutable.
+/// log-odds each came with, for planners to tell them apart (read it next to a snapshot:
+/// MapEngine::priors()) and for the fleet's share to send the vehicle's own evidence only
+/// (fleet::SubmapShare: its value minus the prior's). A voxel counts as prior while it holds the
+/// value it came with; the vehicle's own measurements change it (a prior is kept below
+/// clamp_max, so even the first own hit does). Immutable.
 class PriorVoxels {
  public:
   PriorVoxels() = default;
-  /// A copy of `earlier` with `added` (world voxel, log-odds) on top.
-  PriorVoxels(const PriorVoxels& earlier, const std::vector<std::pair<VoxelIndex, LogOddsQ>>& added);
+  /// A copy of `earlier` with `added` on top: per submap, the voxels added (ascending offsets
+  /// inside the submap, with the log-odds each came with); `submap_cells`: voxels per submap and
+  /// axis (the engine's).
+  PriorVoxels(const PriorVoxels& earlier, const Eigen::Vector3i& submap_cells,
+              const std::vector<std::pair<SubmapIndex, std::vector<VoxelRecord>>>& added);
   /// True when `g` came from another vehicle and `window` (a snapshot's) still holds it with
   /// the value it came with. False outside the window.
   [[nodiscard]] bool isPrior(const VoxelIndex& g, const LocalWindow& window) const;
+  /// The voxels of submap `m` added as priors (ascending offsets, the log-odds each came with);
+  /// null when there are none.
+  [[nodiscard]] const std::vector<VoxelRecord>* inSubmap(const SubmapIndex& m) const;
   /// Voxels ever added as priors.
-  [[nodiscard]] std::size_t size() const { return values_.size(); }
+  [[nodiscard]] std::size_t size() const { return size_; }
 
  private:
-  struct Hash {
-    std::size_t operator()(const VoxelIndex& g) const {
-      return (static_cast<std::size_t>(static_cast<std::uint32_t>(g.x())) * 73856093u) ^
-             (static_cast<std::size_t>(static_cast<std::uint32_t>(g.y())) * 19349663u) ^
-             (static_cast<std::size_t>(static_cast<std::uint32_t>(g.z())) * 83492791u);
-    }
-  };
-  std::unordered_map<VoxelIndex, LogOddsQ, Hash> values_;
+  Eigen::Vector3i submap_cells_ = Eigen::Vector3i::Ones();
+  std::unordered_map<std::uint64_t, std::vector<VoxelRecord>> submaps_;  ///< by packed index
+  std::size_t size_ = 0;
 };
 
 /// Optional observers of the layers the snapshot does not carry, and of each new snapshot,
@@ -192,8 +194,8 @@ class MapEngine {
   /// configuration, or its data is inconsistent); the message names what differs.
   void restoreState(const MapState& state);
   /// Takes another vehicle's occupied voxels of submap `m` (ascending offsets inside the submap,
-  /// with their log-odds, as GlobalMap holds them; e.g. from the fleet's mlmap_msgs/Submap) as
-  /// prior knowledge: before the next frame the local-global stage adds each of them that the
+  /// with their log-odds, as GlobalMap holds them; e.g. from the fleet's mlmap_msgs/Submap; the
+  /// records below occupancy, another vehicle's free evidence, are left out) as prior knowledge: before the next frame the local-global stage adds each of them that the
   /// map does not hold (GlobalMap::addPrior(): the vehicle's own evidence wins), so when the
   /// vehicle enters that submap its window is restored with them before its own sensor sees
   /// them; its measurements then update them as any voxel. A prior's log-odds is kept below
@@ -202,7 +204,8 @@ class MapEngine {
   /// until it leaves the window (the vehicle observes it itself meanwhile); a later prior of the
   /// same submap is merged with a waiting one (the higher log-odds per voxel). Any thread.
   void addPrior(const SubmapIndex& m, std::vector<VoxelRecord> records);
-  /// The voxels added as priors so far (see PriorVoxels): never null, safe from any thread.
+  /// The voxels added as priors since the map was last emptied (clear(), restoreState()); see
+  /// PriorVoxels: never null, safe from any thread.
   [[nodiscard]] std::shared_ptr<const PriorVoxels> priors() const;
 
   /// Empties the local and the global map (what planners, the 2D grid, the ESDF and a map file

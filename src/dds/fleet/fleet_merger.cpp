@@ -22,9 +22,7 @@ using Clock = std::chrono::steady_clock;
 
 /// A colour per vehicle index (packed as PointCloud2's float `rgb`, as PCL and RViz read it).
 float vehicleColour(int index) {
-  static constexpr std::uint32_t kPalette[] = {0xe6194b, 0x3cb44b, 0x4363d8, 0xf58231,
-                                               0x911eb4, 0x46f0f0, 0xf032e6, 0xbcf60c};
-  const std::uint32_t rgb = kPalette[static_cast<std::size_t>(index) % 8];
+  const std::uint32_t rgb = fleet::vehicleColourRgb(index);
   float f = 0.0f;
   std::memcpy(&f, &rgb, sizeof(f));
   return f;

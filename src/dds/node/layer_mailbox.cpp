@@ -53,7 +53,7 @@ void LayerMailbox::copyGlobal(const GlobalMap& map, double stamp_s, std::uint64_
 }
 
 void LayerMailbox::copyFleet(const GlobalMap& map, std::shared_ptr<const MapSnapshot> snap,
-                             bool force) {
+                             std::shared_ptr<const PriorVoxels> priors, bool force) {
   std::lock_guard<std::mutex> lock(mutex_);
   if (!(force || fleet_gate_.due())) return;
   fleet_gate_.mark();
@@ -61,6 +61,7 @@ void LayerMailbox::copyFleet(const GlobalMap& map, std::shared_ptr<const MapSnap
   fleet_version_ = delta.version;
   fleet_.delta.merge(std::move(delta));
   fleet_.snap = std::move(snap);
+  fleet_.priors = std::move(priors);
   fleet_.fresh = true;
   cv_.notify_one();
 }
@@ -97,6 +98,7 @@ LayerMailbox::News LayerMailbox::take(std::chrono::milliseconds poll) {
   awareness_.fresh = global_.fresh = fleet_.fresh = false;
   fleet_.delta = fleet::GlobalMapDelta{};
   fleet_.snap.reset();
+  fleet_.priors.reset();
   return news;
 }
 

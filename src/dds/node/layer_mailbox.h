@@ -43,10 +43,12 @@ struct LayerCopy {
 };
 
 /// What the fleet output needs of one collection: the global map's changes since the previous
-/// collection and the snapshot (its window) of the same frame.
+/// collection, the snapshot (its window) and the priors taken (MapEngine::priors()) of the same
+/// frame.
 struct FleetCopy {
   fleet::GlobalMapDelta delta;
   std::shared_ptr<const MapSnapshot> snap;
+  std::shared_ptr<const PriorVoxels> priors;
   bool fresh = false;  ///< not taken yet
 };
 
@@ -64,9 +66,10 @@ class LayerMailbox {
   /// `force`).
   void copyGlobal(const GlobalMap& map, double stamp_s, std::uint64_t version, bool force = false);
   /// Collects the global map's changes since the last collection, with `snap` (the snapshot of
-  /// the frame `map` is at), when fleet_rate_hz allows (or `force`). Earlier collections not
-  /// taken yet are merged with it.
-  void copyFleet(const GlobalMap& map, std::shared_ptr<const MapSnapshot> snap, bool force = false);
+  /// the frame `map` is at) and `priors` (the engine's priors as `map` holds them), when
+  /// fleet_rate_hz allows (or `force`). Earlier collections not taken yet are merged with it.
+  void copyFleet(const GlobalMap& map, std::shared_ptr<const MapSnapshot> snap,
+                 std::shared_ptr<const PriorVoxels> priors, bool force = false);
   /// A frame's snapshot is out.
   void announceSnapshot();
   /// The publishing thread is to publish once more and end.

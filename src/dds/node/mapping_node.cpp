@@ -229,15 +229,15 @@ struct MappingNode::Impl {
         std::move(observers));
   }
 
-  /// dds.fleet.publish: hands the global map's changes and the window of the same frame to the
-  /// fleet output (at fleet.rate_hz, or now with `force`). On the local-global thread, or on any
+  /// dds.fleet.publish: hands the global map's changes, the window and the priors of the same
+  /// frame to the fleet output (at fleet.rate_hz, or now with `force`). On the local-global thread, or on any
   /// thread with `force` while the engine is idle. Nothing before the first snapshot, nor while
   /// the engine's latest snapshot is not the one of `map`'s frame (the planning thread's).
   void shareWithFleet(const GlobalMap& map, bool force) {
     std::shared_ptr<const MapSnapshot> snap = engine ? engine->snapshot() : nullptr;
     if (!snap || snap->frame() == 0) return;
     if (!force && snap->frame() != last_snapshot_frame) return;
-    mailbox.copyFleet(map, std::move(snap), force);
+    mailbox.copyFleet(map, std::move(snap), engine->priors(), force);
   }
 
   /// dds.fleet.subscribe: a reader of the fleet's submaps; the other vehicles' go to the engine

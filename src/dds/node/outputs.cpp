@@ -285,8 +285,9 @@ class EsdfOutput : public OutputOperation {
   std::shared_ptr<const EsdfMap> sent_;  ///< held, so a new field never reuses its address
 };
 
-/// dds.fleet.publish: the submaps whose occupied content changed since they last went out, from
-/// each collection of the global map's changes and the window of the same frame.
+/// dds.fleet.publish: the submaps whose content (the vehicle's own evidence, fleet::ownEvidence())
+/// changed since they last went out, from each collection of the global map's changes, the
+/// window and the priors of the same frame.
 class FleetOutput : public OutputOperation {
  public:
   FleetOutput(std::unique_ptr<SubmapWriter> writer, const Eigen::Vector3i& submap_cells,
@@ -297,7 +298,8 @@ class FleetOutput : public OutputOperation {
     if (!copy.fresh) return;
     fleet::GlobalMapDelta delta = copy.delta;
     const std::vector<fleet::SubmapUpdate> updates =
-        share_.changes(std::move(delta), copy.snap ? &copy.snap->window() : nullptr);
+        share_.changes(std::move(delta), copy.snap ? &copy.snap->window() : nullptr,
+                       copy.priors.get());
     if (updates.empty()) return;
     const std::uint64_t failures = writer_->failures();
     const std::size_t bytes = writer_->write(updates, copy.snap ? copy.snap->stamp_s() : 0.0);

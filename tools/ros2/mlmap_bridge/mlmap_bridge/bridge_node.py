@@ -10,17 +10,21 @@ In (mlmap_node's defaults; QoS as idl/README.md lists the writers):
                                                   node latches them; a late ground station
                                                   still gets the last one
   mlmap_msgs/Status                               RELIABLE, KEEP_LAST 10 (small, 1 Hz)
+  PointCloud2 fleet map (mlmap_fleet, optional)   RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 1
 Out (under output_prefix, RELIABLE so RViz's default subscriptions match):
   <layer> MarkerArray cube lists (heights / distances as colours; serialised from numpy
   arrays, no Python object per voxel), grid (passed through, latched like the input),
-  status (a text above the vehicle) and status_text (String).
+  status (a text above the vehicle), status_text (String), and with fleet_map_topic set
+  fleet_map (cubes in the colour of the vehicle that saw them, latched) and fleet_paths (each
+  vehicle's path from /tf, a line strip in its colour).
 """
 
 from functools import partial
 import time
 from typing import Any, Dict, List, Optional
 
-from mlmap_msgs.msg import Status
+from geometry_msgs.msg import Point
+from mlmap_msgs.msg import FleetStatus, Status
 from nav_msgs.msg import OccupancyGrid
 from rcl_interfaces.msg import ParameterDescriptor
 import rclpy
@@ -29,13 +33,16 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import PointCloud2
 from std_msgs.msg import Header, String
+from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import Marker, MarkerArray
 
 from .conversions import CloudLayoutError, LatestThrottle, status_text
-from .markers import cloud_layer_markers, marker_array, MessageTypes, text_marker
+from .fleet_paths import FleetPaths
+from .markers import cloud_layer_markers, fleet_map_markers, marker_array, MessageTypes
+from .markers import text_marker
 from .parameters import CLOUD_LAYERS, CloudLayer, in_namespace, PARAMETERS, prefixed_frame
 
-TYPES = MessageTypes(Marker=Marker, MarkerArray=MarkerArray, Header=Header)
+TYPES = MessageTypes(Marker=Marker, MarkerArray=MarkerArray, Header=Header, Point=Point)
 
 
 def _qos(depth: int, reliable: bool, latched: bool) -> QoSProfile:
@@ -67,6 +74,8 @@ class MlmapBridge(Node):
             p.name: self.get_parameter(p.name).value for p in PARAMETERS}
         namespace = self.settings['namespace']
         for name in self.settings:  # mlmap_node's topics and the outputs under its namespace
+            if name in ('fleet_map_topic', 'fleet_status_topic'):  # the merger's: absolute
+                continue
             if name.endswith('_topic') or name == 'output_prefix':
                 self.settings[name] = in_namespace(namespace, self.settings[name])
         self._body_frame = prefixed_frame(self.settings['frame_prefix'],
@@ -78,6 +87,7 @@ class MlmapBridge(Node):
             self._wire_cloud_layer(layer)
         self._wire_grid()
         self._wire_status()
+        self._wire_fleet_map()
         self.create_timer(POLL_PERIOD_S, self._poll)
 
     def _throttle(self, rate_parameter: str, handler):
@@ -136,6 +146,57 @@ class MlmapBridge(Node):
                                  self._throttle('grid_max_rate_hz', publisher.publish),
                                  LATCHED_IN)
         self.get_logger().info(f'{topic} -> {output}')
+
+    def _wire_fleet_map(self) -> None:
+        """Subscribe to mlmap_fleet's merged map and publish it coloured by vehicle (if set)."""
+        topic = self.settings['fleet_map_topic']
+        if not topic:
+            return
+        output = f'{self._output_prefix}/fleet_map'
+        publisher = self.create_publisher(MarkerArray, output, LATCHED_OUT)
+
+        def handler(cloud: PointCloud2) -> None:
+            try:
+                publisher.publish(fleet_map_markers(cloud, self.settings))
+            except (CloudLayoutError, ValueError) as error:
+                self.get_logger().warning(f'fleet_map: {error}', throttle_duration_sec=5.0)
+        self.create_subscription(PointCloud2, topic,
+                                 self._throttle('fleet_map_max_rate_hz', handler), LATCHED_IN)
+        self.get_logger().info(f'{topic} -> {output}')
+        self._wire_fleet_paths()
+
+    def _wire_fleet_paths(self) -> None:
+        """Each vehicle's path from /tf, in the colour mlmap_fleet's status gives it."""
+        self._fleet_paths = FleetPaths(self.settings['body_frame'])
+        self._paths_world_frame = 'map'
+        self._paths_changed = False
+        output = f'{self._output_prefix}/fleet_paths'
+        self._paths_publisher = self.create_publisher(MarkerArray, output, OUT)
+        self.create_subscription(TFMessage, '/tf', self._on_fleet_tf, _qos(100, True, False))
+        status_topic = self.settings['fleet_status_topic']
+        if status_topic:
+            self.create_subscription(FleetStatus, status_topic, self._on_fleet_status, STATUS_IN)
+        self.create_timer(1.0, self._publish_fleet_paths)
+        self.get_logger().info(f'/tf, {status_topic or "(no status)"} -> {output}')
+
+    def _on_fleet_tf(self, message: TFMessage) -> None:
+        """Add the vehicles' body positions of one /tf message to their paths."""
+        for t in message.transforms:
+            p = t.transform.translation
+            if self._fleet_paths.add(t.child_frame_id, p.x, p.y, p.z):
+                self._paths_world_frame = t.header.frame_id or self._paths_world_frame
+                self._paths_changed = True
+
+    def _on_fleet_status(self, status: FleetStatus) -> None:
+        """Colour the paths in the merger's vehicle order."""
+        self._fleet_paths.set_vehicles(list(status.vehicles))
+
+    def _publish_fleet_paths(self) -> None:
+        """Publish the paths once a second when they grew."""
+        if not self._paths_changed:
+            return
+        self._paths_changed = False
+        self._paths_publisher.publish(self._fleet_paths.markers(TYPES, self._paths_world_frame))
 
     def _wire_status(self) -> None:
         """Subscribe to the status and publish it as a text marker and a string."""

@@ -135,6 +135,26 @@ def height_colors(z: np.ndarray, z_min: float, z_max: float, alpha: float = 1.0)
     return scale_colors(t, HEIGHT_SCALE, alpha)
 
 
+def packed_rgb_colors(cloud, alpha: float = 1.0) -> Tuple[np.ndarray, np.ndarray]:
+    """Return the finite x, y, z of a PointCloud2 and the colours of its `rgb` field.
+
+    `rgb` holds 0x00RRGGBB: packed in a float32 as PCL and RViz read it (mlmap_fleet's fleet
+    map: the colour of the first vehicle that saw the voxel), or as an unsigned integer.
+    Returns xyz (float64, shape (N, 3)) and rgba in [0, 1] (shape (N, 4)).
+    """
+    rgb_field = [f for f in cloud.fields if f.name == 'rgb']
+    fields = read_cloud_fields(cloud, ('x', 'y', 'z', 'rgb'))
+    if rgb_field and int(rgb_field[0].datatype) == 7:  # FLOAT32: the bits are the colour
+        bits = fields[:, 3].astype(np.float32).view(np.uint32)
+    else:
+        bits = fields[:, 3].astype(np.uint32)
+    rgba = np.empty((len(bits), 4), dtype=np.float64)
+    for channel, shift in enumerate((16, 8, 0)):
+        rgba[:, channel] = ((bits >> shift) & 0xff) / 255.0
+    rgba[:, 3] = alpha
+    return fields[:, :3], rgba
+
+
 def distance_colors(distance_m: np.ndarray, max_distance_m: float,
                     alpha: float = 1.0) -> np.ndarray:
     """Colour signed distances: purple inside obstacles, red at them, green at max_distance_m."""

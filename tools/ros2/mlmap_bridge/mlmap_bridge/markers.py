@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Any, Mapping
 
 from .conversions import cloud_xyz, distance_colors, grid_spacing, height_colors
+from .conversions import packed_rgb_colors
 from .conversions import read_cloud_fields, thin_evenly
 from .marker_cdr import ADD, cube_list_array, TEXT_VIEW_FACING
 from .parameters import CloudLayer
@@ -26,6 +27,7 @@ class MessageTypes:
     Marker: Any
     MarkerArray: Any
     Header: Any
+    Point: Any = None  # geometry_msgs/Point, for the vehicles' paths (fleet_paths.py)
 
 
 def text_marker(types: MessageTypes, frame_id: str, ns: str, text: str, height_m: float,
@@ -89,3 +91,20 @@ def cloud_layer_markers(layer: CloudLayer, cloud, settings: Mapping[str, Any]) -
     stamp = cloud.header.stamp
     return cube_list_array(stamp.sec, stamp.nanosec, cloud.header.frame_id, layer.name, xyz,
                            rgba, size_m)
+
+
+def fleet_map_markers(cloud, settings: Mapping[str, Any]) -> bytes:
+    """Turn mlmap_fleet's merged map (PointCloud2 with `rgb`) into a serialised MarkerArray.
+
+    One cube list (namespace 'fleet_map') coloured per vehicle by the cloud's rgb field; the
+    cube edge is map_cube_size_m or, when that is 0, the voxel edge found in the cloud; thinned
+    evenly to max_cubes as the other layers.
+    """
+    xyz, rgba = packed_rgb_colors(cloud)
+    size_m = float(settings['map_cube_size_m'])
+    if size_m <= 0:
+        size_m = grid_spacing(xyz) or DEFAULT_VOXEL_EDGE_M
+    keep = thin_evenly(len(xyz), int(settings['max_cubes']))
+    stamp = cloud.header.stamp
+    return cube_list_array(stamp.sec, stamp.nanosec, cloud.header.frame_id, 'fleet_map',
+                           xyz[keep], rgba[keep], size_m)

@@ -59,11 +59,20 @@ PARAMETERS = (
               '"" disables it'),
     Parameter('status_topic', '/mlmap/status',
               'mlmap status in (mlmap_msgs/Status); "" disables it'),
+    Parameter('fleet_map_topic', '',
+              "mlmap_fleet's merged map in (sensor_msgs/PointCloud2 with rgb per vehicle, "
+              'RELIABLE + TRANSIENT_LOCAL), absolute: not under `namespace`; its default is '
+              '/mlmap/fleet/occupied; "" (default) disables it and the paths'),
+    Parameter('fleet_status_topic', '/mlmap/fleet/status',
+              "mlmap_fleet's status in (mlmap_msgs/FleetStatus), absolute: its vehicle order "
+              'gives each path the colour the merged map gives the vehicle; "": order seen'),
     # Outputs.
     Parameter('output_prefix', '/mlmap/viz',
               'RViz topics out: <prefix>/awareness, /local_map, /global_map, /esdf_slice '
               '(visualization_msgs/MarkerArray), /grid (nav_msgs/OccupancyGrid), /status '
-              '(MarkerArray with a text) and /status_text (std_msgs/String)'),
+              '(MarkerArray with a text), /status_text (std_msgs/String) and, with '
+              'fleet_map_topic, /fleet_map (MarkerArray coloured by vehicle, latched) and '
+              '/fleet_paths (a line strip per vehicle from /tf, <vehicle>/<body_frame>)'),
     Parameter('body_frame', 'base_link',
               'frame the status text floats above (mlmap_node dds.body_frame)'),
     Parameter('namespace', '',
@@ -78,6 +87,7 @@ PARAMETERS = (
     Parameter('global_map_max_rate_hz', 0.5, 'most global-map conversions per second; 0: all'),
     Parameter('esdf_slice_max_rate_hz', 2.0, 'most ESDF-slice conversions per second; 0: all'),
     Parameter('grid_max_rate_hz', 2.0, 'most grid messages passed on per second; 0: all'),
+    Parameter('fleet_map_max_rate_hz', 0.5, 'most fleet-map conversions per second; 0: all'),
     # Looks.
     Parameter('max_cubes', 100000,
               'most cubes in one layer marker; larger clouds are thinned evenly (RViz and '

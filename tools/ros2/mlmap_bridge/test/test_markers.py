@@ -9,6 +9,7 @@ from mlmap_bridge.parameters import CLOUD_LAYERS, defaults
 from marker_reader import read_marker_array
 import numpy as np
 import pytest
+import struct
 
 TYPES = mk.MessageTypes(Marker=fake_msgs.Marker, MarkerArray=fake_msgs.MarkerArray,
                         Header=fake_msgs.Header)
@@ -130,3 +131,26 @@ def test_text_marker_floats_above_the_body_frame():
     assert m.color.a == 1.0
     array = mk.marker_array(TYPES, m)
     assert array.markers == [m]
+
+
+def test_fleet_map_cubes_take_each_voxels_vehicle_colour():
+    """mlmap_fleet's cloud: the packed float32 rgb of each voxel becomes its cube's colour."""
+    palette = [0xe6194b, 0x3cb44b, 0x4363d8]  # mlmap_fleet's first three vehicles
+    rgb_as_float = [struct.unpack('<f', struct.pack('<I', c))[0] for c in palette]
+    points = [{'x': 0.05 + 0.1 * i, 'y': 0.05, 'z': 1.05, 'rgb': rgb_as_float[i % 3]}
+              for i in range(9)]
+    fields = XYZ + [field('rgb', 12, FLOAT32)]
+    cloud = make_cloud(points, fields, 16)
+    cloud.header.stamp = fake_msgs.Time(sec=3, nanosec=4)
+    m = _marker(mk.fleet_map_markers(cloud, defaults()))
+    assert m.ns == 'fleet_map' and m.type == marker_cdr.CUBE_LIST
+    expected = [((c >> 16 & 0xff) / 255.0, (c >> 8 & 0xff) / 255.0, (c & 0xff) / 255.0, 1.0)
+                for c in palette] * 3
+    colours = np.array([(c.r, c.g, c.b, c.a) for c in m.colors])
+    assert colours.shape == (9, 4) and np.allclose(colours, expected, atol=1e-6)
+    assert m.scale.x == pytest.approx(0.1, abs=1e-6)  # the voxel edge found in the cloud
+    # An integer rgb field gives the same colours.
+    as_int = make_cloud([dict(p, rgb=palette[i % 3]) for i, p in enumerate(points)],
+                        XYZ + [field('rgb', 12, 6)], 16)
+    xyz, rgba = cv.packed_rgb_colors(as_int)
+    assert np.allclose(rgba, expected, atol=1e-9) and len(xyz) == 9
