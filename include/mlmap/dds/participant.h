@@ -51,10 +51,9 @@ using ParticipantPtr = std::unique_ptr<eprosima::fastdds::dds::DomainParticipant
 ///   kept, and a UDPv4 transport with maxInitialPeersRange 32 is added (plus SHM with
 ///   `shared_memory`); the multicast discovery locators are removed, a unicast one is added, and
 ///   127.0.0.1 joins the initial peers: up to 32 participants on the host find each other with no
-///   multicast. mlmap's one difference: without static peers the added UDPv4 transport is
-///   restricted to this host's own addresses (localhostAddresses()) and announces all of them,
-///   127.0.0.1 first (rmw_fastrtps's listens on every interface and announces the network
-///   interfaces' addresses only).
+///   multicast. mlmap's one difference: without static peers the participant announces this
+///   host's own addresses (localhostAddresses()), 127.0.0.1 first, as its unicast locators
+///   (rmw_fastrtps's announces the network interfaces' addresses only).
 /// - Static peers (resolveStaticPeers: `static_peers`, else ROS_STATIC_PEERS), as Jazzy's
 ///   rmw_fastrtps_cpp: with kLocalhost or kSubnet each peer's IPv4 address (names resolved) joins
 ///   the initial peers (port 0: the domain's well-known ports, maxInitialPeersRange of them), and
@@ -99,11 +98,13 @@ struct ParticipantSetup {
 /// (loading `profiles_file` when set). Throws std::runtime_error like it.
 ParticipantSetup participantSetup(const DdsConfig& config, const std::string& name);
 
-/// The addresses a kLocalhost participant without static peers listens on and announces:
-/// 127.0.0.1, then this host's other IPv4 addresses (as Fast DDS lists its interfaces). A ROS 2 node
-/// on rmw_fastrtps_cpp with LOCALHOST announces only the latter on a host that has one, and Fast
-/// DDS sends to an address of its own host only when its transport's whitelist holds it (over
-/// loopback then). Datagrams to the host's own addresses never leave it.
+/// The addresses a kLocalhost participant without static peers announces: 127.0.0.1, then this
+/// host's other IPv4 addresses (as Fast DDS lists its interfaces). A ROS 2 node on
+/// rmw_fastrtps_cpp with LOCALHOST announces only the latter on a host that has one, and Fast DDS
+/// sends to an address of its own host only when its UDP transport has no whitelist or one that
+/// holds the address (over loopback then); a whitelist of several addresses would send every
+/// datagram once per address, so the transport has none. Datagrams to the host's own addresses
+/// never leave it.
 std::vector<std::string> localhostAddresses();
 
 /// The data-sharing domain of mlmap's endpoints: a readers' and a writer's data-sharing is used

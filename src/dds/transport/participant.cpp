@@ -96,8 +96,7 @@ frtps::Locator_t staticPeerLocator(const std::string& host, const std::string& s
 /// base QoS (the profile's): no multicast discovery locators; the built-in transports off; the
 /// profile's own transports kept and a UDPv4 transport added (maxInitialPeersRange 32, plus SHM
 /// with `shared_memory`); 127.0.0.1 added to the initial peers. mlmap's one difference: without
-/// static peers, the added UDPv4 transport and the announced locators are confined to this host's
-/// own addresses (localhostAddresses()).
+/// static peers, the announced locators are this host's own addresses (localhostAddresses()).
 void applyLocalhostRange(bool shared_memory, bool has_static_peers, fdds::DomainParticipantQos* qos) {
   fdds::TransportConfigQos& transport = qos->transport();
   transport.use_builtin_transports = false;
@@ -115,9 +114,10 @@ void applyLocalhostRange(bool shared_memory, bool has_static_peers, fdds::Domain
     wire.builtin.metatrafficUnicastLocatorList.push_back(frtps::Locator_t());
     return;
   }
-  const std::vector<std::string> addresses = localhostAddresses();
-  udp->interfaceWhiteList = addresses;
-  for (const std::string& address : addresses) {
+  // The locators, not a whitelist, confine what is listened on: Fast DDS 2.9 sends every
+  // unicast datagram once through each whitelisted interface's socket, so a whitelist of two
+  // addresses sent each sample twice (and lost fragments of large clouds under that load).
+  for (const std::string& address : localhostAddresses()) {
     frtps::Locator_t locator;  // port 0: Fast DDS computes the domain's ports
     locator.kind = LOCATOR_KIND_UDPv4;
     frtps::IPLocator::setIPv4(locator, address);
