@@ -72,7 +72,7 @@ ROSDEP_KEYS = {'Eigen3': 'eigen', 'Threads': None, 'yaml-cpp': 'yaml-cpp',
                'fastcdr': 'fastcdr', 'fastrtps': 'fastrtps', 'GTest': 'gtest',
                'octomap': 'octomap', 'nlohmann_json': 'nlohmann-json-dev',
                'PkgConfig': 'pkg-config', 'SQLite3': 'libsqlite3-dev',
-               'dynamicEDT3D': 'dynamic_edt_3d'}
+               'dynamicEDT3D': 'dynamic_edt_3d', 'PNG': 'libpng-dev'}
 
 
 def test_root_manifest_depends_on_everything_cmake_finds():
