@@ -5,6 +5,7 @@
 
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>
+#include <fastrtps/xmlparser/XMLProfileManager.h>
 
 #include <chrono>
 #include <functional>
@@ -25,6 +26,23 @@ inline bool waitFor(const std::function<bool()>& condition,
   }
   return true;
 }
+
+/// Fast DDS's delivery between participants of one process, which bypasses transports and
+/// data-sharing alike, switched off while it lives (set before the participants are made).
+class NoIntraprocessDelivery {
+ public:
+  NoIntraprocessDelivery() : saved_(eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings()) {
+    eprosima::fastrtps::LibrarySettingsAttributes off = saved_;
+    off.intraprocess_delivery = eprosima::fastrtps::INTRAPROCESS_OFF;
+    eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(off);
+  }
+  ~NoIntraprocessDelivery() { eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(saved_); }
+  NoIntraprocessDelivery(const NoIntraprocessDelivery&) = delete;
+  NoIntraprocessDelivery& operator=(const NoIntraprocessDelivery&) = delete;
+
+ private:
+  eprosima::fastrtps::LibrarySettingsAttributes saved_;
+};
 
 /// Settings of a participant that never leaves the host (DiscoveryRange::kLocalhost).
 inline DdsConfig localhostConfig(int domain_id) {

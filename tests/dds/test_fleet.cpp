@@ -1,7 +1,7 @@
 // The fleet on DDS, on loopback only (DiscoveryRange::kLocalhost), domains 140..149: vehicles'
 // engines share their submaps through SubmapWriter (as mlmap_node does) and FleetMerger fuses
 // them; the merged map against one engine fed every frame, a merger that joins late, malformed
-// samples, and mlmap_node itself sharing its map.
+// samples, a lossy link, and mlmap_node itself sharing its map.
 #include "../fleet/fleet_test_support.h"
 #include "dds_test_support.h"
 
@@ -18,6 +18,9 @@
 #include "nav_msgs/msg/OccupancyGrid_PubSubTypes.h"
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
 
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastdds/rtps/transport/test_UDPv4TransportDescriptor.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -180,6 +183,78 @@ TEST(FleetDds, MergedMapOfTwoVehiclesMatchesOneEngineFedEveryFrame) {
               s.merged_voxels, agreement, flight_s / 2, bytes[0], bytes[1], whole_map_bytes[0],
               whole_map_bytes[1]);
   EXPECT_EQ(s.vehicles[0].info.bytes + s.vehicles[1].info.bytes, bytes[0] + bytes[1]);
+}
+
+/// The vehicles' side of a lossy radio link: a participant as createParticipant() makes it, whose
+/// UDPv4 transports drop `percent` % of every RTPS message they send (data, fragments,
+/// heartbeats, ACKNACKs, gaps and discovery alike: Fast DDS's test UDPv4 transport).
+ParticipantPtr lossyParticipant(int domain_id, std::uint8_t percent) {
+  using eprosima::fastdds::rtps::test_UDPv4TransportDescriptor;
+  using eprosima::fastdds::rtps::UDPv4TransportDescriptor;
+  ParticipantSetup setup = participantSetup(localhostConfig(domain_id), "lossy_vehicles");
+  for (auto& transport : setup.qos.transport().user_transports) {
+    const auto udp = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(transport);
+    if (!udp) continue;
+    auto lossy = std::make_shared<test_UDPv4TransportDescriptor>();
+    lossy->maxInitialPeersRange = udp->maxInitialPeersRange;
+    lossy->interfaceWhiteList = udp->interfaceWhiteList;
+    lossy->sendBufferSize = udp->sendBufferSize;
+    lossy->receiveBufferSize = udp->receiveBufferSize;
+    lossy->percentageOfMessagesToDrop = percent;
+    transport = lossy;
+  }
+  return ParticipantPtr(
+      fdds::DomainParticipantFactory::get_instance()->create_participant(domain_id, setup.qos));
+}
+
+// The radio loses 5 % of the packets (tc netem, which would also delay them, is not in
+// every kernel: this VM's has none, see tests/fleet/fleet_netns.sh). Over a link from the
+// vehicles that loses 5 % of everything it carries, the merged map converges to the one of a
+// perfect link: the union of the vehicles' maps, each voxel with its provenance.
+TEST(FleetDds, OverALinkLosingFivePercentTheMergedMapConvergesToThePerfectLinks) {
+  const test_support::NoIntraprocessDelivery through_the_transports;
+  constexpr int kDomain = 146;
+  const MapConfig config = fleet::test_support::fleetMapConfig();
+  const std::vector<PointCloudFrame> frames = fleet::test_support::roomFlight(240);
+  FleetMerger merger(mergerConfig(kDomain));
+  merger.start();
+  const ParticipantPtr participant = lossyParticipant(kDomain, 5);
+  ASSERT_TRUE(participant);
+  fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  SharingVehicle uav1(publisher, "uav1", config);
+  SharingVehicle uav2(publisher, "uav2", config);
+  ASSERT_TRUE(waitFor([&] {
+    return test_support::writerMatched(uav1.writer().get()) &&
+           test_support::writerMatched(uav2.writer().get());
+  }, std::chrono::milliseconds(30000)));
+  const std::size_t half = frames.size() / 2;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    SharingVehicle& v = i < half ? uav1 : uav2;
+    v.map(frames[i]);
+    if (i % 6 == 5) v.share();
+  }
+  uav1.share();
+  uav2.share();
+  const std::set<Key3> a = keys(uav1.engine().occupiedVoxels());
+  const std::set<Key3> b = keys(uav2.engine().occupiedVoxels());
+  std::set<Key3> both = a;
+  both.insert(b.begin(), b.end());
+  ASSERT_FALSE(a.empty());
+  ASSERT_FALSE(b.empty());
+  // Reliable writers repair what was lost; the last version of each submap wins (KEEP_LAST 1 per
+  // submap), so the merger may take fewer samples than were written, never a different map.
+  EXPECT_TRUE(waitFor([&] { return mergedKeys(merger) == both; }, std::chrono::milliseconds(60000)))
+      << "merged " << mergedKeys(merger).size() << " voxels, the vehicles " << both.size();
+  for (const auto& [v, bits] : merger.occupiedVoxels()) {
+    const Key3 k{v.x(), v.y(), v.z()};
+    ASSERT_EQ(bits, (a.count(k) ? 1u : 0u) | (b.count(k) ? 2u : 0u));
+  }
+  const FleetMergerStats s = merger.stats();
+  EXPECT_EQ(s.samples_rejected, 0u);
+  std::printf("over 5 %% loss: %zu merged voxels from %llu of %llu samples written\n",
+              s.merged_voxels, static_cast<unsigned long long>(s.samples_received),
+              static_cast<unsigned long long>(uav1.writer().samplesWritten() +
+                                              uav2.writer().samplesWritten()));
 }
 
 TEST(FleetDds, ALateMergerGetsEverySubmapFromTheWritersHistoryAndMarksSilentVehiclesStale) {

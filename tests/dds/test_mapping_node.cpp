@@ -682,30 +682,13 @@ TEST(MappingNodeOutput, TheMapGridKeepsWhatTheRollingGridLeftBehindOnAFixedLatti
   EXPECT_EQ(mismatches, 0u) << "of " << compared;
 }
 
-/// Fast DDS's delivery between participants of one process, which bypasses transports and
-/// data-sharing alike, switched off while it lives (set before the participants are made).
-class NoIntraprocessDelivery {
- public:
-  NoIntraprocessDelivery() : saved_(eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings()) {
-    eprosima::fastrtps::LibrarySettingsAttributes off = saved_;
-    off.intraprocess_delivery = eprosima::fastrtps::INTRAPROCESS_OFF;
-    eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(off);
-  }
-  ~NoIntraprocessDelivery() { eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(saved_); }
-  NoIntraprocessDelivery(const NoIntraprocessDelivery&) = delete;
-  NoIntraprocessDelivery& operator=(const NoIntraprocessDelivery&) = delete;
-
- private:
-  eprosima::fastrtps::LibrarySettingsAttributes saved_;
-};
-
 // mlmap_sensor_publisher's cloud writer offers data-sharing. Here the sensor's one transport
 // drops every DATA_FRAG it sends, so its 0.45 MB clouds (many fragments) reach the node only by
 // data-sharing: with dds.data_sharing true every frame is mapped; with false no cloud arrives,
 // while the poses (one small DATA each) still do. (Delivery within the process is off, as
 // between mlmap_sensor_publisher and mlmap_node.)
 TEST(MappingNodeInput, CloudsOfADataSharingWriterAreReadInItsMemoryUnlessDataSharingIsOff) {
-  const NoIntraprocessDelivery between_processes;
+  const test_support::NoIntraprocessDelivery between_processes;
   for (const bool data_sharing : {true, false}) {
     SCOPED_TRACE(data_sharing ? "dds.data_sharing true" : "dds.data_sharing false");
     const int domain_id = data_sharing ? 174 : 175;
@@ -800,7 +783,7 @@ class DiscoveryLog : public fdds::DomainParticipantListener {
 // the node must offer them UDP locators only, announce data-sharing in mlmap's own domain alone,
 // and exchange samples with them both ways (over UDP, the one transport both sides have).
 TEST(ForeignPeer, IsOfferedNoSharedMemoryAndSamplesCrossBothWays) {
-  const NoIntraprocessDelivery between_processes;
+  const test_support::NoIntraprocessDelivery between_processes;
   constexpr int kDomain = 180;
   const NodeConfig config = nodeConfig(kDomain);
   ASSERT_FALSE(config.dds.shared_memory) << "the default";
