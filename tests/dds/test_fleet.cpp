@@ -253,8 +253,8 @@ TEST(FleetDds, OverALinkLosingFivePercentTheMergedMapConvergesToThePerfectLinks)
   EXPECT_EQ(s.samples_rejected, 0u);
   std::printf("over 5 %% loss: %zu merged voxels from %llu of %llu samples written\n",
               s.merged_voxels, static_cast<unsigned long long>(s.samples_received),
-              static_cast<unsigned long long>(uav1.writer().samplesWritten() +
-                                              uav2.writer().samplesWritten()));
+              static_cast<unsigned long long>(uav1.writer().samplesWritten()) +
+                  static_cast<unsigned long long>(uav2.writer().samplesWritten()));
 }
 
 TEST(FleetDds, ALateMergerGetsEverySubmapFromTheWritersHistoryAndMarksSilentVehiclesStale) {
