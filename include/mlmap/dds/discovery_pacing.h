@@ -20,7 +20,7 @@
 ///   this participant announce itself during the pause, by changing a counter in its USER_DATA
 ///   (`...;announcement=N;`, after the `enclave=` that ROS 2 reads): the peer knows the writers
 ///   when the heartbeat comes. Measured with tests/dds/discovery_latency.sh's Cyclone peers: over
-///   0.1 s in 6 of 40 runs (up to 0.72 s) without it, 0 of 70 (max 28 ms) with it.
+///   0.1 s in 6 of 40 runs (up to 0.73 s) without it, 0 of 70 (max 28 ms) with it.
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>

@@ -114,9 +114,9 @@ void applyLocalhostRange(bool shared_memory, bool has_static_peers, fdds::Domain
     wire.builtin.metatrafficUnicastLocatorList.push_back(frtps::Locator_t());
     return;
   }
-  // The locators, not a whitelist, confine what is listened on: Fast DDS 2.9 sends every
-  // unicast datagram once through each whitelisted interface's socket, so a whitelist of two
-  // addresses sent each sample twice (and lost fragments of large clouds under that load).
+  // Announced explicitly, with no whitelist: Fast DDS 2.9 sends every unicast datagram once
+  // through each whitelisted interface's socket, so a whitelist of these addresses sent each
+  // sample twice (and lost fragments of large clouds under that load).
   for (const std::string& address : localhostAddresses()) {
     frtps::Locator_t locator;  // port 0: Fast DDS computes the domain's ports
     locator.kind = LOCATOR_KIND_UDPv4;
