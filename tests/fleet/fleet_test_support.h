@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <map>
+#include <set>
 #include <tuple>
 #include <vector>
 
@@ -21,6 +22,24 @@ struct VoxelLess {
   }
 };
 using VoxelValues = std::map<VoxelIndex, LogOddsQ, VoxelLess>;
+
+/// A voxel index as an ordered triple (std::set of voxels).
+using Key3 = std::tuple<int, int, int>;
+
+/// The voxels of `voxels` as a set.
+inline std::set<Key3> keys(const std::vector<VoxelIndex>& voxels) {
+  std::set<Key3> out;
+  for (const VoxelIndex& v : voxels) out.insert({v.x(), v.y(), v.z()});
+  return out;
+}
+
+/// Intersection over union of two voxel sets (1 when both are empty).
+inline double iou(const std::set<Key3>& a, const std::set<Key3>& b) {
+  std::size_t both = 0;
+  for (const Key3& k : a) both += b.count(k);
+  const std::size_t either = a.size() + b.size() - both;
+  return either == 0 ? 1.0 : static_cast<double>(both) / static_cast<double>(either);
+}
 
 /// 0.2 m voxels, a 16 x 16 x 6 m window (submaps of 16 x 16 x 6 voxels), 8 m range: small enough
 /// for a test, several submaps retired and restored along the room's loop.

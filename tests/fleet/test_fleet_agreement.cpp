@@ -19,7 +19,9 @@
 namespace mlmap::fleet {
 namespace {
 
-using Key3 = std::tuple<int, int, int>;
+using test_support::iou;
+using test_support::Key3;
+using test_support::keys;
 
 /// Agreement of the merged map with one engine and with the room.
 struct Agreement {
@@ -75,19 +77,6 @@ struct Vehicle {
   std::uint64_t version = 0;
   std::uint64_t sequence = 0;
 };
-
-std::set<Key3> keys(const std::vector<VoxelIndex>& voxels) {
-  std::set<Key3> out;
-  for (const VoxelIndex& v : voxels) out.insert({v.x(), v.y(), v.z()});
-  return out;
-}
-
-double iou(const std::set<Key3>& a, const std::set<Key3>& b) {
-  std::size_t both = 0;
-  for (const Key3& k : a) both += b.count(k);
-  const std::size_t either = a.size() + b.size() - both;
-  return either == 0 ? 1.0 : static_cast<double>(both) / static_cast<double>(either);
-}
 
 /// The voxels holding a LiDAR return of `frames` (noise-free: points on the room's surfaces):
 /// the ground truth of what the vehicles saw.

@@ -55,9 +55,6 @@ class DiscoveryPacing : public eprosima::fastdds::dds::DomainParticipantListener
   void on_participant_discovery(eprosima::fastdds::dds::DomainParticipant* participant,
                                 eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override;
 
-  /// How many early announcements were made (peers that appear close together share one).
-  [[nodiscard]] std::uint64_t announcements() const;
-
  private:
   /// The announcing thread: announces whenever asked, until the pacing is deleted.
   void run();
@@ -69,11 +66,11 @@ class DiscoveryPacing : public eprosima::fastdds::dds::DomainParticipantListener
   std::chrono::milliseconds delay_;
   std::string user_data_;  ///< the participant's USER_DATA at construction (`enclave=...;`)
 
-  mutable std::mutex mutex_;
+  std::mutex mutex_;
   std::condition_variable wake_;
   bool asked_ = false;  ///< a peer of another vendor appeared since the last announcement
   bool stopping_ = false;
-  std::uint64_t announcements_ = 0;
+  std::uint64_t announcements_ = 0;  ///< made so far: the USER_DATA counter (peers close together share one)
   std::thread thread_;  ///< last: started when everything above exists
 };
 

@@ -67,6 +67,37 @@
 
 namespace mlmap {
 
+/// A trilinear interpolation: its value and its partial derivatives per unit of the fractions.
+struct Trilinear {
+  double value = 0.0;
+  double d_dtx = 0.0;
+  double d_dty = 0.0;
+  double d_dtz = 0.0;
+};
+
+/// Interpolates the corner values c<x><y><z> of a cell at fractions (tx, ty, tz) in [0, 1]^3:
+/// z first, then y, then x, with the derivatives of the same lines (the one arithmetic of
+/// EsdfMap::query() and EsdfQueryGrid::query()).
+inline Trilinear trilinear(double c000, double c001, double c010, double c011, double c100,
+                           double c101, double c110, double c111, double tx, double ty,
+                           double tz) {
+  const double dz00 = c001 - c000;
+  const double dz01 = c011 - c010;
+  const double dz10 = c101 - c100;
+  const double dz11 = c111 - c110;
+  const double c00 = c000 + tz * dz00;
+  const double c01 = c010 + tz * dz01;
+  const double c10 = c100 + tz * dz10;
+  const double c11 = c110 + tz * dz11;
+  const double dy0 = c01 - c00;
+  const double dy1 = c11 - c10;
+  const double c0 = c00 + ty * dy0;
+  const double c1 = c10 + ty * dy1;
+  const double dz0 = dz00 + ty * (dz01 - dz00);
+  const double dz1 = dz10 + ty * (dz11 - dz10);
+  return {c0 + tx * (c1 - c0), c1 - c0, dy0 + tx * (dy1 - dy0), dz0 + tx * (dz1 - dz0)};
+}
+
 /// Dense box of occupancy states on the world voxel grid (voxel i spans [i * res, (i + 1) * res)
 /// per axis). `states[(x * size.y() + y) * size.z() + z]` holds box-relative voxel (x, y, z),
 /// i.e. world voxel min_index + (x, y, z): x-major, z fastest (the local map's iteration order).
@@ -400,32 +431,13 @@ inline EsdfMap::Query EsdfMap::query(const Eigen::Vector3d& p_W) const {
   const double kz = rz == tz ? inv_resolution_ : 0.0;
 
   const float* c = field_.data() + (ix * ny + iy) * nz + iz;
-  const double c000 = c[0];
-  const double c001 = c[step_z_];
-  const double c010 = c[step_y_];
-  const double c011 = c[step_y_ + step_z_];
-  const double c100 = c[step_x_];
-  const double c101 = c[step_x_ + step_z_];
-  const double c110 = c[step_x_ + step_y_];
-  const double c111 = c[step_x_ + step_y_ + step_z_];
-  const double dz00 = c001 - c000;
-  const double dz01 = c011 - c010;
-  const double dz10 = c101 - c100;
-  const double dz11 = c111 - c110;
-  const double c00 = c000 + tz * dz00;
-  const double c01 = c010 + tz * dz01;
-  const double c10 = c100 + tz * dz10;
-  const double c11 = c110 + tz * dz11;
-  const double dy0 = c01 - c00;
-  const double dy1 = c11 - c10;
-  const double c0 = c00 + ty * dy0;
-  const double c1 = c10 + ty * dy1;
-  q.distance_m = c0 + tx * (c1 - c0);
-  q.gradient.x() = (c1 - c0) * kx;
-  q.gradient.y() = (dy0 + tx * (dy1 - dy0)) * ky;
-  const double dz0 = dz00 + ty * (dz01 - dz00);
-  const double dz1 = dz10 + ty * (dz11 - dz10);
-  q.gradient.z() = (dz0 + tx * (dz1 - dz0)) * kz;
+  const Trilinear t = trilinear(c[0], c[step_z_], c[step_y_], c[step_y_ + step_z_], c[step_x_],
+                                c[step_x_ + step_z_], c[step_x_ + step_y_],
+                                c[step_x_ + step_y_ + step_z_], tx, ty, tz);
+  q.distance_m = t.value;
+  q.gradient.x() = t.d_dtx * kx;
+  q.gradient.y() = t.d_dty * ky;
+  q.gradient.z() = t.d_dtz * kz;
   return q;
 }
 

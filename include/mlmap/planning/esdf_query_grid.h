@@ -114,34 +114,16 @@ inline EsdfMap::Query EsdfQueryGrid::query(const Eigen::Vector3d& p_W) const {
   const std::ptrdiff_t own = (tx >= 0.5 ? stride_x_ : 0) + (ty >= 0.5 ? stride_y_ : 0) +
                              (tz >= 0.5 ? 1 : 0);
   q.valid = (c[own] & 1) == 0;
-  const std::int32_t v000 = c[0] >> 1;
-  const std::int32_t v001 = c[1] >> 1;
-  const std::int32_t v010 = c[stride_y_] >> 1;
-  const std::int32_t v011 = c[stride_y_ + 1] >> 1;
-  const std::int32_t v100 = c[stride_x_] >> 1;
-  const std::int32_t v101 = c[stride_x_ + 1] >> 1;
-  const std::int32_t v110 = c[stride_x_ + stride_y_] >> 1;
-  const std::int32_t v111 = c[stride_x_ + stride_y_ + 1] >> 1;
   // Interpolation in levels (exact integer differences), scaled to metres at the end.
-  const double dz00 = v001 - v000;
-  const double dz01 = v011 - v010;
-  const double dz10 = v101 - v100;
-  const double dz11 = v111 - v110;
-  const double c00 = v000 + tz * dz00;
-  const double c01 = v010 + tz * dz01;
-  const double c10 = v100 + tz * dz10;
-  const double c11 = v110 + tz * dz11;
-  const double dy0 = c01 - c00;
-  const double dy1 = c11 - c10;
-  const double c0 = c00 + ty * dy0;
-  const double c1 = c10 + ty * dy1;
+  const Trilinear t = trilinear(c[0] >> 1, c[1] >> 1, c[stride_y_] >> 1, c[stride_y_ + 1] >> 1,
+                                c[stride_x_] >> 1, c[stride_x_ + 1] >> 1,
+                                c[stride_x_ + stride_y_] >> 1, c[stride_x_ + stride_y_ + 1] >> 1,
+                                tx, ty, tz);
   const double gradient_scale = step_m_ * inv_resolution_;
-  q.distance_m = (c0 + tx * (c1 - c0)) * step_m_;
-  q.gradient.x() = (c1 - c0) * gradient_scale;
-  q.gradient.y() = (dy0 + tx * (dy1 - dy0)) * gradient_scale;
-  const double dz0 = dz00 + ty * (dz01 - dz00);
-  const double dz1 = dz10 + ty * (dz11 - dz10);
-  q.gradient.z() = (dz0 + tx * (dz1 - dz0)) * gradient_scale;
+  q.distance_m = t.value * step_m_;
+  q.gradient.x() = t.d_dtx * gradient_scale;
+  q.gradient.y() = t.d_dty * gradient_scale;
+  q.gradient.z() = t.d_dtz * gradient_scale;
   return q;
 }
 

@@ -46,11 +46,6 @@ void DiscoveryPacing::on_participant_discovery(fdds::DomainParticipant*,
   std::this_thread::sleep_for(delay_);  // Fast DDS answers the new participant when this returns
 }
 
-std::uint64_t DiscoveryPacing::announcements() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return announcements_;
-}
-
 void DiscoveryPacing::run() {
   std::unique_lock<std::mutex> lock(mutex_);
   while (true) {
