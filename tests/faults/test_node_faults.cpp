@@ -499,7 +499,12 @@ class GroundStation {
   fdds::DataReader* local_reader_ = nullptr;
 };
 
+// The ground station is another process in real use; here its participant is deleted and made
+// again beside the node's, and Fast DDS 2.9's delivery within the process raced that deletion
+// once under ASan (SEGV in StatefulWriter::intraprocess_gap), so the test goes through the
+// transports as two processes do.
 TEST(NodeFaults, SubscriberThatLeavesAndReturnsGetsTheLayersAgainAndMappingNeverWaits) {
+  const test_support::NoIntraprocessDelivery between_processes;
   NodeConfig config = lidarNodeConfig(205);
   config.map.local_map.size_cells = Eigen::Vector3i(45, 45, 25);  // 9 m: flying 8 m retires submaps
   config.dds.rates.global_map_hz = 10.0;
