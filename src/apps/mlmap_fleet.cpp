@@ -3,12 +3,16 @@
 // over plain Fast DDS: no ROS installation needed. The work is mlmap::dds::FleetMerger's.
 
 #include "mlmap/apps/stop_signal.h"
+#include "mlmap/config/config_yaml.h"
 #include "mlmap/dds/fleet_merger.h"
+#include "mlmap/map_io/map_file.h"
 
 #include <CLI/CLI.hpp>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
+#include <filesystem>
+#include <stdexcept>
 
 namespace {
 
@@ -21,6 +25,9 @@ struct Options {
   std::string discovery_range;  ///< --discovery-range ("": ROS_AUTOMATIC_DISCOVERY_RANGE)
   double duration_s = 0.0;      ///< --duration (0: until SIGINT / SIGTERM)
   double report_every_s = 5.0;  ///< --report-every (0: none)
+  std::string config_path;      ///< --config: the vehicles' configuration ("": the defaults)
+  std::string save_map_path;    ///< --save-map: the merged map's file at the end ("": none)
+  bool overwrite = false;       ///< --overwrite: --save-map may replace an existing map file
 };
 
 /// Adds every option of mlmap_fleet to `app`.
@@ -46,6 +53,29 @@ void addOptions(CLI::App& app, Options& o) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--report-every", o.report_every_s, "seconds between status lines (0: none)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--config", o.config_path,
+                 "the vehicles' mlmap configuration (mlmap_node's file): its log_odds section "
+                 "clamps and thresholds the fused map and is the saved map's sensor model")
+      ->check(CLI::ExistingFile);
+  app.add_option("--save-map", o.save_map_path,
+                 "at the end, write the merged map to this mlmap map file (global layer; "
+                 "mlmap_map_tool converts it, mlmap_node map_file.load_path starts from it)");
+  app.add_flag("--overwrite", o.overwrite, "--save-map may replace an existing mlmap map file");
+}
+
+/// Why the merged map could not be saved where `o` says, or "" when it can (checked at start,
+/// so that a mission does not end with a map that has nowhere to go).
+std::string saveMapProblem(const Options& o) {
+  if (o.save_map_path.empty()) return "";
+  const std::string conflict =
+      io::outputConflict(o.save_map_path, {o.config_path}, o.overwrite, "--overwrite");
+  if (!conflict.empty()) return "--save-map: not writing " + conflict;
+  const std::filesystem::path parent =
+      std::filesystem::absolute(o.save_map_path).parent_path();
+  if (!std::filesystem::is_directory(parent)) {
+    return "--save-map: the folder " + parent.string() + " does not exist";
+  }
+  return "";
 }
 
 /// The merger's messages to the log, at their level.
@@ -62,6 +92,11 @@ int run(Options o) {
   try {
     o.merger.dds.domain_id = o.domain_id;
     o.merger.dds.discovery_range = o.discovery_range;
+    if (!o.config_path.empty()) {
+      o.merger.log_odds = io::loadConfigYaml(o.config_path, io::kNodeOnlySections).log_odds;
+    }
+    const std::string save_problem = saveMapProblem(o);
+    if (!save_problem.empty()) throw std::runtime_error(save_problem);
     apps::installStopHandler();
     dds::FleetMerger merger(o.merger, logMessage);
     spdlog::info("merging the fleet's submaps on DDS domain {} (rt/{}), publishing under '{}'",
@@ -72,6 +107,12 @@ int run(Options o) {
     spdlog::info("stopping");
     merger.stop();
     spdlog::info("done: {}", merger.statusLine());
+    if (!o.save_map_path.empty()) {
+      const MapState state = merger.mapState();
+      io::saveMapFile(state, o.save_map_path);
+      spdlog::info("saved the merged map ({} occupied voxels in {} submaps) to {}",
+                   state.globalVoxelCount(), state.global_submaps.size(), o.save_map_path);
+    }
     return 0;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());

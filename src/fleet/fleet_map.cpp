@@ -4,10 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <tuple>
 
 namespace mlmap::fleet {
 
-FleetMap::FleetMap(const LogOddsConfig& log_odds) : model_(log_odds) {}
+FleetMap::FleetMap(const LogOddsConfig& log_odds) : log_odds_(log_odds), model_(log_odds) {}
 
 bool FleetMap::acceptGeometry(double resolution_m, const Eigen::Vector3i& submap_cells) {
   if (!has_geometry_) {
@@ -159,6 +162,41 @@ std::size_t FleetMap::memoryBytes() const {
     }
   }
   return bytes;
+}
+
+std::vector<std::pair<SubmapIndex, std::vector<VoxelRecord>>> FleetMap::occupiedSubmaps() const {
+  std::vector<std::pair<SubmapIndex, std::vector<VoxelRecord>>> out;
+  for (const auto& [key, entry] : submaps_) {
+    std::vector<VoxelRecord> records;
+    for (const FleetVoxel& v : entry.fused) {
+      if (model_.isOccupied(v.log_odds)) records.push_back({v.offset, v.log_odds});
+    }
+    if (!records.empty()) out.emplace_back(submapOf(key), std::move(records));
+  }
+  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
+    return std::make_tuple(a.first.x(), a.first.y(), a.first.z()) <
+           std::make_tuple(b.first.x(), b.first.y(), b.first.z());
+  });
+  return out;
+}
+
+MapState fleetMapState(const FleetMap& fleet) {
+  if (!fleet.hasGeometry()) {
+    throw std::runtime_error("no vehicle has shared a submap yet: nothing to save");
+  }
+  MapState state;
+  state.local_map.resolution_m = fleet.resolution_m();
+  state.local_map.size_cells = fleet.submapCells() * LocalMapConfig::kSubmapsPerAxis;
+  state.log_odds = fleet.logOddsConfig();
+  state.global_submaps = fleet.occupiedSubmaps();
+  const std::vector<std::string> problems = mapStateProblems(state);
+  if (!problems.empty()) {
+    std::ostringstream m;
+    m << "the merged map cannot be saved:";
+    for (const std::string& p : problems) m << " " << p << ";";
+    throw std::runtime_error(m.str());
+  }
+  return state;
 }
 
 }  // namespace mlmap::fleet

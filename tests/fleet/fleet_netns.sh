@@ -3,13 +3,15 @@
 # namespace with mlmap_sensor_publisher (config/worlds/fleet/uavK.yaml, prerendered) ->
 # mlmap_node (namespace uavK, sharing its submaps on rt/mlmap/submaps), and mlmap_fleet in the
 # hub namespace. Faults: every vehicle's link limited (tc tbf; this kernel has no netem, so no
-# loss or delay), and vehicle 1's link cut for --cut seconds mid-flight, then restored.
+# loss or delay here: tests/dds/emulated_link.h applies them in a process), and vehicle 1's link
+# cut for --cut seconds mid-flight, then restored.
 # Checks: every frame of every vehicle mapped, none dropped (the link does not slow onboard
 # mapping); during the cut the merger marks uav1 STALE and keeps its voxels, and a few seconds
 # after the link is back it is no longer stale (vehicles that finished flying turn stale again:
 # a mapped, unchanging map sends nothing); after the flight
 # the merger that lived through the cut holds the same map (per vehicle and merged) as a merger
-# that joins at the end and gets every submap's last state from the writers' histories.
+# that joins at the end and gets every submap's last state from the writers' histories, and
+# saves it as it stops (--save-map) with every voxel it held.
 # Vehicle k flies config/worlds/fleet/uav((k-1) % 3 + 1).yaml (more than three share routes).
 # Prints the merger's CPU time and peak memory.
 #   fleet_netns.sh --bin DIR --out DIR --domain ID [--vehicles N] [--frames F] [--rate HZ]
@@ -53,7 +55,7 @@ if [ "$limit_mbit" != 0 ]; then
 fi
 stale_s=3
 nsenter -t "$lan_hub" -n "$bin/mlmap_fleet" --domain "$domain" --discovery-range SUBNET \
-  --stale-after $stale_s --report-every 1 > "$out/merger.log" 2>&1 &
+  --stale-after $stale_s --report-every 1 --save-map "$out/fleet.mlmap" > "$out/merger.log" 2>&1 &
 merger=$!; pids+=("$merger")
 merger_started_s=$(date +%s)
 publishers=()
@@ -133,5 +135,11 @@ if [ "$cut_s" != 0 ]; then
   grep -o 'uav1 ([^)]*)' "$out/after_cut.log" | grep -q STALE &&
     fail "uav1 still stale after its link came back: $(cat "$out/after_cut.log")"
 fi
+# What the merger saved as it stopped is the map it held (mlmap_map_tool reads it as any map).
+saved=$("$bin/mlmap_map_tool" --info "$out/fleet.mlmap" | sed -n 's/.*global map: \([0-9]*\) occupied voxels.*/\1/p')
+merged=$(grep -o 'merged [0-9]* voxels' <<<"$final" | grep -o '[0-9]*')
+[ -n "$saved" ] && [ "$saved" = "$merged" ] ||
+  fail "the saved merged map holds ${saved:-no} voxels, the merger $merged"
+echo "saved: $out/fleet.mlmap, $saved occupied voxels"
 echo "merger: ${merger_cpu_s} s of CPU over ${merger_wall_s} s, peak RSS $(( merger_hwm_kb / 1024 )) MB, $n vehicles at $rate_hz Hz"
 echo "PASS"

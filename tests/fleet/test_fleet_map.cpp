@@ -2,10 +2,14 @@
 // in a std::map, fused voxel by voxel in another, on random streams with replacements, empties,
 // duplicates and versions arriving out of order.
 #include "mlmap/fleet/fleet_map.h"
+#include "mlmap/map_io/map_export.h"
+#include "mlmap/map_io/map_file.h"
+#include "mlmap/pipeline/map_engine.h"
 
 #include <gtest/gtest.h>
 
 #include <map>
+#include <set>
 #include <random>
 #include <tuple>
 
@@ -158,6 +162,66 @@ TEST(FleetMap, GridMarksTheBandsOccupiedColumnsAndMemoryFollowsVoxels) {
       static_cast<double>(map.memoryBytes() - small) / static_cast<double>(200 * 64);
   EXPECT_LT(per_voxel, 40.0);
   std::printf("fleet map: %.1f B per occupied voxel of one vehicle\n", per_voxel);
+}
+
+// mlmap_fleet --save-map: the merged map as a map file, read back by the map file's own decoder
+// and by an engine (what mlmap_node's map_file.load_path does), holds every fused occupied voxel
+// of the slow reference with its log-odds, and nothing else.
+TEST(FleetMapFile, TheSavedMergedMapHoldsEveryFusedVoxelWithItsLogOddsAndAnEngineLoadsIt) {
+  const Eigen::Vector3i cells(3, 3, 2);  // the submaps of a 15 x 15 x 10 window
+  LogOddsConfig log_odds;
+  log_odds.clamp_max = 2.5;  // a model other than the default travels with the map
+  FleetMap map(log_odds);
+  EXPECT_THROW((void)fleetMapState(map), std::runtime_error) << "nothing merged yet";
+  ASSERT_TRUE(map.acceptGeometry(0.1, cells));
+  Reference reference;
+  const std::vector<std::string> order = {"uav1", "uav2", "uav3"};
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> coord(-3, 3), value(-1500, 2500), offset(0, cells.prod() - 1);
+  for (int step = 0; step < 300; ++step) {
+    const std::string& vehicle = order[static_cast<std::size_t>(step) % order.size()];
+    const SubmapIndex m(coord(rng), coord(rng), coord(rng) / 3);
+    std::map<std::uint32_t, LogOddsQ> voxels;
+    for (int i = 0; i < 8; ++i) {
+      voxels[static_cast<std::uint32_t>(offset(rng))] = static_cast<LogOddsQ>(value(rng));
+    }
+    std::vector<VoxelRecord> records;
+    records.reserve(voxels.size());
+    for (const auto& [o, l] : voxels) records.push_back({o, l});
+    const std::uint64_t sequence = static_cast<std::uint64_t>(step) + 1;
+    reference.apply(vehicle, m, sequence, records);
+    (void)map.apply(vehicle, m, sequence, std::move(records));
+  }
+  const auto expected = reference.fused(order, cells, map.model());
+  ASSERT_GT(expected.size(), 100u);
+
+  const MapState saved = fleetMapState(map);
+  EXPECT_EQ(saved.local_map.resolution_m, 0.1);
+  EXPECT_EQ(saved.local_map.size_cells, Eigen::Vector3i(15, 15, 10));
+  EXPECT_EQ(saved.log_odds.clamp_max, 2.5);
+  const MapState loaded = io::decodeMapFile(io::encodeMapFile(saved), "fleet.mlmap");
+  EXPECT_TRUE(mapStateProblems(loaded).empty());
+  std::map<Key3, double> in_file;
+  for (const io::OccupiedVoxel& v : io::occupiedVoxels(loaded)) {
+    in_file[Key3{v.index.x(), v.index.y(), v.index.z()}] = v.log_odds;
+  }
+  ASSERT_EQ(in_file.size(), expected.size());
+  for (const auto& [g, fused] : expected) {
+    ASSERT_EQ(in_file.count(g), 1u);
+    EXPECT_DOUBLE_EQ(in_file[g], dequantizeLogOdds(fused.first));
+  }
+
+  MapConfig config;
+  config.local_map = saved.local_map;
+  config.log_odds = log_odds;
+  io::checkMapMatchesConfig(loaded, config, "fleet.mlmap");
+  MapEngine engine(config);
+  engine.restoreState(loaded);
+  std::set<Key3> in_engine;
+  for (const VoxelIndex& v : engine.occupiedVoxels()) in_engine.insert(Key3{v.x(), v.y(), v.z()});
+  std::set<Key3> expected_keys;
+  for (const auto& entry : expected) expected_keys.insert(entry.first);
+  EXPECT_EQ(in_engine, expected_keys);
 }
 
 }  // namespace

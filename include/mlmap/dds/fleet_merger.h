@@ -77,6 +77,8 @@ class FleetMerger {
   [[nodiscard]] FleetMergerStats stats() const;
   /// The merged map's occupied voxels with their vehicle bits.
   [[nodiscard]] std::vector<std::pair<VoxelIndex, std::uint64_t>> occupiedVoxels() const;
+  /// The merged map as a map file holds it (fleet::fleetMapState(); throws as it does).
+  [[nodiscard]] MapState mapState() const;
   /// One line: vehicles (name, last seen, kB, submaps, voxels, stale), merged voxels, memory.
   [[nodiscard]] std::string statusLine() const;
   [[nodiscard]] int domainId() const;

@@ -17,6 +17,7 @@
 
 #include "mlmap/core/log_odds.h"
 #include "mlmap/global/global_map.h"
+#include "mlmap/local/map_state.h"
 #include "mlmap/planning/projected_grid.h"
 
 #include <cstdint>
@@ -103,6 +104,10 @@ class FleetMap {
     }
   }
 
+  /// The fused occupied voxels as the global map keeps them: submaps by ascending index (x, then
+  /// y, then z), each with its voxels by ascending offset; submaps with none left out.
+  [[nodiscard]] std::vector<std::pair<SubmapIndex, std::vector<VoxelRecord>>> occupiedSubmaps() const;
+
   /// The 2D grid of the occupied voxels whose centres lie in [band_min_z_m, band_max_z_m]:
   /// 100 where one is, -1 (unknown) elsewhere (free space does not travel), over the occupied
   /// voxels' extent (an empty grid when there are none).
@@ -116,6 +121,7 @@ class FleetMap {
   [[nodiscard]] double resolution_m() const { return resolution_m_; }
   [[nodiscard]] const Eigen::Vector3i& submapCells() const { return submap_cells_; }
   [[nodiscard]] const LogOddsModel& model() const { return model_; }
+  [[nodiscard]] const LogOddsConfig& logOddsConfig() const { return log_odds_; }
   /// Changes of the fused map so far (equal values: nothing changed).
   [[nodiscard]] std::uint64_t changes() const { return changes_; }
 
@@ -133,6 +139,7 @@ class FleetMap {
   static SubmapIndex submapOf(std::uint64_t key);
   void fuse(Entry* entry);
 
+  LogOddsConfig log_odds_;
   LogOddsModel model_;
   bool has_geometry_ = false;
   double resolution_m_ = 0.0;
@@ -143,5 +150,12 @@ class FleetMap {
   std::size_t voxel_count_ = 0;
   std::uint64_t changes_ = 0;
 };
+
+/// The merged map as a map file holds it (mlmap/map_io/map_file.h): every fused occupied voxel
+/// in the global layer with its log-odds, no local window (a node that loads it places one where
+/// it starts), the fleet's voxel size, a window of kSubmapsPerAxis of the fleet's submaps per
+/// axis, and `fleet`'s log-odds model. Throws std::runtime_error when no sample has given the
+/// fleet a grid yet, or when the state would not be sound (mapStateProblems()).
+[[nodiscard]] MapState fleetMapState(const FleetMap& fleet);
 
 }  // namespace mlmap::fleet

@@ -314,6 +314,11 @@ std::vector<std::pair<VoxelIndex, std::uint64_t>> FleetMerger::occupiedVoxels() 
   return out;
 }
 
+MapState FleetMerger::mapState() const {
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return fleet::fleetMapState(impl_->map);
+}
+
 std::string FleetMerger::statusLine() const {
   const FleetMergerStats s = stats();
   std::ostringstream m;
