@@ -488,11 +488,15 @@ bool EsdfMap::update(const OccupancyBox& box) {
   }
   last_update_ = UpdateStats{};
   last_update_.full = false;
-  // A moved box, where the windowed passes apply: computing it whole costs less than shifting
-  // the kept buffers and going through the lines the new slabs and the removed faces reach
-  // (about half the box for a window that moves by a fifth of its size).
-  if (!delta.isZero() && window_kernel_) return compute(box);
-  if (!delta.isZero()) {
+  // A moved box, where the windowed passes apply: moved along z, every z line reaches a new
+  // or a removed face within the clamp (the box is shallow), so it is computed whole. Moved
+  // along x or y, the kept box is first brought to the new place with its kept states (see
+  // moveWindowed()), then the states that changed there go through the unmoved path below.
+  const bool moved_windowed = !delta.isZero() && window_kernel_;
+  if (moved_windowed && delta.z() != 0) return compute(box);
+  if (moved_windowed) {
+    moveWindowed(box, delta);
+  } else if (!delta.isZero()) {
     shiftKept(delta);
     min_index_ = box.min_index;
     last_update_.shifted = true;
@@ -515,8 +519,145 @@ bool EsdfMap::update(const OccupancyBox& box) {
     }
     if (changed_states_.size() > budget) return compute(box);
   }
-  updateChanged(box, delta);
+  updateChanged(box, moved_windowed ? VoxelIndex::Zero() : delta);
+  if (moved_windowed) {  // every cell may have moved: a copy must take the field whole
+    last_update_.shifted = true;
+    last_update_.changed_cells = cells;
+    changed_cells_.clear();
+  }
   return true;
+}
+
+void EsdfMap::moveWindowed(const OccupancyBox& box, const VoxelIndex& delta) {
+  const int nx = size_.x();
+  const int ny = size_.y();
+  const int nz = size_.z();
+  const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
+  const auto* now = reinterpret_cast<const std::uint8_t*>(box.states.data());
+  Scratch* scratch = &scratch_[0];
+  // The kept states at their new place; the rows the move brought in (whole rows: delta.z() is
+  // 0) from the new box. This box, B', differs from the new one only where the kept part
+  // changed, which update() then handles as for an unmoved box.
+  shiftBox(&kept_states_, size_, delta, kUnseenState);
+  std::uint8_t* kept = kept_states_.data();
+  for (int x = 0; x < nx; ++x) {
+    const bool x_new = x + delta.x() < 0 || x + delta.x() >= nx;
+    for (int y = 0; y < ny; ++y) {
+      if (!x_new && y + delta.y() >= 0 && y + delta.y() < ny) continue;
+      const std::size_t row = static_cast<std::size_t>(x) * slab + static_cast<std::size_t>(y) * nz;
+      std::memcpy(kept + row, now + row, static_cast<std::size_t>(nz));
+    }
+  }
+  min_index_ = box.min_index;
+  // Pass 1 of B' whole (about a tenth of a compute; most rows reach a new or removed x face).
+  sweepRows(kept, 0, ny, scratch);
+  // A slab within the clamp of a new or removed x face (pass 1 changed there) is transformed
+  // whole. The others keep their y pass results and field, moved to their new place; their
+  // pass 1 changed only in the new y rows, so their y pass changes only within the clamp of a
+  // new or removed y face, and their z pass only on those rows.
+  const int reach = cap_d_ + 1;
+  const int dx = delta.x();
+  const int dy = delta.y();
+  // [lo, hi) ranges along an axis of n voxels whose results a move by d changes (d > 0: the
+  // face at 0 removed, the voxels from n - d new; d < 0: the mirror image).
+  const auto changedBands = [reach](int d, int n, int bands[4]) {
+    if (d > 0) {
+      bands[0] = 0;
+      bands[1] = std::min(n, reach);
+      bands[2] = std::max(0, n - d - reach);
+      bands[3] = n;
+    } else {
+      bands[0] = 0;
+      bands[1] = std::min(n, -d + reach);
+      bands[2] = std::max(0, n - reach);
+      bands[3] = n;
+    }
+    if (bands[2] <= bands[1]) {  // they meet: one band over the whole axis
+      bands[1] = n;
+      bands[2] = bands[3] = n;
+    }
+  };
+  int x_bands[4] = {0, 0, 0, 0};
+  if (dx != 0) changedBands(dx, nx, x_bands);
+  int y_bands[4] = {0, 0, 0, 0};
+  if (dy != 0) changedBands(dy, ny, y_bands);
+  const auto whole = [&](int x) {
+    return (x >= x_bands[0] && x < x_bands[1]) || (x >= x_bands[2] && x < x_bands[3]) ||
+           (dy != 0 && y_bands[1] == ny);
+  };
+  // The kept slabs' results moved (their source slab x + dx is kept too), in the order that
+  // reads each source before it is overwritten; rows y + dy beyond the box are new (in a y
+  // band). The unknown bits move with them where the rows do not.
+  const std::size_t words = slab_bits_ / 64;
+  const int row_lo = std::max(0, -dy);
+  const int row_hi = std::min(ny, ny - dy);
+  const auto row_count = static_cast<std::size_t>(row_hi - row_lo) * static_cast<std::size_t>(nz);
+  for (int i = 0; i < nx; ++i) {
+    const int x = dx > 0 ? i : nx - 1 - i;
+    if (whole(x)) continue;
+    const std::size_t to = static_cast<std::size_t>(x) * slab + static_cast<std::size_t>(row_lo) * nz;
+    const std::size_t from =
+        static_cast<std::size_t>(x + dx) * slab + static_cast<std::size_t>(row_lo + dy) * nz;
+    std::memmove(pass2_narrow_.data() + to, pass2_narrow_.data() + from,
+                 row_count * sizeof(std::int16_t));
+    std::memmove(field_.data() + to, field_.data() + from, row_count * sizeof(float));
+    if (dy == 0) {
+      std::memmove(unknown_bits_.data() + static_cast<std::size_t>(x) * words,
+                   unknown_bits_.data() + static_cast<std::size_t>(x + dx) * words,
+                   words * sizeof(std::uint64_t));
+    }
+  }
+  for (int x = 0; x < nx; ++x) {
+    if (whole(x)) {
+      transformSlabs(kept, x, x + 1, scratch);
+      last_update_.y_lines += static_cast<std::size_t>(nz);
+      last_update_.z_lines += static_cast<std::size_t>(ny);
+      continue;
+    }
+    if (dy == 0) continue;
+    transformSlabRows(x, y_bands[0], y_bands[1], scratch);
+    if (y_bands[2] < y_bands[3]) transformSlabRows(x, y_bands[2], y_bands[3], scratch);
+    writeUnknownBits(kept, x);
+  }
+  last_update_.rows_swept = static_cast<std::size_t>(ny);
+}
+
+void EsdfMap::transformSlabRows(int x, int y_begin, int y_end, Scratch* scratch) {
+  const int ny = size_.y();
+  const int nz = size_.z();
+  const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
+  esdf_kernel::WindowBuffers* buffers = &scratch->window;
+  UpdateStats& u = last_update_;
+  // The y pass over the part of the y lines whose outputs in [y_begin, y_end) are exact: they
+  // lie more than cap_d + 1 from its cut ends (esdf_kernel::transformLines()).
+  const int margin = cap_d_ + 2;
+  const int begin = std::max(0, y_begin - margin);
+  const int end = std::min(ny, y_end + margin);
+  const std::size_t width = static_cast<std::size_t>(nz);
+  const std::size_t n = static_cast<std::size_t>(end - begin) * width;
+  if (buffers->lines.size() < n) buffers->lines.resize(n);
+  std::int16_t* values = buffers->lines.data();
+  const std::size_t first = static_cast<std::size_t>(x) * slab;
+  esdf_kernel::squareDistances(pass1_narrow_.data() + first + static_cast<std::size_t>(begin) * width,
+                               width, end - begin, nz, cap_sq_, cap_d_, values);
+  esdf_kernel::transformLines(values, end - begin, nz, cap_sq_, cap_d_, buffers);
+  std::int16_t* rows = pass2_narrow_.data() + first + static_cast<std::size_t>(y_begin) * width;
+  const auto count = static_cast<std::size_t>(y_end - y_begin);
+  std::copy(values + static_cast<std::size_t>(y_begin - begin) * width,
+            values + static_cast<std::size_t>(y_end - begin) * width, rows);
+  u.y_lines += static_cast<std::size_t>(nz);
+  u.z_lines += count;
+  // The z pass over those rows (whole z lines), transposed to lie side by side, and back.
+  std::vector<std::int16_t>& gathered = scratch->gathered;
+  if (gathered.size() < count * width) gathered.resize(count * width);
+  if (buffers->lines.size() < count * width) buffers->lines.resize(count * width);
+  values = buffers->lines.data();
+  esdf_kernel::transpose16(rows, width, values, count, static_cast<int>(count), nz);
+  esdf_kernel::transformLines(values, nz, static_cast<int>(count), cap_sq_, cap_d_, buffers);
+  esdf_kernel::transpose16(values, count, gathered.data(), width, nz, static_cast<int>(count));
+  const float* table = metres_table_.data() + inf_;
+  float* field = field_.data() + first + static_cast<std::size_t>(y_begin) * width;
+  for (std::size_t i = 0; i < count * width; ++i) field[i] = table[gathered[i]];
 }
 
 void EsdfMap::shiftKept(const VoxelIndex& delta) {

@@ -46,8 +46,13 @@
 /// translation), so the field is bit-identical to a full recompute. With the envelope code (large
 /// clamps), a box that moved (the window slid) by less than its size is shifted first: the kept
 /// part stays, the new slabs count as changed, and so does the face the move removed (its
-/// neighbours there are gone). Where the windowed passes apply, a moved box is computed whole,
-/// which costs less than the shift and the lines it touches. More than 1/16 of the box changed
+/// neighbours there are gone). Where the windowed passes apply, a box moved along x or y is
+/// first brought to its new place with the kept states (the box B' of moveWindowed()): the x
+/// pass runs again, the x slabs within the clamp of a new or removed x face go through the
+/// y and z passes whole, the other slabs' results are moved and only their rows within the
+/// clamp of a new or removed y face are transformed again; then the states that changed in the
+/// kept part go through the unmoved path. A box moved along z (every z line of a shallow box
+/// reaches a face within the clamp) is computed whole. More than 1/16 of the box changed
 /// (e.g. a map load) is computed whole. The cost follows what changed:
 /// a depth frame's few thousand changed voxels touch a part of the lines.
 ///
@@ -193,10 +198,11 @@ class EsdfMap {
   /// Brings the field to `box`, exactly as compute(box) would, doing only the work the changes
   /// since the last compute() or update() need (see the file comment). Falls back to compute()
   /// when there is no kept box (first call, after a failed call, after copyFrom()), when the
-  /// size or resolution differs, when the box moved by its size or more, when it moved at all
-  /// and windowedPasses() applies, or when more than 1/16 of an unmoved box changed (the full
-  /// compute is then cheaper). Same return value and
-  /// failure behaviour as compute(). Single-threaded except in the fallback.
+  /// size or resolution differs, when the box moved by its size or more, when it moved along z
+  /// and windowedPasses() applies, or when more than 1/16 of the kept part changed (the full
+  /// compute is then cheaper). After a move, lastUpdate().shifted is set (changedCells() does
+  /// not list the moved cells). Same return value and failure behaviour as compute().
+  /// Single-threaded except in the fallback.
   [[nodiscard]] bool update(const OccupancyBox& box);
   /// What the last compute() or update() did.
   [[nodiscard]] const UpdateStats& lastUpdate() const { return last_update_; }
@@ -329,6 +335,14 @@ class EsdfMap {
   void prepare(const OccupancyBox& box);
   /// Shifts the kept state by `delta` voxels (new min - old min); new voxels are marked unseen.
   void shiftKept(const VoxelIndex& delta);
+  /// update() for a box moved by `delta` (delta.z() == 0) where the windowed passes apply:
+  /// brings the kept state to the new place as the field of B', the new box's geometry with the
+  /// kept states where the boxes overlap and the new box's states elsewhere, exactly as
+  /// compute(B') would, transforming only the slabs and rows the move reaches.
+  void moveWindowed(const OccupancyBox& box, const VoxelIndex& delta);
+  /// The y pass's results of x slab x over the rows [y_begin, y_end) from pass 1, and the z
+  /// pass over those rows into the field (windowed passes).
+  void transformSlabRows(int x, int y_begin, int y_end, Scratch* scratch);
   /// The incremental part of update(): box has the kept geometry after a shift by `shift`
   /// voxels (zero: none).
   void updateChanged(const OccupancyBox& box, const VoxelIndex& shift);
