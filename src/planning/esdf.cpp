@@ -345,6 +345,10 @@ constexpr std::uint8_t kUnseenState = 0xFF;
 constexpr std::int32_t kUnseenPass = std::numeric_limits<std::int32_t>::min();
 /// Field value of a voxel that was not in the kept box (beyond any clamp).
 constexpr float kUnseenField = std::numeric_limits<float>::lowest();
+/// The same for the x pass's 8-bit results (at most cap_d + 1 <= 49 in magnitude) ...
+constexpr std::int8_t kUnseenNarrow1 = std::numeric_limits<std::int8_t>::min();
+/// ... and the y pass's 16-bit ones (at most cap_sq + 1 < 16384 in magnitude).
+constexpr std::int16_t kUnseenNarrow2 = std::numeric_limits<std::int16_t>::min();
 /// update() recomputes the whole field when more than 1 / kFullFraction of the voxels changed.
 constexpr std::size_t kFullFraction = 16;
 
@@ -494,6 +498,7 @@ bool EsdfMap::update(const OccupancyBox& box) {
   // moveWindowed()), then the states that changed there go through the unmoved path below.
   const bool moved_windowed = !delta.isZero() && window_kernel_;
   if (moved_windowed && delta.z() != 0) return compute(box);
+  resetLineMarks();
   if (moved_windowed) {
     moveWindowed(box, delta);
   } else if (!delta.isZero()) {
@@ -528,136 +533,144 @@ bool EsdfMap::update(const OccupancyBox& box) {
   return true;
 }
 
+void EsdfMap::resetLineMarks() {
+  const auto nx = static_cast<std::size_t>(size_.x());
+  const auto ny = static_cast<std::size_t>(size_.y());
+  const auto nz = static_cast<std::size_t>(size_.z());
+  dirty_y_lo_.assign(nx * nz, size_.y());
+  dirty_y_hi_.assign(nx * nz, -1);
+  dirty_z_lo_.assign(nx * ny, size_.z());
+  dirty_z_hi_.assign(nx * ny, -1);
+}
+
 void EsdfMap::moveWindowed(const OccupancyBox& box, const VoxelIndex& delta) {
   const int nx = size_.x();
   const int ny = size_.y();
   const int nz = size_.z();
+  const int dx = delta.x();
+  const int dy = delta.y();
   const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
   const auto* now = reinterpret_cast<const std::uint8_t*>(box.states.data());
   Scratch* scratch = &scratch_[0];
+  const auto kept_slab = [&](int x) { return x + dx >= 0 && x + dx < nx; };
   // The kept states at their new place; the rows the move brought in (whole rows: delta.z() is
   // 0) from the new box. This box, B', differs from the new one only where the kept part
   // changed, which update() then handles as for an unmoved box.
   shiftBox(&kept_states_, size_, delta, kUnseenState);
   std::uint8_t* kept = kept_states_.data();
   for (int x = 0; x < nx; ++x) {
-    const bool x_new = x + delta.x() < 0 || x + delta.x() >= nx;
     for (int y = 0; y < ny; ++y) {
-      if (!x_new && y + delta.y() >= 0 && y + delta.y() < ny) continue;
+      if (kept_slab(x) && y + dy >= 0 && y + dy < ny) continue;
       const std::size_t row = static_cast<std::size_t>(x) * slab + static_cast<std::size_t>(y) * nz;
       std::memcpy(kept + row, now + row, static_cast<std::size_t>(nz));
     }
   }
   min_index_ = box.min_index;
-  // Pass 1 of B' whole (about a tenth of a compute; most rows reach a new or removed x face).
-  sweepRows(kept, 0, ny, scratch);
-  // A slab within the clamp of a new or removed x face (pass 1 changed there) is transformed
-  // whole. The others keep their y pass results and field, moved to their new place; their
-  // pass 1 changed only in the new y rows, so their y pass changes only within the clamp of a
-  // new or removed y face, and their z pass only on those rows.
-  const int reach = cap_d_ + 1;
-  const int dx = delta.x();
-  const int dy = delta.y();
-  // [lo, hi) ranges along an axis of n voxels whose results a move by d changes (d > 0: the
-  // face at 0 removed, the voxels from n - d new; d < 0: the mirror image).
-  const auto changedBands = [reach](int d, int n, int bands[4]) {
-    if (d > 0) {
-      bands[0] = 0;
-      bands[1] = std::min(n, reach);
-      bands[2] = std::max(0, n - d - reach);
-      bands[3] = n;
-    } else {
-      bands[0] = 0;
-      bands[1] = std::min(n, -d + reach);
-      bands[2] = std::max(0, n - reach);
-      bands[3] = n;
-    }
-    if (bands[2] <= bands[1]) {  // they meet: one band over the whole axis
-      bands[1] = n;
-      bands[2] = bands[3] = n;
-    }
-  };
-  int x_bands[4] = {0, 0, 0, 0};
-  if (dx != 0) changedBands(dx, nx, x_bands);
-  int y_bands[4] = {0, 0, 0, 0};
-  if (dy != 0) changedBands(dy, ny, y_bands);
-  const auto whole = [&](int x) {
-    return (x >= x_bands[0] && x < x_bands[1]) || (x >= x_bands[2] && x < x_bands[3]) ||
-           (dy != 0 && y_bands[1] == ny);
-  };
-  // The kept slabs' results moved (their source slab x + dx is kept too), in the order that
-  // reads each source before it is overwritten; rows y + dy beyond the box are new (in a y
-  // band). The unknown bits move with them where the rows do not.
+  // The kept slabs' results (x pass, y pass, field) moved to their new place, in the order that
+  // reads each source slab before it is overwritten; the new rows of a kept slab get values no
+  // pass produces, so that they differ from the fresh ones below. The unknown bits move with
+  // the slabs where the rows do not move, and are written again where they do.
   const std::size_t words = slab_bits_ / 64;
   const int row_lo = std::max(0, -dy);
   const int row_hi = std::min(ny, ny - dy);
-  const auto row_count = static_cast<std::size_t>(row_hi - row_lo) * static_cast<std::size_t>(nz);
+  const auto kept_rows = static_cast<std::size_t>(row_hi - row_lo) * static_cast<std::size_t>(nz);
+  const auto moveSlab = [&](auto* values, int x, auto unseen) {
+    auto* slab_values = values + static_cast<std::size_t>(x) * slab;
+    std::memmove(slab_values + static_cast<std::size_t>(row_lo) * nz,
+                 values + static_cast<std::size_t>(x + dx) * slab +
+                     static_cast<std::size_t>(row_lo + dy) * nz,
+                 kept_rows * sizeof(*values));
+    std::fill(slab_values, slab_values + static_cast<std::size_t>(row_lo) * nz, unseen);
+    std::fill(slab_values + static_cast<std::size_t>(row_hi) * nz, slab_values + slab, unseen);
+  };
   for (int i = 0; i < nx; ++i) {
-    const int x = dx > 0 ? i : nx - 1 - i;
-    if (whole(x)) continue;
-    const std::size_t to = static_cast<std::size_t>(x) * slab + static_cast<std::size_t>(row_lo) * nz;
-    const std::size_t from =
-        static_cast<std::size_t>(x + dx) * slab + static_cast<std::size_t>(row_lo + dy) * nz;
-    std::memmove(pass2_narrow_.data() + to, pass2_narrow_.data() + from,
-                 row_count * sizeof(std::int16_t));
-    std::memmove(field_.data() + to, field_.data() + from, row_count * sizeof(float));
+    const int x = dx >= 0 ? i : nx - 1 - i;
+    if (!kept_slab(x)) continue;
+    moveSlab(pass1_narrow_.data(), x, kUnseenNarrow1);
+    moveSlab(pass2_narrow_.data(), x, kUnseenNarrow2);
+    moveSlab(field_.data(), x, kUnseenField);
     if (dy == 0) {
       std::memmove(unknown_bits_.data() + static_cast<std::size_t>(x) * words,
                    unknown_bits_.data() + static_cast<std::size_t>(x + dx) * words,
                    words * sizeof(std::uint64_t));
+    } else {
+      writeUnknownBits(kept, x);
     }
   }
+  // The x pass of B', a block of rows at a time. In the kept slabs, a result that differs from
+  // the moved one (next to a new or removed x face, or in a new row) marks its y line, as a
+  // changed state's would; the removed y face marks every kept y line (its neighbours there are
+  // gone, with no changed input). The new slabs are transformed whole. updateChanged() then
+  // transforms the marked lines.
+  const int face = dy > 0 ? 0 : ny - 1;
+  const std::int32_t unknown_is_obstacle = config_.unknown_as == UnknownAs::kOccupied ? 1 : 0;
+  std::vector<std::int8_t>& narrow_rows = scratch->narrow_rows;
+  narrow_rows.resize(static_cast<std::size_t>(std::min(kNarrowRowBlock, ny)) * nz);
+  std::int8_t* narrow = narrow_rows.data();
+  // In a kept row, the x pass changed only within the clamp of a new or removed x face: the
+  // bands [0, low_end) and [high_begin, nx), each swept over a part that reaches cap_d + 1
+  // beyond it (its results there are then exact: a voxel farther than cap_d is beyond the cap).
+  const int reach = cap_d_ + 1;
+  const int low_end = dx == 0 ? 0 : std::min(nx, (dx < 0 ? -dx : 0) + reach);
+  const int high_begin = dx == 0 ? nx : std::max(0, nx - (dx > 0 ? dx : 0) - reach);
+  const bool split = low_end + reach < high_begin - reach;
+  // Writes the fresh results of slab x (`from`, n values of the row block at y0) over the kept
+  // ones, marking the y lines where a kept slab's differ.
+  const auto merge = [&](int x, const std::int32_t* from, int y0, int n) {
+    for (int i = 0; i < n; ++i) narrow[i] = static_cast<std::int8_t>(from[i]);
+    std::int8_t* to =
+        pass1_narrow_.data() + static_cast<std::size_t>(x) * slab + static_cast<std::size_t>(y0) * nz;
+    if (kept_slab(x) && std::memcmp(to, narrow, static_cast<std::size_t>(n)) != 0) {
+      int* lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz;
+      int* hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz;
+      for (int i = 0; i < n; ++i) {
+        if (narrow[i] == to[i]) continue;
+        const int y = y0 + i / nz;
+        const int z = i % nz;
+        lo[z] = std::min(lo[z], y);
+        hi[z] = std::max(hi[z], y);
+      }
+    }
+    std::memcpy(to, narrow, static_cast<std::size_t>(n));
+  };
+  // Sweeps the x range [b, e) of the row block at y0 and merges the results of [out_b, out_e).
+  const auto sweepPart = [&](int y0, int n, int b, int e, int out_b, int out_e) {
+    std::int32_t* fresh = scratch->sweep.data();
+    sweepBlock(kept + static_cast<std::size_t>(b) * slab + static_cast<std::size_t>(y0) * nz, slab,
+               fresh, static_cast<std::size_t>(n), e - b, n, scratch->near_free.data(),
+               scratch->near_obstacle.data(), unknown_is_obstacle, cap_d_, pass1Inf());
+    for (int x = out_b; x < out_e; ++x) {
+      merge(x, fresh + static_cast<std::size_t>(x - b) * static_cast<std::size_t>(n), y0, n);
+    }
+  };
+  for (int y0 = 0; y0 < ny; y0 += kNarrowRowBlock) {
+    const int rows = std::min(kNarrowRowBlock, ny - y0);
+    const int n = rows * nz;
+    const bool new_rows = y0 < row_lo || y0 + rows > row_hi;
+    if (new_rows || !split) {
+      sweepPart(y0, n, 0, nx, 0, nx);
+      last_update_.rows_swept += static_cast<std::size_t>(rows);
+      continue;
+    }
+    if (low_end > 0 || high_begin < nx) last_update_.rows_swept += static_cast<std::size_t>(rows);
+    if (low_end > 0) sweepPart(y0, n, 0, low_end + reach, 0, low_end);
+    if (high_begin < nx) sweepPart(y0, n, high_begin - reach, nx, high_begin, nx);
+  }
   for (int x = 0; x < nx; ++x) {
-    if (whole(x)) {
+    if (!kept_slab(x)) {
       transformSlabs(kept, x, x + 1, scratch);
       last_update_.y_lines += static_cast<std::size_t>(nz);
       last_update_.z_lines += static_cast<std::size_t>(ny);
       continue;
     }
     if (dy == 0) continue;
-    transformSlabRows(x, y_bands[0], y_bands[1], scratch);
-    if (y_bands[2] < y_bands[3]) transformSlabRows(x, y_bands[2], y_bands[3], scratch);
-    writeUnknownBits(kept, x);
+    int* lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz;
+    int* hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz;
+    for (int z = 0; z < nz; ++z) {
+      lo[z] = std::min(lo[z], face);
+      hi[z] = std::max(hi[z], face);
+    }
   }
-  last_update_.rows_swept = static_cast<std::size_t>(ny);
-}
-
-void EsdfMap::transformSlabRows(int x, int y_begin, int y_end, Scratch* scratch) {
-  const int ny = size_.y();
-  const int nz = size_.z();
-  const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
-  esdf_kernel::WindowBuffers* buffers = &scratch->window;
-  UpdateStats& u = last_update_;
-  // The y pass over the part of the y lines whose outputs in [y_begin, y_end) are exact: they
-  // lie more than cap_d + 1 from its cut ends (esdf_kernel::transformLines()).
-  const int margin = cap_d_ + 2;
-  const int begin = std::max(0, y_begin - margin);
-  const int end = std::min(ny, y_end + margin);
-  const std::size_t width = static_cast<std::size_t>(nz);
-  const std::size_t n = static_cast<std::size_t>(end - begin) * width;
-  if (buffers->lines.size() < n) buffers->lines.resize(n);
-  std::int16_t* values = buffers->lines.data();
-  const std::size_t first = static_cast<std::size_t>(x) * slab;
-  esdf_kernel::squareDistances(pass1_narrow_.data() + first + static_cast<std::size_t>(begin) * width,
-                               width, end - begin, nz, cap_sq_, cap_d_, values);
-  esdf_kernel::transformLines(values, end - begin, nz, cap_sq_, cap_d_, buffers);
-  std::int16_t* rows = pass2_narrow_.data() + first + static_cast<std::size_t>(y_begin) * width;
-  const auto count = static_cast<std::size_t>(y_end - y_begin);
-  std::copy(values + static_cast<std::size_t>(y_begin - begin) * width,
-            values + static_cast<std::size_t>(y_end - begin) * width, rows);
-  u.y_lines += static_cast<std::size_t>(nz);
-  u.z_lines += count;
-  // The z pass over those rows (whole z lines), transposed to lie side by side, and back.
-  std::vector<std::int16_t>& gathered = scratch->gathered;
-  if (gathered.size() < count * width) gathered.resize(count * width);
-  if (buffers->lines.size() < count * width) buffers->lines.resize(count * width);
-  values = buffers->lines.data();
-  esdf_kernel::transpose16(rows, width, values, count, static_cast<int>(count), nz);
-  esdf_kernel::transformLines(values, nz, static_cast<int>(count), cap_sq_, cap_d_, buffers);
-  esdf_kernel::transpose16(values, count, gathered.data(), width, nz, static_cast<int>(count));
-  const float* table = metres_table_.data() + inf_;
-  float* field = field_.data() + first + static_cast<std::size_t>(y_begin) * width;
-  for (std::size_t i = 0; i < count * width; ++i) field[i] = table[gathered[i]];
 }
 
 void EsdfMap::shiftKept(const VoxelIndex& delta) {
@@ -678,10 +691,6 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
   Scratch* scratch = &scratch_[0];
   UpdateStats& u = last_update_;
   changed_cells_.clear();
-  dirty_y_lo_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(nz), ny);
-  dirty_y_hi_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(nz), -1);
-  dirty_z_lo_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), nz);
-  dirty_z_hi_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), -1);
   // A changed input at i changes outputs within reach = cap_d_ + 1 of it (a site's parabola
   // within the cap, or a run boundary next to it); those outputs depend on inputs within reach
   // of them. So lines are transformed again over [lo - 2 reach, hi + 2 reach] and compared over
@@ -1175,6 +1184,7 @@ std::size_t EsdfMap::memoryBytes() const {
                  sizeof(std::int32_t) +
              (s.out_keys64.capacity() + s.in_keys64.capacity()) * sizeof(std::int64_t) +
              s.lanes.capacity() * sizeof(int) + s.gathered.capacity() * sizeof(std::int16_t) +
+             s.narrow_rows.capacity() +
              (s.window.magnitude.capacity() + s.window.best.capacity() +
               s.window.near_free.capacity() + s.window.near_obstacle.capacity() +
               s.window.lines.capacity() + s.window.transposed.capacity() +

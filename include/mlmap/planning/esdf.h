@@ -47,12 +47,13 @@
 /// clamps), a box that moved (the window slid) by less than its size is shifted first: the kept
 /// part stays, the new slabs count as changed, and so does the face the move removed (its
 /// neighbours there are gone). Where the windowed passes apply, a box moved along x or y is
-/// first brought to its new place with the kept states (the box B' of moveWindowed()): the x
-/// pass runs again, the x slabs within the clamp of a new or removed x face go through the
-/// y and z passes whole, the other slabs' results are moved and only their rows within the
-/// clamp of a new or removed y face are transformed again; then the states that changed in the
-/// kept part go through the unmoved path. A box moved along z (every z line of a shallow box
-/// reaches a face within the clamp) is computed whole. More than 1/16 of the box changed
+/// first brought to B' (moveWindowed()), its new place with the kept states: the new x slabs
+/// are computed whole; in the kept slabs the kept results are moved, the x pass runs again
+/// only within the clamp of a new or removed x face and over the new rows, and the y lines
+/// where its results differ, or next to a removed y face, are marked. The states that changed
+/// in the kept part then go through the unmoved path, which transforms those lines with its
+/// own. A box moved along z (every z line of a shallow box reaches a face within the clamp) is
+/// computed whole. More than 1/16 of the box changed
 /// (e.g. a map load) is computed whole. The cost follows what changed:
 /// a depth frame's few thousand changed voxels touch a part of the lines.
 ///
@@ -297,6 +298,7 @@ class EsdfMap {
     esdf_kernel::WindowBuffers window;        ///< the windowed passes' slab buffers
     std::vector<int> lanes;                   ///< update(): the lines of a slab transformed
     std::vector<std::int16_t> gathered;       ///< update(): those lines one after another
+    std::vector<std::int8_t> narrow_rows;     ///< update() after a move: x pass rows in 8 bits
   };
 
   /// Unknown bit of box-relative voxel (x, y, z) (inside the box).
@@ -335,14 +337,15 @@ class EsdfMap {
   void prepare(const OccupancyBox& box);
   /// Shifts the kept state by `delta` voxels (new min - old min); new voxels are marked unseen.
   void shiftKept(const VoxelIndex& delta);
+  /// Clears the marks of the y and z lines that update() transforms again.
+  void resetLineMarks();
   /// update() for a box moved by `delta` (delta.z() == 0) where the windowed passes apply:
-  /// brings the kept state to the new place as the field of B', the new box's geometry with the
-  /// kept states where the boxes overlap and the new box's states elsewhere, exactly as
-  /// compute(B') would, transforming only the slabs and rows the move reaches.
+  /// brings the map to B', the new box's geometry with the kept states where the boxes overlap
+  /// and the new box's states elsewhere. The new x slabs are computed whole; in the kept ones
+  /// the results are moved, the x pass runs again and the y lines where its results differ
+  /// (next to a new or removed x face, in the new rows) or next to a removed y face are marked
+  /// for updateChanged(), which transforms them with the frame's own changes.
   void moveWindowed(const OccupancyBox& box, const VoxelIndex& delta);
-  /// The y pass's results of x slab x over the rows [y_begin, y_end) from pass 1, and the z
-  /// pass over those rows into the field (windowed passes).
-  void transformSlabRows(int x, int y_begin, int y_end, Scratch* scratch);
   /// The incremental part of update(): box has the kept geometry after a shift by `shift`
   /// voxels (zero: none).
   void updateChanged(const OccupancyBox& box, const VoxelIndex& shift);
