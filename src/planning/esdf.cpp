@@ -553,23 +553,14 @@ void EsdfMap::moveWindowed(const OccupancyBox& box, const VoxelIndex& delta) {
   const auto* now = reinterpret_cast<const std::uint8_t*>(box.states.data());
   Scratch* scratch = &scratch_[0];
   const auto kept_slab = [&](int x) { return x + dx >= 0 && x + dx < nx; };
-  // The kept states at their new place; the rows the move brought in (whole rows: delta.z() is
-  // 0) from the new box. This box, B', differs from the new one only where the kept part
-  // changed, which update() then handles as for an unmoved box.
-  shiftBox(&kept_states_, size_, delta, kUnseenState);
+  // The kept slabs' states and results (x pass, y pass, field) moved to their new place, in the
+  // order that reads each source slab before it is overwritten; the new rows of a kept slab
+  // get the new box's states and values no pass produces, so that they differ from the fresh
+  // ones below. The new slabs take the new box's states after that (their place may have been
+  // a source). This box of states, B', differs from the new one only where the kept part
+  // changed, which update() then handles as for an unmoved box. The unknown bits move with the
+  // slabs where the rows do not move, and are written again where they do.
   std::uint8_t* kept = kept_states_.data();
-  for (int x = 0; x < nx; ++x) {
-    for (int y = 0; y < ny; ++y) {
-      if (kept_slab(x) && y + dy >= 0 && y + dy < ny) continue;
-      const std::size_t row = static_cast<std::size_t>(x) * slab + static_cast<std::size_t>(y) * nz;
-      std::memcpy(kept + row, now + row, static_cast<std::size_t>(nz));
-    }
-  }
-  min_index_ = box.min_index;
-  // The kept slabs' results (x pass, y pass, field) moved to their new place, in the order that
-  // reads each source slab before it is overwritten; the new rows of a kept slab get values no
-  // pass produces, so that they differ from the fresh ones below. The unknown bits move with
-  // the slabs where the rows do not move, and are written again where they do.
   const std::size_t words = slab_bits_ / 64;
   const int row_lo = std::max(0, -dy);
   const int row_hi = std::min(ny, ny - dy);
@@ -586,6 +577,14 @@ void EsdfMap::moveWindowed(const OccupancyBox& box, const VoxelIndex& delta) {
   for (int i = 0; i < nx; ++i) {
     const int x = dx >= 0 ? i : nx - 1 - i;
     if (!kept_slab(x)) continue;
+    const std::size_t first = static_cast<std::size_t>(x) * slab;
+    std::memmove(kept + first + static_cast<std::size_t>(row_lo) * nz,
+                 kept + static_cast<std::size_t>(x + dx) * slab +
+                     static_cast<std::size_t>(row_lo + dy) * nz,
+                 kept_rows);
+    std::memcpy(kept + first, now + first, static_cast<std::size_t>(row_lo) * nz);
+    const std::size_t high = static_cast<std::size_t>(row_hi) * nz;
+    std::memcpy(kept + first + high, now + first + high, slab - high);
     moveSlab(pass1_narrow_.data(), x, kUnseenNarrow1);
     moveSlab(pass2_narrow_.data(), x, kUnseenNarrow2);
     moveSlab(field_.data(), x, kUnseenField);
@@ -597,6 +596,12 @@ void EsdfMap::moveWindowed(const OccupancyBox& box, const VoxelIndex& delta) {
       writeUnknownBits(kept, x);
     }
   }
+  for (int x = 0; x < nx; ++x) {
+    if (kept_slab(x)) continue;
+    const std::size_t first = static_cast<std::size_t>(x) * slab;
+    std::memcpy(kept + first, now + first, slab);
+  }
+  min_index_ = box.min_index;
   // The x pass of B', a block of rows at a time. In the kept slabs, a result that differs from
   // the moved one (next to a new or removed x face, or in a new row) marks its y line, as a
   // changed state's would; the removed y face marks every kept y line (its neighbours there are
