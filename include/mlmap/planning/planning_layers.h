@@ -6,8 +6,9 @@
 ///
 /// The ESDF is updated only when a voxel state changed inside its box or the box moved, and
 /// at most at esdf.max_rate_hz (stamps of the frames); the update is incremental
-/// (EsdfMap::update(): only what the changed voxels can affect; a moved box computed whole, or
-/// its kept part shifted with the envelope code), and a planner gets a copy of the field that
+/// (EsdfMap::update(): only what the changed voxels can affect; a box moved along x or y keeps
+/// its kept part and computes the new slabs and what they and the removed faces reach, one
+/// moved along z is computed whole), and a planner gets a copy of the field that
 /// is brought up to date cell by cell. With `own_thread` it is computed on a planning
 /// thread of its own so that mapping never waits for it; a frame that finds the thread busy
 /// replaces the one waiting (latest only, counted). Otherwise it runs inside update().
@@ -33,7 +34,8 @@ struct PlanningStats {
   std::uint64_t grid_rebuilds = 0;       ///< of those, rebuilt whole (window or band moved)
   std::uint64_t esdf_updates = 0;        ///< ESDF updated (incrementally or whole)
   std::uint64_t esdf_full = 0;           ///< of those, computed whole (first, load, many
-                                         ///< changes, a moved box; see EsdfMap::update())
+                                         ///< changes, a box moved along z; see
+                                         ///< EsdfMap::update())
   std::uint64_t esdf_unchanged = 0;      ///< skipped: no state change in the box, box still
   std::uint64_t esdf_rate_limited = 0;   ///< skipped: sooner than 1 / esdf.max_rate_hz
   std::uint64_t esdf_superseded = 0;     ///< planning thread busy: a newer frame took its place
