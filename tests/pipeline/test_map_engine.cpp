@@ -641,6 +641,66 @@ TEST(MapEngine, IncrementalEsdfEqualsAFullRecomputeAfterEveryFrame) {
   }
 }
 
+// With esdf.query_grid, every snapshot carries a query copy of its field, pooled and brought up
+// to date cell by cell (across several updates while planners held other copies, across window
+// moves): after every frame of a sliding flight it answers exactly as a copy freshly built from
+// the snapshot's field, at every cell centre and between them. Without the key there is none.
+TEST(MapEngine, SnapshotQueryGridEqualsAFreshBuildAfterEveryFrame) {
+  const io::Scenario scenario = test::cheapScenario();
+  MapConfig config = test::smallWindowConfig();
+  config.esdf.max_rate_hz = 0.0;
+  config.esdf.query_grid = true;
+  config.projected_grid.enabled = false;
+  MapEngine engine(config);
+  std::vector<std::shared_ptr<const MapSnapshot>> held;  // planners holding older snapshots
+  int checked = 0;
+  int failures = 0;
+  const auto check = [&](int done) {
+    const auto snap = engine.snapshot();
+    ASSERT_NE(snap->esdf(), nullptr) << "frame " << done;
+    ASSERT_NE(snap->esdfGrid(), nullptr) << "frame " << done;
+    EsdfQueryGrid fresh;
+    fresh.build(*snap->esdf());
+    const EsdfMap& field = *snap->esdf();
+    const Eigen::Vector3i& n = field.size();
+    const double res = field.resolution_m();
+    for (int x = 0; x < n.x(); ++x) {
+      for (int y = 0; y < n.y(); ++y) {
+        for (int z = 0; z < n.z(); ++z) {
+          // A cell centre and a point between it and its upper neighbours.
+          const Eigen::Vector3d c = voxelCenter(field.minIndex() + VoxelIndex(x, y, z), res);
+          for (const Eigen::Vector3d& p : {c, Eigen::Vector3d(c + Eigen::Vector3d(0.3, 0.6, 0.45) * res)}) {
+            const EsdfMap::Query a = snap->esdfGrid()->query(p);
+            const EsdfMap::Query e = fresh.query(p);
+            if ((a.valid != e.valid || a.distance_m != e.distance_m || a.gradient != e.gradient) &&
+                ++failures <= 5) {
+              ADD_FAILURE() << "frame " << done << " at " << p.transpose() << ": pooled "
+                            << a.distance_m << ", fresh " << e.distance_m;
+            }
+          }
+        }
+      }
+    }
+    if (done % 3 == 0) held.push_back(snap);  // keeps this copy out of the pool for a while
+    if (held.size() > 4) held.erase(held.begin());
+    ++checked;
+  };
+  eval::FlightOptions options;
+  options.max_frames = 60;
+  options.progress = [&](int done, int) { check(done); };
+  ASSERT_EQ(eval::flyScenario(scenario, engine, options).frames, 60);
+  EXPECT_EQ(checked, 60);
+  EXPECT_EQ(failures, 0);
+
+  config.esdf.query_grid = false;
+  MapEngine without(config);
+  options.max_frames = 3;
+  options.progress = nullptr;
+  eval::flyScenario(scenario, without, options);
+  ASSERT_NE(without.snapshot()->esdf(), nullptr);
+  EXPECT_EQ(without.snapshot()->esdfGrid(), nullptr);
+}
+
 // The ESDF is updated at most at its rate (frame stamps) and the skips are counted.
 TEST(MapEngine, EsdfIsRateLimitedByFrameStamps) {
   const io::Scenario scenario = io::defaultScenario();

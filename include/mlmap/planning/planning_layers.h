@@ -82,7 +82,12 @@ class PlanningLayers {
   /// Fills esdf_box_ from the job's window: only the submaps whose states changed since the
   /// last fill when the window and the box are where they were, else all of it.
   void fillEsdfBox(const EsdfJob& job);
-  std::shared_ptr<const EsdfMap> computeEsdf(const EsdfJob& job);
+  /// A published field and its query copy (nullptr unless esdf.query_grid).
+  struct PublishedEsdf {
+    std::shared_ptr<const EsdfMap> map;
+    std::shared_ptr<const EsdfQueryGrid> query_grid;
+  };
+  PublishedEsdf computeEsdf(const EsdfJob& job);
   /// Whether this frame's ESDF is computed, and why not.
   struct EsdfDecision {
     bool due = false;           ///< compute it (the box's state changed and the rate allows)
@@ -102,7 +107,7 @@ class PlanningLayers {
   void recordUpdate(double snapshot_ms, double grid_ms, double esdf_ms, std::uint64_t frame,
                     const EsdfDecision& decision, bool superseded);
   void publish(std::shared_ptr<const LocalWindow> window, std::shared_ptr<const ProjectedGrid> grid,
-               std::shared_ptr<const EsdfMap> esdf, bool keep_esdf, std::uint64_t frame,
+               PublishedEsdf esdf, bool keep_esdf, std::uint64_t frame,
                double stamp_s, const Transform& T_W_B);
   void planningLoop();
   [[nodiscard]] VoxelIndex esdfBoxMin(const LocalWindow& window, const Eigen::Vector3d& body_W,
@@ -144,11 +149,13 @@ class PlanningLayers {
   struct EsdfCopy {
     std::shared_ptr<EsdfMap> map;
     std::shared_ptr<EsdfLease> lease = std::make_shared<EsdfLease>();
+    std::shared_ptr<EsdfQueryGrid> query_grid;  // map's query copy (esdf.query_grid)
     std::vector<std::uint32_t> pending;  // cells esdf_ changed since map was filled
     bool stale = true;                   // map must be copied whole
   };
-  /// The published copy of esdf_ after an update (reusing a copy no snapshot holds).
-  std::shared_ptr<const EsdfMap> publishEsdfCopy();
+  /// The published copy of esdf_ after an update (reusing a copy no snapshot holds), with its
+  /// query copy brought up to date by the same cells.
+  PublishedEsdf publishEsdfCopy();
   EsdfMap esdf_;
   std::vector<EsdfCopy> esdf_copies_;
   OccupancyBox esdf_box_;
