@@ -38,8 +38,8 @@ PointCloudFrame cloudAt(double t, const Eigen::Vector3d& body) {
 }
 
 TEST(TimingSummary, NearestRankOnTheSortedValuesWhateverTheirOrder) {
-  std::vector<double> values;
-  for (int i = 0; i < 100; ++i) values.push_back((i * 37) % 100 + 1);  // 1..100, shuffled
+  std::vector<double> values(100);
+  for (int i = 0; i < 100; ++i) values[static_cast<std::size_t>(i)] = (i * 37) % 100 + 1;  // 1..100, shuffled
   const TimingSummary s = summarizeTimings(values);
   EXPECT_EQ(s.samples, 100u);
   EXPECT_DOUBLE_EQ(s.median_ms, 51.0);  // rank round(0.5 * 99) = 50 (0-based)
