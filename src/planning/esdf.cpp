@@ -345,6 +345,10 @@ constexpr std::uint8_t kUnseenState = 0xFF;
 constexpr std::int32_t kUnseenPass = std::numeric_limits<std::int32_t>::min();
 /// Field value of a voxel that was not in the kept box (beyond any clamp).
 constexpr float kUnseenField = std::numeric_limits<float>::lowest();
+/// The same for the x pass's 8-bit results (at most cap_d + 1 <= 49 in magnitude) ...
+constexpr std::int8_t kUnseenNarrow1 = std::numeric_limits<std::int8_t>::min();
+/// ... and the y pass's 16-bit ones (at most cap_sq + 1 < 16384 in magnitude).
+constexpr std::int16_t kUnseenNarrow2 = std::numeric_limits<std::int16_t>::min();
 /// update() recomputes the whole field when more than 1 / kFullFraction of the voxels changed.
 constexpr std::size_t kFullFraction = 16;
 
@@ -488,11 +492,16 @@ bool EsdfMap::update(const OccupancyBox& box) {
   }
   last_update_ = UpdateStats{};
   last_update_.full = false;
-  // A moved box, where the windowed passes apply: computing it whole costs less than shifting
-  // the kept buffers and going through the lines the new slabs and the removed faces reach
-  // (about half the box for a window that moves by a fifth of its size).
-  if (!delta.isZero() && window_kernel_) return compute(box);
-  if (!delta.isZero()) {
+  // A moved box, where the windowed passes apply: moved along z, every z line reaches a new
+  // or a removed face within the clamp (the box is shallow), so it is computed whole. Moved
+  // along x or y, the kept box is first brought to the new place with its kept states (see
+  // moveWindowed()), then the states that changed there go through the unmoved path below.
+  const bool moved_windowed = !delta.isZero() && window_kernel_;
+  if (moved_windowed && delta.z() != 0) return compute(box);
+  resetLineMarks();
+  if (moved_windowed) {
+    moveWindowed(box, delta);
+  } else if (!delta.isZero()) {
     shiftKept(delta);
     min_index_ = box.min_index;
     last_update_.shifted = true;
@@ -515,8 +524,158 @@ bool EsdfMap::update(const OccupancyBox& box) {
     }
     if (changed_states_.size() > budget) return compute(box);
   }
-  updateChanged(box, delta);
+  updateChanged(box, moved_windowed ? VoxelIndex::Zero() : delta);
+  if (moved_windowed) {  // every cell may have moved: a copy must take the field whole
+    last_update_.shifted = true;
+    last_update_.changed_cells = cells;
+    changed_cells_.clear();
+  }
   return true;
+}
+
+void EsdfMap::resetLineMarks() {
+  const auto nx = static_cast<std::size_t>(size_.x());
+  const auto ny = static_cast<std::size_t>(size_.y());
+  const auto nz = static_cast<std::size_t>(size_.z());
+  dirty_y_lo_.assign(nx * nz, size_.y());
+  dirty_y_hi_.assign(nx * nz, -1);
+  dirty_z_lo_.assign(nx * ny, size_.z());
+  dirty_z_hi_.assign(nx * ny, -1);
+}
+
+void EsdfMap::moveWindowed(const OccupancyBox& box, const VoxelIndex& delta) {
+  const int nx = size_.x();
+  const int ny = size_.y();
+  const int nz = size_.z();
+  const int dx = delta.x();
+  const int dy = delta.y();
+  const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
+  const auto* now = reinterpret_cast<const std::uint8_t*>(box.states.data());
+  Scratch* scratch = &scratch_[0];
+  const auto kept_slab = [&](int x) { return x + dx >= 0 && x + dx < nx; };
+  // The kept slabs' states and results (x pass, y pass, field) moved to their new place, in the
+  // order that reads each source slab before it is overwritten; the new rows of a kept slab
+  // get the new box's states and values no pass produces, so that they differ from the fresh
+  // ones below. The new slabs take the new box's states after that (their place may have been
+  // a source). This box of states, B', differs from the new one only where the kept part
+  // changed, which update() then handles as for an unmoved box. The unknown bits move with the
+  // slabs where the rows do not move, and are written again where they do.
+  std::uint8_t* kept = kept_states_.data();
+  const std::size_t words = slab_bits_ / 64;
+  const int row_lo = std::max(0, -dy);
+  const int row_hi = std::min(ny, ny - dy);
+  const auto kept_rows = static_cast<std::size_t>(row_hi - row_lo) * static_cast<std::size_t>(nz);
+  const auto moveSlab = [&](auto* values, int x, auto unseen) {
+    auto* slab_values = values + static_cast<std::size_t>(x) * slab;
+    std::memmove(slab_values + static_cast<std::size_t>(row_lo) * nz,
+                 values + static_cast<std::size_t>(x + dx) * slab +
+                     static_cast<std::size_t>(row_lo + dy) * nz,
+                 kept_rows * sizeof(*values));
+    std::fill(slab_values, slab_values + static_cast<std::size_t>(row_lo) * nz, unseen);
+    std::fill(slab_values + static_cast<std::size_t>(row_hi) * nz, slab_values + slab, unseen);
+  };
+  for (int i = 0; i < nx; ++i) {
+    const int x = dx >= 0 ? i : nx - 1 - i;
+    if (!kept_slab(x)) continue;
+    const std::size_t first = static_cast<std::size_t>(x) * slab;
+    std::memmove(kept + first + static_cast<std::size_t>(row_lo) * nz,
+                 kept + static_cast<std::size_t>(x + dx) * slab +
+                     static_cast<std::size_t>(row_lo + dy) * nz,
+                 kept_rows);
+    std::memcpy(kept + first, now + first, static_cast<std::size_t>(row_lo) * nz);
+    const std::size_t high = static_cast<std::size_t>(row_hi) * nz;
+    std::memcpy(kept + first + high, now + first + high, slab - high);
+    moveSlab(pass1_narrow_.data(), x, kUnseenNarrow1);
+    moveSlab(pass2_narrow_.data(), x, kUnseenNarrow2);
+    moveSlab(field_.data(), x, kUnseenField);
+    if (dy == 0) {
+      std::memmove(unknown_bits_.data() + static_cast<std::size_t>(x) * words,
+                   unknown_bits_.data() + static_cast<std::size_t>(x + dx) * words,
+                   words * sizeof(std::uint64_t));
+    } else {
+      writeUnknownBits(kept, x);
+    }
+  }
+  for (int x = 0; x < nx; ++x) {
+    if (kept_slab(x)) continue;
+    const std::size_t first = static_cast<std::size_t>(x) * slab;
+    std::memcpy(kept + first, now + first, slab);
+  }
+  min_index_ = box.min_index;
+  // The x pass of B', a block of rows at a time. In the kept slabs, a result that differs from
+  // the moved one (next to a new or removed x face, or in a new row) marks its y line, as a
+  // changed state's would; the removed y face marks every kept y line (its neighbours there are
+  // gone, with no changed input). The new slabs are transformed whole. updateChanged() then
+  // transforms the marked lines.
+  const int face = dy > 0 ? 0 : ny - 1;
+  const std::int32_t unknown_is_obstacle = config_.unknown_as == UnknownAs::kOccupied ? 1 : 0;
+  std::vector<std::int8_t>& narrow_rows = scratch->narrow_rows;
+  narrow_rows.resize(static_cast<std::size_t>(std::min(kNarrowRowBlock, ny)) * nz);
+  std::int8_t* narrow = narrow_rows.data();
+  // In a kept row, the x pass changed only within the clamp of a new or removed x face: the
+  // bands [0, low_end) and [high_begin, nx), each swept over a part that reaches cap_d + 1
+  // beyond it (its results there are then exact: a voxel farther than cap_d is beyond the cap).
+  const int reach = cap_d_ + 1;
+  const int low_end = dx == 0 ? 0 : std::min(nx, (dx < 0 ? -dx : 0) + reach);
+  const int high_begin = dx == 0 ? nx : std::max(0, nx - (dx > 0 ? dx : 0) - reach);
+  const bool split = low_end + reach < high_begin - reach;
+  // Writes the fresh results of slab x (`from`, n values of the row block at y0) over the kept
+  // ones, marking the y lines where a kept slab's differ.
+  const auto merge = [&](int x, const std::int32_t* from, int y0, int n) {
+    for (int i = 0; i < n; ++i) narrow[i] = static_cast<std::int8_t>(from[i]);
+    std::int8_t* to =
+        pass1_narrow_.data() + static_cast<std::size_t>(x) * slab + static_cast<std::size_t>(y0) * nz;
+    if (kept_slab(x) && std::memcmp(to, narrow, static_cast<std::size_t>(n)) != 0) {
+      int* lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz;
+      int* hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz;
+      for (int i = 0; i < n; ++i) {
+        if (narrow[i] == to[i]) continue;
+        const int y = y0 + i / nz;
+        const int z = i % nz;
+        lo[z] = std::min(lo[z], y);
+        hi[z] = std::max(hi[z], y);
+      }
+    }
+    std::memcpy(to, narrow, static_cast<std::size_t>(n));
+  };
+  // Sweeps the x range [b, e) of the row block at y0 and merges the results of [out_b, out_e).
+  const auto sweepPart = [&](int y0, int n, int b, int e, int out_b, int out_e) {
+    std::int32_t* fresh = scratch->sweep.data();
+    sweepBlock(kept + static_cast<std::size_t>(b) * slab + static_cast<std::size_t>(y0) * nz, slab,
+               fresh, static_cast<std::size_t>(n), e - b, n, scratch->near_free.data(),
+               scratch->near_obstacle.data(), unknown_is_obstacle, cap_d_, pass1Inf());
+    for (int x = out_b; x < out_e; ++x) {
+      merge(x, fresh + static_cast<std::size_t>(x - b) * static_cast<std::size_t>(n), y0, n);
+    }
+  };
+  for (int y0 = 0; y0 < ny; y0 += kNarrowRowBlock) {
+    const int rows = std::min(kNarrowRowBlock, ny - y0);
+    const int n = rows * nz;
+    const bool new_rows = y0 < row_lo || y0 + rows > row_hi;
+    if (new_rows || !split) {
+      sweepPart(y0, n, 0, nx, 0, nx);
+      last_update_.rows_swept += static_cast<std::size_t>(rows);
+      continue;
+    }
+    if (low_end > 0 || high_begin < nx) last_update_.rows_swept += static_cast<std::size_t>(rows);
+    if (low_end > 0) sweepPart(y0, n, 0, low_end + reach, 0, low_end);
+    if (high_begin < nx) sweepPart(y0, n, high_begin - reach, nx, high_begin, nx);
+  }
+  for (int x = 0; x < nx; ++x) {
+    if (!kept_slab(x)) {
+      transformSlabs(kept, x, x + 1, scratch);
+      last_update_.y_lines += static_cast<std::size_t>(nz);
+      last_update_.z_lines += static_cast<std::size_t>(ny);
+      continue;
+    }
+    if (dy == 0) continue;
+    int* lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz;
+    int* hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz;
+    for (int z = 0; z < nz; ++z) {
+      lo[z] = std::min(lo[z], face);
+      hi[z] = std::max(hi[z], face);
+    }
+  }
 }
 
 void EsdfMap::shiftKept(const VoxelIndex& delta) {
@@ -537,10 +696,6 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
   Scratch* scratch = &scratch_[0];
   UpdateStats& u = last_update_;
   changed_cells_.clear();
-  dirty_y_lo_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(nz), ny);
-  dirty_y_hi_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(nz), -1);
-  dirty_z_lo_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), nz);
-  dirty_z_hi_.assign(static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny), -1);
   // A changed input at i changes outputs within reach = cap_d_ + 1 of it (a site's parabola
   // within the cap, or a run boundary next to it); those outputs depend on inputs within reach
   // of them. So lines are transformed again over [lo - 2 reach, hi + 2 reach] and compared over
@@ -1034,6 +1189,7 @@ std::size_t EsdfMap::memoryBytes() const {
                  sizeof(std::int32_t) +
              (s.out_keys64.capacity() + s.in_keys64.capacity()) * sizeof(std::int64_t) +
              s.lanes.capacity() * sizeof(int) + s.gathered.capacity() * sizeof(std::int16_t) +
+             s.narrow_rows.capacity() +
              (s.window.magnitude.capacity() + s.window.best.capacity() +
               s.window.near_free.capacity() + s.window.near_obstacle.capacity() +
               s.window.lines.capacity() + s.window.transposed.capacity() +

@@ -107,20 +107,30 @@ void EsdfQueryGrid::writePadding(int x, int y, int z, std::int16_t value) {
   }
 }
 
+bool EsdfQueryGrid::sameGeometry(const EsdfMap& map) const {
+  return !empty() && !map.empty() && map.minIndex() == min_index_ && map.size() == size_ &&
+         1.0 / map.resolution_m() == inv_resolution_ &&
+         map.config().max_distance_m == max_distance_m_;
+}
+
 bool EsdfQueryGrid::sync(const EsdfMap& map) {
   const EsdfMap::UpdateStats& last = map.lastUpdate();
-  const bool same = !empty() && !map.empty() && map.minIndex() == min_index_ &&
-                    map.size() == size_ && 1.0 / map.resolution_m() == inv_resolution_ &&
-                    map.config().max_distance_m == max_distance_m_;
-  if (last.full || last.shifted || !same) {
+  if (last.full || last.shifted || !sameGeometry(map)) {
     build(map);
     return false;
   }
+  return syncCells(map, map.changedCells());
+}
+
+bool EsdfQueryGrid::syncCells(const EsdfMap& map, const std::vector<std::uint32_t>& offsets) {
+  if (!sameGeometry(map)) return false;
   const float* field = map.distances().data();
+  const auto cells = static_cast<std::uint32_t>(map.distances().size());
   // 32-bit divisions (offsets are 32-bit; kMaxCells keeps the box below 2^28 voxels).
   const auto nz = static_cast<std::uint32_t>(size_.z());
   const std::uint32_t slab = static_cast<std::uint32_t>(size_.y()) * nz;
-  for (const std::uint32_t offset : map.changedCells()) {
+  for (const std::uint32_t offset : offsets) {
+    if (offset >= cells) continue;
     const std::uint32_t x = offset / slab;
     const std::uint32_t r = offset - x * slab;
     const std::uint32_t y = r / nz;

@@ -8,14 +8,16 @@ namespace mlmap {
 MapSnapshot::MapSnapshot(std::shared_ptr<const LocalWindow> window,
                          std::shared_ptr<const ProjectedGrid> grid,
                          std::shared_ptr<const EsdfMap> esdf, std::uint64_t frame, double stamp_s,
-                         const Transform& T_W_B, std::uint64_t esdf_frame)
+                         const Transform& T_W_B, std::uint64_t esdf_frame,
+                         std::shared_ptr<const EsdfQueryGrid> esdf_grid)
     : window_(window ? std::move(window) : std::make_shared<const LocalWindow>()),
       grid_(grid ? std::move(grid) : std::make_shared<const ProjectedGrid>()),
       esdf_(std::move(esdf)),
       frame_(frame),
       stamp_s_(stamp_s),
       T_W_B_(T_W_B),
-      esdf_frame_(esdf_frame) {}
+      esdf_frame_(esdf_frame),
+      esdf_grid_(std::move(esdf_grid)) {}
 
 Occupancy MapSnapshot::state(const Eigen::Vector3d& p_W) const {
   if (!p_W.allFinite()) return Occupancy::kUnknown;

@@ -52,20 +52,21 @@ std::shared_ptr<const MapSnapshot> PlanningLayers::snapshot() const {
 
 void PlanningLayers::publish(std::shared_ptr<const LocalWindow> window,
                              std::shared_ptr<const ProjectedGrid> grid,
-                             std::shared_ptr<const EsdfMap> esdf, bool keep_esdf,
-                             std::uint64_t frame, double stamp_s, const Transform& T_W_B) {
+                             PublishedEsdf esdf, bool keep_esdf, std::uint64_t frame,
+                             double stamp_s, const Transform& T_W_B) {
   std::shared_ptr<const MapSnapshot> old;
   std::lock_guard<std::mutex> lock(snapshot_mutex_);
   // Read and replace under one lock, so that a field the planning thread published meanwhile
   // is carried over rather than lost.
   std::uint64_t esdf_frame = frame;
   if (keep_esdf) {
-    esdf = snapshot_->esdfPtr();
+    esdf = {snapshot_->esdfPtr(), snapshot_->esdfGridPtr()};
     esdf_frame = snapshot_->esdfFrame();
   }
   old = std::exchange(snapshot_, std::make_shared<const MapSnapshot>(
-                                     std::move(window), std::move(grid), std::move(esdf), frame,
-                                     stamp_s, T_W_B, esdf_frame));
+                                     std::move(window), std::move(grid), std::move(esdf.map),
+                                     frame, stamp_s, T_W_B, esdf_frame,
+                                     std::move(esdf.query_grid)));
 }
 
 void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std::uint64_t frame,
@@ -79,7 +80,7 @@ void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std:
       config_.projected_grid.enabled ? updateGrid(local, global, *window, body_W) : -1.0;
   const EsdfDecision decision = decideEsdf(local, *window, body_W, stamp_s);
 
-  std::shared_ptr<const EsdfMap> esdf;
+  PublishedEsdf esdf;
   double esdf_ms = -1.0;
   EsdfJob job{window, body_W, frame, local.changeClock(), {}};
   if (decision.due) {
@@ -319,13 +320,14 @@ void PlanningLayers::fillEsdfBox(const EsdfJob& job) {
   esdf_box_clock_ = job.clock;
 }
 
-std::shared_ptr<const EsdfMap> PlanningLayers::computeEsdf(const EsdfJob& job) {
+PlanningLayers::PublishedEsdf PlanningLayers::computeEsdf(const EsdfJob& job) {
   fillEsdfBox(job);
   const bool ok = esdf_.update(esdf_box_);
-  std::shared_ptr<const EsdfMap> published = ok ? publishEsdfCopy() : nullptr;
+  PublishedEsdf published = ok ? publishEsdfCopy() : PublishedEsdf{};
   std::size_t bytes = esdf_box_.states.capacity() * sizeof(Occupancy) + esdf_.memoryBytes();
   for (const EsdfCopy& c : esdf_copies_) {
-    bytes += c.map->memoryBytes() + c.pending.capacity() * sizeof(std::uint32_t);
+    bytes += c.map->memoryBytes() + c.pending.capacity() * sizeof(std::uint32_t) +
+             (c.query_grid ? c.query_grid->memoryBytes() : 0);
   }
   {
     std::lock_guard<std::mutex> lock(stats_mutex_);
@@ -335,7 +337,7 @@ std::shared_ptr<const EsdfMap> PlanningLayers::computeEsdf(const EsdfJob& job) {
   return published;
 }
 
-std::shared_ptr<const EsdfMap> PlanningLayers::publishEsdfCopy() {
+PlanningLayers::PublishedEsdf PlanningLayers::publishEsdfCopy() {
   // Past this many changed cells a copy is refreshed whole (a contiguous copy is then cheaper).
   const std::size_t whole_above = esdf_.distances().size() / 8;
   const EsdfMap::UpdateStats& u = esdf_.lastUpdate();
@@ -366,13 +368,21 @@ std::shared_ptr<const EsdfMap> PlanningLayers::publishEsdfCopy() {
     copy = &esdf_copies_.back();
     copy->lease->held = true;  // not yet shared with any other thread
   }
-  if (copy->stale || !copy->map->copyCells(esdf_, copy->pending)) copy->map->copyFrom(esdf_);
+  const bool whole_copy = copy->stale || !copy->map->copyCells(esdf_, copy->pending);
+  if (whole_copy) copy->map->copyFrom(esdf_);
+  if (config_.esdf.query_grid) {
+    if (!copy->query_grid) copy->query_grid = std::make_shared<EsdfQueryGrid>();
+    if (whole_copy || !copy->query_grid->syncCells(*copy->map, copy->pending)) {
+      copy->query_grid->build(*copy->map);
+    }
+  }
   copy->pending.clear();
   copy->stale = false;
   // What snapshots hold: the copy, and a release that hands it back to the pool.
   struct Holder {
-    Holder(std::shared_ptr<EsdfMap> m, std::shared_ptr<EsdfLease> l)
-        : map(std::move(m)), lease(std::move(l)) {}
+    Holder(std::shared_ptr<EsdfMap> m, std::shared_ptr<EsdfQueryGrid> g,
+           std::shared_ptr<EsdfLease> l)
+        : map(std::move(m)), query_grid(std::move(g)), lease(std::move(l)) {}
     Holder(const Holder&) = delete;
     Holder& operator=(const Holder&) = delete;
     ~Holder() {
@@ -380,10 +390,17 @@ std::shared_ptr<const EsdfMap> PlanningLayers::publishEsdfCopy() {
       lease->held = false;
     }
     std::shared_ptr<EsdfMap> map;
+    std::shared_ptr<EsdfQueryGrid> query_grid;
     std::shared_ptr<EsdfLease> lease;
   };
-  const auto holder = std::make_shared<const Holder>(copy->map, copy->lease);
-  return std::shared_ptr<const EsdfMap>(holder, holder->map.get());
+  const auto holder = std::make_shared<const Holder>(
+      copy->map, config_.esdf.query_grid ? copy->query_grid : nullptr, copy->lease);
+  PublishedEsdf published;
+  published.map = std::shared_ptr<const EsdfMap>(holder, holder->map.get());
+  if (holder->query_grid) {
+    published.query_grid = std::shared_ptr<const EsdfQueryGrid>(holder, holder->query_grid.get());
+  }
+  return published;
 }
 
 void PlanningLayers::planningLoop() {
@@ -399,7 +416,7 @@ void PlanningLayers::planningLoop() {
       busy_ = true;
     }
     const Clock::time_point start = Clock::now();
-    std::shared_ptr<const EsdfMap> esdf = computeEsdf(job);
+    PublishedEsdf esdf = computeEsdf(job);
     const double ms = msSince(start);
     {
       // The newest window and grid with the new field.
@@ -407,8 +424,9 @@ void PlanningLayers::planningLoop() {
       std::lock_guard<std::mutex> lock(snapshot_mutex_);
       const MapSnapshot& s = *snapshot_;
       old = std::exchange(snapshot_, std::make_shared<const MapSnapshot>(
-                                         s.windowPtr(), s.gridPtr(), std::move(esdf), s.frame(),
-                                         s.stamp_s(), s.T_W_B(), job.frame));
+                                         s.windowPtr(), s.gridPtr(), std::move(esdf.map),
+                                         s.frame(), s.stamp_s(), s.T_W_B(), job.frame,
+                                         std::move(esdf.query_grid)));
     }
     {
       std::lock_guard<std::mutex> lock(stats_mutex_);

@@ -272,6 +272,10 @@ struct StreamRow {
   double update_max_ms = 0.0;
   double full_median_ms = 0.0;
   double full_p99_ms = 0.0;
+  int moves = 0;                     ///< frames where the window moved
+  double move_median_ms = 0.0;       ///< update() on those frames
+  double move_p99_ms = 0.0;
+  double move_full_median_ms = 0.0;  ///< compute() on the same frames
   double grid_sync_median_ms = 0.0;  ///< EsdfQueryGrid::sync() after update(), per frame
   double grid_sync_p99_ms = 0.0;
   int mismatched_frames = 0;  ///< frames where update() differs from compute() (must be 0)
@@ -315,6 +319,8 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
   std::vector<double> sync_ms;
   std::vector<double> update_ms;
   std::vector<double> full_ms;
+  std::vector<double> move_ms;
+  std::vector<double> move_full_ms;
   std::vector<double> same_box_ms;
   std::vector<double> edt_ms;
   std::vector<double> changed;
@@ -348,6 +354,10 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
     start = Clock::now();
     if (!full.compute(box)) return row;
     full_ms.push_back(msSince(start));
+    if (box.min_index != boxes[f - 1].min_index) {
+      move_ms.push_back(update_ms.back());
+      move_full_ms.push_back(full_ms.back());
+    }
     row.mismatched_frames += incremental.distances() == full.distances() ? 0 : 1;
 #if defined(MLMAP_HAVE_DYNAMICEDT3D)
     if (!with_edt) continue;
@@ -406,6 +416,12 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
   row.update_max_ms = percentile(&update_ms, 1.0);
   row.full_median_ms = percentile(&full_ms, 0.5);
   row.full_p99_ms = percentile(&full_ms, 0.99);
+  if (!move_ms.empty()) {
+    row.moves = static_cast<int>(move_ms.size());
+    row.move_median_ms = percentile(&move_ms, 0.5);
+    row.move_p99_ms = percentile(&move_ms, 0.99);
+    row.move_full_median_ms = percentile(&move_full_ms, 0.5);
+  }
   row.grid_sync_median_ms = percentile(&sync_ms, 0.5);
   row.grid_sync_p99_ms = percentile(&sync_ms, 0.99);
   if (!edt_ms.empty()) {
@@ -421,14 +437,16 @@ void printStream(const StreamRow& r, std::FILE* json, bool last) {
   if (json == nullptr) {
     std::printf("%-10s %-9s %4d %4d %4d %8.0f %7.3f %7.3f %7.3f %7.3f %7.3f %4d | %4d %8.3f %8.3f "
                 "%7.3f %6.1fx  mismatched %zu of %zu (max %.3f m); lines %.0f %.0f %.0f; query "
-                "grid sync %.3f / %.3f ms\n",
+                "grid sync %.3f / %.3f ms; %d moves: update() %.3f / %.3f ms, compute() %.3f "
+                "ms\n",
                 r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full,
                 r.changed_states, r.update_median_ms, r.update_p99_ms, r.update_max_ms,
                 r.full_median_ms, r.full_p99_ms, r.mismatched_frames, r.edt_updates,
                 r.edt_median_ms, r.edt_p99_ms, r.same_box_median_ms,
                 r.same_box_median_ms > 0.0 ? r.edt_median_ms / r.same_box_median_ms : 0.0,
                 r.edt_mismatched, r.edt_compared, r.edt_max_error_m, r.rows, r.y_lines, r.z_lines,
-                r.grid_sync_median_ms, r.grid_sync_p99_ms);
+                r.grid_sync_median_ms, r.grid_sync_p99_ms, r.moves, r.move_median_ms,
+                r.move_p99_ms, r.move_full_median_ms);
     return;
   }
   std::fprintf(json,
@@ -437,14 +455,16 @@ void printStream(const StreamRow& r, std::FILE* json, bool last) {
                "\"lines_median\": {\"x_rows\": %.0f, \"y\": %.0f, \"z\": %.0f}, "
                "\"update_ms\": {\"median\": %.4f, \"p99\": %.4f, \"max\": %.4f}, "
                "\"compute_ms\": {\"median\": %.4f, \"p99\": %.4f}, "
+               "\"moves\": %d, \"move_update_ms\": {\"median\": %.4f, \"p99\": %.4f}, "
+               "\"move_compute_median_ms\": %.4f, "
                "\"query_grid_sync_ms\": {\"median\": %.4f, \"p99\": %.4f}, \"mismatched_frames\": %d, "
                "\"dynamicedt3d\": {\"updates\": %d, \"median_ms\": %.4f, \"p99_ms\": %.4f, "
                "\"ours_same_frames_median_ms\": %.4f, \"compared\": %zu, \"mismatched\": %zu, "
                "\"max_error_m\": %.4f}}%s\n",
                r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full,
                r.changed_states, r.rows, r.y_lines, r.z_lines, r.update_median_ms,
-               r.update_p99_ms, r.update_max_ms, r.full_median_ms, r.full_p99_ms,
-               r.grid_sync_median_ms, r.grid_sync_p99_ms, r.mismatched_frames, r.edt_updates, r.edt_median_ms, r.edt_p99_ms,
+               r.update_p99_ms, r.update_max_ms, r.full_median_ms, r.full_p99_ms, r.moves,
+               r.move_median_ms, r.move_p99_ms, r.move_full_median_ms, r.grid_sync_median_ms, r.grid_sync_p99_ms, r.mismatched_frames, r.edt_updates, r.edt_median_ms, r.edt_p99_ms,
                r.same_box_median_ms, r.edt_compared,
                r.edt_mismatched, r.edt_max_error_m, last ? "" : ",");
 }

@@ -38,8 +38,8 @@ PointCloudFrame cloudAt(double t, const Eigen::Vector3d& body) {
 }
 
 TEST(TimingSummary, NearestRankOnTheSortedValuesWhateverTheirOrder) {
-  std::vector<double> values;
-  for (int i = 0; i < 100; ++i) values.push_back((i * 37) % 100 + 1);  // 1..100, shuffled
+  std::vector<double> values(100);
+  for (int i = 0; i < 100; ++i) values[static_cast<std::size_t>(i)] = (i * 37) % 100 + 1;  // 1..100, shuffled
   const TimingSummary s = summarizeTimings(values);
   EXPECT_EQ(s.samples, 100u);
   EXPECT_DOUBLE_EQ(s.median_ms, 51.0);  // rank round(0.5 * 99) = 50 (0-based)
@@ -632,12 +632,73 @@ TEST(MapEngine, IncrementalEsdfEqualsAFullRecomputeAfterEveryFrame) {
     EXPECT_EQ(checked, frames + 21);
     EXPECT_GT(window_moves, 10) << "the window slides";
     EXPECT_GT(p.esdf_updates, static_cast<std::uint64_t>(frames));
-    // Where the window stayed, the update is incremental; a moved window is computed whole
-    // (EsdfMap::update() with the windowed passes), as are the first frame and the load.
+    // Where the window stayed, the update is incremental, and so is a move along x or y; a
+    // window moved along z is computed whole (EsdfMap::update() with the windowed passes), as
+    // are the first frame and the load.
     EXPECT_LE(p.esdf_full, static_cast<std::uint64_t>(window_moves) + 2)
         << "the updates of frames where the window stayed are incremental";
     EXPECT_GT(p.esdf_updates - p.esdf_full, static_cast<std::uint64_t>(frames / 4));
   }
+}
+
+// With esdf.query_grid, every snapshot carries a query copy of its field, pooled and brought up
+// to date cell by cell (across several updates while planners held other copies, across window
+// moves): after every frame of a sliding flight it answers exactly as a copy freshly built from
+// the snapshot's field, at every cell centre and between them. Without the key there is none.
+TEST(MapEngine, SnapshotQueryGridEqualsAFreshBuildAfterEveryFrame) {
+  const io::Scenario scenario = test::cheapScenario();
+  MapConfig config = test::smallWindowConfig();
+  config.esdf.max_rate_hz = 0.0;
+  config.esdf.query_grid = true;
+  config.projected_grid.enabled = false;
+  MapEngine engine(config);
+  std::vector<std::shared_ptr<const MapSnapshot>> held;  // planners holding older snapshots
+  int checked = 0;
+  int failures = 0;
+  const auto check = [&](int done) {
+    const auto snap = engine.snapshot();
+    ASSERT_NE(snap->esdf(), nullptr) << "frame " << done;
+    ASSERT_NE(snap->esdfGrid(), nullptr) << "frame " << done;
+    EsdfQueryGrid fresh;
+    fresh.build(*snap->esdf());
+    const EsdfMap& field = *snap->esdf();
+    const Eigen::Vector3i& n = field.size();
+    const double res = field.resolution_m();
+    for (int x = 0; x < n.x(); ++x) {
+      for (int y = 0; y < n.y(); ++y) {
+        for (int z = 0; z < n.z(); ++z) {
+          // A cell centre and a point between it and its upper neighbours.
+          const Eigen::Vector3d c = voxelCenter(field.minIndex() + VoxelIndex(x, y, z), res);
+          for (const Eigen::Vector3d& p : {c, Eigen::Vector3d(c + Eigen::Vector3d(0.3, 0.6, 0.45) * res)}) {
+            const EsdfMap::Query a = snap->esdfGrid()->query(p);
+            const EsdfMap::Query e = fresh.query(p);
+            if ((a.valid != e.valid || a.distance_m != e.distance_m || a.gradient != e.gradient) &&
+                ++failures <= 5) {
+              ADD_FAILURE() << "frame " << done << " at " << p.transpose() << ": pooled "
+                            << a.distance_m << ", fresh " << e.distance_m;
+            }
+          }
+        }
+      }
+    }
+    if (done % 3 == 0) held.push_back(snap);  // keeps this copy out of the pool for a while
+    if (held.size() > 4) held.erase(held.begin());
+    ++checked;
+  };
+  eval::FlightOptions options;
+  options.max_frames = 60;
+  options.progress = [&](int done, int) { check(done); };
+  ASSERT_EQ(eval::flyScenario(scenario, engine, options).frames, 60);
+  EXPECT_EQ(checked, 60);
+  EXPECT_EQ(failures, 0);
+
+  config.esdf.query_grid = false;
+  MapEngine without(config);
+  options.max_frames = 3;
+  options.progress = nullptr;
+  eval::flyScenario(scenario, without, options);
+  ASSERT_NE(without.snapshot()->esdf(), nullptr);
+  EXPECT_EQ(without.snapshot()->esdfGrid(), nullptr);
 }
 
 // The ESDF is updated at most at its rate (frame stamps) and the skips are counted.

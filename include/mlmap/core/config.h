@@ -244,6 +244,7 @@ struct EsdfConfig {
   int num_threads = 1;                                   ///< key num_threads
   double max_rate_hz = 10.0;                             ///< key max_rate_hz
   Eigen::Vector3d box_size_m = Eigen::Vector3d::Zero();  ///< key box_size_m
+  bool query_grid = false;                               ///< key query_grid
 
   /// The keys of the `esdf` section (see the file comment).
   template <class Self, class V>
@@ -261,6 +262,9 @@ struct EsdfConfig {
           "changed in the window or the box moved; 0: at every change");
     v.key("box_size_m", c.box_size_m, "m",
           "box centred on the body; 0 on an axis: the whole local map along it");
+    v.key("query_grid", c.query_grid, "",
+          "snapshots also carry a 16-bit query copy of the field (esdfGrid(),\n"
+          "2 B a voxel per pooled copy, kept up to date cell by cell)");
   }
 
   static constexpr int kMaxThreads = 64;

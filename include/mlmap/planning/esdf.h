@@ -46,8 +46,14 @@
 /// translation), so the field is bit-identical to a full recompute. With the envelope code (large
 /// clamps), a box that moved (the window slid) by less than its size is shifted first: the kept
 /// part stays, the new slabs count as changed, and so does the face the move removed (its
-/// neighbours there are gone). Where the windowed passes apply, a moved box is computed whole,
-/// which costs less than the shift and the lines it touches. More than 1/16 of the box changed
+/// neighbours there are gone). Where the windowed passes apply, a box moved along x or y is
+/// first brought to B' (moveWindowed()), its new place with the kept states: the new x slabs
+/// are computed whole; in the kept slabs the kept results are moved, the x pass runs again
+/// only within the clamp of a new or removed x face and over the new rows, and the y lines
+/// where its results differ, or next to a removed y face, are marked. The states that changed
+/// in the kept part then go through the unmoved path, which transforms those lines with its
+/// own. A box moved along z (every z line of a shallow box reaches a face within the clamp) is
+/// computed whole. More than 1/16 of the box changed
 /// (e.g. a map load) is computed whole. The cost follows what changed:
 /// a depth frame's few thousand changed voxels touch a part of the lines.
 ///
@@ -193,10 +199,11 @@ class EsdfMap {
   /// Brings the field to `box`, exactly as compute(box) would, doing only the work the changes
   /// since the last compute() or update() need (see the file comment). Falls back to compute()
   /// when there is no kept box (first call, after a failed call, after copyFrom()), when the
-  /// size or resolution differs, when the box moved by its size or more, when it moved at all
-  /// and windowedPasses() applies, or when more than 1/16 of an unmoved box changed (the full
-  /// compute is then cheaper). Same return value and
-  /// failure behaviour as compute(). Single-threaded except in the fallback.
+  /// size or resolution differs, when the box moved by its size or more, when it moved along z
+  /// and windowedPasses() applies, or when more than 1/16 of the kept part changed (the full
+  /// compute is then cheaper). After a move, lastUpdate().shifted is set (changedCells() does
+  /// not list the moved cells). Same return value and failure behaviour as compute().
+  /// Single-threaded except in the fallback.
   [[nodiscard]] bool update(const OccupancyBox& box);
   /// What the last compute() or update() did.
   [[nodiscard]] const UpdateStats& lastUpdate() const { return last_update_; }
@@ -291,6 +298,7 @@ class EsdfMap {
     esdf_kernel::WindowBuffers window;        ///< the windowed passes' slab buffers
     std::vector<int> lanes;                   ///< update(): the lines of a slab transformed
     std::vector<std::int16_t> gathered;       ///< update(): those lines one after another
+    std::vector<std::int8_t> narrow_rows;     ///< update() after a move: x pass rows in 8 bits
   };
 
   /// Unknown bit of box-relative voxel (x, y, z) (inside the box).
@@ -329,6 +337,15 @@ class EsdfMap {
   void prepare(const OccupancyBox& box);
   /// Shifts the kept state by `delta` voxels (new min - old min); new voxels are marked unseen.
   void shiftKept(const VoxelIndex& delta);
+  /// Clears the marks of the y and z lines that update() transforms again.
+  void resetLineMarks();
+  /// update() for a box moved by `delta` (delta.z() == 0) where the windowed passes apply:
+  /// brings the map to B', the new box's geometry with the kept states where the boxes overlap
+  /// and the new box's states elsewhere. The new x slabs are computed whole; in the kept ones
+  /// the results are moved, the x pass runs again and the y lines where its results differ
+  /// (next to a new or removed x face, in the new rows) or next to a removed y face are marked
+  /// for updateChanged(), which transforms them with the frame's own changes.
+  void moveWindowed(const OccupancyBox& box, const VoxelIndex& delta);
   /// The incremental part of update(): box has the kept geometry after a shift by `shift`
   /// voxels (zero: none).
   void updateChanged(const OccupancyBox& box, const VoxelIndex& shift);

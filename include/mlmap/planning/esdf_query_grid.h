@@ -49,6 +49,11 @@ class EsdfQueryGrid {
   /// synced from `map` after each of its earlier compute() / update() calls. Returns true when
   /// only the changed cells were copied.
   bool sync(const EsdfMap& map);
+  /// Copies from `map` the cells at `offsets` (OccupancyBox order; offsets beyond the box are
+  /// ignored), e.g. the changedCells() of several updates since this copy was last built or
+  /// synced. The map must have the geometry and clamp this copy was built with (checked: false
+  /// and nothing copied otherwise).
+  bool syncCells(const EsdfMap& map, const std::vector<std::uint32_t>& offsets);
 
   /// Distance and gradient at a world point, EsdfMap::query()'s within the error bounds.
   /// Allocation-free.
@@ -69,6 +74,8 @@ class EsdfQueryGrid {
   [[nodiscard]] std::size_t memoryBytes() const { return cells_.capacity() * sizeof(std::int16_t); }
 
  private:
+  /// True when this copy was built from a map of `map`'s geometry and clamp (both not empty).
+  [[nodiscard]] bool sameGeometry(const EsdfMap& map) const;
   /// Quantised value of a field value [m] and unknown bit.
   [[nodiscard]] std::int16_t encode(float distance_m, bool unknown) const;
   /// Copies the padding cells next to box-relative cell (x, y, z) from it (a border cell).

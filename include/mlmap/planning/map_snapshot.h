@@ -14,6 +14,7 @@
 
 #include "mlmap/local/local_map.h"
 #include "mlmap/planning/esdf.h"
+#include "mlmap/planning/esdf_query_grid.h"
 #include "mlmap/planning/projected_grid.h"
 
 #include <cstdint>
@@ -26,7 +27,8 @@ class MapSnapshot {
  public:
   MapSnapshot(std::shared_ptr<const LocalWindow> window, std::shared_ptr<const ProjectedGrid> grid,
               std::shared_ptr<const EsdfMap> esdf, std::uint64_t frame, double stamp_s,
-              const Transform& T_W_B, std::uint64_t esdf_frame = 0);
+              const Transform& T_W_B, std::uint64_t esdf_frame = 0,
+              std::shared_ptr<const EsdfQueryGrid> esdf_grid = nullptr);
 
   /// Occupancy of the voxel holding p_W; unknown outside the local window.
   [[nodiscard]] Occupancy state(const Eigen::Vector3d& p_W) const;
@@ -49,6 +51,9 @@ class MapSnapshot {
   [[nodiscard]] const ProjectedGrid& grid() const { return *grid_; }
   /// The ESDF, or nullptr when it is disabled or not computed yet.
   [[nodiscard]] const EsdfMap* esdf() const { return esdf_.get(); }
+  /// The query copy of esdf() (EsdfQueryGrid, built from the same field), or nullptr when
+  /// esdf.query_grid is off or there is no ESDF.
+  [[nodiscard]] const EsdfQueryGrid* esdfGrid() const { return esdf_grid_.get(); }
   /// The local window the occupancy queries read.
   [[nodiscard]] const LocalWindow& window() const { return *window_; }
   /// Lower and upper corners of the local window in W [m] (both zero before the first frame).
@@ -66,6 +71,9 @@ class MapSnapshot {
   [[nodiscard]] const std::shared_ptr<const LocalWindow>& windowPtr() const { return window_; }
   [[nodiscard]] const std::shared_ptr<const ProjectedGrid>& gridPtr() const { return grid_; }
   [[nodiscard]] const std::shared_ptr<const EsdfMap>& esdfPtr() const { return esdf_; }
+  [[nodiscard]] const std::shared_ptr<const EsdfQueryGrid>& esdfGridPtr() const {
+    return esdf_grid_;
+  }
 
  private:
   [[nodiscard]] bool voxelBlocks(const VoxelIndex& g, UnknownAs unknown) const;
@@ -77,6 +85,7 @@ class MapSnapshot {
   double stamp_s_ = 0.0;
   Transform T_W_B_ = Transform::Identity();
   std::uint64_t esdf_frame_ = 0;
+  std::shared_ptr<const EsdfQueryGrid> esdf_grid_;
 };
 
 }  // namespace mlmap

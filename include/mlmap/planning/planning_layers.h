@@ -6,8 +6,9 @@
 ///
 /// The ESDF is updated only when a voxel state changed inside its box or the box moved, and
 /// at most at esdf.max_rate_hz (stamps of the frames); the update is incremental
-/// (EsdfMap::update(): only what the changed voxels can affect; a moved box computed whole, or
-/// its kept part shifted with the envelope code), and a planner gets a copy of the field that
+/// (EsdfMap::update(): only what the changed voxels can affect; a box moved along x or y keeps
+/// its kept part and computes the new slabs and what they and the removed faces reach, one
+/// moved along z is computed whole), and a planner gets a copy of the field that
 /// is brought up to date cell by cell. With `own_thread` it is computed on a planning
 /// thread of its own so that mapping never waits for it; a frame that finds the thread busy
 /// replaces the one waiting (latest only, counted). Otherwise it runs inside update().
@@ -33,7 +34,8 @@ struct PlanningStats {
   std::uint64_t grid_rebuilds = 0;       ///< of those, rebuilt whole (window or band moved)
   std::uint64_t esdf_updates = 0;        ///< ESDF updated (incrementally or whole)
   std::uint64_t esdf_full = 0;           ///< of those, computed whole (first, load, many
-                                         ///< changes, a moved box; see EsdfMap::update())
+                                         ///< changes, a box moved along z; see
+                                         ///< EsdfMap::update())
   std::uint64_t esdf_unchanged = 0;      ///< skipped: no state change in the box, box still
   std::uint64_t esdf_rate_limited = 0;   ///< skipped: sooner than 1 / esdf.max_rate_hz
   std::uint64_t esdf_superseded = 0;     ///< planning thread busy: a newer frame took its place
@@ -80,7 +82,12 @@ class PlanningLayers {
   /// Fills esdf_box_ from the job's window: only the submaps whose states changed since the
   /// last fill when the window and the box are where they were, else all of it.
   void fillEsdfBox(const EsdfJob& job);
-  std::shared_ptr<const EsdfMap> computeEsdf(const EsdfJob& job);
+  /// A published field and its query copy (nullptr unless esdf.query_grid).
+  struct PublishedEsdf {
+    std::shared_ptr<const EsdfMap> map;
+    std::shared_ptr<const EsdfQueryGrid> query_grid;
+  };
+  PublishedEsdf computeEsdf(const EsdfJob& job);
   /// Whether this frame's ESDF is computed, and why not.
   struct EsdfDecision {
     bool due = false;           ///< compute it (the box's state changed and the rate allows)
@@ -100,7 +107,7 @@ class PlanningLayers {
   void recordUpdate(double snapshot_ms, double grid_ms, double esdf_ms, std::uint64_t frame,
                     const EsdfDecision& decision, bool superseded);
   void publish(std::shared_ptr<const LocalWindow> window, std::shared_ptr<const ProjectedGrid> grid,
-               std::shared_ptr<const EsdfMap> esdf, bool keep_esdf, std::uint64_t frame,
+               PublishedEsdf esdf, bool keep_esdf, std::uint64_t frame,
                double stamp_s, const Transform& T_W_B);
   void planningLoop();
   [[nodiscard]] VoxelIndex esdfBoxMin(const LocalWindow& window, const Eigen::Vector3d& body_W,
@@ -142,11 +149,13 @@ class PlanningLayers {
   struct EsdfCopy {
     std::shared_ptr<EsdfMap> map;
     std::shared_ptr<EsdfLease> lease = std::make_shared<EsdfLease>();
+    std::shared_ptr<EsdfQueryGrid> query_grid;  // map's query copy (esdf.query_grid)
     std::vector<std::uint32_t> pending;  // cells esdf_ changed since map was filled
     bool stale = true;                   // map must be copied whole
   };
-  /// The published copy of esdf_ after an update (reusing a copy no snapshot holds).
-  std::shared_ptr<const EsdfMap> publishEsdfCopy();
+  /// The published copy of esdf_ after an update (reusing a copy no snapshot holds), with its
+  /// query copy brought up to date by the same cells.
+  PublishedEsdf publishEsdfCopy();
   EsdfMap esdf_;
   std::vector<EsdfCopy> esdf_copies_;
   OccupancyBox esdf_box_;
