@@ -14,6 +14,7 @@
 #include "mlmap/core/log_odds.h"
 #include "mlmap/global/global_map.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdlib>
 #include <memory>
@@ -126,21 +127,26 @@ class LocalMap {
     const auto ny = static_cast<std::size_t>(size_.y());
     const auto nz = static_cast<std::size_t>(size_.z());
     const auto z0 = static_cast<std::size_t>(floorMod(min_index_.z(), size_.z()));
+    const auto sy0 = static_cast<std::size_t>(floorMod(min_index_.y(), size_.y()));
     for (int x = 0; x < size_.x(); ++x) {
-      const auto sx = static_cast<std::size_t>(floorMod(min_index_.x() + x, size_.x()));
-      for (int y = 0; y < size_.y(); ++y) {
-        const std::size_t torus_column =
-            sx * ny + static_cast<std::size_t>(floorMod(min_index_.y() + y, size_.y()));
-        if (!mayHoldOccupied(torus_column)) continue;
+      const std::size_t row = static_cast<std::size_t>(floorMod(min_index_.x() + x, size_.x())) * ny;
+      // Window y 0, 1, ... are torus y sy0 .. ny - 1, then 0 .. sy0 - 1.
+      auto listColumn = [&](std::size_t torus_column, int y) {
         const std::size_t column = torus_column * nz;
-        if (!anyOccupied(cells_.get() + column)) continue;
+        if (!anyOccupied(cells_.get() + column)) return;
         std::size_t sz = z0;
         for (int z = 0; z < size_.z(); ++z) {
           const LogOddsQ v = flipUnknown(cells_[column + sz]);
           if (model_.isOccupied(v)) f(min_index_ + VoxelIndex(x, y, z), dequantizeLogOdds(v));
           if (++sz == nz) sz = 0;
         }
-      }
+      };
+      forEachMarkedColumn(row + sy0, row + ny, [&](std::size_t c) {
+        listColumn(c, static_cast<int>(c - row - sy0));
+      });
+      forEachMarkedColumn(row, row + sy0, [&](std::size_t c) {
+        listColumn(c, static_cast<int>(c - row + ny - sy0));
+      });
     }
   }
 
@@ -197,12 +203,23 @@ class LocalMap {
   struct FreeCells {
     void operator()(LogOddsQ* p) const { std::free(p); }
   };
-  /// False when no voxel of the torus column (x * size_cells.y + y) can be occupied: none took
-  /// a hit or a restored value since the window was last cleared whole.
-  [[nodiscard]] bool mayHoldOccupied(std::size_t torus_column) const {
-    return (may_hold_occupied_[torus_column >> 6] >> (torus_column & 63)) & 1u;
+  /// Calls f(torus column) for every column in [first, end) marked by markMayHoldOccupied(), in
+  /// increasing order, 64 columns per step.
+  template <typename F>
+  void forEachMarkedColumn(std::size_t first, std::size_t end, F&& f) const {
+    while (first < end) {
+      const std::size_t word_end = std::min(end, (first | 63) + 1);
+      std::uint64_t bits = may_hold_occupied_[first >> 6] >> (first & 63);
+      if (word_end - first < 64) bits &= (std::uint64_t{1} << (word_end - first)) - 1;
+      while (bits != 0) {
+        f(first + static_cast<std::size_t>(__builtin_ctzll(bits)));
+        bits &= bits - 1;
+      }
+      first = word_end;
+    }
   }
-  /// Marks the torus column as possibly holding occupied voxels (see mayHoldOccupied()).
+  /// Marks the torus column (x * size_cells.y + y) as possibly holding occupied voxels: it took
+  /// a hit that made a voxel occupied, or a restored value. An unmarked column holds none.
   void markMayHoldOccupied(std::size_t torus_column) {
     may_hold_occupied_[torus_column >> 6] |= std::uint64_t{1} << (torus_column & 63);
   }
@@ -248,7 +265,7 @@ class LocalMap {
   std::vector<std::uint64_t> submap_state_changed_at_;  // the same for state changes
   std::vector<std::uint64_t> column_changed_at_;  // per torus column x, y: last value change
   std::vector<std::uint8_t> submap_of_torus_z_;   // torus z -> submap slot z (no division per voxel)
-  std::vector<std::uint64_t> may_hold_occupied_;  // a bit per torus column, see mayHoldOccupied()
+  std::vector<std::uint64_t> may_hold_occupied_;  // a bit per torus column, see markMayHoldOccupied()
 };
 
 }  // namespace mlmap
