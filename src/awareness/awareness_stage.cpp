@@ -320,8 +320,19 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
   for (const End& e : ends_) {
     if (!e.cut) batch->hits.push_back({e.voxel + g.box_origin, e.p_W});
   }
-  updateAwarenessMap(T_W_B.translation());
-  carve(g.origin_vox, batch);
+  // From here on ends_ holds every end, those beyond the box last (the hits are listed already).
+  ends_.insert(ends_.end(), outside_.begin(), outside_.end());
+  if (config_.awareness.num_threads > 1) {
+    // The awareness map and the free set share no state (carve() writes only the direction
+    // fields of ends_, the map reads their points): the map is updated on a thread of its own
+    // meanwhile, the same map either way.
+    std::thread awareness_map([this, body_W = T_W_B.translation()] { updateAwarenessMap(body_W); });
+    carve(g.origin_vox, batch);
+    awareness_map.join();
+  } else {
+    updateAwarenessMap(T_W_B.translation());
+    carve(g.origin_vox, batch);
+  }
   counters->hit_voxels = batch->hits.size();
   counters->free_voxels = batch->free_count;
 }
@@ -504,22 +515,17 @@ void AwarenessStage::collectEnds(const Source& source, const FrameGeometry& g,
 
 void AwarenessStage::updateAwarenessMap(const Eigen::Vector3d& body_W) {
   map_.beginFrame(body_W);
-  for (const auto* list : {&ends_, &outside_}) {
-    for (const End& e : *list) {
-      if (!e.cut) map_.markHit(e.p_W);
-    }
+  for (const End& e : ends_) {
+    if (!e.cut) map_.markHit(e.p_W);
   }
   map_.castRaysToHits();
-  for (const auto* list : {&ends_, &outside_}) {
-    for (const End& e : *list) {
-      if (e.cut) map_.castRay(e.p_W, /*end_is_free=*/true);
-    }
+  for (const End& e : ends_) {
+    if (e.cut) map_.castRay(e.p_W, /*end_is_free=*/true);
   }
   map_.endFrame();
 }
 
 void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
-  ends_.insert(ends_.end(), outside_.begin(), outside_.end());  // hits are listed already
   // Bin index on level L with n = 2^lg bins per face side: (face n + iu) n + iv.
   const int n0 = bins_per_face_side_;
   int lg0 = 0;
