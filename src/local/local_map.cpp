@@ -147,9 +147,17 @@ LocalMap::LocalMap(const LocalMapConfig& config, const LogOddsConfig& log_odds)
                          0),
       submap_state_changed_at_(submap_changed_at_.size(), 0),
       column_changed_at_(static_cast<std::size_t>(size_.x()) * static_cast<std::size_t>(size_.y()), 0),
+      submap_of_torus_x_(static_cast<std::size_t>(size_.x())),
+      submap_of_torus_y_(static_cast<std::size_t>(size_.y())),
       submap_of_torus_z_(static_cast<std::size_t>(size_.z())),
       may_hold_occupied_((column_changed_at_.size() + 63) / 64, 0) {
   if (cells_ == nullptr) throw std::bad_alloc();
+  for (int x = 0; x < size_.x(); ++x) {
+    submap_of_torus_x_[static_cast<std::size_t>(x)] = static_cast<std::uint8_t>(x / submap_.x());
+  }
+  for (int y = 0; y < size_.y(); ++y) {
+    submap_of_torus_y_[static_cast<std::size_t>(y)] = static_cast<std::uint8_t>(y / submap_.y());
+  }
   for (int z = 0; z < size_.z(); ++z) {
     submap_of_torus_z_[static_cast<std::size_t>(z)] = static_cast<std::uint8_t>(z / submap_.z());
   }
@@ -418,20 +426,42 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
     return;
   }
   const std::uint64_t now = ++change_clock_;
+  // A voxel d = g - minIndex() inside the window sits at torus (first + d) per axis, wrapped
+  // once: no division per hit (the slot() of a hit and its submap took a dozen).
+  const Eigen::Vector3i torus_first(floorMod(min_index_.x(), size_.x()), floorMod(min_index_.y(), size_.y()),
+                                    floorMod(min_index_.z(), size_.z()));
+  const auto ny = static_cast<std::size_t>(size_.y());
+  const auto nz = static_cast<std::size_t>(size_.z());
+  constexpr auto kStride = static_cast<std::size_t>(LocalMapConfig::kSubmapsPerAxis);
   // Hits in chunks: first the chunk's cells, fetched meanwhile (a LiDAR's hits are spread all
   // over the window), then their updates.
   constexpr std::size_t kChunk = 32;
   constexpr std::size_t kOutside = ~std::size_t{0};
   std::array<std::size_t, kChunk> cells{};
+  std::array<std::size_t, kChunk> columns{};  // torus column x * size_cells.y + y
+  std::array<std::size_t, kChunk> submaps{};  // slot in the submap stamp arrays
   for (std::size_t first = 0; first < batch.hits.size(); first += kChunk) {
     const std::size_t n = std::min(kChunk, batch.hits.size() - first);
     for (std::size_t i = 0; i < n; ++i) {
-      const VoxelIndex& g = batch.hits[first + i].index;
-      cells[i] = contains(g) ? slot(g) : kOutside;
-      if (cells[i] != kOutside) __builtin_prefetch(&cells_[cells[i]]);
+      const VoxelIndex d = batch.hits[first + i].index - min_index_;
+      cells[i] = kOutside;
+      if (static_cast<unsigned>(d.x()) >= static_cast<unsigned>(size_.x()) ||
+          static_cast<unsigned>(d.y()) >= static_cast<unsigned>(size_.y()) ||
+          static_cast<unsigned>(d.z()) >= static_cast<unsigned>(size_.z())) {
+        continue;
+      }
+      Eigen::Vector3i t = torus_first + d;
+      for (int a = 0; a < 3; ++a) {
+        if (t[a] >= size_[a]) t[a] -= size_[a];
+      }
+      columns[i] = static_cast<std::size_t>(t.x()) * ny + static_cast<std::size_t>(t.y());
+      cells[i] = columns[i] * nz + static_cast<std::size_t>(t.z());
+      submaps[i] = (static_cast<std::size_t>(submap_of_torus_x_[static_cast<std::size_t>(t.x())]) * kStride +
+                    submap_of_torus_y_[static_cast<std::size_t>(t.y())]) * kStride +
+                   submap_of_torus_z_[static_cast<std::size_t>(t.z())];
+      __builtin_prefetch(&cells_[cells[i]]);
     }
     for (std::size_t i = 0; i < n; ++i) {
-      const HitMeasurement& h = batch.hits[first + i];
       const std::size_t cell = cells[i];
       if (cell == kOutside) {
         ++counters_.outside_window;
@@ -444,8 +474,8 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
       model_.hit(v);
       cells_[cell] = flipUnknown(v);
       if (v != old) {
-        const std::size_t m = submapSlot(submapOf(h.index));
-        const std::size_t torus_column = cell / static_cast<std::size_t>(size_.z());
+        const std::size_t m = submaps[i];
+        const std::size_t torus_column = columns[i];
         submap_changed_at_[m] = now;
         if (before != model_.state(v)) {
           submap_state_changed_at_[m] = now;
@@ -497,10 +527,9 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
           static_cast<std::size_t>(sy);
       LogOddsQ* column = cells_.get() + torus_column * static_cast<std::size_t>(size_.z());
       // The column's submaps in the stamp arrays (torus slot x, y; z per voxel).
-      constexpr auto kStride = static_cast<std::size_t>(LocalMapConfig::kSubmapsPerAxis);
       const std::size_t column_submaps =
-          (static_cast<std::size_t>(sx / submap_.x()) * kStride +
-           static_cast<std::size_t>(sy / submap_.y())) * kStride;
+          (static_cast<std::size_t>(submap_of_torus_x_[static_cast<std::size_t>(sx)]) * kStride +
+           submap_of_torus_y_[static_cast<std::size_t>(sy)]) * kStride;
       std::uint64_t* submaps_changed_at = submap_changed_at_.data() + column_submaps;
       std::uint64_t* submaps_state_changed_at = submap_state_changed_at_.data() + column_submaps;
       bool column_changed = false;
