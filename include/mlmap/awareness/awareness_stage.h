@@ -138,7 +138,7 @@ class AwarenessStage {
   std::vector<End> ends_;           // inside the scratch box, one per voxel
   std::vector<End> outside_;        // beyond the box (the local map cannot hold them), per point
   std::vector<Cone> cones_;         // this frame's cones, bins first (coarse to fine), then ends
-  std::vector<double> range_scratch_;  // the cones' x centres, for splitting them over threads
+  std::vector<double> range_scratch_;  // the cones' work per box x, for splitting it over threads
   // Open-addressing table: linear box index (+ cut flag) -> index in ends_, valid when stamped.
   struct Slot {
     std::uint32_t stamp = 0;
