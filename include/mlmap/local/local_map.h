@@ -240,9 +240,8 @@ class LocalMap {
   /// values) is occupied.
   [[nodiscard]] bool anyOccupied(const LogOddsQ* column) const;
   /// Applies a miss to column[base + k] (stored values) for each set bit k of `bits` (all within
-  /// the column),
-  /// stamping the submaps (`changed_at`, `state_changed_at`: the column's stamps) whose values
-  /// or states changed. Returns whether any value changed.
+  /// the column), stamping the submaps (`changed_at`, `state_changed_at`: the column's stamps)
+  /// whose values or states changed. Returns whether any value changed.
   bool missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint64_t now,
                std::uint64_t* changed_at, std::uint64_t* state_changed_at) const;
   void moveCenter(const SubmapIndex& new_center, GlobalMap* global);
