@@ -190,6 +190,7 @@ void writeStats(const std::string& path, const RunInfo& info, const MapConfig& c
   stats["pairing"] = info.pairing;
   stats["resolution_m"] = config.local_map.resolution_m;
   stats["max_range_m"] = config.awareness.max_range_m;
+  stats["awareness_threads"] = config.awareness.num_threads;
   stats["timing_ms"] = timingJson(frames);
   stats["memory_bytes"] = memoryJson(s, peak_engine_bytes);
   stats["counters"] = countersJson(info, s, frames, occupied);
@@ -217,6 +218,7 @@ struct Options {
   std::string config_path;     ///< --config: engine configuration YAML (empty: defaults)
   double resolution_m = 0.0;   ///< --resolution (0: the config's, or the kind's default)
   double max_range_m = 0.0;    ///< --max-range (0: the config's)
+  int awareness_threads = 0;   ///< --awareness-threads (0: the config's awareness.num_threads)
   int max_frames = 0;          ///< --max-frames (0: all)
   std::string out_dir = "mlmap_replay_out";  ///< --out
   std::string voxels_out;      ///< --voxels-out (empty: OUT/occupied_voxels.txt)
@@ -315,7 +317,7 @@ void addSourceOptions(CLI::App& app, Options& o) {
   addBagOptions(app, o, {frames_opt, clouds_opt, scenario_opt});
 }
 
-/// Adds --resolution, --max-range and --config to `app`.
+/// Adds --resolution, --max-range, --awareness-threads and --config to `app`.
 void addEngineOptions(CLI::App& app, Options& o) {
   app.add_option("--resolution", o.resolution_m,
                  "voxel size [m]; the local map keeps ~19x19x7 m (default: --config's, or without "
@@ -325,6 +327,11 @@ void addEngineOptions(CLI::App& app, Options& o) {
                  "maximum range [m] (awareness.max_range_m; default: --config's, 10): farther points "
                  "clear their ray up to here and mark nothing; the awareness grid grows to reach it")
       ->check(CLI::Range(0.1, 400.0));
+  app.add_option("--awareness-threads", o.awareness_threads,
+                 "threads carving a frame's free space (awareness.num_threads; default: --config's, "
+                 "1): the same map with any count, faster where a core is free (a second core "
+                 "shares the reading)")
+      ->check(CLI::Range(1, AwarenessConfig::kMaxThreads));
   app.add_option("--config", o.config_path, "engine configuration YAML (config/mlmap.yaml documents "
                                             "every key; an mlmap_node file works too, its dds and "
                                             "map_file sections are skipped; the replay always runs "
@@ -428,6 +435,7 @@ void adjustConfig(const Options& o, MapConfig* config) {
     }
     sizeWindowForRange(o.max_range_m, config);
   }
+  if (o.awareness_threads > 0) config->awareness.num_threads = o.awareness_threads;
   if (config->pipeline.threaded) {
     spdlog::warn("pipeline.threaded: the replay runs synchronously (every frame is mapped, in order)");
     config->pipeline.threaded = false;

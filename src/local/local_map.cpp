@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
+#include <new>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -25,10 +27,11 @@ bool LocalMap::missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint
   bool any_changed = false;
   // One voxel, the rule as written (what the eight-lane step below must equal).
   auto missOne = [&](int t) {
-    LogOddsQ& v = column[t];
-    const LogOddsQ old = v;
+    const LogOddsQ old = flipUnknown(column[t]);
+    LogOddsQ v = old;
     const Occupancy before = model_.state(v);
     model_.miss(v);
+    column[t] = flipUnknown(v);
     if (v != old) {
       const std::size_t m = submap_of_torus_z_[static_cast<std::size_t>(t)];
       changed_at[m] = now;
@@ -40,6 +43,7 @@ bool LocalMap::missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint
   // Eight voxels at a time (a run of free voxels in a column is usually longer: 20 per word on
   // a LiDAR frame), as long as all eight lie in the column.
   const __m128i lane_bits = _mm_setr_epi16(1, 2, 4, 8, 16, 32, 64, 128);
+  const __m128i sign_bit = _mm_set1_epi16(kUnknownLogOdds);  // stored <-> value, see flipUnknown()
   const __m128i unknown = _mm_set1_epi16(kUnknownLogOdds);
   const __m128i miss = _mm_set1_epi16(model_.missStep());
   const __m128i lo = _mm_set1_epi16(model_.clampMin());
@@ -60,7 +64,7 @@ bool LocalMap::missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint
     const int lanes = static_cast<int>((bits >> k) & 0xFFu);
     bits &= ~(std::uint64_t{0xFF} << k);
     LogOddsQ* p = column + t;
-    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p));
+    const __m128i v = _mm_xor_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)), sign_bit);
     const __m128i selected =
         _mm_cmpeq_epi16(_mm_and_si128(_mm_set1_epi16(static_cast<short>(lanes)), lane_bits), lane_bits);
     const __m128i was_unknown = _mm_cmpeq_epi16(v, unknown);
@@ -68,7 +72,7 @@ bool LocalMap::missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint
     const __m128i updated =
         _mm_min_epi16(_mm_max_epi16(_mm_adds_epi16(_mm_andnot_si128(was_unknown, v), miss), lo), hi);
     const __m128i out = _mm_or_si128(_mm_and_si128(selected, updated), _mm_andnot_si128(selected, v));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(p), out);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(p), _mm_xor_si128(out, sign_bit));
     const __m128i changed = _mm_andnot_si128(_mm_cmpeq_epi16(out, v), selected);
     int changed8 = _mm_movemask_epi8(_mm_packs_epi16(changed, zero));
     if (changed8 == 0) continue;  // all saturated already: the common case in mapped space
@@ -115,14 +119,16 @@ bool LocalMap::anyOccupied(const LogOddsQ* column) const {
   int k = 0;
 #if defined(__SSE2__)
   const __m128i above = _mm_set1_epi16(threshold);
+  const __m128i sign_bit = _mm_set1_epi16(kUnknownLogOdds);
   __m128i any = _mm_setzero_si128();
   for (; k + 8 <= nz; k += 8) {
-    any = _mm_or_si128(any, _mm_cmpgt_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(column + k)), above));
+    const __m128i v = _mm_xor_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(column + k)), sign_bit);
+    any = _mm_or_si128(any, _mm_cmpgt_epi16(v, above));
   }
   if (_mm_movemask_epi8(any) != 0) return true;
 #endif
   for (; k < nz; ++k) {
-    if (column[k] > threshold) return true;
+    if (flipUnknown(column[k]) > threshold) return true;
   }
   return false;
 }
@@ -132,15 +138,26 @@ LocalMap::LocalMap(const LocalMapConfig& config, const LogOddsConfig& log_odds)
       model_(log_odds),
       size_(config.size_cells),
       submap_(config.submap_cells()),
-      cells_(static_cast<std::size_t>(size_.x()) * static_cast<std::size_t>(size_.y()) *
-                 static_cast<std::size_t>(size_.z()),
-             kUnknownLogOdds),
+      cell_count_(static_cast<std::size_t>(size_.x()) * static_cast<std::size_t>(size_.y()) *
+                  static_cast<std::size_t>(size_.z())),
+      // Zeroed: every voxel unknown (flipUnknown()); calloc leaves fresh pages untouched.
+      cells_(static_cast<LogOddsQ*>(std::calloc(cell_count_, sizeof(LogOddsQ)))),
       submap_changed_at_(static_cast<std::size_t>(LocalMapConfig::kSubmapsPerAxis) *
                              LocalMapConfig::kSubmapsPerAxis * LocalMapConfig::kSubmapsPerAxis,
                          0),
       submap_state_changed_at_(submap_changed_at_.size(), 0),
       column_changed_at_(static_cast<std::size_t>(size_.x()) * static_cast<std::size_t>(size_.y()), 0),
-      submap_of_torus_z_(static_cast<std::size_t>(size_.z())) {
+      submap_of_torus_x_(static_cast<std::size_t>(size_.x())),
+      submap_of_torus_y_(static_cast<std::size_t>(size_.y())),
+      submap_of_torus_z_(static_cast<std::size_t>(size_.z())),
+      may_hold_occupied_((column_changed_at_.size() + 63) / 64, 0) {
+  if (cells_ == nullptr) throw std::bad_alloc();
+  for (int x = 0; x < size_.x(); ++x) {
+    submap_of_torus_x_[static_cast<std::size_t>(x)] = static_cast<std::uint8_t>(x / submap_.x());
+  }
+  for (int y = 0; y < size_.y(); ++y) {
+    submap_of_torus_y_[static_cast<std::size_t>(y)] = static_cast<std::uint8_t>(y / submap_.y());
+  }
   for (int z = 0; z < size_.z(); ++z) {
     submap_of_torus_z_[static_cast<std::size_t>(z)] = static_cast<std::uint8_t>(z / submap_.z());
   }
@@ -164,12 +181,12 @@ bool LocalMap::contains(const VoxelIndex& index) const {
 }
 
 Occupancy LocalMap::state(const VoxelIndex& index) const {
-  return contains(index) ? model_.state(cells_[slot(index)]) : Occupancy::kUnknown;
+  return contains(index) ? model_.state(flipUnknown(cells_[slot(index)])) : Occupancy::kUnknown;
 }
 
 bool LocalMap::logOdds(const VoxelIndex& index, double* log_odds) const {
   if (!contains(index)) return false;
-  const LogOddsQ v = cells_[slot(index)];
+  const LogOddsQ v = flipUnknown(cells_[slot(index)]);
   if (v == kUnknownLogOdds) return false;
   *log_odds = dequantizeLogOdds(v);
   return true;
@@ -187,15 +204,16 @@ void LocalMap::retireSubmap(const SubmapIndex& m, GlobalMap* global) {
   const std::size_t nz = static_cast<std::size_t>(size_.z());
   for (int x = 0; x < submap_.x(); ++x) {
     for (int y = 0; y < submap_.y(); ++y) {
-      LogOddsQ* row = cells_.data() +
+      LogOddsQ* row = cells_.get() +
                       (static_cast<std::size_t>(t0.x() + x) * static_cast<std::size_t>(size_.y()) +
                        static_cast<std::size_t>(t0.y() + y)) *
                           nz +
                       static_cast<std::size_t>(t0.z());
       if (y + kAhead < submap_.y()) __builtin_prefetch(row + kAhead * nz, 1);
       for (int z = 0; z < submap_.z(); ++z, ++offset) {
-        if (model_.isOccupied(row[z])) scratch_.push_back({offset, row[z]});
-        row[z] = kUnknownLogOdds;
+        const LogOddsQ v = flipUnknown(row[z]);
+        if (model_.isOccupied(v)) scratch_.push_back({offset, v});
+        row[z] = 0;  // unknown, stored
       }
     }
   }
@@ -236,10 +254,11 @@ void LocalMap::restoreSubmap(const SubmapIndex& m, GlobalMap* global) {
     const int x = static_cast<int>(r.offset / plane);
     const int y = static_cast<int>((r.offset % plane) / static_cast<std::uint32_t>(submap_.z()));
     const int z = static_cast<int>(r.offset % static_cast<std::uint32_t>(submap_.z()));
-    cells_[(static_cast<std::size_t>(t0.x() + x) * static_cast<std::size_t>(size_.y()) +
-            static_cast<std::size_t>(t0.y() + y)) *
-               static_cast<std::size_t>(size_.z()) +
-           static_cast<std::size_t>(t0.z() + z)] = r.log_odds;
+    const std::size_t torus_column = static_cast<std::size_t>(t0.x() + x) * static_cast<std::size_t>(size_.y()) +
+                                     static_cast<std::size_t>(t0.y() + y);
+    cells_[torus_column * static_cast<std::size_t>(size_.z()) + static_cast<std::size_t>(t0.z() + z)] =
+        flipUnknown(r.log_odds);
+    markMayHoldOccupied(torus_column);
   }
   ++counters_.submaps_restored;
 }
@@ -324,7 +343,8 @@ void LocalMap::restoreWindow(const LocalWindow& window) {
   const std::string problem = windowProblem(window);
   if (!problem.empty()) throw std::invalid_argument("local map window: " + problem);
   if (window.size.prod() == 0) {
-    std::fill(cells_.begin(), cells_.end(), kUnknownLogOdds);
+    std::fill(cells_.get(), cells_.get() + cell_count_, LogOddsQ{0});  // unknown, stored
+    std::fill(may_hold_occupied_.begin(), may_hold_occupied_.end(), 0);
     placed_ = false;
     center_ = SubmapIndex::Zero();
     min_index_ = VoxelIndex::Zero();
@@ -341,10 +361,12 @@ void LocalMap::restoreWindow(const LocalWindow& window) {
   for (int x = 0; x < size_.x(); ++x) {
     for (int y = 0; y < size_.y(); ++y) {
       for (int z = 0; z < size_.z(); ++z) {
-        cells_[slot(min_index_ + VoxelIndex(x, y, z))] = *src++;
+        cells_[slot(min_index_ + VoxelIndex(x, y, z))] = flipUnknown(*src++);
       }
     }
   }
+  // Any column may hold an occupied voxel now.
+  std::fill(may_hold_occupied_.begin(), may_hold_occupied_.end(), ~std::uint64_t{0});
   stampAllSubmaps();
 }
 
@@ -404,35 +426,62 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
     return;
   }
   const std::uint64_t now = ++change_clock_;
+  // A voxel d = g - minIndex() inside the window sits at torus (first + d) per axis, wrapped
+  // once: no division per hit (the slot() of a hit and its submap took a dozen).
+  const Eigen::Vector3i torus_first(floorMod(min_index_.x(), size_.x()), floorMod(min_index_.y(), size_.y()),
+                                    floorMod(min_index_.z(), size_.z()));
+  const auto ny = static_cast<std::size_t>(size_.y());
+  const auto nz = static_cast<std::size_t>(size_.z());
+  constexpr auto kStride = static_cast<std::size_t>(LocalMapConfig::kSubmapsPerAxis);
   // Hits in chunks: first the chunk's cells, fetched meanwhile (a LiDAR's hits are spread all
   // over the window), then their updates.
   constexpr std::size_t kChunk = 32;
   constexpr std::size_t kOutside = ~std::size_t{0};
   std::array<std::size_t, kChunk> cells{};
+  std::array<std::size_t, kChunk> columns{};  // torus column x * size_cells.y + y
+  std::array<std::size_t, kChunk> submaps{};  // slot in the submap stamp arrays
   for (std::size_t first = 0; first < batch.hits.size(); first += kChunk) {
     const std::size_t n = std::min(kChunk, batch.hits.size() - first);
     for (std::size_t i = 0; i < n; ++i) {
-      const VoxelIndex& g = batch.hits[first + i].index;
-      cells[i] = contains(g) ? slot(g) : kOutside;
-      if (cells[i] != kOutside) __builtin_prefetch(&cells_[cells[i]]);
+      const VoxelIndex d = batch.hits[first + i].index - min_index_;
+      cells[i] = kOutside;
+      if (static_cast<unsigned>(d.x()) >= static_cast<unsigned>(size_.x()) ||
+          static_cast<unsigned>(d.y()) >= static_cast<unsigned>(size_.y()) ||
+          static_cast<unsigned>(d.z()) >= static_cast<unsigned>(size_.z())) {
+        continue;
+      }
+      Eigen::Vector3i t = torus_first + d;
+      for (int a = 0; a < 3; ++a) {
+        if (t[a] >= size_[a]) t[a] -= size_[a];
+      }
+      columns[i] = static_cast<std::size_t>(t.x()) * ny + static_cast<std::size_t>(t.y());
+      cells[i] = columns[i] * nz + static_cast<std::size_t>(t.z());
+      submaps[i] = (static_cast<std::size_t>(submap_of_torus_x_[static_cast<std::size_t>(t.x())]) * kStride +
+                    submap_of_torus_y_[static_cast<std::size_t>(t.y())]) * kStride +
+                   submap_of_torus_z_[static_cast<std::size_t>(t.z())];
+      __builtin_prefetch(&cells_[cells[i]]);
     }
     for (std::size_t i = 0; i < n; ++i) {
-      const HitMeasurement& h = batch.hits[first + i];
       const std::size_t cell = cells[i];
       if (cell == kOutside) {
         ++counters_.outside_window;
         ++counters_.hits_outside_window;
         continue;
       }
-      LogOddsQ& v = cells_[cell];
-      const LogOddsQ old = v;
+      const LogOddsQ old = flipUnknown(cells_[cell]);
+      LogOddsQ v = old;
       const Occupancy before = model_.state(v);
       model_.hit(v);
+      cells_[cell] = flipUnknown(v);
       if (v != old) {
-        const std::size_t m = submapSlot(submapOf(h.index));
+        const std::size_t m = submaps[i];
+        const std::size_t torus_column = columns[i];
         submap_changed_at_[m] = now;
-        if (before != model_.state(v)) submap_state_changed_at_[m] = now;
-        column_changed_at_[cell / static_cast<std::size_t>(size_.z())] = now;
+        if (before != model_.state(v)) {
+          submap_state_changed_at_[m] = now;
+          if (model_.isOccupied(v)) markMayHoldOccupied(torus_column);
+        }
+        column_changed_at_[torus_column] = now;
       }
       ++counters_.hits_applied;
     }
@@ -476,12 +525,11 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
       const std::size_t torus_column =
           static_cast<std::size_t>(sx) * static_cast<std::size_t>(size_.y()) +
           static_cast<std::size_t>(sy);
-      LogOddsQ* column = cells_.data() + torus_column * static_cast<std::size_t>(size_.z());
+      LogOddsQ* column = cells_.get() + torus_column * static_cast<std::size_t>(size_.z());
       // The column's submaps in the stamp arrays (torus slot x, y; z per voxel).
-      constexpr auto kStride = static_cast<std::size_t>(LocalMapConfig::kSubmapsPerAxis);
       const std::size_t column_submaps =
-          (static_cast<std::size_t>(sx / submap_.x()) * kStride +
-           static_cast<std::size_t>(sy / submap_.y())) * kStride;
+          (static_cast<std::size_t>(submap_of_torus_x_[static_cast<std::size_t>(sx)]) * kStride +
+           submap_of_torus_y_[static_cast<std::size_t>(sy)]) * kStride;
       std::uint64_t* submaps_changed_at = submap_changed_at_.data() + column_submaps;
       std::uint64_t* submaps_state_changed_at = submap_state_changed_at_.data() + column_submaps;
       bool column_changed = false;
@@ -557,10 +605,10 @@ int LocalMap::copyColumns(LocalWindow* out, bool all, std::uint64_t changed_afte
     for (std::size_t y = 0; y < ny; ++y) {
       if (all || column_changed_at_[sx * ny + sy] > changed_after) {
         ++copied;
-        const LogOddsQ* column = cells_.data() + (sx * ny + sy) * nz;
+        const LogOddsQ* column = cells_.get() + (sx * ny + sy) * nz;
         LogOddsQ* dst = out->log_odds.data() + (x * ny + y) * nz;
-        std::copy(column + split, column + nz, dst);
-        std::copy(column, column + split, dst + (nz - split));
+        dst = std::transform(column + split, column + nz, dst, flipUnknown);
+        std::transform(column, column + split, dst, flipUnknown);
       }
       if (++sy == ny) sy = 0;
     }

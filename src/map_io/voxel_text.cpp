@@ -15,7 +15,8 @@ std::vector<VoxelIndex> sortedUnique(std::vector<VoxelIndex> voxels) {
   auto less = [](const VoxelIndex& a, const VoxelIndex& b) {
     return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
   };
-  std::sort(voxels.begin(), voxels.end(), less);
+  // A local map lists its voxels in this order already (a replay whose window held everything).
+  if (!std::is_sorted(voxels.begin(), voxels.end(), less)) std::sort(voxels.begin(), voxels.end(), less);
   voxels.erase(std::unique(voxels.begin(), voxels.end()), voxels.end());
   return voxels;
 }

@@ -335,6 +335,21 @@ TEST(Replay, ReaderThreadGivesTheSameMapAsReadingInTurn) {
       << readText(dir + "/ahead.log");
 }
 
+TEST(Replay, AwarenessThreadsGiveTheSameMapAsOne) {
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_awareness_threads";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string base = std::string(MLMAP_REPLAY_BIN) + " --max-frames 8 --awareness-threads ";
+  ASSERT_EQ(run(base + "1 --out '" + dir + "/one'", dir + "/one.log"), 0) << readText(dir + "/one.log");
+  ASSERT_EQ(run(base + "3 --out '" + dir + "/three'", dir + "/three.log"), 0) << readText(dir + "/three.log");
+  const std::string one = readText(dir + "/one/occupied_voxels.txt");
+  EXPECT_GT(io::readVoxelText(dir + "/one/occupied_voxels.txt").size(), 1000u);
+  EXPECT_EQ(readText(dir + "/three/occupied_voxels.txt"), one);
+  EXPECT_EQ(jsonInt(readText(dir + "/one/stats.json"), "awareness_threads"), 1);
+  EXPECT_EQ(jsonInt(readText(dir + "/three/stats.json"), "awareness_threads"), 3);
+  EXPECT_NE(run(base + "0 --out '" + dir + "/none'", dir + "/none.log"), 0);
+}
+
 TEST(Replay, UnreadableCloudAfterGoodOnesIsNamedWithOrWithoutTheReaderThread) {
   const std::string dir = ::testing::TempDir() + "/mlmap_replay_bad_middle";
   fs::remove_all(dir);

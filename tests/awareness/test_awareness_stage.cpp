@@ -116,10 +116,10 @@ TEST(AwarenessStage, CarvingIsCompleteAgainstA3DReferenceWalk) {
   expectCompleteCarving(0.1, 300, 2, /*bin_width_voxels=*/1.0);  // awareness.bin_width_voxels
 }
 
-// awareness.num_threads splits the carving by box x: the batch (free bits, free
-// count, hits) and the counters are those of one thread, bit for bit, over
-// several frames (the stage's tables are reused), for a cloud all around the
-// sensor and one on a single side.
+// awareness.num_threads splits the carving by box x and updates the awareness map on a
+// thread of its own meanwhile: the batch (free bits, free count, hits), the counters and the
+// awareness map are those of one thread, bit for bit, over several frames (the stage's tables
+// are reused), for a cloud all around the sensor and one on a single side.
 TEST(AwarenessStage, ThreadsCarveTheSameFreeSetBitForBit) {
   for (const int threads : {2, 3, 5}) {
     MapConfig one = testConfig(0.1);
@@ -155,6 +155,12 @@ TEST(AwarenessStage, ThreadsCarveTheSameFreeSetBitForBit) {
       for (std::size_t i = 0; i < a.hits.size(); ++i) EXPECT_EQ(a.hits[i].index, b.hits[i].index);
       EXPECT_EQ(ca.free_voxels, cb.free_voxels);
       EXPECT_EQ(ca.hit_voxels, cb.hit_voxels);
+      // The awareness map, updated on a thread of its own meanwhile, is the same too.
+      EXPECT_EQ(reference.map().occupiedPoints(), threaded.map().occupiedPoints());
+      for (const Occupancy s : {Occupancy::kOccupied, Occupancy::kFree}) {
+        EXPECT_EQ(reference.map().count(s), threaded.map().count(s));
+      }
+      EXPECT_GT(reference.map().count(Occupancy::kFree), 1000u);
     }
   }
 }

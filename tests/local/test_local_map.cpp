@@ -398,6 +398,61 @@ TEST(LocalMap, RecycledSubmapsStartUnknownAfterAShift) {
   EXPECT_EQ(unknown, 10u * 15u * 5u - 8u * 12u * 4u);
 }
 
+// A window loaded with restoreWindow() (as a saved map is) holds exactly the copied values, and
+// forEachOccupied() lists every occupied voxel of it, though no hit reached the loaded map: the
+// listing skips only columns that cannot hold one. An empty window unplaces the map and forgets
+// every value.
+TEST(LocalMap, ARestoredWindowListsEveryOccupiedVoxelOfTheCopy) {
+  for (const FlightShape& shape : flightShapes()) {
+    SCOPED_TRACE(shape.name);
+    const LocalMapConfig& config = shape.config;
+    LocalMap map(config, shape.log_odds);
+    GlobalMap global(config.submap_cells(), config.resolution_m);
+    std::mt19937 rng(5);
+    Eigen::Vector3d body(0.5, 0.5, 0.5);
+    for (int frame = 0; frame < 200; ++frame) {
+      body += randomStep(0.8, 0.5 * shape.z_step_m, rng);
+      map.recenter(body, &global);
+      std::vector<VoxelIndex> hits;
+      std::vector<VoxelIndex> frees;
+      fewUpdatesAround(body, 12, shape.z_run_max, rng, &hits, &frees);
+      map.integrate(makeBatch(body, hits, frees));
+    }
+    LocalWindow copy;
+    map.copyWindow(&copy);
+    std::vector<VoxelIndex> occupied;  // the slow reference: every voxel of the copy
+    for (int x = 0; x < copy.size.x(); ++x)
+      for (int y = 0; y < copy.size.y(); ++y)
+        for (int z = 0; z < copy.size.z(); ++z) {
+          const VoxelIndex g = copy.min_index + VoxelIndex(x, y, z);
+          if (copy.state(g) == Occupancy::kOccupied) occupied.push_back(g);
+        }
+    ASSERT_GE(occupied.size(), 5u);  // the extreme model's misses erase most of them
+
+    LocalMap loaded(config, shape.log_odds);
+    loaded.restoreWindow(copy);
+    LocalWindow round_trip;
+    loaded.copyWindow(&round_trip);
+    EXPECT_EQ(round_trip.min_index, copy.min_index);
+    EXPECT_TRUE(round_trip.log_odds == copy.log_odds);
+    std::vector<VoxelIndex> listed;
+    loaded.forEachOccupied([&](const VoxelIndex& g, double) { listed.push_back(g); });
+    EXPECT_EQ(listed, occupied);
+
+    loaded.restoreWindow(LocalWindow{});
+    EXPECT_FALSE(loaded.placed());
+    GlobalMap empty(config.submap_cells(), config.resolution_m);
+    loaded.recenter(body, &empty);
+    std::size_t known = 0;
+    for (int x = 0; x < config.size_cells.x(); ++x)
+      for (int y = 0; y < config.size_cells.y(); ++y)
+        for (int z = 0; z < config.size_cells.z(); ++z) {
+          known += loaded.state(loaded.minIndex() + VoxelIndex(x, y, z)) != Occupancy::kUnknown ? 1 : 0;
+        }
+    EXPECT_EQ(known, 0u) << "values survived an empty window";
+  }
+}
+
 TEST(LocalMap, SlidingRoundTripKeepsOccupiedVoxelsWhereTheyWere) {
   LocalMapConfig config;
   config.resolution_m = 0.2;

@@ -87,7 +87,8 @@ class AwarenessStage {
   /// Turns every point into its end voxel (ends_, one per box voxel) or an end beyond the box
   /// (outside_, per point), counting the points rejected or cut at the maximum range.
   void collectEnds(const Source& source, const FrameGeometry& g, PointCounters* counters);
-  /// The awareness map of this frame: carried obstacles, hits, then the 2D rho-z ray walks.
+  /// The awareness map of this frame: carried obstacles, hits, then the 2D rho-z ray walks, from
+  /// ends_ (which holds outside_ too by then). Reads only the ends' points and `cut`.
   void updateAwarenessMap(const Eigen::Vector3d& body_W);
   /// A voxel where rays end in this frame: the box of its points and the first point.
   struct End {
@@ -113,8 +114,9 @@ class AwarenessStage {
   };
   /// The entry of a box key (voxel index | kCutFlag), added when new.
   std::uint32_t findOrAddEnd(std::uint32_t key);
-  /// The frame's free space: lists the cones of the direction bins and of the ends, carves them
-  /// (carveCones()) and sets batch->free_count.
+  /// The frame's free space: lists the cones of the direction bins and of the ends (ends_, which
+  /// holds outside_ too by then), carves them (carveCones()) and sets batch->free_count. Writes
+  /// only the direction fields (bin, near) of ends_.
   void carve(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch);
   /// A cone to carve: the part s in [s_min, 1] of the cone from the sensor to `box`.
   struct Cone {
@@ -136,7 +138,7 @@ class AwarenessStage {
   std::vector<End> ends_;           // inside the scratch box, one per voxel
   std::vector<End> outside_;        // beyond the box (the local map cannot hold them), per point
   std::vector<Cone> cones_;         // this frame's cones, bins first (coarse to fine), then ends
-  std::vector<double> range_scratch_;  // the cones' x centres, for splitting them over threads
+  std::vector<double> range_scratch_;  // the cones' work per box x, for splitting it over threads
   // Open-addressing table: linear box index (+ cut flag) -> index in ends_, valid when stamped.
   struct Slot {
     std::uint32_t stamp = 0;

@@ -14,7 +14,10 @@
 #include "mlmap/core/log_odds.h"
 #include "mlmap/global/global_map.h"
 
+#include <algorithm>
 #include <cstdint>
+#include <cstdlib>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -119,23 +122,31 @@ class LocalMap {
   void forEachOccupied(F&& f) const {
     if (!placed_) return;
     // slot() walked column by column: one wrap-around per column instead of three modulos per
-    // voxel (a 750 x 750 x 75 LiDAR window is 42 million voxels).
+    // voxel (a 750 x 750 x 75 LiDAR window is 42 million voxels); only the columns that ever
+    // took a hit or a restored voxel are read (a LiDAR in a room reaches a few percent of them).
     const auto ny = static_cast<std::size_t>(size_.y());
     const auto nz = static_cast<std::size_t>(size_.z());
     const auto z0 = static_cast<std::size_t>(floorMod(min_index_.z(), size_.z()));
+    const auto sy0 = static_cast<std::size_t>(floorMod(min_index_.y(), size_.y()));
     for (int x = 0; x < size_.x(); ++x) {
-      const auto sx = static_cast<std::size_t>(floorMod(min_index_.x() + x, size_.x()));
-      for (int y = 0; y < size_.y(); ++y) {
-        const std::size_t column =
-            (sx * ny + static_cast<std::size_t>(floorMod(min_index_.y() + y, size_.y()))) * nz;
-        if (!anyOccupied(cells_.data() + column)) continue;  // most columns
+      const std::size_t row = static_cast<std::size_t>(floorMod(min_index_.x() + x, size_.x())) * ny;
+      // Window y 0, 1, ... are torus y sy0 .. ny - 1, then 0 .. sy0 - 1.
+      auto listColumn = [&](std::size_t torus_column, int y) {
+        const std::size_t column = torus_column * nz;
+        if (!anyOccupied(cells_.get() + column)) return;
         std::size_t sz = z0;
         for (int z = 0; z < size_.z(); ++z) {
-          const LogOddsQ v = cells_[column + sz];
+          const LogOddsQ v = flipUnknown(cells_[column + sz]);
           if (model_.isOccupied(v)) f(min_index_ + VoxelIndex(x, y, z), dequantizeLogOdds(v));
           if (++sz == nz) sz = 0;
         }
-      }
+      };
+      forEachMarkedColumn(row + sy0, row + ny, [&](std::size_t c) {
+        listColumn(c, static_cast<int>(c - row - sy0));
+      });
+      forEachMarkedColumn(row, row + sy0, [&](std::size_t c) {
+        listColumn(c, static_cast<int>(c - row + ny - sy0));
+      });
     }
   }
 
@@ -164,8 +175,8 @@ class LocalMap {
   }
   /// Bytes held by the voxel storage (2 bytes per voxel) and the change stamps of its columns.
   [[nodiscard]] std::size_t memoryBytes() const {
-    return cells_.capacity() * sizeof(LogOddsQ) +
-           column_changed_at_.capacity() * sizeof(std::uint64_t);
+    return cell_count_ * sizeof(LogOddsQ) + column_changed_at_.capacity() * sizeof(std::uint64_t) +
+           may_hold_occupied_.capacity() * sizeof(std::uint64_t);
   }
   /// Bytes per voxel of the active area.
   static constexpr std::size_t kBytesPerVoxel = sizeof(LogOddsQ);
@@ -181,6 +192,37 @@ class LocalMap {
                static_cast<std::size_t>(size_.z()) +
            static_cast<std::size_t>(floorMod(g.z(), size_.z()));
   }
+  /// A log-odds value as the window stores it, and back (the same operation): the sign bit
+  /// flipped, so that unknown (the smallest value) is stored as 0. The window then starts as
+  /// zeroed memory from calloc, whose pages the system provides only where a voxel is written
+  /// (a 750 x 750 x 75 LiDAR window is 84 MB, of which a scan in a room reaches a few percent).
+  [[nodiscard]] static LogOddsQ flipUnknown(LogOddsQ v) {
+    return static_cast<LogOddsQ>(v ^ kUnknownLogOdds);
+  }
+  /// Frees the window's calloc'd storage.
+  struct FreeCells {
+    void operator()(LogOddsQ* p) const { std::free(p); }
+  };
+  /// Calls f(torus column) for every column in [first, end) marked by markMayHoldOccupied(), in
+  /// increasing order, 64 columns per step.
+  template <typename F>
+  void forEachMarkedColumn(std::size_t first, std::size_t end, F&& f) const {
+    while (first < end) {
+      const std::size_t word_end = std::min(end, (first | 63) + 1);
+      std::uint64_t bits = may_hold_occupied_[first >> 6] >> (first & 63);
+      if (word_end - first < 64) bits &= (std::uint64_t{1} << (word_end - first)) - 1;
+      while (bits != 0) {
+        f(first + static_cast<std::size_t>(__builtin_ctzll(bits)));
+        bits &= bits - 1;
+      }
+      first = word_end;
+    }
+  }
+  /// Marks the torus column (x * size_cells.y + y) as possibly holding occupied voxels: it took
+  /// a hit that made a voxel occupied, or a restored value. An unmarked column holds none.
+  void markMayHoldOccupied(std::size_t torus_column) {
+    may_hold_occupied_[torus_column >> 6] |= std::uint64_t{1} << (torus_column & 63);
+  }
   /// Slot of submap m in submap_changed_at_ (its torus position, m mod 5 per axis).
   [[nodiscard]] static std::size_t submapSlot(const SubmapIndex& m) {
     constexpr int kN = LocalMapConfig::kSubmapsPerAxis;
@@ -194,11 +236,12 @@ class LocalMap {
   /// Copies into `out` (placed and sized like the window) every column of the window, or with
   /// `all` false those changed after `changed_after`. Returns the number of columns copied.
   int copyColumns(LocalWindow* out, bool all, std::uint64_t changed_after) const;
-  /// Whether any of the size_cells.z voxels of the torus column starting at `column` is occupied.
+  /// Whether any of the size_cells.z voxels of the torus column starting at `column` (stored
+  /// values) is occupied.
   [[nodiscard]] bool anyOccupied(const LogOddsQ* column) const;
-  /// Applies a miss to column[base + k] for each set bit k of `bits` (all within the column),
-  /// stamping the submaps (`changed_at`, `state_changed_at`: the column's stamps) whose values
-  /// or states changed. Returns whether any value changed.
+  /// Applies a miss to column[base + k] (stored values) for each set bit k of `bits` (all within
+  /// the column), stamping the submaps (`changed_at`, `state_changed_at`: the column's stamps)
+  /// whose values or states changed. Returns whether any value changed.
   bool missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint64_t now,
                std::uint64_t* changed_at, std::uint64_t* state_changed_at) const;
   void moveCenter(const SubmapIndex& new_center, GlobalMap* global);
@@ -209,7 +252,8 @@ class LocalMap {
   LogOddsModel model_;
   Eigen::Vector3i size_;
   Eigen::Vector3i submap_;
-  std::vector<LogOddsQ> cells_;
+  std::size_t cell_count_;  // size_cells.x * y * z
+  std::unique_ptr<LogOddsQ[], FreeCells> cells_;  // stored values, see flipUnknown()
   bool placed_ = false;
   SubmapIndex center_ = SubmapIndex::Zero();
   VoxelIndex min_index_ = VoxelIndex::Zero();
@@ -219,7 +263,10 @@ class LocalMap {
   std::vector<std::uint64_t> submap_changed_at_;        // per torus submap slot, see submapSlot()
   std::vector<std::uint64_t> submap_state_changed_at_;  // the same for state changes
   std::vector<std::uint64_t> column_changed_at_;  // per torus column x, y: last value change
+  std::vector<std::uint8_t> submap_of_torus_x_;   // torus x -> submap slot x (no division per hit)
+  std::vector<std::uint8_t> submap_of_torus_y_;   // torus y -> submap slot y
   std::vector<std::uint8_t> submap_of_torus_z_;   // torus z -> submap slot z (no division per voxel)
+  std::vector<std::uint64_t> may_hold_occupied_;  // a bit per torus column, see markMayHoldOccupied()
 };
 
 }  // namespace mlmap
