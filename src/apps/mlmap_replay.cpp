@@ -27,6 +27,7 @@
 #include <filesystem>
 #include <future>
 #include <optional>
+#include <thread>
 
 namespace {
 
@@ -218,7 +219,7 @@ struct Options {
   std::string config_path;     ///< --config: engine configuration YAML (empty: defaults)
   double resolution_m = 0.0;   ///< --resolution (0: the config's, or the kind's default)
   double max_range_m = 0.0;    ///< --max-range (0: the config's)
-  int awareness_threads = 0;   ///< --awareness-threads (0: the config's awareness.num_threads)
+  int awareness_threads = 0;   ///< --awareness-threads (0: not given, see defaultAwarenessThreads())
   int max_frames = 0;          ///< --max-frames (0: all)
   std::string out_dir = "mlmap_replay_out";  ///< --out
   std::string voxels_out;      ///< --voxels-out (empty: OUT/occupied_voxels.txt)
@@ -329,8 +330,8 @@ void addEngineOptions(CLI::App& app, Options& o) {
       ->check(CLI::Range(0.1, 400.0));
   app.add_option("--awareness-threads", o.awareness_threads,
                  "threads carving a frame's free space (awareness.num_threads; default: --config's, "
-                 "1): the same map with any count, faster where a core is free (a second core "
-                 "shares the reading)")
+                 "or without --config 2 on a machine with two cores or more, else 1): the same map "
+                 "with any count, faster where a core is free (a second core shares the reading)")
       ->check(CLI::Range(1, AwarenessConfig::kMaxThreads));
   app.add_option("--config", o.config_path, "engine configuration YAML (config/mlmap.yaml documents "
                                             "every key; an mlmap_node file works too, its dds and "
@@ -427,6 +428,11 @@ void sizeWindowForRange(double range_m, MapConfig* config) {
 
 /// --max-range applied (the awareness grid and the local window grow to reach it), the engine made synchronous and
 /// the planning layers limited to what the outputs need.
+/// The replay's awareness threads without --awareness-threads or --config: an offline run has the
+/// machine to itself, so two where there are two cores (the map is the same with any count; more
+/// than two gain little beside the reader thread), else one.
+int defaultAwarenessThreads() { return std::thread::hardware_concurrency() >= 2 ? 2 : 1; }
+
 void adjustConfig(const Options& o, MapConfig* config) {
   if (o.max_range_m > 0.0) {
     config->awareness.max_range_m = o.max_range_m;
@@ -435,7 +441,11 @@ void adjustConfig(const Options& o, MapConfig* config) {
     }
     sizeWindowForRange(o.max_range_m, config);
   }
-  if (o.awareness_threads > 0) config->awareness.num_threads = o.awareness_threads;
+  if (o.awareness_threads > 0) {
+    config->awareness.num_threads = o.awareness_threads;
+  } else if (o.config_path.empty()) {
+    config->awareness.num_threads = defaultAwarenessThreads();
+  }
   if (config->pipeline.threaded) {
     spdlog::warn("pipeline.threaded: the replay runs synchronously (every frame is mapped, in order)");
     config->pipeline.threaded = false;

@@ -21,6 +21,7 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <thread>
 
 #if !defined(MLMAP_REPLAY_BIN) || !defined(MLMAP_DEMO_BIN) || !defined(MLMAP_SHARED_DATA_DIR) || \
     !defined(MLMAP_SOURCE_DIR)
@@ -348,6 +349,12 @@ TEST(Replay, AwarenessThreadsGiveTheSameMapAsOne) {
   EXPECT_EQ(jsonInt(readText(dir + "/one/stats.json"), "awareness_threads"), 1);
   EXPECT_EQ(jsonInt(readText(dir + "/three/stats.json"), "awareness_threads"), 3);
   EXPECT_NE(run(base + "0 --out '" + dir + "/none'", dir + "/none.log"), 0);
+  // Without the option or --config: two threads where the machine has two cores.
+  ASSERT_EQ(run(std::string(MLMAP_REPLAY_BIN) + " --max-frames 8 --out '" + dir + "/auto'",
+                dir + "/auto.log"), 0) << readText(dir + "/auto.log");
+  EXPECT_EQ(jsonInt(readText(dir + "/auto/stats.json"), "awareness_threads"),
+            std::thread::hardware_concurrency() >= 2 ? 2 : 1);
+  EXPECT_EQ(readText(dir + "/auto/occupied_voxels.txt"), one);
 }
 
 TEST(Replay, UnreadableCloudAfterGoodOnesIsNamedWithOrWithoutTheReaderThread) {

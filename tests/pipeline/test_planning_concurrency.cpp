@@ -1,5 +1,6 @@
-// Planner threads query the engine while the simulator flies and the map slides. Run under
-// ThreadSanitizer in CI (tools/test.sh): any data race between mapping and queries fails it.
+// Planner threads query the engine while the simulator flies and the map slides (the awareness
+// stage and the ESDF on threads of their own too). Run under ThreadSanitizer in CI
+// (tools/test.sh): any data race between mapping and queries fails it.
 
 #include "mlmap/eval/sim_flight.h"
 
@@ -24,6 +25,7 @@ TEST(PlanningConcurrency, PlannerThreadsQueryWhileTheMapSlides) {
   config.esdf.max_rate_hz = 0.0;  // every change: as many ESDF swaps as possible
   config.projected_grid.include_global = true;
   config.esdf.num_threads = 2;  // the ESDF's own worker threads too
+  config.awareness.num_threads = 2;  // the carving's threads and the awareness map's thread
   MapEngine engine(config);
 
   std::atomic<bool> done{false};
