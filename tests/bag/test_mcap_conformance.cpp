@@ -2,7 +2,9 @@
 /// The MCAP format's own conformance files (shared/data/mcap-conformance, from foxglove/mcap):
 /// every record a reader must find, in order, and every message through the indexed reader.
 /// The copy in shared/ holds Git LFS pointers instead of the .mcap bytes (the .json files are
-/// real): the tests skip, saying so, until the real files are there.
+/// real): the tests skip, saying so, until the real files are there. MLMAP_MCAP_CONFORMANCE_DIR
+/// names another copy (each .mcap with its .json), e.g. the files foxglove/mcap's own generator
+/// writes (docs/replay.md says how, and how to check them against the LFS pointers).
 
 #include "mlmap/bag/mcap.h"
 
@@ -10,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -24,7 +27,14 @@ namespace mcap = mlmap::bag::mcap;
 using Json = nlohmann::json;
 using Fields = std::map<std::string, Json>;
 
-const fs::path kDataDir = fs::path(MLMAP_SHARED_DATA_DIR) / "mcap-conformance";
+/// MLMAP_MCAP_CONFORMANCE_DIR when set, else shared/data/mcap-conformance.
+fs::path dataDir() {
+  const char* dir = std::getenv("MLMAP_MCAP_CONFORMANCE_DIR");  // NOLINT(concurrency-mt-unsafe)
+  return dir != nullptr && *dir != '\0' ? fs::path(dir)
+                                         : fs::path(MLMAP_SHARED_DATA_DIR) / "mcap-conformance";
+}
+
+const fs::path kDataDir = dataDir();
 
 /// Why the conformance files cannot be read ("" when they can): absent, or LFS pointers.
 std::string unavailable(const std::vector<fs::path>& files) {
@@ -182,7 +192,8 @@ TEST(McapConformance, ReaderFindsEveryMessageInLogTimeOrder) {
     SCOPED_TRACE(file.filename().string());
     using Key = std::tuple<std::uint64_t, std::uint16_t, std::uint32_t, std::vector<std::uint8_t>>;
     std::vector<Key> want;
-    for (const Json& record : expected(file)["records"]) {
+    const Json doc = expected(file);  // kept: a range over a temporary's member would dangle
+    for (const Json& record : doc["records"]) {
       if (record["type"] != "Message") continue;
       std::map<std::string, Json> f;
       for (const Json& field : record["fields"]) f[field[0]] = field[1];
