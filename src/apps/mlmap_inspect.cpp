@@ -129,13 +129,15 @@ struct Subscription {
     readers.reset();
   }
   /// Adds a reader of `PubSubType` on the node's topic `name` (in the namespace unless
-  /// `absolute`, as tf and tf_static are) and expects `name` to arrive.
+  /// `absolute`, as tf and tf_static are) and expects `name` to arrive. Logs each change of its
+  /// matched publishers ("<name>: 1 publisher(s) matched"): the node found, handshakes included.
   template <typename PubSubType>
   void add(const std::string& name, const fdds::DataReaderQos& qos,
            std::function<void(typename PubSubType::type&&)> sink, bool absolute = false) {
     expected.push_back(name);
-    readers->add<PubSubType>(mlmap::dds::ddsTopicName(absolute ? "" : ns, name), qos,
-                             std::move(sink));
+    readers->add<PubSubType>(
+        mlmap::dds::ddsTopicName(absolute ? "" : ns, name), qos, std::move(sink),
+        [name](int publishers) { spdlog::info("{}: {} publisher(s) matched", name, publishers); });
   }
 };
 

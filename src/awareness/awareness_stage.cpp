@@ -367,8 +367,11 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
     // fields of ends_, the map reads their points): the map is updated on a thread of its own
     // meanwhile, the same map either way.
     std::thread awareness_map([this, body_W = T_W_B.translation()] { updateAwarenessMap(body_W); });
+    struct JoinAtScopeEnd {  // also when carve() throws: a joinable thread must not be destroyed
+      std::thread& thread;
+      ~JoinAtScopeEnd() { thread.join(); }
+    } join_it{awareness_map};
     carve(g.origin_vox, batch);
-    awareness_map.join();
   } else {
     updateAwarenessMap(T_W_B.translation());
     carve(g.origin_vox, batch);

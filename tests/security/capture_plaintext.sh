@@ -67,6 +67,12 @@ run() {  # run <name> <security yaml lines>
   "$bin/mlmap_inspect" --config "$dir/node.yaml" "${ground[@]}" --duration 120 \
     --expect mlmap/local_map/occupied,mlmap/grid > "$dir/inspect.log" 2>&1 &
   local inspect=$!; pids+=("$inspect")
+  # The ground station's handshake with the node can take seconds on a loaded machine (ASan,
+  # other tests): the sensor starts once the ground station has matched the node's local map.
+  for _ in $(seq 600); do
+    grep -qs 'mlmap/local_map/occupied: [1-9][0-9]* publisher(s) matched' "$dir/inspect.log" && break
+    sleep 0.1
+  done
   "$bin/mlmap_sensor_publisher" --config "$dir/node.yaml" "${sensor[@]}" --scenario "$out/scenario.yaml" \
     --max-frames 30 --rate 10 --wait-for-subscriber 30 > "$dir/publisher.log" 2>&1
   local pub_rc=$?
