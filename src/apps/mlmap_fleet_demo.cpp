@@ -207,6 +207,52 @@ void flyFleet(const Options& o, std::vector<std::unique_ptr<Vehicle>>& vehicles,
   for (const auto& v : vehicles) shareRound(*v, vehicles, fleet, o.share_back);
 }
 
+/// One engine fed every vehicle's frames, one flight after the other (each flight's stamps
+/// moved after the previous one's: an engine maps frames in stamp order): its occupied voxels.
+std::vector<VoxelIndex> singleEngineVoxels(const std::vector<std::unique_ptr<Vehicle>>& vehicles,
+                                           const MapConfig& config) {
+  MapEngine single(config);
+  double stamp_offset_s = 0.0;
+  for (const auto& v : vehicles) {
+    double last_s = 0.0;
+    for (int i = 0; i < v->frames_planned; ++i) {
+      DepthFrame frame = std::get<DepthFrame>(v->source.read(static_cast<std::size_t>(i)));
+      last_s = frame.stamp_s;
+      frame.stamp_s += stamp_offset_s;
+      if (single.submit(std::move(frame)) != FrameStatus::kAccepted) {
+        throw std::runtime_error("the single engine refused frame " + std::to_string(i) + " of " +
+                                 v->name);
+      }
+    }
+    stamp_offset_s += last_s + 1.0;
+  }
+  return single.occupiedVoxels();
+}
+
+/// Writes <out>/<vehicle>_top.png: what vehicle `index` brought to the merged map (the voxels
+/// its own evidence raised, in the height band) and its path. Returns how many it raised.
+std::size_t writeOwnVoxelsPicture(const Options& o, const fleet::FleetMap& fleet, const Vehicle& v,
+                                  int index, double resolution_m) {
+  io::VoxelList own;
+  own.resolution_m = resolution_m;
+  std::size_t own_count = 0;
+  const std::uint64_t bit = std::uint64_t{1} << index;
+  fleet.forEachOccupied([&](const VoxelIndex& g, LogOddsQ, std::uint64_t bits) {
+    if ((bits & bit) == 0) return;
+    ++own_count;
+    if (inView(o, g, resolution_m)) {
+      own.centers_W.push_back((g.cast<double>() + Eigen::Vector3d::Constant(0.5)) * resolution_m);
+    }
+  });
+  io::MapImageOptions options;
+  options.trajectory_W = v.trajectory_W;
+  options.title = v.name + ": the " + std::to_string(own_count) +
+                  " merged voxels its own evidence raised (" + fixed(o.view_min_z_m) + " .. " +
+                  fixed(o.view_max_z_m) + " m high)";
+  io::writePng(o.out_dir + "/" + v.name + "_top.png", io::renderTopDown(own, options));
+  return own_count;
+}
+
 /// Flies the fleet and one engine fed every vehicle's frames, writes the pictures and
 /// summary.json.
 void run(const Options& o) {
@@ -233,29 +279,12 @@ void run(const Options& o) {
                o.share_hz, o.share_back ? ", each taking the others' submaps as priors" : "");
   flyFleet(o, vehicles, &fleet, &truth, config);
 
-  // One engine fed every vehicle's frames, one flight after the other (each flight's stamps
-  // moved after the previous one's: an engine maps frames in stamp order).
-  MapEngine single(config);
-  double stamp_offset_s = 0.0;
-  for (const auto& v : vehicles) {
-    double last_s = 0.0;
-    for (int i = 0; i < v->frames_planned; ++i) {
-      DepthFrame frame = std::get<DepthFrame>(v->source.read(static_cast<std::size_t>(i)));
-      last_s = frame.stamp_s;
-      frame.stamp_s += stamp_offset_s;
-      if (single.submit(std::move(frame)) != FrameStatus::kAccepted) {
-        throw std::runtime_error("the single engine refused frame " + std::to_string(i) + " of " +
-                                 v->name);
-      }
-    }
-    stamp_offset_s += last_s + 1.0;
-  }
+  const std::vector<VoxelIndex> single_voxels = singleEngineVoxels(vehicles, config);
   std::vector<VoxelIndex> merged;
   fleet.forEachOccupied([&](const VoxelIndex& g, LogOddsQ, std::uint64_t) { merged.push_back(g); });
   const sim::World& world = vehicles.front()->scenario.world;
   const double res = config.local_map.resolution_m;
   const eval::Accuracy accuracy = eval::scoreOccupancy(merged, truth.voxels(), world, res);
-  const std::vector<VoxelIndex> single_voxels = single.occupiedVoxels();
   const eval::Accuracy single_accuracy = eval::scoreOccupancy(single_voxels, truth.voxels(), world, res);
   const double iou = eval::compareVoxels(merged, single_voxels).iou;
 
@@ -266,24 +295,7 @@ void run(const Options& o) {
     const Vehicle& v = *vehicles[k];
     const double flight_s = v.frames_planned / v.scenario.frame_rate_hz;
     seconds = std::max(seconds, flight_s);
-    // What it brought to the merged map: the voxels its own evidence raised.
-    io::VoxelList own;
-    own.resolution_m = res;
-    std::size_t own_count = 0;
-    const std::uint64_t bit = std::uint64_t{1} << k;
-    fleet.forEachOccupied([&](const VoxelIndex& g, LogOddsQ, std::uint64_t bits) {
-      if ((bits & bit) == 0) return;
-      ++own_count;
-      if (inView(o, g, res)) {
-        own.centers_W.push_back((g.cast<double>() + Eigen::Vector3d::Constant(0.5)) * res);
-      }
-    });
-    io::MapImageOptions options;
-    options.trajectory_W = v.trajectory_W;
-    options.title = v.name + ": the " + std::to_string(own_count) +
-                    " merged voxels its own evidence raised (" + fixed(o.view_min_z_m) + " .. " +
-                    fixed(o.view_max_z_m) + " m high)";
-    io::writePng(o.out_dir + "/" + v.name + "_top.png", io::renderTopDown(own, options));
+    const std::size_t own_count = writeOwnVoxelsPicture(o, fleet, v, static_cast<int>(k), res);
     json_vehicles.push_back({{"name", v.name},
                              {"frames_mapped", v.frames_mapped},
                              {"frames_planned", v.frames_planned},

@@ -167,11 +167,11 @@ std::size_t FleetMap::memoryBytes() const {
 std::vector<std::pair<SubmapIndex, std::vector<VoxelRecord>>> FleetMap::occupiedSubmaps() const {
   std::vector<std::pair<SubmapIndex, std::vector<VoxelRecord>>> out;
   for (const auto& [key, entry] : submaps_) {
-    std::vector<VoxelRecord> records;
-    for (const FleetVoxel& v : entry.fused) {
-      if (model_.isOccupied(v.log_odds)) records.push_back({v.offset, v.log_odds});
-    }
-    if (!records.empty()) out.emplace_back(submapOf(key), std::move(records));
+    if (entry.fused.empty()) continue;
+    std::vector<VoxelRecord> records;  // fuse() keeps occupied voxels only, by offset
+    records.reserve(entry.fused.size());
+    for (const FleetVoxel& v : entry.fused) records.push_back({v.offset, v.log_odds});
+    out.emplace_back(submapOf(key), std::move(records));
   }
   std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) {
     return std::make_tuple(a.first.x(), a.first.y(), a.first.z()) <

@@ -393,8 +393,7 @@ PlanningLayers::PublishedEsdf PlanningLayers::publishEsdfCopy() {
     std::shared_ptr<EsdfQueryGrid> query_grid;
     std::shared_ptr<EsdfLease> lease;
   };
-  const auto holder = std::make_shared<const Holder>(
-      copy->map, config_.esdf.query_grid ? copy->query_grid : nullptr, copy->lease);
+  const auto holder = std::make_shared<const Holder>(copy->map, copy->query_grid, copy->lease);
   PublishedEsdf published;
   published.map = std::shared_ptr<const EsdfMap>(holder, holder->map.get());
   if (holder->query_grid) {

@@ -93,8 +93,7 @@ class FleetMap {
     const auto plane = static_cast<std::uint32_t>(submap_cells_.y() * submap_cells_.z());
     for (const auto& [key, entry] : submaps_) {
       const VoxelIndex base = submapOf(key).cwiseProduct(submap_cells_);
-      for (const FleetVoxel& v : entry.fused) {
-        if (!model_.isOccupied(v.log_odds)) continue;
+      for (const FleetVoxel& v : entry.fused) {  // fuse() keeps occupied voxels only
         const int x = static_cast<int>(v.offset / plane);
         const int rest = static_cast<int>(v.offset % plane);
         f(VoxelIndex(base.x() + x, base.y() + rest / submap_cells_.z(),

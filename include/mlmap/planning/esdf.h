@@ -104,6 +104,20 @@ inline Trilinear trilinear(double c000, double c001, double c010, double c011, d
   return {c0 + tx * (c1 - c0), c1 - c0, dy0 + tx * (dy1 - dy0), dz0 + tx * (dz1 - dz0)};
 }
 
+/// Answers `count` queries in order into `out` while prefetching the cells of the point `ahead`
+/// places later (the one loop of EsdfMap::queryBatch() and EsdfQueryGrid::queryBatch()), so the
+/// memory latencies of many queries overlap.
+template <typename Result, typename Prefetch, typename Query>
+void prefetchedQueries(const Eigen::Vector3d* points_W, std::size_t count, std::size_t ahead,
+                       Result* out, const Prefetch& prefetch, const Query& query) {
+  ahead = std::min(count, ahead);
+  for (std::size_t i = 0; i < ahead; ++i) prefetch(points_W[i]);
+  for (std::size_t i = 0; i < count; ++i) {
+    if (i + ahead < count) prefetch(points_W[i + ahead]);
+    out[i] = query(points_W[i]);
+  }
+}
+
 /// Dense box of occupancy states on the world voxel grid (voxel i spans [i * res, (i + 1) * res)
 /// per axis). `states[(x * size.y() + y) * size.z() + z]` holds box-relative voxel (x, y, z),
 /// i.e. world voxel min_index + (x, y, z): x-major, z fastest (the local map's iteration order).
@@ -498,12 +512,10 @@ inline void EsdfMap::prefetchQuery(const Eigen::Vector3d& p_W) const {
 
 inline void EsdfMap::queryBatch(const Eigen::Vector3d* points_W, std::size_t count,
                                 Query* out) const {
-  const std::size_t ahead = std::min(count, kQueryPrefetchAhead);
-  for (std::size_t i = 0; i < ahead; ++i) prefetchQuery(points_W[i]);
-  for (std::size_t i = 0; i < count; ++i) {
-    if (i + ahead < count) prefetchQuery(points_W[i + ahead]);
-    out[i] = query(points_W[i]);
-  }
+  prefetchedQueries(
+      points_W, count, kQueryPrefetchAhead, out,
+      [this](const Eigen::Vector3d& p_W) { prefetchQuery(p_W); },
+      [this](const Eigen::Vector3d& p_W) { return query(p_W); });
 }
 
 }  // namespace mlmap

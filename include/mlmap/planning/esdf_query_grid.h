@@ -156,12 +156,10 @@ inline void EsdfQueryGrid::prefetch(const Eigen::Vector3d& p_W) const {
 
 inline void EsdfQueryGrid::queryBatch(const Eigen::Vector3d* points_W, std::size_t count,
                                       EsdfMap::Query* out) const {
-  const std::size_t ahead = std::min(count, kPrefetchAhead);
-  for (std::size_t i = 0; i < ahead; ++i) prefetch(points_W[i]);
-  for (std::size_t i = 0; i < count; ++i) {
-    if (i + ahead < count) prefetch(points_W[i + ahead]);
-    out[i] = query(points_W[i]);
-  }
+  prefetchedQueries(
+      points_W, count, kPrefetchAhead, out,
+      [this](const Eigen::Vector3d& p_W) { prefetch(p_W); },
+      [this](const Eigen::Vector3d& p_W) { return query(p_W); });
 }
 
 }  // namespace mlmap
