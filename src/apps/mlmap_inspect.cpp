@@ -29,6 +29,7 @@
 #include <opencv2/imgproc.hpp>
 #include <spdlog/spdlog.h>
 
+#include <atomic>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
@@ -55,6 +56,7 @@ struct Options {
   bool expect_all = false;            ///< --expect-all: exit 2 unless every enabled layer arrived
   bool as_bridge = false;             ///< --as-bridge: subscribe with the ROS 2 bridge's QoS
   std::vector<std::string> expect_topics;  ///< --expect: exit 2 unless these arrived
+  bool until_expected = false;        ///< --until-expected: stop once the expected layers arrived
   double min_precision = 0.0;         ///< --min-precision: exit 2 below it (0: no check)
   apps::SecurityOptions security;     ///< --keystore, --enclave, --security-strategy
 };
@@ -76,6 +78,9 @@ void addOptions(CLI::App& app, Options& o) {
   app.add_option("--expect", o.expect_topics,
                  "exit 2 unless these layers arrived (topic names as in the config, e.g. mlmap/grid)")
       ->delimiter(',');
+  app.add_flag("--until-expected", o.until_expected,
+               "stop as soon as the expected layers arrived (--expect, or every layer with "
+               "--expect-all); --duration stays the limit");
   app.add_option("--min-precision", o.min_precision, "exit 2 when the scored precision is lower");
   o.security.add(app);
 }
@@ -99,6 +104,7 @@ struct Received {
   mlmap::dds::mlmap_msgs::Status_ status;
   std::vector<Eigen::Vector3d> trajectory_W;
   std::uint64_t malformed = 0;
+  std::atomic<int> matched_readers{0};  ///< readers that have matched a publisher (no mutex)
 
   /// Counts a message of `bytes` bytes with `points` points / cells on topic `name`, and its age
   /// from `stamp`; call with `mutex` held.
@@ -122,6 +128,7 @@ struct Subscription {
   std::unique_ptr<mlmap::dds::TakeReaders> readers;
   std::vector<std::string> expected;
   std::string ns;  ///< the node's DDS namespace
+  std::atomic<int>* matched_readers = nullptr;  ///< Received's count of readers that matched
 
   /// Deletes the readers and then their listeners: no more callbacks from here on.
   void close() {
@@ -137,7 +144,11 @@ struct Subscription {
     expected.push_back(name);
     readers->add<PubSubType>(
         mlmap::dds::ddsTopicName(absolute ? "" : ns, name), qos, std::move(sink),
-        [name](int publishers) { spdlog::info("{}: {} publisher(s) matched", name, publishers); });
+        [name, counter = matched_readers, first = std::make_shared<bool>(true)](int publishers) {
+          spdlog::info("{}: {} publisher(s) matched", name, publishers);
+          if (publishers > 0 && *first) counter->fetch_add(1);
+          if (publishers > 0) *first = false;
+        });
   }
 };
 
@@ -235,6 +246,7 @@ void subscribeStatusAndTf(const mlmap::dds::DdsConfig& dds, Subscription* sub, R
 Subscription subscribe(const Options& o, const mlmap::dds::DdsConfig& dds, Received* rx) {
   Subscription sub;
   sub.ns = dds.ns;
+  sub.matched_readers = &rx->matched_readers;
   sub.participant = mlmap::dds::createParticipant(dds, "mlmap_inspect");
   fdds::Subscriber* subscriber = sub.participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
   sub.readers = std::make_unique<mlmap::dds::TakeReaders>(subscriber, [rx](const std::string& what) {
@@ -256,26 +268,6 @@ bool idleTooLong(const Received& rx, double idle_s, Clock::time_point now) {
   return newest != Clock::time_point::min() && secondsBetween(newest, now) > idle_s;
 }
 
-/// Waits for messages until --duration, --idle-stop or a stop signal, printing the counts every
-/// two seconds.
-void listen(const Options& o, Received* rx) {
-  const auto start = Clock::now();
-  auto last_print = start;
-  while (!apps::stopRequested()) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    const auto now = Clock::now();
-    if (o.duration_s > 0 && secondsBetween(start, now) >= o.duration_s) break;
-    std::lock_guard<std::mutex> lock(rx->mutex);
-    if (idleTooLong(*rx, o.idle_s, now)) break;
-    if (secondsBetween(last_print, now) >= 2.0) {
-      last_print = now;
-      std::string line;
-      for (const auto& [name, t] : rx->topics) line += fmt::format(" {}:{}", name, t.messages);
-      spdlog::info("received{}", line.empty() ? " nothing yet" : line);
-    }
-  }
-}
-
 /// The names of `names` that nothing arrived on.
 std::vector<std::string> missingOf(const Received& rx, const std::vector<std::string>& names) {
   std::vector<std::string> missing;
@@ -283,6 +275,32 @@ std::vector<std::string> missingOf(const Received& rx, const std::vector<std::st
     if (rx.topics.count(name) == 0) missing.push_back(name);
   }
   return missing;
+}
+
+/// True with --until-expected once every expected layer arrived (call with rx.mutex held).
+bool expectedArrived(const Options& o, const Received& rx, const std::vector<std::string>& all) {
+  if (!o.until_expected) return false;
+  return missingOf(rx, o.expect_topics).empty() && (!o.expect_all || missingOf(rx, all).empty());
+}
+
+/// Waits for messages until --duration, --idle-stop, --until-expected or a stop signal, printing
+/// the counts every two seconds.
+void listen(const Options& o, Received* rx, const std::vector<std::string>& expected) {
+  const auto start = Clock::now();
+  auto last_print = start;
+  while (!apps::stopRequested()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    const auto now = Clock::now();
+    if (o.duration_s > 0 && secondsBetween(start, now) >= o.duration_s) break;
+    std::lock_guard<std::mutex> lock(rx->mutex);
+    if (idleTooLong(*rx, o.idle_s, now) || expectedArrived(o, *rx, expected)) break;
+    if (secondsBetween(last_print, now) >= 2.0) {
+      last_print = now;
+      std::string line;
+      for (const auto& [name, t] : rx->topics) line += fmt::format(" {}:{}", name, t.messages);
+      spdlog::info("received{}", line.empty() ? " nothing yet" : line);
+    }
+  }
 }
 
 /// One line per topic: messages, rate, size, points and the age at arrival.
@@ -435,6 +453,11 @@ int report(const Options& o, const Received& rx, const std::vector<std::string>&
   printTopics(rx);
   for (const std::string& name : missing) spdlog::warn("{:28} nothing received", name);
   for (const std::string& name : missing_listed) spdlog::error("{:28} expected, nothing received", name);
+  if (rx.matched_readers.load() == 0) {
+    spdlog::error("no publisher of mlmap_node matched any reader: the node was not discovered (is it "
+                  "running, on this domain and namespace, in reach of the discovery range, with the "
+                  "same security?)");
+  }
   const Score score = scoreAgainstScenario(o, rx, res);
   if (!o.out_dir.empty()) {
     std::filesystem::create_directories(o.out_dir);
@@ -457,7 +480,7 @@ int run(const Options& o) {
     Received rx;
     Subscription sub = subscribe(o, config.dds, &rx);
     spdlog::info("listening for {} layers of mlmap_node (namespace '{}')", sub.expected.size(), sub.ns);
-    listen(o, &rx);
+    listen(o, &rx, sub.expected);
     sub.close();
     return report(o, rx, sub.expected, config.map.local_map.resolution_m);
   } catch (const std::exception& e) {

@@ -11,7 +11,7 @@
 #   vanish   joins at 4 s and is killed (-9) at 8 s, as a ground station that loses power;
 #   rejoin   joins at 12 s and stays to the end: every layer again, and the age of what it sees;
 #   latched  joins after the flight, when nothing new is published: must get the 2D grid and the
-#            global map (TRANSIENT_LOCAL), the latter equal to the node's.
+#            global map (TRANSIENT_LOCAL), the latter equal to the node's (its status says).
 # Onboard, every frame must be mapped: the ground station's coming and going and the slow link do
 # not slow or stop the mapping. Needs root (unshare, nsenter, ip, tc).
 set -uo pipefail
@@ -87,8 +87,9 @@ wait $late; late_rc=$?
 sleep 3   # the last frames' layers cross
 kill -INT $rejoin; wait $rejoin; rejoin_rc=$?
 sleep 2   # the node is idle now: only what is latched can reach a newcomer
-"${ground_inspect[@]}" --out "$out/latched" --duration 4 \
-  --expect mlmap/grid,mlmap/global_map/occupied > "$out/latched.log" 2>&1
+# Discovery on a loaded machine can take seconds: up to 30 s, ending as soon as the layers came.
+"${ground_inspect[@]}" --out "$out/latched" --duration 30 --until-expected \
+  --expect mlmap/grid,mlmap/global_map/occupied,mlmap/status > "$out/latched.log" 2>&1
 latched_rc=$?
 kill -INT $node; wait $node; node_rc=$?
 

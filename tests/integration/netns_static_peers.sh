@@ -44,9 +44,10 @@ start_node() {
     nsenter -t "$vehicle" -n "$bin/mlmap_node" --report-every 0 > "$out/node_$2.log" 2>&1 &
   node=$!; pids+=("$node")
 }
+# The ground station for at most $1 s, its log named $2; more options after.
 ground_inspect() {
   ROS_AUTOMATIC_DISCOVERY_RANGE=SUBNET nsenter -t "$ground" -n "$bin/mlmap_inspect" \
-    --duration "$1" --expect mlmap/status > "$out/inspect_$2.log" 2>&1
+    --duration "$1" --expect mlmap/status "${@:3}" > "$out/inspect_$2.log" 2>&1
 }
 
 start_node "" without
@@ -54,7 +55,7 @@ ground_inspect 6 without; without_rc=$?
 kill -INT "$node"; wait "$node"
 
 start_node "10.78.0.2" with
-ground_inspect 8 with; with_rc=$?
+ground_inspect 30 with --until-expected; with_rc=$?   # discovery may take seconds when loaded
 kill -INT "$node"; wait "$node"; node_rc=$?
 
 for f in node_without inspect_without node_with inspect_with; do echo "== $f"; cat "$out/$f.log"; done
