@@ -888,15 +888,21 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
     const int begin = std::max(0, lo - 2 * reach);
     const int end = std::min(ny, hi + 2 * reach + 1);
     const int count = z_last - z_first + 1;
-    const std::size_t width = static_cast<std::size_t>(count);
+    // Across a multiple of 16 lanes (+inf in the extra ones): the sweeps run in whole vectors.
+    const int padded = esdf_kernel::paddedLanes(count);
+    const auto width = static_cast<std::size_t>(padded);
     const std::size_t n = static_cast<std::size_t>(end - begin) * width;
     if (buffers->lines.size() < n) buffers->lines.resize(n);
     std::int16_t* values = buffers->lines.data();
     const std::int8_t* in = pass1_narrow_.data() + static_cast<std::size_t>(x) * slab +
                             static_cast<std::size_t>(z_first);
     esdf_kernel::squareDistances(in + static_cast<std::size_t>(begin) * nz, static_cast<std::size_t>(nz),
-                                 end - begin, count, cap_sq_, cap_d_, values);
-    esdf_kernel::transformLines(values, end - begin, count, cap_sq_, cap_d_, buffers);
+                                 end - begin, count, width, cap_sq_, cap_d_, values);
+    // Read back over [lo - reach, hi + reach] only: the window runs there alone.
+    const int out_begin = std::max(0, lo - reach) - begin;
+    const int out_end = std::min(ny, hi + reach + 1) - begin;
+    esdf_kernel::transformLines(values, end - begin, padded, out_begin, out_end, cap_sq_, cap_d_,
+                                buffers);
     std::int16_t* slab_values = pass2_narrow_.data() + static_cast<std::size_t>(x) * slab;
     int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
     int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
@@ -936,7 +942,9 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
     const int begin = std::max(0, lo - 2 * reach);
     const int end = std::min(nz, hi + 2 * reach + 1);
     const int count = static_cast<int>(lanes.size());
-    const std::size_t n = static_cast<std::size_t>(end - begin) * lanes.size();
+    const int padded = esdf_kernel::paddedLanes(count);  // +inf in the extra lanes, as above
+    const auto width = static_cast<std::size_t>(padded);
+    const std::size_t n = static_cast<std::size_t>(end - begin) * width;
     if (buffers->lines.size() < n) buffers->lines.resize(n);
     std::int16_t* values = buffers->lines.data();
     const std::size_t first = static_cast<std::size_t>(x) * slab;
@@ -949,9 +957,16 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
                                static_cast<std::size_t>(lanes[static_cast<std::size_t>(l)]) * nz;
       std::copy(in + begin, in + end, gathered.data() + static_cast<std::size_t>(l) * span);
     }
-    esdf_kernel::transpose16(gathered.data(), span, values, lanes.size(), count, end - begin);
-    esdf_kernel::transformLines(values, end - begin, count, cap_sq_, cap_d_, buffers);
-    esdf_kernel::transpose16(values, lanes.size(), gathered.data(), span, end - begin, count);
+    esdf_kernel::transpose16(gathered.data(), span, values, width, count, end - begin);
+    for (std::size_t i = 0; i < span; ++i) {
+      std::fill(values + i * width + lanes.size(), values + (i + 1) * width,
+                static_cast<std::int16_t>(inf_));
+    }
+    const int out_begin = std::max(0, lo - reach) - begin;
+    const int out_end = std::min(nz, hi + reach + 1) - begin;
+    esdf_kernel::transformLines(values, end - begin, padded, out_begin, out_end, cap_sq_, cap_d_,
+                                buffers);
+    esdf_kernel::transpose16(values, width, gathered.data(), span, end - begin, count);
     for (int l = 0; l < count; ++l) {
       const int y = lanes[static_cast<std::size_t>(l)];
       const std::size_t row = first + static_cast<std::size_t>(y) * nz;

@@ -137,10 +137,12 @@ inline __attribute__((always_inline)) void sweepRight(const std::int16_t* __rest
 }
 
 /// The 1D pass along the outer index of `values` (n lines of `lanes` values, lanes fastest;
-/// signed squared distances or +-inf), in place. `m` is buffers->magnitude laid out with pad
-/// = cap_d * lanes values of inf before and after, already holding |values|.
+/// signed squared distances or +-inf), in place, written at positions [out_begin, out_end)
+/// only (the others keep their input). `m` is buffers->magnitude laid out with pad = cap_d *
+/// lanes values of inf before and after, already holding |values|.
 inline __attribute__((always_inline)) void windowPass(std::int16_t* values, std::int16_t* m,
-                                                      int n, int lanes, std::int32_t cap_sq,
+                                                      int n, int lanes, int out_begin,
+                                                      int out_end, std::int32_t cap_sq,
                                                       std::int32_t cap_d,
                                                       WindowBuffers* buffers) {
   const auto inf = static_cast<std::int16_t>(cap_sq + 1);
@@ -168,8 +170,12 @@ inline __attribute__((always_inline)) void windowPass(std::int16_t* values, std:
   }
   const std::size_t pad = static_cast<std::size_t>(cap_d) * row;
   countFiniteBlocks(m - pad, cells + 2 * pad, inf, buffers);
-  relaxWindow(best, m, lanes, cells, cap_d, pad, buffers->finite_before.data());
-  for (std::size_t i = 0; i < cells; ++i) {
+  // The window, the costly part, over the output positions only.
+  const std::size_t first = static_cast<std::size_t>(out_begin) * row;
+  const std::size_t last = static_cast<std::size_t>(out_end) * row;
+  relaxWindow(best + first, m + first, lanes, last - first, cap_d, pad + first,
+              buffers->finite_before.data());
+  for (std::size_t i = first; i < last; ++i) {
     const std::int16_t v = best[i] <= cap_sq ? best[i] : inf;
     values[i] = values[i] < 0 ? static_cast<std::int16_t>(-v) : v;
   }
@@ -261,19 +267,21 @@ void transpose16(const std::int16_t* src, std::size_t src_stride, std::int16_t* 
 
 MLMAP_ESDF_CLONES
 void squareDistances(const std::int8_t* in, std::size_t in_stride, int rows, int width,
-                     std::int32_t cap_sq, std::int32_t cap_d, std::int16_t* out) {
+                     std::size_t out_stride, std::int32_t cap_sq, std::int32_t cap_d,
+                     std::int16_t* out) {
   // 16-bit arithmetic (|d| <= 127, d^2 and inf fit), which SSE2 multiplies too.
   const auto inf = static_cast<std::int16_t>(cap_sq + 1);
   const auto cap = static_cast<std::int16_t>(cap_d);
   for (int r = 0; r < rows; ++r) {
     const std::int8_t* row = in + static_cast<std::size_t>(r) * in_stride;
-    std::int16_t* to = out + static_cast<std::size_t>(r) * static_cast<std::size_t>(width);
+    std::int16_t* to = out + static_cast<std::size_t>(r) * out_stride;
     for (int c = 0; c < width; ++c) {
       const std::int16_t v = row[c];
       const auto a = static_cast<std::int16_t>(v < 0 ? -v : v);
       const auto sq = static_cast<std::int16_t>(a <= cap ? static_cast<std::int16_t>(a * a) : inf);
       to[c] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
     }
+    std::fill(to + width, to + out_stride, inf);
   }
 }
 
@@ -311,7 +319,7 @@ void transformSlabY(const std::int8_t* pass1, int ny, int nz, std::int32_t cap_s
     std::fill(m_row + nz, m_row + z_lanes, inf);
     std::fill(v_row + nz, v_row + z_lanes, inf);
   }
-  windowPass(values, m, ny, z_lanes, cap_sq, cap_d, buffers);
+  windowPass(values, m, ny, z_lanes, 0, ny, cap_sq, cap_d, buffers);
   // Out to pass 2 (y-major) and, transposed, to the z pass's lines (z-major, +inf in the extra
   // lanes).
   std::int16_t* out = buffers->signed_sq.data();
@@ -327,21 +335,21 @@ void transformSlabY(const std::int8_t* pass1, int ny, int nz, std::int32_t cap_s
 }
 
 MLMAP_ESDF_CLONES
-void transformLines(std::int16_t* values, int n, int lanes, std::int32_t cap_sq,
-                    std::int32_t cap_d, WindowBuffers* buffers) {
+void transformLines(std::int16_t* values, int n, int lanes, int out_begin, int out_end,
+                    std::int32_t cap_sq, std::int32_t cap_d, WindowBuffers* buffers) {
   const auto inf = static_cast<std::int16_t>(cap_sq + 1);
   const std::size_t cells = static_cast<std::size_t>(n) * static_cast<std::size_t>(lanes);
   std::int16_t* m = prepareBuffers(n, lanes, cap_d, inf, buffers);
   for (std::size_t i = 0; i < cells; ++i) {
     m[i] = static_cast<std::int16_t>(values[i] < 0 ? -values[i] : values[i]);
   }
-  windowPass(values, m, n, lanes, cap_sq, cap_d, buffers);
+  windowPass(values, m, n, lanes, out_begin, out_end, cap_sq, cap_d, buffers);
 }
 
 void transformSlabZ(int ny, int nz, std::int32_t cap_sq, std::int32_t cap_d,
                     WindowBuffers* buffers) {
   // z-major: the z lines across the y lanes.
-  transformLines(buffers->signed_sq.data(), nz, paddedLanes(ny), cap_sq, cap_d, buffers);
+  transformLines(buffers->signed_sq.data(), nz, paddedLanes(ny), 0, nz, cap_sq, cap_d, buffers);
 }
 
 }  // namespace mlmap::esdf_kernel

@@ -64,18 +64,23 @@ struct WindowBuffers {
 void transpose16(const std::int16_t* src, std::size_t src_stride, std::int16_t* dst,
                  std::size_t dst_stride, int rows, int cols);
 
-/// The y pass's input from the x pass's results: out[r * width + c] = the signed square of
+/// The y pass's input from the x pass's results: out[r * out_stride + c] = the signed square of
 /// in[r * in_stride + c] (r < rows, c < width), +-inf (cap_sq + 1) where its magnitude is above
-/// cap_d. Built for AVX2 / AVX-512 too (it vectorises).
+/// cap_d, and +inf for width <= c < out_stride (padding lanes). Built for AVX2 / AVX-512 too
+/// (it vectorises).
 void squareDistances(const std::int8_t* in, std::size_t in_stride, int rows, int width,
-                     std::int32_t cap_sq, std::int32_t cap_d, std::int16_t* out);
+                     std::size_t out_stride, std::int32_t cap_sq, std::int32_t cap_d,
+                     std::int16_t* out);
 
 /// Transforms `lanes` lines of n values side by side, in place: values[i * lanes + l] is value
 /// i of line l, a signed squared distance (+ non-obstacle, - obstacle) or +-inf (cap_sq + 1).
-/// A part of a line may be given: its outputs are then exact where they lie more than cap_d + 1
-/// from the part's cut ends.
-void transformLines(std::int16_t* values, int n, int lanes, std::int32_t cap_sq,
-                    std::int32_t cap_d, WindowBuffers* buffers);
+/// Only positions [out_begin, out_end) are transformed (0 <= out_begin <= out_end <= n); the
+/// others keep their input. A part of a line may be given: its outputs are then exact where
+/// they lie more than cap_d + 1 from the part's cut ends, so a caller that needs outputs
+/// [a, b) gives the inputs [a - cap_d - 1, b + cap_d + 1) and asks for [a, b) only: the
+/// window, the costly part, then runs over the outputs alone.
+void transformLines(std::int16_t* values, int n, int lanes, int out_begin, int out_end,
+                    std::int32_t cap_sq, std::int32_t cap_d, WindowBuffers* buffers);
 
 /// The y pass of one x slab: `pass1` holds ny * nz signed distances along x (z fastest; +d
 /// non-obstacle, -d obstacle; any magnitude above cap_d means beyond the clamp). Writes the
