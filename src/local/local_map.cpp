@@ -215,6 +215,13 @@ void LocalMap::retireSubmap(const SubmapIndex& m, GlobalMap* global) {
         if (model_.isOccupied(v)) scratch_.push_back({offset, v});
         row[z] = 0;  // unknown, stored
       }
+      // A marked column left with nothing occupied (its other submaps above and below included)
+      // is unmarked: over a long flight the occupied listing keeps reading only the columns
+      // that hold something. A restored submap marks its columns again.
+      const std::size_t torus_column = static_cast<std::size_t>(row - cells_.get()) / nz;
+      if (columnMarked(torus_column) && !anyOccupied(cells_.get() + torus_column * nz)) {
+        may_hold_occupied_[torus_column >> 6] &= ~(std::uint64_t{1} << (torus_column & 63));
+      }
     }
   }
   global->store(m, std::vector<VoxelRecord>(scratch_.begin(), scratch_.end()));

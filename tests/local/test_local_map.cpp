@@ -398,6 +398,50 @@ TEST(LocalMap, RecycledSubmapsStartUnknownAfterAShift) {
   EXPECT_EQ(unknown, 10u * 15u * 5u - 8u * 12u * 4u);
 }
 
+// A window move unmarks the columns it left with no occupied voxel: the occupied listing reads
+// only marked columns, so over a long flight the marks would otherwise grow to the whole window
+// (the listing back to a full scan). After each move the marked columns are exactly the columns
+// holding an occupied voxel (counted voxel by voxel; the flight only hits, so no occupied voxel
+// was freed in place), and the listing still finds every occupied voxel.
+TEST(LocalMap, AWindowMoveUnmarksTheColumnsItEmptied) {
+  const LocalMapConfig config = smallMap();
+  LocalMap map(config, LogOddsConfig{});
+  GlobalMap global(config.submap_cells(), 1.0);
+  map.recenter({0.5, 0.5, 0.5}, &global);
+  std::vector<VoxelIndex> hits;
+  for (int x = 0; x < 10; ++x)
+    for (int y = 0; y < 15; ++y)
+      for (int z = 0; z < 5; ++z) {
+        if ((x + y + z) % 4 == 0) hits.push_back(map.minIndex() + VoxelIndex(x, y, z));
+      }
+  map.integrate(makeBatch({0.5, 0.5, 0.5}, hits, {}));
+  const auto check = [&](const char* step, std::size_t expected_columns) {
+    std::set<std::pair<int, int>> holding;
+    std::size_t occupied = 0;
+    for (int x = 0; x < 10; ++x)
+      for (int y = 0; y < 15; ++y)
+        for (int z = 0; z < 5; ++z) {
+          if (map.state(map.minIndex() + VoxelIndex(x, y, z)) != Occupancy::kOccupied) continue;
+          holding.insert({x, y});
+          ++occupied;
+        }
+    std::size_t listed = 0;
+    map.forEachOccupied([&](const VoxelIndex&, float) { ++listed; });
+    EXPECT_EQ(holding.size(), expected_columns) << step;
+    EXPECT_EQ(map.markedColumns(), holding.size()) << step;
+    EXPECT_EQ(listed, occupied) << step;
+  };
+  check("filled", 150);
+  map.recenter({2.5, 0.5, 0.5}, &global);  // one submap (2 voxels) along +x: a new empty slab
+  check("moved along x", 8 * 15);
+  map.recenter({2.5, 0.5, 1.5}, &global);  // one submap along z: every column keeps 4 layers
+  check("moved along z", 8 * 15);
+  map.recenter({2.5, 0.5, 0.5}, &global);  // back along z: the layer comes back from the global map
+  check("back along z", 8 * 15);
+  map.recenter({0.5, 0.5, 0.5}, &global);  // back along x: the slab comes back, marked again
+  check("back along x", 150);
+}
+
 // A window loaded with restoreWindow() (as a saved map is) holds exactly the copied values, and
 // forEachOccupied() lists every occupied voxel of it, though no hit reached the loaded map: the
 // listing skips only columns that cannot hold one. An empty window unplaces the map and forgets

@@ -173,6 +173,14 @@ class LocalMap {
   [[nodiscard]] std::uint64_t submapStateChangedAt(const SubmapIndex& m) const {
     return submap_state_changed_at_[submapSlot(m)];
   }
+  /// Columns (x, y) of the window that the occupied listing reads: every column holding an
+  /// occupied voxel is among them, and a column that a window move emptied of occupied voxels
+  /// is not.
+  [[nodiscard]] std::size_t markedColumns() const {
+    std::size_t n = 0;
+    for (const std::uint64_t word : may_hold_occupied_) n += static_cast<std::size_t>(__builtin_popcountll(word));
+    return n;
+  }
   /// Bytes held by the voxel storage (2 bytes per voxel) and the change stamps of its columns.
   [[nodiscard]] std::size_t memoryBytes() const {
     return cell_count_ * sizeof(LogOddsQ) + column_changed_at_.capacity() * sizeof(std::uint64_t) +
@@ -217,6 +225,10 @@ class LocalMap {
       }
       first = word_end;
     }
+  }
+  /// True when markMayHoldOccupied() marked the torus column (and no retire unmarked it since).
+  [[nodiscard]] bool columnMarked(std::size_t torus_column) const {
+    return ((may_hold_occupied_[torus_column >> 6] >> (torus_column & 63)) & 1U) != 0;
   }
   /// Marks the torus column (x * size_cells.y + y) as possibly holding occupied voxels: it took
   /// a hit that made a voxel occupied, or a restored value. An unmarked column holds none.
