@@ -719,8 +719,19 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
   }
   row_buffer_.resize(static_cast<std::size_t>(nx) * static_cast<std::size_t>(nz));
 
-  // Changed states: their rows are swept again over the z range of the row's changes; their
-  // unknown bits follow (all of them after a shift, whose bits were not shifted).
+  // Changed states: the rows of those whose kind changed (obstacle or not: all pass 1 reads) are
+  // swept again over the z range of the row's changes; their unknown bits follow (all of them
+  // after a shift, whose bits were not shifted). Most of a frame's changes are unknown voxels
+  // seen free: with unknown as free, no kind changes there, and no row is swept for them.
+  const std::int32_t unknown_is_obstacle = config_.unknown_as == UnknownAs::kOccupied ? 1 : 0;
+  constexpr auto kOccupied = static_cast<std::uint8_t>(Occupancy::kOccupied);
+  const auto obstacle = [&](std::uint8_t state) {
+    return state == kOccupied || (state == kUnknown && unknown_is_obstacle != 0);
+  };
+  // A kept voxel a shift left unseen (kUnseenState) has no pass 1 result yet: always swept.
+  const auto kind_changed = [&](std::uint8_t now, std::uint8_t before) {
+    return before == kUnseenState || obstacle(now) != obstacle(before);
+  };
   std::uint8_t* kept = kept_states_.data();
   row_z_lo_.assign(static_cast<std::size_t>(ny), nz);
   row_z_hi_.assign(static_cast<std::size_t>(ny), -1);
@@ -734,10 +745,12 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
     const std::size_t r = i - x * slab;
     const std::size_t y = r / static_cast<std::size_t>(nz);
     const int z = static_cast<int>(r - y * static_cast<std::size_t>(nz));
-    row_z_lo_[y] = std::min(row_z_lo_[y], z);
-    row_z_hi_[y] = std::max(row_z_hi_[y], z);
-    row_x_lo_[y] = std::min(row_x_lo_[y], static_cast<int>(x));
-    row_x_hi_[y] = std::max(row_x_hi_[y], static_cast<int>(x));
+    if (kind_changed(states[i], kept[i])) {
+      row_z_lo_[y] = std::min(row_z_lo_[y], z);
+      row_z_hi_[y] = std::max(row_z_hi_[y], z);
+      row_x_lo_[y] = std::min(row_x_lo_[y], static_cast<int>(x));
+      row_x_hi_[y] = std::max(row_x_hi_[y], static_cast<int>(x));
+    }
     if (!u.shifted && (states[i] == kUnknown) != (kept[i] == kUnknown)) {
       unknown_bits_[(x * slab_bits_ + r) >> 6] ^= std::uint64_t{1} << ((x * slab_bits_ + r) & 63);
       changed_cells_.push_back(c);
@@ -751,7 +764,6 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
 
   // Pass 1, row by row over the changed z range and the x range the changes reach (as for the
   // lines below); changed results mark their y lines.
-  const std::int32_t unknown_is_obstacle = config_.unknown_as == UnknownAs::kOccupied ? 1 : 0;
   for (int y = 0; y < ny; ++y) {
     const int z_lo = row_z_lo_[static_cast<std::size_t>(y)];
     const int z_hi = row_z_hi_[static_cast<std::size_t>(y)];
