@@ -482,7 +482,13 @@ bool EsdfMap::compute(const OccupancyBox& box) {
   return true;
 }
 
-bool EsdfMap::update(const OccupancyBox& box) {
+bool EsdfMap::update(const OccupancyBox& box) { return updateWithin(box, nullptr); }
+
+bool EsdfMap::update(const OccupancyBox& box, const std::vector<Region>& may_have_changed) {
+  return updateWithin(box, &may_have_changed);
+}
+
+bool EsdfMap::updateWithin(const OccupancyBox& box, const std::vector<Region>* regions) {
   if (!kept_ || !wellFormed(box) || box.size != size_ || box.resolution_m != resolution_m_) {
     return compute(box);
   }
@@ -510,25 +516,59 @@ bool EsdfMap::update(const OccupancyBox& box) {
   // every thread).
   const std::size_t cells = box.states.size();
   const std::size_t budget = last_update_.shifted ? cells : cells / kFullFraction;
-  const auto* now = reinterpret_cast<const std::uint8_t*>(box.states.data());
-  const std::uint8_t* kept = kept_states_.data();
-  changed_states_.clear();
-  for (std::size_t i = 0; i < cells;) {
-    const std::size_t n = std::min<std::size_t>(64, cells - i);
-    if (std::memcmp(now + i, kept + i, n) == 0) {
-      i += n;
-      continue;
-    }
-    for (const std::size_t end = i + n; i < end; ++i) {
-      if (now[i] != kept[i]) changed_states_.push_back(static_cast<std::uint32_t>(i));
-    }
-    if (changed_states_.size() > budget) return compute(box);
-  }
+  if (!collectChangedStates(box, budget, delta.isZero() ? regions : nullptr)) return compute(box);
   updateChanged(box, moved_windowed ? VoxelIndex::Zero() : delta);
   if (moved_windowed) {  // every cell may have moved: a copy must take the field whole
     last_update_.shifted = true;
     last_update_.changed_cells = cells;
     changed_cells_.clear();
+  }
+  return true;
+}
+
+bool EsdfMap::collectChangedStates(const OccupancyBox& box, std::size_t budget,
+                                   const std::vector<Region>* regions) {
+  const auto* now = reinterpret_cast<const std::uint8_t*>(box.states.data());
+  const std::uint8_t* kept = kept_states_.data();
+  changed_states_.clear();
+  // Appends the changed voxels of [i, end), 64 at a time.
+  const auto compare = [&](std::size_t i, std::size_t end) {
+    while (i < end) {
+      const std::size_t n = std::min<std::size_t>(64, end - i);
+      if (std::memcmp(now + i, kept + i, n) != 0) {
+        for (std::size_t j = i; j < i + n; ++j) {
+          if (now[j] != kept[j]) changed_states_.push_back(static_cast<std::uint32_t>(j));
+        }
+      }
+      i += n;
+    }
+  };
+  if (regions == nullptr) {
+    const std::size_t cells = box.states.size();
+    for (std::size_t i = 0; i < cells; i += 4096) {
+      compare(i, std::min(cells, i + 4096));
+      if (changed_states_.size() > budget) return false;
+    }
+    return true;
+  }
+  const auto ny = static_cast<std::size_t>(size_.y());
+  const auto nz = static_cast<std::size_t>(size_.z());
+  for (const Region& r : *regions) {
+    const Eigen::Vector3i lo = r.lo.cwiseMax(0);
+    const Eigen::Vector3i hi = r.hi.cwiseMin(size_);
+    if ((hi.array() <= lo.array()).any()) continue;
+    for (int x = lo.x(); x < hi.x(); ++x) {
+      for (int y = lo.y(); y < hi.y(); ++y) {
+        const std::size_t column = (static_cast<std::size_t>(x) * ny + static_cast<std::size_t>(y)) * nz;
+        compare(column + static_cast<std::size_t>(lo.z()), column + static_cast<std::size_t>(hi.z()));
+      }
+    }
+    if (changed_states_.size() > budget) return false;
+  }
+  if (regions->size() > 1) {  // overlapping regions list a voxel once
+    std::sort(changed_states_.begin(), changed_states_.end());
+    changed_states_.erase(std::unique(changed_states_.begin(), changed_states_.end()),
+                          changed_states_.end());
   }
   return true;
 }

@@ -270,7 +270,7 @@ VoxelIndex PlanningLayers::esdfBoxMin(const LocalWindow& window, const Eigen::Ve
   return box_min;
 }
 
-void PlanningLayers::fillEsdfBox(const EsdfJob& job) {
+bool PlanningLayers::fillEsdfBox(const EsdfJob& job) {
   const LocalWindow& window = *job.window;
   Eigen::Vector3i size;
   const VoxelIndex box_min = esdfBoxMin(window, job.body_W, &size);
@@ -283,6 +283,7 @@ void PlanningLayers::fillEsdfBox(const EsdfJob& job) {
                         job.submap_stamps.size() == kSubmaps &&
                         window.size == cells * kN;
   if (!in_place) esdf_box_.reset(box_min, size, window.resolution_m);
+  esdf_refilled_.clear();
   const LogOddsModel& model = window.model;
   // Fills the box voxels of window-relative [lo, hi) (clipped to the box).
   const auto fill = [&](const VoxelIndex& lo_window, const VoxelIndex& hi_window) {
@@ -313,16 +314,20 @@ void PlanningLayers::fillEsdfBox(const EsdfJob& job) {
           if (job.submap_stamps[i] <= esdf_box_clock_) continue;
           const VoxelIndex lo = VoxelIndex(sx, sy, sz).cwiseProduct(cells);
           fill(lo, lo + cells);
+          const VoxelIndex lo_box = window.min_index + lo - box_min;  // clipped by the ESDF
+          esdf_refilled_.push_back({lo_box, lo_box + cells});
         }
   }
   esdf_box_filled_ = true;
   esdf_box_window_ = window.min_index;
   esdf_box_clock_ = job.clock;
+  return in_place;
 }
 
 PlanningLayers::PublishedEsdf PlanningLayers::computeEsdf(const EsdfJob& job) {
-  fillEsdfBox(job);
-  const bool ok = esdf_.update(esdf_box_);
+  // Refilled in place, the box changed only in the refilled submaps: the ESDF compares it with
+  // its kept box there alone.
+  const bool ok = fillEsdfBox(job) ? esdf_.update(esdf_box_, esdf_refilled_) : esdf_.update(esdf_box_);
   PublishedEsdf published = ok ? publishEsdfCopy() : PublishedEsdf{};
   std::size_t bytes = esdf_box_.states.capacity() * sizeof(Occupancy) + esdf_.memoryBytes();
   for (const EsdfCopy& c : esdf_copies_) {

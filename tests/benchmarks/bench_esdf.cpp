@@ -227,7 +227,15 @@ void print(const Row& r, std::FILE* json, bool last) {
 
 /// The window's states after each frame of the default flight mapped at `res` over a
 /// 19 x 19 x 7 m window (the first `frames` frames).
-std::vector<OccupancyBox> streamedBoxes(double res, int frames) {
+/// The window's states after each streamed frame, and where they may have changed since the
+/// frame before: the window's submaps with a later state stamp (what a map engine knows; the
+/// ESDF box of mlmap_node is filled from the same stamps).
+struct Streamed {
+  std::vector<OccupancyBox> boxes;
+  std::vector<std::vector<EsdfMap::Region>> changed;  ///< per box, in its coordinates
+};
+
+Streamed streamedBoxes(double res, int frames) {
   const io::Scenario scenario = io::defaultScenario();
   MapConfig config;
   config.local_map.resolution_m = res;
@@ -235,21 +243,36 @@ std::vector<OccupancyBox> streamedBoxes(double res, int frames) {
   config.local_map.size_cells = {n, n, static_cast<int>(std::lround(7.0 / res / 5.0)) * 5};
   config.pipeline.planning_layers = false;
   MapEngine engine(config);
-  std::vector<OccupancyBox> boxes;
+  Streamed out;
   LocalWindow window;
+  std::uint64_t clock = 0;
   eval::FlightOptions options;
   options.max_frames = frames;
   options.progress = [&](int, int) {
-    engine.localMap().copyWindow(&window);
+    const LocalMap& local = engine.localMap();
+    local.copyWindow(&window);
     OccupancyBox box;
     box.reset(window.min_index, window.size, window.resolution_m);
     for (std::size_t i = 0; i < box.states.size(); ++i) {
       box.states[i] = window.model.state(window.log_odds[i]);
     }
-    boxes.push_back(std::move(box));
+    out.boxes.push_back(std::move(box));
+    std::vector<EsdfMap::Region> changed;
+    const Eigen::Vector3i cells = config.local_map.submap_cells();
+    const int half = LocalMapConfig::kSubmapsPerAxis / 2;
+    for (int x = -half; x <= half; ++x)
+      for (int y = -half; y <= half; ++y)
+        for (int z = -half; z <= half; ++z) {
+          const SubmapIndex m = local.centerSubmap() + SubmapIndex(x, y, z);
+          if (local.submapStateChangedAt(m) <= clock) continue;
+          const Eigen::Vector3i lo = Eigen::Vector3i(x + half, y + half, z + half).cwiseProduct(cells);
+          changed.push_back({lo, lo + cells});
+        }
+    out.changed.push_back(std::move(changed));
+    clock = local.changeClock();
   };
   eval::flyScenario(scenario, engine, options);
-  return boxes;
+  return out;
 }
 
 bool isObstacle(Occupancy s, UnknownAs unknown_as) {
@@ -306,8 +329,9 @@ std::unique_ptr<DynamicEDT3D> edtFor(const OccupancyBox& box, UnknownAs unknown_
 }
 #endif
 
-StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes,
-                 UnknownAs unknown_as, bool with_edt, int edt_compare_every) {
+StreamRow stream(const std::string& name, const Streamed& streamed, UnknownAs unknown_as,
+                 bool with_edt, bool with_hints, int edt_compare_every) {
+  const std::vector<OccupancyBox>& boxes = streamed.boxes;
   StreamRow row{name, toString(unknown_as)};
   EsdfConfig config;
   config.unknown_as = unknown_as;
@@ -339,7 +363,9 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
   for (std::size_t f = 1; f < boxes.size(); ++f) {
     const OccupancyBox& box = boxes[f];
     Clock::time_point start = Clock::now();
-    if (!incremental.update(box)) return row;
+    // Unmoved, both are told where the states may have changed (the window's changed submaps).
+    const bool hinted = with_hints && box.min_index == boxes[f - 1].min_index;
+    if (!(hinted ? incremental.update(box, streamed.changed[f]) : incremental.update(box))) return row;
     update_ms.push_back(msSince(start));
     start = Clock::now();
     grid.sync(incremental);
@@ -367,17 +393,23 @@ StreamRow stream(const std::string& name, const std::vector<OccupancyBox>& boxes
       continue;
     }
     same_box_ms.push_back(update_ms.back());
-    start = Clock::now();
+    // Its changes, listed beforehand (not timed: only its own work is), whereas update() finds
+    // ours itself.
+    std::vector<std::pair<Eigen::Vector3i, bool>> changes;  // voxel, obstacle now
     for (std::size_t i = 0; i < box.states.size(); ++i) {
       const bool now = isObstacle(box.states[i], unknown_as);
       if (now == isObstacle(before.states[i], unknown_as)) continue;
       const int x = static_cast<int>(i / (static_cast<std::size_t>(box.size.y()) * box.size.z()));
       const int y = static_cast<int>((i / box.size.z()) % box.size.y());
       const int z = static_cast<int>(i % box.size.z());
+      changes.emplace_back(Eigen::Vector3i(x, y, z), now);
+    }
+    start = Clock::now();
+    for (const auto& [v, now] : changes) {
       if (now) {
-        edt->occupyCell(x, y, z);
+        edt->occupyCell(v.x(), v.y(), v.z());
       } else {
-        edt->clearCell(x, y, z);
+        edt->clearCell(v.x(), v.y(), v.z());
       }
     }
     edt->update(true);
@@ -485,6 +517,7 @@ int main(int argc, char** argv) {
   bool with_edt = true;
   int edt_compare_every = 10;
   bool only_streamed = false;
+  bool with_hints = true;
   app.add_option("--frames", frames, "streamed frames of the default flight (0: none)")
       ->check(CLI::Range(0, 100000))->capture_default_str();
   app.add_flag("!--no-dynamicedt3d", with_edt, "skip DynamicEDT3D in the streamed part");
@@ -492,6 +525,8 @@ int main(int argc, char** argv) {
                  "compare with DynamicEDT3D's distances every N of its updates (0: never)")
       ->capture_default_str();
   app.add_flag("--streamed-only", only_streamed, "skip the single-box part");
+  app.add_flag("!--no-hints", with_hints,
+               "compare each streamed box whole, not only in the window's changed submaps");
   CLI11_PARSE(app, argc, argv);
 
   const sim::World world = sim::World::defaultRoom();
@@ -554,11 +589,11 @@ int main(int argc, char** argv) {
                 "res", "unknown", "n", "move", "full", "states", "median", "p99", "max",
                 "median", "p99", "diff", "n", "median", "p99", "ours", "ratio");
     for (const double res : {0.2, 0.1}) {
-      const std::vector<OccupancyBox> boxes = streamedBoxes(res, frames);
+      const Streamed streamed = streamedBoxes(res, frames);
       char name[32];
       std::snprintf(name, sizeof(name), "%.1f m", res);
       for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
-        stream_rows.push_back(stream(name, boxes, policy, with_edt, edt_compare_every));
+        stream_rows.push_back(stream(name, streamed, policy, with_edt, with_hints, edt_compare_every));
         printStream(stream_rows.back(), nullptr, false);
       }
     }

@@ -826,6 +826,68 @@ TEST(Esdf, IncrementalUpdatesEqualAFullRecomputeAfterEveryStep) {
   }
 }
 
+// update() told where the states may have changed (as the map engine tells it: the submaps it
+// refilled) compares the box with the kept one only there, and still equals a full compute()
+// bit for bit: blocks of 5^3 voxels holding a change, one of them listed twice, plus unchanged
+// ones. When the box moved the hint speaks of the old place and is ignored: given an empty
+// list then, the update must still find every change.
+TEST(Esdf, UpdatesToldWhereStatesChangedEqualAFullRecompute) {
+  const Eigen::Vector3i size(31, 27, 17);
+  std::mt19937 rng(11);
+  for (const bool envelope_only : {false, true}) {
+    for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
+      SCOPED_TRACE(std::string(toString(policy)) + (envelope_only ? ", envelope code" : ""));
+      const Eigen::Vector3i world_size = size * 2 + Eigen::Vector3i::Ones();
+      ChangingWorld world(world_size, static_cast<std::uint32_t>(rng()));
+      EsdfMap incremental(config(0.65, policy));
+      EsdfMap full(config(0.65, policy));
+      incremental.setEnvelopeOnly(envelope_only);
+      full.setEnvelopeOnly(envelope_only);
+      VoxelIndex min_index = VoxelIndex::Zero();
+      OccupancyBox before = world.box(min_index, size, 0.1);
+      ASSERT_TRUE(incremental.compute(before));
+      std::size_t hinted = 0;
+      std::size_t moved = 0;
+      for (int step = 0; step < 40; ++step) {
+        world.step();
+        if (step % 5 == 4) {  // slide by a voxel or two along x and y
+          min_index += VoxelIndex(1 + step % 2, step % 3 == 0 ? 1 : -1, 0);
+          min_index = min_index.cwiseMax(0).cwiseMin(world_size - size);
+        }
+        const OccupancyBox box = world.box(min_index, size, 0.1);
+        std::vector<EsdfMap::Region> regions;
+        if (box.min_index == before.min_index) {
+          constexpr int kBlock = 5;
+          for (int x = 0; x < size.x(); x += kBlock)
+            for (int y = 0; y < size.y(); y += kBlock)
+              for (int z = 0; z < size.z(); z += kBlock) {
+                const Eigen::Vector3i lo(x, y, z);
+                const Eigen::Vector3i hi = lo + Eigen::Vector3i::Constant(kBlock);  // clipped
+                bool changed = (x + y + z) % 3 == 0;                          // some unchanged too
+                for (int i = x; i < std::min(hi.x(), size.x()) && !changed; ++i)
+                  for (int j = y; j < std::min(hi.y(), size.y()) && !changed; ++j)
+                    for (int k = z; k < std::min(hi.z(), size.z()) && !changed; ++k) {
+                      const VoxelIndex g = box.min_index + VoxelIndex(i, j, k);
+                      changed = box.at(g) != before.at(g);
+                    }
+                if (changed) regions.push_back({lo, hi});
+              }
+          if (!regions.empty()) regions.push_back(regions.front());  // overlapping
+          ++hinted;
+        } else {
+          ++moved;
+        }
+        ASSERT_TRUE(incremental.update(box, regions));
+        ASSERT_TRUE(full.compute(box));
+        expectSameField(incremental, full, "step " + std::to_string(step));
+        before = box;
+      }
+      EXPECT_GT(hinted, 20u);
+      EXPECT_GT(moved, 3u);
+    }
+  }
+}
+
 // A box moving along x and y, by less than the clamp and by more, while the world changes
 // under it: with the windowed passes the move goes through moveWindowed() (shifted, not
 // computed whole), and the field and unknown bits equal a full compute() after every step,

@@ -219,6 +219,18 @@ class EsdfMap {
   /// not list the moved cells). Same return value and failure behaviour as compute().
   /// Single-threaded except in the fallback.
   [[nodiscard]] bool update(const OccupancyBox& box);
+  /// A part of a box, voxels [lo, hi) in box coordinates (from the box's min_index).
+  struct Region {
+    Eigen::Vector3i lo;  ///< first voxel, inclusive
+    Eigen::Vector3i hi;  ///< one past the last voxel
+  };
+  /// As update(box), where the caller knows where states may have changed since the last
+  /// compute() or update(): only inside `may_have_changed` (clipped to the box; overlaps are
+  /// allowed). A map engine knows this from its submaps' change stamps, and the box is then
+  /// compared with the kept one only there instead of whole (at 0.1 m, 5 MB of memory read per
+  /// frame). States that changed elsewhere would be missed: the promise is the caller's. When
+  /// the box moved, the whole box is compared (the hint speaks of the old place).
+  [[nodiscard]] bool update(const OccupancyBox& box, const std::vector<Region>& may_have_changed);
   /// What the last compute() or update() did.
   [[nodiscard]] const UpdateStats& lastUpdate() const { return last_update_; }
   /// Box offsets (OccupancyBox order) of the cells whose value or unknown bit the last update()
@@ -353,6 +365,12 @@ class EsdfMap {
   void shiftKept(const VoxelIndex& delta);
   /// Clears the marks of the y and z lines that update() transforms again.
   void resetLineMarks();
+  /// update()'s common part; `regions` null: the whole box may have changed.
+  [[nodiscard]] bool updateWithin(const OccupancyBox& box, const std::vector<Region>* regions);
+  /// Lists in changed_states_ the voxels of `box` whose state differs from the kept one, inside
+  /// `regions` (null: everywhere); false once more than `budget` did.
+  [[nodiscard]] bool collectChangedStates(const OccupancyBox& box, std::size_t budget,
+                                          const std::vector<Region>* regions);
   /// update() for a box moved by `delta` (delta.z() == 0) where the windowed passes apply:
   /// brings the map to B', the new box's geometry with the kept states where the boxes overlap
   /// and the new box's states elsewhere. The new x slabs are computed whole; in the kept ones

@@ -80,8 +80,9 @@ class PlanningLayers {
     std::vector<std::uint64_t> submap_stamps;
   };
   /// Fills esdf_box_ from the job's window: only the submaps whose states changed since the
-  /// last fill when the window and the box are where they were, else all of it.
-  void fillEsdfBox(const EsdfJob& job);
+  /// last fill when the window and the box are where they were (returns true, and lists their
+  /// parts of the box in esdf_refilled_), else all of it (returns false).
+  bool fillEsdfBox(const EsdfJob& job);
   /// A published field and its query copy (nullptr unless esdf.query_grid).
   struct PublishedEsdf {
     std::shared_ptr<const EsdfMap> map;
@@ -162,6 +163,7 @@ class PlanningLayers {
   bool esdf_box_filled_ = false;                     // esdf_box_ holds a window's states
   VoxelIndex esdf_box_window_ = VoxelIndex::Zero();  // min_index of the window it was filled from
   std::uint64_t esdf_box_clock_ = 0;                 // that window's change clock
+  std::vector<EsdfMap::Region> esdf_refilled_;       // parts of the box the last fill rewrote
 
   mutable std::mutex stats_mutex_;
   PlanningStats stats_;
