@@ -426,7 +426,7 @@ TEST(LocalMap, AWindowMoveUnmarksTheColumnsItEmptied) {
           ++occupied;
         }
     std::size_t listed = 0;
-    map.forEachOccupied([&](const VoxelIndex&, float) { ++listed; });
+    map.forEachOccupied([&](const VoxelIndex&, double) { ++listed; });
     EXPECT_EQ(holding.size(), expected_columns) << step;
     EXPECT_EQ(map.markedColumns(), holding.size()) << step;
     EXPECT_EQ(listed, occupied) << step;
