@@ -826,6 +826,10 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
       auto* old = kept_pass1 + static_cast<std::size_t>(x) * slab + row;
       int* lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz + z_lo;
       int* hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz + z_lo;
+      // Most of the row's results are unchanged: checked first without a branch (it vectorises).
+      int differ = 0;
+      for (int z = 0; z < n; ++z) differ |= static_cast<int>(fresh[z] != old[z]);
+      if (differ == 0) return;
       for (int z = 0; z < n; ++z) {
         if (fresh[z] != old[z]) {
           old[z] = static_cast<std::remove_reference_t<decltype(old[z])>>(fresh[z]);
