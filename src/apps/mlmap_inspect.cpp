@@ -104,7 +104,7 @@ struct Received {
   mlmap::dds::mlmap_msgs::Status_ status;
   std::vector<Eigen::Vector3d> trajectory_W;
   std::uint64_t malformed = 0;
-  std::atomic<int> matched_readers{0};  ///< readers that have matched a publisher (no mutex)
+  std::atomic<bool> node_found{false};  ///< a reader matched a publisher of the node (no mutex)
 
   /// Counts a message of `bytes` bytes with `points` points / cells on topic `name`, and its age
   /// from `stamp`; call with `mutex` held.
@@ -128,7 +128,7 @@ struct Subscription {
   std::unique_ptr<mlmap::dds::TakeReaders> readers;
   std::vector<std::string> expected;
   std::string ns;  ///< the node's DDS namespace
-  std::atomic<int>* matched_readers = nullptr;  ///< Received's count of readers that matched
+  std::atomic<bool>* node_found = nullptr;  ///< Received's: set when a reader matches
 
   /// Deletes the readers and then their listeners: no more callbacks from here on.
   void close() {
@@ -144,10 +144,9 @@ struct Subscription {
     expected.push_back(name);
     readers->add<PubSubType>(
         mlmap::dds::ddsTopicName(absolute ? "" : ns, name), qos, std::move(sink),
-        [name, counter = matched_readers, first = std::make_shared<bool>(true)](int publishers) {
+        [name, found = node_found](int publishers) {
           spdlog::info("{}: {} publisher(s) matched", name, publishers);
-          if (publishers > 0 && *first) counter->fetch_add(1);
-          if (publishers > 0) *first = false;
+          if (publishers > 0) found->store(true);
         });
   }
 };
@@ -246,7 +245,7 @@ void subscribeStatusAndTf(const mlmap::dds::DdsConfig& dds, Subscription* sub, R
 Subscription subscribe(const Options& o, const mlmap::dds::DdsConfig& dds, Received* rx) {
   Subscription sub;
   sub.ns = dds.ns;
-  sub.matched_readers = &rx->matched_readers;
+  sub.node_found = &rx->node_found;
   sub.participant = mlmap::dds::createParticipant(dds, "mlmap_inspect");
   fdds::Subscriber* subscriber = sub.participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
   sub.readers = std::make_unique<mlmap::dds::TakeReaders>(subscriber, [rx](const std::string& what) {
@@ -453,7 +452,7 @@ int report(const Options& o, const Received& rx, const std::vector<std::string>&
   printTopics(rx);
   for (const std::string& name : missing) spdlog::warn("{:28} nothing received", name);
   for (const std::string& name : missing_listed) spdlog::error("{:28} expected, nothing received", name);
-  if (rx.matched_readers.load() == 0) {
+  if (!rx.node_found.load()) {
     spdlog::error("no publisher of mlmap_node matched any reader: the node was not discovered (is it "
                   "running, on this domain and namespace, in reach of the discovery range, with the "
                   "same security?)");

@@ -82,6 +82,16 @@ inline std::uint64_t zeroBytes8(const std::uint8_t* p) {
 
 // ---- Pass 1 (x): two sweeps of the 1D distance to the nearest voxel of the other kind ----
 
+/// A voxel's kind, all that pass 1 reads of its state: an obstacle when occupied, or unknown
+/// with `unknown_is_obstacle` (1: unknown as occupied, 0: as free). Branch-free, so that the
+/// sweeps vectorise.
+inline __attribute__((always_inline)) bool isObstacle(std::int32_t state,
+                                                      std::int32_t unknown_is_obstacle) {
+  constexpr auto kUnknown = static_cast<std::int32_t>(Occupancy::kUnknown);
+  constexpr auto kOccupied = static_cast<std::int32_t>(Occupancy::kOccupied);
+  return ((state == kOccupied ? 1 : 0) | ((state == kUnknown ? 1 : 0) & unknown_is_obstacle)) != 0;
+}
+
 /// Forward sweep over `n` consecutive voxels (a run of z, and of y when rows are blocked) at x:
 /// updates the last non-obstacle / obstacle x of each and writes the signed distance to the last
 /// voxel of the other kind (negative for obstacles). Branch-free, so it vectorises.
@@ -91,12 +101,8 @@ inline __attribute__((always_inline)) void sweepForward(const std::uint8_t* __re
                                                         std::int32_t* __restrict last_obstacle,
                                                         int n, std::int32_t x,
                                                         std::int32_t unknown_is_obstacle) {
-  constexpr auto kUnknown = static_cast<std::uint8_t>(Occupancy::kUnknown);
-  constexpr auto kOccupied = static_cast<std::uint8_t>(Occupancy::kOccupied);
   for (int z = 0; z < n; ++z) {
-    const std::int32_t state = states[z];
-    const std::int32_t is_unknown = state == kUnknown ? 1 : 0;
-    const bool obstacle = ((state == kOccupied ? 1 : 0) | (is_unknown & unknown_is_obstacle)) != 0;
+    const bool obstacle = isObstacle(states[z], unknown_is_obstacle);
     const std::int32_t lf = last_free[z];
     const std::int32_t lo = last_obstacle[z];
     last_free[z] = obstacle ? lf : x;
@@ -764,13 +770,10 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
   // after a shift, whose bits were not shifted). Most of a frame's changes are unknown voxels
   // seen free: with unknown as free, no kind changes there, and no row is swept for them.
   const std::int32_t unknown_is_obstacle = config_.unknown_as == UnknownAs::kOccupied ? 1 : 0;
-  constexpr auto kOccupied = static_cast<std::uint8_t>(Occupancy::kOccupied);
-  const auto obstacle = [&](std::uint8_t state) {
-    return state == kOccupied || (state == kUnknown && unknown_is_obstacle != 0);
-  };
   // A kept voxel a shift left unseen (kUnseenState) has no pass 1 result yet: always swept.
   const auto kind_changed = [&](std::uint8_t now, std::uint8_t before) {
-    return before == kUnseenState || obstacle(now) != obstacle(before);
+    return before == kUnseenState ||
+           isObstacle(now, unknown_is_obstacle) != isObstacle(before, unknown_is_obstacle);
   };
   std::uint8_t* kept = kept_states_.data();
   row_z_lo_.assign(static_cast<std::size_t>(ny), nz);

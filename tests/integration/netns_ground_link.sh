@@ -88,9 +88,10 @@ sleep 3   # the last frames' layers cross
 kill -INT $rejoin; wait $rejoin; rejoin_rc=$?
 sleep 2   # the node is idle now: only what is latched can reach a newcomer
 # Discovery on a loaded machine can take seconds: up to 30 s, ending as soon as the layers came.
+latched_start=$SECONDS
 "${ground_inspect[@]}" --out "$out/latched" --duration 30 --until-expected \
   --expect mlmap/grid,mlmap/global_map/occupied,mlmap/status > "$out/latched.log" 2>&1
-latched_rc=$?
+latched_rc=$? latched_s=$((SECONDS - latched_start))
 kill -INT $node; wait $node; node_rc=$?
 
 for f in publisher node late rejoin latched; do echo "== $f"; cat "$out/$f.log"; done
@@ -100,6 +101,7 @@ fail() { echo "FAIL: $*"; exit 1; }
 [ $late_rc -eq 0 ] || fail "a late-joining ground station did not get every layer"
 [ $rejoin_rc -eq 0 ] || fail "a ground station rejoining did not get every layer"
 [ $latched_rc -eq 0 ] || fail "a ground station joining after the flight did not get the grid and global map"
+[ $latched_s -lt 30 ] || fail "--until-expected: the latched station did not stop once its layers came (${latched_s} s)"
 done_line=$(grep 'done: ' "$out/node.log")
 mapped=$(sed -n 's/.*done: \([0-9]*\) frames mapped (\([0-9]*\) dropped.*/\1 \2/p' <<<"$done_line")
 [ "$mapped" = "$frames 0" ] || fail "onboard mapping was disturbed: $done_line"

@@ -63,6 +63,8 @@ echo "without peers: inspect $without_rc; with peers: inspect $with_rc, node $no
 [ $without_rc -ne 0 ] || fail "the status crossed without static peers: the test does not isolate them"
 grep -q "mlmap/status *expected, nothing received" "$out/inspect_without.log" ||
   fail "without static peers the ground station failed for another reason than no discovery"
+grep -q "the node was not discovered" "$out/inspect_without.log" ||
+  fail "without static peers the ground station did not say that it found no node"
 [ $with_rc -eq 0 ] || fail "ROS_STATIC_PEERS=10.78.0.2: the ground station got no status"
 [ $node_rc -eq 0 ] || fail "mlmap_node did not stop cleanly"
 echo "OK: the static peer carried discovery over a link without multicast"

@@ -20,6 +20,14 @@ LocalMapConfig smallMap() {
   return c;
 }
 
+/// Calls f(offset) for every voxel offset (x, y, z) of a window of `size` voxels, z fastest.
+template <typename F>
+void forEachOffset(const Eigen::Vector3i& size, F&& f) {
+  for (int x = 0; x < size.x(); ++x)
+    for (int y = 0; y < size.y(); ++y)
+      for (int z = 0; z < size.z(); ++z) f(VoxelIndex(x, y, z));
+}
+
 /// Within 6 voxels (z within 2). The draws are sequenced: the order in which a call's arguments
 /// are evaluated is unspecified, and gcc and clang would otherwise fly different paths.
 VoxelIndex randomOffset(std::mt19937& rng) {
@@ -369,12 +377,9 @@ TEST(LocalMap, RecycledSubmapsStartUnknownAfterAShift) {
   // Fill the whole window with free and occupied voxels.
   std::vector<VoxelIndex> hits;
   std::vector<VoxelIndex> frees;
-  for (int x = 0; x < 10; ++x)
-    for (int y = 0; y < 15; ++y)
-      for (int z = 0; z < 5; ++z) {
-        const VoxelIndex g = map.minIndex() + VoxelIndex(x, y, z);
-        ((x + y + z) % 4 == 0 ? hits : frees).push_back(g);
-      }
+  forEachOffset(config.size_cells, [&](const VoxelIndex& o) {
+    (o.sum() % 4 == 0 ? hits : frees).push_back(map.minIndex() + o);
+  });
   map.integrate(makeBatch({0.5, 0.5, 0.5}, hits, frees));
   const VoxelIndex old_min = map.minIndex();
   // Leave the centre submap diagonally: a 26-neighbour shift in x, y and z.
@@ -382,19 +387,17 @@ TEST(LocalMap, RecycledSubmapsStartUnknownAfterAShift) {
   EXPECT_EQ(map.centerSubmap(), SubmapIndex(1, 1, 1));
   EXPECT_EQ(map.minIndex(), old_min + VoxelIndex(2, 3, 1));
   std::size_t unknown = 0;
-  for (int x = 0; x < 10; ++x)
-    for (int y = 0; y < 15; ++y)
-      for (int z = 0; z < 5; ++z) {
-        const VoxelIndex g = map.minIndex() + VoxelIndex(x, y, z);
-        const bool was_inside = (g - old_min).minCoeff() >= 0 && g.x() - old_min.x() < 10 &&
-                                g.y() - old_min.y() < 15 && g.z() - old_min.z() < 5;
-        if (!was_inside) {
-          EXPECT_EQ(map.state(g), Occupancy::kUnknown) << "stale value at " << g.transpose();
-          ++unknown;
-        } else {
-          EXPECT_NE(map.state(g), Occupancy::kUnknown);
-        }
-      }
+  forEachOffset(config.size_cells, [&](const VoxelIndex& o) {
+    const VoxelIndex g = map.minIndex() + o;
+    const bool was_inside = (g - old_min).minCoeff() >= 0 && g.x() - old_min.x() < 10 &&
+                            g.y() - old_min.y() < 15 && g.z() - old_min.z() < 5;
+    if (!was_inside) {
+      EXPECT_EQ(map.state(g), Occupancy::kUnknown) << "stale value at " << g.transpose();
+      ++unknown;
+    } else {
+      EXPECT_NE(map.state(g), Occupancy::kUnknown);
+    }
+  });
   EXPECT_EQ(unknown, 10u * 15u * 5u - 8u * 12u * 4u);
 }
 
@@ -409,22 +412,18 @@ TEST(LocalMap, AWindowMoveUnmarksTheColumnsItEmptied) {
   GlobalMap global(config.submap_cells(), 1.0);
   map.recenter({0.5, 0.5, 0.5}, &global);
   std::vector<VoxelIndex> hits;
-  for (int x = 0; x < 10; ++x)
-    for (int y = 0; y < 15; ++y)
-      for (int z = 0; z < 5; ++z) {
-        if ((x + y + z) % 4 == 0) hits.push_back(map.minIndex() + VoxelIndex(x, y, z));
-      }
+  forEachOffset(config.size_cells, [&](const VoxelIndex& o) {
+    if (o.sum() % 4 == 0) hits.push_back(map.minIndex() + o);
+  });
   map.integrate(makeBatch({0.5, 0.5, 0.5}, hits, {}));
   const auto check = [&](const char* step, std::size_t expected_columns) {
     std::set<std::pair<int, int>> holding;
     std::size_t occupied = 0;
-    for (int x = 0; x < 10; ++x)
-      for (int y = 0; y < 15; ++y)
-        for (int z = 0; z < 5; ++z) {
-          if (map.state(map.minIndex() + VoxelIndex(x, y, z)) != Occupancy::kOccupied) continue;
-          holding.insert({x, y});
-          ++occupied;
-        }
+    forEachOffset(config.size_cells, [&](const VoxelIndex& o) {
+      if (map.state(map.minIndex() + o) != Occupancy::kOccupied) return;
+      holding.insert({o.x(), o.y()});
+      ++occupied;
+    });
     std::size_t listed = 0;
     map.forEachOccupied([&](const VoxelIndex&, double) { ++listed; });
     EXPECT_EQ(holding.size(), expected_columns) << step;

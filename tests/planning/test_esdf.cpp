@@ -978,6 +978,56 @@ TEST(Esdf, OneChangedVoxelTouchesOnlyLinesWithinTheClamp) {
   expectSameField(map, full, "after a malformed box");
 }
 
+// A change that keeps a voxel's kind (obstacle or not, all the x pass reads) sweeps no row and
+// transforms no line: with unknown as free, unknown seen free only flips unknown bits; with
+// unknown as occupied, the same voxel becoming free is a real change. Either way the field
+// equals a full compute.
+TEST(Esdf, AChangeThatKeepsTheKindSweepsNoRow) {
+  for (const UnknownAs policy : {UnknownAs::kFree, UnknownAs::kOccupied}) {
+    SCOPED_TRACE(toString(policy));
+    OccupancyBox box;
+    box.reset({0, 0, 0}, {40, 30, 20}, 0.1, Occupancy::kFree);
+    for (int x = 10; x < 30; ++x) box.at({x, 15, 10}) = Occupancy::kOccupied;
+    for (int y = 0; y < 30; ++y) box.at({35, y, 5}) = Occupancy::kUnknown;
+    EsdfMap map(config(0.5, policy));
+    ASSERT_TRUE(map.update(box));
+    for (int y = 0; y < 30; ++y) box.at({35, y, 5}) = Occupancy::kFree;  // seen free
+    ASSERT_TRUE(map.update(box));
+    const EsdfMap::UpdateStats& u = map.lastUpdate();
+    EXPECT_FALSE(u.full);
+    EXPECT_EQ(u.changed_states, 30u);
+    if (policy == UnknownAs::kFree) {
+      EXPECT_EQ(u.rows_swept, 0u);
+      EXPECT_EQ(u.y_lines, 0u);
+      EXPECT_EQ(u.z_lines, 0u);
+      EXPECT_EQ(u.changed_cells, 30u);  // the unknown bits
+    } else {
+      EXPECT_EQ(u.rows_swept, 30u);
+      EXPECT_GT(u.z_lines, 0u);
+    }
+    EsdfMap full(config(0.5, policy));
+    ASSERT_TRUE(full.compute(box));
+    expectSameField(map, full, "unknown seen free");
+  }
+}
+
+// The hint is taken at its word where the box stayed: a change outside the regions named is not
+// looked for (that is the saving), and is found once a region names it.
+TEST(Esdf, AnUnmovedUpdateComparesOnlyTheRegionsNamed) {
+  OccupancyBox box;
+  box.reset({0, 0, 0}, {30, 20, 10}, 0.1, Occupancy::kFree);
+  EsdfMap map(config(0.5, UnknownAs::kOccupied));
+  ASSERT_TRUE(map.update(box));
+  box.at({20, 10, 5}) = Occupancy::kOccupied;
+  ASSERT_TRUE(map.update(box, {{{0, 0, 0}, {10, 20, 10}}}));  // names another part only
+  EXPECT_EQ(map.lastUpdate().changed_states, 0u);
+  ASSERT_TRUE(map.update(box, {{{15, 5, 0}, {25, 15, 10}}}));
+  EXPECT_EQ(map.lastUpdate().changed_states, 1u);
+  EsdfMap full(config(0.5, UnknownAs::kOccupied));
+  ASSERT_TRUE(full.compute(box));
+  expectSameField(map, full, "after the region named it");
+}
+
 /// Points for comparing queries: uniform over the box and a tenth beyond each face, the box's
 /// corners, cell centres, points within half a voxel of the faces, and points that are no
 /// points (NaN, huge).
