@@ -2,6 +2,7 @@
 
 #include "mlmap/planning/esdf_window_kernel.h"
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -915,6 +916,26 @@ void EsdfMap::updateLinesEnvelope(int reach, Scratch* scratch) {
   }
 }
 
+namespace {
+
+/// Lanes of one group of updateLinesWindowed(): one vector of 16-bit values.
+constexpr int kGroupLanes = 16;
+
+/// Orders `lines` by the start of their changed range into `sorted` (a counting sort over the
+/// `n` possible starts, stable): lines taken 16 at a time then share most of their ranges.
+template <typename Line>
+void sortByStart(const std::vector<Line>& lines, int n, std::vector<Line>* sorted,
+                 std::vector<int>* starts) {
+  std::vector<int>& at = *starts;
+  at.assign(static_cast<std::size_t>(n) + 1, 0);
+  for (const Line& l : lines) ++at[static_cast<std::size_t>(l.lo) + 1];
+  for (std::size_t i = 1; i < at.size(); ++i) at[i] += at[i - 1];
+  sorted->resize(lines.size());
+  for (const Line& l : lines) (*sorted)[static_cast<std::size_t>(at[static_cast<std::size_t>(l.lo)]++)] = l;
+}
+
+}  // namespace
+
 void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
   const int nx = size_.x();
   const int ny = size_.y();
@@ -922,123 +943,151 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
   const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
   UpdateStats& u = last_update_;
   esdf_kernel::WindowBuffers* buffers = &scratch->window;
-  std::vector<int>& lanes = scratch->lanes;
-  // Pass 2: per x slab, the y lines of the z span of the marked ones side by side (one lane
-  // each, contiguous in pass1_) over the union of the marked ranges. Each marked lane's outputs
-  // within its own range are exact (a part of a line, see above); the unmarked lanes of the
-  // span are transformed too (the same code, no cost to speak of) but not read back: their
-  // inputs did not change, nor do their results. Changed results mark their z lines.
+  std::vector<MarkedLine>& marked = scratch->marked;
+  std::vector<MarkedLine>& sorted = scratch->sorted;
+  constexpr std::size_t kWidth = kGroupLanes;
+  const auto inf = static_cast<std::int16_t>(inf_);
+  // The marked lines of the whole box, ordered by the start of their changed range and taken
+  // 16 at a time, side by side (one lane each) over the union of the group's ranges: a group's
+  // lines come from any slab, so that few lanes are idle and the union stays close to each
+  // line's own range. Each line's outputs within its own range are exact (a part of a line,
+  // see above).
+
+  // Pass 2, the marked y lines; changed results mark their z lines.
+  marked.clear();
   for (int x = 0; x < nx; ++x) {
-    const int* dirty_lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz;
-    const int* dirty_hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz;
-    int lo = ny;
-    int hi = -1;
-    int z_first = nz;
-    int z_last = -1;
+    const std::size_t row = static_cast<std::size_t>(x) * static_cast<std::size_t>(nz);
     for (int z = 0; z < nz; ++z) {
-      if (dirty_hi[z] < dirty_lo[z]) continue;
-      ++u.y_lines;
-      z_first = std::min(z_first, z);
-      z_last = z;
-      lo = std::min(lo, dirty_lo[z]);
-      hi = std::max(hi, dirty_hi[z]);
+      const int lo = dirty_y_lo_[row + static_cast<std::size_t>(z)];
+      const int hi = dirty_y_hi_[row + static_cast<std::size_t>(z)];
+      if (hi >= lo) marked.push_back({x, z, lo, hi});
     }
-    if (z_last < 0) continue;
+  }
+  u.y_lines = marked.size();
+  sortByStart(marked, ny, &sorted, &scratch->starts);
+  // The x pass's signed distance (8 bits, indexed by its byte) -> the y pass's input: the
+  // signed square, or +-inf.
+  std::array<std::int16_t, 256> square{};
+  for (std::size_t byte = 0; byte < square.size(); ++byte) {
+    const auto v = static_cast<std::int8_t>(static_cast<std::uint8_t>(byte));
+    const int a = std::abs(static_cast<int>(v));
+    const int sq = a <= cap_d_ ? a * a : inf_;
+    square[byte] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
+  }
+  for (std::size_t g = 0; g < sorted.size(); g += kWidth) {
+    const std::size_t count = std::min(kWidth, sorted.size() - g);
+    const MarkedLine* group = sorted.data() + g;
+    int hi = -1;
+    for (std::size_t l = 0; l < count; ++l) hi = std::max(hi, group[l].hi);
+    const int lo = group[0].lo;  // sorted by start
     const int begin = std::max(0, lo - 2 * reach);
     const int end = std::min(ny, hi + 2 * reach + 1);
-    const int count = z_last - z_first + 1;
-    // Across a multiple of 16 lanes (+inf in the extra ones): the sweeps run in whole vectors.
-    const int padded = esdf_kernel::paddedLanes(count);
-    const auto width = static_cast<std::size_t>(padded);
-    const std::size_t n = static_cast<std::size_t>(end - begin) * width;
-    if (buffers->lines.size() < n) buffers->lines.resize(n);
+    const auto span = static_cast<std::size_t>(end - begin);
+    if (buffers->lines.size() < span * kWidth) buffers->lines.resize(span * kWidth);
     std::int16_t* values = buffers->lines.data();
-    const std::int8_t* in = pass1_narrow_.data() + static_cast<std::size_t>(x) * slab +
-                            static_cast<std::size_t>(z_first);
-    esdf_kernel::squareDistances(in + static_cast<std::size_t>(begin) * nz, static_cast<std::size_t>(nz),
-                                 end - begin, count, width, cap_sq_, cap_d_, values);
+    for (std::size_t l = 0; l < kWidth; ++l) {
+      if (l >= count) {  // idle lane: +inf
+        for (std::size_t i = 0; i < span; ++i) values[i * kWidth + l] = inf;
+        continue;
+      }
+      const std::int8_t* in = pass1_narrow_.data() + static_cast<std::size_t>(group[l].x) * slab +
+                              static_cast<std::size_t>(begin) * static_cast<std::size_t>(nz) +
+                              static_cast<std::size_t>(group[l].across);
+      for (std::size_t i = 0; i < span; ++i) {
+        values[i * kWidth + l] = square[static_cast<std::uint8_t>(in[i * static_cast<std::size_t>(nz)])];
+      }
+    }
     // Read back over [lo - reach, hi + reach] only: the window runs there alone.
     const int out_begin = std::max(0, lo - reach) - begin;
     const int out_end = std::min(ny, hi + reach + 1) - begin;
-    esdf_kernel::transformLines(values, end - begin, padded, out_begin, out_end, cap_sq_, cap_d_,
-                                buffers);
-    std::int16_t* slab_values = pass2_narrow_.data() + static_cast<std::size_t>(x) * slab;
-    int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
-    int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
-    for (int z = z_first; z <= z_last; ++z) {
-      if (dirty_hi[z] < dirty_lo[z]) continue;
-      const std::size_t l = static_cast<std::size_t>(z - z_first);
-      const int y_end = std::min(ny, dirty_hi[z] + reach + 1);
-      for (int y = std::max(0, dirty_lo[z] - reach); y < y_end; ++y) {
-        std::int16_t& old = slab_values[static_cast<std::size_t>(y) * nz + z];
-        const std::int16_t fresh = values[static_cast<std::size_t>(y - begin) * width + l];
+    esdf_kernel::transformLines(values, end - begin, kGroupLanes, out_begin, out_end, cap_sq_,
+                                cap_d_, buffers);
+    for (std::size_t l = 0; l < count; ++l) {
+      const MarkedLine& line = group[l];
+      const auto x = static_cast<std::size_t>(line.x);
+      std::int16_t* slab_values = pass2_narrow_.data() + x * slab + static_cast<std::size_t>(line.across);
+      int* mark_lo = dirty_z_lo_.data() + x * static_cast<std::size_t>(ny);
+      int* mark_hi = dirty_z_hi_.data() + x * static_cast<std::size_t>(ny);
+      const int y_end = std::min(ny, line.hi + reach + 1);
+      for (int y = std::max(0, line.lo - reach); y < y_end; ++y) {
+        std::int16_t& old = slab_values[static_cast<std::size_t>(y) * static_cast<std::size_t>(nz)];
+        const std::int16_t fresh = values[static_cast<std::size_t>(y - begin) * kWidth + l];
         if (fresh != old) {
           old = fresh;
-          mark_lo[y] = std::min(mark_lo[y], z);
-          mark_hi[y] = std::max(mark_hi[y], z);
+          mark_lo[y] = std::min(mark_lo[y], line.across);
+          mark_hi[y] = std::max(mark_hi[y], line.across);
         }
       }
     }
   }
 
-  // Pass 3: per x slab, the marked z lines side by side, into the field (the metres table is
-  // there: windowFits() keeps 2 inf_ + 1 below its limit).
-  const float* table = metres_table_.data() + inf_;
+  // Pass 3, the marked z lines, into the field (the metres table is there: windowFits() keeps
+  // 2 inf_ + 1 below its limit). A z line is contiguous: the group's lines are copied one
+  // after another, then transposed to lie side by side (and back).
+  marked.clear();
   for (int x = 0; x < nx; ++x) {
-    const int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
-    const int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
-    lanes.clear();
-    int lo = nz;
-    int hi = -1;
+    const std::size_t row = static_cast<std::size_t>(x) * static_cast<std::size_t>(ny);
     for (int y = 0; y < ny; ++y) {
-      if (mark_hi[y] < mark_lo[y]) continue;
-      lanes.push_back(y);
-      lo = std::min(lo, mark_lo[y]);
-      hi = std::max(hi, mark_hi[y]);
+      const int lo = dirty_z_lo_[row + static_cast<std::size_t>(y)];
+      const int hi = dirty_z_hi_[row + static_cast<std::size_t>(y)];
+      if (hi >= lo) marked.push_back({x, y, lo, hi});
     }
-    if (lanes.empty()) continue;
-    u.z_lines += lanes.size();
+  }
+  u.z_lines = marked.size();
+  sortByStart(marked, nz, &sorted, &scratch->starts);
+  const float* table = metres_table_.data() + inf_;
+  std::vector<std::int16_t>& gathered = scratch->gathered;
+  for (std::size_t g = 0; g < sorted.size(); g += kWidth) {
+    const std::size_t count = std::min(kWidth, sorted.size() - g);
+    const MarkedLine* group = sorted.data() + g;
+    int hi = -1;
+    for (std::size_t l = 0; l < count; ++l) hi = std::max(hi, group[l].hi);
+    const int lo = group[0].lo;
     const int begin = std::max(0, lo - 2 * reach);
     const int end = std::min(nz, hi + 2 * reach + 1);
-    const int count = static_cast<int>(lanes.size());
-    const int padded = esdf_kernel::paddedLanes(count);  // +inf in the extra lanes, as above
-    const auto width = static_cast<std::size_t>(padded);
-    const std::size_t n = static_cast<std::size_t>(end - begin) * width;
-    if (buffers->lines.size() < n) buffers->lines.resize(n);
-    std::int16_t* values = buffers->lines.data();
-    const std::size_t first = static_cast<std::size_t>(x) * slab;
-    // The marked rows one after another, then transposed to lie side by side (and back).
     const auto span = static_cast<std::size_t>(end - begin);
-    std::vector<std::int16_t>& gathered = scratch->gathered;
-    if (gathered.size() < n) gathered.resize(n);
-    for (int l = 0; l < count; ++l) {
-      const std::int16_t* in = pass2_narrow_.data() + first +
-                               static_cast<std::size_t>(lanes[static_cast<std::size_t>(l)]) * nz;
-      std::copy(in + begin, in + end, gathered.data() + static_cast<std::size_t>(l) * span);
+    if (buffers->lines.size() < span * kWidth) buffers->lines.resize(span * kWidth);
+    if (gathered.size() < span * kWidth) gathered.resize(span * kWidth);
+    std::int16_t* values = buffers->lines.data();
+    const auto first = [&](const MarkedLine& line) {
+      return static_cast<std::size_t>(line.x) * slab +
+             static_cast<std::size_t>(line.across) * static_cast<std::size_t>(nz);
+    };
+    for (std::size_t l = 0; l < kWidth; ++l) {
+      std::int16_t* to = gathered.data() + l * span;
+      if (l < count) {
+        const std::int16_t* in = pass2_narrow_.data() + first(group[l]) + static_cast<std::size_t>(begin);
+        std::copy(in, in + span, to);
+      } else {
+        std::fill(to, to + span, inf);  // idle lane
+      }
     }
-    esdf_kernel::transpose16(gathered.data(), span, values, width, count, end - begin);
-    for (std::size_t i = 0; i < span; ++i) {
-      std::fill(values + i * width + lanes.size(), values + (i + 1) * width,
-                static_cast<std::int16_t>(inf_));
-    }
+    esdf_kernel::transpose16(gathered.data(), span, values, kWidth, kGroupLanes, end - begin);
     const int out_begin = std::max(0, lo - reach) - begin;
     const int out_end = std::min(nz, hi + reach + 1) - begin;
-    esdf_kernel::transformLines(values, end - begin, padded, out_begin, out_end, cap_sq_, cap_d_,
-                                buffers);
-    esdf_kernel::transpose16(values, width, gathered.data(), span, end - begin, count);
-    for (int l = 0; l < count; ++l) {
-      const int y = lanes[static_cast<std::size_t>(l)];
-      const std::size_t row = first + static_cast<std::size_t>(y) * nz;
+    esdf_kernel::transformLines(values, end - begin, kGroupLanes, out_begin, out_end, cap_sq_,
+                                cap_d_, buffers);
+    esdf_kernel::transpose16(values, kWidth, gathered.data(), span, end - begin,
+                             static_cast<int>(count));
+    for (std::size_t l = 0; l < count; ++l) {
+      const MarkedLine& line = group[l];
+      const std::size_t row = first(line);
       float* field = field_.data() + row;
-      const std::int16_t* fresh = gathered.data() + static_cast<std::size_t>(l) * span;
-      const int z_end = std::min(nz, mark_hi[y] + reach + 1);
-      for (int z = std::max(0, mark_lo[y] - reach); z < z_end; ++z) {
+      const std::int16_t* fresh = gathered.data() + l * span;
+      const int z_begin = std::max(0, line.lo - reach);
+      const int z_end = std::min(nz, line.hi + reach + 1);
+      // Branch-free: every cell written and listed, the list advanced past the changed ones.
+      const std::size_t listed = changed_cells_.size();
+      changed_cells_.resize(listed + static_cast<std::size_t>(z_end - z_begin));
+      std::uint32_t* next = changed_cells_.data() + listed;
+      for (int z = z_begin; z < z_end; ++z) {
         const float m = table[fresh[z - begin]];
-        if (m != field[z]) {
-          field[z] = m;
-          changed_cells_.push_back(static_cast<std::uint32_t>(row + static_cast<std::size_t>(z)));
-        }
+        const bool changed = m != field[z];
+        field[z] = m;
+        *next = static_cast<std::uint32_t>(row + static_cast<std::size_t>(z));
+        next += changed ? 1 : 0;
       }
+      changed_cells_.resize(static_cast<std::size_t>(next - changed_cells_.data()));
     }
   }
 }
@@ -1262,7 +1311,8 @@ std::size_t EsdfMap::memoryBytes() const {
               s.near_obstacle.capacity() + s.line.capacity() + s.sweep.capacity()) *
                  sizeof(std::int32_t) +
              (s.out_keys64.capacity() + s.in_keys64.capacity()) * sizeof(std::int64_t) +
-             s.lanes.capacity() * sizeof(int) + s.gathered.capacity() * sizeof(std::int16_t) +
+             (s.marked.capacity() + s.sorted.capacity()) * sizeof(MarkedLine) +
+             s.starts.capacity() * sizeof(int) + s.gathered.capacity() * sizeof(std::int16_t) +
              s.narrow_rows.capacity() +
              (s.window.magnitude.capacity() + s.window.best.capacity() +
               s.window.near_free.capacity() + s.window.near_obstacle.capacity() +

@@ -265,26 +265,6 @@ void transpose16(const std::int16_t* src, std::size_t src_stride, std::int16_t* 
   transpose(src, src_stride, dst, dst_stride, rows, cols);
 }
 
-MLMAP_ESDF_CLONES
-void squareDistances(const std::int8_t* in, std::size_t in_stride, int rows, int width,
-                     std::size_t out_stride, std::int32_t cap_sq, std::int32_t cap_d,
-                     std::int16_t* out) {
-  // 16-bit arithmetic (|d| <= 127, d^2 and inf fit), which SSE2 multiplies too.
-  const auto inf = static_cast<std::int16_t>(cap_sq + 1);
-  const auto cap = static_cast<std::int16_t>(cap_d);
-  for (int r = 0; r < rows; ++r) {
-    const std::int8_t* row = in + static_cast<std::size_t>(r) * in_stride;
-    std::int16_t* to = out + static_cast<std::size_t>(r) * out_stride;
-    for (int c = 0; c < width; ++c) {
-      const std::int16_t v = row[c];
-      const auto a = static_cast<std::int16_t>(v < 0 ? -v : v);
-      const auto sq = static_cast<std::int16_t>(a <= cap ? static_cast<std::int16_t>(a * a) : inf);
-      to[c] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
-    }
-    std::fill(to + width, to + out_stride, inf);
-  }
-}
-
 bool windowFits(std::int32_t cap_sq, std::int32_t cap_d) {
   // inf + k^2 <= 2 cap_sq + 1 and (cap_d + 1)^2 must fit 16 bits.
   return cap_d >= 1 && cap_d <= kMaxWindowCapCells && 2 * cap_sq + 1 < 32767;

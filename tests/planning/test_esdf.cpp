@@ -810,6 +810,17 @@ TEST(Esdf, IncrementalUpdatesEqualAFullRecomputeAfterEveryStep) {
         if (u.full || u.shifted) {
           copy.copyFrom(incremental);
         } else {
+          // Only cells that changed are listed (the copy below checks that all of them are).
+          std::size_t unchanged_listed = 0;
+          for (const std::uint32_t cell : incremental.changedCells()) {
+            const int x = static_cast<int>(cell / static_cast<std::uint32_t>(box.size.y() * box.size.z()));
+            const int y = static_cast<int>(cell / static_cast<std::uint32_t>(box.size.z())) % box.size.y();
+            const int z = static_cast<int>(cell % static_cast<std::uint32_t>(box.size.z()));
+            const bool same = copy.distances()[cell] == incremental.distances()[cell] &&
+                              copy.isUnknownCell(x, y, z) == incremental.isUnknownCell(x, y, z);
+            unchanged_listed += same ? 1 : 0;
+          }
+          EXPECT_EQ(unchanged_listed, 0u) << "step " << step;
           ASSERT_TRUE(copy.copyCells(incremental, incremental.changedCells()));
         }
         const std::string what = "step " + std::to_string(step);

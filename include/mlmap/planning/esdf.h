@@ -43,7 +43,10 @@
 /// line is transformed only over twice that around its changed inputs, and its results are kept
 /// within once that, where the parabolas cut off at the part's ends lie beyond the cap. Each
 /// part goes through the same code as in compute() (exact integer arithmetic, invariant under
-/// translation), so the field is bit-identical to a full recompute. With the envelope code (large
+/// translation), so the field is bit-identical to a full recompute. Through the windowed passes,
+/// the lines to transform again are taken from the whole box in order of where their changes
+/// start, 16 side by side (one vector of 16-bit values), each group over the union of its
+/// lines' parts. With the envelope code (large
 /// clamps), a box that moved (the window slid) by less than its size is shifted first: the kept
 /// part stays, the new slabs count as changed, and so does the face the move removed (its
 /// neighbours there are gone). Where the windowed passes apply, a box moved along x or y is
@@ -308,6 +311,14 @@ class EsdfMap {
   [[nodiscard]] std::size_t memoryBytes() const;
 
  private:
+  /// A y line (across = z) or z line (across = y) of x slab x that update()'s windowed passes
+  /// transform again, and the range [lo, hi] along it where its inputs changed.
+  struct MarkedLine {
+    int x;       ///< x slab
+    int across;  ///< z of a y line, y of a z line
+    int lo;      ///< first changed input along the line
+    int hi;      ///< last changed input (inclusive)
+  };
   /// Per-thread scratch (envelopes sized for the longest y or z line + 1).
   struct Scratch {
     std::vector<std::int32_t> runs;           ///< starts of the same-sign runs of a line
@@ -322,8 +333,10 @@ class EsdfMap {
     std::vector<std::int32_t> line;           ///< one y or z line being transformed
     std::vector<std::int32_t> sweep;          ///< x pass: 32-bit results before the 8-bit copy
     esdf_kernel::WindowBuffers window;        ///< the windowed passes' slab buffers
-    std::vector<int> lanes;                   ///< update(): the lines of a slab transformed
-    std::vector<std::int16_t> gathered;       ///< update(): those lines one after another
+    std::vector<MarkedLine> marked;           ///< update(): the lines its next pass transforms
+    std::vector<MarkedLine> sorted;           ///< ... ordered by the start of their range
+    std::vector<int> starts;                  ///< ... and the counting sort's buckets
+    std::vector<std::int16_t> gathered;       ///< update(): z lines one after another
     std::vector<std::int8_t> narrow_rows;     ///< update() after a move: x pass rows in 8 bits
   };
 

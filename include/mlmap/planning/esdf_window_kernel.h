@@ -64,14 +64,6 @@ struct WindowBuffers {
 void transpose16(const std::int16_t* src, std::size_t src_stride, std::int16_t* dst,
                  std::size_t dst_stride, int rows, int cols);
 
-/// The y pass's input from the x pass's results: out[r * out_stride + c] = the signed square of
-/// in[r * in_stride + c] (r < rows, c < width), +-inf (cap_sq + 1) where its magnitude is above
-/// cap_d, and +inf for width <= c < out_stride (padding lanes). Built for AVX2 / AVX-512 too
-/// (it vectorises).
-void squareDistances(const std::int8_t* in, std::size_t in_stride, int rows, int width,
-                     std::size_t out_stride, std::int32_t cap_sq, std::int32_t cap_d,
-                     std::int16_t* out);
-
 /// Transforms `lanes` lines of n values side by side, in place: values[i * lanes + l] is value
 /// i of line l, a signed squared distance (+ non-obstacle, - obstacle) or +-inf (cap_sq + 1).
 /// Only positions [out_begin, out_end) are transformed (0 <= out_begin <= out_end <= n); the
