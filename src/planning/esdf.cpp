@@ -918,53 +918,74 @@ void EsdfMap::updateLinesEnvelope(int reach, Scratch* scratch) {
 
 namespace {
 
-/// Lanes of one group of updateLinesWindowed(): one vector of 16-bit values.
-constexpr int kGroupLanes = 16;
+/// update()'s windowed passes take their marked lines kGroupLanes at a time.
+constexpr auto kGroupWidth = static_cast<std::size_t>(esdf_kernel::kGroupLanes);
 
-/// Orders `lines` by the start of their changed range into `sorted` (a counting sort over the
-/// `n` possible starts, stable): lines taken 16 at a time then share most of their ranges.
+/// Lists the lines marked in lo / hi (per x slab, `per_slab` lines; a line is marked where
+/// hi >= lo) and orders them by the start of their changed range into `sorted` (a counting
+/// sort over the `length` possible starts, stable): lines taken kGroupWidth at a time then
+/// share most of their ranges.
 template <typename Line>
-void sortByStart(const std::vector<Line>& lines, int n, std::vector<Line>* sorted,
-                 std::vector<int>* starts) {
+void sortMarkedLines(const std::vector<int>& lo, const std::vector<int>& hi, int nx, int per_slab,
+                     int length, std::vector<Line>* marked, std::vector<Line>* sorted,
+                     std::vector<int>* starts) {
+  marked->clear();
+  for (int x = 0; x < nx; ++x) {
+    const std::size_t first = static_cast<std::size_t>(x) * static_cast<std::size_t>(per_slab);
+    for (int a = 0; a < per_slab; ++a) {
+      const std::size_t i = first + static_cast<std::size_t>(a);
+      if (hi[i] >= lo[i]) marked->push_back({x, a, lo[i], hi[i]});
+    }
+  }
   std::vector<int>& at = *starts;
-  at.assign(static_cast<std::size_t>(n) + 1, 0);
-  for (const Line& l : lines) ++at[static_cast<std::size_t>(l.lo) + 1];
+  at.assign(static_cast<std::size_t>(length) + 1, 0);
+  for (const Line& l : *marked) ++at[static_cast<std::size_t>(l.lo) + 1];
   for (std::size_t i = 1; i < at.size(); ++i) at[i] += at[i - 1];
-  sorted->resize(lines.size());
-  for (const Line& l : lines) (*sorted)[static_cast<std::size_t>(at[static_cast<std::size_t>(l.lo)]++)] = l;
+  sorted->resize(marked->size());
+  for (const Line& l : *marked) {
+    (*sorted)[static_cast<std::size_t>(at[static_cast<std::size_t>(l.lo)]++)] = l;
+  }
+}
+
+/// Where a group of marked lines (sorted by start) is transformed along a line of `length`:
+/// inputs [begin, end), outputs [out_begin, out_end) relative to begin (see updateChanged()).
+struct GroupSpan {
+  int begin;
+  int end;
+  int out_begin;
+  int out_end;
+};
+
+template <typename Line>
+GroupSpan groupSpan(const Line* group, std::size_t count, int reach, int length) {
+  int hi = -1;
+  for (std::size_t l = 0; l < count; ++l) hi = std::max(hi, group[l].hi);
+  const int lo = group[0].lo;  // sorted by start
+  const int begin = std::max(0, lo - 2 * reach);
+  return {begin, std::min(length, hi + 2 * reach + 1), std::max(0, lo - reach) - begin,
+          std::min(length, hi + reach + 1) - begin};
 }
 
 }  // namespace
 
 void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
-  const int nx = size_.x();
-  const int ny = size_.y();
-  const int nz = size_.z();
-  const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
-  UpdateStats& u = last_update_;
-  esdf_kernel::WindowBuffers* buffers = &scratch->window;
-  std::vector<MarkedLine>& marked = scratch->marked;
-  std::vector<MarkedLine>& sorted = scratch->sorted;
-  constexpr std::size_t kWidth = kGroupLanes;
-  const auto inf = static_cast<std::int16_t>(inf_);
   // The marked lines of the whole box, ordered by the start of their changed range and taken
-  // 16 at a time, side by side (one lane each) over the union of the group's ranges: a group's
-  // lines come from any slab, so that few lanes are idle and the union stays close to each
-  // line's own range. Each line's outputs within its own range are exact (a part of a line,
-  // see above).
+  // kGroupWidth at a time, side by side (one lane each) over the union of the group's ranges:
+  // a group's lines come from any slab, so that few lanes are idle and the union stays close to
+  // each line's own range. Each line's outputs within its own range are exact (a part of a
+  // line, see updateChanged()).
+  updateYLinesWindowed(reach, scratch);
+  updateZLinesWindowed(reach, scratch);
+}
 
-  // Pass 2, the marked y lines; changed results mark their z lines.
-  marked.clear();
-  for (int x = 0; x < nx; ++x) {
-    const std::size_t row = static_cast<std::size_t>(x) * static_cast<std::size_t>(nz);
-    for (int z = 0; z < nz; ++z) {
-      const int lo = dirty_y_lo_[row + static_cast<std::size_t>(z)];
-      const int hi = dirty_y_hi_[row + static_cast<std::size_t>(z)];
-      if (hi >= lo) marked.push_back({x, z, lo, hi});
-    }
-  }
-  u.y_lines = marked.size();
-  sortByStart(marked, ny, &sorted, &scratch->starts);
+void EsdfMap::updateYLinesWindowed(int reach, Scratch* scratch) {
+  const int ny = size_.y();
+  const auto nz = static_cast<std::size_t>(size_.z());
+  const std::size_t slab = static_cast<std::size_t>(ny) * nz;
+  std::vector<MarkedLine>& sorted = scratch->sorted;
+  sortMarkedLines(dirty_y_lo_, dirty_y_hi_, size_.x(), size_.z(), ny, &scratch->marked, &sorted,
+                  &scratch->starts);
+  last_update_.y_lines = sorted.size();
   // The x pass's signed distance (8 bits, indexed by its byte) -> the y pass's input: the
   // signed square, or +-inf.
   std::array<std::int16_t, 256> square{};
@@ -974,44 +995,43 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
     const int sq = a <= cap_d_ ? a * a : inf_;
     square[byte] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
   }
-  for (std::size_t g = 0; g < sorted.size(); g += kWidth) {
-    const std::size_t count = std::min(kWidth, sorted.size() - g);
+  esdf_kernel::WindowBuffers* buffers = &scratch->window;
+  for (std::size_t g = 0; g < sorted.size(); g += kGroupWidth) {
+    const std::size_t count = std::min(kGroupWidth, sorted.size() - g);
     const MarkedLine* group = sorted.data() + g;
-    int hi = -1;
-    for (std::size_t l = 0; l < count; ++l) hi = std::max(hi, group[l].hi);
-    const int lo = group[0].lo;  // sorted by start
-    const int begin = std::max(0, lo - 2 * reach);
-    const int end = std::min(ny, hi + 2 * reach + 1);
-    const auto span = static_cast<std::size_t>(end - begin);
-    if (buffers->lines.size() < span * kWidth) buffers->lines.resize(span * kWidth);
+    const GroupSpan span = groupSpan(group, count, reach, ny);
+    const auto n = static_cast<std::size_t>(span.end - span.begin);
+    if (buffers->lines.size() < n * kGroupWidth) buffers->lines.resize(n * kGroupWidth);
     std::int16_t* values = buffers->lines.data();
-    for (std::size_t l = 0; l < kWidth; ++l) {
-      if (l >= count) {  // idle lane: +inf
-        for (std::size_t i = 0; i < span; ++i) values[i * kWidth + l] = inf;
+    // A y line is strided (nz apart): gathered value by value into its lane; idle lanes +inf.
+    for (std::size_t l = 0; l < kGroupWidth; ++l) {
+      if (l >= count) {
+        for (std::size_t i = 0; i < n; ++i) {
+          values[i * kGroupWidth + l] = static_cast<std::int16_t>(inf_);
+        }
         continue;
       }
       const std::int8_t* in = pass1_narrow_.data() + static_cast<std::size_t>(group[l].x) * slab +
-                              static_cast<std::size_t>(begin) * static_cast<std::size_t>(nz) +
+                              static_cast<std::size_t>(span.begin) * nz +
                               static_cast<std::size_t>(group[l].across);
-      for (std::size_t i = 0; i < span; ++i) {
-        values[i * kWidth + l] = square[static_cast<std::uint8_t>(in[i * static_cast<std::size_t>(nz)])];
+      for (std::size_t i = 0; i < n; ++i) {
+        values[i * kGroupWidth + l] = square[static_cast<std::uint8_t>(in[i * nz])];
       }
     }
-    // Read back over [lo - reach, hi + reach] only: the window runs there alone.
-    const int out_begin = std::max(0, lo - reach) - begin;
-    const int out_end = std::min(ny, hi + reach + 1) - begin;
-    esdf_kernel::transformLines(values, end - begin, kGroupLanes, out_begin, out_end, cap_sq_,
-                                cap_d_, buffers);
+    esdf_kernel::transformLines(values, span.end - span.begin, esdf_kernel::kGroupLanes,
+                                span.out_begin, span.out_end, cap_sq_, cap_d_, buffers);
+    // Changed results are kept and mark their z lines.
     for (std::size_t l = 0; l < count; ++l) {
       const MarkedLine& line = group[l];
       const auto x = static_cast<std::size_t>(line.x);
-      std::int16_t* slab_values = pass2_narrow_.data() + x * slab + static_cast<std::size_t>(line.across);
+      std::int16_t* kept = pass2_narrow_.data() + x * slab + static_cast<std::size_t>(line.across);
       int* mark_lo = dirty_z_lo_.data() + x * static_cast<std::size_t>(ny);
       int* mark_hi = dirty_z_hi_.data() + x * static_cast<std::size_t>(ny);
       const int y_end = std::min(ny, line.hi + reach + 1);
       for (int y = std::max(0, line.lo - reach); y < y_end; ++y) {
-        std::int16_t& old = slab_values[static_cast<std::size_t>(y) * static_cast<std::size_t>(nz)];
-        const std::int16_t fresh = values[static_cast<std::size_t>(y - begin) * kWidth + l];
+        std::int16_t& old = kept[static_cast<std::size_t>(y) * nz];
+        const auto i = static_cast<std::size_t>(y - span.begin);
+        const std::int16_t fresh = values[i * kGroupWidth + l];
         if (fresh != old) {
           old = fresh;
           mark_lo[y] = std::min(mark_lo[y], line.across);
@@ -1020,68 +1040,64 @@ void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
       }
     }
   }
+}
 
-  // Pass 3, the marked z lines, into the field (the metres table is there: windowFits() keeps
-  // 2 inf_ + 1 below its limit). A z line is contiguous: the group's lines are copied one
-  // after another, then transposed to lie side by side (and back).
-  marked.clear();
-  for (int x = 0; x < nx; ++x) {
-    const std::size_t row = static_cast<std::size_t>(x) * static_cast<std::size_t>(ny);
-    for (int y = 0; y < ny; ++y) {
-      const int lo = dirty_z_lo_[row + static_cast<std::size_t>(y)];
-      const int hi = dirty_z_hi_[row + static_cast<std::size_t>(y)];
-      if (hi >= lo) marked.push_back({x, y, lo, hi});
-    }
-  }
-  u.z_lines = marked.size();
-  sortByStart(marked, nz, &sorted, &scratch->starts);
+void EsdfMap::updateZLinesWindowed(int reach, Scratch* scratch) {
+  const int nz = size_.z();
+  const std::size_t slab = static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(nz);
+  std::vector<MarkedLine>& sorted = scratch->sorted;
+  sortMarkedLines(dirty_z_lo_, dirty_z_hi_, size_.x(), size_.y(), nz, &scratch->marked, &sorted,
+                  &scratch->starts);
+  last_update_.z_lines = sorted.size();
+  // The metres table is there: windowFits() keeps 2 inf_ + 1 below its limit.
   const float* table = metres_table_.data() + inf_;
+  esdf_kernel::WindowBuffers* buffers = &scratch->window;
   std::vector<std::int16_t>& gathered = scratch->gathered;
-  for (std::size_t g = 0; g < sorted.size(); g += kWidth) {
-    const std::size_t count = std::min(kWidth, sorted.size() - g);
+  const auto first = [&](const MarkedLine& line) {
+    return static_cast<std::size_t>(line.x) * slab +
+           static_cast<std::size_t>(line.across) * static_cast<std::size_t>(nz);
+  };
+  for (std::size_t g = 0; g < sorted.size(); g += kGroupWidth) {
+    const std::size_t count = std::min(kGroupWidth, sorted.size() - g);
     const MarkedLine* group = sorted.data() + g;
-    int hi = -1;
-    for (std::size_t l = 0; l < count; ++l) hi = std::max(hi, group[l].hi);
-    const int lo = group[0].lo;
-    const int begin = std::max(0, lo - 2 * reach);
-    const int end = std::min(nz, hi + 2 * reach + 1);
-    const auto span = static_cast<std::size_t>(end - begin);
-    if (buffers->lines.size() < span * kWidth) buffers->lines.resize(span * kWidth);
-    if (gathered.size() < span * kWidth) gathered.resize(span * kWidth);
+    const GroupSpan span = groupSpan(group, count, reach, nz);
+    const int rows = span.end - span.begin;
+    const auto n = static_cast<std::size_t>(rows);
+    if (buffers->lines.size() < n * kGroupWidth) buffers->lines.resize(n * kGroupWidth);
+    if (gathered.size() < n * kGroupWidth) gathered.resize(n * kGroupWidth);
     std::int16_t* values = buffers->lines.data();
-    const auto first = [&](const MarkedLine& line) {
-      return static_cast<std::size_t>(line.x) * slab +
-             static_cast<std::size_t>(line.across) * static_cast<std::size_t>(nz);
-    };
-    for (std::size_t l = 0; l < kWidth; ++l) {
-      std::int16_t* to = gathered.data() + l * span;
+    // A z line is contiguous: the group's lines are copied one after another (idle lanes +inf),
+    // then transposed to lie side by side (and back).
+    for (std::size_t l = 0; l < kGroupWidth; ++l) {
+      std::int16_t* to = gathered.data() + l * n;
       if (l < count) {
-        const std::int16_t* in = pass2_narrow_.data() + first(group[l]) + static_cast<std::size_t>(begin);
-        std::copy(in, in + span, to);
+        const std::int16_t* in =
+            pass2_narrow_.data() + first(group[l]) + static_cast<std::size_t>(span.begin);
+        std::copy(in, in + n, to);
       } else {
-        std::fill(to, to + span, inf);  // idle lane
+        std::fill(to, to + n, static_cast<std::int16_t>(inf_));
       }
     }
-    esdf_kernel::transpose16(gathered.data(), span, values, kWidth, kGroupLanes, end - begin);
-    const int out_begin = std::max(0, lo - reach) - begin;
-    const int out_end = std::min(nz, hi + reach + 1) - begin;
-    esdf_kernel::transformLines(values, end - begin, kGroupLanes, out_begin, out_end, cap_sq_,
-                                cap_d_, buffers);
-    esdf_kernel::transpose16(values, kWidth, gathered.data(), span, end - begin,
+    esdf_kernel::transpose16(gathered.data(), n, values, kGroupWidth, esdf_kernel::kGroupLanes,
+                             rows);
+    esdf_kernel::transformLines(values, rows, esdf_kernel::kGroupLanes, span.out_begin,
+                                span.out_end, cap_sq_, cap_d_, buffers);
+    esdf_kernel::transpose16(values, kGroupWidth, gathered.data(), n, rows,
                              static_cast<int>(count));
+    // Into the field, branch-free: every cell written and listed, the list advanced past the
+    // changed ones.
     for (std::size_t l = 0; l < count; ++l) {
       const MarkedLine& line = group[l];
       const std::size_t row = first(line);
       float* field = field_.data() + row;
-      const std::int16_t* fresh = gathered.data() + l * span;
+      const std::int16_t* fresh = gathered.data() + l * n;
       const int z_begin = std::max(0, line.lo - reach);
       const int z_end = std::min(nz, line.hi + reach + 1);
-      // Branch-free: every cell written and listed, the list advanced past the changed ones.
       const std::size_t listed = changed_cells_.size();
       changed_cells_.resize(listed + static_cast<std::size_t>(z_end - z_begin));
       std::uint32_t* next = changed_cells_.data() + listed;
       for (int z = z_begin; z < z_end; ++z) {
-        const float m = table[fresh[z - begin]];
+        const float m = table[fresh[z - span.begin]];
         const bool changed = m != field[z];
         field[z] = m;
         *next = static_cast<std::uint32_t>(row + static_cast<std::size_t>(z));

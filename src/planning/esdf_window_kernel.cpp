@@ -139,18 +139,23 @@ inline __attribute__((always_inline)) void sweepRight(const std::int16_t* __rest
 /// The 1D pass along the outer index of `values` (n lines of `lanes` values, lanes fastest;
 /// signed squared distances or +-inf), in place, written at positions [out_begin, out_end)
 /// only (the others keep their input). `m` is buffers->magnitude laid out with pad = cap_d *
-/// lanes values of inf before and after, already holding |values|.
+/// lanes values of inf before and after, already holding |values|. kLanes > 0: `lanes` is
+/// kLanes, known here, and the sweeps keep their last / next positions in registers.
+template <int kLanes>
 inline __attribute__((always_inline)) void windowPass(std::int16_t* values, std::int16_t* m,
-                                                      int n, int lanes, int out_begin,
+                                                      int n, int lanes_in, int out_begin,
                                                       int out_end, std::int32_t cap_sq,
                                                       std::int32_t cap_d,
                                                       WindowBuffers* buffers) {
+  const int lanes = kLanes > 0 ? kLanes : lanes_in;
   const auto inf = static_cast<std::int16_t>(cap_sq + 1);
   const std::size_t row = static_cast<std::size_t>(lanes);
   const std::size_t cells = static_cast<std::size_t>(n) * row;
   std::int16_t* best = buffers->best.data();
-  std::int16_t* near_free = buffers->near_free.data();
-  std::int16_t* near_obstacle = buffers->near_obstacle.data();
+  std::int16_t fixed_free[kLanes > 0 ? kLanes : 1];
+  std::int16_t fixed_obstacle[kLanes > 0 ? kLanes : 1];
+  std::int16_t* near_free = kLanes > 0 ? fixed_free : buffers->near_free.data();
+  std::int16_t* near_obstacle = kLanes > 0 ? fixed_obstacle : buffers->near_obstacle.data();
   // r: distance along the line to the nearest voxel of the other kind (cap_d + 1 when beyond),
   // two sweeps with the last / next position of each kind per lane.
   const auto far = static_cast<std::int16_t>(cap_d + 1);
@@ -299,7 +304,7 @@ void transformSlabY(const std::int8_t* pass1, int ny, int nz, std::int32_t cap_s
     std::fill(m_row + nz, m_row + z_lanes, inf);
     std::fill(v_row + nz, v_row + z_lanes, inf);
   }
-  windowPass(values, m, ny, z_lanes, 0, ny, cap_sq, cap_d, buffers);
+  windowPass<0>(values, m, ny, z_lanes, 0, ny, cap_sq, cap_d, buffers);
   // Out to pass 2 (y-major) and, transposed, to the z pass's lines (z-major, +inf in the extra
   // lanes).
   std::int16_t* out = buffers->signed_sq.data();
@@ -323,7 +328,11 @@ void transformLines(std::int16_t* values, int n, int lanes, int out_begin, int o
   for (std::size_t i = 0; i < cells; ++i) {
     m[i] = static_cast<std::int16_t>(values[i] < 0 ? -values[i] : values[i]);
   }
-  windowPass(values, m, n, lanes, out_begin, out_end, cap_sq, cap_d, buffers);
+  if (lanes == kGroupLanes) {
+    windowPass<kGroupLanes>(values, m, n, lanes, out_begin, out_end, cap_sq, cap_d, buffers);
+  } else {
+    windowPass<0>(values, m, n, lanes, out_begin, out_end, cap_sq, cap_d, buffers);
+  }
 }
 
 void transformSlabZ(int ny, int nz, std::int32_t cap_sq, std::int32_t cap_d,

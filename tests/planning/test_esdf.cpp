@@ -812,10 +812,12 @@ TEST(Esdf, IncrementalUpdatesEqualAFullRecomputeAfterEveryStep) {
         } else {
           // Only cells that changed are listed (the copy below checks that all of them are).
           std::size_t unchanged_listed = 0;
+          const auto ny = static_cast<std::uint32_t>(box.size.y());
+          const auto nz = static_cast<std::uint32_t>(box.size.z());
           for (const std::uint32_t cell : incremental.changedCells()) {
-            const int x = static_cast<int>(cell / static_cast<std::uint32_t>(box.size.y() * box.size.z()));
-            const int y = static_cast<int>(cell / static_cast<std::uint32_t>(box.size.z())) % box.size.y();
-            const int z = static_cast<int>(cell % static_cast<std::uint32_t>(box.size.z()));
+            const auto x = static_cast<int>(cell / (ny * nz));
+            const auto y = static_cast<int>(cell / nz % ny);
+            const auto z = static_cast<int>(cell % nz);
             const bool same = copy.distances()[cell] == incremental.distances()[cell] &&
                               copy.isUnknownCell(x, y, z) == incremental.isUnknownCell(x, y, z);
             unchanged_listed += same ? 1 : 0;

@@ -397,8 +397,13 @@ class EsdfMap {
   /// The y and z passes of updateChanged() over the lines its x pass marked, `reach` = cap_d_ + 1:
   /// line by line with the envelope code ...
   void updateLinesEnvelope(int reach, Scratch* scratch);
-  /// ... or, where the windowed passes apply, a slab's marked lines side by side through them.
+  /// ... or, where the windowed passes apply, the marked lines side by side through them, in
+  /// groups across the box:
   void updateLinesWindowed(int reach, Scratch* scratch);
+  /// the y pass (into pass2_narrow_), marking the z lines whose input changed, ...
+  void updateYLinesWindowed(int reach, Scratch* scratch);
+  /// ... then the z pass, into the field.
+  void updateZLinesWindowed(int reach, Scratch* scratch);
   /// What pass 1 writes for "beyond the cap": inf_, or cap_d_ + 1 where its results are kept in
   /// 8 bits (the windowed passes read any distance above cap_d_ as beyond).
   [[nodiscard]] std::int32_t pass1Inf() const { return window_kernel_ ? cap_d_ + 1 : inf_; }

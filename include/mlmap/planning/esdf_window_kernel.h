@@ -43,6 +43,11 @@ constexpr std::int32_t kMaxWindowCapCells = 48;
 /// never read back.
 [[nodiscard]] constexpr int paddedLanes(int lines) { return (lines + 15) / 16 * 16; }
 
+/// Lanes of the groups of lines EsdfMap::update() transforms again (one vector of 16-bit
+/// values): transformLines() is built for this width on its own, its sweeps keeping their
+/// state in registers.
+constexpr int kGroupLanes = 16;
+
 /// True when the windowed passes apply: cap_d <= kMaxWindowCapCells, and inf plus any k^2 of
 /// the window fits a 16-bit signed value.
 [[nodiscard]] bool windowFits(std::int32_t cap_sq, std::int32_t cap_d);
