@@ -560,10 +560,33 @@ bool EsdfMap::collectChangedStates(const OccupancyBox& box, std::size_t budget,
   }
   const auto ny = static_cast<std::size_t>(size_.y());
   const auto nz = static_cast<std::size_t>(size_.z());
+  // Clipped, and regions stacked along z over the same x and y extents merged (submaps one
+  // above the other): a column is then compared in one run instead of several short ones.
+  std::vector<Region>& merged = merged_regions_;
+  merged.clear();
   for (const Region& r : *regions) {
-    const Eigen::Vector3i lo = r.lo.cwiseMax(0);
-    const Eigen::Vector3i hi = r.hi.cwiseMin(size_);
-    if ((hi.array() <= lo.array()).any()) continue;
+    const Region clipped{r.lo.cwiseMax(0), r.hi.cwiseMin(size_)};
+    if ((clipped.hi.array() > clipped.lo.array()).all()) merged.push_back(clipped);
+  }
+  const auto key = [](const Region& r) {
+    return std::array<int, 5>{r.lo.x(), r.lo.y(), r.hi.x(), r.hi.y(), r.lo.z()};
+  };
+  std::sort(merged.begin(), merged.end(),
+            [&](const Region& a, const Region& b) { return key(a) < key(b); });
+  std::size_t kept_regions = 0;
+  for (const Region& r : merged) {
+    Region* last = kept_regions > 0 ? &merged[kept_regions - 1] : nullptr;
+    if (last != nullptr && last->lo.head<2>() == r.lo.head<2>() &&
+        last->hi.head<2>() == r.hi.head<2>() && r.lo.z() <= last->hi.z()) {
+      last->hi.z() = std::max(last->hi.z(), r.hi.z());
+    } else {
+      merged[kept_regions++] = r;
+    }
+  }
+  merged.resize(kept_regions);
+  for (const Region& r : merged) {
+    const Eigen::Vector3i& lo = r.lo;
+    const Eigen::Vector3i& hi = r.hi;
     for (int x = lo.x(); x < hi.x(); ++x) {
       for (int y = lo.y(); y < hi.y(); ++y) {
         const std::size_t column = (static_cast<std::size_t>(x) * ny + static_cast<std::size_t>(y)) * nz;
@@ -572,7 +595,7 @@ bool EsdfMap::collectChangedStates(const OccupancyBox& box, std::size_t budget,
     }
     if (changed_states_.size() > budget) return false;
   }
-  if (regions->size() > 1) {  // overlapping regions list a voxel once
+  if (merged.size() > 1) {  // overlapping regions list a voxel once
     std::sort(changed_states_.begin(), changed_states_.end());
     changed_states_.erase(std::unique(changed_states_.begin(), changed_states_.end()),
                           changed_states_.end());
@@ -1317,6 +1340,7 @@ std::size_t EsdfMap::memoryBytes() const {
                       (dirty_y_lo_.capacity() + dirty_y_hi_.capacity() + dirty_z_lo_.capacity() +
                        dirty_z_hi_.capacity()) * sizeof(int) +
                       (changed_cells_.capacity() + changed_states_.capacity()) * sizeof(std::uint32_t) +
+                      merged_regions_.capacity() * sizeof(Region) +
                       (row_z_lo_.capacity() + row_z_hi_.capacity() + row_x_lo_.capacity() +
                        row_x_hi_.capacity()) * sizeof(int) +
                       metres_table_.capacity() * sizeof(float) +

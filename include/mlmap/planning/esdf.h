@@ -446,6 +446,7 @@ class EsdfMap {
   UpdateStats last_update_;
   std::vector<std::uint32_t> changed_cells_;
   std::vector<std::uint32_t> changed_states_;  ///< offsets of the states update() found changed
+  std::vector<Region> merged_regions_;  ///< update(box, regions): the regions clipped and merged
   std::vector<int> row_z_lo_;               ///< per y: lowest z of a changed state (nz: none)
   std::vector<int> row_z_hi_;               ///< per y: highest z of a changed state (-1: none)
   std::vector<int> row_x_lo_;               ///< per y: lowest x of a changed state
