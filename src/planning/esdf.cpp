@@ -595,7 +595,18 @@ bool EsdfMap::collectChangedStates(const OccupancyBox& box, std::size_t budget,
     }
     if (changed_states_.size() > budget) return false;
   }
-  if (merged.size() > 1) {  // overlapping regions list a voxel once
+  // Overlapping regions list a voxel once (most callers' regions are disjoint submaps: then
+  // there is nothing to sort).
+  const auto overlap = [](const Region& a, const Region& b) {
+    return (a.lo.array() < b.hi.array()).all() && (b.lo.array() < a.hi.array()).all();
+  };
+  bool any_overlap = false;
+  for (std::size_t i = 0; i < merged.size() && !any_overlap; ++i) {
+    for (std::size_t j = i + 1; j < merged.size() && !any_overlap; ++j) {
+      any_overlap = overlap(merged[i], merged[j]);
+    }
+  }
+  if (any_overlap) {
     std::sort(changed_states_.begin(), changed_states_.end());
     changed_states_.erase(std::unique(changed_states_.begin(), changed_states_.end()),
                           changed_states_.end());

@@ -871,21 +871,29 @@ TEST(Esdf, UpdatesToldWhereStatesChangedEqualAFullRecompute) {
         std::vector<EsdfMap::Region> regions;
         if (box.min_index == before.min_index) {
           constexpr int kBlock = 5;
+          std::vector<EsdfMap::Region> holding_changes;
           for (int x = 0; x < size.x(); x += kBlock)
             for (int y = 0; y < size.y(); y += kBlock)
               for (int z = 0; z < size.z(); z += kBlock) {
                 const Eigen::Vector3i lo(x, y, z);
                 const Eigen::Vector3i hi = lo + Eigen::Vector3i::Constant(kBlock);  // clipped
-                bool changed = (x + y + z) % 3 == 0;                          // some unchanged too
+                bool changed = false;
                 for (int i = x; i < std::min(hi.x(), size.x()) && !changed; ++i)
                   for (int j = y; j < std::min(hi.y(), size.y()) && !changed; ++j)
                     for (int k = z; k < std::min(hi.z(), size.z()) && !changed; ++k) {
                       const VoxelIndex g = box.min_index + VoxelIndex(i, j, k);
                       changed = box.at(g) != before.at(g);
                     }
-                if (changed) regions.push_back({lo, hi});
+                if (changed) holding_changes.push_back({lo, hi});
+                if (changed || (x + y + z) % 3 == 0) regions.push_back({lo, hi});  // some unchanged
               }
-          if (!regions.empty()) regions.push_back(regions.front());  // overlapping
+          // Overlapping: a block listed twice, and blocks holding changes listed again shifted
+          // along x and y (a voxel in two regions of different extents).
+          if (!regions.empty()) regions.push_back(regions.front());
+          for (const EsdfMap::Region& r : holding_changes) {
+            const Eigen::Vector3i shift(2, 3, 0);
+            regions.push_back({r.lo - shift, r.hi - shift});
+          }
           ++hinted;
         } else {
           ++moved;
@@ -893,6 +901,13 @@ TEST(Esdf, UpdatesToldWhereStatesChangedEqualAFullRecompute) {
         ASSERT_TRUE(incremental.update(box, regions));
         ASSERT_TRUE(full.compute(box));
         expectSameField(incremental, full, "step " + std::to_string(step));
+        if (box.min_index == before.min_index && !incremental.lastUpdate().full) {
+          std::size_t differing = 0;  // each changed voxel counted once, overlaps or not
+          for (std::size_t i = 0; i < box.states.size(); ++i) {
+            differing += box.states[i] != before.states[i] ? 1 : 0;
+          }
+          EXPECT_EQ(incremental.lastUpdate().changed_states, differing) << "step " << step;
+        }
         before = box;
       }
       EXPECT_GT(hinted, 20u);
