@@ -573,17 +573,17 @@ bool EsdfMap::collectChangedStates(const OccupancyBox& box, std::size_t budget,
   };
   std::sort(merged.begin(), merged.end(),
             [&](const Region& a, const Region& b) { return key(a) < key(b); });
-  std::size_t kept_regions = 0;
+  std::size_t merged_count = 0;
   for (const Region& r : merged) {
-    Region* last = kept_regions > 0 ? &merged[kept_regions - 1] : nullptr;
+    Region* last = merged_count > 0 ? &merged[merged_count - 1] : nullptr;
     if (last != nullptr && last->lo.head<2>() == r.lo.head<2>() &&
         last->hi.head<2>() == r.hi.head<2>() && r.lo.z() <= last->hi.z()) {
       last->hi.z() = std::max(last->hi.z(), r.hi.z());
     } else {
-      merged[kept_regions++] = r;
+      merged[merged_count++] = r;
     }
   }
-  merged.resize(kept_regions);
+  merged.resize(merged_count);
   for (const Region& r : merged) {
     const Eigen::Vector3i& lo = r.lo;
     const Eigen::Vector3i& hi = r.hi;
@@ -1020,13 +1020,11 @@ void EsdfMap::updateYLinesWindowed(int reach, Scratch* scratch) {
   sortMarkedLines(dirty_y_lo_, dirty_y_hi_, size_.x(), size_.z(), ny, &scratch->marked, &sorted,
                   &scratch->starts);
   last_update_.y_lines = sorted.size();
-  // The x pass's signed distance (8 bits, indexed by its byte) -> the y pass's input: the
-  // signed square, or +-inf.
+  // The x pass's signed distance (8 bits, indexed by its byte) -> the y pass's signed input.
   std::array<std::int16_t, 256> square{};
   for (std::size_t byte = 0; byte < square.size(); ++byte) {
-    const auto v = static_cast<std::int8_t>(static_cast<std::uint8_t>(byte));
-    const int a = std::abs(static_cast<int>(v));
-    const int sq = a <= cap_d_ ? a * a : inf_;
+    const std::int32_t v = static_cast<std::int8_t>(static_cast<std::uint8_t>(byte));
+    const std::int32_t sq = esdf_kernel::squaredAlongX(v, cap_d_, inf_);
     square[byte] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
   }
   esdf_kernel::WindowBuffers* buffers = &scratch->window;

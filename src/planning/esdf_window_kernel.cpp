@@ -296,8 +296,7 @@ void transformSlabY(const std::int8_t* pass1, int ny, int nz, std::int32_t cap_s
     std::int16_t* v_row = values + static_cast<std::size_t>(y) * z_row;
     for (int z = 0; z < nz; ++z) {
       const std::int32_t v = in[z];
-      const std::int32_t a = v < 0 ? -v : v;
-      const std::int32_t sq = a <= cap_d ? a * a : std::int32_t{inf};
+      const std::int32_t sq = squaredAlongX(v, cap_d, inf);
       m_row[z] = static_cast<std::int16_t>(sq);
       v_row[z] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
     }

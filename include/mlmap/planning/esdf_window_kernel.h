@@ -48,6 +48,15 @@ constexpr std::int32_t kMaxWindowCapCells = 48;
 /// state in registers.
 constexpr int kGroupLanes = 16;
 
+/// The y pass's input magnitude from an x-pass result d (the signed distance along x; any
+/// magnitude above cap_d means beyond the clamp): d^2, or inf = cap_sq + 1 beyond the clamp.
+/// The sign of d (obstacle or not) carries over.
+[[nodiscard]] inline std::int32_t squaredAlongX(std::int32_t d, std::int32_t cap_d,
+                                                std::int32_t inf) {
+  const std::int32_t a = d < 0 ? -d : d;
+  return a <= cap_d ? a * a : inf;
+}
+
 /// True when the windowed passes apply: cap_d <= kMaxWindowCapCells, and inf plus any k^2 of
 /// the window fits a 16-bit signed value.
 [[nodiscard]] bool windowFits(std::int32_t cap_sq, std::int32_t cap_d);
