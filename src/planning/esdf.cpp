@@ -10,6 +10,7 @@
 #include <system_error>
 #include <thread>
 #include <type_traits>
+#include <utility>
 
 namespace mlmap {
 namespace {
@@ -430,6 +431,7 @@ void EsdfMap::prepare(const OccupancyBox& box) {
     pass2_.resize(cells);
   }
   kept_states_.resize(cells);
+  resetLineMarks();
   if (scratch_.size() < static_cast<std::size_t>(threads)) {
     scratch_.resize(static_cast<std::size_t>(threads));
   }
@@ -511,7 +513,9 @@ bool EsdfMap::updateWithin(const OccupancyBox& box, const std::vector<Region>* r
   // moveWindowed()), then the states that changed there go through the unmoved path below.
   const bool moved_windowed = !delta.isZero() && window_kernel_;
   if (moved_windowed && delta.z() != 0) return compute(box);
-  resetLineMarks();
+  // Until this update is through, the kept state is not the box's: were it cut short (an
+  // allocation failing), the next update computes the field whole.
+  kept_ = false;
   if (moved_windowed) {
     moveWindowed(box, delta);
   } else if (!delta.isZero()) {
@@ -530,6 +534,7 @@ bool EsdfMap::updateWithin(const OccupancyBox& box, const std::vector<Region>* r
     last_update_.changed_cells = cells;
     changed_cells_.clear();
   }
+  kept_ = true;
   return true;
 }
 
@@ -902,19 +907,23 @@ void EsdfMap::updateLinesEnvelope(int reach, Scratch* scratch) {
   UpdateStats& u = last_update_;
   std::int32_t* line = scratch->line.data();
   for (int x = 0; x < nx; ++x) {
-    const int* dirty_lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz;
-    const int* dirty_hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz;
+    int* dirty_lo = dirty_y_lo_.data() + static_cast<std::size_t>(x) * nz;
+    int* dirty_hi = dirty_y_hi_.data() + static_cast<std::size_t>(x) * nz;
     std::int32_t* slab_values = pass2_.data() + static_cast<std::size_t>(x) * slab;
     int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
     int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
     for (int z = 0; z < nz; ++z) {
       if (dirty_hi[z] < dirty_lo[z]) continue;
+      const int lo = dirty_lo[z];
+      const int hi = dirty_hi[z];
+      dirty_lo[z] = ny;  // the marks are left clear (see resetLineMarks())
+      dirty_hi[z] = -1;
       ++u.y_lines;
-      const int begin = std::max(0, dirty_lo[z] - 2 * reach);
-      const int end = std::min(ny, dirty_hi[z] + 2 * reach + 1);
+      const int begin = std::max(0, lo - 2 * reach);
+      const int end = std::min(ny, hi + 2 * reach + 1);
       transformYLine(x, z, begin, end, line, scratch);
-      const int y_end = std::min(ny, dirty_hi[z] + reach + 1);
-      for (int y = std::max(0, dirty_lo[z] - reach); y < y_end; ++y) {
+      const int y_end = std::min(ny, hi + reach + 1);
+      for (int y = std::max(0, lo - reach); y < y_end; ++y) {
         std::int32_t& old = slab_values[static_cast<std::size_t>(y) * nz + z];
         const std::int32_t fresh = line[y - begin];
         if (fresh != old) {
@@ -928,18 +937,22 @@ void EsdfMap::updateLinesEnvelope(int reach, Scratch* scratch) {
 
   // Pass 3, the marked z lines, into the field.
   for (int x = 0; x < nx; ++x) {
-    const int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
-    const int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
+    int* mark_lo = dirty_z_lo_.data() + static_cast<std::size_t>(x) * ny;
+    int* mark_hi = dirty_z_hi_.data() + static_cast<std::size_t>(x) * ny;
     for (int y = 0; y < ny; ++y) {
       if (mark_hi[y] < mark_lo[y]) continue;
+      const int lo = mark_lo[y];
+      const int hi = mark_hi[y];
+      mark_lo[y] = nz;
+      mark_hi[y] = -1;
       ++u.z_lines;
-      const int begin = std::max(0, mark_lo[y] - 2 * reach);
-      const int end = std::min(nz, mark_hi[y] + 2 * reach + 1);
+      const int begin = std::max(0, lo - 2 * reach);
+      const int end = std::min(nz, hi + 2 * reach + 1);
       transformZLine(x, y, begin, end, line, scratch);
       const std::size_t first = static_cast<std::size_t>(x) * slab + static_cast<std::size_t>(y) * nz;
       float* field = field_.data() + first;
-      const int z_end = std::min(nz, mark_hi[y] + reach + 1);
-      for (int z = std::max(0, mark_lo[y] - reach); z < z_end; ++z) {
+      const int z_end = std::min(nz, hi + reach + 1);
+      for (int z = std::max(0, lo - reach); z < z_end; ++z) {
         const float m = metres(line[z - begin]);
         if (m != field[z]) {
           field[z] = m;
@@ -955,20 +968,36 @@ namespace {
 /// update()'s windowed passes take their marked lines kGroupLanes at a time.
 constexpr auto kGroupWidth = static_cast<std::size_t>(esdf_kernel::kGroupLanes);
 
-/// Lists the lines marked in lo / hi (per x slab, `per_slab` lines; a line is marked where
-/// hi >= lo) and orders them by the start of their changed range into `sorted` (a counting
-/// sort over the `length` possible starts, stable): lines taken kGroupWidth at a time then
-/// share most of their ranges.
+/// Floats in a 64-byte cache line (the step of the z pass's prefetches).
+constexpr int kFloatsPerCacheLine = 16;
+
+/// Takes the lines marked in lo / hi (per x slab, `per_slab` lines of `length` positions; a
+/// line is marked where hi >= 0, unmarked at lo = length, hi = -1), leaving them unmarked, and
+/// orders them by the start of their changed range into `sorted` (a counting sort over the
+/// possible starts, stable): lines taken kGroupWidth at a time then share most of their ranges.
 template <typename Line>
-void sortMarkedLines(const std::vector<int>& lo, const std::vector<int>& hi, int nx, int per_slab,
-                     int length, std::vector<Line>* marked, std::vector<Line>* sorted,
+void takeMarkedLines(std::vector<int>* lo, std::vector<int>* hi, int nx, int per_slab, int length,
+                     std::vector<Line>* marked, std::vector<Line>* sorted,
                      std::vector<int>* starts) {
   marked->clear();
+  // Most lines are unmarked: looked at kScan at a time without a branch first (it vectorises).
+  constexpr int kScan = 16;
+  int* const lo_at = lo->data();
+  int* const hi_at = hi->data();
   for (int x = 0; x < nx; ++x) {
     const std::size_t first = static_cast<std::size_t>(x) * static_cast<std::size_t>(per_slab);
-    for (int a = 0; a < per_slab; ++a) {
-      const std::size_t i = first + static_cast<std::size_t>(a);
-      if (hi[i] >= lo[i]) marked->push_back({x, a, lo[i], hi[i]});
+    for (int a0 = 0; a0 < per_slab; a0 += kScan) {
+      const int a_end = std::min(per_slab, a0 + kScan);
+      int any = 0;
+      for (int a = a0; a < a_end; ++a) any |= static_cast<int>(hi_at[first + a] >= 0);
+      if (any == 0) continue;
+      for (int a = a0; a < a_end; ++a) {
+        const std::size_t i = first + static_cast<std::size_t>(a);
+        if (hi_at[i] < 0) continue;
+        marked->push_back({x, a, lo_at[i], hi_at[i]});
+        lo_at[i] = length;
+        hi_at[i] = -1;
+      }
     }
   }
   std::vector<int>& at = *starts;
@@ -1000,6 +1029,13 @@ GroupSpan groupSpan(const Line* group, std::size_t count, int reach, int length)
           std::min(length, hi + reach + 1) - begin};
 }
 
+/// The positions [first, second) of one marked line whose outputs are compared and kept (its
+/// changed range widened by `reach`, see updateChanged()).
+template <typename Line>
+std::pair<int, int> outputRange(const Line& line, int reach, int length) {
+  return {std::max(0, line.lo - reach), std::min(length, line.hi + reach + 1)};
+}
+
 }  // namespace
 
 void EsdfMap::updateLinesWindowed(int reach, Scratch* scratch) {
@@ -1017,7 +1053,7 @@ void EsdfMap::updateYLinesWindowed(int reach, Scratch* scratch) {
   const auto nz = static_cast<std::size_t>(size_.z());
   const std::size_t slab = static_cast<std::size_t>(ny) * nz;
   std::vector<MarkedLine>& sorted = scratch->sorted;
-  sortMarkedLines(dirty_y_lo_, dirty_y_hi_, size_.x(), size_.z(), ny, &scratch->marked, &sorted,
+  takeMarkedLines(&dirty_y_lo_, &dirty_y_hi_, size_.x(), size_.z(), ny, &scratch->marked, &sorted,
                   &scratch->starts);
   last_update_.y_lines = sorted.size();
   // The x pass's signed distance (8 bits, indexed by its byte) -> the y pass's signed input.
@@ -1028,6 +1064,10 @@ void EsdfMap::updateYLinesWindowed(int reach, Scratch* scratch) {
     square[byte] = static_cast<std::int16_t>(v < 0 ? -sq : sq);
   }
   esdf_kernel::WindowBuffers* buffers = &scratch->window;
+  const auto keptY = [&](const MarkedLine& line) {  // the line's kept y pass results, nz apart
+    return pass2_narrow_.data() + static_cast<std::size_t>(line.x) * slab +
+           static_cast<std::size_t>(line.across);
+  };
   for (std::size_t g = 0; g < sorted.size(); g += kGroupWidth) {
     const std::size_t count = std::min(kGroupWidth, sorted.size() - g);
     const MarkedLine* group = sorted.data() + g;
@@ -1049,6 +1089,13 @@ void EsdfMap::updateYLinesWindowed(int reach, Scratch* scratch) {
       for (std::size_t i = 0; i < n; ++i) {
         values[i * kGroupWidth + l] = square[static_cast<std::uint8_t>(in[i * nz])];
       }
+      // The kept results this line's outputs are compared with lie a line apart (a cache line
+      // each): fetched now, while the group is transformed.
+      const std::int16_t* kept = keptY(group[l]);
+      const auto [y_begin, y_end] = outputRange(group[l], reach, ny);
+      for (int y = y_begin; y < y_end; ++y) {
+        __builtin_prefetch(kept + static_cast<std::size_t>(y) * nz, 1);
+      }
     }
     esdf_kernel::transformLines(values, span.end - span.begin, esdf_kernel::kGroupLanes,
                                 span.out_begin, span.out_end, cap_sq_, cap_d_, buffers);
@@ -1056,11 +1103,11 @@ void EsdfMap::updateYLinesWindowed(int reach, Scratch* scratch) {
     for (std::size_t l = 0; l < count; ++l) {
       const MarkedLine& line = group[l];
       const auto x = static_cast<std::size_t>(line.x);
-      std::int16_t* kept = pass2_narrow_.data() + x * slab + static_cast<std::size_t>(line.across);
+      std::int16_t* kept = keptY(line);
       int* mark_lo = dirty_z_lo_.data() + x * static_cast<std::size_t>(ny);
       int* mark_hi = dirty_z_hi_.data() + x * static_cast<std::size_t>(ny);
-      const int y_end = std::min(ny, line.hi + reach + 1);
-      for (int y = std::max(0, line.lo - reach); y < y_end; ++y) {
+      const auto [y_begin, y_end] = outputRange(line, reach, ny);
+      for (int y = y_begin; y < y_end; ++y) {
         std::int16_t& old = kept[static_cast<std::size_t>(y) * nz];
         const auto i = static_cast<std::size_t>(y - span.begin);
         const std::int16_t fresh = values[i * kGroupWidth + l];
@@ -1078,7 +1125,7 @@ void EsdfMap::updateZLinesWindowed(int reach, Scratch* scratch) {
   const int nz = size_.z();
   const std::size_t slab = static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(nz);
   std::vector<MarkedLine>& sorted = scratch->sorted;
-  sortMarkedLines(dirty_z_lo_, dirty_z_hi_, size_.x(), size_.y(), nz, &scratch->marked, &sorted,
+  takeMarkedLines(&dirty_z_lo_, &dirty_z_hi_, size_.x(), size_.y(), nz, &scratch->marked, &sorted,
                   &scratch->starts);
   last_update_.z_lines = sorted.size();
   // The metres table is there: windowFits() keeps 2 inf_ + 1 below its limit.
@@ -1106,6 +1153,12 @@ void EsdfMap::updateZLinesWindowed(int reach, Scratch* scratch) {
         const std::int16_t* in =
             pass2_narrow_.data() + first(group[l]) + static_cast<std::size_t>(span.begin);
         std::copy(in, in + n, to);
+        // The field cells this line writes (a few cache lines anywhere in the box): fetched
+        // now, while the group is transformed.
+        const float* field = field_.data() + first(group[l]);
+        const auto [z_begin, z_end] = outputRange(group[l], reach, nz);
+        for (int z = z_begin; z < z_end; z += kFloatsPerCacheLine) __builtin_prefetch(field + z, 1);
+        __builtin_prefetch(field + z_end - 1, 1);
       } else {
         std::fill(to, to + n, static_cast<std::int16_t>(inf_));
       }
@@ -1123,8 +1176,7 @@ void EsdfMap::updateZLinesWindowed(int reach, Scratch* scratch) {
       const std::size_t row = first(line);
       float* field = field_.data() + row;
       const std::int16_t* fresh = gathered.data() + l * n;
-      const int z_begin = std::max(0, line.lo - reach);
-      const int z_end = std::min(nz, line.hi + reach + 1);
+      const auto [z_begin, z_end] = outputRange(line, reach, nz);
       const std::size_t listed = changed_cells_.size();
       changed_cells_.resize(listed + static_cast<std::size_t>(z_end - z_begin));
       std::uint32_t* next = changed_cells_.data() + listed;

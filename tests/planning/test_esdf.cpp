@@ -974,36 +974,59 @@ TEST(Esdf, WindowedMovesAlongXAndYEqualAFullRecompute) {
 }
 
 // The incremental path touches only what a change can reach: one voxel turned occupied in a
-// free box far from everything re-sweeps one row and re-transforms only lines within the clamp.
+// free box far from everything re-sweeps one row and re-transforms only lines within the clamp;
+// an update with nothing changed, also right after a window move, transforms nothing (the line
+// marks are left clear). Both the windowed passes and the envelope code.
 TEST(Esdf, OneChangedVoxelTouchesOnlyLinesWithinTheClamp) {
-  OccupancyBox box;
-  box.reset({0, 0, 0}, {60, 50, 40}, 0.1, Occupancy::kFree);
-  EsdfMap map(config(0.5, UnknownAs::kOccupied));  // 5 voxels
-  ASSERT_TRUE(map.update(box));
-  box.at({30, 25, 20}) = Occupancy::kOccupied;
-  ASSERT_TRUE(map.update(box));
-  const EsdfMap::UpdateStats& u = map.lastUpdate();
-  EXPECT_FALSE(u.full);
-  EXPECT_EQ(u.changed_states, 1u);
-  EXPECT_EQ(u.rows_swept, 1u);
-  EXPECT_LE(u.y_lines, 11u);       // x within +-5 of the voxel, z = 20
-  EXPECT_LE(u.z_lines, 11u * 11u);  // x and y within +-5
-  EXPECT_GT(u.changed_cells, 100u);
-  EsdfMap full(config(0.5, UnknownAs::kOccupied));
-  ASSERT_TRUE(full.compute(box));
-  expectSameField(map, full, "one voxel");
-  // Nothing changed: nothing is done.
-  ASSERT_TRUE(map.update(box));
-  EXPECT_EQ(map.lastUpdate().rows_swept, 0u);
-  EXPECT_EQ(map.lastUpdate().changed_cells, 0u);
-  // A malformed box empties the map and the next update computes whole.
-  OccupancyBox bad = box;
-  bad.states.pop_back();
-  EXPECT_FALSE(map.update(bad));
-  EXPECT_TRUE(map.empty());
-  ASSERT_TRUE(map.update(box));
-  EXPECT_TRUE(map.lastUpdate().full);
-  expectSameField(map, full, "after a malformed box");
+  for (const bool envelope_only : {false, true}) {
+    SCOPED_TRACE(envelope_only ? "envelope code" : "windowed passes");
+    OccupancyBox box;
+    box.reset({0, 0, 0}, {60, 50, 40}, 0.1, Occupancy::kFree);
+    EsdfMap map(config(0.5, UnknownAs::kOccupied));  // 5 voxels
+    map.setEnvelopeOnly(envelope_only);
+    ASSERT_TRUE(map.update(box));
+    ASSERT_EQ(map.windowedPasses(), !envelope_only);
+    box.at({30, 25, 20}) = Occupancy::kOccupied;
+    ASSERT_TRUE(map.update(box));
+    const EsdfMap::UpdateStats& u = map.lastUpdate();
+    EXPECT_FALSE(u.full);
+    EXPECT_EQ(u.changed_states, 1u);
+    EXPECT_EQ(u.rows_swept, 1u);
+    EXPECT_LE(u.y_lines, 11u);       // x within +-5 of the voxel, z = 20
+    EXPECT_LE(u.z_lines, 11u * 11u);  // x and y within +-5
+    EXPECT_GT(u.changed_cells, 100u);
+    EsdfMap full(config(0.5, UnknownAs::kOccupied));
+    ASSERT_TRUE(full.compute(box));
+    expectSameField(map, full, "one voxel");
+    // Nothing changed: nothing is done.
+    ASSERT_TRUE(map.update(box));
+    EXPECT_EQ(map.lastUpdate().rows_swept, 0u);
+    EXPECT_EQ(map.lastUpdate().y_lines, 0u);
+    EXPECT_EQ(map.lastUpdate().z_lines, 0u);
+    EXPECT_EQ(map.lastUpdate().changed_cells, 0u);
+    // The box moved along x and y (the obstacle stays where it is in the world), then the same
+    // box again: the second update has nothing to do.
+    OccupancyBox moved;
+    moved.reset({4, -3, 0}, box.size, 0.1, Occupancy::kFree);
+    moved.at({30, 25, 20}) = Occupancy::kOccupied;
+    ASSERT_TRUE(map.update(moved));
+    EXPECT_FALSE(map.lastUpdate().full);
+    EXPECT_TRUE(map.lastUpdate().shifted);
+    ASSERT_TRUE(map.update(moved));
+    EXPECT_EQ(map.lastUpdate().rows_swept, 0u);
+    EXPECT_EQ(map.lastUpdate().y_lines, 0u);
+    EXPECT_EQ(map.lastUpdate().z_lines, 0u);
+    ASSERT_TRUE(full.compute(moved));
+    expectSameField(map, full, "moved, then unchanged");
+    // A malformed box empties the map and the next update computes whole.
+    OccupancyBox bad = moved;
+    bad.states.pop_back();
+    EXPECT_FALSE(map.update(bad));
+    EXPECT_TRUE(map.empty());
+    ASSERT_TRUE(map.update(moved));
+    EXPECT_TRUE(map.lastUpdate().full);
+    expectSameField(map, full, "after a malformed box");
+  }
 }
 
 // A change that keeps a voxel's kind (obstacle or not, all the x pass reads) sweeps no row and

@@ -376,7 +376,8 @@ class EsdfMap {
   void prepare(const OccupancyBox& box);
   /// Shifts the kept state by `delta` voxels (new min - old min); new voxels are marked unseen.
   void shiftKept(const VoxelIndex& delta);
-  /// Clears the marks of the y and z lines that update() transforms again.
+  /// Sizes and clears the marks of the y and z lines that update() transforms again (in
+  /// prepare()); update() takes the lines it transforms off the marks, leaving them clear.
   void resetLineMarks();
   /// update()'s common part; `regions` null: the whole box may have changed.
   [[nodiscard]] bool updateWithin(const OccupancyBox& box, const std::vector<Region>* regions);
