@@ -564,22 +564,32 @@ TEST(FleetDds, ANodeTakingTheFleetsSubmapsHasAnotherVehiclesObstaclesOnEntry) {
       << held << " of " << inside << " of uav1's voxels in uav2's window";
 
   // uav2 sends its own evidence only: not uav1's voxels back (they would count twice), just
-  // what its one return changed. The merged map is uav1's.
-  node.stop();  // the final state goes out
-  ASSERT_GT(node.counters().fleet_submaps_sent, 0u);
-  // (Samples are not counted: KEEP_LAST 1 per submap may replace a version before it is sent.)
+  // what its one return changed. The merged map is uav1's. uav2's samples reach the merger
+  // while its node runs: its writer keeps the last version of each submap for readers it has
+  // not matched yet, and a busy machine may take seconds to match them (a writer stopped
+  // before it matched a reader waits for no acknowledgement from it).
   auto vehicleOf = [](const FleetMergerStats& s, const std::string& name) {
     return std::find_if(s.vehicles.begin(), s.vehicles.end(),
                         [&](const FleetVehicleStatus& v) { return v.info.name == name; });
   };
   FleetMergerStats s;
-  ASSERT_TRUE(waitFor([&] {
+  const auto merged_both = [&] {
     s = merger.stats();
     const auto a = vehicleOf(s, "uav1");
     const auto b = vehicleOf(s, "uav2");
     return a != s.vehicles.end() && a->info.samples >= uav1.writer().samplesWritten() &&
            b != s.vehicles.end() && b->info.voxels > 0;
-  }, std::chrono::milliseconds(20000)));
+  };
+  ASSERT_TRUE(waitFor(merged_both, std::chrono::milliseconds(20000)))
+      << merger.statusLine() << "; uav1 wrote " << uav1.writer().samplesWritten()
+      << " samples; uav2 sent " << node.counters().fleet_submaps_sent << " submaps";
+  EXPECT_EQ(s.publishers_matched, 2);
+  node.stop();  // its final state goes out (nothing new: its one frame was sent)
+  // (Samples are not counted: KEEP_LAST 1 per submap may replace a version before it is sent.)
+  ASSERT_GT(node.counters().fleet_submaps_sent, 0u);
+  ASSERT_TRUE(merged_both());
+  EXPECT_TRUE(waitFor([&] { return merger.stats().publishers_matched == 1; }))
+      << "uav2's node left: " << merger.stats().publishers_matched << " writers matched";
   const auto uav2 = vehicleOf(s, "uav2");
   EXPECT_LE(uav2->info.voxels, 8u) << "uav2 sent back uav1's priors";
   const std::set<Key3> merged = mergedKeys(merger);

@@ -55,6 +55,9 @@ struct FleetMergerStats {
   std::size_t memory_bytes = 0;
   std::uint64_t samples_received = 0;
   std::uint64_t samples_rejected = 0;    ///< malformed or of another grid
+  /// Submap writers (vehicles) the merger's reader is matched with now, whether or not they
+  /// have sent anything yet: a vehicle's final state reaches the merger only once matched.
+  int publishers_matched = 0;
   std::uint64_t clouds_published = 0;
   std::uint64_t grids_published = 0;
 };

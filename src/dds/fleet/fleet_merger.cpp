@@ -85,6 +85,7 @@ struct FleetMerger::Impl {
   fleet::FleetMap map;
   std::uint64_t samples_received = 0;
   std::uint64_t samples_rejected = 0;
+  int publishers_matched = 0;
   std::uint64_t clouds_published = 0;
   std::uint64_t grids_published = 0;
   std::string last_rejection;
@@ -137,7 +138,11 @@ struct FleetMerger::Impl {
     });
     readers->add<mlmap_msgs::Submap_PubSubType>(
         ddsTopicName("", config.submaps_topic), submapReaderQos(),
-        [this](mlmap_msgs::Submap_&& msg) { receive(msg); });
+        [this](mlmap_msgs::Submap_&& msg) { receive(msg); },
+        [this](int matched) {
+          std::lock_guard<std::mutex> lock(mutex);
+          publishers_matched = matched;
+        });
   }
 
   /// Counts and (once a second at most) logs a refused sample. Under `mutex`.
@@ -301,6 +306,7 @@ FleetMergerStats FleetMerger::stats() const {
   s.memory_bytes = impl_->map.memoryBytes();
   s.samples_received = impl_->samples_received;
   s.samples_rejected = impl_->samples_rejected;
+  s.publishers_matched = impl_->publishers_matched;
   s.clouds_published = impl_->clouds_published;
   s.grids_published = impl_->grids_published;
   return s;
@@ -330,7 +336,7 @@ std::string FleetMerger::statusLine() const {
       << static_cast<double>(v.info.bytes) / 1e3 << " kB, " << v.info.submaps << " submaps, "
       << v.info.voxels << " voxels" << (v.stale ? ", STALE" : "") << ")";
   }
-  m << "; merged " << s.merged_voxels << " voxels in " << s.submaps << " submaps, "
+  m << "; " << s.publishers_matched << " submap writers matched; merged " << s.merged_voxels << " voxels in " << s.submaps << " submaps, "
     << static_cast<double>(s.memory_bytes) / 1e6 << " MB; " << s.samples_rejected
     << " samples refused";
   return m.str();
