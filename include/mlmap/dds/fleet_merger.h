@@ -56,7 +56,8 @@ struct FleetMergerStats {
   std::uint64_t samples_received = 0;
   std::uint64_t samples_rejected = 0;    ///< malformed or of another grid
   /// Submap writers (vehicles) the merger's reader is matched with now, whether or not they
-  /// have sent anything yet: a vehicle's final state reaches the merger only once matched.
+  /// have sent anything yet. A vehicle that leaves before its writer matched the merger's
+  /// reader is never heard: discovery takes a moment, longer on a busy machine.
   int publishers_matched = 0;
   std::uint64_t clouds_published = 0;
   std::uint64_t grids_published = 0;

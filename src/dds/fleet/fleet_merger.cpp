@@ -336,9 +336,9 @@ std::string FleetMerger::statusLine() const {
       << static_cast<double>(v.info.bytes) / 1e3 << " kB, " << v.info.submaps << " submaps, "
       << v.info.voxels << " voxels" << (v.stale ? ", STALE" : "") << ")";
   }
-  m << "; " << s.publishers_matched << " submap writers matched; merged " << s.merged_voxels << " voxels in " << s.submaps << " submaps, "
-    << static_cast<double>(s.memory_bytes) / 1e6 << " MB; " << s.samples_rejected
-    << " samples refused";
+  m << "; " << s.publishers_matched << " submap writers matched; merged " << s.merged_voxels
+    << " voxels in " << s.submaps << " submaps, " << static_cast<double>(s.memory_bytes) / 1e6
+    << " MB; " << s.samples_rejected << " samples refused";
   return m.str();
 }
 
