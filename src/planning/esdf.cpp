@@ -10,7 +10,6 @@
 #include <system_error>
 #include <thread>
 #include <type_traits>
-#include <utility>
 
 namespace mlmap {
 namespace {
@@ -359,6 +358,21 @@ constexpr std::int8_t kUnseenNarrow1 = std::numeric_limits<std::int8_t>::min();
 constexpr std::int16_t kUnseenNarrow2 = std::numeric_limits<std::int16_t>::min();
 /// update() recomputes the whole field when more than 1 / kFullFraction of the voxels changed.
 constexpr std::size_t kFullFraction = 16;
+
+/// The part of a line of `length` positions that changed inputs over [lo, hi] reach (see
+/// EsdfMap::updateChanged()): the outputs [out_begin, out_end), within `reach` of them, and the
+/// inputs those depend on, [in_begin, in_end), within twice that.
+struct ReachedPart {
+  int in_begin;
+  int in_end;
+  int out_begin;
+  int out_end;
+};
+
+inline ReachedPart reachedPart(int lo, int hi, int reach, int length) {
+  return {std::max(0, lo - 2 * reach), std::min(length, hi + 2 * reach + 1),
+          std::max(0, lo - reach), std::min(length, hi + reach + 1)};
+}
 
 }  // namespace
 
@@ -856,12 +870,11 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
     const std::size_t row = static_cast<std::size_t>(y) * nz + static_cast<std::size_t>(z_lo);
     const int x_lo = row_x_lo_[static_cast<std::size_t>(y)];
     const int x_hi = row_x_hi_[static_cast<std::size_t>(y)];
-    const int x_begin = std::max(0, x_lo - 2 * reach);
-    const int x_end = std::min(nx, x_hi + 2 * reach + 1);
+    const ReachedPart xs = reachedPart(x_lo, x_hi, reach, nx);
+    const int x_begin = xs.in_begin;
     sweepBlock(states + static_cast<std::size_t>(x_begin) * slab + row, slab, row_buffer_.data(),
-               static_cast<std::size_t>(n), x_end - x_begin, n, scratch->near_free.data(),
+               static_cast<std::size_t>(n), xs.in_end - x_begin, n, scratch->near_free.data(),
                scratch->near_obstacle.data(), unknown_is_obstacle, cap_d_, pass1Inf());
-    const int compare_end = std::min(nx, x_hi + reach + 1);
     // Writes the fresh results over the kept ones (32 or 8 bits), marking the changed ones.
     const auto merge = [&](auto* kept_pass1, int x) {
       const std::int32_t* fresh =
@@ -881,7 +894,7 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
         }
       }
     };
-    for (int x = std::max(0, x_lo - reach); x < compare_end; ++x) {
+    for (int x = xs.out_begin; x < xs.out_end; ++x) {
       if (window_kernel_) {
         merge(pass1_narrow_.data(), x);
       } else {
@@ -919,13 +932,11 @@ void EsdfMap::updateLinesEnvelope(int reach, Scratch* scratch) {
       dirty_lo[z] = ny;  // the marks are left clear (see resetLineMarks())
       dirty_hi[z] = -1;
       ++u.y_lines;
-      const int begin = std::max(0, lo - 2 * reach);
-      const int end = std::min(ny, hi + 2 * reach + 1);
-      transformYLine(x, z, begin, end, line, scratch);
-      const int y_end = std::min(ny, hi + reach + 1);
-      for (int y = std::max(0, lo - reach); y < y_end; ++y) {
+      const ReachedPart part = reachedPart(lo, hi, reach, ny);
+      transformYLine(x, z, part.in_begin, part.in_end, line, scratch);
+      for (int y = part.out_begin; y < part.out_end; ++y) {
         std::int32_t& old = slab_values[static_cast<std::size_t>(y) * nz + z];
-        const std::int32_t fresh = line[y - begin];
+        const std::int32_t fresh = line[y - part.in_begin];
         if (fresh != old) {
           old = fresh;
           mark_lo[y] = std::min(mark_lo[y], z);
@@ -946,14 +957,12 @@ void EsdfMap::updateLinesEnvelope(int reach, Scratch* scratch) {
       mark_lo[y] = nz;
       mark_hi[y] = -1;
       ++u.z_lines;
-      const int begin = std::max(0, lo - 2 * reach);
-      const int end = std::min(nz, hi + 2 * reach + 1);
-      transformZLine(x, y, begin, end, line, scratch);
+      const ReachedPart part = reachedPart(lo, hi, reach, nz);
+      transformZLine(x, y, part.in_begin, part.in_end, line, scratch);
       const std::size_t first = static_cast<std::size_t>(x) * slab + static_cast<std::size_t>(y) * nz;
       float* field = field_.data() + first;
-      const int z_end = std::min(nz, hi + reach + 1);
-      for (int z = std::max(0, lo - reach); z < z_end; ++z) {
-        const float m = metres(line[z - begin]);
+      for (int z = part.out_begin; z < part.out_end; ++z) {
+        const float m = metres(line[z - part.in_begin]);
         if (m != field[z]) {
           field[z] = m;
           changed_cells_.push_back(static_cast<std::uint32_t>(first + static_cast<std::size_t>(z)));
@@ -1011,29 +1020,18 @@ void takeMarkedLines(std::vector<int>* lo, std::vector<int>* hi, int nx, int per
 }
 
 /// Where a group of marked lines (sorted by start) is transformed along a line of `length`:
-/// inputs [begin, end), outputs [out_begin, out_end) relative to begin (see updateChanged()).
-struct GroupSpan {
-  int begin;
-  int end;
-  int out_begin;
-  int out_end;
-};
-
+/// the part the union of their changed ranges reaches.
 template <typename Line>
-GroupSpan groupSpan(const Line* group, std::size_t count, int reach, int length) {
+ReachedPart groupSpan(const Line* group, std::size_t count, int reach, int length) {
   int hi = -1;
   for (std::size_t l = 0; l < count; ++l) hi = std::max(hi, group[l].hi);
-  const int lo = group[0].lo;  // sorted by start
-  const int begin = std::max(0, lo - 2 * reach);
-  return {begin, std::min(length, hi + 2 * reach + 1), std::max(0, lo - reach) - begin,
-          std::min(length, hi + reach + 1) - begin};
+  return reachedPart(group[0].lo, hi, reach, length);  // sorted by start
 }
 
-/// The positions [first, second) of one marked line whose outputs are compared and kept (its
-/// changed range widened by `reach`, see updateChanged()).
+/// The part one marked line's changed range reaches.
 template <typename Line>
-std::pair<int, int> outputRange(const Line& line, int reach, int length) {
-  return {std::max(0, line.lo - reach), std::min(length, line.hi + reach + 1)};
+ReachedPart linePart(const Line& line, int reach, int length) {
+  return reachedPart(line.lo, line.hi, reach, length);
 }
 
 }  // namespace
@@ -1071,8 +1069,8 @@ void EsdfMap::updateYLinesWindowed(int reach, Scratch* scratch) {
   for (std::size_t g = 0; g < sorted.size(); g += kGroupWidth) {
     const std::size_t count = std::min(kGroupWidth, sorted.size() - g);
     const MarkedLine* group = sorted.data() + g;
-    const GroupSpan span = groupSpan(group, count, reach, ny);
-    const auto n = static_cast<std::size_t>(span.end - span.begin);
+    const ReachedPart span = groupSpan(group, count, reach, ny);
+    const auto n = static_cast<std::size_t>(span.in_end - span.in_begin);
     if (buffers->lines.size() < n * kGroupWidth) buffers->lines.resize(n * kGroupWidth);
     std::int16_t* values = buffers->lines.data();
     // A y line is strided (nz apart): gathered value by value into its lane; idle lanes +inf.
@@ -1084,7 +1082,7 @@ void EsdfMap::updateYLinesWindowed(int reach, Scratch* scratch) {
         continue;
       }
       const std::int8_t* in = pass1_narrow_.data() + static_cast<std::size_t>(group[l].x) * slab +
-                              static_cast<std::size_t>(span.begin) * nz +
+                              static_cast<std::size_t>(span.in_begin) * nz +
                               static_cast<std::size_t>(group[l].across);
       for (std::size_t i = 0; i < n; ++i) {
         values[i * kGroupWidth + l] = square[static_cast<std::uint8_t>(in[i * nz])];
@@ -1092,13 +1090,14 @@ void EsdfMap::updateYLinesWindowed(int reach, Scratch* scratch) {
       // The kept results this line's outputs are compared with lie a line apart (a cache line
       // each): fetched now, while the group is transformed.
       const std::int16_t* kept = keptY(group[l]);
-      const auto [y_begin, y_end] = outputRange(group[l], reach, ny);
-      for (int y = y_begin; y < y_end; ++y) {
+      const ReachedPart part = linePart(group[l], reach, ny);
+      for (int y = part.out_begin; y < part.out_end; ++y) {
         __builtin_prefetch(kept + static_cast<std::size_t>(y) * nz, 1);
       }
     }
-    esdf_kernel::transformLines(values, span.end - span.begin, esdf_kernel::kGroupLanes,
-                                span.out_begin, span.out_end, cap_sq_, cap_d_, buffers);
+    esdf_kernel::transformLines(values, static_cast<int>(n), esdf_kernel::kGroupLanes,
+                                span.out_begin - span.in_begin, span.out_end - span.in_begin,
+                                cap_sq_, cap_d_, buffers);
     // Changed results are kept and mark their z lines.
     for (std::size_t l = 0; l < count; ++l) {
       const MarkedLine& line = group[l];
@@ -1106,10 +1105,10 @@ void EsdfMap::updateYLinesWindowed(int reach, Scratch* scratch) {
       std::int16_t* kept = keptY(line);
       int* mark_lo = dirty_z_lo_.data() + x * static_cast<std::size_t>(ny);
       int* mark_hi = dirty_z_hi_.data() + x * static_cast<std::size_t>(ny);
-      const auto [y_begin, y_end] = outputRange(line, reach, ny);
-      for (int y = y_begin; y < y_end; ++y) {
+      const ReachedPart part = linePart(line, reach, ny);
+      for (int y = part.out_begin; y < part.out_end; ++y) {
         std::int16_t& old = kept[static_cast<std::size_t>(y) * nz];
-        const auto i = static_cast<std::size_t>(y - span.begin);
+        const auto i = static_cast<std::size_t>(y - span.in_begin);
         const std::int16_t fresh = values[i * kGroupWidth + l];
         if (fresh != old) {
           old = fresh;
@@ -1139,8 +1138,8 @@ void EsdfMap::updateZLinesWindowed(int reach, Scratch* scratch) {
   for (std::size_t g = 0; g < sorted.size(); g += kGroupWidth) {
     const std::size_t count = std::min(kGroupWidth, sorted.size() - g);
     const MarkedLine* group = sorted.data() + g;
-    const GroupSpan span = groupSpan(group, count, reach, nz);
-    const int rows = span.end - span.begin;
+    const ReachedPart span = groupSpan(group, count, reach, nz);
+    const int rows = span.in_end - span.in_begin;
     const auto n = static_cast<std::size_t>(rows);
     if (buffers->lines.size() < n * kGroupWidth) buffers->lines.resize(n * kGroupWidth);
     if (gathered.size() < n * kGroupWidth) gathered.resize(n * kGroupWidth);
@@ -1151,22 +1150,25 @@ void EsdfMap::updateZLinesWindowed(int reach, Scratch* scratch) {
       std::int16_t* to = gathered.data() + l * n;
       if (l < count) {
         const std::int16_t* in =
-            pass2_narrow_.data() + first(group[l]) + static_cast<std::size_t>(span.begin);
+            pass2_narrow_.data() + first(group[l]) + static_cast<std::size_t>(span.in_begin);
         std::copy(in, in + n, to);
         // The field cells this line writes (a few cache lines anywhere in the box): fetched
         // now, while the group is transformed.
         const float* field = field_.data() + first(group[l]);
-        const auto [z_begin, z_end] = outputRange(group[l], reach, nz);
-        for (int z = z_begin; z < z_end; z += kFloatsPerCacheLine) __builtin_prefetch(field + z, 1);
-        __builtin_prefetch(field + z_end - 1, 1);
+        const ReachedPart part = linePart(group[l], reach, nz);
+        for (int z = part.out_begin; z < part.out_end; z += kFloatsPerCacheLine) {
+          __builtin_prefetch(field + z, 1);
+        }
+        __builtin_prefetch(field + part.out_end - 1, 1);
       } else {
         std::fill(to, to + n, static_cast<std::int16_t>(inf_));
       }
     }
     esdf_kernel::transpose16(gathered.data(), n, values, kGroupWidth, esdf_kernel::kGroupLanes,
                              rows);
-    esdf_kernel::transformLines(values, rows, esdf_kernel::kGroupLanes, span.out_begin,
-                                span.out_end, cap_sq_, cap_d_, buffers);
+    esdf_kernel::transformLines(values, rows, esdf_kernel::kGroupLanes,
+                                span.out_begin - span.in_begin, span.out_end - span.in_begin,
+                                cap_sq_, cap_d_, buffers);
     esdf_kernel::transpose16(values, kGroupWidth, gathered.data(), n, rows,
                              static_cast<int>(count));
     // Into the field, branch-free: every cell written and listed, the list advanced past the
@@ -1176,12 +1178,12 @@ void EsdfMap::updateZLinesWindowed(int reach, Scratch* scratch) {
       const std::size_t row = first(line);
       float* field = field_.data() + row;
       const std::int16_t* fresh = gathered.data() + l * n;
-      const auto [z_begin, z_end] = outputRange(line, reach, nz);
+      const ReachedPart part = linePart(line, reach, nz);
       const std::size_t listed = changed_cells_.size();
-      changed_cells_.resize(listed + static_cast<std::size_t>(z_end - z_begin));
+      changed_cells_.resize(listed + static_cast<std::size_t>(part.out_end - part.out_begin));
       std::uint32_t* next = changed_cells_.data() + listed;
-      for (int z = z_begin; z < z_end; ++z) {
-        const float m = table[fresh[z - span.begin]];
+      for (int z = part.out_begin; z < part.out_end; ++z) {
+        const float m = table[fresh[z - span.in_begin]];
         const bool changed = m != field[z];
         field[z] = m;
         *next = static_cast<std::uint32_t>(row + static_cast<std::size_t>(z));
