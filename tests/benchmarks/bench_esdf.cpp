@@ -29,6 +29,7 @@
 #endif
 
 #include <algorithm>
+#include <numeric>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -328,6 +329,8 @@ struct StreamRow {
   double edt_median_ms = -1.0;
   double edt_p99_ms = -1.0;
   double same_box_median_ms = 0.0;  ///< update() on the frames DynamicEDT3D is timed on
+  double edt_total_ms = 0.0;        ///< DynamicEDT3D over all its timed updates
+  double same_box_total_ms = 0.0;   ///< update() over the same frames
   std::size_t edt_compared = 0;
   std::size_t edt_mismatched = 0;
   double edt_max_error_m = 0.0;
@@ -495,6 +498,8 @@ StreamRow stream(const std::string& name, const Streamed& streamed, UnknownAs un
     row.edt_median_ms = percentile(&edt_ms, 0.5);
     row.edt_p99_ms = percentile(&edt_ms, 0.99);
     row.same_box_median_ms = percentile(&same_box_ms, 0.5);
+    row.edt_total_ms = std::accumulate(edt_ms.begin(), edt_ms.end(), 0.0);
+    row.same_box_total_ms = std::accumulate(same_box_ms.begin(), same_box_ms.end(), 0.0);
   }
   return row;
 }
@@ -502,7 +507,7 @@ StreamRow stream(const std::string& name, const Streamed& streamed, UnknownAs un
 void printStream(const StreamRow& r, std::FILE* json, bool last) {
   if (json == nullptr) {
     std::printf("%-10s %-9s %4d %4d %4d %8.0f %7.3f %7.3f %7.3f %7.3f %7.3f %4d | %4d %8.3f %8.3f "
-                "%7.3f %6.1fx  mismatched %zu of %zu (max %.3f m); lines %.0f %.0f %.0f; query "
+                "%7.3f %6.1fx  all %d: %.1f / %.1f ms (%.1fx); mismatched %zu of %zu (max %.3f m); lines %.0f %.0f %.0f; query "
                 "grid sync %.3f / %.3f ms; %d moves: update() %.3f / %.3f ms, compute() %.3f "
                 "ms\n",
                 r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full,
@@ -510,6 +515,8 @@ void printStream(const StreamRow& r, std::FILE* json, bool last) {
                 r.full_median_ms, r.full_p99_ms, r.mismatched_frames, r.edt_updates,
                 r.edt_median_ms, r.edt_p99_ms, r.same_box_median_ms,
                 r.same_box_median_ms > 0.0 ? r.edt_median_ms / r.same_box_median_ms : 0.0,
+                r.edt_updates, r.edt_total_ms, r.same_box_total_ms,
+                r.same_box_total_ms > 0.0 ? r.edt_total_ms / r.same_box_total_ms : 0.0,
                 r.edt_mismatched, r.edt_compared, r.edt_max_error_m, r.rows, r.y_lines, r.z_lines,
                 r.grid_sync_median_ms, r.grid_sync_p99_ms, r.moves, r.move_median_ms,
                 r.move_p99_ms, r.move_full_median_ms);
@@ -525,13 +532,14 @@ void printStream(const StreamRow& r, std::FILE* json, bool last) {
                "\"move_compute_median_ms\": %.4f, "
                "\"query_grid_sync_ms\": {\"median\": %.4f, \"p99\": %.4f}, \"mismatched_frames\": %d, "
                "\"dynamicedt3d\": {\"updates\": %d, \"median_ms\": %.4f, \"p99_ms\": %.4f, "
-               "\"ours_same_frames_median_ms\": %.4f, \"compared\": %zu, \"mismatched\": %zu, "
+               "\"ours_same_frames_median_ms\": %.4f, \"total_ms\": %.3f, "
+               "\"ours_same_frames_total_ms\": %.3f, \"compared\": %zu, \"mismatched\": %zu, "
                "\"max_error_m\": %.4f}}%s\n",
                r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full,
                r.changed_states, r.rows, r.y_lines, r.z_lines, r.update_median_ms,
                r.update_p99_ms, r.update_max_ms, r.full_median_ms, r.full_p99_ms, r.moves,
                r.move_median_ms, r.move_p99_ms, r.move_full_median_ms, r.grid_sync_median_ms, r.grid_sync_p99_ms, r.mismatched_frames, r.edt_updates, r.edt_median_ms, r.edt_p99_ms,
-               r.same_box_median_ms, r.edt_compared,
+               r.same_box_median_ms, r.edt_total_ms, r.same_box_total_ms, r.edt_compared,
                r.edt_mismatched, r.edt_max_error_m, last ? "" : ",");
 }
 
@@ -561,7 +569,13 @@ int main(int argc, char** argv) {
   app.add_flag("--streamed-only", only_streamed, "skip the single-box part");
   app.add_flag("!--no-hints", with_hints,
                "compare each streamed box whole, not only in the window's changed submaps");
+  std::vector<double> resolutions{0.2, 0.1};
+  app.add_option("--resolution", resolutions, "resolutions in metres (0.2, 0.1 or both)")
+      ->check(CLI::IsMember({0.2, 0.1}))->capture_default_str();
   CLI11_PARSE(app, argc, argv);
+  const auto wanted = [&](double res) {
+    return std::find(resolutions.begin(), resolutions.end(), res) != resolutions.end();
+  };
 
   const sim::World world = sim::World::defaultRoom();
   const Eigen::Vector3d center_W(14.5, 4.5, 1.5);  // on the first leg of the default flight
@@ -571,10 +585,14 @@ int main(int argc, char** argv) {
     OccupancyBox box;
   };
   std::vector<Scene> scenes;
-  scenes.push_back({"room 0.2 m 95x95x35",
-                    rasterise(world, center_W, 0.2, {95, 95, 35}, unknown_beyond_x_m)});
-  scenes.push_back({"room 0.1 m 190x190x70",
-                    rasterise(world, center_W, 0.1, {190, 190, 70}, unknown_beyond_x_m)});
+  if (wanted(0.2)) {
+    scenes.push_back({"room 0.2 m 95x95x35",
+                      rasterise(world, center_W, 0.2, {95, 95, 35}, unknown_beyond_x_m)});
+  }
+  if (wanted(0.1)) {
+    scenes.push_back({"room 0.1 m 190x190x70",
+                      rasterise(world, center_W, 0.1, {190, 190, 70}, unknown_beyond_x_m)});
+  }
   for (const Scene& s : scenes) {
     std::size_t occupied = 0;
     std::size_t unknown = 0;
@@ -623,6 +641,7 @@ int main(int argc, char** argv) {
                 "res", "unknown", "n", "move", "full", "states", "median", "p99", "max",
                 "median", "p99", "diff", "n", "median", "p99", "ours", "ratio");
     for (const double res : {0.2, 0.1}) {
+      if (!wanted(res)) continue;
       const Streamed streamed = streamedBoxes(res, frames);
       char name[32];
       std::snprintf(name, sizeof(name), "%.1f m", res);
