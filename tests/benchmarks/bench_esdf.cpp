@@ -29,11 +29,11 @@
 #endif
 
 #include <algorithm>
-#include <numeric>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <numeric>
 #include <random>
 #include <string>
 #include <thread>
@@ -507,9 +507,9 @@ StreamRow stream(const std::string& name, const Streamed& streamed, UnknownAs un
 void printStream(const StreamRow& r, std::FILE* json, bool last) {
   if (json == nullptr) {
     std::printf("%-10s %-9s %4d %4d %4d %8.0f %7.3f %7.3f %7.3f %7.3f %7.3f %4d | %4d %8.3f %8.3f "
-                "%7.3f %6.1fx  all %d: %.1f / %.1f ms (%.1fx); mismatched %zu of %zu (max %.3f m); lines %.0f %.0f %.0f; query "
-                "grid sync %.3f / %.3f ms; %d moves: update() %.3f / %.3f ms, compute() %.3f "
-                "ms\n",
+                "%7.3f %6.1fx  all %d: %.1f / %.1f ms (%.1fx); mismatched %zu of %zu (max %.3f m); "
+                "lines %.0f %.0f %.0f; query grid sync %.3f / %.3f ms; %d moves: update() %.3f / "
+                "%.3f ms, compute() %.3f ms\n",
                 r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full,
                 r.changed_states, r.update_median_ms, r.update_p99_ms, r.update_max_ms,
                 r.full_median_ms, r.full_p99_ms, r.mismatched_frames, r.edt_updates,
