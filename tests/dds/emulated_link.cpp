@@ -2,6 +2,8 @@
 
 #include "dds_test_support.h"
 
+#include "mlmap/dds/udp_send_guard.h"
+
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/rtps/common/LocatorsIterator.hpp>
 #include <fastdds/rtps/network/SenderResource.h>
@@ -182,9 +184,13 @@ rtps::TransportInterface* EmulatedLinkTransportDescriptor::create_transport() co
 
 ParticipantPtr participantOverLink(int domain_id, const std::shared_ptr<EmulatedLink>& link) {
   ParticipantSetup setup = participantSetup(localhostConfig(domain_id), "over_a_link");
+  // The link goes below the send guard, right above the UDPv4 transport.
   for (auto& transport : setup.qos.transport().user_transports) {
-    if (std::dynamic_pointer_cast<rtps::UDPv4TransportDescriptor>(transport)) {
-      transport = std::make_shared<EmulatedLinkTransportDescriptor>(transport, link);
+    const auto guard = std::dynamic_pointer_cast<rtps::ChainingTransportDescriptor>(transport);
+    if (guard && isUdpSendGuard(transport) &&
+        std::dynamic_pointer_cast<rtps::UDPv4TransportDescriptor>(guard->low_level_descriptor)) {
+      guard->low_level_descriptor =
+          std::make_shared<EmulatedLinkTransportDescriptor>(guard->low_level_descriptor, link);
     }
   }
   return ParticipantPtr(eprosima::fastdds::dds::DomainParticipantFactory::get_instance()

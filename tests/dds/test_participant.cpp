@@ -5,6 +5,7 @@
 
 #include "mlmap/dds/cloud_sample.h"
 #include "mlmap/dds/entities.h"
+#include "mlmap/dds/udp_send_guard.h"
 
 #include "dds_test_support.h"
 #include "scoped_env.h"
@@ -82,7 +83,7 @@ std::shared_ptr<D> onlyTransport(const fdds::DomainParticipantQos& qos) {
   std::shared_ptr<D> found;
   int count = 0;
   for (const auto& t : qos.transport().user_transports) {
-    if (auto typed = std::dynamic_pointer_cast<D>(t)) {
+    if (auto typed = std::dynamic_pointer_cast<D>(unguarded(t))) {
       found = typed;
       ++count;
     }
@@ -444,6 +445,41 @@ bool loadTestProfiles() {
   return loaded;
 }
 
+// Every UDP transport of every participant mlmap makes is behind the send guard
+// (udp_send_guard.h), whatever the range, shared memory or profile; nothing else is wrapped.
+TEST(ParticipantSetup, EveryUdpTransportIsBehindTheSendGuardAndNothingElseIs) {
+  ASSERT_TRUE(loadTestProfiles());
+  for (const char* range : {"LOCALHOST", "SUBNET", "OFF"}) {
+    for (const bool shared_memory : {false, true}) {
+      for (const char* profile : {"", "mlmap_test_loopback_no_peers"}) {
+        DdsConfig config;
+        config.domain_id = 153;
+        config.discovery_range = range;
+        config.shared_memory = shared_memory;
+        config.participant_profile = profile;
+        const ParticipantSetup setup = participantSetup(config, "test");
+        int udp = 0;
+        for (const auto& transport : setup.qos.transport().user_transports) {
+          const auto below = unguarded(transport);
+          const bool is_udp = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(below) != nullptr;
+          udp += is_udp ? 1 : 0;
+          EXPECT_EQ(isUdpSendGuard(transport), is_udp)
+              << range << ", shared memory " << shared_memory << ", profile '" << profile << "'";
+        }
+        EXPECT_GE(udp, 1) << range << ", profile '" << profile << "'";
+      }
+    }
+  }
+  // The guard takes UDP only, and never twice.
+  const auto udp = std::make_shared<UDPv4TransportDescriptor>();
+  const auto guarded = withUdpSendGuard(udp);
+  EXPECT_TRUE(isUdpSendGuard(guarded));
+  EXPECT_EQ(unguarded(guarded), udp);
+  EXPECT_EQ(withUdpSendGuard(guarded), guarded);
+  const auto shm = std::make_shared<SharedMemTransportDescriptor>();
+  EXPECT_EQ(withUdpSendGuard(shm), shm);
+}
+
 TEST(ParticipantSetup, LargeDataRaisesAProfilesSizesOnACopyAndNeverLowersThem) {
   ASSERT_TRUE(loadTestProfiles());
   DdsConfig config;
@@ -547,8 +583,11 @@ TEST(ParticipantSetup, LocalhostKeepsAProfilesTransportsAndAddsLoopbackUdpAsJazz
   // The profile's UDPv4 (its 8 MB receive buffer) stays, mlmap's loopback UDPv4 is added; the
   // profile's SHM is left out (dds.shared_memory false), which is said.
   ASSERT_EQ(transports.size(), 2u);
-  const auto profile_udp = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(transports[0]);
-  const auto added_udp = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(transports[1]);
+  // Both behind the send guard (udp_send_guard.h).
+  EXPECT_TRUE(isUdpSendGuard(transports[0]));
+  EXPECT_TRUE(isUdpSendGuard(transports[1]));
+  const auto profile_udp = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(unguarded(transports[0]));
+  const auto added_udp = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(unguarded(transports[1]));
   ASSERT_NE(profile_udp, nullptr);
   ASSERT_NE(added_udp, nullptr);
   EXPECT_EQ(profile_udp->receiveBufferSize, 8388608u);

@@ -79,6 +79,10 @@ using ParticipantPtr = std::unique_ptr<eprosima::fastdds::dds::DomainParticipant
 /// itself is not modified); other transports are left alone. Over SHM the sender's
 /// segment decides, over UDP the receiver's buffer (bounded by net.core.rmem_max).
 ///
+/// Last, every UDPv4 / UDPv6 transport is put behind the send guard (udp_send_guard.h): Fast DDS
+/// 2.9.1 aborts when a reliable writer sends to a locator it never opened, which a second ROS 2
+/// node on rmw_cyclonedds_cpp with Jazzy's defaults makes happen; the guard opens it first.
+///
 /// Throws std::runtime_error with the reason when the profiles file, the profile or the
 /// environment is invalid, or Fast DDS refuses to create the participant.
 ParticipantPtr createParticipant(const DdsConfig& config, const std::string& name);

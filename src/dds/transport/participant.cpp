@@ -1,5 +1,7 @@
 #include "mlmap/dds/participant.h"
 
+#include "mlmap/dds/udp_send_guard.h"
+
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <fastdds/rtps/common/Locator.h>
@@ -324,6 +326,8 @@ ParticipantSetup participantSetup(const DdsConfig& config, const std::string& na
   const std::string removed = withSharedMemoryOnlyIfAsked(config.shared_memory, profile, &qos);
   if (!removed.empty()) setup.warnings.push_back(removed);
   if (config.large_data) sizeForLargeData(&qos);
+  // Last, over the transports as sized: no remote locator may abort the process (see there).
+  guardUdpSends(&qos);
 
   // As rmw_fastrtps: discovery data of participants with many endpoints can exceed the
   // preallocated 5000 bytes.
