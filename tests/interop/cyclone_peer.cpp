@@ -2,7 +2,7 @@
 // cross-vendor interoperability tests. It uses Cyclone's C API with types that idlc generated
 // from mlmap's own idl/ files, and does not link the Fast DDS side of mlmap.
 //
-//   listen: subscribes to a PointCloud2 topic (RELIABLE, VOLATILE) and an OccupancyGrid topic
+//   listen: subscribes to PointCloud2 topics (RELIABLE, VOLATILE) and OccupancyGrid topics
 //           (RELIABLE, TRANSIENT_LOCAL, as Nav2 subscribes to maps) and writes a canonical record
 //           of every sample (sample_record.h) into --out. A sample that did not arrive as XCDR1
 //           little endian (what ROS 2 sends), or does not deserialise, is logged and not recorded.
@@ -32,6 +32,7 @@
 #include <CLI/CLI.hpp>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -42,6 +43,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -255,27 +257,81 @@ class RecordingReader {
 struct ListenOptions {
   std::string out_dir;
   std::string ready_file;
-  std::string cloud_topic = "rt/mlmap/local_map/occupied";
-  std::string grid_topic = "rt/mlmap/grid";
+  std::vector<std::string> cloud_topics{"rt/mlmap/local_map/occupied"};
+  std::vector<std::string> grid_topics{"rt/mlmap/grid"};
   int cloud_writers = 1;
   int expect_clouds = 0;
   int expect_grids = 0;
   double timeout_s = 30.0;
   double linger_s = 1.0;
+  double stay_s = 0.0;  ///< at least this long, even when everything expected came earlier
 };
+
+/// The record kind of a topic: `kind` alone when it is the only topic of its kind (the records of
+/// the loopback tests), else `kind` and the topic, so that equal stamps on two topics never meet.
+std::string recordKind(const std::string& kind, const std::string& topic, std::size_t topics) {
+  if (topics == 1) return kind;
+  std::string name = kind + "@" + topic;
+  std::replace(name.begin(), name.end(), '/', '.');
+  return name;
+}
+
+/// Readers of one message type on several topics, polled and counted together.
+template <typename Msg>
+class RecordingReaders {
+ public:
+  RecordingReaders(dds_entity_t participant, const dds_topic_descriptor_t* type, const std::string& kind,
+                   const std::vector<std::string>& topics, const Qos& qos, const std::string& out_dir) {
+    for (const std::string& topic : topics) {
+      readers_.push_back(std::make_unique<RecordingReader<Msg>>(
+          participant, type, recordKind(kind, topic, topics.size()), topic, qos, out_dir));
+    }
+  }
+  void poll() {
+    for (auto& reader : readers_) reader->poll();
+  }
+  /// True when every topic's reader has matched at least `writers` writers.
+  [[nodiscard]] bool matched(std::uint32_t writers) const {
+    return std::all_of(readers_.begin(), readers_.end(),
+                       [writers](const auto& reader) { return reader->matched() >= writers; });
+  }
+  /// The fewest samples recorded on any one topic.
+  [[nodiscard]] int fewestRecorded() const {
+    int fewest = std::numeric_limits<int>::max();
+    for (const auto& reader : readers_) fewest = std::min(fewest, reader->recorded());
+    return readers_.empty() ? 0 : fewest;
+  }
+  [[nodiscard]] int recorded() const { return sum(&RecordingReader<Msg>::recorded); }
+  [[nodiscard]] int rejected() const { return sum(&RecordingReader<Msg>::rejected); }
+
+ private:
+  int sum(int (RecordingReader<Msg>::*count)() const) const {
+    int total = 0;
+    for (const auto& reader : readers_) total += ((*reader).*count)();
+    return total;
+  }
+  std::vector<std::unique_ptr<RecordingReader<Msg>>> readers_;
+};
+
+std::string joined(const std::vector<std::string>& topics) {
+  std::string text;
+  for (const std::string& topic : topics) text += (text.empty() ? "" : ", ") + topic;
+  return text;
+}
 
 int listen(int domain_id, const ListenOptions& o) {
   std::filesystem::create_directories(o.out_dir);
   const EntityGuard participant(createParticipant(domain_id));
-  RecordingReader<sensor_msgs_msg_dds__PointCloud2_> clouds(
-      participant.get(), &sensor_msgs_msg_dds__PointCloud2__desc, "cloud", o.cloud_topic,
+  RecordingReaders<sensor_msgs_msg_dds__PointCloud2_> clouds(
+      participant.get(), &sensor_msgs_msg_dds__PointCloud2__desc, "cloud", o.cloud_topics,
       Qos(DDS_RELIABILITY_RELIABLE, DDS_DURABILITY_VOLATILE, 10), o.out_dir);
   // History 10, not Nav2's 1: a writer that wrongly sent more than its last grid to a late joiner
   // must show up as extra records, not be hidden by the reader's own history.
-  RecordingReader<nav_msgs_msg_dds__OccupancyGrid_> grids(
-      participant.get(), &nav_msgs_msg_dds__OccupancyGrid__desc, "grid", o.grid_topic,
+  RecordingReaders<nav_msgs_msg_dds__OccupancyGrid_> grids(
+      participant.get(), &nav_msgs_msg_dds__OccupancyGrid__desc, "grid", o.grid_topics,
       Qos(DDS_RELIABILITY_RELIABLE, DDS_DURABILITY_TRANSIENT_LOCAL, 10), o.out_dir);
-  spdlog::info("listening on {} and {} (domain {})", o.cloud_topic, o.grid_topic, domain_id);
+  spdlog::info("listening on {} and {} (domain {})", joined(o.cloud_topics), joined(o.grid_topics),
+               domain_id);
 
   const auto start = Clock::now();
   auto elapsed_s = [&start] { return std::chrono::duration<double>(Clock::now() - start).count(); };
@@ -284,19 +340,20 @@ int listen(int domain_id, const ListenOptions& o) {
   while (!g_stop) {
     clouds.poll();
     grids.poll();
-    if (!ready && clouds.matched() >= static_cast<std::uint32_t>(o.cloud_writers) && grids.matched() > 0) {
+    if (!ready && clouds.matched(static_cast<std::uint32_t>(o.cloud_writers)) && grids.matched(1)) {
       ready = true;
       std::ofstream(o.ready_file) << "1\n";
-      spdlog::info("matched both writers after {:.2f} s", elapsed_s());
+      spdlog::info("matched every writer after {:.2f} s", elapsed_s());
     }
-    if (complete_at_s < 0 && clouds.recorded() >= o.expect_clouds && grids.recorded() >= o.expect_grids) {
+    if (complete_at_s < 0 && clouds.fewestRecorded() >= o.expect_clouds &&
+        grids.fewestRecorded() >= o.expect_grids) {
       complete_at_s = elapsed_s();  // stay a little: anything more would be an unexpected extra
     }
-    if (complete_at_s >= 0 && elapsed_s() > complete_at_s + o.linger_s) break;
+    if (complete_at_s >= 0 && elapsed_s() > std::max(complete_at_s + o.linger_s, o.stay_s)) break;
     if (elapsed_s() > o.timeout_s) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
-  spdlog::info("recorded {} clouds and {} grids (expected {} and {}), refused {} samples",
+  spdlog::info("recorded {} clouds and {} grids (expected {} and {} per topic), refused {} samples",
                clouds.recorded(), grids.recorded(), o.expect_clouds, o.expect_grids,
                clouds.rejected() + grids.rejected());
   if (complete_at_s < 0) {
@@ -539,16 +596,23 @@ int main(int argc, char** argv) {
   listen_cmd->add_option("--out", listen_options.out_dir, "folder for the records")->required();
   listen_cmd->add_option("--ready-file", listen_options.ready_file,
                          "created once both readers have matched a writer")->required();
-  listen_cmd->add_option("--cloud-topic", listen_options.cloud_topic, "DDS topic of the clouds")
+  listen_cmd->add_option("--cloud-topic", listen_options.cloud_topics,
+                         "DDS topic of the clouds (repeat for more)")
       ->capture_default_str();
-  listen_cmd->add_option("--grid-topic", listen_options.grid_topic, "DDS topic of the grids")
+  listen_cmd->add_option("--grid-topic", listen_options.grid_topics,
+                         "DDS topic of the grids (repeat for more)")
       ->capture_default_str();
   listen_cmd->add_option("--cloud-writers", listen_options.cloud_writers,
                          "cloud writers to match before signalling ready")->capture_default_str();
-  listen_cmd->add_option("--expect-clouds", listen_options.expect_clouds, "clouds to wait for");
-  listen_cmd->add_option("--expect-grids", listen_options.expect_grids, "grids to wait for");
+  listen_cmd->add_option("--expect-clouds", listen_options.expect_clouds, "clouds to wait for, per topic");
+  listen_cmd->add_option("--expect-grids", listen_options.expect_grids, "grids to wait for, per topic");
   listen_cmd->add_option("--timeout", listen_options.timeout_s, "give up after this many seconds")
       ->capture_default_str();
+  listen_cmd->add_option("--stay", listen_options.stay_s,
+                         "stay subscribed at least this many seconds (a subscriber that stays, as "
+                         "a ROS 2 node does)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
 
   FlyOptions fly_options;
   CLI::App* fly_cmd = app.add_subcommand("fly", "fly the built-in scenario, publish clouds and poses");

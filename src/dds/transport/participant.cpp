@@ -14,8 +14,13 @@
 #include <fastrtps/utils/IPFinder.h>
 #include <fastrtps/utils/IPLocator.h>
 
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <iostream>
+#include <mutex>
 #include <stdexcept>
 #include <vector>
 
@@ -250,6 +255,58 @@ void checkDepth(int depth) {
   }
 }
 
+/// True when no socket of this host holds UDP `port` on any IPv4 address: a socket of ours binds
+/// it without address reuse, as Fast DDS and Cyclone DDS bind their unicast ports.
+bool udpPortFree(std::uint32_t port) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  if (fd < 0) return false;
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_ANY);
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  const bool free = ::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof(address)) == 0;
+  ::close(fd);
+  return free;
+}
+
+/// Participant indexes tried for a free pair of unicast ports (Fast DDS's own limit is 120).
+constexpr std::int32_t kProbedParticipantIndexes = 120;
+
+/// The first participant index whose discovery and data unicast ports on `domain` (as Fast DDS
+/// computes them from `ports`) are both free on this host now; -1 when none is.
+///
+/// Fast DDS 2.9 numbers its participants per process and, when another process already holds
+/// the ports of that number, binds the next ones but still announces the first ones too, for the
+/// participant or for its endpoints. A Fast DDS peer sends to every locator (each sample also to
+/// the other process), a Cyclone DDS peer to one of them: a node started after a ROS 2 node on
+/// rmw_cyclonedds_cpp (which takes participant indexes from 0 with Jazzy's defaults) received
+/// none of its samples. With a free index chosen first, nothing is moved and nothing stale is
+/// announced.
+std::int32_t freeParticipantIndex(int domain_id, const frtps::PortParameters& ports) {
+  const std::uint32_t base =
+      ports.portBase + ports.domainIDGain * static_cast<std::uint32_t>(domain_id);
+  for (std::int32_t index = 0; index < kProbedParticipantIndexes; ++index) {
+    const std::uint32_t step = ports.participantIDGain * static_cast<std::uint32_t>(index);
+    const std::uint32_t discovery = base + ports.offsetd1 + step;
+    const std::uint32_t data = base + ports.offsetd3 + step;
+    if (data > 65535 || discovery > 65535) break;
+    if (udpPortFree(discovery) && udpPortFree(data)) return index;
+  }
+  return -1;
+}
+
+/// True when Fast DDS will number the participant and derive its UDPv4 ports from that number:
+/// simple discovery, no index set, a UDPv4 transport.
+bool takesAParticipantIndex(const fdds::DomainParticipantQos& qos) {
+  const fdds::WireProtocolConfigQos& wire = qos.wire_protocol();
+  if (wire.participant_id >= 0) return false;
+  if (wire.builtin.discovery_config.discoveryProtocol != frtps::DiscoveryProtocol_t::SIMPLE) return false;
+  return std::any_of(qos.transport().user_transports.begin(), qos.transport().user_transports.end(),
+                     [](const TransportPtr& t) {
+                       return std::dynamic_pointer_cast<UDPv4TransportDescriptor>(unguarded(t)) != nullptr;
+                     });
+}
+
 }  // namespace
 
 std::vector<std::string> localhostAddresses() {
@@ -346,9 +403,18 @@ ParticipantPtr createParticipant(const DdsConfig& config, const std::string& nam
   // As rmw: a Permissive fallback is said, not silent.
   if (!setup.security.warning.empty()) std::cerr << "[mlmap dds] warning: " << setup.security.warning << "\n";
   for (const std::string& warning : setup.warnings) std::cerr << "[mlmap dds] warning: " << warning << "\n";
+  // The index is chosen and taken under one lock, so that two threads of this process never
+  // choose the same one.
+  static std::mutex creating;
+  std::unique_lock<std::mutex> lock(creating);
+  fdds::DomainParticipantQos qos = setup.qos;
+  if (takesAParticipantIndex(qos)) {
+    qos.wire_protocol().participant_id = freeParticipantIndex(setup.domain_id, qos.wire_protocol().port);
+  }
   fdds::DomainParticipant* participant =
       fdds::DomainParticipantFactory::get_instance()->create_participant(
-          static_cast<fdds::DomainId_t>(setup.domain_id), setup.qos);
+          static_cast<fdds::DomainId_t>(setup.domain_id), qos);
+  lock.unlock();
   if (participant == nullptr) {
     std::string security;
     if (setup.security.enabled()) {
