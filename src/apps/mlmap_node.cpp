@@ -6,6 +6,7 @@
 #include "mlmap/apps/stop_signal.h"
 
 #include <CLI/CLI.hpp>
+#include <spdlog/fmt/fmt.h>
 #include <spdlog/sinks/stdout_color_sinks.h>
 #include <spdlog/spdlog.h>
 
@@ -59,45 +60,49 @@ void logInputs(const mlmap::dds::NodeConfig& config, const mlmap::dds::MappingNo
   for (const std::string* name : {&t.cloud, &t.depth_image, &t.camera_info, &t.pose, &t.odometry}) {
     if (!name->empty()) inputs += (inputs.empty() ? "" : ", ") + mlmap::dds::ddsTopicName(config.dds.ns, *name);
   }
-  spdlog::info("mapping on DDS domain {} (discovery {}, namespace '{}'), inputs: {}", node.domainId(),
-               discovery, config.dds.ns, inputs);
+  node.log(LogLevel::kInfo,
+           fmt::format("mapping on DDS domain {} (discovery {}, namespace '{}'), inputs: {}",
+                       node.domainId(), discovery, config.dds.ns, inputs));
 }
 
 /// The frame checks' counters, when one is not zero: a frame_id or child_frame_id the node did
 /// not expect, or the robot's odometry missing on /tf (docs/dds-and-ros2.md, TF).
-void logFrameChecks(const mlmap::dds::NodeCounters& c) {
+void logFrameChecks(const mlmap::dds::MappingNode& node, const mlmap::dds::NodeCounters& c) {
   if (c.frames_unexpected_frame_id + c.frames_unresolved_frame_id +
           c.odometry_child_frame_mismatch + c.tf_odom_missing == 0) {
     return;
   }
-  spdlog::warn("frame checks: {} frames in an unexpected frame_id, {} frames with an unresolved "
-               "frame_id (dropped), {} odometry child_frame_id mismatches, {} poses without the "
-               "robot's odom -> body; {} transforms received",
-               c.frames_unexpected_frame_id, c.frames_unresolved_frame_id,
-               c.odometry_child_frame_mismatch, c.tf_odom_missing, c.tf_transforms_received);
+  node.log(LogLevel::kWarning,
+           fmt::format("frame checks: {} frames in an unexpected frame_id, {} frames with an "
+                       "unresolved frame_id (dropped), {} odometry child_frame_id mismatches, {} "
+                       "poses without the robot's odom -> body; {} transforms received",
+                       c.frames_unexpected_frame_id, c.frames_unresolved_frame_id,
+                       c.odometry_child_frame_mismatch, c.tf_odom_missing, c.tf_transforms_received));
 }
 
 /// The hits outside the local window, when there are any: their evidence went to the global map
 /// without their free space, or was lost (docs/replay.md: a larger window maps them whole).
-void logHitsOutsideWindow(const EngineStats& s) {
+void logHitsOutsideWindow(const mlmap::dds::MappingNode& node, const EngineStats& s) {
   if (s.points.hits_beyond_local_map + s.local.hits_outside_window == 0) return;
-  spdlog::warn("outside the local window: {} points in range, {} hit voxels; {} hit updates went "
-               "to the global map without their free space, {} hits lost",
-               s.points.hits_beyond_local_map, s.local.hits_outside_window, s.hits_to_global,
-               s.hits_lost);
+  node.log(LogLevel::kWarning,
+           fmt::format("outside the local window: {} points in range, {} hit voxels; {} hit "
+                       "updates went to the global map without their free space, {} hits lost",
+                       s.points.hits_beyond_local_map, s.local.hits_outside_window,
+                       s.hits_to_global, s.hits_lost));
 }
 
 /// One progress line: frames, timings and memory.
 void logProgress(const mlmap::dds::MappingNode& node) {
   const EngineStats s = node.engineStats();
   const mlmap::dds::NodeCounters c = node.counters();
-  spdlog::info("frames: {} received, {} mapped, {} without pose, {} malformed; total {:.1f} ms "
-               "median, {:.1f} ms p99; {:.1f} MB",
-               c.clouds_received + c.images_received, s.frames_mapped, c.frames_without_pose,
-               c.inputs_malformed, s.total.median_ms, s.total.p99_ms,
-               static_cast<double>(s.memory.total()) / 1e6);
-  logFrameChecks(c);
-  logHitsOutsideWindow(s);
+  node.log(LogLevel::kInfo,
+           fmt::format("frames: {} received, {} mapped, {} without pose, {} malformed; total "
+                       "{:.1f} ms median, {:.1f} ms p99; {:.1f} MB",
+                       c.clouds_received + c.images_received, s.frames_mapped,
+                       c.frames_without_pose, c.inputs_malformed, s.total.median_ms,
+                       s.total.p99_ms, static_cast<double>(s.memory.total()) / 1e6));
+  logFrameChecks(node, c);
+  logHitsOutsideWindow(node, s);
 }
 
 /// Maps until --duration or a stop signal, with a progress line every --report-every seconds.
@@ -108,28 +113,31 @@ void mapUntilStopped(const Options& o, const mlmap::dds::MappingNode& node) {
 /// Stops the node and logs its counts; returns the exit status (1 when the map of this run was
 /// not saved at shutdown).
 int stopAndReport(const mlmap::dds::NodeConfig& config, mlmap::dds::MappingNode& node) {
-  spdlog::info("stopping");
-  node.stop();
+  node.log(LogLevel::kInfo, "stopping");
+  node.stop();  // from here on the node's lines go to stderr only: /rosout's writer is gone
   const EngineStats s = node.engineStats();
   const mlmap::dds::NodeCounters c = node.counters();
-  spdlog::info("done: {} frames mapped ({} dropped, {} rejected by the engine, {} without pose, "
-               "{} across a pose jump, {} malformed inputs, {} poses rejected); {} messages published; "
-               "{} map saves, {} failed",
-               s.frames_mapped, s.frames_dropped + c.frames_handover_dropped,
-               c.frames_engine_rejected, c.frames_without_pose + c.frames_future,
-               c.frames_across_pose_jump, c.inputs_malformed, c.poses_rejected, c.messages_published,
-               c.map_saves, c.map_saves_failed);
-  logFrameChecks(c);
-  logHitsOutsideWindow(s);
+  node.log(LogLevel::kInfo,
+           fmt::format("done: {} frames mapped ({} dropped, {} rejected by the engine, {} without "
+                       "pose, {} across a pose jump, {} malformed inputs, {} poses rejected); {} "
+                       "messages published; {} map saves, {} failed",
+                       s.frames_mapped, s.frames_dropped + c.frames_handover_dropped,
+                       c.frames_engine_rejected, c.frames_without_pose + c.frames_future,
+                       c.frames_across_pose_jump, c.inputs_malformed, c.poses_rejected,
+                       c.messages_published, c.map_saves, c.map_saves_failed));
+  logFrameChecks(node, c);
+  logHitsOutsideWindow(node, s);
   if (config.dds.fleet.publish || config.dds.fleet.subscribe) {
-    spdlog::info("fleet: {} changed submaps sent ({:.1f} kB), {} submaps of other vehicles taken "
-                 "as priors ({} voxels added), {} refused",
-                 c.fleet_submaps_sent, static_cast<double>(c.fleet_bytes_sent) / 1e3,
-                 c.fleet_priors_received, s.prior_voxels_added, c.fleet_samples_refused);
+    node.log(LogLevel::kInfo,
+             fmt::format("fleet: {} changed submaps sent ({:.1f} kB), {} submaps of other "
+                         "vehicles taken as priors ({} voxels added), {} refused",
+                         c.fleet_submaps_sent, static_cast<double>(c.fleet_bytes_sent) / 1e3,
+                         c.fleet_priors_received, s.prior_voxels_added, c.fleet_samples_refused));
   }
   if (!config.map_file.save_path.empty() && c.last_map_save_failed) {
     // The map of this run is lost unless a supervisor notices: say so in the exit status.
-    spdlog::error("the map was not saved to '{}' at shutdown (see above)", config.map_file.save_path);
+    node.log(LogLevel::kError, fmt::format("the map was not saved to '{}' at shutdown (see above)",
+                                           config.map_file.save_path));
     return 1;
   }
   return 0;

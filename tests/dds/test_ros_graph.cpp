@@ -327,6 +327,11 @@ TEST(RosGraph, RosoutHasRclsQosAndCarriesTheNodesLogLines) {
   EXPECT_EQ(warning.name_(), "mlmap_node");
   EXPECT_GT(warning.stamp_().sec_(), 0);
   EXPECT_EQ(line("memory of the configured")->level_(), 20);
+  // A program's own lines logged through the node (mlmap_node's progress and stop lines) too.
+  node.log(LogLevel::kWarning, "frames: 3 received, 3 mapped (a program's progress line)");
+  ASSERT_TRUE(waitFor([&] { return line("a program's progress line").has_value(); }))
+      << "a line logged through MappingNode::log() did not reach /rosout";
+  EXPECT_EQ(line("a program's progress line")->level_(), 30);
 
   const std::optional<Endpoint> writer = observer.log.on("rt/rosout", true);
   ASSERT_TRUE(writer);

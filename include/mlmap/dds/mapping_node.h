@@ -99,6 +99,9 @@ class MappingNode {
   [[nodiscard]] int domainId() const;
   /// What the node's ROS 2 services (~/save_map, ~/clear_map, the parameter services) counted.
   [[nodiscard]] ServiceCounters serviceCounters() const;
+  /// Logs a line as the node logs its own: to the LogSink and, until stop() deletes the
+  /// participant, to /rosout (a program's progress lines, so that ROS 2 tools see them too).
+  void log(LogLevel level, const std::string& message) const;
 
  private:
   struct Impl;

@@ -369,6 +369,10 @@ std::shared_ptr<const MapSnapshot> MappingNode::snapshot() const {
 
 int MappingNode::domainId() const { return impl_->domain_id; }
 
+void MappingNode::log(LogLevel level, const std::string& message) const {
+  impl_->log.always(level, message);
+}
+
 ServiceCounters MappingNode::serviceCounters() const {
   return impl_->services ? impl_->services->counters() : ServiceCounters{};
 }
