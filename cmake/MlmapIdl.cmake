@@ -13,17 +13,18 @@
 # `pose_` vs type `Pose_`), absolute paths (relative ones silently give empty headers), one run
 # over every file (it writes the code of included files too; a run per file would race in
 # parallel builds), and outputs moved into <pkg>/msg/ afterwards because it writes them flat.
+# RunFastddsgen.cmake runs it: a temporary directory of this build's own (its default, /tmp, is
+# shared by every build on the machine), its errors fail the build, outputs land by rename.
 find_program(FASTDDSGEN_EXECUTABLE fastddsgen REQUIRED)  # found already by MlmapDdsSupport
+set(MLMAP_RUN_FASTDDSGEN "${CMAKE_CURRENT_LIST_DIR}/RunFastddsgen.cmake")
 
 function(mlmap_idl_library target)
   cmake_parse_arguments(ARG "" "IDL_ROOT" "" ${ARGN})
   get_filename_component(root "${ARG_IDL_ROOT}" ABSOLUTE)
   file(GLOB idl_files CONFIGURE_DEPENDS "${root}/*/msg/*_.idl" "${root}/*/srv/*_.idl")
   set(gen_dir "${CMAKE_CURRENT_BINARY_DIR}/idl_gen")
-  set(flat_dir "${gen_dir}/_flat")
   set(outputs "")
   set(sources "")
-  set(moves "")
   set(seen "")
   foreach(idl IN LISTS idl_files)
     get_filename_component(name "${idl}" NAME_WE)
@@ -38,19 +39,18 @@ function(mlmap_idl_library target)
     foreach(suffix .h .cxx PubSubTypes.h PubSubTypes.cxx)
       set(out "${gen_dir}/${pkg}/${kind}/${name}${suffix}")
       list(APPEND outputs "${out}")
-      list(APPEND moves COMMAND ${CMAKE_COMMAND} -E copy_if_different "${flat_dir}/${name}${suffix}" "${out}")
       if(suffix MATCHES "cxx$")
         list(APPEND sources "${out}")
       endif()
     endforeach()
   endforeach()
+  string(REPLACE ";" "|" idl_list "${idl_files}")  # one -D value
   add_custom_command(
     OUTPUT ${outputs}
-    COMMAND ${CMAKE_COMMAND} -E rm -rf "${flat_dir}"
-    COMMAND ${CMAKE_COMMAND} -E make_directory "${flat_dir}"
-    COMMAND ${FASTDDSGEN_EXECUTABLE} -cs -replace -d "${flat_dir}" -I "${root}" ${idl_files}
-    ${moves}
-    DEPENDS ${idl_files}
+    COMMAND ${CMAKE_COMMAND} "-DFASTDDSGEN=${FASTDDSGEN_EXECUTABLE}" "-DIDL_ROOT=${root}"
+            "-DIDL_FILES=${idl_list}" "-DGEN_DIR=${gen_dir}"
+            "-DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/idl_work" -P "${MLMAP_RUN_FASTDDSGEN}"
+    DEPENDS ${idl_files} "${MLMAP_RUN_FASTDDSGEN}"
     COMMENT "Generating Fast DDS types from ${root} with fastddsgen"
     VERBATIM)
   add_library(${target} ${sources})

@@ -83,6 +83,14 @@ using ParticipantPtr = std::unique_ptr<eprosima::fastdds::dds::DomainParticipant
 /// 2.9.1 aborts when a reliable writer sends to a locator it never opened, which a second ROS 2
 /// node on rmw_cyclonedds_cpp with Jazzy's defaults makes happen; the guard opens it first.
 ///
+/// Participant index: with simple discovery over UDPv4 and no index set by the profile, the
+/// participant gets the first index (0..119) whose discovery and data unicast ports on the domain
+/// no socket of this host holds (probed by binding them). Fast DDS 2.9 would number it per
+/// process, and when another process (a ROS 2 node on rmw_cyclonedds_cpp, which takes indexes
+/// from 0) holds those ports it moves to others but still announces the first ones, so a Cyclone
+/// peer sent its samples to the other process. Creation is serialised within the process, so
+/// that two threads never pick the same index.
+///
 /// Throws std::runtime_error with the reason when the profiles file, the profile or the
 /// environment is invalid, or Fast DDS refuses to create the participant.
 ParticipantPtr createParticipant(const DdsConfig& config, const std::string& name);
