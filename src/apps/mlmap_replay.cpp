@@ -5,6 +5,7 @@
 #include "mlmap/core/stopwatch.h"
 #include "mlmap/eval/json_output.h"
 #include "mlmap/eval/run_outputs.h"
+#include "mlmap/map_io/map_file.h"
 #include "mlmap/datasets/cloud_sequence.h"
 #include "mlmap/datasets/frame_directory.h"
 #include "mlmap/datasets/frame_prefetcher.h"
@@ -719,6 +720,27 @@ int finish(const Options& o, const MapConfig& config, Replay* replay) {
   return s.frames_mapped > 0 ? 0 : 3;
 }
 
+/// Throws std::runtime_error naming the option when an output of the run (--save-map,
+/// --voxels-out, --stats-out, --grid-out's two files) would replace one of its inputs (under any
+/// spelling of the path, or a file inside an input folder) or, but for --save-map with
+/// --overwrite, an existing mlmap map.
+void checkOutputs(const Options& o) {
+  const std::vector<std::string> inputs = {o.bag_path,    o.frames_dir,  o.clouds_dir,
+                                           o.poses_path,  o.config_path, o.scenario_path};
+  std::vector<std::pair<std::string, std::string>> outputs = {
+      {"--save-map", o.save_map_path}, {"--voxels-out", o.voxels_out}, {"--stats-out", o.stats_out}};
+  if (!o.grid_out.empty()) {
+    outputs.emplace_back("--grid-out", o.grid_out + ".pgm");
+    outputs.emplace_back("--grid-out", o.grid_out + ".yaml");
+  }
+  for (const auto& [option, path] : outputs) {
+    if (path.empty()) continue;
+    const bool may_replace_map = option == "--save-map" && o.overwrite;
+    const std::string conflict = io::outputConflict(path, inputs, may_replace_map, "--overwrite");
+    if (!conflict.empty()) throw std::runtime_error(option + ": " + conflict);
+  }
+}
+
 /// Checks the configuration, maps the source and writes the outputs. Returns the exit status:
 /// 0, 2 for a bad configuration or --extrinsic, 3 when no frame was mapped.
 int replaySource(const Options& o) {
@@ -728,6 +750,7 @@ int replaySource(const Options& o) {
   if (!cloud_options) return 2;
   adjustConfig(o, &config);
   if (!validConfig(config)) return 2;
+  checkOutputs(o);  // before anything is written or read
   std::filesystem::create_directories(o.out_dir);
   if (!o.save_map_path.empty()) eval::checkSaveMapTarget(o.save_map_path, o.overwrite);  // before the run
 

@@ -413,13 +413,37 @@ bool isMapFile(const std::string& path) {
          std::memcmp(magic, kMagic, sizeof magic) == 0;
 }
 
+namespace {
+
+/// True when `path` names something inside the directory `folder` (any spelling of either).
+bool isInside(const std::filesystem::path& path, const std::filesystem::path& folder) {
+  std::error_code ec;
+  const std::filesystem::path inner = std::filesystem::weakly_canonical(path, ec);
+  if (ec) return false;
+  const std::filesystem::path outer = std::filesystem::weakly_canonical(folder, ec);
+  if (ec) return false;
+  auto o = outer.begin();
+  auto i = inner.begin();
+  for (; o != outer.end() && !o->empty(); ++o, ++i) {
+    if (i == inner.end() || *i != *o) return false;
+  }
+  return i != inner.end();
+}
+
+}  // namespace
+
 std::string outputConflict(const std::string& output, const std::vector<std::string>& inputs,
                            bool overwrite_maps, const std::string& overwrite_flag) {
   std::error_code ec;
   if (!std::filesystem::exists(output, ec)) return "";
   for (const std::string& input : inputs) {
-    if (!input.empty() && std::filesystem::equivalent(output, input, ec)) {
+    if (input.empty()) continue;
+    if (std::filesystem::equivalent(output, input, ec)) {
       return "'" + output + "' is an input of this run: writing it would destroy what is read";
+    }
+    if (std::filesystem::is_directory(input, ec) && isInside(output, input)) {
+      return "'" + output + "' is inside the input folder '" + input +
+             "' of this run: writing it could destroy what is read";
     }
   }
   if (!overwrite_maps && isMapFile(output)) {

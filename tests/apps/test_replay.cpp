@@ -272,6 +272,55 @@ TEST(Replay, BadInputIsRefusedWithAMessage) {
   }
 }
 
+// No output of a run may replace one of its inputs, under any spelling of the path or inside an
+// input folder, for any output option; the input stays as it was and nothing is written.
+TEST(Replay, NoOutputReplacesAnInput) {
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_outputs";
+  fs::remove_all(dir);
+  fs::create_directories(dir + "/clouds");
+  const std::string bag = "not a bag, but an input all the same\n";
+  mlmap::testing::writeFile(dir + "/run.mcap", bag);
+  mlmap::testing::writeFile(dir + "/clouds/a.pcd", "VERSION 0.7\n");
+  mlmap::testing::writeFile(dir + "/clouds/a.pgm", "P5\n");
+  mlmap::testing::writeFile(dir + "/poses.txt", "0 0 0 0 0 0 0 1\n");
+  mlmap::testing::writeFile(dir + "/mlmap.yaml", "local_map: {resolution_m: 0.2}\n");
+  const std::string bin = MLMAP_REPLAY_BIN;
+  const std::string out = " --out '" + dir + "/out'";
+  struct Case {
+    std::string args;
+    std::string option;  ///< named in the message
+  };
+  const std::vector<Case> cases = {
+      {" --bag '" + dir + "/run.mcap' --save-map '" + dir + "/run.mcap'", "--save-map"},
+      {" --bag '" + dir + "/run.mcap' --save-map '" + dir + "/clouds/../run.mcap' --overwrite",
+       "--save-map"},
+      {" --bag '" + dir + "/run.mcap' --voxels-out '" + dir + "/./run.mcap'", "--voxels-out"},
+      {" --bag '" + dir + "/run.mcap' --stats-out '" + dir + "/run.mcap'", "--stats-out"},
+      {" --config '" + dir + "/mlmap.yaml' --stats-out '" + dir + "/mlmap.yaml'", "--stats-out"},
+      {" --clouds '" + dir + "/clouds' --poses '" + dir + "/poses.txt' --voxels-out '" + dir +
+           "/clouds/a.pcd'",
+       "--voxels-out"},
+      {" --clouds '" + dir + "/clouds' --poses '" + dir + "/poses.txt' --grid-out '" + dir +
+           "/clouds/a'",
+       "--grid-out"},  // clouds/a.pgm exists below
+
+  };
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const std::string log = dir + "/case" + std::to_string(i) + ".log";
+    const int rc = run(bin + out + cases[i].args, log);
+    EXPECT_EQ(rc, 1) << cases[i].args << "\n" << readText(log);
+    const std::string said = readText(log);
+    EXPECT_NE(said.find(cases[i].option + ": '"), std::string::npos) << said;
+    EXPECT_TRUE(said.find("is an input of this run") != std::string::npos ||
+                said.find("is inside the input folder") != std::string::npos)
+        << said;
+    EXPECT_FALSE(fs::exists(dir + "/out")) << "case " << i << " wrote its output folder";
+  }
+  EXPECT_EQ(readText(dir + "/run.mcap"), bag) << "the bag was replaced";
+  EXPECT_EQ(readText(dir + "/mlmap.yaml"), "local_map: {resolution_m: 0.2}\n");
+  EXPECT_EQ(readText(dir + "/clouds/a.pcd"), "VERSION 0.7\n");
+}
+
 TEST(Replay, SimulatorIsTheDefaultSource) {
   const std::string dir = ::testing::TempDir() + "/mlmap_replay_sim";
   fs::remove_all(dir);

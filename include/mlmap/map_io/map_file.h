@@ -66,10 +66,11 @@ void checkMapMatchesConfig(const MapState& state, const MapConfig& config,
 /// True when `path` is an existing file that starts like an mlmap map file ("MLMAPMAP").
 [[nodiscard]] bool isMapFile(const std::string& path);
 
-/// Why a program must not write `output`, or "" when it may: `output` is one of `inputs` (the
-/// same file under any spelling of its path), or an existing mlmap map file while
-/// `overwrite_maps` is false (the message then names `overwrite_flag`, the option that allows
-/// it). Every program checks its outputs with it before writing anything.
+/// Why a program must not write `output`, or "" when it may: `output` exists and is one of
+/// `inputs` (the same file under any spelling of its path) or lies inside an input that is a
+/// folder, or it is an existing mlmap map file while `overwrite_maps` is false (the message then
+/// names `overwrite_flag`, the option that allows it). A path that does not exist yet never
+/// conflicts. Every program checks its outputs with it before writing anything.
 [[nodiscard]] std::string outputConflict(const std::string& output,
                                          const std::vector<std::string>& inputs,
                                          bool overwrite_maps, const std::string& overwrite_flag);
