@@ -20,6 +20,8 @@ namespace mlmap::bag {
 namespace {
 
 constexpr double kSameStamp_s = 1e-6;  // as PoseBuffer and CloudSequence
+/// The most transforms between the world frame and the body frame (a robot's tree is a few deep).
+constexpr std::size_t kMaxTfChainEdges = 64;
 
 bool isDepthEncoding(const std::string& encoding) {
   return encoding == "16UC1" || encoding == "32FC1" || encoding == "mono16";
@@ -302,11 +304,13 @@ void BagFrameSource::addTf(const std::vector<std::uint8_t>& bytes, const std::st
       tf->parent_of[child] = parent;
       // The frames above the body (its ancestors, as far as known): only their transforms are
       // kept whole; of the others only the latest, which seeds a frame found to be an ancestor.
+      // A cycle ends the walk (composeTfPoses() refuses it), and so does kMaxTfChainEdges.
       tf->ancestors.clear();
       std::string frame = options_.body_frame;
       for (auto up = tf->parent_of.find(frame);
-           up != tf->parent_of.end() && tf->ancestors.size() < 64; up = tf->parent_of.find(frame)) {
-        tf->ancestors.insert(frame);
+           up != tf->parent_of.end() && tf->ancestors.size() <= kMaxTfChainEdges &&
+           tf->ancestors.insert(frame).second;
+           up = tf->parent_of.find(frame)) {
         frame = up->second;
       }
       for (const std::string& a : tf->ancestors) {
@@ -321,7 +325,9 @@ void BagFrameSource::addTf(const std::vector<std::uint8_t>& bytes, const std::st
 }
 
 std::vector<BagFrameSource::StampedTransform> BagFrameSource::composeTfPoses(TfEdges* tf) const {
-  // The chain world -> ... -> body through /tf (dynamic) and /tf_static edges, body end first.
+  // The chain world -> ... -> body through /tf (dynamic) and /tf_static edges, body end first;
+  // consecutive static edges are multiplied into one, so that composing costs (poses x dynamic
+  // edges), whatever the number of static ones.
   struct Edge {
     const std::vector<StampedTransform>* series = nullptr;  ///< dynamic; null: static
     Transform T_parent_child = Transform::Identity();
@@ -329,7 +335,8 @@ std::vector<BagFrameSource::StampedTransform> BagFrameSource::composeTfPoses(TfE
   std::vector<Edge> chain;
   std::string frame = options_.body_frame;
   std::string walked = frame;
-  while (frame != options_.world_frame && chain.size() < 64) {
+  std::set<std::string> visited = {frame};
+  for (std::size_t edges = 0; frame != options_.world_frame; ++edges) {
     Edge edge;
     std::string parent;
     if (const auto up = tf->parent_of.find(frame); up != tf->parent_of.end()) {
@@ -350,9 +357,25 @@ std::vector<BagFrameSource::StampedTransform> BagFrameSource::composeTfPoses(TfE
                                "' to the body frame '" + options_.body_frame + "' (found " +
                                walked + " with no parent); set world_frame or body_frame");
     }
-    chain.push_back(edge);
-    frame = parent;
     walked += " <- " + parent;
+    if (!visited.insert(parent).second) {
+      throw std::runtime_error(bag_->path() + ": the transforms from the body frame '" +
+                               options_.body_frame + "' loop back to '" + parent + "' (" +
+                               walked + ") before reaching '" + options_.world_frame +
+                               "': a /tf or /tf_static cycle; no pose is taken from it");
+    }
+    if (edges + 1 > kMaxTfChainEdges) {
+      throw std::runtime_error(bag_->path() + ": more than " + std::to_string(kMaxTfChainEdges) +
+                               " transforms between '" + options_.world_frame +
+                               "' and the body frame '" + options_.body_frame + "' (" + walked +
+                               ")");
+    }
+    if (edge.series == nullptr && !chain.empty() && chain.back().series == nullptr) {
+      chain.back().T_parent_child = edge.T_parent_child * chain.back().T_parent_child;
+    } else {
+      chain.push_back(edge);
+    }
+    frame = parent;
   }
   // The poses at the stamps of the lowest dynamic edge, the others interpolated there (their
   // nearest transform held outside their range, as a slow map -> odom is).

@@ -181,6 +181,43 @@ std::string errorOf(Make&& make) {
   return "";
 }
 
+// Static edges above a dynamic one are composed in order (they are multiplied into one).
+TEST(BagFrameSource, StaticEdgesAboveTheDynamicOneComposeInOrder) {
+  BagFrameSourceOptions options;
+  options.world_frame = "world";
+  const BagFrameSource source(openBag(fixture("tf_static_chain.mcap")), options);
+  const auto& clouds = expected()["clouds"];
+  ASSERT_EQ(source.size(), clouds.size());
+  const Transform T_W_O =
+      transformOf(expected()["T_world_w1"]) * transformOf(expected()["T_w1_odom"]);
+  for (std::size_t i = 0; i < source.size(); ++i) {
+    expectNear(std::get<mlmap::PointCloudFrame>(source.read(i)).T_W_B,
+               T_W_O * bodyPose(secondsAfterT0(clouds[i]["stamp_ns"])), 1e-6);
+  }
+}
+
+// A cycle in the transforms, dynamic or static, is refused with the loop it found, at once (the
+// walk up the tree used to go round a dynamic cycle for ever, and to compose a static one).
+TEST(BagFrameSource, TfCyclesAreRefusedWithTheLoop) {
+  for (const char* bag : {"tf_cycle.mcap", "tf_static_cycle.mcap"}) {
+    for (const char* world : {"world", "map"}) {
+      BagFrameSourceOptions options;
+      options.world_frame = world;
+      const std::string error = [&] {
+        try {
+          const BagFrameSource source(openBag(fixture(bag)), options);
+          ADD_FAILURE() << bag << ": poses were taken from a cycle";
+        } catch (const std::runtime_error& e) {
+          return std::string(e.what());
+        }
+        return std::string();
+      }();
+      EXPECT_NE(error.find("loop back to"), std::string::npos) << bag << ": " << error;
+      EXPECT_NE(error.find("cycle"), std::string::npos) << bag << ": " << error;
+    }
+  }
+}
+
 TEST(BagFrameSource, AmbiguousInputsNameTheOptionAndListTheTopics) {
   const std::shared_ptr<const mlmap::bag::BagReader> bag = openBag(fixture("tf_unchunked.mcap"));
   const std::string clouds = errorOf([&] { (void)autoSelect(*bag, BagInputs{}, "world"); });
