@@ -91,23 +91,41 @@ void logHitsOutsideWindow(const mlmap::dds::MappingNode& node, const EngineStats
                        s.hits_to_global, s.hits_lost));
 }
 
-/// One progress line: frames, timings and memory.
-void logProgress(const mlmap::dds::MappingNode& node) {
+/// The first time hits fall outside the local window, once: what happens to them and what to
+/// change. The progress lines then carry the count, and the closing lines the totals.
+void warnOfHitsOutsideWindowOnce(const mlmap::dds::MappingNode& node, const EngineStats& s,
+                                 bool* warned) {
+  if (*warned || s.points.hits_beyond_local_map + s.local.hits_outside_window == 0) return;
+  *warned = true;
+  node.log(LogLevel::kWarning,
+           "hits are falling outside the local window: they reach the global map as occupied "
+           "but without the free space in front of them, so obstacles that move away there are "
+           "not cleared. To map them whole, make local_map.size_cells hold "
+           "awareness.max_range_m around the vehicle (or lower max_range_m). Said once; the "
+           "progress lines count them and the last lines give the totals.");
+}
+
+/// One progress line: frames, timings, memory and the hits outside the local window.
+void logProgress(const mlmap::dds::MappingNode& node, bool* warned_outside) {
   const EngineStats s = node.engineStats();
   const mlmap::dds::NodeCounters c = node.counters();
   node.log(LogLevel::kInfo,
            fmt::format("frames: {} received, {} mapped, {} without pose, {} malformed; total "
-                       "{:.1f} ms median, {:.1f} ms p99; {:.1f} MB",
+                       "{:.1f} ms median, {:.1f} ms p99; {:.1f} MB; {} hit updates outside the "
+                       "local window",
                        c.clouds_received + c.images_received, s.frames_mapped,
                        c.frames_without_pose, c.inputs_malformed, s.total.median_ms,
-                       s.total.p99_ms, static_cast<double>(s.memory.total()) / 1e6));
+                       s.total.p99_ms, static_cast<double>(s.memory.total()) / 1e6,
+                       s.hits_to_global + s.hits_lost));
   logFrameChecks(node, c);
-  logHitsOutsideWindow(node, s);
+  warnOfHitsOutsideWindowOnce(node, s, warned_outside);
 }
 
 /// Maps until --duration or a stop signal, with a progress line every --report-every seconds.
 void mapUntilStopped(const Options& o, const mlmap::dds::MappingNode& node) {
-  apps::runUntilStopped(o.duration_s, o.report_every_s, [&] { logProgress(node); });
+  bool warned_outside = false;
+  apps::runUntilStopped(o.duration_s, o.report_every_s,
+                        [&] { logProgress(node, &warned_outside); });
 }
 
 /// Stops the node and logs its counts; returns the exit status (1 when the map of this run was

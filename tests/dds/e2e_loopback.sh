@@ -35,7 +35,8 @@ else
   inspect=(--default-scenario --min-precision 0.9)
 fi
 
-"$bin/mlmap_node" --config "$cfg" --report-every 0 > "$out/node.log" 2>&1 &
+# Progress lines every second, as a user runs it: warnings must not repeat with them.
+"$bin/mlmap_node" --config "$cfg" --report-every 1 > "$out/node.log" 2>&1 &
 node=$!
 "$bin/mlmap_inspect" --config "$cfg" --out "$out" --expect-all "${inspect[@]}" \
   --idle-stop 3 --duration 120 > "$out/inspect.log" 2>&1 &
@@ -53,6 +54,14 @@ for f in publisher node inspect; do echo "== $f"; cat "$out/$f.log"; done
 echo "publisher $pub_rc, node $node_rc, inspector $inspect_rc"
 [ $pub_rc -eq 0 ] && [ $node_rc -eq 0 ] && [ $inspect_rc -eq 0 ] || { echo "FAIL: a process failed"; exit 1; }
 mapped=$(sed -n 's/.*done: \([0-9]*\) frames mapped.*/\1/p' "$out/node.log")
+# The hits outside the local window are explained at most once while mapping, and totalled at
+# most once at the end, however many progress lines there were.
+progress=$(grep -c "frames: " "$out/node.log")
+explained=$(grep -c "hits are falling outside the local window" "$out/node.log")
+totalled=$(grep -c "outside the local window: [0-9]* points in range" "$out/node.log")
+echo "progress lines $progress, window warnings $explained while mapping, $totalled at the end"
+[ "$explained" -le 1 ] && [ "$totalled" -le 1 ] ||
+  { echo "FAIL: the window warning repeats"; exit 1; }
 [ "${mapped:-0}" -eq "$frames" ] || { echo "FAIL: the node mapped ${mapped:-no} frames of $frames"; exit 1; }
 for f in dds_map_top.png dds_awareness_top.png dds_grid.png dds_esdf_slice.png summary.json; do
   [ -s "$out/$f" ] || { echo "FAIL: the inspector wrote no $f"; exit 1; }
