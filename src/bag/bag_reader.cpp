@@ -76,8 +76,20 @@ class FolderBag : public BagReader {
   std::vector<std::string> warnings_;
 };
 
+/// Throws unless `path` is a regular file: opening a FIFO blocks until something writes to it,
+/// and a device never ends.
+void requireRegularFile(const std::string& path) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec) throw std::runtime_error(path + ": cannot open: " + ec.message());
+  if (!fs::is_regular_file(status)) {
+    throw std::runtime_error(path + ": not a regular file (a device, pipe or socket), not a bag");
+  }
+}
+
 /// A bag file by its first bytes: MCAP or sqlite3.
 std::unique_ptr<BagReader> openFile(const std::string& path) {
+  requireRegularFile(path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path + ": cannot open");
   char head[16] = {};
@@ -127,6 +139,7 @@ std::unique_ptr<BagReader> openFolder(const std::string& dir) {
                                "' is not a file name inside the folder");
     }
     const std::string file = (fs::path(dir) / relative).string();
+    requireRegularFile(file);
     files.push_back(storage == "mcap" ? openMcapBag(file) : openSqliteBag(file));
   }
   return std::make_unique<FolderBag>(dir, std::move(files));

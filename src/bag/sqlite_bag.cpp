@@ -3,6 +3,7 @@
 #include <sqlite3.h>
 
 #include <cstring>
+#include <filesystem>
 #include <map>
 #include <mutex>
 #include <stdexcept>
@@ -45,6 +46,11 @@ class SqliteBag : public BagReader {
       throw std::runtime_error(path + ": cannot open as sqlite3: " + error);
     }
     try {
+      requireTables();
+      std::error_code ec;
+      const std::uintmax_t file_bytes = std::filesystem::file_size(path, ec);
+      // Every row of a real table is stored in the file, in a few bytes at least.
+      max_rows_ = ec ? 0 : file_bytes / kMinRowBytes;
       readTopics();
       readEntries();
       read_statement_ =
@@ -89,10 +95,35 @@ class SqliteBag : public BagReader {
   }
 
  private:
+  /// Throws unless `topics` and `messages` are tables: a view can compute rows without end (a
+  /// recursive one never finishes, a join can make 10^8 rows of a small file).
+  void requireTables() {
+    for (const char* name : {"topics", "messages"}) {
+      Statement statement(db_, path_, "SELECT type FROM sqlite_master WHERE name = ?");
+      sqlite3_bind_text(statement.get(), 1, name, -1, SQLITE_STATIC);
+      const std::string type =
+          sqlite3_step(statement.get()) == SQLITE_ROW ? text(statement.get(), 0) : "";
+      if (type != "table") {
+        throw std::runtime_error(path_ + ": not a rosbag2 sqlite3 bag: '" + name + "' is " +
+                                 (type.empty() ? std::string("missing") : "a " + type) +
+                                 ", not a table");
+      }
+    }
+  }
+
+  /// Throws when a table yields more rows than the file can hold.
+  void countRow(std::size_t rows, const char* table) const {
+    if (rows > max_rows_) {
+      throw std::runtime_error(path_ + ": " + table + " has more rows than a file of its size can " +
+                               "hold (" + std::to_string(max_rows_) + ")");
+    }
+  }
+
   void readTopics() {
     Statement statement(db_, path_, "SELECT id, name, type, serialization_format FROM topics");
     int step = SQLITE_ROW;
     while ((step = sqlite3_step(statement.get())) == SQLITE_ROW) {
+      countRow(topics_.size() + 1, "topics");
       topic_of_id_[sqlite3_column_int64(statement.get(), 0)] = topics_.size();
       topics_.push_back(
           {text(statement.get(), 1), text(statement.get(), 2), text(statement.get(), 3), 0});
@@ -105,6 +136,7 @@ class SqliteBag : public BagReader {
                         "SELECT id, topic_id, timestamp FROM messages ORDER BY timestamp, id");
     int step = SQLITE_ROW;
     while ((step = sqlite3_step(statement.get())) == SQLITE_ROW) {
+      countRow(entries_.size() + 1, "messages");
       const sqlite3_int64 topic_id = sqlite3_column_int64(statement.get(), 1);
       const sqlite3_int64 stamp = sqlite3_column_int64(statement.get(), 2);
       const auto topic = topic_of_id_.find(topic_id);
@@ -125,8 +157,12 @@ class SqliteBag : public BagReader {
     if (step != SQLITE_DONE) throw std::runtime_error(path_ + ": messages: " + sqlite3_errmsg(db_));
   }
 
+  /// The least bytes a row of a table takes in the file (a record header and a few integers).
+  static constexpr std::uintmax_t kMinRowBytes = 4;
+
   std::string path_;
   sqlite3* db_ = nullptr;
+  std::uintmax_t max_rows_ = 0;  ///< rows a file of this size can hold
   std::vector<TopicInfo> topics_;
   std::map<sqlite3_int64, std::size_t> topic_of_id_;
   std::vector<MessageEntry> entries_;

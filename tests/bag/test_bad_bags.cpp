@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 #include <sqlite3.h>
+#include <sys/stat.h>
 
 #include <cstring>
 #include <filesystem>
@@ -242,11 +243,42 @@ TEST(BadBags, SqliteFileThatIsNotABag) {
             SQLITE_OK);
   sqlite3_close(db);
   EXPECT_EQ(errorOf([&] { readEverything(path); }),
-            path + ": not a rosbag2 sqlite3 bag (no such table: topics)");
+            path + ": not a rosbag2 sqlite3 bag: 'topics' is missing, not a table");
   std::vector<std::uint8_t> bytes = readAll(path);
   std::fill(bytes.begin() + 100, bytes.end(), 0xEE);  // the header stays, the pages are garbage
   writeAll(path, bytes);
   EXPECT_NE(errorOf([&] { readEverything(path); }).find(path + ": "), std::string::npos);
+}
+
+// `messages` or `topics` as a view: a recursive view never ends and a join makes rows without
+// bound from a small file; only tables are read, whose rows the file's size bounds.
+TEST(BadBags, ViewsInsteadOfTablesAreRefused) {
+  const std::string recursive = editedDb3(
+      "recursive_view.db3",
+      "ALTER TABLE messages RENAME TO m0; CREATE VIEW messages AS WITH RECURSIVE "
+      "r(id, topic_id, timestamp, data) AS (SELECT id, topic_id, timestamp, data FROM m0 "
+      "UNION ALL SELECT id, topic_id, timestamp + 1, data FROM r) SELECT * FROM r");
+  EXPECT_EQ(errorOf([&] { readEverything(recursive); }),
+            recursive + ": not a rosbag2 sqlite3 bag: 'messages' is a view, not a table");
+  const std::string topics = editedDb3(
+      "topics_view.db3",
+      "ALTER TABLE topics RENAME TO t0; CREATE VIEW topics AS SELECT a.* FROM t0 a, t0 b, t0 c");
+  EXPECT_EQ(errorOf([&] { readEverything(topics); }),
+            topics + ": not a rosbag2 sqlite3 bag: 'topics' is a view, not a table");
+}
+
+// A FIFO (or a device) named as the bag is refused at once: opening a FIFO blocks until
+// something writes to it.
+TEST(BadBags, AFifoIsRefusedWithoutWaiting) {
+  for (const char* name : {"fifo.mcap", "fifo.db3"}) {
+    const std::string path = scratch(name);
+    fs::remove(path);
+    ASSERT_EQ(::mkfifo(path.c_str(), 0600), 0) << path;
+    EXPECT_EQ(errorOf([&] { readEverything(path); }),
+              path + ": not a regular file (a device, pipe or socket), not a bag");
+  }
+  EXPECT_EQ(errorOf([&] { readEverything("/dev/zero"); }),
+            "/dev/zero: not a regular file (a device, pipe or socket), not a bag");
 }
 
 TEST(BadBags, MetadataOfAnotherStorage) {
