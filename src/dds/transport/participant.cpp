@@ -269,7 +269,8 @@ bool udpPortFree(std::uint32_t port) {
   return free;
 }
 
-/// Participant indexes tried for a free pair of unicast ports (Fast DDS's own limit is 120).
+/// Participant indexes tried for a free pair of unicast ports: the 120 whose ports stay within the
+/// domain's block of 250 (offsets 10 and 11, two ports per index).
 constexpr std::int32_t kProbedParticipantIndexes = 120;
 
 /// The first participant index whose discovery and data unicast ports on `domain` (as Fast DDS
