@@ -3,6 +3,7 @@
 #include <lz4frame.h>
 #include <zstd.h>
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <stdexcept>
@@ -322,15 +323,16 @@ void decompressLz4(const ChunkHeader& chunk, std::vector<std::uint8_t>* out) {
 
 }  // namespace
 
-std::vector<std::uint8_t> decompressChunk(const ChunkHeader& chunk) {
+std::vector<std::uint8_t> decompressChunk(const ChunkHeader& chunk, std::uint64_t max_bytes) {
   if (!chunk.compression.empty() && chunk.compression != "zstd" && chunk.compression != "lz4") {
     throw std::runtime_error("unknown compression '" + chunk.compression +
                              "' (known: none, zstd, lz4)");
   }
-  if (chunk.uncompressed_size > kMaxMcapRecordBytes) {
+  const std::uint64_t limit = std::min(max_bytes, kMaxMcapRecordBytes);
+  if (chunk.uncompressed_size > limit) {
     throw std::runtime_error("declared uncompressed size " +
                              std::to_string(chunk.uncompressed_size) + " exceeds the limit of " +
-                             std::to_string(kMaxMcapRecordBytes) + " bytes");
+                             std::to_string(limit) + " bytes for this file");
   }
   if (chunk.compression.empty() && chunk.uncompressed_size != chunk.records_size) {
     throw std::runtime_error("uncompressed chunk holds " + std::to_string(chunk.records_size) +

@@ -91,11 +91,12 @@ struct ChunkHeader {
 };
 /// Parses a Chunk record's body. Throws when its records length exceeds the body.
 ChunkHeader parseChunk(const std::uint8_t* body, std::size_t size);
-/// The chunk's records decompressed: exactly uncompressed_size bytes (at most
-/// kMaxMcapRecordBytes) matching uncompressed_crc when it is not 0. Throws std::runtime_error
-/// saying what is wrong (unknown compression, declared size too large or not the real one, bad
-/// CRC, corrupt data).
-std::vector<std::uint8_t> decompressChunk(const ChunkHeader& chunk);
+/// The chunk's records decompressed: exactly uncompressed_size bytes (at most `max_bytes`, itself
+/// at most kMaxMcapRecordBytes) matching uncompressed_crc when it is not 0. Throws
+/// std::runtime_error saying what is wrong (unknown compression, declared size too large or not
+/// the real one, bad CRC, corrupt data).
+std::vector<std::uint8_t> decompressChunk(const ChunkHeader& chunk,
+                                          std::uint64_t max_bytes = kMaxMcapRecordBytes);
 
 /// CRC-32 (IEEE 802.3, as MCAP uses) of `size` bytes, continuing `crc` (0 to start).
 std::uint32_t crc32(const std::uint8_t* data, std::size_t size, std::uint32_t crc = 0);

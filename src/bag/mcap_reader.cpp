@@ -145,6 +145,18 @@ void visitChunkRecords(const std::vector<std::uint8_t>& records, const std::stri
 
 }  // namespace
 
+std::uint64_t maxDecompressedChunkBytes(std::uint64_t file_size) {
+  constexpr std::uint64_t kFloor = std::uint64_t{64} << 20;
+  constexpr std::uint64_t kPerFileByte = 256;
+  const std::uint64_t scaled =
+      file_size > kMaxMcapRecordBytes / kPerFileByte ? kMaxMcapRecordBytes : file_size * kPerFileByte;
+  return std::min(kMaxMcapRecordBytes, std::max(kFloor, scaled));
+}
+
+std::uint64_t maxIndexedMessages(std::uint64_t file_size) {
+  return std::max<std::uint64_t>(std::uint64_t{1} << 20, file_size / 4);
+}
+
 ScanResult scanRecords(const std::string& path, const std::function<void(const Record&)>& visit) {
   File file(path);
   const bool closed = checkMagic(file, path);
@@ -178,7 +190,8 @@ ScanResult scanRecords(const std::string& path, const std::function<void(const R
       const std::vector<std::uint8_t> body = readBytes(file.fd(), path, body_offset, prefix.length);
       if (prefix.opcode == detail::kChunk) {
         const std::vector<std::uint8_t> records = withContext(context, [&] {
-          return detail::decompressChunk(detail::parseChunk(body.data(), body.size()));
+          return detail::decompressChunk(detail::parseChunk(body.data(), body.size()),
+                                         maxDecompressedChunkBytes(file.size()));
         });
         visitChunkRecords(
             records, context,
@@ -447,6 +460,13 @@ void McapReader::indexChunk(std::uint32_t chunk, const std::vector<std::uint8_t>
         const std::string inner = context + ": " + detail::opcodeName(opcode) +
                                   " record at chunk byte " + std::to_string(pos);
         if (opcode == detail::kMessage) {
+          if (messages_.size() >= maxIndexedMessages(file_size_)) {
+            throw std::runtime_error(
+                inner + ": more than " + std::to_string(maxIndexedMessages(file_size_)) +
+                " messages in a file of " + std::to_string(file_size_) +
+                " bytes (at most one per 4 bytes of the file, or 2^20): its chunks compress "
+                "beyond any recording's, refused before the index outgrows the file");
+          }
           withContext(inner, [&] {
             detail::Cursor in(data, size);
             MessageLocation location;
@@ -487,7 +507,8 @@ const std::vector<std::uint8_t>& McapReader::chunkRecords(std::uint32_t chunk) c
       readBytes(fd_, path_, span.offset + kRecordPrefixBytes, prefix.length);
   cached_chunk_ = 0;
   cached_records_ = withContext(context, [&] {
-    return detail::decompressChunk(detail::parseChunk(body.data(), body.size()));
+    return detail::decompressChunk(detail::parseChunk(body.data(), body.size()),
+                                   maxDecompressedChunkBytes(file_size_));
   });
   cached_chunk_ = chunk;
   return cached_records_;

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 #include <sys/stat.h>
+#include <zstd.h>
 
 #include <cstring>
 #include <filesystem>
@@ -66,6 +67,67 @@ std::string errorOf(Make&& make) {
 void readEverything(const std::string& path) {
   const auto bag = openBag(path);
   for (std::size_t i = 0; i < bag->entries().size(); ++i) (void)bag->read(i);
+}
+
+/// Appends little-endian integers and MCAP strings, to write hostile MCAP files by hand.
+struct LittleEndian {
+  std::vector<std::uint8_t> bytes;
+  template <typename T>
+  void put(T value) {
+    const auto* raw = reinterpret_cast<const std::uint8_t*>(&value);
+    bytes.insert(bytes.end(), raw, raw + sizeof(T));
+  }
+  void string(const std::string& s) {
+    put(static_cast<std::uint32_t>(s.size()));
+    bytes.insert(bytes.end(), s.begin(), s.end());
+  }
+  void record(std::uint8_t opcode, const std::vector<std::uint8_t>& body) {
+    put(opcode);
+    put(static_cast<std::uint64_t>(body.size()));
+    bytes.insert(bytes.end(), body.begin(), body.end());
+  }
+};
+
+/// A closed MCAP file without a summary whose one zstd chunk holds `records` (as a writer that
+/// compresses very well would make it).
+std::vector<std::uint8_t> mcapWithOneZstdChunk(const std::vector<std::uint8_t>& records) {
+  std::vector<std::uint8_t> compressed(ZSTD_compressBound(records.size()));
+  const std::size_t n =
+      ZSTD_compress(compressed.data(), compressed.size(), records.data(), records.size(), 3);
+  if (ZSTD_isError(n) != 0) throw std::runtime_error(ZSTD_getErrorName(n));
+  compressed.resize(n);
+  LittleEndian chunk;
+  chunk.put(std::uint64_t{0});  // message_start_time
+  chunk.put(std::uint64_t{0});  // message_end_time
+  chunk.put(static_cast<std::uint64_t>(records.size()));
+  chunk.put(std::uint32_t{0});  // no CRC
+  chunk.string("zstd");
+  chunk.put(static_cast<std::uint64_t>(compressed.size()));
+  chunk.bytes.insert(chunk.bytes.end(), compressed.begin(), compressed.end());
+  LittleEndian file;
+  const std::uint8_t magic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
+  file.bytes.assign(magic, magic + 8);
+  LittleEndian header;
+  header.string("ros2");
+  header.string("mlmap test");
+  file.record(0x01, header.bytes);
+  file.record(0x06, chunk.bytes);
+  file.record(0x0F, std::vector<std::uint8_t>(4, 0));   // DataEnd
+  file.record(0x02, std::vector<std::uint8_t>(20, 0));  // Footer: no summary
+  file.bytes.insert(file.bytes.end(), magic, magic + 8);
+  return file.bytes;
+}
+
+/// `count` copies of one empty Message record (31 bytes, the smallest there is) on channel 1.
+std::vector<std::uint8_t> emptyMessages(std::size_t count) {
+  LittleEndian message;
+  message.put(std::uint16_t{1});
+  message.put(std::uint32_t{0});  // sequence
+  message.put(std::uint64_t{0});  // log_time
+  message.put(std::uint64_t{0});  // publish_time
+  LittleEndian out;
+  for (std::size_t i = 0; i < count; ++i) out.record(0x05, message.bytes);
+  return out.bytes;
 }
 
 TEST(BadBags, TruncatedMcapIsReadUpToTheCutWithAWarning) {
@@ -296,6 +358,55 @@ TEST(BadBags, MetadataOfAnotherStorage) {
   EXPECT_NE(
       errorOf([&] { readEverything(dir.string()); }).find("is not a file name inside the folder"),
       std::string::npos);
+}
+
+
+// A chunk of tiny messages that compresses a thousandfold used to be indexed in full (24 bytes a
+// message, 2 GB for a 1 GiB chunk of a 300 KB file): the index is now bounded by the file's size.
+TEST(BadBags, ChunksOfTinyMessagesCannotOutgrowTheFile) {
+  const std::size_t count = std::size_t{3} << 19;  // 1.5 M messages, 48.8 MB decompressed
+  const std::vector<std::uint8_t> bytes = mcapWithOneZstdChunk(emptyMessages(count));
+  ASSERT_LT(bytes.size(), std::size_t{64} << 10);  // a 16 kB file
+  const std::string path = scratch("tiny_messages.mcap");
+  writeAll(path, bytes);
+  const std::string error = errorOf([&] { readEverything(path); });
+  EXPECT_NE(error.find(path + ": Chunk record at byte "), std::string::npos) << error;
+  EXPECT_NE(error.find(": more than 1048576 messages in a file of " +
+                       std::to_string(bytes.size()) + " bytes"),
+            std::string::npos)
+      << error;
+  // Fewer of the same messages are read.
+  writeAll(path, mcapWithOneZstdChunk(emptyMessages(1000)));
+  const mlmap::bag::mcap::McapReader reader(path);
+  EXPECT_EQ(reader.messages().size(), 1000u);
+}
+
+// A small file's chunk may not decompress to tens of megabytes, even when zstd really delivers
+// them (zeros): the bound comes from the file's size, checked before allocating.
+TEST(BadBags, ASmallFilesChunkCannotDecompressToHundredsOfMegabytes) {
+  LittleEndian message;
+  message.put(std::uint16_t{1});
+  message.put(std::uint32_t{0});
+  message.put(std::uint64_t{0});
+  message.put(std::uint64_t{0});
+  message.bytes.resize(message.bytes.size() + (std::size_t{80} << 20), 0);  // 80 MiB of zeros
+  LittleEndian records;
+  records.record(0x05, message.bytes);
+  const std::vector<std::uint8_t> bytes = mcapWithOneZstdChunk(records.bytes);
+  ASSERT_LT(bytes.size(), std::size_t{64} << 10);
+  const std::string path = scratch("zeros.mcap");
+  writeAll(path, bytes);
+  const std::uint64_t limit = mlmap::bag::mcap::maxDecompressedChunkBytes(bytes.size());
+  EXPECT_EQ(limit, std::uint64_t{64} << 20);
+  const std::string error = errorOf([&] { readEverything(path); });
+  EXPECT_NE(error.find(std::to_string(records.bytes.size()) + " exceeds the limit of " +
+                       std::to_string(limit) + " bytes for this file"),
+            std::string::npos)
+      << error;
+  EXPECT_EQ(mlmap::bag::mcap::maxDecompressedChunkBytes(std::uint64_t{1} << 30),
+            mlmap::bag::kMaxMcapRecordBytes);
+  EXPECT_EQ(mlmap::bag::mcap::maxDecompressedChunkBytes(std::uint64_t{1} << 20),
+            std::uint64_t{256} << 20);
 }
 
 }  // namespace

@@ -6,8 +6,10 @@
 ///
 /// Nothing read from a file is trusted: every length is checked against the bytes that remain
 /// in its record and in the file before anything is allocated, a record or a decompressed chunk
-/// held in memory is at most kMaxMcapRecordBytes, and a chunk must decompress to exactly the size
-/// it declares (and to its CRC when it gives one). A malformed file gives a std::runtime_error
+/// held in memory is at most kMaxMcapRecordBytes (and a chunk at most
+/// maxDecompressedChunkBytes() of the file), the index of messages at most maxIndexedMessages()
+/// of the file, and a chunk must decompress to exactly the size it declares (and to its CRC
+/// when it gives one). A malformed file gives a std::runtime_error
 /// naming the file, the record and its byte offset.
 
 #include <cstdint>
@@ -25,6 +27,18 @@ namespace mlmap::bag {
 inline constexpr std::uint64_t kMaxMcapRecordBytes = std::uint64_t{1} << 30;
 
 namespace mcap {
+
+/// The largest chunk a file of `file_size` bytes may decompress to: 256 bytes per byte of the
+/// file, at least 64 MiB (writers' chunks are about 1 MiB), at most kMaxMcapRecordBytes. A
+/// small file cannot make the reader allocate a gigabyte.
+std::uint64_t maxDecompressedChunkBytes(std::uint64_t file_size);
+
+/// The most messages a file of `file_size` bytes may index: one per 4 bytes of the file (a
+/// message record is at least 31 bytes before compression, so this allows 8:1 on the smallest
+/// messages and more on larger ones), at least 2^20. The index costs 24 bytes a message, so
+/// its memory stays within 6x the file (24 MiB for small files), however well the chunks
+/// compress.
+std::uint64_t maxIndexedMessages(std::uint64_t file_size);
 
 /// Header record (opcode 0x01).
 struct Header {
