@@ -85,6 +85,9 @@ class RmwFastrtpsStyleClient {
     return std::nullopt;
   }
 
+  /// The request writer, for tests that write requests of their own making.
+  eprosima::fastdds::dds::DataWriter* writer() const { return writer_; }
+
   /// Replies to other clients that this one took and dropped.
   int foreignReplies() const { return foreign_replies_; }
 

@@ -15,13 +15,14 @@
 ///   number) names the request;
 /// - the server replies with related_sample_identity = (that reply reader's GUID, the request's
 ///   sequence number), or (the request writer's GUID, ...) when the request carried no reader GUID;
-///   when it names a reader, the server first waits (up to its reply writer's max_blocking_time)
-///   for its reply writer to match that reader, and drops the reply when the client's endpoints
-///   have left;
+///   when it names a reader, the server sends it once its reply writer has matched that reader
+///   (waiting up to the writer's max_blocking_time), and drops the reply when the client's
+///   endpoints have left;
 /// - a client takes every reply on its topic and keeps those whose related_sample_identity's writer
 ///   GUID is its reply reader's or its request writer's, pairing them by sequence number.
 
 #include "mlmap/dds/entities.h"
+#include "mlmap/dds/fair_request_queue.h"
 #include "mlmap/dds/node_config.h"
 
 #include "rcl_interfaces/srv/DescribeParameters_.h"
@@ -95,13 +96,28 @@ eprosima::fastrtps::rtps::WriteParams replyWriteParams(const RequestId& id);
 struct ServiceCounters {
   std::uint64_t requests = 0;            ///< requests taken and answered
   std::uint64_t requests_malformed = 0;  ///< requests that failed to decode (dropped)
-  std::uint64_t replies_unmatched = 0;   ///< replies not sent: the client's reader never matched
+  /// Requests dropped unhandled: the queue was full, or held the client's share already.
+  std::uint64_t requests_refused = 0;
+  /// Replies not sent: the client's reader never matched, or too many replies were waiting for
+  /// readers to match.
+  std::uint64_t replies_unmatched = 0;
+};
+
+/// The bounds of a ServiceHost: what a client that floods the services can hold.
+struct ServiceLimits {
+  std::size_t queued_requests = 64;             ///< requests waiting for the thread, in all
+  std::size_t queued_requests_per_client = 8;   ///< ... of one client (participant)
+  std::size_t waiting_replies = 64;             ///< replies waiting for their reader to match
+  std::size_t waiting_replies_per_client = 8;   ///< ... of one client
 };
 
 /// Serves ROS 2 services of one node on a participant: per service a request reader and a reply
 /// writer (ServiceHost::add()), the handlers run one at a time on a thread of the host's own (never
 /// on Fast DDS's listener threads, so a slow handler such as a map save delays only other
-/// requests). Create the services, then start(); stop() before the participant's entities go.
+/// requests). Requests wait in a FairRequestQueue (clients, i.e. participants, served in turn;
+/// bounded by ServiceLimits, the rest refused and counted); a reply whose client reader has not
+/// matched yet waits beside the queue, never on the thread. Create the services, then start();
+/// stop() before the participant's entities go.
 class ServiceHost {
  public:
   /// Services whose endpoints live on `publisher` and `subscriber` (so that ros_discovery_info
@@ -109,7 +125,7 @@ class ServiceHost {
   /// or unsent reply (any thread; keep it short).
   ServiceHost(eprosima::fastdds::dds::Publisher* publisher,
               eprosima::fastdds::dds::Subscriber* subscriber,
-              std::function<void(const std::string&)> on_problem);
+              std::function<void(const std::string&)> on_problem, ServiceLimits limits = {});
   ~ServiceHost();
   ServiceHost(const ServiceHost&) = delete;
   ServiceHost& operator=(const ServiceHost&) = delete;
@@ -133,18 +149,30 @@ class ServiceHost {
   /// One service's reply writer and the client readers it matched (rmw's ServicePubListener).
   class ReplyWriter : public eprosima::fastdds::dds::DataWriterListener {
    public:
+    /// `on_matched` runs (on Fast DDS's listener thread) each time a reader matches.
+    explicit ReplyWriter(std::function<void()> on_matched) : on_matched_(std::move(on_matched)) {}
     void on_publication_matched(
         eprosima::fastdds::dds::DataWriter* writer,
         const eprosima::fastdds::dds::PublicationMatchedStatus& status) override;
-    /// Waits up to `timeout` until `reader` is matched; true when it is.
-    bool waitForReader(const eprosima::fastrtps::rtps::GUID_t& reader,
-                       std::chrono::nanoseconds timeout);
+    /// True when `reader` is matched now.
+    bool isMatched(const eprosima::fastrtps::rtps::GUID_t& reader);
     eprosima::fastdds::dds::DataWriter* writer = nullptr;
 
    private:
+    std::function<void()> on_matched_;
     std::mutex mutex_;
-    std::condition_variable cv_;
     std::set<eprosima::fastrtps::rtps::GUID_t> readers_;
+  };
+
+  /// Writes a reply with the given parameters; true when written.
+  using WriteReply = std::function<bool(eprosima::fastrtps::rtps::WriteParams&)>;
+
+  /// A reply waiting for its client's reader to match its writer.
+  struct WaitingReply {
+    ReplyWriter* out = nullptr;
+    RequestId id;
+    WriteReply write;
+    std::chrono::steady_clock::time_point deadline;
   };
 
   /// Takes requests on the listener thread and queues their handling.
@@ -158,21 +186,32 @@ class ServiceHost {
     std::function<void(eprosima::fastdds::dds::DataReader*)> take_;
   };
 
-  /// Queues `job` for the handler thread (dropped once stopped).
-  void post(std::function<void()> job);
-  /// Sends `reply` for request `id` on `out`, as rmw_fastrtps_cpp does; counts what fails.
-  void sendReply(ReplyWriter& out, void* reply, const RequestId& id);
+  /// Queues `job`, the handling of request `id`, for the handler thread: dropped once stopped,
+  /// refused and counted beyond the ServiceLimits.
+  void post(const RequestId& id, std::function<void()> job);
+  /// Sends the reply to request `id` on `out` as rmw_fastrtps_cpp does: at once when `id` names
+  /// no reader or a matched one, else once it matches (within the writer's max_blocking_time);
+  /// counts what is not sent. Never waits.
+  void sendReply(ReplyWriter& out, WriteReply write, const RequestId& id);
+  /// Writes the reply to `id` with `write` and counts the outcome.
+  void writeReply(const WriteReply& write, const RequestId& id);
+  /// Under `mutex_`: moves the waiting replies whose reader matched to `ready`, drops (and
+  /// counts) the expired ones into `expired`.
+  void settleWaitingReplies(std::vector<WaitingReply>* ready, std::vector<WaitingReply>* expired);
   void countMalformed(const std::string& topic);
   void run();
 
   eprosima::fastdds::dds::Publisher* publisher_;
   eprosima::fastdds::dds::Subscriber* subscriber_;
   std::function<void(const std::string&)> on_problem_;
+  ServiceLimits limits_;
   std::vector<std::unique_ptr<ReplyWriter>> writers_;
   std::vector<std::unique_ptr<RequestListener>> listeners_;
   mutable std::mutex mutex_;
   std::condition_variable cv_;
-  std::deque<std::function<void()>> jobs_;
+  FairRequestQueue<eprosima::fastrtps::rtps::GuidPrefix_t, std::function<void()>> jobs_;
+  std::deque<WaitingReply> waiting_replies_;
+  bool reader_matched_ = false;  // a reply writer matched a reader since the last look
   bool stopping_ = false;
   ServiceCounters counters_;
   std::thread thread_;
@@ -184,7 +223,13 @@ void ServiceHost::add(
     std::function<typename RespPubSub::type(const typename ReqPubSub::type&)> handler) {
   using Request = typename ReqPubSub::type;
   using Reply = typename RespPubSub::type;
-  auto out = std::make_unique<ReplyWriter>();
+  auto out = std::make_unique<ReplyWriter>([this] {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      reader_matched_ = true;
+    }
+    cv_.notify_all();
+  });
   out->writer = createWriter<RespPubSub>(publisher_, topics.reply, serviceWriterQos(), out.get());
   ReplyWriter* reply_writer = out.get();
   writers_.push_back(std::move(out));
@@ -205,9 +250,15 @@ void ServiceHost::add(
       if (!taken) return;
       if (!info.valid_data) continue;
       const RequestId id = requestIdOf(info);
-      post([this, reply_writer, shared_handler, request, id] {
-        Reply reply = (*shared_handler)(*request);
-        sendReply(*reply_writer, &reply, id);
+      post(id, [this, reply_writer, shared_handler, request, id] {
+        auto reply = std::make_shared<Reply>((*shared_handler)(*request));
+        eprosima::fastdds::dds::DataWriter* writer = reply_writer->writer;
+        sendReply(
+            *reply_writer,
+            [reply, writer](eprosima::fastrtps::rtps::WriteParams& params) {
+              return writer->write(reply.get(), params);
+            },
+            id);
       });
     }
   };

@@ -74,18 +74,22 @@ void ServiceHost::ReplyWriter::on_publication_matched(
       readers_.erase(reader);
     }
   }
-  cv_.notify_all();
+  if (status.current_count_change > 0 && on_matched_) on_matched_();
 }
 
-bool ServiceHost::ReplyWriter::waitForReader(const rtps::GUID_t& reader,
-                                             std::chrono::nanoseconds timeout) {
-  std::unique_lock<std::mutex> lock(mutex_);
-  return cv_.wait_for(lock, timeout, [&] { return readers_.count(reader) > 0; });
+bool ServiceHost::ReplyWriter::isMatched(const rtps::GUID_t& reader) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return readers_.count(reader) > 0;
 }
 
 ServiceHost::ServiceHost(fdds::Publisher* publisher, fdds::Subscriber* subscriber,
-                         std::function<void(const std::string&)> on_problem)
-    : publisher_(publisher), subscriber_(subscriber), on_problem_(std::move(on_problem)) {}
+                         std::function<void(const std::string&)> on_problem, ServiceLimits limits)
+    : publisher_(publisher),
+      subscriber_(subscriber),
+      on_problem_(std::move(on_problem)),
+      limits_(limits),
+      jobs_(std::max<std::size_t>(1, limits.queued_requests),
+            std::max<std::size_t>(1, limits.queued_requests_per_client)) {}
 
 ServiceHost::~ServiceHost() { stop(); }
 
@@ -100,6 +104,7 @@ void ServiceHost::stop() {
     std::lock_guard<std::mutex> lock(mutex_);
     stopping_ = true;
     jobs_.clear();
+    waiting_replies_.clear();
   }
   cv_.notify_all();
   if (thread_.joinable()) thread_.join();
@@ -110,27 +115,75 @@ ServiceCounters ServiceHost::counters() const {
   return counters_;
 }
 
-void ServiceHost::post(std::function<void()> job) {
+void ServiceHost::post(const RequestId& id, std::function<void()> job) {
+  std::size_t queued = 0, of_client = 0;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (stopping_) return;
-    jobs_.push_back(std::move(job));
+    if (jobs_.push(id.request_writer.guidPrefix, std::move(job))) {
+      cv_.notify_all();
+      return;
+    }
+    ++counters_.requests_refused;
+    queued = jobs_.size();
+    of_client = jobs_.size(id.request_writer.guidPrefix);
   }
-  cv_.notify_all();
+  if (on_problem_) {
+    on_problem_("request refused: " + std::to_string(queued) + " requests wait (" +
+                std::to_string(of_client) + " of this client), at most " +
+                std::to_string(limits_.queued_requests) + " (" +
+                std::to_string(limits_.queued_requests_per_client) + " a client)");
+  }
 }
 
 void ServiceHost::run() {
   for (;;) {
-    std::function<void()> job;
+    std::optional<std::function<void()>> job;
+    std::vector<WaitingReply> ready, expired;
     {
       std::unique_lock<std::mutex> lock(mutex_);
-      cv_.wait(lock, [this] { return stopping_ || !jobs_.empty(); });
+      const auto wake = [this] {
+        return stopping_ || !jobs_.empty() || reader_matched_ ||
+               (!waiting_replies_.empty() &&
+                std::chrono::steady_clock::now() >= waiting_replies_.front().deadline);
+      };
+      if (waiting_replies_.empty()) {
+        cv_.wait(lock, wake);
+      } else {
+        cv_.wait_until(lock, waiting_replies_.front().deadline, wake);
+      }
       if (stopping_) return;
-      job = std::move(jobs_.front());
-      jobs_.pop_front();
+      reader_matched_ = false;
+      settleWaitingReplies(&ready, &expired);
+      job = jobs_.pop();
     }
-    job();
+    for (const WaitingReply& r : ready) writeReply(r.write, r.id);
+    if (!expired.empty() && on_problem_) {
+      on_problem_("no reply sent on " + expired.front().out->writer->get_topic()->get_name() +
+                  (expired.size() > 1 ? " (and " + std::to_string(expired.size() - 1) + " more)"
+                                      : std::string()) +
+                  ": the client's reply reader did not match in time");
+    }
+    if (job) (*job)();
   }
+}
+
+void ServiceHost::settleWaitingReplies(std::vector<WaitingReply>* ready,
+                                       std::vector<WaitingReply>* expired) {
+  const auto now = std::chrono::steady_clock::now();
+  std::deque<WaitingReply> still;
+  for (WaitingReply& r : waiting_replies_) {
+    if (r.out->isMatched(r.id.reply_to)) {
+      ready->push_back(std::move(r));
+    } else if (now >= r.deadline) {
+      ++counters_.replies_unmatched;
+      expired->push_back(std::move(r));
+    } else {
+      still.push_back(std::move(r));
+    }
+  }
+  // Deadlines are in the order the replies were made, so the front is always the earliest.
+  waiting_replies_ = std::move(still);
 }
 
 void ServiceHost::countMalformed(const std::string& topic) {
@@ -141,28 +194,40 @@ void ServiceHost::countMalformed(const std::string& topic) {
   if (on_problem_) on_problem_("cannot decode a request on " + topic + " (malformed CDR): dropped");
 }
 
-void ServiceHost::sendReply(ReplyWriter& out, void* reply, const RequestId& id) {
-  // As rmw_fastrtps_cpp: a reply addressed to the client's reader waits (up to the writer's
-  // max_blocking_time) until that reader is matched, or it could be sent before the client can
-  // receive it.
-  if (isReaderGuid(id.reply_to)) {
-    const auto& blocking = out.writer->get_qos().reliability().max_blocking_time;
-    const std::chrono::nanoseconds timeout =
-        std::chrono::seconds(blocking.seconds) + std::chrono::nanoseconds(blocking.nanosec);
-    if (!out.waitForReader(id.reply_to, timeout)) {
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        ++counters_.replies_unmatched;
-      }
-      if (on_problem_) {
-        on_problem_("no reply sent on " + out.writer->get_topic()->get_name() +
-                    ": the client's reply reader did not match in time");
-      }
+void ServiceHost::sendReply(ReplyWriter& out, WriteReply write, const RequestId& id) {
+  // As rmw_fastrtps_cpp: a reply addressed to the client's reader is sent once that reader is
+  // matched (up to the writer's max_blocking_time), or it could be sent before the client can
+  // receive it. Unlike rmw it waits beside the queue, not on the thread: a client that names a
+  // reader that never comes delays no one.
+  if (!isReaderGuid(id.reply_to) || out.isMatched(id.reply_to)) {
+    writeReply(write, id);
+    return;
+  }
+  const auto& blocking = out.writer->get_qos().reliability().max_blocking_time;
+  const auto timeout = std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::seconds(blocking.seconds) + std::chrono::nanoseconds(blocking.nanosec));
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto client = id.request_writer.guidPrefix;
+    const auto of_client = static_cast<std::size_t>(
+        std::count_if(waiting_replies_.begin(), waiting_replies_.end(),
+                      [&](const WaitingReply& r) { return r.id.request_writer.guidPrefix == client; }));
+    if (waiting_replies_.size() < limits_.waiting_replies &&
+        of_client < limits_.waiting_replies_per_client) {
+      waiting_replies_.push_back({&out, id, std::move(write), std::chrono::steady_clock::now() + timeout});
       return;
     }
+    ++counters_.replies_unmatched;
   }
+  if (on_problem_) {
+    on_problem_("no reply sent on " + out.writer->get_topic()->get_name() +
+                ": too many replies wait for their client's reader to match");
+  }
+}
+
+void ServiceHost::writeReply(const WriteReply& write, const RequestId& id) {
   rtps::WriteParams params = replyWriteParams(id);
-  const bool written = out.writer->write(reply, params);
+  const bool written = write(params);
   std::lock_guard<std::mutex> lock(mutex_);
   if (written) {
     ++counters_.requests;
