@@ -14,9 +14,11 @@
 # Enclaves (ROS 2 topic names, `rt/...`; `*` also matches a namespace):
 #   /mlmap/node             the onboard node: reads sensor topics, publishes the map layers and tf
 #   /mlmap/sensor           a sensor driver / simulator: publishes clouds, depth images and poses
-#   /ground/monitor         a ground station: reads everything, may publish anything
-#   /ground/viewer_readonly reads the map layers, tf and status; publishing clouds, images or poses
-#                           is denied
+#   /ground/monitor         a ground station: reads everything, may publish anything and call
+#                           any service (save_map, clear_map, parameters)
+#   /ground/viewer_readonly reads the map layers, tf and status and may call the services that
+#                           read parameters; publishing clouds, images or poses, and calling
+#                           save_map, clear_map or set_parameters, is denied
 #   /stranger               a complete, self-consistent identity from a DIFFERENT CA
 #                           (<keystore>/private/stranger_ca.key.pem): nobody above trusts it
 # Governance: authenticated participants only, join access control, and rtps, discovery,
@@ -178,9 +180,20 @@ EOF
 
 # ---- Enclaves -------------------------------------------------------------------------------
 # Topic lists: one <topic> per word. ROS 2 infrastructure every node uses (rmw's graph topic,
-# rosout, parameter services) is allowed to everybody that is not a stranger.
+# rosout, serving its services: reading requests on rq/*, writing replies on rr/*) is allowed to
+# everybody that is not a stranger. Calling a service is the opposite (writing its request,
+# reading replies): the monitor may call any service, the read-only viewer only the services that
+# read parameters, the node and the sensor none.
 ros_pub="ros_discovery_info rt/rosout rr/*"
 ros_sub="ros_discovery_info rq/*"
+call_any_pub="rq/*"
+call_any_sub="rr/*"
+read_only_services="list_parameters get_parameters describe_parameters get_parameter_types"
+call_read_only_pub="" call_read_only_sub=""
+for service in $read_only_services; do
+  call_read_only_pub+=" rq/*/${service}Request"
+  call_read_only_sub+=" rr/*/${service}Reply"
+done
 topics() {
   local t
   for t in $1; do printf '            <topic>%s</topic>\n' "$t"; done
@@ -245,11 +258,11 @@ make_enclave /mlmap/sensor "$ca_key" "$ca_cert" ca.cert.pem \
   "rt/*cloud rt/*pose rt/*odometry rt/*image* rt/*camera_info rt/*tf rt/*tf_static $ros_pub" \
   "$ros_sub"
 make_enclave /ground/monitor "$ca_key" "$ca_cert" ca.cert.pem \
-  "rt/* $ros_pub" \
-  "rt/* $ros_sub"
+  "rt/* $ros_pub $call_any_pub" \
+  "rt/* $ros_sub $call_any_sub"
 make_enclave /ground/viewer_readonly "$ca_key" "$ca_cert" ca.cert.pem \
-  "$ros_pub" \
-  "rt/*mlmap/* rt/*tf rt/*tf_static $ros_sub" \
+  "$ros_pub$call_read_only_pub" \
+  "rt/*mlmap/* rt/*tf rt/*tf_static $ros_sub$call_read_only_sub" \
   "rt/*cloud rt/*pose rt/*odometry rt/*image* rt/*camera_info"
 make_enclave /stranger "$root/private/stranger_ca.key.pem" "$root/public/stranger_ca.cert.pem" \
   stranger_ca.cert.pem \

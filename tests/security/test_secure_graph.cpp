@@ -5,21 +5,28 @@
 // - a participant without credentials and one with the /stranger identity (a different CA)
 //   neither match nor read anything, and their clouds and poses never reach the node;
 // - /ground/viewer_readonly reads the layers, but its permissions refuse it writers of clouds
-//   and poses.
+//   and poses;
+// - the services are called as the permissions say (domain 191).
 // The node's counters show what reached it. Encryption on the wire: capture_plaintext.sh.
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/mapping_node.h"
 #include "mlmap/dds/participant.h"
 #include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/ros_graph.h"
+#include "mlmap/dds/ros_services.h"
 
 #include "dds_test_support.h"
 #include "scoped_env.h"
+#include "service_client.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
+#include "rcl_interfaces/srv/GetParameters_PubSubTypes.h"
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
+#include "std_srvs/srv/Trigger_PubSubTypes.h"
 #include "tf2_msgs/msg/TFMessage_PubSubTypes.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -243,6 +250,75 @@ TEST(SecureGraph, OnlyPermittedPeersReadTheLayersAndOnlyTheSensorFeedsTheNode) {
     EXPECT_EQ(p->local_maps, 0);
     EXPECT_EQ(p->matchedReaders(), 0);
   }
+  node.stop();
+}
+
+
+/// A temporary folder removed with the object.
+struct TempDir {
+  std::filesystem::path path;
+  explicit TempDir(const std::string& name)
+      : path(std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()))) {
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path);
+  }
+  ~TempDir() { std::filesystem::remove_all(path); }
+};
+
+using TriggerClient =
+    test_support::RmwFastrtpsStyleClient<::std_srvs::srv::dds_::Trigger_Request_PubSubType,
+                                         ::std_srvs::srv::dds_::Trigger_Response_PubSubType>;
+using GetClient =
+    test_support::RmwFastrtpsStyleClient<::rcl_interfaces::srv::dds_::GetParameters_Request_PubSubType,
+                                         ::rcl_interfaces::srv::dds_::GetParameters_Response_PubSubType>;
+
+// Under DDS Security the services are called as the enclaves' permissions say: the monitor calls
+// save_map and reads parameters, the read-only viewer reads parameters but may not write a
+// save_map or clear_map request, the sensor calls nothing. (The keystore once let no enclave write
+// rq/*: nobody could call anything.)
+TEST(SecureGraph, ServicesAreCalledAsTheEnclavesPermissionsSay) {
+  const ScopedEnv keystore_env("ROS_SECURITY_KEYSTORE", std::nullopt);
+  const ScopedEnv enclave_env("ROS_SECURITY_ENCLAVE_OVERRIDE", std::nullopt);
+  constexpr int kDomain = 191;
+  TempDir dir("mlmap_secure_services");
+  NodeConfig node_config;
+  node_config.dds = peerConfig(kDomain, "/mlmap/node");
+  node_config.map_file.save_path = (dir.path / "saved.mlmap").string();
+  MappingNode node(node_config);
+  const std::string ns = rosNodeNamespace(node_config.dds.ns);
+  const ServiceTopics save_topics = privateServiceTopics(ns, "mlmap_node", "save_map");
+  const ServiceTopics clear_topics = privateServiceTopics(ns, "mlmap_node", "clear_map");
+  const ServiceTopics get_topics = privateServiceTopics(ns, "mlmap_node", "get_parameters");
+  ::rcl_interfaces::srv::dds_::GetParameters_Request_ get_request;
+  get_request.names_({"local_map.resolution_m"});
+
+  const ParticipantPtr monitor = createParticipant(peerConfig(kDomain, "/ground/monitor"), "monitor");
+  TriggerClient save(monitor.get(), save_topics);
+  GetClient monitor_get(monitor.get(), get_topics);
+  ASSERT_TRUE(waitFor([&] { return save.ready() && monitor_get.ready(); }, kSecureTimeout))
+      << "the monitor's service clients did not match the node";
+  const auto saved = save.callUntilAnswered({});
+  ASSERT_TRUE(saved) << "the monitor's save_map got no reply";
+  EXPECT_TRUE(saved->success_()) << saved->message_();
+  EXPECT_TRUE(std::filesystem::exists(node_config.map_file.save_path));
+  const auto monitor_values = monitor_get.callUntilAnswered(get_request);
+  ASSERT_TRUE(monitor_values);
+  EXPECT_EQ(monitor_values->values_().size(), 1u);
+
+  const ParticipantPtr viewer =
+      createParticipant(peerConfig(kDomain, "/ground/viewer_readonly"), "viewer");
+  GetClient viewer_get(viewer.get(), get_topics);
+  ASSERT_TRUE(waitFor([&] { return viewer_get.ready(); }, kSecureTimeout));
+  const auto viewer_values = viewer_get.callUntilAnswered(get_request);
+  ASSERT_TRUE(viewer_values) << "the read-only viewer could not read a parameter";
+  EXPECT_EQ(viewer_values->values_().size(), 1u);
+  // Fast DDS checks a participant's own permissions when it creates a writer.
+  EXPECT_THROW(TriggerClient(viewer.get(), save_topics), std::runtime_error);
+  EXPECT_THROW(TriggerClient(viewer.get(), clear_topics), std::runtime_error);
+
+  const ParticipantPtr sensor = createParticipant(peerConfig(kDomain, "/mlmap/sensor"), "sensor");
+  EXPECT_THROW(GetClient(sensor.get(), get_topics), std::runtime_error);
+  EXPECT_EQ(node.counters().map_saves, 1u);
   node.stop();
 }
 
