@@ -10,9 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <deque>
 #include <iomanip>
-#include <set>
 #include <sstream>
 #include <stdexcept>
 
@@ -20,8 +18,6 @@ namespace mlmap::bag {
 namespace {
 
 constexpr double kSameStamp_s = 1e-6;  // as PoseBuffer and CloudSequence
-/// The most transforms between the world frame and the body frame (a robot's tree is a few deep).
-constexpr std::size_t kMaxTfChainEdges = 64;
 
 bool isDepthEncoding(const std::string& encoding) {
   return encoding == "16UC1" || encoding == "32FC1" || encoding == "mono16";
@@ -101,24 +97,7 @@ std::string messageName(const BagReader& bag, std::size_t entry) {
   return header;
 }
 
-Transform inverse(const Transform& T) {
-  Transform inv = Transform::Identity();
-  inv.linear() = T.linear().transpose();
-  inv.translation() = -(inv.linear() * T.translation());
-  return inv;
-}
-
 }  // namespace
-
-Transform BagFrameSource::transformAt(const std::vector<StampedTransform>& series, double stamp_s) {
-  const auto after =
-      std::lower_bound(series.begin(), series.end(), stamp_s,
-                       [](const StampedTransform& p, double t) { return p.stamp_s < t; });
-  if (after == series.begin()) return series.front().T;
-  if (after == series.end()) return series.back().T;
-  const StampedTransform& before = *std::prev(after);
-  return interpolatePose(before.T, before.stamp_s, after->T, after->stamp_s, stamp_s);
-}
 
 BagInputs autoSelect(const BagReader& bag, const BagInputs& requested,
                      const std::string& world_frame) {
@@ -200,7 +179,7 @@ BagInputs autoSelect(const BagReader& bag, const BagInputs& requested,
 
 BagFrameSource::BagFrameSource(std::shared_ptr<const BagReader> bag,
                                const BagFrameSourceOptions& options)
-    : bag_(std::move(bag)), options_(options) {
+    : bag_(std::move(bag)), options_(options), tf_(options.world_frame, options.body_frame) {
   if (bag_ == nullptr) throw std::invalid_argument("BagFrameSource: no bag");
   if (!(options_.pose_tolerance_s > 0.0) || !std::isfinite(options_.pose_tolerance_s)) {
     throw std::invalid_argument("BagFrameSource: pose_tolerance_s must be positive");
@@ -225,7 +204,7 @@ void BagFrameSource::addStaticTransforms(const std::vector<std::uint8_t>& bytes,
       throw std::runtime_error(what + ": transform " + t.header_().frame_id_() + " -> " +
                                t.child_frame_id_() + " is not a rigid transform");
     }
-    static_edges_.push_back({t.header_().frame_id_(), t.child_frame_id_(), T});
+    tf_.addStatic(t.header_().frame_id_(), t.child_frame_id_(), T);
   }
 }
 
@@ -236,34 +215,12 @@ std::size_t BagFrameSource::extrinsicFor(const std::string& frame_id) {
   Transform T_B_S = Transform::Identity();
   if (options_.T_B_S) {
     T_B_S = *options_.T_B_S;
-  } else if (frame_id != options_.body_frame) {
-    // Breadth-first through /tf_static, both ways along each edge, from the body frame.
-    std::deque<std::pair<std::string, Transform>> queue = {
-        {options_.body_frame, Transform::Identity()}};
-    std::set<std::string> seen = {options_.body_frame};
-    bool found = false;
-    while (!queue.empty() && !found) {
-      const auto [frame, T_B_F] = queue.front();
-      queue.pop_front();
-      for (const StaticEdge& e : static_edges_) {
-        std::string next;
-        Transform T_B_N = Transform::Identity();
-        if (e.parent == frame) next = e.child, T_B_N = T_B_F * e.T_parent_child;
-        if (e.child == frame) next = e.parent, T_B_N = T_B_F * inverse(e.T_parent_child);
-        if (next.empty() || !seen.insert(next).second) continue;
-        if (next == frame_id) {
-          T_B_S = T_B_N;
-          found = true;
-          break;
-        }
-        queue.emplace_back(next, T_B_N);
-      }
-    }
-    if (!found) {
-      throw std::runtime_error(bag_->path() + ": no /tf_static path from the body frame '" +
-                               options_.body_frame + "' to the sensor frame '" + frame_id +
-                               "'; set the option body_frame, or give T_B_S");
-    }
+  } else if (const std::optional<Transform> found = tf_.staticFromBody(frame_id)) {
+    T_B_S = *found;
+  } else {
+    throw std::runtime_error(bag_->path() + ": no /tf_static path from the body frame '" +
+                             options_.body_frame + "' to the sensor frame '" + frame_id +
+                             "'; set the option body_frame, or give T_B_S");
   }
   extrinsics_.emplace_back(frame_id, T_B_S);
   return extrinsics_.size() - 1;
@@ -287,113 +244,18 @@ void BagFrameSource::addPoses(const std::vector<std::uint8_t>& bytes, const std:
   poses->push_back(pose);
 }
 
-void BagFrameSource::addTf(const std::vector<std::uint8_t>& bytes, const std::string& what,
-                           TfEdges* tf) const {
+void BagFrameSource::addTf(const std::vector<std::uint8_t>& bytes, const std::string& what) {
   tf2_msgs::TFMessage_ msg;
   decodeCdr(bytes, what, &msg);
   for (const auto& t : msg.transforms_()) {
     const std::string& parent = t.header_().frame_id_();
     const std::string& child = t.child_frame_id_();
-    StampedTransform sample;
-    if (!transformOf(t, &sample.T) || t.header_().stamp_().nanosec_() >= 1000000000U) {
+    Transform T = Transform::Identity();
+    if (!transformOf(t, &T) || t.header_().stamp_().nanosec_() >= 1000000000U) {
       throw std::runtime_error(what + ": transform " + parent + " -> " + child + " is not valid");
     }
-    sample.stamp_s = dds::toSeconds(t.header_().stamp_());
-    const auto known = tf->parent_of.find(child);
-    if (known == tf->parent_of.end() || known->second != parent) {
-      tf->parent_of[child] = parent;
-      // The frames above the body (its ancestors, as far as known): only their transforms are
-      // kept whole; of the others only the latest, which seeds a frame found to be an ancestor.
-      // A cycle ends the walk (composeTfPoses() refuses it), and so does kMaxTfChainEdges.
-      tf->ancestors.clear();
-      std::string frame = options_.body_frame;
-      for (auto up = tf->parent_of.find(frame);
-           up != tf->parent_of.end() && tf->ancestors.size() <= kMaxTfChainEdges &&
-           tf->ancestors.insert(frame).second;
-           up = tf->parent_of.find(frame)) {
-        frame = up->second;
-      }
-      for (const std::string& a : tf->ancestors) {
-        const auto latest = tf->latest.find(a);
-        if (tf->series[a].empty() && latest != tf->latest.end())
-          tf->series[a].push_back(latest->second);
-      }
-    }
-    tf->latest[child] = sample;
-    if (tf->ancestors.count(child) != 0) tf->series[child].push_back(sample);
+    tf_.addDynamic(parent, child, dds::toSeconds(t.header_().stamp_()), T);
   }
-}
-
-std::vector<BagFrameSource::StampedTransform> BagFrameSource::composeTfPoses(TfEdges* tf) const {
-  // The chain world -> ... -> body through /tf (dynamic) and /tf_static edges, body end first;
-  // consecutive static edges are multiplied into one, so that composing costs (poses x dynamic
-  // edges), whatever the number of static ones.
-  struct Edge {
-    const std::vector<StampedTransform>* series = nullptr;  ///< dynamic; null: static
-    Transform T_parent_child = Transform::Identity();
-  };
-  std::vector<Edge> chain;
-  std::string frame = options_.body_frame;
-  std::string walked = frame;
-  std::set<std::string> visited = {frame};
-  for (std::size_t edges = 0; frame != options_.world_frame; ++edges) {
-    Edge edge;
-    std::string parent;
-    if (const auto up = tf->parent_of.find(frame); up != tf->parent_of.end()) {
-      parent = up->second;
-      std::vector<StampedTransform>& series = tf->series[frame];
-      std::stable_sort(series.begin(), series.end(),
-                       [](const StampedTransform& a, const StampedTransform& b) {
-                         return a.stamp_s < b.stamp_s;
-                       });
-      edge.series = &series;
-    } else {
-      for (const StaticEdge& e : static_edges_) {
-        if (e.child == frame) parent = e.parent, edge.T_parent_child = e.T_parent_child;
-      }
-    }
-    if (parent.empty()) {
-      throw std::runtime_error(bag_->path() + ": no /tf path from '" + options_.world_frame +
-                               "' to the body frame '" + options_.body_frame + "' (found " +
-                               walked + " with no parent); set world_frame or body_frame");
-    }
-    walked += " <- " + parent;
-    if (!visited.insert(parent).second) {
-      throw std::runtime_error(bag_->path() + ": the transforms from the body frame '" +
-                               options_.body_frame + "' loop back to '" + parent + "' (" +
-                               walked + ") before reaching '" + options_.world_frame +
-                               "': a /tf or /tf_static cycle; no pose is taken from it");
-    }
-    if (edges + 1 > kMaxTfChainEdges) {
-      throw std::runtime_error(bag_->path() + ": more than " + std::to_string(kMaxTfChainEdges) +
-                               " transforms between '" + options_.world_frame +
-                               "' and the body frame '" + options_.body_frame + "' (" + walked +
-                               ")");
-    }
-    if (edge.series == nullptr && !chain.empty() && chain.back().series == nullptr) {
-      chain.back().T_parent_child = edge.T_parent_child * chain.back().T_parent_child;
-    } else {
-      chain.push_back(edge);
-    }
-    frame = parent;
-  }
-  // The poses at the stamps of the lowest dynamic edge, the others interpolated there (their
-  // nearest transform held outside their range, as a slow map -> odom is).
-  const auto lowest =
-      std::find_if(chain.begin(), chain.end(), [](const Edge& e) { return e.series != nullptr; });
-  if (lowest == chain.end() || lowest->series->empty()) return {};
-  std::vector<StampedTransform> poses;
-  poses.reserve(lowest->series->size());
-  for (const StampedTransform& sample : *lowest->series) {
-    StampedTransform pose;
-    pose.stamp_s = sample.stamp_s;
-    for (auto edge = chain.rbegin(); edge != chain.rend(); ++edge) {
-      pose.T = pose.T * (edge->series == nullptr ? edge->T_parent_child
-                                                 : transformAt(*edge->series, sample.stamp_s));
-    }
-    poses.push_back(pose);
-  }
-  return poses;
 }
 
 BagFrameSource::Scan BagFrameSource::scanBag() {
@@ -421,7 +283,7 @@ BagFrameSource::Scan BagFrameSource::scanBag() {
     const std::string what = messageName(*bag_, i);
     const std::vector<std::uint8_t> bytes = bag_->read(i).data;
     if (has_static && topic == static_topic) addStaticTransforms(bytes, what);
-    if (topic == pose_topic && inputs_.pose_from_tf) addTf(bytes, what, &scan.tf);
+    if (topic == pose_topic && inputs_.pose_from_tf) addTf(bytes, what);
     if (topic == pose_topic && !inputs_.pose_from_tf) addPoses(bytes, what, odometry, &scan.poses);
     if (topic == info_topic)
       scan.infos.emplace_back(dds::toSeconds(headerOf(bytes, what).stamp_()), i);
@@ -433,7 +295,13 @@ BagFrameSource::Scan BagFrameSource::scanBag() {
                              static_cast<std::size_t>(id - scan.frame_ids.begin())});
     }
   }
-  if (inputs_.pose_from_tf) scan.poses = composeTfPoses(&scan.tf);
+  if (inputs_.pose_from_tf) {
+    try {
+      scan.poses = tf_.poses();
+    } catch (const std::runtime_error& e) {
+      throw std::runtime_error(bag_->path() + ": " + e.what());
+    }
+  }
   std::stable_sort(
       scan.poses.begin(), scan.poses.end(),
       [](const StampedTransform& a, const StampedTransform& b) { return a.stamp_s < b.stamp_s; });

@@ -18,14 +18,13 @@
 /// memory held is a few dozen bytes per frame and per pose, whatever the size of the bag.
 
 #include "mlmap/bag/bag_reader.h"
+#include "mlmap/bag/tf_tree.h"
 #include "mlmap/core/types.h"
 #include "mlmap/datasets/frame_source.h"
 
 #include <cstddef>
-#include <map>
 #include <memory>
 #include <optional>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -94,23 +93,6 @@ class BagFrameSource : public io::FrameSource {
     Transform T_W_B = Transform::Identity();
     std::size_t extrinsic = 0;  ///< index into extrinsics_
   };
-  struct StampedTransform {
-    double stamp_s = 0.0;
-    Transform T = Transform::Identity();
-  };
-  /// A /tf_static transform.
-  struct StaticEdge {
-    std::string parent;
-    std::string child;
-    Transform T_parent_child = Transform::Identity();
-  };
-  /// The /tf transforms kept while scanning: whole series only for the body's ancestors.
-  struct TfEdges {
-    std::map<std::string, std::string> parent_of;    ///< child -> parent, every frame seen
-    std::set<std::string> ancestors;                 ///< the body and the frames above it
-    std::map<std::string, StampedTransform> latest;  ///< child -> its latest transform
-    std::map<std::string, std::vector<StampedTransform>> series;  ///< child -> its transforms
-  };
   /// What one pass over the bag found.
   struct Scan {
     /// An input message.
@@ -123,21 +105,16 @@ class BagFrameSource : public io::FrameSource {
     std::vector<std::pair<double, std::size_t>> infos;  ///< CameraInfo stamp, entry; by stamp
     std::vector<Input> inputs;                          ///< in log-time order
     std::vector<std::string> frame_ids;                 ///< of the inputs
-    TfEdges tf;                                         ///< poses from /tf: what it held
   };
   /// Reads the poses, /tf_static, the CameraInfo stamps and the inputs' headers in one pass.
   Scan scanBag();
-  /// Adds the /tf_static transforms of one message to static_edges_.
+  /// Adds the /tf_static transforms of one message to tf_.
   void addStaticTransforms(const std::vector<std::uint8_t>& bytes, const std::string& what);
   /// Adds the T_W_B of one pose (or /tf) message to `poses`.
   void addPoses(const std::vector<std::uint8_t>& bytes, const std::string& what, bool odometry,
                 std::vector<StampedTransform>* poses) const;
-  /// Adds the transforms of one /tf message to `tf`.
-  void addTf(const std::vector<std::uint8_t>& bytes, const std::string& what, TfEdges* tf) const;
-  /// T_W_B from the /tf chain world_frame -> ... -> body_frame (see the file comment).
-  std::vector<StampedTransform> composeTfPoses(TfEdges* tf) const;
-  /// A transform of `series` (sorted) at `stamp_s`: interpolated, or the nearest outside its range.
-  static Transform transformAt(const std::vector<StampedTransform>& series, double stamp_s);
+  /// Adds the transforms of one /tf message to tf_.
+  void addTf(const std::vector<std::uint8_t>& bytes, const std::string& what);
   /// Index into extrinsics_ of T_B_S for a sensor frame (found through /tf_static once).
   std::size_t extrinsicFor(const std::string& frame_id);
   /// Pairs the inputs with poses into frames_.
@@ -146,7 +123,7 @@ class BagFrameSource : public io::FrameSource {
   std::shared_ptr<const BagReader> bag_;
   BagFrameSourceOptions options_;
   BagInputs inputs_;
-  std::vector<StaticEdge> static_edges_;
+  TfTree tf_;  ///< /tf (when the poses come from it) and /tf_static
   std::vector<std::pair<std::string, Transform>> extrinsics_;  ///< frame_id -> T_B_S
   std::vector<FrameRef> frames_;
   std::size_t unpaired_ = 0;
