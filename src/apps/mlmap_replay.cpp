@@ -152,6 +152,7 @@ eval::Json countersJson(const RunInfo& info, const EngineStats& s, const std::ve
           {"beyond_max_range", s.points.beyond_max_range},
           {"hit_voxels", s.points.hit_voxels},
           {"hits_beyond_local_map", s.points.hits_beyond_local_map},
+          {"hits_above_or_below_local_map", s.points.hits_above_or_below_local_map},
           {"hits_outside_window", s.local.hits_outside_window},
           {"hits_to_global_map", s.hits_to_global},
           {"hits_lost", s.hits_lost},
@@ -400,7 +401,7 @@ void planningForOutputs(const Options& o, MapConfig* config) {
 }
 
 /// Widens the local window horizontally so that every hit within `range_m` of the body lies in
-/// it wherever the body is in its submap (3 of the 5 submaps from the body), logged. A window
+/// it wherever the body is in its centre submap (2.5 x the range across), logged. A window
 /// already that wide is kept; so is one whose widening the configuration's limits refuse (the
 /// window's 2e8 voxels, the awareness scratch box): the hits beyond it then go to the global map
 /// as hits only, counted and said.
@@ -639,11 +640,13 @@ void printHitsNotMapped(const EngineStats& s) {
       static_cast<unsigned long long>(s.hits_to_global),
       static_cast<unsigned long long>(s.hits_lost));
   if (points + voxels > 0) {
+    const std::uint64_t vertical = s.points.hits_above_or_below_local_map;
     spdlog::warn(
         "{} points in range and {} hit voxels fell outside the local window: their hits went to "
-        "the global map ({} updates, {} lost), their free space was not mapped; a larger "
-        "local_map.size_cells (--config, or --max-range) maps them whole",
-        points, voxels, s.hits_to_global, s.hits_lost);
+        "the global map ({} updates, {} lost), their free space was not mapped. Of the points, "
+        "{} lay beyond its horizontal reach (a wider local_map.size_cells x, y, or --max-range, "
+        "maps them whole) and {} above or below it (a taller local_map.size_cells z does)",
+        points, voxels, s.hits_to_global, s.hits_lost, points - vertical, vertical);
   }
 }
 

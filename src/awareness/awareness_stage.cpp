@@ -150,6 +150,7 @@ PointCounters& PointCounters::operator+=(const PointCounters& o) {
   rejected_too_close += o.rejected_too_close;
   beyond_max_range += o.beyond_max_range;
   hits_beyond_local_map += o.hits_beyond_local_map;
+  hits_above_or_below_local_map += o.hits_above_or_below_local_map;
   sampled_out += o.sampled_out;
   hit_voxels += o.hit_voxels;
   free_voxels += o.free_voxels;
@@ -535,6 +536,10 @@ void AwarenessStage::collectEnds(const Source& source, const FrameGeometry& g,
           e.cut = key == kPointOutsideCutKey;
           c.beyond_max_range += e.cut ? 1 : 0;
           c.hits_beyond_local_map += e.cut ? 0 : 1;
+          // Box-relative voxel coordinates: inside horizontally, so outside in z.
+          const bool beside = v[0] >= 0.0f && v[0] < static_cast<float>(box_dims_.x()) &&
+                              v[1] >= 0.0f && v[1] < static_cast<float>(box_dims_.y());
+          c.hits_above_or_below_local_map += !e.cut && beside ? 1 : 0;
           outside_.push_back(e);
         }
         continue;

@@ -58,6 +58,7 @@ Json reportJson(const std::string& source, const EngineStats& s, std::size_t occ
                       {"beyond_max_range", s.points.beyond_max_range},
                       {"hit_voxels", s.points.hit_voxels},
                       {"hits_beyond_local_map", s.points.hits_beyond_local_map},
+                      {"hits_above_or_below_local_map", s.points.hits_above_or_below_local_map},
                       {"hits_outside_window", s.local.hits_outside_window},
                       {"hits_to_global_map", s.hits_to_global},
                       {"hits_lost", s.hits_lost},

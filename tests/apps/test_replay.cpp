@@ -182,10 +182,10 @@ TEST(Replay, VoxelIndicesAreFloorOfCoordinateOverResolution) {
 
 TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
   // A wall 2 m away and one 15 m away beside it, in range (20 m) but beyond the 19 m window's
-  // reach (3 submaps, 11.4 m) when the configuration fixes the window: the far wall's hits go to
-  // the global map (its free space is not mapped), and the summary, the log and stats.json say
-  // how many. With --max-range the replay sizes the window itself, and both walls are mapped in
-  // the window.
+  // reach (7.6 to 11.4 m: 2 to 3 submaps) when the configuration fixes the window: the far wall's
+  // hits go to the global map (its free space is not mapped), and the summary, the log and
+  // stats.json say how many. With --max-range the replay sizes the window itself, and both walls
+  // are mapped in the window, even with the body at the far edge of its submap.
   const std::string dir = ::testing::TempDir() + "/mlmap_replay_outside";
   fs::remove_all(dir);
   fs::create_directories(dir + "/clouds");
@@ -209,6 +209,7 @@ TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
   ASSERT_EQ(run(command, dir + "/replay.log"), 0) << readText(dir + "/replay.log");
   const std::string stats = readText(dir + "/out/stats.json");
   EXPECT_EQ(jsonInt(stats, "hits_beyond_local_map"), 21 * 11);  // every point of the far wall
+  EXPECT_EQ(jsonInt(stats, "hits_above_or_below_local_map"), 0);  // beyond it horizontally
   EXPECT_EQ(jsonInt(stats, "hits_outside_window"), 0);
   EXPECT_EQ(jsonInt(stats, "hit_voxels"), 21 * 11);  // the near wall's
   EXPECT_EQ(jsonInt(stats, "hits_to_global_map"), 21 * 11);  // the far wall's, one per voxel
@@ -229,8 +230,12 @@ TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
   EXPECT_NE(log.find("their free space was not mapped"), std::string::npos) << log;
   EXPECT_EQ(jsonInt(readText(dir + "/out/report.json"), "hits_beyond_local_map"), 21 * 11);
 
-  // --max-range 20: the window grows to hold the range, and every hit is mapped.
-  ASSERT_EQ(run(source + " --resolution 0.1 --max-range 20 --out '" + dir + "/sized'",
+  // --max-range 20: the window grows to hold the range, and every hit is mapped, with the body
+  // 6.6 m along x: at the far edge of its submap in a window of 2 x 20 / 0.6 = 335 voxels (6.7 m
+  // submaps), which reached only 13.5 m ahead.
+  mlmap::testing::writeFile(dir + "/edge.csv", "t,x,y,z,qx,qy,qz,qw\n1,6.6,0,0,0,0,0,1\n");
+  ASSERT_EQ(run(std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir + "/clouds' --poses '" + dir +
+                    "/edge.csv' --resolution 0.1 --max-range 20 --out '" + dir + "/sized'",
                 dir + "/sized.log"),
             0)
       << readText(dir + "/sized.log");
@@ -240,12 +245,45 @@ TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
   EXPECT_EQ(jsonInt(sized, "hit_voxels"), 2 * 21 * 11);
   std::size_t far = 0;
   for (const VoxelIndex& v : io::readVoxelText(dir + "/sized/occupied_voxels.txt")) {
-    far += v.x() == 150 ? 1 : 0;
+    far += v.x() == 216 ? 1 : 0;
   }
   EXPECT_EQ(far, 21u * 11u) << "the far wall, 15 m away";
-  EXPECT_NE(readText(dir + "/sized.log").find("the local window grows from 190 x 190 to 335 x 335"),
+  EXPECT_NE(readText(dir + "/sized.log").find("the local window grows from 190 x 190 to 500 x 500"),
             std::string::npos)
       << readText(dir + "/sized.log");
+}
+
+// A LiDAR's upper beams: hits within the window's horizontal reach but above it are counted
+// apart, and the log says that a taller window, not a wider one, maps them.
+TEST(Replay, HitsAboveTheWindowAreToldApartFromThoseBeyondIt) {
+  const std::string dir = ::testing::TempDir() + "/mlmap_replay_above";
+  fs::remove_all(dir);
+  fs::create_directories(dir + "/clouds");
+  std::vector<Eigen::Vector3d> points;
+  for (int j = -10; j <= 10; ++j) {
+    for (int k = 0; k <= 10; ++k) points.emplace_back(3.05, 0.1 * j + 0.05, 5.05 + 0.1 * k);
+  }
+  mlmap::testing::writeFile(
+      dir + "/clouds/scan_a.ply",
+      mlmap::testing::makePly(points, mlmap::testing::PlyFormat::kAscii, true));
+  mlmap::testing::writeFile(dir + "/poses.csv", "t,x,y,z,qx,qy,qz,qw\n1,0,0,0,0,0,0,1\n");
+  // 70 voxels (7 m) tall: the scratch box reaches 3 submaps (4.2 m) above the sensor.
+  mlmap::testing::writeFile(dir + "/fixed.yaml",
+                            "local_map: {resolution_m: 0.1, size_cells: [190, 190, 70]}\n"
+                            "awareness: {max_range_m: 20, rho_cells: 200}\n");
+  ASSERT_EQ(run(std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir + "/clouds' --poses '" + dir +
+                    "/poses.csv' --config '" + dir + "/fixed.yaml' --out '" + dir + "/out'",
+                dir + "/replay.log"),
+            0)
+      << readText(dir + "/replay.log");
+  const std::string stats = readText(dir + "/out/stats.json");
+  EXPECT_EQ(jsonInt(stats, "hits_beyond_local_map"), 21 * 11);
+  EXPECT_EQ(jsonInt(stats, "hits_above_or_below_local_map"), 21 * 11);
+  EXPECT_NE(readText(dir + "/replay.log")
+                .find("0 lay beyond its horizontal reach (a wider local_map.size_cells x, y, or "
+                      "--max-range, maps them whole) and 231 above or below it"),
+            std::string::npos)
+      << readText(dir + "/replay.log");
 }
 
 TEST(Replay, BadInputIsRefusedWithAMessage) {

@@ -25,6 +25,9 @@ struct PointCounters {
   /// body's): they mark the awareness map and clear their ray, and their voxels get a hit in the
   /// global map (MeasurementBatch::far_hits).
   std::uint64_t hits_beyond_local_map = 0;
+  /// Of them, the points within the local map's horizontal reach but above or below it (a
+  /// LiDAR's upper and lower beams): a taller local_map.size_cells z holds them.
+  std::uint64_t hits_above_or_below_local_map = 0;
   std::uint64_t sampled_out = 0;         ///< left out by sample_count
   std::uint64_t hit_voxels = 0;          ///< occupied measurements (unique voxels)
   std::uint64_t free_voxels = 0;         ///< free measurements (unique voxels)

@@ -123,13 +123,15 @@ struct LocalMapConfig {
   static constexpr int kSubmapsPerAxis = 5;
   [[nodiscard]] Eigen::Vector3i submap_cells() const { return size_cells / kSubmapsPerAxis; }
   /// How far from the body [m] the window holds every hit horizontally, wherever the body is in
-  /// the centre submap it is re-centred on: 3 of the 5 submaps of the narrower axis.
+  /// the centre submap it is re-centred on: the 2 submaps beyond it on the narrower axis (the
+  /// body may sit at the centre submap's edge).
   [[nodiscard]] double horizontalReach_m() const {
-    return 0.6 * std::min(size_cells.x(), size_cells.y()) * resolution_m;
+    return 0.4 * std::min(size_cells.x(), size_cells.y()) * resolution_m;
   }
-  /// The voxels per horizontal axis (a multiple of 5) whose reach holds `range_m`.
+  /// The voxels per horizontal axis (a multiple of 5) whose reach holds `range_m`: 2.5 x the
+  /// range across.
   [[nodiscard]] int horizontalCellsForRange(double range_m) const {
-    return static_cast<int>(std::ceil(range_m / (3.0 * resolution_m) - 1e-9)) * kSubmapsPerAxis;
+    return static_cast<int>(std::ceil(range_m / (2.0 * resolution_m) - 1e-9)) * kSubmapsPerAxis;
   }
   void validate(std::vector<std::string>* errors) const;
 };

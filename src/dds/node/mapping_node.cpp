@@ -174,13 +174,13 @@ struct MappingNode::Impl {
 
   /// The local window is centred on the body's submap (5 per axis): a hit more than 3 submaps
   /// from the body horizontally lies outside it wherever the body is in its submap (between 2
-  /// and 3 submaps it depends on where the body is); its occupied evidence goes to the global
-  /// map, counted, and its free space is not mapped. A range beyond 3 submaps is said at start,
-  /// with the window that would hold it.
+  /// submaps, horizontalReach_m(), and 3 it depends on where the body is); its occupied evidence
+  /// goes to the global map, counted, and its free space is not mapped. A range beyond 3 submaps
+  /// is said at start, with the window that would hold every hit in range.
   void warnIfRangeExceedsWindow() {
     const LocalMapConfig& lm = config.map.local_map;
     const double range_m = config.map.awareness.max_range_m;
-    if (range_m <= lm.horizontalReach_m()) return;
+    if (range_m <= 1.5 * lm.horizontalReach_m()) return;  // 3 submaps
     const int needed = lm.horizontalCellsForRange(range_m);
     std::ostringstream m;
     m << "awareness.max_range_m (" << range_m << " m) reaches beyond the local window: hits "
