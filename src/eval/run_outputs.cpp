@@ -112,7 +112,6 @@ MapConfig runConfig(const std::string& config_path, DataKind kind, double resolu
     // The frame poses are camera poses: the camera is the body.
     config.sensor.translation_B_m.setZero();
     config.sensor.rotation_rpy_deg.setZero();
-    if (config_path.empty()) config.log_odds.hit = 0.6;  // Table 1: low-precision sensor
   }
   return config;
 }

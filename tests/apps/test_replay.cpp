@@ -515,7 +515,7 @@ TEST(Replay, RealsenseFramesGiveTheDemosMap) {
   ASSERT_EQ(run(std::string(MLMAP_DEMO_BIN) + options + "/demo'", dir + "/demo.log"), 0)
       << readText(dir + "/demo.log");
   // mlmap_demo maps the frames with the same settings (eval::runConfig) in the same order: the
-  // same map (4,323 voxels, as mlmap_dds_end_to_end_replay receives over DDS). Voxel-for-voxel
+  // same map (4,813 voxels, as mlmap_dds_end_to_end_replay receives over DDS). Voxel-for-voxel
   // agreement with the engine run directly is checked on clouds above.
   const std::vector<VoxelIndex> replayed = io::readVoxelText(dir + "/replay/occupied_voxels.txt");
   const long demo = jsonInt(readText(dir + "/demo/report.json"), "occupied_voxels");

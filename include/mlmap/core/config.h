@@ -42,7 +42,7 @@ struct AwarenessConfig {
   int sample_count = 0;           ///< key sample_count (the paper's SAMPLE_CNT)
   std::uint32_t sample_seed = 1;  ///< key sample_seed
   int num_threads = 1;            ///< key num_threads
-  double bin_width_voxels = 2.0;  ///< key bin_width_voxels
+  double bin_width_voxels = 1.0;  ///< key bin_width_voxels
 
   /// The keys of the `awareness` section (see the file comment).
   template <class Self, class V>
@@ -64,7 +64,7 @@ struct AwarenessConfig {
           "threads carving a frame's free space, the caller's included (the same map with any)");
     v.key("bin_width_voxels", c.bin_width_voxels, "",
           "rays share a cone until their direction bin is this wide, in [1, 2]: 1 carves "
-          "closer to the rays (thicker surfaces) at more cost");
+          "closer to the rays (full surfaces, as OctoMap's), 2 costs less carving");
   }
 
   /// Upper bound of num_threads.

@@ -37,8 +37,8 @@ void setResolution(MapConfig* config, double resolution_m);
 
 /// The engine configuration both programs map `kind` with: `config_path` (empty: the defaults),
 /// the resolution `resolution_m` (> 0) or, without a config file, the kind's default (0.1 m
-/// simulator and clouds, 0.02 m frames). Frames: the camera is the body (sensor: identity) and,
-/// without a config file, log_odds.hit = 0.6 (Table 1, low-precision sensor). Not validated.
+/// simulator and clouds, 0.02 m frames). Frames: the camera is the body (sensor: identity). Not
+/// validated.
 /// @throws std::runtime_error when the config file is malformed.
 [[nodiscard]] MapConfig runConfig(const std::string& config_path, DataKind kind, double resolution_m);
 
