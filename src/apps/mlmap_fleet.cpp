@@ -28,6 +28,8 @@ struct Options {
   std::string config_path;      ///< --config: the vehicles' configuration ("": the defaults)
   std::string save_map_path;    ///< --save-map: the merged map's file at the end ("": none)
   bool overwrite = false;       ///< --overwrite: --save-map may replace an existing map file
+  double vehicle_budget_mb = 256.0;  ///< --vehicle-budget [MiB]
+  double fleet_budget_mb = 1024.0;   ///< --fleet-budget [MiB]
 };
 
 /// Adds every option of mlmap_fleet to `app`.
@@ -55,8 +57,19 @@ void addOptions(CLI::App& app, Options& o) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--config", o.config_path,
                  "the vehicles' mlmap configuration (mlmap_node's file): its log_odds section "
-                 "clamps and thresholds the fused map and is the saved map's sensor model")
+                 "clamps and thresholds the fused map and is the saved map's sensor model; its "
+                 "local_map (resolution_m, size_cells / 5) is the fleet's grid: samples of "
+                 "another are refused")
       ->check(CLI::ExistingFile);
+  app.add_option("--vehicle", o.merger.trust.vehicles,
+                 "a vehicle of the fleet (its dds.fleet.vehicle), repeated for each: samples "
+                 "of any other name are refused (none: an open domain, any name may join)");
+  app.add_option("--vehicle-budget", o.vehicle_budget_mb,
+                 "memory one vehicle's submaps may take in the merger [MiB]")
+      ->check(CLI::Range(1.0, 1048576.0));
+  app.add_option("--fleet-budget", o.fleet_budget_mb,
+                 "memory the merged map may take [MiB]")
+      ->check(CLI::Range(1.0, 1048576.0));
   app.add_option("--save-map", o.save_map_path,
                  "at the end, write the merged map to this mlmap map file (global layer; "
                  "mlmap_map_tool converts it, mlmap_node map_file.load_path starts from it)");
@@ -93,8 +106,13 @@ int run(Options o) {
     o.merger.dds.domain_id = o.domain_id;
     o.merger.dds.discovery_range = o.discovery_range;
     if (!o.config_path.empty()) {
-      o.merger.log_odds = io::loadConfigYaml(o.config_path, io::kNodeOnlySections).log_odds;
+      const MapConfig vehicles = io::loadConfigYaml(o.config_path, io::kNodeOnlySections);
+      o.merger.log_odds = vehicles.log_odds;
+      o.merger.trust.resolution_m = vehicles.local_map.resolution_m;
+      o.merger.trust.submap_cells = vehicles.local_map.submap_cells();
     }
+    o.merger.trust.vehicle_budget_bytes = static_cast<std::size_t>(o.vehicle_budget_mb * 1048576.0);
+    o.merger.trust.fleet_budget_bytes = static_cast<std::size_t>(o.fleet_budget_mb * 1048576.0);
     const std::string save_problem = saveMapProblem(o);
     if (!save_problem.empty()) throw std::runtime_error(save_problem);
     apps::installStopHandler();

@@ -36,6 +36,17 @@ int FleetMap::vehicleIndex(const std::string& name) {
   return index;
 }
 
+int FleetMap::findVehicle(const std::string& name) const {
+  const auto it = vehicle_index_.find(name);
+  return it == vehicle_index_.end() ? -1 : it->second;
+}
+
+void FleetMap::noteRestart(int index) {
+  if (index >= 0 && static_cast<std::size_t>(index) < vehicles_.size()) {
+    ++vehicles_[static_cast<std::size_t>(index)].restarts;
+  }
+}
+
 void FleetMap::noteReceived(const std::string& vehicle, std::size_t bytes, double now_s) {
   const int v = vehicleIndex(vehicle);
   if (v < 0) return;
@@ -53,37 +64,94 @@ std::uint32_t vehicleColourRgb(int index) {
 
 SubmapIndex FleetMap::submapOf(std::uint64_t key) { return unpackSubmap(key); }
 
+namespace {
+/// Bytes of one hash map node of the submaps (key, entry, next pointer, cached hash).
+template <typename Entry>
+constexpr std::size_t nodeBytes() {
+  return sizeof(std::uint64_t) + sizeof(Entry) + 2 * sizeof(void*);
+}
+}  // namespace
+
+std::size_t FleetMap::contributionBytes(std::size_t voxels) {
+  return sizeof(Contribution) + voxels * sizeof(VoxelRecord);
+}
+
+FleetMap::MemoryAfter FleetMap::memoryAfter(int index, const SubmapIndex& m,
+                                            std::size_t voxels) const {
+  MemoryAfter after;
+  const auto it = submaps_.find(packSubmap(m));
+  std::size_t held_records = 0, other_records = 0, fused_now = 0;
+  if (it != submaps_.end()) {
+    fused_now = it->second.fused.size();
+    for (const Contribution& c : it->second.contributions) {
+      (c.vehicle == index ? held_records : other_records) += c.records.size();
+    }
+  }
+  const bool contributes = it != submaps_.end() &&
+                           std::any_of(it->second.contributions.begin(),
+                                       it->second.contributions.end(),
+                                       [index](const Contribution& c) { return c.vehicle == index; });
+  const std::size_t held_bytes = contributes ? contributionBytes(held_records) : 0;
+  const std::size_t vehicle_now =
+      index >= 0 && static_cast<std::size_t>(index) < vehicles_.size()
+          ? vehicles_[static_cast<std::size_t>(index)].memory_bytes
+          : 0;
+  // The fused voxels of the submap afterwards: at most one per offset any contribution holds.
+  const auto submap_voxels = static_cast<std::size_t>(submap_cells_.x()) *
+                             static_cast<std::size_t>(submap_cells_.y()) *
+                             static_cast<std::size_t>(submap_cells_.z());
+  const std::size_t fused_max = std::min(submap_voxels, other_records + voxels);
+  const std::size_t fused_growth = fused_max > fused_now ? fused_max - fused_now : 0;
+  after.vehicle_bytes = vehicle_now - held_bytes + contributionBytes(voxels);
+  after.fleet_bytes = memoryBytes() - held_bytes + contributionBytes(voxels) +
+                      fused_growth * sizeof(FleetVoxel) +
+                      (it == submaps_.end() ? nodeBytes<Entry>() : 0);
+  return after;
+}
+
 SubmapApply FleetMap::apply(const std::string& vehicle, const SubmapIndex& m,
-                            std::uint64_t sequence, std::vector<VoxelRecord>&& records) {
+                            std::uint64_t sequence, std::vector<VoxelRecord>&& records,
+                            std::uint32_t epoch) {
   const int v = vehicleIndex(vehicle);
   if (v < 0) return SubmapApply::kTooManyVehicles;
   FleetVehicle& info = vehicles_[static_cast<std::size_t>(v)];
   const std::uint64_t key = packSubmap(m);
   auto it = submaps_.find(key);
   // An empty sample for a new submap still creates it: its sequence orders later samples.
-  if (it == submaps_.end()) it = submaps_.emplace(key, Entry{}).first;
+  if (it == submaps_.end()) {
+    it = submaps_.emplace(key, Entry{}).first;
+    held_bytes_ += nodeBytes<Entry>();
+  }
   Entry& entry = it->second;
   auto c = std::find_if(entry.contributions.begin(), entry.contributions.end(),
                         [v](const Contribution& x) { return x.vehicle == v; });
-  if (c != entry.contributions.end() && sequence <= c->sequence) {
+  if (c != entry.contributions.end() && c->epoch == epoch && sequence <= c->sequence) {
     ++info.samples_outdated;
     return SubmapApply::kOutdated;
   }
   if (c == entry.contributions.end()) {
-    entry.contributions.push_back(Contribution{v, 0, {}});
+    entry.contributions.push_back(Contribution{v, 0, epoch, {}});
     c = entry.contributions.end() - 1;
+    held_bytes_ += contributionBytes(0);
+    info.memory_bytes += contributionBytes(0);
   }
   const std::size_t before = c->records.size();
+  held_bytes_ = held_bytes_ - before * sizeof(VoxelRecord) + records.size() * sizeof(VoxelRecord);
+  info.memory_bytes =
+      info.memory_bytes - before * sizeof(VoxelRecord) + records.size() * sizeof(VoxelRecord);
   info.voxels = info.voxels - before + records.size();
   if (before == 0 && !records.empty()) ++info.submaps;
   if (before != 0 && records.empty()) --info.submaps;
   c->sequence = sequence;
+  c->epoch = epoch;
   c->records = std::move(records);
   c->records.shrink_to_fit();
   ++info.samples_applied;
   voxel_count_ -= entry.fused.size();
+  held_bytes_ -= entry.fused.size() * sizeof(FleetVoxel);
   fuse(&entry);
   voxel_count_ += entry.fused.size();
+  held_bytes_ += entry.fused.size() * sizeof(FleetVoxel);
   ++changes_;
   return SubmapApply::kApplied;
 }
@@ -152,16 +220,7 @@ ProjectedGrid FleetMap::projectGrid(double band_min_z_m, double band_max_z_m) co
 }
 
 std::size_t FleetMap::memoryBytes() const {
-  constexpr std::size_t kNodeBytes = sizeof(std::uint64_t) + sizeof(Entry) + 2 * sizeof(void*);
-  std::size_t bytes = submaps_.bucket_count() * sizeof(void*) + submaps_.size() * kNodeBytes;
-  for (const auto& [key, entry] : submaps_) {
-    bytes += entry.contributions.capacity() * sizeof(Contribution) +
-             entry.fused.capacity() * sizeof(FleetVoxel);
-    for (const Contribution& c : entry.contributions) {
-      bytes += c.records.capacity() * sizeof(VoxelRecord);
-    }
-  }
-  return bytes;
+  return held_bytes_ + submaps_.bucket_count() * sizeof(void*);
 }
 
 std::vector<std::pair<SubmapIndex, std::vector<VoxelRecord>>> FleetMap::occupiedSubmaps() const {

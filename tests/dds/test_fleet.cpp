@@ -44,6 +44,10 @@ FleetMergerConfig mergerConfig(int domain_id) {
   FleetMergerConfig c;
   c.dds = localhostConfig(domain_id);
   c.publish_hz = 5.0;
+  // The vehicles' grid (fleet_test_support.h): the fleet's grid is configuration.
+  const LocalMapConfig local = fleet::test_support::fleetMapConfig().local_map;
+  c.trust.resolution_m = local.resolution_m;
+  c.trust.submap_cells = local.submap_cells();
   return c;
 }
 

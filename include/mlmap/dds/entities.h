@@ -130,6 +130,16 @@ class TakeListener : public eprosima::fastdds::dds::DataReaderListener {
  public:
   TakeListener(std::function<void(Msg&&)> sink, std::function<void(const std::string&)> on_error,
                std::function<void(int)> on_matched = {})
+      : sink_([s = std::move(sink)](Msg&& m, const eprosima::fastdds::dds::SampleInfo&) {
+          s(std::move(m));
+        }),
+        on_error_(std::move(on_error)),
+        on_matched_(std::move(on_matched)) {}
+  /// As above, `sink` also getting the sample's SampleInfo (e.g. the publishing writer's GUID,
+  /// `publication_handle`).
+  TakeListener(std::function<void(Msg&&, const eprosima::fastdds::dds::SampleInfo&)> sink,
+               std::function<void(const std::string&)> on_error,
+               std::function<void(int)> on_matched = {})
       : sink_(std::move(sink)), on_error_(std::move(on_error)), on_matched_(std::move(on_matched)) {}
   void on_subscription_matched(eprosima::fastdds::dds::DataReader*,
                                const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
@@ -149,12 +159,12 @@ class TakeListener : public eprosima::fastdds::dds::DataReaderListener {
         continue;
       }
       if (!taken) return;
-      if (info.valid_data) sink_(std::move(msg));
+      if (info.valid_data) sink_(std::move(msg), info);
     }
   }
 
  private:
-  std::function<void(Msg&&)> sink_;
+  std::function<void(Msg&&, const eprosima::fastdds::dds::SampleInfo&)> sink_;
   std::function<void(const std::string&)> on_error_;
   std::function<void(int)> on_matched_;
 };
@@ -196,6 +206,21 @@ class TakeReaders {
                                           std::function<void(int)> on_matched = {}) {
     auto listener = std::make_unique<TakeListener<typename PubSubType::type>>(std::move(sink), on_error_,
                                                                               std::move(on_matched));
+    eprosima::fastdds::dds::DataReader* reader =
+        createReader<PubSubType>(subscriber_, dds_topic, qos, listener.get());
+    listeners_.push_back(std::move(listener));
+    return reader;
+  }
+
+  /// As add(), `sink` also getting each sample's SampleInfo.
+  template <typename PubSubType>
+  eprosima::fastdds::dds::DataReader* addWithInfo(
+      const std::string& dds_topic, const eprosima::fastdds::dds::DataReaderQos& qos,
+      std::function<void(typename PubSubType::type&&, const eprosima::fastdds::dds::SampleInfo&)>
+          sink,
+      std::function<void(int)> on_matched = {}) {
+    auto listener = std::make_unique<TakeListener<typename PubSubType::type>>(
+        std::move(sink), on_error_, std::move(on_matched));
     eprosima::fastdds::dds::DataReader* reader =
         createReader<PubSubType>(subscriber_, dds_topic, qos, listener.get());
     listeners_.push_back(std::move(listener));

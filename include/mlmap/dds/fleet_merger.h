@@ -11,6 +11,7 @@
 #include "mlmap/core/config.h"
 #include "mlmap/core/log_odds.h"
 #include "mlmap/dds/dds_config.h"
+#include "mlmap/dds/fleet_intake.h"
 #include "mlmap/fleet/fleet_map.h"
 #include "mlmap/pipeline/rate_limited_log.h"
 
@@ -38,6 +39,8 @@ struct FleetMergerConfig {
   double grid_min_z_m = 0.2;   ///< the grid's band of voxel centre heights [m]
   double grid_max_z_m = 2.0;
   LogOddsConfig log_odds;      ///< clamping bounds and threshold of the fused log-odds
+  /// The grid, the known vehicles and the memory budgets (docs/fleet.md#trust).
+  FleetTrustConfig trust;
 };
 
 /// One vehicle as the status reports it.
@@ -54,7 +57,12 @@ struct FleetMergerStats {
   std::size_t submaps = 0;
   std::size_t memory_bytes = 0;
   std::uint64_t samples_received = 0;
-  std::uint64_t samples_rejected = 0;    ///< malformed or of another grid
+  /// Samples refused or dropped, for any reason (the sum of `refused`).
+  std::uint64_t samples_rejected = 0;
+  /// Refused and dropped samples by reason (index: SubmapRefusal).
+  SubmapRefusalCounts refused{};
+  /// Times a vehicle's samples came from a new writer (a restart), all vehicles.
+  std::uint64_t restarts = 0;
   /// Submap writers (vehicles) the merger's reader is matched with now, whether or not they
   /// have sent anything yet. A vehicle that leaves before its writer matched the merger's
   /// reader is never heard: discovery takes a moment, longer on a busy machine.
@@ -81,9 +89,11 @@ class FleetMerger {
   [[nodiscard]] FleetMergerStats stats() const;
   /// The merged map's occupied voxels with their vehicle bits.
   [[nodiscard]] std::vector<std::pair<VoxelIndex, std::uint64_t>> occupiedVoxels() const;
-  /// The merged map as a map file holds it (fleet::fleetMapState(); throws as it does).
+  /// The merged map as a map file holds it (fleet::fleetMapState(); throws as it does, and
+  /// std::runtime_error when no vehicle's sample was applied: nothing to save).
   [[nodiscard]] MapState mapState() const;
-  /// One line: vehicles (name, last seen, kB, submaps, voxels, stale), merged voxels, memory.
+  /// One line: vehicles (name, last seen, kB, submaps, voxels, restarts, stale), merged voxels,
+  /// memory, refused samples by reason.
   [[nodiscard]] std::string statusLine() const;
   [[nodiscard]] int domainId() const;
 

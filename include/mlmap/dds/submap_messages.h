@@ -56,6 +56,10 @@ struct DecodedSubmap {
   std::vector<VoxelRecord> records;  ///< ascending offsets inside the submap
 };
 
+/// The checks of decodeSubmapMessage() that need no decoding (everything but the payload's
+/// content): "" when they pass, else why not. Allocates nothing.
+std::string submapHeaderProblem(const ::mlmap_msgs::msg::dds_::Submap_& msg);
+
 /// Checks and decodes `msg` into `out`. Returns "" when it is accepted, else why not: a layout
 /// version other than kSubmapLayoutVersion, an empty or overlong vehicle name, a resolution not
 /// finite and > 0, a submap of no voxels or more than kMaxSubmapVoxels, an index beyond

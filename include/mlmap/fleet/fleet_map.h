@@ -50,6 +50,8 @@ struct FleetVehicle {
   std::uint64_t samples_outdated = 0; ///< older than (or as old as) the content held: ignored
   std::uint64_t submaps = 0;          ///< submaps where it holds occupied voxels
   std::uint64_t voxels = 0;           ///< voxels it contributes evidence for
+  std::uint64_t memory_bytes = 0;     ///< bytes its contributions hold
+  std::uint64_t restarts = 0;         ///< times its samples came from a new source (epoch)
   double last_seen_s = -std::numeric_limits<double>::infinity();  ///< caller's clock [s]
 };
 
@@ -78,14 +80,33 @@ class FleetMap {
 
   /// The vehicle's index, registered on first use (-1 beyond kMaxVehicles).
   int vehicleIndex(const std::string& name);
+  /// The vehicle's index, or -1 when it is not registered (registers nothing).
+  [[nodiscard]] int findVehicle(const std::string& name) const;
+  /// Counts a restart of vehicle `index` (FleetVehicle::restarts).
+  void noteRestart(int index);
   /// Counts a received sample of `vehicle` (`bytes` of payload) at `now_s` (caller's clock).
   void noteReceived(const std::string& vehicle, std::size_t bytes, double now_s);
 
   /// Replaces `vehicle`'s content of submap `m` by `records` (ascending offsets inside the
   /// submap; empty: it holds nothing there now), when `sequence` is newer than the one held
-  /// for that vehicle and submap, and fuses the submap again.
+  /// for that vehicle and submap or `epoch` differs from the held content's (the vehicle
+  /// restarted: a new source whose sequence numbers are not comparable with the old one's),
+  /// and fuses the submap again.
   SubmapApply apply(const std::string& vehicle, const SubmapIndex& m, std::uint64_t sequence,
-                    std::vector<VoxelRecord>&& records);
+                    std::vector<VoxelRecord>&& records, std::uint32_t epoch = 0);
+
+  /// Bytes held after a change, as memoryAfter() foresees it.
+  struct MemoryAfter {
+    std::size_t vehicle_bytes = 0;  ///< the vehicle's contributions (FleetVehicle::memory_bytes)
+    std::size_t fleet_bytes = 0;    ///< the whole map (memoryBytes()), an upper bound
+  };
+  /// What vehicle `index` (-1: a vehicle not registered yet) and the map would hold if its
+  /// content of submap `m` became `voxels` voxels: computed from the sizes alone, before
+  /// anything is allocated. The submap's fused voxels are counted as one per offset any
+  /// contribution would hold, at most the submap's voxels (an upper bound).
+  [[nodiscard]] MemoryAfter memoryAfter(int index, const SubmapIndex& m, std::size_t voxels) const;
+  /// Bytes one vehicle's content of one submap of `voxels` voxels holds.
+  static std::size_t contributionBytes(std::size_t voxels);
 
   /// Calls f(world voxel index, fused log-odds, vehicle bits) for every fused voxel (all occupied).
   template <typename F>
@@ -115,7 +136,8 @@ class FleetMap {
   [[nodiscard]] const std::vector<FleetVehicle>& vehicles() const { return vehicles_; }
   [[nodiscard]] std::size_t voxelCount() const { return voxel_count_; }
   [[nodiscard]] std::size_t submapCount() const { return submaps_.size(); }
-  /// Bytes held by the contributions, the fused voxels and the hash map's nodes (estimate).
+  /// Bytes held by the contributions, the fused voxels and the hash map's nodes and buckets
+  /// (kept as the map changes: O(1)).
   [[nodiscard]] std::size_t memoryBytes() const;
   [[nodiscard]] double resolution_m() const { return resolution_m_; }
   [[nodiscard]] const Eigen::Vector3i& submapCells() const { return submap_cells_; }
@@ -129,6 +151,7 @@ class FleetMap {
   struct Contribution {
     int vehicle = 0;
     std::uint64_t sequence = 0;
+    std::uint32_t epoch = 0;
     std::vector<VoxelRecord> records;
   };
   struct Entry {
@@ -147,6 +170,7 @@ class FleetMap {
   std::unordered_map<std::string, int> vehicle_index_;
   std::unordered_map<std::uint64_t, Entry> submaps_;
   std::size_t voxel_count_ = 0;
+  std::size_t held_bytes_ = 0;  // contributions, fused voxels, hash nodes (not buckets)
   std::uint64_t changes_ = 0;
 };
 

@@ -82,14 +82,13 @@ struct FleetMerger::Impl {
   LogSink log;
   Clock::time_point started = Clock::now();
   mutable std::mutex mutex;  // guards map, counters
-  fleet::FleetMap map;
+  FleetIntake intake;
+  const fleet::FleetMap& map;
   std::uint64_t samples_received = 0;
-  std::uint64_t samples_rejected = 0;
   int publishers_matched = 0;
   std::uint64_t clouds_published = 0;
   std::uint64_t grids_published = 0;
-  std::string last_rejection;
-  Clock::time_point last_rejection_log = Clock::time_point::min();
+  RateLimitedLog refusal_log;
 
   ParticipantPtr participant;
   std::unique_ptr<TakeReaders> readers;
@@ -104,7 +103,11 @@ struct FleetMerger::Impl {
   bool stopped = false;
 
   Impl(const FleetMergerConfig& c, LogSink sink)
-      : config(c), log(std::move(sink)), map(c.log_odds) {}
+      : config(c),
+        log(std::move(sink)),
+        intake(c.trust, c.log_odds),
+        map(intake.map()),
+        refusal_log(log, kSubmapRefusals + 1) {}
 
   double now_s() const { return secondsBetween(started, Clock::now()); }
 
@@ -134,58 +137,56 @@ struct FleetMerger::Impl {
         publisher, ddsTopicName(ns, config.status_topic), reliableWriterQos(10));
     readers = std::make_unique<TakeReaders>(subscriber, [this](const std::string& what) {
       std::lock_guard<std::mutex> lock(mutex);
-      reject(what);
+      ++samples_received;
+      intake.countUndecodable();
+      logRefusal(SubmapRefusal::kMalformed, what);
     });
-    readers->add<mlmap_msgs::Submap_PubSubType>(
+    if (config.trust.vehicles.empty()) {
+      say(LogLevel::kWarning,
+          "open domain: any participant may join the fleet as a vehicle (list the vehicles to "
+          "close it: --vehicle NAME; docs/fleet.md#trust)");
+    }
+    readers->addWithInfo<mlmap_msgs::Submap_PubSubType>(
         ddsTopicName("", config.submaps_topic), submapReaderQos(),
-        [this](mlmap_msgs::Submap_&& msg) { receive(msg); },
+        [this](mlmap_msgs::Submap_&& msg, const fdds::SampleInfo& info) { receive(msg, info); },
         [this](int matched) {
           std::lock_guard<std::mutex> lock(mutex);
           publishers_matched = matched;
         });
   }
 
-  /// Counts and (once a second at most) logs a refused sample. Under `mutex`.
-  void reject(const std::string& why) {
-    ++samples_rejected;
-    const Clock::time_point now = Clock::now();
-    if (last_rejection_log == Clock::time_point::min() ||
-        secondsBetween(last_rejection_log, now) >= 1.0) {
-      last_rejection_log = now;
-      say(LogLevel::kWarning, "submap sample refused: " + why + " (" +
-                                  std::to_string(samples_rejected) + " so far)");
-    }
+  /// Logs a refused sample, once a second at most per reason (with how many so far).
+  void logRefusal(SubmapRefusal reason, const std::string& why) {
+    refusal_log.log(LogLevel::kWarning, static_cast<int>(reason),
+                    "submap sample refused: " + why + " (" +
+                        std::to_string(intake.refused()[static_cast<std::size_t>(reason)]) + " " +
+                        toString(reason) + " so far)");
   }
 
-  /// Fast DDS's listener thread: decode, check, fuse.
-  void receive(const mlmap_msgs::Submap_& msg) {
-    DecodedSubmap decoded;
-    const std::string problem = decodeSubmapMessage(msg, &decoded);
+  /// Fast DDS's listener thread: the trust checks, decoding, fusion (FleetIntake::take()).
+  void receive(const mlmap_msgs::Submap_& msg, const fdds::SampleInfo& info) {
+    SubmapWriterId writer{};
+    const auto& handle = info.publication_handle.value;  // the writer's GUID, 16 octets
+    for (std::size_t i = 0; i < writer.size(); ++i) writer[i] = handle[static_cast<unsigned>(i)];
+    const auto wall_us = static_cast<std::uint64_t>(
+        std::chrono::duration_cast<std::chrono::microseconds>(
+            std::chrono::system_clock::now().time_since_epoch())
+            .count());
     std::lock_guard<std::mutex> lock(mutex);
     ++samples_received;
-    if (!problem.empty()) {
-      reject("from '" + msg.vehicle_().substr(0, kMaxVehicleNameBytes) + "': " + problem);
+    const SubmapIntake r = intake.take(msg, writer, now_s(), wall_us);
+    if (!r.applied) {
+      logRefusal(r.refusal, r.why);
       return;
     }
-    if (!map.acceptGeometry(decoded.geometry.resolution_m, decoded.geometry.cells)) {
-      std::ostringstream m;
-      m << "from '" << decoded.vehicle << "': grid " << decoded.geometry.resolution_m << " m, "
-        << decoded.geometry.cells.transpose() << " voxels per submap differs from the fleet's "
-        << map.resolution_m() << " m, " << map.submapCells().transpose();
-      reject(m.str());
-      return;
+    if (r.joined) say(LogLevel::kInfo, "vehicle '" + msg.vehicle_() + "' joined the fleet");
+    if (r.restarted) {
+      const int v = map.findVehicle(msg.vehicle_());
+      const std::uint64_t n = map.vehicles()[static_cast<std::size_t>(v)].restarts;
+      refusal_log.log(LogLevel::kInfo, static_cast<int>(kSubmapRefusals),
+                      "vehicle '" + msg.vehicle_() + "' restarted (samples from a new writer, " +
+                          std::to_string(n) + " so far): they replace its earlier ones");
     }
-    const bool known = map.vehicleIndex(decoded.vehicle) >= 0;
-    map.noteReceived(decoded.vehicle, serializedSubmapBytes(msg), now_s());
-    if (!known) {
-      reject("from '" + decoded.vehicle + "': more than " +
-             std::to_string(fleet::FleetMap::kMaxVehicles) + " vehicles");
-      return;
-    }
-    if (map.vehicles().back().name == decoded.vehicle && map.vehicles().back().samples == 1) {
-      say(LogLevel::kInfo, "vehicle '" + decoded.vehicle + "' joined the fleet");
-    }
-    map.apply(decoded.vehicle, decoded.index, decoded.sequence, std::move(decoded.records));
   }
 
   void publishLoop() {
@@ -256,7 +257,7 @@ struct FleetMerger::Impl {
       m.voxels_().push_back(v.info.voxels);
     }
     m.merged_voxels_(map.voxelCount());
-    m.samples_rejected_(samples_rejected);
+    m.samples_rejected_(intake.refusedTotal());
     return m;
   }
 
@@ -305,7 +306,9 @@ FleetMergerStats FleetMerger::stats() const {
   s.submaps = impl_->map.submapCount();
   s.memory_bytes = impl_->map.memoryBytes();
   s.samples_received = impl_->samples_received;
-  s.samples_rejected = impl_->samples_rejected;
+  s.samples_rejected = impl_->intake.refusedTotal();
+  s.refused = impl_->intake.refused();
+  for (const fleet::FleetVehicle& v : impl_->map.vehicles()) s.restarts += v.restarts;
   s.publishers_matched = impl_->publishers_matched;
   s.clouds_published = impl_->clouds_published;
   s.grids_published = impl_->grids_published;
@@ -322,6 +325,14 @@ std::vector<std::pair<VoxelIndex, std::uint64_t>> FleetMerger::occupiedVoxels() 
 
 MapState FleetMerger::mapState() const {
   std::lock_guard<std::mutex> lock(impl_->mutex);
+  std::uint64_t applied = 0;
+  for (const fleet::FleetVehicle& v : impl_->map.vehicles()) applied += v.samples_applied;
+  if (applied == 0) {
+    std::ostringstream m;
+    m << "no vehicle's submap was merged (" << impl_->samples_received << " samples received, "
+      << impl_->intake.refusedTotal() << " refused): nothing to save";
+    throw std::runtime_error(m.str());
+  }
   return fleet::fleetMapState(impl_->map);
 }
 
@@ -334,11 +345,20 @@ std::string FleetMerger::statusLine() const {
   for (const FleetVehicleStatus& v : s.vehicles) {
     m << " " << v.info.name << " (seen " << v.seconds_since_seen << " s ago, "
       << static_cast<double>(v.info.bytes) / 1e3 << " kB, " << v.info.submaps << " submaps, "
-      << v.info.voxels << " voxels" << (v.stale ? ", STALE" : "") << ")";
+      << v.info.voxels << " voxels";
+    if (v.info.restarts > 0) m << ", " << v.info.restarts << " restarts";
+    m << (v.stale ? ", STALE" : "") << ")";
   }
   m << "; " << s.publishers_matched << " submap writers matched; merged " << s.merged_voxels
     << " voxels in " << s.submaps << " submaps, " << static_cast<double>(s.memory_bytes) / 1e6
     << " MB; " << s.samples_rejected << " samples refused";
+  const char* separator = " (";
+  for (std::size_t r = 0; r < kSubmapRefusals; ++r) {
+    if (s.refused[r] == 0) continue;
+    m << separator << toString(static_cast<SubmapRefusal>(r)) << " " << s.refused[r];
+    separator = ", ";
+  }
+  if (s.samples_rejected > 0) m << ")";
   return m.str();
 }
 

@@ -38,7 +38,7 @@ namespace fdds = eprosima::fastdds::dds;
   return msg;
 }
 
-std::string decodeSubmapMessage(const ::mlmap_msgs::msg::dds_::Submap_& msg, DecodedSubmap* out) {
+std::string submapHeaderProblem(const ::mlmap_msgs::msg::dds_::Submap_& msg) {
   if (msg.version_() != kSubmapLayoutVersion) {
     return "layout version " + std::to_string(msg.version_()) + " (this reader knows " +
            std::to_string(kSubmapLayoutVersion) + ")";
@@ -60,6 +60,17 @@ std::string decodeSubmapMessage(const ::mlmap_msgs::msg::dds_::Submap_& msg, Dec
       return "submap index beyond the grid's limit";
     }
   }
+  if (msg.voxel_count_() > voxels) {
+    return std::string("payload refused: ") +
+           fleet::toString(fleet::SubmapDecodeError::kTooManyVoxels);
+  }
+  return "";
+}
+
+std::string decodeSubmapMessage(const ::mlmap_msgs::msg::dds_::Submap_& msg, DecodedSubmap* out) {
+  const std::string problem = submapHeaderProblem(msg);
+  if (!problem.empty()) return problem;
+  const std::uint64_t voxels = std::uint64_t{msg.size_x_()} * msg.size_y_() * msg.size_z_();
   const fleet::SubmapDecodeError error = fleet::decodeSubmapVoxels(
       msg.voxel_count_(), msg.encoding_(), msg.raw_size_(), msg.data_().data(), msg.data_().size(),
       voxels, &out->records);

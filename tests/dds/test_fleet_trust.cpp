@@ -1,0 +1,159 @@
+// The fleet's trust model on DDS (docs/fleet.md#trust), on loopback only, domains 148, 149 and
+// 164: the attacks of issue 43 (a stranger's grid first, 64 empty names, a sample under a
+// vehicle's name with sequence 2^64-1) against a running FleetMerger. Each of them, on the
+// merger that believed every participant, left the honest vehicle's map empty or cut.
+#include "../fleet/fleet_test_support.h"
+#include "dds_test_support.h"
+
+#include "mlmap/dds/entities.h"
+#include "mlmap/dds/fleet_merger.h"
+#include "mlmap/dds/participant.h"
+#include "mlmap/dds/submap_messages.h"
+
+#include "mlmap_msgs/msg/Submap_PubSubTypes.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <limits>
+#include <stdexcept>
+
+namespace mlmap::dds {
+namespace {
+
+namespace fdds = eprosima::fastdds::dds;
+using test_support::localhostConfig;
+using test_support::waitFor;
+
+/// The fleet's grid in these tests: the vehicles' (fleet_test_support.h).
+SubmapGeometry fleetGrid() {
+  const LocalMapConfig local = fleet::test_support::fleetMapConfig().local_map;
+  return SubmapGeometry{local.resolution_m, local.submap_cells()};
+}
+
+FleetMergerConfig mergerConfig(int domain_id) {
+  FleetMergerConfig c;
+  c.dds = localhostConfig(domain_id);
+  c.publish_hz = 5.0;
+  c.trust.resolution_m = fleetGrid().resolution_m;
+  c.trust.submap_cells = fleetGrid().cells;
+  return c;
+}
+
+bool received(const FleetMerger& merger, std::uint64_t samples) {
+  return waitFor([&] { return merger.stats().samples_received >= samples; },
+                 std::chrono::milliseconds(20000));
+}
+
+std::uint64_t refused(const FleetMerger& merger, SubmapRefusal reason) {
+  return merger.stats().refused[static_cast<std::size_t>(reason)];
+}
+
+/// A raw writer of Submap samples, as a stranger's program would make one.
+fdds::DataWriter* strangerWriter(fdds::Publisher* publisher) {
+  return createWriter<::mlmap_msgs::msg::dds_::Submap_PubSubType>(publisher, "rt/mlmap/submaps",
+                                                                 submapWriterQos());
+}
+
+const fleet::SubmapUpdate kTwoVoxels{SubmapIndex(1, 2, 0), {{3, 2000}, {40, 3500}}};
+
+TEST(FleetTrust, AStrangersGridSentFirstDoesNotBecomeTheFleetsAndNothingMergedSavesNothing) {
+  constexpr int kDomain = 148;
+  FleetMerger merger(mergerConfig(kDomain));
+  merger.start();
+  const ParticipantPtr participant = createParticipant(localhostConfig(kDomain), "both");
+  fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  fdds::DataWriter* stranger = strangerWriter(publisher);
+  ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(stranger); }));
+  // One empty sample of a made-up grid, before any vehicle.
+  auto lie = toSubmapMessage({SubmapIndex(0, 0, 0), {}}, SubmapGeometry{0.123, {16, 16, 6}},
+                             "stranger", 1, 1.0, "map");
+  ASSERT_TRUE(stranger->write(&lie));
+  ASSERT_TRUE(received(merger, 1));
+  EXPECT_EQ(refused(merger, SubmapRefusal::kWrongGrid), 1u);
+  // Nothing merged: no map to save (mlmap_fleet --save-map exits with 1).
+  EXPECT_THROW(static_cast<void>(merger.mapState()), std::runtime_error);
+
+  SubmapWriter uav1(publisher, "rt/mlmap/submaps", "uav1", fleetGrid(), "map");
+  ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(uav1.get()); }));
+  uav1.write({kTwoVoxels}, 2.0);
+  ASSERT_TRUE(received(merger, 2));
+  EXPECT_TRUE(waitFor([&] { return merger.stats().merged_voxels == 2u; }))
+      << merger.statusLine();
+  EXPECT_EQ(merger.stats().samples_rejected, 1u);
+  EXPECT_NE(merger.statusLine().find("grid 1"), std::string::npos) << merger.statusLine();
+  EXPECT_EQ(merger.mapState().globalVoxelCount(), 2u);
+}
+
+TEST(FleetTrust, SixtyFourEmptySamplesUnderMadeUpNamesTakeNoPlaceOfARealVehicle) {
+  constexpr int kDomain = 149;
+  FleetMerger merger(mergerConfig(kDomain));
+  merger.start();
+  const ParticipantPtr participant = createParticipant(localhostConfig(kDomain), "both");
+  fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  fdds::DataWriter* stranger = strangerWriter(publisher);
+  ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(stranger); }));
+  constexpr int kNames = 64;
+  for (int i = 0; i < kNames; ++i) {
+    auto empty = toSubmapMessage({SubmapIndex(0, 0, i % 8), {}}, fleetGrid(),
+                                 "ghost" + std::to_string(i), 1, 1.0, "map");
+    ASSERT_TRUE(stranger->write(&empty));
+  }
+  ASSERT_TRUE(received(merger, kNames));
+  SubmapWriter uav1(publisher, "rt/mlmap/submaps", "uav1", fleetGrid(), "map");
+  ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(uav1.get()); }));
+  uav1.write({kTwoVoxels}, 2.0);
+  ASSERT_TRUE(received(merger, kNames + 1));
+  EXPECT_TRUE(waitFor([&] { return merger.stats().merged_voxels == 2u; }))
+      << merger.statusLine();
+  const FleetMergerStats s = merger.stats();
+  ASSERT_EQ(s.vehicles.size(), 1u);
+  EXPECT_EQ(s.vehicles[0].info.name, "uav1");
+  EXPECT_EQ(s.samples_rejected, static_cast<std::uint64_t>(kNames));
+  EXPECT_EQ(refused(merger, SubmapRefusal::kEmptyNewVehicle), static_cast<std::uint64_t>(kNames));
+}
+
+TEST(FleetTrust, ASampleUnderAVehiclesNameWithTheLastSequenceNumberNeitherErasesNorLocksItOut) {
+  constexpr int kDomain = 164;
+  FleetMerger merger(mergerConfig(kDomain));
+  merger.start();
+  const ParticipantPtr participant = createParticipant(localhostConfig(kDomain), "all");
+  fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  auto uav1 = std::make_unique<SubmapWriter>(publisher, "rt/mlmap/submaps", "uav1", fleetGrid(),
+                                             "map");
+  fdds::DataWriter* stranger = strangerWriter(publisher);
+  ASSERT_TRUE(waitFor([&] {
+    return test_support::writerMatched(uav1->get()) && test_support::writerMatched(stranger);
+  }));
+  fleet::SubmapUpdate other{SubmapIndex(0, 0, 0), {{7, 2500}}};
+  uav1->write({kTwoVoxels, other}, 1.0);
+  ASSERT_TRUE(received(merger, 2));
+  ASSERT_TRUE(waitFor([&] { return merger.stats().merged_voxels == 3u; }));
+
+  // An empty sample of each submap under uav1's name, sequence 2^64-1: refused, counted.
+  for (const SubmapIndex& m : {kTwoVoxels.index, other.index}) {
+    auto erase = toSubmapMessage({m, {}}, fleetGrid(), "uav1",
+                                 std::numeric_limits<std::uint64_t>::max(), 2.0, "map");
+    ASSERT_TRUE(stranger->write(&erase));
+  }
+  ASSERT_TRUE(received(merger, 4));
+  EXPECT_EQ(merger.stats().merged_voxels, 3u);
+  EXPECT_EQ(refused(merger, SubmapRefusal::kSequenceAhead), 2u);
+
+  // uav1 restarts (a new writer, its sequence numbers from its clock again) and flies on: its
+  // samples are taken, none "outdated".
+  uav1 = std::make_unique<SubmapWriter>(publisher, "rt/mlmap/submaps", "uav1", fleetGrid(), "map");
+  ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(uav1->get()); }));
+  other.records.push_back({9, 2600});
+  uav1->write({other}, 3.0);
+  ASSERT_TRUE(received(merger, 5));
+  EXPECT_TRUE(waitFor([&] { return merger.stats().merged_voxels == 4u; })) << merger.statusLine();
+  FleetMergerStats s = merger.stats();
+  EXPECT_EQ(refused(merger, SubmapRefusal::kOutdated), 0u);
+  ASSERT_EQ(s.vehicles.size(), 1u);
+  EXPECT_EQ(s.vehicles[0].info.restarts, 1u);
+  EXPECT_NE(merger.statusLine().find("1 restarts"), std::string::npos) << merger.statusLine();
+}
+
+}  // namespace
+}  // namespace mlmap::dds
