@@ -103,9 +103,14 @@ FleetMap::MemoryAfter FleetMap::memoryAfter(int index, const SubmapIndex& m,
   const std::size_t fused_max = std::min(submap_voxels, other_records + voxels);
   const std::size_t fused_growth = fused_max > fused_now ? fused_max - fused_now : 0;
   after.vehicle_bytes = vehicle_now - held_bytes + contributionBytes(voxels);
-  after.fleet_bytes = memoryBytes() - held_bytes + contributionBytes(voxels) +
+  // A new submap may rehash the table: libstdc++ grows it to the next prime past twice its
+  // buckets, below three per submap.
+  const std::size_t buckets =
+      it == submaps_.end() ? std::max(submaps_.bucket_count(), 3 * (submaps_.size() + 1))
+                           : submaps_.bucket_count();
+  after.fleet_bytes = held_bytes_ - held_bytes + contributionBytes(voxels) +
                       fused_growth * sizeof(FleetVoxel) +
-                      (it == submaps_.end() ? nodeBytes<Entry>() : 0);
+                      (it == submaps_.end() ? nodeBytes<Entry>() : 0) + buckets * sizeof(void*);
   return after;
 }
 

@@ -194,6 +194,40 @@ void submaps() {
         cdr(mlmap::dds::toSubmapMessage({SubmapIndex(1, 1, 1), {}}, grid, "uav1", 9, 14.0, "map")));
 }
 
+/// One record of fuzz_fleet_sample's stream: the writer, the length, the sample's CDR.
+std::string fleetRecord(std::uint8_t writer, const std::string& sample) {
+  const auto n = static_cast<std::uint16_t>(sample.size());
+  return std::string(1, static_cast<char>(writer)) + static_cast<char>(n & 0xff) +
+         static_cast<char>(n >> 8) + sample;
+}
+
+/// Streams of samples for the merger's accept path (fuzz_fleet_sample.cpp): two vehicles, a
+/// restart, a stranger's grid, a sequence number 2^64-1, empty newcomers; open and closed.
+void fleetSamples() {
+  const mlmap::dds::SubmapGeometry grid{0.1, {16, 16, 6}};
+  fleet::SubmapUpdate wall{SubmapIndex(3, -2, 0), {}};
+  for (std::uint32_t o = 0; o < 600; o += 2) wall.records.push_back({o, 3500});
+  const fleet::SubmapUpdate few{SubmapIndex(0, 0, 1), {{1, 900}, {700, -120}}};
+  const fleet::SubmapUpdate empty{SubmapIndex(3, -2, 0), {}};
+  auto sample = [&](const fleet::SubmapUpdate& u, const std::string& vehicle, std::uint64_t seq,
+                    const mlmap::dds::SubmapGeometry& g) {
+    return cdr(mlmap::dds::toSubmapMessage(u, g, vehicle, seq, 1.0, "map"));
+  };
+  const std::string two_vehicles = fleetRecord(0, sample(wall, "uav1", 7, grid)) +
+                                   fleetRecord(1, sample(few, "uav2", 8, grid)) +
+                                   fleetRecord(0, sample(empty, "uav1", 9, grid)) +
+                                   fleetRecord(2, sample(wall, "uav1", 3, grid));  // restart
+  write("fuzz_fleet_sample", "open_two_vehicles_restart.bin", std::string(1, '\0') + two_vehicles);
+  write("fuzz_fleet_sample", "closed_two_vehicles_restart.bin", std::string(1, '\1') + two_vehicles);
+  const std::string attacks =
+      fleetRecord(3, sample(empty, "stranger", 1, {0.123, {16, 16, 6}})) +
+      fleetRecord(3, sample(empty, "ghost", 1, grid)) +
+      fleetRecord(0, sample(few, "uav1", 10, grid)) +
+      fleetRecord(3, sample(empty, "uav1", std::numeric_limits<std::uint64_t>::max(), grid)) +
+      fleetRecord(0, sample(few, "uav1", 11, grid));
+  write("fuzz_fleet_sample", "open_attacks.bin", std::string(1, '\0') + attacks);
+}
+
 void mapFiles() {
   MapState placed = test::smallMapState();
   write("fuzz_map_file", "small.mlmap", io::encodeMapFile(placed));
@@ -227,6 +261,7 @@ int main(int argc, char** argv) {
   depthImages();
   poses();
   submaps();
+  fleetSamples();
   mapFiles();
   return 0;
 }
