@@ -451,6 +451,12 @@ TEST(FleetDds, TheMergedMapReachesRosReadersAsPointCloudGridAndStatusAlsoWhenThe
   EXPECT_EQ(st.vehicles_(), (std::vector<std::string>{"uav1", "uav2"}));
   EXPECT_EQ(st.voxels_(), (std::vector<std::uint64_t>{1, 2}));
   EXPECT_EQ(st.merged_voxels_(), 2u);
+  // Version 2: restarts per vehicle and every refusal reason with its count.
+  EXPECT_EQ(st.version_(), 2u);
+  EXPECT_EQ(st.restarts_(), (std::vector<std::uint64_t>{0, 0}));
+  ASSERT_EQ(st.refusal_reasons_().size(), kSubmapRefusals);
+  EXPECT_EQ(st.refusal_reasons_()[static_cast<std::size_t>(SubmapRefusal::kWrongGrid)], "grid");
+  EXPECT_EQ(st.samples_refused_(), std::vector<std::uint64_t>(kSubmapRefusals, 0));
 }
 
 TEST(FleetDds, MappingNodeSharesItsWholeMapAndTheMergerHoldsIt) {

@@ -246,7 +246,7 @@ struct FleetMerger::Impl {
     mlmap_msgs::FleetStatus_ m;
     m.header_().stamp_(toRosTime(stamp_s));
     m.header_().frame_id_(config.dds.world_frame);
-    m.version_(1);
+    m.version_(2);
     for (const FleetVehicleStatus& v : vehicleStatus()) {
       m.vehicles_().push_back(v.info.name);
       m.last_seen_s_().push_back(v.seconds_since_seen);
@@ -258,6 +258,11 @@ struct FleetMerger::Impl {
     }
     m.merged_voxels_(map.voxelCount());
     m.samples_rejected_(intake.refusedTotal());
+    for (const fleet::FleetVehicle& v : map.vehicles()) m.restarts_().push_back(v.restarts);
+    for (std::size_t r = 0; r < kSubmapRefusals; ++r) {
+      m.refusal_reasons_().push_back(toString(static_cast<SubmapRefusal>(r)));
+      m.samples_refused_().push_back(intake.refused()[r]);
+    }
     return m;
   }
 
