@@ -255,13 +255,17 @@ struct MappingNode::Impl {
   /// Fast DDS's listener thread: checks another vehicle's submap and hands it to the engine.
   void takePrior(const ::mlmap_msgs::msg::dds_::Submap_& msg) {
     if (msg.vehicle_() == fleet_vehicle) return;
+    // The header and the grid first: a sample of another grid is refused before its payload
+    // is decoded (a submap of up to 2^24 voxels).
     DecodedSubmap submap;
-    std::string problem = decodeSubmapMessage(msg, &submap);
+    std::string problem = submapHeaderProblem(msg);
     const LocalMapConfig& lm = config.map.local_map;
-    if (problem.empty() &&
-        (submap.geometry.resolution_m != lm.resolution_m || submap.geometry.cells != lm.submap_cells())) {
+    const Eigen::Vector3i cells(static_cast<int>(msg.size_x_()), static_cast<int>(msg.size_y_()),
+                                static_cast<int>(msg.size_z_()));
+    if (problem.empty() && (msg.resolution_() != lm.resolution_m || cells != lm.submap_cells())) {
       problem = "another voxel grid than this vehicle's";
     }
+    if (problem.empty()) problem = decodeSubmapMessage(msg, &submap);
     if (!problem.empty()) {
       counters.add(&NodeCounters::fleet_samples_refused);
       log.limited(LogLevel::kWarning, node::kReasonFleet,
