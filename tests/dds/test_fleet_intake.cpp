@@ -102,17 +102,22 @@ TEST(FleetIntake, OnAnOpenDomainEmptyNewcomersTakeNoPlaceAndAFullFleetRefusesNew
 TEST(FleetIntake, SequenceNumbersFarAheadAreRefusedAndARestartedVehicleIsTakenAgain) {
   FleetIntake intake(trust(), {});
   const SubmapIndex m(0, 0, 0);
-  const std::uint64_t start = kNow_us - 1000;
+  // At most an hour of microseconds ahead of the clock ...
+  const std::uint64_t start = kNow_us + FleetIntake::kMaxClockLead_us;
+  EXPECT_EQ(intake.take(sample("uav1", start + 1, m, {{3, 2000}}), kWriterA, 0, kNow_us).refusal,
+            SubmapRefusal::kSequenceAhead);
+  EXPECT_EQ(intake.take(sample("uav1", std::numeric_limits<std::uint64_t>::max(), m, {{3, 2000}}),
+                        kWriterA, 0, kNow_us)
+                .refusal,
+            SubmapRefusal::kSequenceAhead);
   ASSERT_TRUE(intake.take(sample("uav1", start, m, {{3, 2000}}), kWriterA, 0, kNow_us).applied);
-  // From the same writer: at most 2^24 ahead of its last.
+  // ... or at most 2^24 ahead of the same writer's last.
   EXPECT_EQ(intake.take(sample("uav1", start + FleetIntake::kMaxSequenceLead + 1, m, {}), kWriterA,
                         0, kNow_us)
                 .refusal,
             SubmapRefusal::kSequenceAhead);
-  // From another writer: at most an hour of microseconds ahead of the clock.
-  EXPECT_EQ(intake.take(sample("uav1", std::numeric_limits<std::uint64_t>::max(), m, {}), kWriterB,
-                        0, kNow_us)
-                .refusal,
+  // Another writer gets the clock bound only.
+  EXPECT_EQ(intake.take(sample("uav1", start + 2, m, {}), kWriterB, 0, kNow_us).refusal,
             SubmapRefusal::kSequenceAhead);
   EXPECT_EQ(intake.map().voxelCount(), 1u);
   // Not newer than what is held from the same writer: outdated, counted.
@@ -128,7 +133,7 @@ TEST(FleetIntake, SequenceNumbersFarAheadAreRefusedAndARestartedVehicleIsTakenAg
   EXPECT_TRUE(r.restarted);
   EXPECT_EQ(intake.map().voxelCount(), 1u);
   EXPECT_EQ(intake.map().vehicles()[0].restarts, 1u);
-  EXPECT_EQ(count(intake, SubmapRefusal::kSequenceAhead), 2u);
+  EXPECT_EQ(count(intake, SubmapRefusal::kSequenceAhead), 4u);
   EXPECT_EQ(count(intake, SubmapRefusal::kOutdated), 1u);
 }
 

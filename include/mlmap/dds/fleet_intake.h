@@ -12,10 +12,9 @@
 /// 3. its vehicle is not in the configured list (a closed fleet), or, on an open domain (no
 ///    list), it is new and the sample is empty (a name that holds nothing never takes one of the
 ///    kMaxVehicles places) or every place is taken by a vehicle that sent voxels;
-/// 4. its sequence number is more than kMaxSequenceLead ahead of the highest one accepted from
-///    the same writer, or, from a writer the vehicle has not used before, more than
-///    kMaxClockLead_us ahead of the wall clock (SubmapWriter starts at the wall clock's
-///    microseconds);
+/// 4. its sequence number is more than kMaxClockLead_us ahead of the wall clock (SubmapWriter
+///    starts at its clock's microseconds and adds one per sample) and more than
+///    kMaxSequenceLead ahead of the highest one accepted from the same writer;
 /// 5. it would take its vehicle over vehicle_budget_bytes or the map over fleet_budget_bytes
 ///    (from the declared voxel count; a sample that shrinks what is held always passes);
 /// 6. its payload does not decode (decodeSubmapMessage());
@@ -92,11 +91,12 @@ struct SubmapIntake {
 /// The merged map behind the trust checks. Not thread-safe.
 class FleetIntake {
  public:
-  /// Sequence numbers one writer may skip [samples]: its samples of a submap overwritten in its
-  /// history (KEEP_LAST 1) are never delivered, so gaps are normal, but not of 16.7 M samples.
+  /// How far past the highest sequence number accepted from a writer its next may be when it is
+  /// beyond the clock bound [samples]: samples overwritten in its history (KEEP_LAST 1) are
+  /// never delivered, so gaps are normal, but not of 16.7 M samples.
   static constexpr std::uint64_t kMaxSequenceLead = std::uint64_t{1} << 24;
-  /// How far ahead of the merger's wall clock a new writer's first sequence number may be [us]
-  /// (SubmapWriter starts at its wall clock's microseconds): one hour of clock difference.
+  /// How far ahead of the merger's wall clock a sequence number may be [us] (SubmapWriter's are
+  /// its clock's microseconds at start plus one per sample): one hour of clock difference.
   static constexpr std::uint64_t kMaxClockLead_us = std::uint64_t{3600} * 1000000;
 
   /// Throws std::invalid_argument when `trust` is not valid (FleetTrustConfig::validate()).

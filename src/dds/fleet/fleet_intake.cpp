@@ -2,7 +2,9 @@
 
 #include "mlmap/dds/submap_messages.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_set>
@@ -76,6 +78,14 @@ std::uint64_t FleetIntake::refusedTotal() const {
   return total;
 }
 
+namespace {
+std::uint64_t saturatingAdd(std::uint64_t a, std::uint64_t b) {
+  return a > std::numeric_limits<std::uint64_t>::max() - b
+             ? std::numeric_limits<std::uint64_t>::max()
+             : a + b;
+}
+}  // namespace
+
 SubmapIntake FleetIntake::refuse(SubmapRefusal reason, std::string why) {
   ++refused_[static_cast<std::size_t>(reason)];
   SubmapIntake out;
@@ -117,16 +127,17 @@ SubmapIntake FleetIntake::take(const ::mlmap_msgs::msg::dds_::Submap_& msg,
                         " vehicles already hold voxels");
     }
   }
-  // 4. Sequence numbers: bounded ahead of the writer's last, or of the clock for a new writer.
+  // 4. Sequence numbers: bounded ahead of the clock, or of the same writer's last.
   const Source* source = index >= 0 ? &sources_[static_cast<std::size_t>(index)] : nullptr;
   const bool same_writer = source != nullptr && source->known && source->writer == writer;
-  const std::uint64_t base = same_writer ? source->highest_sequence : wall_clock_us;
-  const std::uint64_t lead = same_writer ? kMaxSequenceLead : kMaxClockLead_us;
-  if (msg.sequence_() > base && msg.sequence_() - base > lead) {
+  const std::uint64_t bound =
+      std::max(saturatingAdd(wall_clock_us, kMaxClockLead_us),
+               same_writer ? saturatingAdd(source->highest_sequence, kMaxSequenceLead) : 0);
+  if (msg.sequence_() > bound) {
     return refuse(SubmapRefusal::kSequenceAhead,
                   "from '" + name + "': sequence " + std::to_string(msg.sequence_()) +
-                      (same_writer ? " is more than 2^24 ahead of its writer's last"
-                                   : " is more than an hour of microseconds ahead of the clock"));
+                      " is more than an hour of microseconds ahead of the clock" +
+                      (same_writer ? " and more than 2^24 ahead of its writer's last" : ""));
   }
   // 5. Budgets, from the declared size: nothing is allocated for a sample refused here.
   const SubmapIndex m(msg.submap_x_(), msg.submap_y_(), msg.submap_z_());
