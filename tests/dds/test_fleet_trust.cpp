@@ -1,5 +1,5 @@
-// The fleet's trust model on DDS (docs/fleet.md#trust), on loopback only, domains 148, 149 and
-// 164: the attacks of issue 43 (a stranger's grid first, 64 empty names, a sample under a
+// The fleet's trust model on DDS (docs/fleet.md#trust), on loopback only, domains 148, 149,
+// 164 and 165: the attacks of issue 43 (a stranger's grid first, 64 empty names, a sample under a
 // vehicle's name with sequence 2^64-1) against a running FleetMerger. Each of them, on the
 // merger that believed every participant, left the honest vehicle's map empty or cut.
 #include "../fleet/fleet_test_support.h"
@@ -153,6 +153,34 @@ TEST(FleetTrust, ASampleUnderAVehiclesNameWithTheLastSequenceNumberNeitherErases
   ASSERT_EQ(s.vehicles.size(), 1u);
   EXPECT_EQ(s.vehicles[0].info.restarts, 1u);
   EXPECT_NE(merger.statusLine().find("1 restarts"), std::string::npos) << merger.statusLine();
+}
+
+TEST(FleetTrust, AClosedFleetMergesItsListedVehiclesOnlyAndSaysWhoIsNotHeardYet) {
+  constexpr int kDomain = 165;
+  FleetMergerConfig mc = mergerConfig(kDomain);
+  mc.trust.vehicles = {"uav1", "uav2"};
+  FleetMerger merger(mc);
+  merger.start();
+  EXPECT_NE(merger.statusLine().find("uav2 (not heard yet)"), std::string::npos)
+      << merger.statusLine();
+  const ParticipantPtr participant = createParticipant(localhostConfig(kDomain), "all");
+  fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  SubmapWriter uav1(publisher, "rt/mlmap/submaps", "uav1", fleetGrid(), "map");
+  SubmapWriter ghost(publisher, "rt/mlmap/submaps", "ghost", fleetGrid(), "map");
+  ASSERT_TRUE(waitFor([&] {
+    return test_support::writerMatched(uav1.get()) && test_support::writerMatched(ghost.get());
+  }));
+  ghost.write({{SubmapIndex(0, 0, 0), {{7, 2500}}}}, 1.0);
+  uav1.write({kTwoVoxels}, 1.0);
+  ASSERT_TRUE(received(merger, 2));
+  EXPECT_TRUE(waitFor([&] { return merger.stats().merged_voxels == 2u; })) << merger.statusLine();
+  const FleetMergerStats s = merger.stats();
+  ASSERT_EQ(s.vehicles.size(), 2u);
+  EXPECT_EQ(s.vehicles[0].info.name, "uav1");
+  EXPECT_EQ(s.vehicles[0].info.voxels, 2u);
+  EXPECT_EQ(refused(merger, SubmapRefusal::kUnknownVehicle), 1u);
+  EXPECT_NE(merger.statusLine().find("unknown vehicle 1"), std::string::npos)
+      << merger.statusLine();
 }
 
 }  // namespace

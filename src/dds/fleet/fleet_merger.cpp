@@ -348,6 +348,10 @@ std::string FleetMerger::statusLine() const {
   m.precision(1);
   m << s.vehicles.size() << (s.vehicles.empty() ? " vehicles" : " vehicles:");
   for (const FleetVehicleStatus& v : s.vehicles) {
+    if (v.info.samples == 0) {  // a listed vehicle not heard yet
+      m << " " << v.info.name << " (not heard yet)";
+      continue;
+    }
     m << " " << v.info.name << " (seen " << v.seconds_since_seen << " s ago, "
       << static_cast<double>(v.info.bytes) / 1e3 << " kB, " << v.info.submaps << " submaps, "
       << v.info.voxels << " voxels";
