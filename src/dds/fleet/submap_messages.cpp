@@ -68,7 +68,7 @@ std::string submapHeaderProblem(const ::mlmap_msgs::msg::dds_::Submap_& msg) {
 }
 
 std::string decodeSubmapMessage(const ::mlmap_msgs::msg::dds_::Submap_& msg, DecodedSubmap* out) {
-  const std::string problem = submapHeaderProblem(msg);
+  std::string problem = submapHeaderProblem(msg);
   if (!problem.empty()) return problem;
   const std::uint64_t voxels = std::uint64_t{msg.size_x_()} * msg.size_y_() * msg.size_z_();
   const fleet::SubmapDecodeError error = fleet::decodeSubmapVoxels(
