@@ -16,6 +16,7 @@
 #include "nav_msgs/msg/OccupancyGrid_PubSubTypes.h"
 #include "nav_msgs/msg/Odometry_PubSubTypes.h"
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
+#include "tf2_msgs/msg/TFMessage_PubSubTypes.h"
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>
@@ -127,6 +128,49 @@ TEST(TakeListener, PayloadsFastCdrCannotParseAreCountedOnceAndTheNextSampleArriv
   std::this_thread::sleep_for(std::chrono::milliseconds(300));
   EXPECT_EQ(errors, 3) << "each bad sample must be reported exactly once";
   EXPECT_EQ(good, 2) << "a bad sample was handed over as if it were valid";
+}
+
+TEST(TakeListener, ATfSampleDeclaringMoreTransformsThanItsBytesIsRefusedWithTheReason) {
+  // Issue 43 item 10 on the wire, through TakeReaders as the node's /tf and /tf_static readers
+  // take it: 1,000,000 transforms declared in 64 kB (Fast CDR alone would have sized the vector
+  // first: 128 MB). Refused before Fast CDR reads it, reported with the member, and the next
+  // sample arrives.
+  std::mutex mutex;
+  std::vector<std::string> errors;
+  std::atomic<int> good{0};
+  std::unique_ptr<TakeReaders> readers;  // outlives the participant that holds its readers
+  const ParticipantPtr sender = createParticipant(localhostConfig(166), "raw_tf_sender");
+  const ParticipantPtr receiver = createParticipant(localhostConfig(166), "tf_listener");
+  fdds::DataWriter* writer = rawWriter(sender.get(), "rt/tf", "tf2_msgs::msg::dds_::TFMessage_");
+  ASSERT_NE(writer, nullptr);
+  readers = std::make_unique<TakeReaders>(receiver->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT),
+                                          [&](const std::string& what) {
+                                            std::lock_guard<std::mutex> lock(mutex);
+                                            errors.push_back(what);
+                                          });
+  readers->add<::tf2_msgs::msg::dds_::TFMessage_PubSubType>(
+      "rt/tf", reliableReaderQos(false, 100), [&](::tf2_msgs::msg::dds_::TFMessage_&& msg) {
+        if (msg.transforms_().size() == 1 && msg.transforms_()[0].child_frame_id_() == "base_link") ++good;
+      });
+  ASSERT_TRUE(waitFor([&] { return writerMatched(writer); }));
+
+  CdrBytes hostile;
+  hostile.u32(1000000);
+  RawBytes bytes = hostile.bytes();
+  bytes.resize(64 * 1024, 0);
+  ASSERT_TRUE(writer->write(&bytes));
+  CdrBytes one;
+  one.u32(1).i32(7).u32(0).str("odom").str("base_link");
+  for (int i = 0; i < 6; ++i) one.f64(0.0);
+  one.f64(1.0);  // rotation.w
+  RawBytes valid = one.bytes();
+  ASSERT_TRUE(writer->write(&valid));
+  ASSERT_TRUE(waitFor([&] { return good == 1; })) << "the valid /tf sample after the hostile one was lost";
+  std::lock_guard<std::mutex> lock(mutex);
+  ASSERT_EQ(errors.size(), 1U);
+  EXPECT_EQ(errors[0],
+            "cannot deserialise a sample on rt/tf (malformed CDR: tf2_msgs::msg::dds_::TFMessage_ "
+            "`transforms`: sequence declares 1000000 elements of >= 72 bytes, 65528 bytes remain)");
 }
 
 // ---- The node ------------------------------------------------------------------------------

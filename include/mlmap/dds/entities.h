@@ -4,6 +4,7 @@
 /// reader or writer (with the ROS 2 type hash in its USER_DATA, as rmw does), a listener that
 /// takes samples and hands them over, and a set of readers with their listeners (TakeReaders).
 
+#include "mlmap/dds/cdr_check.h"
 #include "mlmap/dds/type_hash.h"
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
@@ -31,26 +32,55 @@ inline bool& deserializeFailed() {
   thread_local bool failed = false;
   return failed;
 }
+/// Why the calling thread's last failed CheckedType::deserialize failed (set with
+/// deserializeFailed; stale otherwise), e.g. "tf2_msgs::msg::dds_::TFMessage_ `transforms`:
+/// sequence declares 16777216 elements of >= 72 bytes, 1000 bytes remain".
+inline std::string& deserializeError() {
+  thread_local std::string error;
+  return error;
+}
 }  // namespace detail
 
-/// A generated type whose deserialize() never throws. Fast CDR throws on some malformed payloads
-/// (a bool byte other than 0/1, an unknown encapsulation) past the generated code, and Fast DDS
+/// A generated type whose deserialize() never throws and never allocates for bytes the payload
+/// does not hold. The payload is first checked against the type's CDR layout from idl/
+/// (checkCdrPayload, cdr_check.h): Fast CDR 1.0 would size every sequence from its declared
+/// count, gigabytes for a small sample that declares millions of elements. Fast CDR also throws
+/// on some malformed payloads (a bool byte other than 0/1) past the generated code, and Fast DDS
 /// 2.9 then leaves the sample in the reader's history, so every later take() would throw on it
 /// again. Here the sample is taken like any other, and the failure is flagged on the taking
-/// thread (TakeListener drops and reports it): Fast DDS ignores deserialize()'s return value.
+/// thread with its reason (TakeListener drops and reports it): Fast DDS ignores deserialize()'s
+/// return value.
 template <typename PubSubType>
 class CheckedType : public PubSubType {
  public:
+  /// @throws std::runtime_error when idl/ has no struct of the type's name (its samples could not
+  /// be checked).
+  CheckedType() : layout_(cdrLayoutOf(this->getName())) {
+    if (layout_ == nullptr) {
+      throw std::runtime_error(std::string("DDS type ") + this->getName() + " has no CDR layout in idl/");
+    }
+  }
+
   bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t* payload, void* data) override {
+    const CdrCheck check = checkCdrPayload(*layout_, payload->data, payload->length);
+    if (!check.ok) {
+      detail::deserializeFailed() = true;
+      detail::deserializeError() = check.error;
+      return false;
+    }
     bool ok = false;
     try {
       ok = PubSubType::deserialize(payload, data);
-    } catch (const std::exception&) {
-      ok = false;
+      if (!ok) detail::deserializeError() = std::string(layout_->dds_type) + ": refused by Fast CDR";
+    } catch (const std::exception& e) {
+      detail::deserializeError() = std::string(layout_->dds_type) + ": " + e.what();
     }
     if (!ok) detail::deserializeFailed() = true;
     return ok;
   }
+
+ private:
+  const CdrStructLayout* layout_;  ///< the type's layout, from idl/
 };
 
 /// Registers the generated type `PubSubType` (as a CheckedType) with the participant, once, and
@@ -155,7 +185,7 @@ class TakeListener : public eprosima::fastdds::dds::DataReaderListener {
       // cppcheck-suppress knownConditionTrueFalse ; set by CheckedType::deserialize inside take
       if (detail::deserializeFailed()) {  // taken or not, the sample has left the history
         on_error_("cannot deserialise a sample on " + reader->get_topicdescription()->get_name() +
-                  " (malformed CDR)");
+                  " (malformed CDR: " + detail::deserializeError() + ")");
         continue;
       }
       if (!taken) return;

@@ -198,7 +198,8 @@ class ServiceHost {
   /// Under `mutex_`: moves the waiting replies whose reader matched to `ready`, drops (and
   /// counts) the expired ones into `expired`.
   void settleWaitingReplies(std::vector<WaitingReply>* ready, std::vector<WaitingReply>* expired);
-  void countMalformed(const std::string& topic);
+  /// Counts a request that failed to deserialise on `topic`, and reports `reason`.
+  void countMalformed(const std::string& topic, const std::string& reason);
   void run();
 
   eprosima::fastdds::dds::Publisher* publisher_;
@@ -244,7 +245,7 @@ void ServiceHost::add(
       // cppcheck-suppress knownConditionTrueFalse ; set by
       // CheckedType::deserialize inside take
       if (detail::deserializeFailed()) {
-        countMalformed(reader->get_topicdescription()->get_name());
+        countMalformed(reader->get_topicdescription()->get_name(), detail::deserializeError());
         continue;
       }
       if (!taken) return;

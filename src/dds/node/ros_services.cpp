@@ -186,12 +186,14 @@ void ServiceHost::settleWaitingReplies(std::vector<WaitingReply>* ready,
   waiting_replies_ = std::move(still);
 }
 
-void ServiceHost::countMalformed(const std::string& topic) {
+void ServiceHost::countMalformed(const std::string& topic, const std::string& reason) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     ++counters_.requests_malformed;
   }
-  if (on_problem_) on_problem_("cannot decode a request on " + topic + " (malformed CDR): dropped");
+  if (on_problem_) {
+    on_problem_("cannot decode a request on " + topic + " (malformed CDR: " + reason + "): dropped");
+  }
 }
 
 void ServiceHost::sendReply(ReplyWriter& out, WriteReply write, const RequestId& id) {
