@@ -1,5 +1,7 @@
 #include "mlmap/bag/ros_messages.h"
 
+#include "mlmap/dds/cdr_check.h"
+
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
 #include "nav_msgs/msg/Odometry_PubSubTypes.h"
 #include "sensor_msgs/msg/CameraInfo_PubSubTypes.h"
@@ -17,13 +19,24 @@ namespace {
 
 /// The bytes as the SerializedPayload_t a DDS reader hands to the type, through `type`'s
 /// deserialize(), which may throw Fast CDR exceptions on malformed data (as the node's
-/// CheckedType catches them).
+/// CheckedType catches them). The bytes are first checked against the type's CDR layout
+/// (checkCdrPayload), as CheckedType checks a sample: Fast CDR would size a sequence from its
+/// declared count before noticing the bytes are missing.
 template <typename PubSubType, typename Msg>
 void deserialize(const std::vector<std::uint8_t>& bytes, const std::string& what, Msg* msg) {
   if (bytes.size() > std::numeric_limits<std::uint32_t>::max()) {
     throw std::runtime_error(what + ": " + std::to_string(bytes.size()) + " bytes, over 4 GiB");
   }
   static thread_local PubSubType type;
+  static const dds::CdrStructLayout* const layout = dds::cdrLayoutOf(type.getName());
+  if (layout == nullptr) {
+    throw std::logic_error(std::string("no CDR layout for ") + type.getName());
+  }
+  const dds::CdrCheck check = dds::checkCdrPayload(*layout, bytes.data(), bytes.size());
+  if (!check.ok) {
+    throw std::runtime_error(what + ": malformed CDR (" + std::to_string(bytes.size()) +
+                             " bytes): " + check.error);
+  }
   eprosima::fastrtps::rtps::SerializedPayload_t payload(static_cast<std::uint32_t>(bytes.size()));
   if (!bytes.empty()) std::memcpy(payload.data, bytes.data(), bytes.size());
   payload.length = static_cast<std::uint32_t>(bytes.size());
