@@ -11,9 +11,11 @@
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
 #include "nav_msgs/msg/Odometry_PubSubTypes.h"
+#include "rcl_interfaces/srv/SetParameters_PubSubTypes.h"
 #include "sensor_msgs/msg/CameraInfo_PubSubTypes.h"
 #include "sensor_msgs/msg/Image_PubSubTypes.h"
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
+#include "tf2_msgs/msg/TFMessage_PubSubTypes.h"
 
 #include <fastcdr/Cdr.h>
 #include <fastcdr/FastBuffer.h>
@@ -228,6 +230,35 @@ void fleetSamples() {
   write("fuzz_fleet_sample", "open_attacks.bin", std::string(1, '\0') + attacks);
 }
 
+/// fuzz_cdr_tf_message: a /tf sample (first byte even) and a SetParameters request (odd).
+void countedSequences() {
+  ::tf2_msgs::msg::dds_::TFMessage_ tf;
+  tf.transforms_().resize(2);
+  tf.transforms_()[0].header_().stamp_(toRosTime(40.5));
+  tf.transforms_()[0].header_().frame_id_("map");
+  tf.transforms_()[0].child_frame_id_("odom");
+  tf.transforms_()[0].transform_().rotation_().w_(1.0);
+  tf.transforms_()[1].header_() = tf.transforms_()[0].header_();
+  tf.transforms_()[1].header_().frame_id_("odom");
+  tf.transforms_()[1].child_frame_id_("base_link");
+  tf.transforms_()[1].transform_().translation_().x_(2.5);
+  tf.transforms_()[1].transform_().rotation_().z_(1.0);
+  write("fuzz_cdr_tf_message", "two_transforms.bin", std::string(1, '\0') + cdr(tf));
+  write("fuzz_cdr_tf_message", "two_transforms_big_endian.bin", std::string(1, '\2') + cdr(tf, true));
+  ::rcl_interfaces::srv::dds_::SetParameters_Request_ request;
+  request.parameters_().resize(3);
+  request.parameters_()[0].name_("local_map.resolution_m");
+  request.parameters_()[0].value_().type_(3);
+  request.parameters_()[0].value_().double_value_(0.1);
+  request.parameters_()[1].name_("sensor.extrinsic");
+  request.parameters_()[1].value_().type_(8);
+  request.parameters_()[1].value_().double_array_value_({0.1, 0.0, 0.2, 0.0, 0.0, 0.0, 1.0});
+  request.parameters_()[2].name_("dds.topics.names");
+  request.parameters_()[2].value_().type_(9);
+  request.parameters_()[2].value_().string_array_value_({"cloud", "pose"});
+  write("fuzz_cdr_tf_message", "set_parameters.bin", std::string(1, '\1') + cdr(request));
+}
+
 void mapFiles() {
   MapState placed = test::smallMapState();
   write("fuzz_map_file", "small.mlmap", io::encodeMapFile(placed));
@@ -262,6 +293,7 @@ int main(int argc, char** argv) {
   poses();
   submaps();
   fleetSamples();
+  countedSequences();
   mapFiles();
   return 0;
 }
