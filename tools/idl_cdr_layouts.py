@@ -5,7 +5,9 @@ mlmap checks every received sample against its type's layout before Fast CDR des
 (include/mlmap/dds/cdr_check.h): Fast CDR 1.0 sizes a sequence from its declared count, so a
 count the payload cannot hold must be refused first. The layout of a struct is its members in
 wire order, each a number (its size), a string (its bound) or a nested struct, single, in a fixed
-array or in a (bounded) sequence, and the least bytes one value takes on the wire.
+array or in a (bounded) sequence, and the least bytes one value takes on the wire; a struct of
+numbers only (Time, Point, Transform) also has its fixed size and alignment, so a walk skips it
+whole.
 
 The IDL is read by tools/idl_type_hashes.py's parser (the same files, the same layout rules: see
 its docstring and idl/README.md), so the two generated tables cannot disagree on a field. Only the
@@ -15,7 +17,8 @@ never go on the wire. Types the layout has no rule for (wchar, wstring, long dou
 Usage: idl_cdr_layouts.py --idl-root DIR --header OUT.h   (writes the C++ header)
        idl_cdr_layouts.py --idl-root DIR --types-header OUT.h   (the generated Fast DDS type of
                                                                  each struct, for tests)
-       idl_cdr_layouts.py --idl-root DIR --print           (prints `<dds type> <min bytes>` lines)
+       idl_cdr_layouts.py --idl-root DIR --print           (prints `<dds type> <min bytes> <fixed bytes>
+                                                           <fixed alignment>` lines)
 """
 
 import argparse
@@ -91,6 +94,24 @@ def member(field, layouts):
     return result
 
 
+def fixed_numbers(members, done):
+    """[(bytes of a number, how many)] a struct is on the wire when it holds numbers only (in
+    single members, arrays and nested structs of numbers only), in order; None otherwise."""
+    numbers = []
+    for m in members:
+        times = m['count'] if m['container'] == 'kArray' else 1
+        if m['container'] == 'kSequence' or m['kind'] == 'kString':
+            return None
+        if m['kind'] == 'kNumber':
+            numbers.append((m['number_bytes'], times))
+        else:
+            nested = done[m['type']]['numbers']
+            if nested is None:
+                return None
+            numbers.extend(nested * times)
+    return numbers
+
+
 def layouts(idl_root):
     """[(ROS type name, layout)] of every wire struct, each after the structs it nests."""
     types = wire_types(idl_root)
@@ -109,7 +130,15 @@ def layouts(idl_root):
             if nested:
                 visit(nested, path + [name])
         members = [member(f, done) for f in types[name]]
-        done[name] = {'members': members, 'min_bytes': sum(m['min_bytes'] for m in members)}
+        numbers = fixed_numbers(members, done)
+        fixed_bytes, fixed_align = 0, 1
+        if numbers is not None:
+            for size, count in numbers:
+                fixed_bytes = (fixed_bytes + size - 1) // size * size + size * count
+                fixed_align = max(fixed_align, size)
+        done[name] = {'members': members, 'min_bytes': sum(m['min_bytes'] for m in members),
+                      'fixed_bytes': fixed_bytes, 'fixed_align': fixed_align,
+                      'numbers': numbers}
         order.append(name)
 
     for name in sorted(types):
@@ -139,7 +168,8 @@ def header(table):
         blocks.append(
             f'inline constexpr CdrMemberLayout kMembers{ident}[] = {{\n' + '\n'.join(rows) + '\n};\n'
             f'inline constexpr CdrStructLayout kLayout{ident} = {{"{idl.dds_type_name(name)}", '
-            f'kMembers{ident}, {len(layout["members"])}, {layout["min_bytes"]}}};\n')
+            f'kMembers{ident}, {len(layout["members"])}, {layout["min_bytes"]}, '
+            f'{layout["fixed_bytes"]}, {layout["fixed_align"]}}};\n')
     sorted_names = sorted(table, key=lambda entry: idl.dds_type_name(entry[0]))
     index = '\n'.join(f'    &kLayout{identifier(name)},' for name, _ in sorted_names)
     return f"""// Generated at build time by tools/idl_cdr_layouts.py from idl/; do not edit.
@@ -212,7 +242,8 @@ def main():
         return 1
     if args.print:
         for name, layout in sorted(table, key=lambda entry: idl.dds_type_name(entry[0])):
-            print(idl.dds_type_name(name), layout['min_bytes'])
+            print(idl.dds_type_name(name), layout['min_bytes'], layout['fixed_bytes'],
+                  layout['fixed_align'])
         return 0
     write_if_changed(args.header, header(table))
     return 0

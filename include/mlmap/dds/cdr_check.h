@@ -56,6 +56,9 @@ struct CdrStructLayout {
   const CdrMemberLayout* members;  ///< `member_count` members in declaration order
   std::size_t member_count;        ///< members of the struct
   std::uint32_t min_bytes;         ///< least bytes one value takes on the wire, padding not counted
+  std::uint32_t fixed_bytes;       ///< a struct of numbers only: bytes a value takes when it starts
+                                   ///< at a multiple of fixed_align (walked whole); else 0
+  std::uint32_t fixed_align;       ///< its largest number's size (1 when fixed_bytes is 0)
 };
 
 /// The outcome of checkCdrPayload().

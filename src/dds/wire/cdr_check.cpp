@@ -22,6 +22,12 @@ class Walker {
       : body_(body), size_(size_bytes), swap_(swap) {}
 
   bool walkStruct(const CdrStructLayout& layout) {
+    // A struct of numbers only, aligned to its largest: its size is known (walked member by
+    // member when its bytes are missing, to name where).
+    if (layout.fixed_bytes > 0 && pos_ % layout.fixed_align == 0 && layout.fixed_bytes <= remaining()) {
+      pos_ += layout.fixed_bytes;
+      return true;
+    }
     for (std::size_t i = 0; i < layout.member_count; ++i) {
       const CdrMemberLayout& m = layout.members[i];
       if (!walkMember(m)) {
@@ -141,14 +147,21 @@ class Walker {
           }
         }
         return true;
-      case CdrValueKind::kStruct:
+      case CdrValueKind::kStruct: {
+        const CdrStructLayout& type = *m.type;
+        if (type.fixed_bytes > 0 && type.fixed_bytes % type.fixed_align == 0 &&
+            pos_ % type.fixed_align == 0 && count * type.fixed_bytes <= remaining()) {
+          pos_ += static_cast<std::size_t>(count * type.fixed_bytes);  // each element stays aligned
+          return true;
+        }
         for (std::uint64_t i = 0; i < count; ++i) {
-          if (!walkStruct(*m.type)) {
+          if (!walkStruct(type)) {
             if (m.container != CdrContainer::kSingle) prefixIndex(i);
             return false;
           }
         }
         return true;
+      }
     }
     return fail("unknown value kind");
   }
