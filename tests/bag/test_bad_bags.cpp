@@ -277,6 +277,23 @@ TEST(BadBags, MalformedMessageNamesTopicAndTime) {
           ": /points message at log time 1700000001100000000 ns: malformed CDR header (5 bytes)");
 }
 
+TEST(BadBags, TfMessageDeclaringMoreTransformsThanItsBytesIsRefusedBeforeAllocation) {
+  // Issue 43 item 10 in a bag: the /tf_static message declares 1,048,576 transforms in 1 MB
+  // (Fast CDR alone sized the vector first: 134 MB; the issue's 16 MB message, 2 GB). Refused
+  // with the member and the count before Fast CDR reads it (allocations: BagCdrBounds.*).
+  const std::string path = editedDb3(
+      "tf_static_huge_count.db3",
+      "UPDATE messages SET data = x'0001000000001000' || zeroblob(1048576) WHERE topic_id = "
+      "(SELECT id FROM topics WHERE name = '/tf_static')");
+  const std::string error = errorOf([&] {
+    mlmap::bag::BagFrameSource source(openBag(path), mlmap::bag::BagFrameSourceOptions{});
+  });
+  EXPECT_EQ(error, path +
+                       ": /tf_static message at log time 1700000000900000000 ns: malformed CDR "
+                       "(1048584 bytes): tf2_msgs::msg::dds_::TFMessage_ `transforms`: sequence "
+                       "declares 1048576 elements of >= 72 bytes, 1048576 bytes remain");
+}
+
 TEST(BadBags, UnknownTypeIsNotTakenForAnInput) {
   const std::string path = editedDb3(
       "unknown_type.db3", "UPDATE topics SET type = 'acme_msgs/msg/Cloud' WHERE name = '/points'");
