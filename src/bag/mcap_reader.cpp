@@ -154,7 +154,7 @@ std::uint64_t maxDecompressedChunkBytes(std::uint64_t file_size) {
 }
 
 std::uint64_t maxIndexedMessages(std::uint64_t file_size) {
-  return std::max<std::uint64_t>(std::uint64_t{1} << 20, file_size / 4);
+  return std::max<std::uint64_t>(std::uint64_t{1} << 22, file_size / 2);
 }
 
 ScanResult scanRecords(const std::string& path, const std::function<void(const Record&)>& visit) {
@@ -464,7 +464,7 @@ void McapReader::indexChunk(std::uint32_t chunk, const std::vector<std::uint8_t>
             throw std::runtime_error(
                 inner + ": more than " + std::to_string(maxIndexedMessages(file_size_)) +
                 " messages in a file of " + std::to_string(file_size_) +
-                " bytes (at most one per 4 bytes of the file, or 2^20): its chunks compress "
+                " bytes (at most one per 2 bytes of the file, or 2^22): its chunks compress "
                 "beyond any recording's, refused before the index outgrows the file");
           }
           withContext(inner, [&] {

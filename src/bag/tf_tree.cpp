@@ -27,7 +27,9 @@ void TfTree::addStatic(const std::string& parent, const std::string& child,
                        const Transform& T_parent_child) {
   const auto known = static_edges_.find(child);
   const bool new_parent = known == static_edges_.end() || known->second.parent != parent;
+  if (new_parent && known != static_edges_.end()) static_children_[known->second.parent].erase(child);
   static_edges_[child] = {parent, child, T_parent_child};
+  static_children_[parent].insert(child);
   if (new_parent) updateAncestors();
 }
 
@@ -142,7 +144,8 @@ std::vector<StampedTransform> TfTree::poses() {
 std::optional<Transform> TfTree::staticFromBody(const std::string& sensor_frame) const {
   if (sensor_frame == body_frame_) return Transform::Identity();
   // Breadth-first through /tf_static, both ways along each edge, from the body frame; each
-  // frame is entered once, and no deeper than kMaxTfChainEdges.
+  // frame is entered once, and no deeper than kMaxTfChainEdges: the cost is the edges of the
+  // frames reached, whatever the number of others.
   struct Visit {
     std::string frame;
     Transform T_B_F;
@@ -154,12 +157,18 @@ std::optional<Transform> TfTree::staticFromBody(const std::string& sensor_frame)
     const Visit here = queue.front();
     queue.pop_front();
     if (here.depth >= kMaxTfChainEdges) continue;
-    for (const auto& [child, e] : static_edges_) {
-      std::string next;
-      Transform T_B_N = Transform::Identity();
-      if (e.parent == here.frame) next = e.child, T_B_N = here.T_B_F * e.T_parent_child;
-      if (e.child == here.frame) next = e.parent, T_B_N = here.T_B_F * inverse(e.T_parent_child);
-      if (next.empty() || !seen.insert(next).second) continue;
+    std::vector<std::pair<std::string, Transform>> neighbours;  // frame, T_B_N
+    if (const auto down = static_children_.find(here.frame); down != static_children_.end()) {
+      for (const std::string& child : down->second) {
+        neighbours.emplace_back(child, here.T_B_F * static_edges_.at(child).T_parent_child);
+      }
+    }
+    if (const auto up = static_edges_.find(here.frame); up != static_edges_.end()) {
+      neighbours.emplace_back(up->second.parent,
+                              here.T_B_F * inverse(up->second.T_parent_child));
+    }
+    for (auto& [next, T_B_N] : neighbours) {
+      if (!seen.insert(next).second) continue;
       if (next == sensor_frame) return T_B_N;
       queue.push_back({next, T_B_N, here.depth + 1});
     }

@@ -88,9 +88,10 @@ struct LittleEndian {
   }
 };
 
-/// A closed MCAP file without a summary whose one zstd chunk holds `records` (as a writer that
-/// compresses very well would make it).
-std::vector<std::uint8_t> mcapWithOneZstdChunk(const std::vector<std::uint8_t>& records) {
+/// A closed MCAP file without a summary whose `chunks` zstd chunks each hold `records` (as a
+/// writer that compresses very well would make them).
+std::vector<std::uint8_t> mcapWithZstdChunks(const std::vector<std::uint8_t>& records,
+                                             int chunks = 1) {
   std::vector<std::uint8_t> compressed(ZSTD_compressBound(records.size()));
   const std::size_t n =
       ZSTD_compress(compressed.data(), compressed.size(), records.data(), records.size(), 3);
@@ -111,7 +112,7 @@ std::vector<std::uint8_t> mcapWithOneZstdChunk(const std::vector<std::uint8_t>& 
   header.string("ros2");
   header.string("mlmap test");
   file.record(0x01, header.bytes);
-  file.record(0x06, chunk.bytes);
+  for (int c = 0; c < chunks; ++c) file.record(0x06, chunk.bytes);
   file.record(0x0F, std::vector<std::uint8_t>(4, 0));   // DataEnd
   file.record(0x02, std::vector<std::uint8_t>(20, 0));  // Footer: no summary
   file.bytes.insert(file.bytes.end(), magic, magic + 8);
@@ -381,19 +382,20 @@ TEST(BadBags, MetadataOfAnotherStorage) {
 // A chunk of tiny messages that compresses a thousandfold used to be indexed in full (24 bytes a
 // message, 2 GB for a 1 GiB chunk of a 300 KB file): the index is now bounded by the file's size.
 TEST(BadBags, ChunksOfTinyMessagesCannotOutgrowTheFile) {
-  const std::size_t count = std::size_t{3} << 19;  // 1.5 M messages, 48.8 MB decompressed
-  const std::vector<std::uint8_t> bytes = mcapWithOneZstdChunk(emptyMessages(count));
-  ASSERT_LT(bytes.size(), std::size_t{64} << 10);  // a 16 kB file
+  // Three chunks of 1.5 M messages (46.5 MB decompressed each): 4.5 M in all.
+  const std::size_t count = std::size_t{3} << 19;
+  const std::vector<std::uint8_t> bytes = mcapWithZstdChunks(emptyMessages(count), 3);
+  ASSERT_LT(bytes.size(), std::size_t{64} << 10);  // a 48 kB file
   const std::string path = scratch("tiny_messages.mcap");
   writeAll(path, bytes);
   const std::string error = errorOf([&] { readEverything(path); });
   EXPECT_NE(error.find(path + ": Chunk record at byte "), std::string::npos) << error;
-  EXPECT_NE(error.find(": more than 1048576 messages in a file of " +
+  EXPECT_NE(error.find(": more than 4194304 messages in a file of " +
                        std::to_string(bytes.size()) + " bytes"),
             std::string::npos)
       << error;
   // Fewer of the same messages are read.
-  writeAll(path, mcapWithOneZstdChunk(emptyMessages(1000)));
+  writeAll(path, mcapWithZstdChunks(emptyMessages(1000)));
   const mlmap::bag::mcap::McapReader reader(path);
   EXPECT_EQ(reader.messages().size(), 1000u);
 }
@@ -409,7 +411,7 @@ TEST(BadBags, ASmallFilesChunkCannotDecompressToHundredsOfMegabytes) {
   message.bytes.resize(message.bytes.size() + (std::size_t{80} << 20), 0);  // 80 MiB of zeros
   LittleEndian records;
   records.record(0x05, message.bytes);
-  const std::vector<std::uint8_t> bytes = mcapWithOneZstdChunk(records.bytes);
+  const std::vector<std::uint8_t> bytes = mcapWithZstdChunks(records.bytes);
   ASSERT_LT(bytes.size(), std::size_t{64} << 10);
   const std::string path = scratch("zeros.mcap");
   writeAll(path, bytes);

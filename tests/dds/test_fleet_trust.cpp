@@ -1,5 +1,5 @@
 // The fleet's trust model on DDS (docs/fleet.md#trust), on loopback only, domains 148, 149,
-// 164 and 165: the attacks of issue 43 (a stranger's grid first, 64 empty names, a sample under a
+// 212 and 213: the attacks of issue 43 (a stranger's grid first, 64 empty names, a sample under a
 // vehicle's name with sequence 2^64-1) against a running FleetMerger. Each of them, on the
 // merger that believed every participant, left the honest vehicle's map empty or cut.
 #include "../fleet/fleet_test_support.h"
@@ -114,7 +114,7 @@ TEST(FleetTrust, SixtyFourEmptySamplesUnderMadeUpNamesTakeNoPlaceOfARealVehicle)
 }
 
 TEST(FleetTrust, ASampleUnderAVehiclesNameWithTheLastSequenceNumberNeitherErasesNorLocksItOut) {
-  constexpr int kDomain = 164;
+  constexpr int kDomain = 212;
   FleetMerger merger(mergerConfig(kDomain));
   merger.start();
   const ParticipantPtr participant = createParticipant(localhostConfig(kDomain), "all");
@@ -156,7 +156,7 @@ TEST(FleetTrust, ASampleUnderAVehiclesNameWithTheLastSequenceNumberNeitherErases
 }
 
 TEST(FleetTrust, AClosedFleetMergesItsListedVehiclesOnlyAndSaysWhoIsNotHeardYet) {
-  constexpr int kDomain = 165;
+  constexpr int kDomain = 213;
   FleetMergerConfig mc = mergerConfig(kDomain);
   mc.trust.vehicles = {"uav1", "uav2"};
   FleetMerger merger(mc);

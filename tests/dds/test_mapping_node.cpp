@@ -531,10 +531,10 @@ TEST(MappingNodeStart, SaysWhatItsConfigurationWillNotDo) {
   CapturedLog log;
   { MappingNode node(config, log.sink()); }
   EXPECT_EQ(log.count("awareness.max_range_m (30 m) reaches beyond the local window"), 1);
-  EXPECT_EQ(log.count("farther than 11.4 m from the body go to the global map without their free "
-                      "space"),
+  EXPECT_EQ(log.count("farther than 7.6 to 11.4 m from the body (by where it is in its submap) go "
+                      "to the global map without their free space"),
             1);
-  EXPECT_EQ(log.count("local_map.size_cells 250 x 250 horizontally holds the range"), 1);
+  EXPECT_EQ(log.count("local_map.size_cells 375 x 375 horizontally holds the range"), 1);
   EXPECT_EQ(log.count("no sensor topic is configured"), 1);
   EXPECT_EQ(log.count("memory of the configured layers (global map not included): "), 1);
   config.map = MapConfig{};  // defaults: a 10 m range, a 19 m window (3 submaps: 11.4 m)

@@ -217,12 +217,12 @@ eval::VoxelAgreement realSenseAgreement(const std::string& dir, double bin_width
 TEST(OctomapAgreement, RealSenseFramesAt2cmAgreeWithOctomap) {
   const std::string dir = MLMAP_SHARED_DATA_DIR "/realsense_tabletop";
   if (!std::filesystem::exists(dir)) GTEST_SKIP() << dir << " is not there";
-  const double defaults = MapConfig{}.awareness.bin_width_voxels;
-  for (const double bin_width_voxels : {defaults, 2.0}) {
+  ASSERT_EQ(MapConfig{}.awareness.bin_width_voxels, 1.0) << "the defaults this test is about";
+  for (const double bin_width_voxels : {1.0, 2.0}) {
     const eval::VoxelAgreement g = realSenseAgreement(dir, bin_width_voxels);
     ASSERT_GT(g.b, 4000u);
-    EXPECT_GE(g.precision, 0.98);
-    EXPECT_GE(g.iou, bin_width_voxels == defaults ? 0.95 : 0.94)
+    EXPECT_GE(g.precision, 0.999);
+    EXPECT_GE(g.iou, bin_width_voxels == 1.0 ? 0.95 : 0.94)
         << "bins " << bin_width_voxels << " voxels wide: mlmap " << g.a << ", OctoMap " << g.b
         << ", both " << g.intersection;
     EXPECT_GE(g.recall_1, 0.99);

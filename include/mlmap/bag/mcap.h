@@ -33,11 +33,11 @@ namespace mcap {
 /// small file cannot make the reader allocate a gigabyte.
 std::uint64_t maxDecompressedChunkBytes(std::uint64_t file_size);
 
-/// The most messages a file of `file_size` bytes may index: one per 4 bytes of the file (a
-/// message record is at least 31 bytes before compression, so this allows 8:1 on the smallest
-/// messages and more on larger ones), at least 2^20. The index costs 24 bytes a message, so
-/// its memory stays within 6x the file (24 MiB for small files), however well the chunks
-/// compress.
+/// The most messages a file of `file_size` bytes may index: one per 2 bytes of the file (a
+/// message record is at least 31 bytes before compression, so this allows 15:1 on the smallest
+/// messages, a /clock stream's, and more on larger ones), at least 2^22. The index costs 24
+/// bytes a message, so its memory stays within 12x the file (96 MiB for small files), however
+/// well the chunks compress.
 std::uint64_t maxIndexedMessages(std::uint64_t file_size);
 
 /// Header record (opcode 0x01).

@@ -2,8 +2,10 @@
 /// @file
 /// The requests a service thread has yet to handle: one FIFO per client, the clients served in
 /// turn, bounded in total and per client, so that a client that floods a service is refused
-/// beyond its share and an honest client waits for at most one request of each other client.
+/// beyond its share, an honest client waits for at most one request of each other client, and
+/// when floods fill the whole queue a client with fewer requests waiting still gets in.
 
+#include <algorithm>
 #include <cstddef>
 #include <deque>
 #include <iterator>
@@ -18,19 +20,38 @@ namespace mlmap::dds {
 template <class Client, class Job>
 class FairRequestQueue {
  public:
+  /// What push() did.
+  enum class Pushed {
+    kQueued,         ///< added
+    kQueuedInPlace,  ///< added in place of the busiest client's newest job, which is dropped
+    kRefused,        ///< not added: the client holds its share, or no client holds more
+  };
+
   /// At most `max_total` jobs in all, at most `max_per_client` of one client (both >= 1).
   FairRequestQueue(std::size_t max_total, std::size_t max_per_client)
       : max_total_(max_total), max_per_client_(max_per_client) {}
 
-  /// Adds `job` at the end of `client`'s FIFO. False, and nothing added, when the queue holds
-  /// max_total jobs or the client max_per_client.
-  bool push(const Client& client, Job job) {
-    if (size_ >= max_total_) return false;
-    std::deque<Job>& fifo = fifos_[client];
-    if (fifo.size() >= max_per_client_) return false;
-    fifo.push_back(std::move(job));
+  /// Adds `job` at the end of `client`'s FIFO, unless the client holds max_per_client jobs.
+  /// When the queue holds max_total, the busiest client's newest job makes room, if that client
+  /// holds at least two more than `client` (so that places move towards an even share and never
+  /// back and forth); else nothing is added.
+  Pushed push(const Client& client, Job job) {
+    const std::size_t mine = size(client);
+    if (mine >= max_per_client_) return Pushed::kRefused;
+    Pushed pushed = Pushed::kQueued;
+    if (size_ >= max_total_) {
+      const auto busiest =
+          std::max_element(fifos_.begin(), fifos_.end(), [](const auto& a, const auto& b) {
+            return a.second.size() < b.second.size();
+          });
+      if (busiest == fifos_.end() || busiest->second.size() < mine + 2) return Pushed::kRefused;
+      busiest->second.pop_back();  // at least 2 held: never empty after
+      --size_;
+      pushed = Pushed::kQueuedInPlace;
+    }
+    fifos_[client].push_back(std::move(job));
     ++size_;
-    return true;
+    return pushed;
   }
 
   /// The oldest job of the next client after the one served last (in key order, wrapping),

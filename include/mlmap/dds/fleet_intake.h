@@ -20,8 +20,9 @@
 /// 6. its payload does not decode (decodeSubmapMessage());
 /// 7. it is outdated: not newer than the content held from the same writer.
 /// A vehicle's samples from another writer than its last one mark a restart (a new epoch of
-/// fleet::FleetMap::apply()): they replace what the old writer sent, whatever the sequence
-/// numbers, so no sample can lock a vehicle out of its own submaps.
+/// fleet::FleetMap::apply()): each replaces what the old writer sent for its submap, whatever
+/// the sequence numbers, so no sample can lock a vehicle out of its own submaps. Submaps the new
+/// writer does not send again keep the old writer's content (and count against the budget).
 
 #include "mlmap/core/config.h"
 #include "mlmap/core/log_odds.h"

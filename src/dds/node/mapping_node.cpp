@@ -184,7 +184,8 @@ struct MappingNode::Impl {
     const int needed = lm.horizontalCellsForRange(range_m);
     std::ostringstream m;
     m << "awareness.max_range_m (" << range_m << " m) reaches beyond the local window: hits "
-      << "farther than " << lm.horizontalReach_m() << " m from the body go to the global map "
+      << "farther than " << lm.horizontalReach_m() << " to " << 1.5 * lm.horizontalReach_m()
+      << " m from the body (by where it is in its submap) go to the global map "
       << "without their free space (counted in the status: hits_to_global_map); "
       << "local_map.size_cells " << needed << " x " << needed << " horizontally holds the range";
     log.always(LogLevel::kWarning, m.str());

@@ -120,7 +120,11 @@ void ServiceHost::post(const RequestId& id, std::function<void()> job) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (stopping_) return;
-    if (jobs_.push(id.request_writer.guidPrefix, std::move(job))) {
+    using Pushed = decltype(jobs_)::Pushed;
+    const Pushed pushed = jobs_.push(id.request_writer.guidPrefix, std::move(job));
+    if (pushed != Pushed::kRefused) {
+      // In place of the busiest client's newest request: that one is the refused one.
+      if (pushed == Pushed::kQueuedInPlace) ++counters_.requests_refused;
       cv_.notify_all();
       return;
     }
