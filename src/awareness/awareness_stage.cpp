@@ -27,11 +27,12 @@ static_assert(kPointOutsideCutKey + 1 == kPointOutsideHitKey &&
 // Matches no key: box keys stay below it (the box holds far fewer than 2^31 voxels).
 constexpr std::uint32_t kNoRunKey = kPointOutsideCutKey - 1;
 // A bin's shared cone stops where the bin is awareness.bin_width_voxels wide. Thinner bins overlap
-// more: a voxel lies in about ((1 + w) / w)^2 cones of width w, so one voxel wide made every free
-// voxel about six times; two voxels wide (the default) cut the carving cost by a third at 0.1 m
-// for 1.09-1.11x over-carving instead of 1.08x (three voxels wide exceed the 1.15x bound).
+// more: a voxel lies in about ((1 + w) / w)^2 cones of width w, so one voxel wide (the default:
+// the surfaces OctoMap keeps) makes every free voxel about four times, two voxels wide about
+// twice, for 1.09-1.11x over-carving instead of 1.08x (three voxels wide exceed the 1.15x bound).
+// The finest level has AwarenessConfig::binsPerFaceSide() bins per cube face side (at most
+// 6 x 256^2 bins; slots 4 MB with all levels).
 constexpr std::size_t kProbeAhead = 16;  // points between a table slot's prefetch and its probe
-constexpr int kMaxBinsPerFaceSide = 256;  // finest level 6 x 256^2 bins; slots 4 MB with all levels
 
 std::uint32_t hashKey(std::uint32_t key) {
   key ^= key >> 16;
@@ -159,11 +160,7 @@ PointCounters& PointCounters::operator+=(const PointCounters& o) {
 
 AwarenessStage::AwarenessStage(const MapConfig& config)
     : config_(config), map_(config.awareness), table_(1u << 15), rng_(config.awareness.sample_seed) {
-  const double range_voxels = config.awareness.max_range_m / config.local_map.resolution_m;
-  // Cube-map face coordinates span [-1, 1]; a bin of width 2 / n subtends at most ~2 / n rad,
-  // so it is about a voxel wide at n / 2 voxels away.
-  int n = 2;
-  while (n < kMaxBinsPerFaceSide && n < 2.0 * range_voxels / config_.awareness.bin_width_voxels) n *= 2;
+  int n = config.awareness.binsPerFaceSide(config.local_map.resolution_m);
   bins_per_face_side_ = n;
   for (; n >= 1; n /= 2) {
     slots_.emplace_back(6u * static_cast<std::size_t>(n) * static_cast<std::size_t>(n));

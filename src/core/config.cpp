@@ -31,6 +31,15 @@ std::string sectionKey(const Section& section, const T& field) {
 
 double AwarenessConfig::phi_cell_rad() const { return 2.0 * kPi / phi_cells; }
 
+int AwarenessConfig::binsPerFaceSide(double resolution_m) const {
+  // Cube-map face coordinates span [-1, 1]; a bin of width 2 / n subtends at most ~2 / n rad,
+  // so it is about a voxel wide at n / 2 voxels away.
+  const double range_voxels = max_range_m / resolution_m;
+  int n = 2;
+  while (n < kMaxBinsPerFaceSide && n < 2.0 * range_voxels / bin_width_voxels) n *= 2;
+  return n;
+}
+
 void AwarenessConfig::validate(std::vector<std::string>* errors) const {
   require(finitePositive(rho_cell_m) && rho_cell_m <= 10.0, sectionKey(*this, rho_cell_m),
           "must be in (0, 10] m", rho_cell_m, errors);
@@ -254,6 +263,7 @@ MemoryEstimate estimateMemory(const MapConfig& c) {
   constexpr double kEsdfPerBoxVoxel = 20.6;    // field, passes 1-2 (8 + 16 bits with the
                                                // windowed passes), kept states; 2 copies
   constexpr double kAwarenessCellBytes = 9.0;  // per cylindrical cell: state, bins, scratch
+  constexpr double kBinSlotBytes = 8.0;        // per direction bin of every level: stamp, index
   MemoryEstimate e;
   const Eigen::Vector3i& n = c.local_map.size_cells;
   const double window = static_cast<double>(n.x()) * n.y() * n.z();
@@ -270,7 +280,12 @@ MemoryEstimate estimateMemory(const MapConfig& c) {
   }
   const double cells = static_cast<double>(c.awareness.rho_cells) * c.awareness.phi_cells *
                        c.awareness.z_cells;
-  e.awareness_bytes = static_cast<std::size_t>(cells * kAwarenessCellBytes + scratchBoxVoxels(c) / 8.0);
+  double bin_slots = 0.0;
+  for (int side = c.awareness.binsPerFaceSide(c.local_map.resolution_m); side >= 1; side /= 2) {
+    bin_slots += 6.0 * side * side;
+  }
+  e.awareness_bytes = static_cast<std::size_t>(cells * kAwarenessCellBytes + scratchBoxVoxels(c) / 8.0 +
+                                               bin_slots * kBinSlotBytes);
   return e;
 }
 

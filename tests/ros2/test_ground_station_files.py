@@ -72,13 +72,14 @@ ROSDEP_KEYS = {'Eigen3': 'eigen', 'Threads': None, 'yaml-cpp': 'yaml-cpp',
                'fastcdr': 'fastcdr', 'fastrtps': 'fastrtps', 'GTest': 'gtest',
                'octomap': 'octomap', 'nlohmann_json': 'nlohmann-json-dev',
                'PkgConfig': 'pkg-config', 'SQLite3': 'libsqlite3-dev',
-               'dynamicEDT3D': 'dynamic_edt_3d', 'PNG': 'libpng-dev'}
+               'dynamicEDT3D': 'dynamic_edt_3d', 'PNG': 'libpng-dev', 'Python3': 'python3'}
 
 
 def test_root_manifest_depends_on_everything_cmake_finds():
     """A new find_package() must get its rosdep key in package.xml (and here)."""
     found = set()
-    for cmake in (REPO / 'CMakeLists.txt', REPO / 'tests' / 'CMakeLists.txt'):
+    for cmake in [REPO / 'CMakeLists.txt', REPO / 'tests' / 'CMakeLists.txt',
+                  *sorted((REPO / 'src').rglob('CMakeLists.txt'))]:
         code = re.sub(r'#.*', '', cmake.read_text())
         found |= set(re.findall(r'find_package\(([\w-]+)', code))
     unknown = found - set(ROSDEP_KEYS)

@@ -67,6 +67,13 @@ struct AwarenessConfig {
           "closer to the rays (full surfaces, as OctoMap's), 2 costs less carving");
   }
 
+  /// The most direction bins per cube-map face side of the carving's finest level.
+  static constexpr int kMaxBinsPerFaceSide = 256;
+  /// Direction bins per cube-map face side of the carving's finest level (AwarenessStage): the
+  /// power of two whose bins are about bin_width_voxels wide at the range, at most
+  /// kMaxBinsPerFaceSide; coarser levels halve it down to 1.
+  [[nodiscard]] int binsPerFaceSide(double resolution_m) const;
+
   /// Upper bound of num_threads.
   static constexpr int kMaxThreads = 64;
 
