@@ -125,7 +125,7 @@ class ServiceHost {
   /// or unsent reply (any thread; keep it short).
   ServiceHost(eprosima::fastdds::dds::Publisher* publisher,
               eprosima::fastdds::dds::Subscriber* subscriber,
-              std::function<void(const std::string&)> on_problem, ServiceLimits limits = {});
+              std::function<void(const std::string&)> on_problem, const ServiceLimits& limits = {});
   ~ServiceHost();
   ServiceHost(const ServiceHost&) = delete;
   ServiceHost& operator=(const ServiceHost&) = delete;

@@ -83,7 +83,7 @@ bool ServiceHost::ReplyWriter::isMatched(const rtps::GUID_t& reader) {
 }
 
 ServiceHost::ServiceHost(fdds::Publisher* publisher, fdds::Subscriber* subscriber,
-                         std::function<void(const std::string&)> on_problem, ServiceLimits limits)
+                         std::function<void(const std::string&)> on_problem, const ServiceLimits& limits)
     : publisher_(publisher),
       subscriber_(subscriber),
       on_problem_(std::move(on_problem)),
