@@ -85,10 +85,11 @@ void logFrameChecks(const mlmap::dds::MappingNode& node, const mlmap::dds::NodeC
 void logHitsOutsideWindow(const mlmap::dds::MappingNode& node, const EngineStats& s) {
   if (s.points.hits_beyond_local_map + s.local.hits_outside_window == 0) return;
   node.log(LogLevel::kWarning,
-           fmt::format("outside the local window: {} points in range, {} hit voxels; {} hit "
-                       "updates went to the global map without their free space, {} hits lost",
-                       s.points.hits_beyond_local_map, s.local.hits_outside_window,
-                       s.hits_to_global, s.hits_lost));
+           fmt::format("outside the local window: {} points in range ({} of them above or below "
+                       "it), {} hit voxels; {} hit updates went to the global map without their "
+                       "free space, {} hits lost",
+                       s.points.hits_beyond_local_map, s.points.hits_above_or_below_local_map,
+                       s.local.hits_outside_window, s.hits_to_global, s.hits_lost));
 }
 
 /// The first time hits fall outside the local window, once: what happens to them and what to
@@ -101,7 +102,8 @@ void warnOfHitsOutsideWindowOnce(const mlmap::dds::MappingNode& node, const Engi
            "hits are falling outside the local window: they reach the global map as occupied "
            "but without the free space in front of them, so obstacles that move away there are "
            "not cleared. To map them whole, make local_map.size_cells hold "
-           "awareness.max_range_m around the vehicle (or lower max_range_m). Said once; the "
+           "awareness.max_range_m around the vehicle: 2.5 x the range in x and y, and tall enough "
+           "for the sensor's vertical reach (or lower max_range_m). Said once; the "
            "progress lines count them and the last lines give the totals.");
 }
 
