@@ -451,37 +451,41 @@ void McapReader::openByScan(bool closed) {
 void McapReader::indexChunk(std::uint32_t chunk, const std::vector<std::uint8_t>& records,
                             std::uint64_t chunk_offset) {
   const std::string context = where(path_, detail::kChunk, chunk_offset);
+  const std::uint64_t max_messages = maxIndexedMessages(file_size_);
+  // A record's name for errors, made only when one is thrown (a chunk may hold millions).
+  const auto inner = [&](std::uint8_t opcode, std::uint64_t pos) {
+    return context + ": " + detail::opcodeName(opcode) + " record at chunk byte " +
+           std::to_string(pos);
+  };
   visitChunkRecords(
       records, context,
       [&](std::uint8_t opcode, std::uint64_t pos, const std::uint8_t* data, std::size_t size) {
-        if (opcode != detail::kMessage && opcode != detail::kSchema && opcode != detail::kChannel) {
-          return;
-        }
-        const std::string inner = context + ": " + detail::opcodeName(opcode) +
-                                  " record at chunk byte " + std::to_string(pos);
         if (opcode == detail::kMessage) {
-          if (messages_.size() >= maxIndexedMessages(file_size_)) {
+          if (messages_.size() >= max_messages) {
             throw std::runtime_error(
-                inner + ": more than " + std::to_string(maxIndexedMessages(file_size_)) +
+                inner(opcode, pos) + ": more than " + std::to_string(max_messages) +
                 " messages in a file of " + std::to_string(file_size_) +
                 " bytes (at most one per 2 bytes of the file, or 2^22): its chunks compress "
                 "beyond any recording's, refused before the index outgrows the file");
           }
-          withContext(inner, [&] {
+          MessageLocation location;
+          try {
             detail::Cursor in(data, size);
-            MessageLocation location;
             location.channel_id = in.u16();
             in.u32();
             location.log_time_ns = in.u64();
             in.u64();
-            location.chunk = chunk;
-            location.offset = pos;
-            messages_.push_back(location);
-            return 0;
-          });
+          } catch (const std::runtime_error& e) {
+            throw std::runtime_error(inner(opcode, pos) + ": " + e.what());
+          }
+          location.chunk = chunk;
+          location.offset = pos;
+          messages_.push_back(location);
           return;
         }
-        Record record = withContext(inner, [&] { return detail::parseRecord(opcode, data, size); });
+        if (opcode != detail::kSchema && opcode != detail::kChannel) return;
+        Record record = withContext(inner(opcode, pos),
+                                    [&] { return detail::parseRecord(opcode, data, size); });
         if (auto* s = std::get_if<Schema>(&record)) schemas_[s->id] = std::move(*s);
         if (auto* c = std::get_if<Channel>(&record)) channels_[c->id] = std::move(*c);
       });

@@ -180,6 +180,20 @@ TEST(Replay, VoxelIndicesAreFloorOfCoordinateOverResolution) {
   EXPECT_EQ(readText(dir + "/out/occupied_voxels.txt").rfind("# mlmap occupied voxels: ix iy iz", 0), 0u);
 }
 
+/// One scan of `points` (sensor frame) taken at the origin, in `dir`: clouds/scan_a.ply and
+/// poses.csv; and fixed.yaml, a configuration whose window is fixed at 19 x 19 x 7 m (0.1 m
+/// voxels) with a 20 m range.
+void writeOneScanWithAFixedWindow(const std::string& dir,
+                                  const std::vector<Eigen::Vector3d>& points) {
+  mlmap::testing::writeFile(
+      dir + "/clouds/scan_a.ply",
+      mlmap::testing::makePly(points, mlmap::testing::PlyFormat::kAscii, true));
+  mlmap::testing::writeFile(dir + "/poses.csv", "t,x,y,z,qx,qy,qz,qw\n1,0,0,0,0,0,0,1\n");
+  mlmap::testing::writeFile(dir + "/fixed.yaml",
+                            "local_map: {resolution_m: 0.1, size_cells: [190, 190, 70]}\n"
+                            "awareness: {max_range_m: 20, rho_cells: 200}\n");
+}
+
 TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
   // A wall 2 m away and one 15 m away beside it, in range (20 m) but beyond the 19 m window's
   // reach (7.6 to 11.4 m: 2 to 3 submaps) when the configuration fixes the window: the far wall's
@@ -196,13 +210,7 @@ TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
       points.emplace_back(15.05, 0.1 * j + 5.05, 0.1 * k + 0.05);  // not behind the first
     }
   }
-  mlmap::testing::writeFile(
-      dir + "/clouds/scan_a.ply",
-      mlmap::testing::makePly(points, mlmap::testing::PlyFormat::kAscii, true));
-  mlmap::testing::writeFile(dir + "/poses.csv", "t,x,y,z,qx,qy,qz,qw\n1,0,0,0,0,0,0,1\n");
-  mlmap::testing::writeFile(dir + "/fixed.yaml",
-                            "local_map: {resolution_m: 0.1, size_cells: [190, 190, 70]}\n"
-                            "awareness: {max_range_m: 20, rho_cells: 200}\n");
+  writeOneScanWithAFixedWindow(dir, points);
   const std::string source = std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir +
                              "/clouds' --poses '" + dir + "/poses.csv'";
   const std::string command = source + " --config '" + dir + "/fixed.yaml' --out '" + dir + "/out'";
@@ -263,14 +271,8 @@ TEST(Replay, HitsAboveTheWindowAreToldApartFromThoseBeyondIt) {
   for (int j = -10; j <= 10; ++j) {
     for (int k = 0; k <= 10; ++k) points.emplace_back(3.05, 0.1 * j + 0.05, 5.05 + 0.1 * k);
   }
-  mlmap::testing::writeFile(
-      dir + "/clouds/scan_a.ply",
-      mlmap::testing::makePly(points, mlmap::testing::PlyFormat::kAscii, true));
-  mlmap::testing::writeFile(dir + "/poses.csv", "t,x,y,z,qx,qy,qz,qw\n1,0,0,0,0,0,0,1\n");
   // 70 voxels (7 m) tall: the scratch box reaches 3 submaps (4.2 m) above the sensor.
-  mlmap::testing::writeFile(dir + "/fixed.yaml",
-                            "local_map: {resolution_m: 0.1, size_cells: [190, 190, 70]}\n"
-                            "awareness: {max_range_m: 20, rho_cells: 200}\n");
+  writeOneScanWithAFixedWindow(dir, points);
   ASSERT_EQ(run(std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir + "/clouds' --poses '" + dir +
                     "/poses.csv' --config '" + dir + "/fixed.yaml' --out '" + dir + "/out'",
                 dir + "/replay.log"),

@@ -55,14 +55,27 @@ fdds::DataWriter* strangerWriter(fdds::Publisher* publisher) {
                                                                  submapWriterQos());
 }
 
+/// A started merger of `config` and, on its domain, a participant's publisher for the tests'
+/// writers (deleted before the merger).
+struct MergerAndPublisher {
+  explicit MergerAndPublisher(const FleetMergerConfig& config)
+      : merger(config),
+        participant(createParticipant(config.dds, "writers")),
+        publisher(participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT)) {
+    merger.start();
+  }
+  FleetMerger merger;
+  ParticipantPtr participant;
+  fdds::Publisher* publisher;
+};
+
 const fleet::SubmapUpdate kTwoVoxels{SubmapIndex(1, 2, 0), {{3, 2000}, {40, 3500}}};
 
 TEST(FleetTrust, AStrangersGridSentFirstDoesNotBecomeTheFleetsAndNothingMergedSavesNothing) {
   constexpr int kDomain = 148;
-  FleetMerger merger(mergerConfig(kDomain));
-  merger.start();
-  const ParticipantPtr participant = createParticipant(localhostConfig(kDomain), "both");
-  fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  MergerAndPublisher rig(mergerConfig(kDomain));
+  FleetMerger& merger = rig.merger;
+  fdds::Publisher* publisher = rig.publisher;
   fdds::DataWriter* stranger = strangerWriter(publisher);
   ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(stranger); }));
   // One empty sample of a made-up grid, before any vehicle.
@@ -87,10 +100,9 @@ TEST(FleetTrust, AStrangersGridSentFirstDoesNotBecomeTheFleetsAndNothingMergedSa
 
 TEST(FleetTrust, SixtyFourEmptySamplesUnderMadeUpNamesTakeNoPlaceOfARealVehicle) {
   constexpr int kDomain = 149;
-  FleetMerger merger(mergerConfig(kDomain));
-  merger.start();
-  const ParticipantPtr participant = createParticipant(localhostConfig(kDomain), "both");
-  fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  MergerAndPublisher rig(mergerConfig(kDomain));
+  FleetMerger& merger = rig.merger;
+  fdds::Publisher* publisher = rig.publisher;
   fdds::DataWriter* stranger = strangerWriter(publisher);
   ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(stranger); }));
   constexpr int kNames = 64;
@@ -115,10 +127,9 @@ TEST(FleetTrust, SixtyFourEmptySamplesUnderMadeUpNamesTakeNoPlaceOfARealVehicle)
 
 TEST(FleetTrust, ASampleUnderAVehiclesNameWithTheLastSequenceNumberNeitherErasesNorLocksItOut) {
   constexpr int kDomain = 212;
-  FleetMerger merger(mergerConfig(kDomain));
-  merger.start();
-  const ParticipantPtr participant = createParticipant(localhostConfig(kDomain), "all");
-  fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
+  MergerAndPublisher rig(mergerConfig(kDomain));
+  FleetMerger& merger = rig.merger;
+  fdds::Publisher* publisher = rig.publisher;
   auto uav1 = std::make_unique<SubmapWriter>(publisher, "rt/mlmap/submaps", "uav1", fleetGrid(),
                                              "map");
   fdds::DataWriter* stranger = strangerWriter(publisher);
@@ -159,12 +170,11 @@ TEST(FleetTrust, AClosedFleetMergesItsListedVehiclesOnlyAndSaysWhoIsNotHeardYet)
   constexpr int kDomain = 213;
   FleetMergerConfig mc = mergerConfig(kDomain);
   mc.trust.vehicles = {"uav1", "uav2"};
-  FleetMerger merger(mc);
-  merger.start();
+  MergerAndPublisher rig(mc);
+  FleetMerger& merger = rig.merger;
+  fdds::Publisher* publisher = rig.publisher;
   EXPECT_NE(merger.statusLine().find("uav2 (not heard yet)"), std::string::npos)
       << merger.statusLine();
-  const ParticipantPtr participant = createParticipant(localhostConfig(kDomain), "all");
-  fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
   SubmapWriter uav1(publisher, "rt/mlmap/submaps", "uav1", fleetGrid(), "map");
   SubmapWriter ghost(publisher, "rt/mlmap/submaps", "ghost", fleetGrid(), "map");
   ASSERT_TRUE(waitFor([&] {

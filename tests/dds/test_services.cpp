@@ -18,6 +18,7 @@
 #include "dds_test_support.h"
 #include "raw_type.h"
 #include "service_client.h"
+#include "../support/temp_dir.h"
 
 #include "rcl_interfaces/srv/DescribeParameters_PubSubTypes.h"
 #include "rcl_interfaces/srv/GetParameterTypes_PubSubTypes.h"
@@ -330,16 +331,7 @@ using SetAtomicallyClient =
     RmwFastrtpsStyleClient<rcl_srv::SetParametersAtomically_Request_PubSubType,
                            rcl_srv::SetParametersAtomically_Response_PubSubType>;
 
-/// A temporary folder removed with the object.
-struct TempDir {
-  std::filesystem::path path;
-  explicit TempDir(const std::string& name)
-      : path(std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()))) {
-    std::filesystem::remove_all(path);
-    std::filesystem::create_directories(path);
-  }
-  ~TempDir() { std::filesystem::remove_all(path); }
-};
+using mlmap::test::TempDir;
 
 /// A map file with occupied voxels in the local window and in the global map, made by an engine of
 /// `map`'s configuration flying 20 m along x past a wall.

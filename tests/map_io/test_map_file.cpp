@@ -3,6 +3,7 @@
 
 #include "../support/small_flight.h"
 #include "../support/small_map_state.h"
+#include "../support/temp_dir.h"
 #include "mlmap/map_io/map_export.h"
 #include "mlmap/map_io/map_file.h"
 
@@ -34,20 +35,9 @@ namespace fs = std::filesystem;
 using test::flyCheap;
 MapConfig smallConfig() { return test::smallWindowConfig(); }
 
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    path = fs::temp_directory_path() /
-           ("mlmap_map_file_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter()++));
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() { fs::remove_all(path); }
-  static int& counter() {
-    static int n = 0;
-    return n;
-  }
-  [[nodiscard]] std::string file(const std::string& name) const { return (path / name).string(); }
+/// A scratch folder of this file's tests.
+struct TempDir : test::TempDir {
+  TempDir() : test::TempDir("mlmap_map_file_test") {}
 };
 
 std::string readAll(const std::string& path) {

@@ -18,6 +18,7 @@
 #include "dds_test_support.h"
 #include "scoped_env.h"
 #include "service_client.h"
+#include "temp_dir.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
 #include "rcl_interfaces/srv/GetParameters_PubSubTypes.h"
@@ -254,16 +255,7 @@ TEST(SecureGraph, OnlyPermittedPeersReadTheLayersAndOnlyTheSensorFeedsTheNode) {
 }
 
 
-/// A temporary folder removed with the object.
-struct TempDir {
-  std::filesystem::path path;
-  explicit TempDir(const std::string& name)
-      : path(std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()))) {
-    std::filesystem::remove_all(path);
-    std::filesystem::create_directories(path);
-  }
-  ~TempDir() { std::filesystem::remove_all(path); }
-};
+using mlmap::test::TempDir;
 
 using TriggerClient =
     test_support::RmwFastrtpsStyleClient<::std_srvs::srv::dds_::Trigger_Request_PubSubType,

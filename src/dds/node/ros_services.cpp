@@ -174,6 +174,7 @@ void ServiceHost::run() {
 
 void ServiceHost::settleWaitingReplies(std::vector<WaitingReply>* ready,
                                        std::vector<WaitingReply>* expired) {
+  if (waiting_replies_.empty()) return;  // the common case: no reply waits
   const auto now = std::chrono::steady_clock::now();
   std::deque<WaitingReply> still;
   for (WaitingReply& r : waiting_replies_) {
