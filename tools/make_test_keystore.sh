@@ -19,6 +19,11 @@
 #   /ground/viewer_readonly reads the map layers, tf and status and may call the services that
 #                           read parameters; publishing clouds, images or poses, and calling
 #                           save_map, clear_map or set_parameters, is denied
+#   /fleet/uav1, /fleet/uav2 two vehicles of a fleet: each publishes under its own name only
+#                           (rt/uavN/*: its submaps rt/uavN/mlmap/submaps, its layers), tf,
+#                           and reads everything (the others' submaps as priors, its sensors)
+#   /fleet/merger           mlmap_fleet: reads every vehicle's submaps (rt/*/mlmap/submaps),
+#                           publishes the merged map (rt/*mlmap/fleet/*)
 #   /stranger               a complete, self-consistent identity from a DIFFERENT CA
 #                           (<keystore>/private/stranger_ca.key.pem): nobody above trusts it
 # Governance: authenticated participants only, join access control, and rtps, discovery,
@@ -264,6 +269,14 @@ make_enclave /ground/viewer_readonly "$ca_key" "$ca_cert" ca.cert.pem \
   "$ros_pub$call_read_only_pub" \
   "rt/*mlmap/* rt/*tf rt/*tf_static $ros_sub$call_read_only_sub" \
   "rt/*cloud rt/*pose rt/*odometry rt/*image* rt/*camera_info"
+for vehicle in uav1 uav2; do
+  make_enclave /fleet/$vehicle "$ca_key" "$ca_cert" ca.cert.pem \
+    "rt/$vehicle/* rt/*tf rt/*tf_static $ros_pub" \
+    "rt/* $ros_sub"
+done
+make_enclave /fleet/merger "$ca_key" "$ca_cert" ca.cert.pem \
+  "rt/*mlmap/fleet/* $ros_pub" \
+  "rt/*/mlmap/submaps $ros_sub"
 make_enclave /stranger "$root/private/stranger_ca.key.pem" "$root/public/stranger_ca.cert.pem" \
   stranger_ca.cert.pem \
   "rt/* $ros_pub" \

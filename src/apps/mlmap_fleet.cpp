@@ -1,5 +1,5 @@
 // mlmap_fleet: the fleet's merger (ground station or any vehicle). Every vehicle's
-// mlmap_msgs/Submap samples in (rt/mlmap/submaps), the merged map out as standard ROS 2 topics,
+// mlmap_msgs/Submap samples in (each on its own rt/<vehicle>/mlmap/submaps), the merged map out as standard ROS 2 topics,
 // over plain Fast DDS: no ROS installation needed. The work is mlmap::dds::FleetMerger's.
 
 #include "mlmap/apps/stop_signal.h"
@@ -39,7 +39,8 @@ void addOptions(CLI::App& app, Options& o) {
                  "LOCALHOST, SUBNET, OFF or SYSTEM_DEFAULT (\"\": ROS_AUTOMATIC_DISCOVERY_RANGE)");
   app.add_option("--ns", o.merger.dds.ns, "namespace of the outputs (\"\" for none)");
   app.add_option("--world-frame", o.merger.dds.world_frame, "frame_id of the merged map");
-  app.add_option("--submaps-topic", o.merger.submaps_topic, "input: the vehicles' keyed topic");
+  app.add_option("--submaps-topic", o.merger.submaps_topic,
+                 "input: each vehicle V's keyed topic, /V/<this>");
   app.add_option("--cloud-topic", o.merger.cloud_topic, "output: merged occupied voxels");
   app.add_option("--grid-topic", o.merger.grid_topic, "output: merged 2D grid");
   app.add_option("--status-topic", o.merger.status_topic, "output: mlmap_msgs/FleetStatus");

@@ -57,7 +57,7 @@ class SharingVehicle {
   SharingVehicle(fdds::Publisher* publisher, const std::string& name, const MapConfig& config)
       : engine_(config),
         share_(config.local_map.submap_cells()),
-        writer_(publisher, "rt/mlmap/submaps", name,
+        writer_(publisher, "mlmap/submaps", name,
                 SubmapGeometry{config.local_map.resolution_m, config.local_map.submap_cells()},
                 "map") {}
 
@@ -342,7 +342,7 @@ TEST(FleetDds, MalformedSamplesAreRefusedAndCountedTheMergerKeepsMerging) {
   const ParticipantPtr participant = createParticipant(localhostConfig(kDomain), "liar");
   fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
   fdds::DataWriter* writer = createWriter<::mlmap_msgs::msg::dds_::Submap_PubSubType>(
-      publisher, "rt/mlmap/submaps", submapWriterQos());
+      publisher, "rt/liar/mlmap/submaps", submapWriterQos());
   ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(writer); }));
   const SubmapGeometry grid{0.2, {16, 16, 6}};
   fleet::SubmapUpdate good{SubmapIndex(1, 2, 0), {{3, 2000}, {40, 3500}}};
@@ -374,7 +374,7 @@ TEST(FleetDds, MalformedSamplesAreRefusedAndCountedTheMergerKeepsMerging) {
   EXPECT_EQ(s.samples_rejected, bad.size());
   EXPECT_EQ(s.merged_voxels, 2u);
   // Another grid than the fleet's: refused too.
-  auto other = toSubmapMessage(good, SubmapGeometry{0.1, {16, 16, 6}}, "other", 1, 1.0, "map");
+  auto other = toSubmapMessage(good, SubmapGeometry{0.1, {16, 16, 6}}, "liar", ++seq, 1.0, "map");
   ASSERT_TRUE(writer->write(&other));
   ASSERT_TRUE(received(merger, bad.size() + 2));
   EXPECT_EQ(merger.stats().samples_rejected, bad.size() + 1);
@@ -390,8 +390,8 @@ TEST(FleetDds, TheMergedMapReachesRosReadersAsPointCloudGridAndStatusAlsoWhenThe
   const ParticipantPtr participant = createParticipant(localhostConfig(kDomain), "vehicles");
   fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
   const SubmapGeometry grid{0.2, {16, 16, 6}};
-  SubmapWriter uav1(publisher, "rt/mlmap/submaps", "uav1", grid, "map");
-  SubmapWriter uav2(publisher, "rt/mlmap/submaps", "uav2", grid, "map");
+  SubmapWriter uav1(publisher, "mlmap/submaps", "uav1", grid, "map");
+  SubmapWriter uav2(publisher, "mlmap/submaps", "uav2", grid, "map");
   ASSERT_TRUE(waitFor([&] {
     return test_support::writerMatched(uav1.get()) && test_support::writerMatched(uav2.get());
   }));

@@ -1,6 +1,7 @@
 // The fleet's trust model on DDS (docs/fleet.md#trust), on loopback only, domains 148, 149,
 // 212 and 213: the attacks of issue 43 (a stranger's grid first, 64 empty names, a sample under a
-// vehicle's name with sequence 2^64-1) against a running FleetMerger. Each of them, on the
+// vehicle's name with sequence 2^64-1) against a running FleetMerger, and a closed fleet that
+// reads its listed vehicles' topics only. Each of them, on the
 // merger that believed every participant, left the honest vehicle's map empty or cut.
 #include "../fleet/fleet_test_support.h"
 #include "dds_test_support.h"
@@ -17,6 +18,8 @@
 #include <chrono>
 #include <limits>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 namespace mlmap::dds {
 namespace {
@@ -49,10 +52,11 @@ std::uint64_t refused(const FleetMerger& merger, SubmapRefusal reason) {
   return merger.stats().refused[static_cast<std::size_t>(reason)];
 }
 
-/// A raw writer of Submap samples, as a stranger's program would make one.
-fdds::DataWriter* strangerWriter(fdds::Publisher* publisher) {
-  return createWriter<::mlmap_msgs::msg::dds_::Submap_PubSubType>(publisher, "rt/mlmap/submaps",
-                                                                 submapWriterQos());
+/// A raw writer of Submap samples on vehicle `vehicle`'s topic, as a stranger's program would
+/// make one (on an open domain, without DDS Security, anyone may).
+fdds::DataWriter* strangerWriter(fdds::Publisher* publisher, const std::string& vehicle) {
+  return createWriter<::mlmap_msgs::msg::dds_::Submap_PubSubType>(
+      publisher, vehicleSubmapTopic(vehicle, "mlmap/submaps"), submapWriterQos());
 }
 
 /// A started merger of `config` and, on its domain, a participant's publisher for the tests'
@@ -76,7 +80,7 @@ TEST(FleetTrust, AStrangersGridSentFirstDoesNotBecomeTheFleetsAndNothingMergedSa
   MergerAndPublisher rig(mergerConfig(kDomain));
   FleetMerger& merger = rig.merger;
   fdds::Publisher* publisher = rig.publisher;
-  fdds::DataWriter* stranger = strangerWriter(publisher);
+  fdds::DataWriter* stranger = strangerWriter(publisher, "stranger");
   ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(stranger); }));
   // One empty sample of a made-up grid, before any vehicle.
   auto lie = toSubmapMessage({SubmapIndex(0, 0, 0), {}}, SubmapGeometry{0.123, {16, 16, 6}},
@@ -87,7 +91,7 @@ TEST(FleetTrust, AStrangersGridSentFirstDoesNotBecomeTheFleetsAndNothingMergedSa
   // Nothing merged: no map to save (mlmap_fleet --save-map exits with 1).
   EXPECT_THROW(static_cast<void>(merger.mapState()), std::runtime_error);
 
-  SubmapWriter uav1(publisher, "rt/mlmap/submaps", "uav1", fleetGrid(), "map");
+  SubmapWriter uav1(publisher, "mlmap/submaps", "uav1", fleetGrid(), "map");
   ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(uav1.get()); }));
   uav1.write({kTwoVoxels}, 2.0);
   ASSERT_TRUE(received(merger, 2));
@@ -103,16 +107,25 @@ TEST(FleetTrust, SixtyFourEmptySamplesUnderMadeUpNamesTakeNoPlaceOfARealVehicle)
   MergerAndPublisher rig(mergerConfig(kDomain));
   FleetMerger& merger = rig.merger;
   fdds::Publisher* publisher = rig.publisher;
-  fdds::DataWriter* stranger = strangerWriter(publisher);
-  ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(stranger); }));
+  // Each made-up name on a topic of its own (the merger reads each one discovery finds).
   constexpr int kNames = 64;
+  std::vector<fdds::DataWriter*> ghosts;
+  for (int i = 0; i < kNames; ++i) {
+    ghosts.push_back(strangerWriter(publisher, "ghost" + std::to_string(i)));
+  }
+  ASSERT_TRUE(waitFor([&] {
+    for (fdds::DataWriter* w : ghosts) {
+      if (!test_support::writerMatched(w)) return false;
+    }
+    return true;
+  }));
   for (int i = 0; i < kNames; ++i) {
     auto empty = toSubmapMessage({SubmapIndex(0, 0, i % 8), {}}, fleetGrid(),
                                  "ghost" + std::to_string(i), 1, 1.0, "map");
-    ASSERT_TRUE(stranger->write(&empty));
+    ASSERT_TRUE(ghosts[static_cast<std::size_t>(i)]->write(&empty));
   }
   ASSERT_TRUE(received(merger, kNames));
-  SubmapWriter uav1(publisher, "rt/mlmap/submaps", "uav1", fleetGrid(), "map");
+  SubmapWriter uav1(publisher, "mlmap/submaps", "uav1", fleetGrid(), "map");
   ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(uav1.get()); }));
   uav1.write({kTwoVoxels}, 2.0);
   ASSERT_TRUE(received(merger, kNames + 1));
@@ -130,9 +143,9 @@ TEST(FleetTrust, ASampleUnderAVehiclesNameWithTheLastSequenceNumberNeitherErases
   MergerAndPublisher rig(mergerConfig(kDomain));
   FleetMerger& merger = rig.merger;
   fdds::Publisher* publisher = rig.publisher;
-  auto uav1 = std::make_unique<SubmapWriter>(publisher, "rt/mlmap/submaps", "uav1", fleetGrid(),
+  auto uav1 = std::make_unique<SubmapWriter>(publisher, "mlmap/submaps", "uav1", fleetGrid(),
                                              "map");
-  fdds::DataWriter* stranger = strangerWriter(publisher);
+  fdds::DataWriter* stranger = strangerWriter(publisher, "uav1");
   ASSERT_TRUE(waitFor([&] {
     return test_support::writerMatched(uav1->get()) && test_support::writerMatched(stranger);
   }));
@@ -153,7 +166,7 @@ TEST(FleetTrust, ASampleUnderAVehiclesNameWithTheLastSequenceNumberNeitherErases
 
   // uav1 restarts (a new writer, its sequence numbers from its clock again) and flies on: its
   // samples are taken, none "outdated".
-  uav1 = std::make_unique<SubmapWriter>(publisher, "rt/mlmap/submaps", "uav1", fleetGrid(), "map");
+  uav1 = std::make_unique<SubmapWriter>(publisher, "mlmap/submaps", "uav1", fleetGrid(), "map");
   ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(uav1->get()); }));
   other.records.push_back({9, 2600});
   uav1->write({other}, 3.0);
@@ -175,12 +188,18 @@ TEST(FleetTrust, AClosedFleetMergesItsListedVehiclesOnlyAndSaysWhoIsNotHeardYet)
   fdds::Publisher* publisher = rig.publisher;
   EXPECT_NE(merger.statusLine().find("uav2 (not heard yet)"), std::string::npos)
       << merger.statusLine();
-  SubmapWriter uav1(publisher, "rt/mlmap/submaps", "uav1", fleetGrid(), "map");
-  SubmapWriter ghost(publisher, "rt/mlmap/submaps", "ghost", fleetGrid(), "map");
+  SubmapWriter uav1(publisher, "mlmap/submaps", "uav1", fleetGrid(), "map");
+  // A vehicle not listed: the merger has no reader on its topic, its samples never arrive.
+  SubmapWriter ghost(publisher, "mlmap/submaps", "ghost", fleetGrid(), "map");
+  // A stranger on uav1's topic (possible on a domain without DDS Security), under its own name.
+  fdds::DataWriter* stranger = strangerWriter(publisher, "uav1");
   ASSERT_TRUE(waitFor([&] {
-    return test_support::writerMatched(uav1.get()) && test_support::writerMatched(ghost.get());
+    return test_support::writerMatched(uav1.get()) && test_support::writerMatched(stranger);
   }));
   ghost.write({{SubmapIndex(0, 0, 0), {{7, 2500}}}}, 1.0);
+  auto named_ghost = toSubmapMessage({SubmapIndex(0, 0, 1), {{7, 2500}}}, fleetGrid(), "ghost",
+                                     1, 1.0, "map");
+  ASSERT_TRUE(stranger->write(&named_ghost));
   uav1.write({kTwoVoxels}, 1.0);
   ASSERT_TRUE(received(merger, 2));
   EXPECT_TRUE(waitFor([&] { return merger.stats().merged_voxels == 2u; })) << merger.statusLine();
@@ -188,8 +207,10 @@ TEST(FleetTrust, AClosedFleetMergesItsListedVehiclesOnlyAndSaysWhoIsNotHeardYet)
   ASSERT_EQ(s.vehicles.size(), 2u);
   EXPECT_EQ(s.vehicles[0].info.name, "uav1");
   EXPECT_EQ(s.vehicles[0].info.voxels, 2u);
-  EXPECT_EQ(refused(merger, SubmapRefusal::kUnknownVehicle), 1u);
-  EXPECT_NE(merger.statusLine().find("unknown vehicle 1"), std::string::npos)
+  EXPECT_EQ(s.samples_received, 2u);
+  EXPECT_FALSE(test_support::writerMatched(ghost.get()));
+  EXPECT_EQ(refused(merger, SubmapRefusal::kNotItsTopic), 1u);
+  EXPECT_NE(merger.statusLine().find("not its topic 1"), std::string::npos)
       << merger.statusLine();
 }
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The simulated fleet on a LAN of network namespaces (tests/support/netns.sh): per vehicle a
 # namespace with mlmap_sensor_publisher (config/worlds/fleet/uavK.yaml, prerendered) ->
-# mlmap_node (namespace uavK, sharing its submaps on rt/mlmap/submaps), and mlmap_fleet in the
+# mlmap_node (namespace uavK, sharing its submaps on rt/uavK/mlmap/submaps), and mlmap_fleet in the
 # hub namespace. Faults: every vehicle's link limited (tc tbf; this kernel has no netem, so no
 # loss or delay here: tests/dds/emulated_link.h applies them in a process), and vehicle 1's link
 # cut for --cut seconds mid-flight, then restored.

@@ -30,7 +30,7 @@ TEST(FleetPriors, AVehicleEnteringAnAreaMappedOnlyByAnotherHasItsObstaclesBefore
   for (const PointCloudFrame& f : frames) ASSERT_EQ(a.submit(f), FrameStatus::kAccepted);
   const test_support::VoxelValues mapped_by_a = test_support::engineContent(a);
 
-  // Vehicle b receives everything a shares (as mlmap_node would on rt/mlmap/submaps).
+  // Vehicle b receives everything a shares (as mlmap_node would on rt/a/mlmap/submaps).
   SubmapShare share(config.local_map.submap_cells());
   MapEngine b(config);
   std::size_t sent = 0;

@@ -1,14 +1,15 @@
 /// @file
 /// Fuzz target: the fleet merger's accept path (mlmap_fleet), FleetIntake::take() over a stream
-/// of mlmap_msgs/Submap samples from up to four writers: the trust checks (grid, vehicles,
+/// of mlmap_msgs/Submap samples from up to four writers: the trust checks (topic, grid, vehicles,
 /// sequence numbers, memory budgets), decoding and fusion. Checks what docs/fleet.md#trust
 /// promises: the map never holds more than the fleet's budget nor a vehicle more than its own,
 /// a closed fleet never holds another vehicle, an open one never more than kMaxVehicles and
 /// never one that sent nothing but empty samples, and every sample is applied or counted once.
 ///
 /// Input: one mode byte (bit 0: a closed fleet of uav1 and uav2, else an open domain), then
-/// records of [writer byte (0..3, modulo)][uint16 little-endian n][n bytes of Submap CDR as it
-/// arrives, cdr_payload.h].
+/// records of [writer byte (0..3, modulo; bit 7: on uav1's topic, else on the topic of the
+/// name it carries)][uint16 little-endian n][n bytes of Submap CDR as it arrives,
+/// cdr_payload.h].
 
 #include "cdr_payload.h"
 #include "fuzz_support.h"
@@ -38,6 +39,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   while (pos + 3 <= size) {
     dds::SubmapWriterId writer{};
     writer[0] = static_cast<std::uint8_t>(data[pos] % 4);
+    const bool on_uav1s_topic = (data[pos] & 0x80) != 0;  // else on the topic of its own name
     const std::size_t n = data[pos + 1] | (static_cast<std::size_t>(data[pos + 2]) << 8);
     pos += 3;
     if (n > size - pos) break;
@@ -50,8 +52,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       intake.countUndecodable();
       continue;
     }
-    const dds::SubmapIntake r = intake.take(msg, writer, static_cast<double>(taken), kClock_us);
+    const std::string topic_vehicle = on_uav1s_topic ? std::string("uav1") : msg.vehicle_();
+    const dds::SubmapIntake r =
+        intake.take(msg, topic_vehicle, writer, static_cast<double>(taken), kClock_us);
     if (r.applied) {
+      requireThat(msg.vehicle_() == topic_vehicle, "FleetIntake: a sample named for another topic");
       ++applied;
       ++applied_by_name[msg.vehicle_()];
     } else {

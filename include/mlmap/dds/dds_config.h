@@ -98,9 +98,11 @@ struct PublishRates {
 };
 
 /// The `dds.fleet` section: sharing this vehicle's map with the fleet (docs/fleet.md). Each
-/// submap whose occupied content changed goes out as one mlmap_msgs/Submap sample on the keyed
-/// topic `topic` (absolute: the same for every vehicle, whatever its namespace), RELIABLE,
-/// TRANSIENT_LOCAL, KEEP_LAST 1 per submap, at most `rate_hz` times a second. Keys: visit().
+/// submap whose occupied content changed goes out as one mlmap_msgs/Submap sample on the
+/// vehicle's own keyed topic /<vehicle>/<topic> (vehicleSubmapTopic(): the vehicle's name, not
+/// dds.ns, is its namespace, so that DDS Security permissions can let a vehicle publish only its
+/// own), RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 1 per submap, at most `rate_hz` times a second.
+/// Keys: visit().
 struct FleetShareConfig {
   bool publish = false;                ///< key publish
   bool subscribe = false;              ///< key subscribe
@@ -112,14 +114,16 @@ struct FleetShareConfig {
   template <class Self, class V>
   static void visit(Self& c, V& v) {
     v.key("publish", c.publish, "",
-          "share the map: each changed submap's occupied voxels on `topic`\n"
+          "share the map: each changed submap's occupied voxels on /<vehicle>/<topic>\n"
           "(mlmap_fleet merges them)");
     v.key("subscribe", c.subscribe, "",
-          "take the other vehicles' submaps on `topic` as prior knowledge: entering an area\n"
-          "another vehicle mapped restores its obstacles before this sensor sees them");
+          "take the other vehicles' submaps (each on its /<vehicle>/<topic>, found by\n"
+          "discovery) as prior knowledge: entering an area another vehicle mapped restores\n"
+          "its obstacles before this sensor sees them");
     v.key("vehicle", c.vehicle, "", "this vehicle's name in the fleet; \"\": the namespace dds.ns");
     v.key("rate_hz", c.rate_hz, "Hz", "changed submaps go out at most this often");
-    v.key("topic", c.topic, "", "keyed mlmap_msgs/Submap topic, absolute (never namespaced)");
+    v.key("topic", c.topic, "",
+          "keyed mlmap_msgs/Submap topic, under the vehicle's name: /<vehicle>/<topic>");
   }
 };
 
@@ -354,6 +358,11 @@ ExtrinsicSource resolveExtrinsicSource(const DdsConfig& config);
 std::string resolveFleetVehicle(const DdsConfig& config);
 /// The frame names with frame_prefix applied ("uav1" + "base_link" -> "uav1/base_link").
 FrameNames resolveFrames(const DdsConfig& config);
+
+/// Why `name` is not a valid ROS topic name or namespace ("" when it is): tokens of letters,
+/// digits and '_' that do not start with a digit, separated by single '/', optionally starting
+/// with '/', not ending with '/' (rcl's rules, without substitutions such as `~` or `{node}`).
+std::string rosNameProblem(const std::string& name);
 
 /// The DDS topic of a ROS topic: "rt/" + ns + "/" + name (a leading '/' of name or ns and double
 /// slashes are dropped). Example: ("uav1", "cloud") -> "rt/uav1/cloud".

@@ -45,15 +45,20 @@ class DiscoveryPacing : public eprosima::fastdds::dds::DomainParticipantListener
   /// The USER_DATA key whose value counts the early announcements.
   static constexpr const char* kAnnouncementKey = "announcement";
 
-  /// Takes over `participant`'s listener (discovery callbacks only).
+  /// Takes over `participant`'s listener (discovery callbacks only). `publishers`, when given,
+  /// hears every publisher discovery (the participant's listener until now, e.g.
+  /// SubmapReaders::discoveryListener()); it must outlive this.
   explicit DiscoveryPacing(eprosima::fastdds::dds::DomainParticipant* participant,
-                           std::chrono::milliseconds delay = kReplyDelay);
+                           std::chrono::milliseconds delay = kReplyDelay,
+                           eprosima::fastdds::dds::DomainParticipantListener* publishers = nullptr);
   ~DiscoveryPacing() override;
   DiscoveryPacing(const DiscoveryPacing&) = delete;
   DiscoveryPacing& operator=(const DiscoveryPacing&) = delete;
 
   void on_participant_discovery(eprosima::fastdds::dds::DomainParticipant* participant,
                                 eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override;
+  void on_publisher_discovery(eprosima::fastdds::dds::DomainParticipant* participant,
+                              eprosima::fastrtps::rtps::WriterDiscoveryInfo&& info) override;
 
  private:
   /// The announcing thread: announces whenever asked, until the pacing is deleted.
@@ -64,6 +69,7 @@ class DiscoveryPacing : public eprosima::fastdds::dds::DomainParticipantListener
 
   eprosima::fastdds::dds::DomainParticipant* participant_;
   std::chrono::milliseconds delay_;
+  eprosima::fastdds::dds::DomainParticipantListener* publishers_;
   std::string user_data_;  ///< the participant's USER_DATA at construction (`enclave=...;`)
 
   std::mutex mutex_;

@@ -2,23 +2,25 @@
 /// @file
 /// The fleet's trust model (docs/fleet.md#trust): what mlmap_fleet accepts from a Submap sample
 /// and what it refuses, before anything is allocated for it. No DDS entities: FleetMerger hands
-/// every sample with the GUID of the writer that published it; the fuzz target and the unit
-/// tests call it directly.
+/// every sample with the vehicle whose topic it came on and the GUID of the writer that
+/// published it; the fuzz target and the unit tests call it directly.
 ///
 /// In order, a sample is refused (and counted by reason) when:
 /// 1. its header is malformed (submapHeaderProblem());
-/// 2. its grid (voxel edge, voxels per submap) is not the configured one: the fleet's grid is
+/// 2. its vehicle name is not the one of its topic (vehicleSubmapTopic()): under DDS Security a
+///    vehicle's permissions let it publish its own topic only, so the name is its identity;
+/// 3. its grid (voxel edge, voxels per submap) is not the configured one: the fleet's grid is
 ///    configuration, never taken from a sample;
-/// 3. its vehicle is not in the configured list (a closed fleet), or, on an open domain (no
+/// 4. its vehicle is not in the configured list (a closed fleet), or, on an open domain (no
 ///    list), it is new and the sample is empty (a name that holds nothing never takes one of the
 ///    kMaxVehicles places) or every place is taken by a vehicle that sent voxels;
-/// 4. its sequence number is more than kMaxClockLead_us ahead of the wall clock (SubmapWriter
+/// 5. its sequence number is more than kMaxClockLead_us ahead of the wall clock (SubmapWriter
 ///    starts at its clock's microseconds and adds one per sample) and more than
 ///    kMaxSequenceLead ahead of the highest one accepted from the same writer;
-/// 5. it would take its vehicle over vehicle_budget_bytes or the map over fleet_budget_bytes
+/// 6. it would take its vehicle over vehicle_budget_bytes or the map over fleet_budget_bytes
 ///    (from the declared voxel count; a sample that shrinks what is held always passes);
-/// 6. its payload does not decode (decodeSubmapMessage());
-/// 7. it is outdated: not newer than the content held from the same writer.
+/// 7. its payload does not decode (decodeSubmapMessage());
+/// 8. it is outdated: not newer than the content held from the same writer.
 /// A vehicle's samples from another writer than its last one mark a restart (a new epoch of
 /// fleet::FleetMap::apply()): each replaces what the old writer sent for its submap, whatever
 /// the sequence numbers, so no sample can lock a vehicle out of its own submaps. Submaps the new
@@ -49,9 +51,10 @@ enum class SubmapRefusal : std::uint8_t {
   kVehicleBudget,   ///< it would take its vehicle over vehicle_budget_bytes
   kFleetBudget,     ///< it would take the merged map over fleet_budget_bytes
   kOutdated,        ///< not newer than the content held from the same writer: ignored
+  kNotItsTopic,     ///< a vehicle name other than the one of the topic it came on
 };
 /// Number of SubmapRefusal values.
-inline constexpr std::size_t kSubmapRefusals = 9;
+inline constexpr std::size_t kSubmapRefusals = 10;
 /// Short name of a reason as the status line prints it ("malformed", "grid", ...).
 const char* toString(SubmapRefusal reason);
 /// Refused and dropped samples by reason (index: the SubmapRefusal value).
@@ -103,11 +106,12 @@ class FleetIntake {
   /// Throws std::invalid_argument when `trust` is not valid (FleetTrustConfig::validate()).
   FleetIntake(const FleetTrustConfig& trust, const LogOddsConfig& log_odds);
 
-  /// Checks `msg` (published by `writer`) in the order of this file's comment, and applies it
-  /// to the map when it passes. `now_s`: the caller's clock for FleetVehicle::last_seen_s;
-  /// `wall_clock_us`: microseconds since the epoch (the first-sequence bound).
-  SubmapIntake take(const ::mlmap_msgs::msg::dds_::Submap_& msg, const SubmapWriterId& writer,
-                    double now_s, std::uint64_t wall_clock_us);
+  /// Checks `msg` (published by `writer` on the topic of vehicle `topic_vehicle`) in the order
+  /// of this file's comment, and applies it to the map when it passes. `now_s`: the caller's
+  /// clock for FleetVehicle::last_seen_s; `wall_clock_us`: microseconds since the epoch (the
+  /// first-sequence bound).
+  SubmapIntake take(const ::mlmap_msgs::msg::dds_::Submap_& msg, const std::string& topic_vehicle,
+                    const SubmapWriterId& writer, double now_s, std::uint64_t wall_clock_us);
   /// Counts a sample that failed to deserialise (kMalformed).
   void countUndecodable() { ++refused_[static_cast<std::size_t>(SubmapRefusal::kMalformed)]; }
 

@@ -1,6 +1,7 @@
 #pragma once
 /// @file
-/// mlmap_fleet's node: reads every vehicle's mlmap_msgs/Submap samples on rt/mlmap/submaps
+/// mlmap_fleet's node: reads each vehicle's mlmap_msgs/Submap samples on its own topic
+/// rt/<vehicle>/mlmap/submaps (the listed vehicles', or every one discovery finds; SubmapReaders)
 /// (TRANSIENT_LOCAL: a merger that starts late or comes back gets each writer's latest state of
 /// every submap), fuses them in a fleet::FleetMap, and publishes the merged map as standard ROS 2
 /// topics: the occupied voxels as sensor_msgs/PointCloud2 (x, y, z, rgb by the first vehicle
@@ -30,7 +31,8 @@ namespace mlmap::dds {
 /// What mlmap_fleet does.
 struct FleetMergerConfig {
   DdsConfig dds;                                ///< domain, discovery, world_frame, ns of outputs
-  std::string submaps_topic = "mlmap/submaps";  ///< input, absolute (never namespaced)
+  /// Input: vehicle V's submaps on /V/<submaps_topic> (vehicleSubmapTopic()).
+  std::string submaps_topic = "mlmap/submaps";
   std::string cloud_topic = "mlmap/fleet/occupied";  ///< output PointCloud2 (under dds.ns)
   std::string grid_topic = "mlmap/fleet/grid";       ///< output OccupancyGrid (under dds.ns)
   std::string status_topic = "mlmap/fleet/status";   ///< output FleetStatus (under dds.ns)
@@ -67,6 +69,8 @@ struct FleetMergerStats {
   /// have sent anything yet. A vehicle that leaves before its writer matched the merger's
   /// reader is never heard: discovery takes a moment, longer on a busy machine.
   int publishers_matched = 0;
+  /// Vehicle topics found by discovery but not read (SubmapReaders::topicsIgnored()).
+  std::uint64_t topics_ignored = 0;
   std::uint64_t clouds_published = 0;
   std::uint64_t grids_published = 0;
 };

@@ -6,6 +6,7 @@
 #include "mlmap/dds/dds_config.h"
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
+#include <fastdds/dds/domain/DomainParticipantListener.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>
@@ -91,9 +92,13 @@ using ParticipantPtr = std::unique_ptr<eprosima::fastdds::dds::DomainParticipant
 /// peer sent its samples to the other process. Creation is serialised within the process, so
 /// that two threads never pick the same index.
 ///
+/// `listener`, when given, hears the participant's discovery from its creation on (it must
+/// outlive the participant); no entity status goes to it.
+///
 /// Throws std::runtime_error with the reason when the profiles file, the profile or the
 /// environment is invalid, or Fast DDS refuses to create the participant.
-ParticipantPtr createParticipant(const DdsConfig& config, const std::string& name);
+ParticipantPtr createParticipant(const DdsConfig& config, const std::string& name,
+                                 eprosima::fastdds::dds::DomainParticipantListener* listener = nullptr);
 
 /// What createParticipant() creates, without creating it (for logs, `--print-config` and tests).
 struct ParticipantSetup {

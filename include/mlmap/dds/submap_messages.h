@@ -1,8 +1,9 @@
 #pragma once
 /// @file
 /// mlmap_msgs/Submap on DDS: building a sample from a vehicle's changed submap, checking and
-/// decoding a received one (every size checked before anything is allocated for it), the QoS of
-/// the keyed topic rt/mlmap/submaps, and the writer mlmap_node shares its map through.
+/// decoding a received one (every size checked before anything is allocated for it), each
+/// vehicle's keyed topic rt/<vehicle>/mlmap/submaps and its QoS, and the writer mlmap_node shares
+/// its map through.
 
 #include "mlmap/fleet/submap_share.h"
 
@@ -66,20 +67,32 @@ std::string submapHeaderProblem(const ::mlmap_msgs::msg::dds_::Submap_& msg);
 /// GlobalMap::kSubmapIndexLimit, or a payload fleet::decodeSubmapVoxels() refuses.
 std::string decodeSubmapMessage(const ::mlmap_msgs::msg::dds_::Submap_& msg, DecodedSubmap* out);
 
-/// The writer's QoS on rt/mlmap/submaps: RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 1 per instance
+/// The DDS topic vehicle `vehicle` publishes its submaps on: "rt/<vehicle>/<topic>" (leading and
+/// trailing '/' of both dropped), e.g. ("uav1", "mlmap/submaps") -> "rt/uav1/mlmap/submaps".
+/// One topic per vehicle, so that a vehicle's DDS Security permissions can allow it to publish
+/// its own submaps only, and a reader knows whose submaps a topic carries.
+std::string vehicleSubmapTopic(const std::string& vehicle, const std::string& topic);
+/// The vehicle whose submap topic `dds_topic` is (the inverse of vehicleSubmapTopic() for
+/// `topic`), or "" when it is not one: no "rt/" prefix, not ending in "/<topic>", or a vehicle
+/// name that is not a valid ROS name or is longer than kMaxVehicleNameBytes.
+std::string vehicleOfSubmapTopic(const std::string& dds_topic, const std::string& topic);
+
+/// The writer's QoS on a vehicle's submap topic: RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 1 per instance
 /// (the latest state of each submap for late joiners), up to kMaxSubmapInstancesWriter.
 eprosima::fastdds::dds::DataWriterQos submapWriterQos();
 /// The matching reader's: RELIABLE, TRANSIENT_LOCAL (late joiners get the writers' history),
 /// KEEP_LAST 1 per instance, up to kMaxSubmapInstancesReader.
 eprosima::fastdds::dds::DataReaderQos submapReaderQos();
 
-/// A vehicle's writer of its changed submaps on `dds_topic`. Sequence numbers start at the wall
-/// clock's microseconds when it is made and grow by one per sample, so a vehicle that restarts
-/// sends newer ones than before (while its clock does not go back).
+/// A vehicle's writer of its changed submaps on its own topic, vehicleSubmapTopic(vehicle,
+/// topic). Sequence numbers start at the wall clock's microseconds when it is made and grow by
+/// one per sample, so a vehicle that restarts sends newer ones than before (while its clock does
+/// not go back).
 class SubmapWriter {
  public:
-  /// Throws std::runtime_error when the writer cannot be created.
-  SubmapWriter(eprosima::fastdds::dds::Publisher* publisher, const std::string& dds_topic,
+  /// Throws std::runtime_error when the writer cannot be created (also when DDS Security's
+  /// permissions do not let this participant publish the vehicle's topic).
+  SubmapWriter(eprosima::fastdds::dds::Publisher* publisher, const std::string& topic,
                std::string vehicle, const SubmapGeometry& geometry, std::string frame_id);
   /// Writes one sample per update; returns their serializedSubmapBytes(). A failed write is
   /// counted in failures().

@@ -31,6 +31,8 @@ const char* toString(SubmapRefusal reason) {
       return "fleet budget";
     case SubmapRefusal::kOutdated:
       return "outdated";
+    case SubmapRefusal::kNotItsTopic:
+      return "not its topic";
   }
   return "?";
 }
@@ -95,13 +97,18 @@ SubmapIntake FleetIntake::refuse(SubmapRefusal reason, std::string why) {
 }
 
 SubmapIntake FleetIntake::take(const ::mlmap_msgs::msg::dds_::Submap_& msg,
-                               const SubmapWriterId& writer, double now_s,
-                               std::uint64_t wall_clock_us) {
+                               const std::string& topic_vehicle, const SubmapWriterId& writer,
+                               double now_s, std::uint64_t wall_clock_us) {
   const std::string name = msg.vehicle_().substr(0, kMaxVehicleNameBytes);
   // 1. The header, without decoding anything.
   const std::string header = submapHeaderProblem(msg);
   if (!header.empty()) return refuse(SubmapRefusal::kMalformed, "from '" + name + "': " + header);
-  // 2. The fleet's grid is configuration.
+  // 2. A vehicle speaks for itself only: on its own topic.
+  if (msg.vehicle_() != topic_vehicle) {
+    return refuse(SubmapRefusal::kNotItsTopic,
+                  "named '" + name + "' on the topic of vehicle '" + topic_vehicle + "'");
+  }
+  // 3. The fleet's grid is configuration.
   const Eigen::Vector3i cells(static_cast<int>(msg.size_x_()), static_cast<int>(msg.size_y_()),
                               static_cast<int>(msg.size_z_()));
   if (msg.resolution_() != trust_.resolution_m || cells != trust_.submap_cells) {
@@ -111,7 +118,7 @@ SubmapIntake FleetIntake::take(const ::mlmap_msgs::msg::dds_::Submap_& msg,
       << trust_.submap_cells.transpose() << " (the vehicles' local_map, --config)";
     return refuse(SubmapRefusal::kWrongGrid, m.str());
   }
-  // 3. Who may speak.
+  // 4. Who may speak.
   int index = map_.findVehicle(name);
   if (index < 0) {
     if (!trust_.vehicles.empty()) {
@@ -127,7 +134,7 @@ SubmapIntake FleetIntake::take(const ::mlmap_msgs::msg::dds_::Submap_& msg,
                         " vehicles already hold voxels");
     }
   }
-  // 4. Sequence numbers: bounded ahead of the clock, or of the same writer's last.
+  // 5. Sequence numbers: bounded ahead of the clock, or of the same writer's last.
   const Source* source = index >= 0 ? &sources_[static_cast<std::size_t>(index)] : nullptr;
   const bool same_writer = source != nullptr && source->known && source->writer == writer;
   const std::uint64_t bound =
@@ -139,7 +146,7 @@ SubmapIntake FleetIntake::take(const ::mlmap_msgs::msg::dds_::Submap_& msg,
                       " is more than an hour of microseconds ahead of the clock" +
                       (same_writer ? " and more than 2^24 ahead of its writer's last" : ""));
   }
-  // 5. Budgets, from the declared size: nothing is allocated for a sample refused here.
+  // 6. Budgets, from the declared size: nothing is allocated for a sample refused here.
   const SubmapIndex m(msg.submap_x_(), msg.submap_y_(), msg.submap_z_());
   const fleet::FleetMap::MemoryAfter after = map_.memoryAfter(index, m, msg.voxel_count_());
   const std::size_t vehicle_now =
@@ -157,7 +164,7 @@ SubmapIntake FleetIntake::take(const ::mlmap_msgs::msg::dds_::Submap_& msg,
                       " bytes, over the fleet's budget of " +
                       std::to_string(trust_.fleet_budget_bytes));
   }
-  // 6. The payload.
+  // 7. The payload.
   DecodedSubmap decoded;
   const std::string problem = decodeSubmapMessage(msg, &decoded);
   if (!problem.empty()) return refuse(SubmapRefusal::kMalformed, "from '" + name + "': " + problem);

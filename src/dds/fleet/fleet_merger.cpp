@@ -5,6 +5,7 @@
 #include "mlmap/dds/participant.h"
 #include "mlmap/dds/ros_conversions.h"
 #include "mlmap/dds/submap_messages.h"
+#include "mlmap/dds/submap_readers.h"
 
 #include "mlmap_msgs/msg/FleetStatus_PubSubTypes.h"
 #include "mlmap_msgs/msg/Submap_PubSubTypes.h"
@@ -90,8 +91,8 @@ struct FleetMerger::Impl {
   std::uint64_t grids_published = 0;
   RateLimitedLog refusal_log;
 
+  std::unique_ptr<SubmapReaders> readers;  // outlives the participant (its listeners)
   ParticipantPtr participant;
-  std::unique_ptr<TakeReaders> readers;
   fdds::DataWriter* cloud_writer = nullptr;
   fdds::DataWriter* grid_writer = nullptr;
   fdds::DataWriter* status_writer = nullptr;
@@ -122,7 +123,24 @@ struct FleetMerger::Impl {
         !std::isfinite(config.stale_after_s) || config.stale_after_s <= 0.0) {
       throw std::invalid_argument("publish_hz and stale_after_s must be finite and > 0");
     }
-    participant = createParticipant(config.dds, "mlmap_fleet");
+    SubmapReadersConfig which;
+    which.topic = config.submaps_topic;
+    which.vehicles = config.trust.vehicles;
+    readers = std::make_unique<SubmapReaders>(
+        which,
+        [this](const std::string& vehicle, mlmap_msgs::Submap_&& msg,
+               const fdds::SampleInfo& info) { receive(vehicle, msg, info); },
+        [this](const std::string& what) {
+          std::lock_guard<std::mutex> lock(mutex);
+          ++samples_received;
+          intake.countUndecodable();
+          logRefusal(SubmapRefusal::kMalformed, what);
+        },
+        [this](int matched) {
+          std::lock_guard<std::mutex> lock(mutex);
+          publishers_matched = matched;
+        });
+    participant = createParticipant(config.dds, "mlmap_fleet", readers->discoveryListener());
     auto* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
     auto* subscriber = participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
     if (publisher == nullptr || subscriber == nullptr) {
@@ -135,24 +153,12 @@ struct FleetMerger::Impl {
         publisher, ddsTopicName(ns, config.grid_topic), latchedWriterQos());
     status_writer = createWriter<mlmap_msgs::FleetStatus_PubSubType>(
         publisher, ddsTopicName(ns, config.status_topic), reliableWriterQos(10));
-    readers = std::make_unique<TakeReaders>(subscriber, [this](const std::string& what) {
-      std::lock_guard<std::mutex> lock(mutex);
-      ++samples_received;
-      intake.countUndecodable();
-      logRefusal(SubmapRefusal::kMalformed, what);
-    });
     if (config.trust.vehicles.empty()) {
       say(LogLevel::kWarning,
           "open domain: any participant may join the fleet as a vehicle (list the vehicles to "
           "close it: --vehicle NAME; docs/fleet.md#trust)");
     }
-    readers->addWithInfo<mlmap_msgs::Submap_PubSubType>(
-        ddsTopicName("", config.submaps_topic), submapReaderQos(),
-        [this](mlmap_msgs::Submap_&& msg, const fdds::SampleInfo& info) { receive(msg, info); },
-        [this](int matched) {
-          std::lock_guard<std::mutex> lock(mutex);
-          publishers_matched = matched;
-        });
+    readers->start(subscriber);
   }
 
   /// Logs a refused sample, once a second at most per reason (with how many so far).
@@ -164,7 +170,8 @@ struct FleetMerger::Impl {
   }
 
   /// Fast DDS's listener thread: the trust checks, decoding, fusion (FleetIntake::take()).
-  void receive(const mlmap_msgs::Submap_& msg, const fdds::SampleInfo& info) {
+  void receive(const std::string& topic_vehicle, const mlmap_msgs::Submap_& msg,
+               const fdds::SampleInfo& info) {
     SubmapWriterId writer{};
     const auto& handle = info.publication_handle.value;  // the writer's GUID, 16 octets
     for (std::size_t i = 0; i < writer.size(); ++i) writer[i] = handle[static_cast<unsigned>(i)];
@@ -174,7 +181,7 @@ struct FleetMerger::Impl {
             .count());
     std::lock_guard<std::mutex> lock(mutex);
     ++samples_received;
-    const SubmapIntake r = intake.take(msg, writer, now_s(), wall_us);
+    const SubmapIntake r = intake.take(msg, topic_vehicle, writer, now_s(), wall_us);
     if (!r.applied) {
       logRefusal(r.refusal, r.why);
       return;
@@ -279,6 +286,7 @@ struct FleetMerger::Impl {
     for (fdds::DataWriter* w : {cloud_writer, grid_writer}) {
       if (w != nullptr) w->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(1, 0));
     }
+    if (readers) readers->stop();
     participant.reset();
     readers.reset();
   }
@@ -289,6 +297,7 @@ FleetMerger::FleetMerger(const FleetMergerConfig& config, LogSink log)
   try {
     impl_->setUp();
   } catch (...) {
+    if (impl_->readers) impl_->readers->stop();
     impl_->participant.reset();
     impl_->readers.reset();
     throw;
@@ -315,6 +324,7 @@ FleetMergerStats FleetMerger::stats() const {
   s.refused = impl_->intake.refused();
   for (const fleet::FleetVehicle& v : impl_->map.vehicles()) s.restarts += v.restarts;
   s.publishers_matched = impl_->publishers_matched;
+  s.topics_ignored = impl_->readers ? impl_->readers->topicsIgnored() : 0;
   s.clouds_published = impl_->clouds_published;
   s.grids_published = impl_->grids_published;
   return s;
@@ -358,7 +368,9 @@ std::string FleetMerger::statusLine() const {
     if (v.info.restarts > 0) m << ", " << v.info.restarts << " restarts";
     m << (v.stale ? ", STALE" : "") << ")";
   }
-  m << "; " << s.publishers_matched << " submap writers matched; merged " << s.merged_voxels
+  m << "; " << s.publishers_matched << " submap writers matched";
+  if (s.topics_ignored > 0) m << " (" << s.topics_ignored << " vehicle topics ignored)";
+  m << "; merged " << s.merged_voxels
     << " voxels in " << s.submaps << " submaps, " << static_cast<double>(s.memory_bytes) / 1e6
     << " MB; " << s.samples_rejected << " samples refused";
   const char* separator = " (";

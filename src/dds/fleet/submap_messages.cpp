@@ -1,5 +1,6 @@
 #include "mlmap/dds/submap_messages.h"
 
+#include "mlmap/dds/dds_config.h"
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/participant.h"
 #include "mlmap/dds/ros_conversions.h"
@@ -118,11 +119,35 @@ fdds::DataReaderQos submapReaderQos() {
   return qos;
 }
 
-SubmapWriter::SubmapWriter(fdds::Publisher* publisher, const std::string& dds_topic,
+std::string vehicleSubmapTopic(const std::string& vehicle, const std::string& topic) {
+  return ddsTopicName(vehicle, topic);
+}
+
+std::string vehicleOfSubmapTopic(const std::string& dds_topic, const std::string& topic) {
+  const std::string prefix = "rt/";
+  std::string tail = topic;
+  while (!tail.empty() && tail.front() == '/') tail.erase(tail.begin());
+  while (!tail.empty() && tail.back() == '/') tail.pop_back();
+  tail.insert(tail.begin(), '/');
+  if (tail.size() < 2 || dds_topic.size() <= prefix.size() + tail.size() ||
+      dds_topic.compare(0, prefix.size(), prefix) != 0 ||
+      dds_topic.compare(dds_topic.size() - tail.size(), tail.size(), tail) != 0) {
+    return "";
+  }
+  std::string vehicle =
+      dds_topic.substr(prefix.size(), dds_topic.size() - prefix.size() - tail.size());
+  if (vehicle.size() > kMaxVehicleNameBytes || !rosNameProblem(vehicle).empty() ||
+      vehicle.front() == '/') {
+    return "";
+  }
+  return vehicle;
+}
+
+SubmapWriter::SubmapWriter(fdds::Publisher* publisher, const std::string& topic,
                            std::string vehicle, const SubmapGeometry& geometry,
                            std::string frame_id)
-    : writer_(createWriter<::mlmap_msgs::msg::dds_::Submap_PubSubType>(publisher, dds_topic,
-                                                                     submapWriterQos())),
+    : writer_(createWriter<::mlmap_msgs::msg::dds_::Submap_PubSubType>(
+          publisher, vehicleSubmapTopic(vehicle, topic), submapWriterQos())),
       vehicle_(std::move(vehicle)),
       geometry_(geometry),
       frame_id_(std::move(frame_id)),

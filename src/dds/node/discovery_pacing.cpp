@@ -11,8 +11,9 @@ namespace fdds = eprosima::fastdds::dds;
 namespace rtps = eprosima::fastrtps::rtps;
 
 DiscoveryPacing::DiscoveryPacing(fdds::DomainParticipant* participant,
-                                 std::chrono::milliseconds delay)
-    : participant_(participant), delay_(delay) {
+                                 std::chrono::milliseconds delay,
+                                 fdds::DomainParticipantListener* publishers)
+    : participant_(participant), delay_(delay), publishers_(publishers) {
   fdds::DomainParticipantQos qos;
   participant_->get_qos(qos);
   const std::vector<rtps::octet>& data = qos.user_data().data_vec();
@@ -44,6 +45,11 @@ void DiscoveryPacing::on_participant_discovery(fdds::DomainParticipant*,
     wake_.notify_all();
   }
   std::this_thread::sleep_for(delay_);  // Fast DDS answers the new participant when this returns
+}
+
+void DiscoveryPacing::on_publisher_discovery(fdds::DomainParticipant* participant,
+                                             rtps::WriterDiscoveryInfo&& info) {
+  if (publishers_ != nullptr) publishers_->on_publisher_discovery(participant, std::move(info));
 }
 
 void DiscoveryPacing::run() {

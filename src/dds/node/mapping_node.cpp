@@ -15,6 +15,7 @@
 #include "mlmap/dds/entities.h"
 #include "mlmap/dds/ros_graph.h"
 #include "mlmap/dds/submap_messages.h"
+#include "mlmap/dds/submap_readers.h"
 
 #include "mlmap_msgs/msg/Submap_PubSubTypes.h"
 
@@ -69,9 +70,9 @@ struct MappingNode::Impl {
   std::unique_ptr<node::InputReaders> readers;
   std::unique_ptr<node::FramePairer> pairer;
   std::unique_ptr<node::NodeServices> services;
-  /// dds.fleet.subscribe: the reader of the other vehicles' submaps (deleted after the
-  /// participant, which deletes the reader first).
-  std::unique_ptr<TakeReaders> fleet_readers;
+  /// dds.fleet.subscribe: the readers of the other vehicles' submaps (deleted after the
+  /// participant, which deletes the readers first).
+  std::unique_ptr<SubmapReaders> fleet_readers;
   std::string fleet_vehicle = resolveFleetVehicle(config.dds);  ///< this vehicle's name
   /// Set by ~/clear_map: the emptied global map goes out at once, whatever the rate limit.
   std::atomic<bool> force_global_publish{false};
@@ -103,7 +104,9 @@ struct MappingNode::Impl {
 
   void setUp() {
     // The participant first, so that the node's log lines from here on reach /rosout too.
-    participant = createParticipant(config.dds, kNodeName);
+    if (config.dds.fleet.subscribe) makeFleetReaders();
+    participant = createParticipant(config.dds, kNodeName,
+                                    fleet_readers ? fleet_readers->discoveryListener() : nullptr);
     domain_id = static_cast<int>(participant->get_domain_id());
     auto* publisher = participant->create_publisher(eprosima::fastdds::dds::PUBLISHER_QOS_DEFAULT);
     auto* subscriber =
@@ -119,7 +122,9 @@ struct MappingNode::Impl {
       rosout = std::move(writer);
     }
     graph = std::make_unique<DiscoveryInfoPublisher>(participant.get(), kNodeName, node_namespace);
-    pacing = std::make_unique<DiscoveryPacing>(participant.get());
+    pacing = std::make_unique<DiscoveryPacing>(
+        participant.get(), DiscoveryPacing::kReplyDelay,
+        fleet_readers ? fleet_readers->discoveryListener() : nullptr);
     graph->announce({publisher}, {subscriber});
 
     logMemoryEstimate();
@@ -139,7 +144,7 @@ struct MappingNode::Impl {
     services = std::make_unique<node::NodeServices>(publisher, subscriber, node_namespace,
                                                     kNodeName, effective, *engine, *persistence,
                                                     log, [this] { force_global_publish = true; });
-    if (config.dds.fleet.subscribe) subscribeToFleet(subscriber);
+    if (fleet_readers) fleet_readers->start(subscriber);
     graph->announce({publisher}, {subscriber});  // the ROS graph learns of the new endpoints
     warnAboutMissingInputs(loaded);
     if (loaded) {
@@ -241,25 +246,31 @@ struct MappingNode::Impl {
     mailbox.copyFleet(map, std::move(snap), engine->priors(), force);
   }
 
-  /// dds.fleet.subscribe: a reader of the fleet's submaps; the other vehicles' go to the engine
-  /// as prior knowledge (MapEngine::addPrior), this vehicle's own are ignored.
-  void subscribeToFleet(eprosima::fastdds::dds::Subscriber* subscriber) {
-    fleet_readers = std::make_unique<TakeReaders>(subscriber, [this](const std::string& what) {
-      counters.add(&NodeCounters::fleet_samples_refused);
-      log.limited(LogLevel::kWarning, node::kReasonFleet, what);
-    });
-    fleet_readers->add<::mlmap_msgs::msg::dds_::Submap_PubSubType>(
-        ddsTopicName("", config.dds.fleet.topic), submapReaderQos(),
-        [this](::mlmap_msgs::msg::dds_::Submap_&& msg) { takePrior(msg); });
+  /// dds.fleet.subscribe: readers of the other vehicles' submap topics, found by discovery; their
+  /// samples go to the engine as prior knowledge (MapEngine::addPrior).
+  void makeFleetReaders() {
+    SubmapReadersConfig which;
+    which.topic = config.dds.fleet.topic;
+    which.own_vehicle = fleet_vehicle;
+    fleet_readers = std::make_unique<SubmapReaders>(
+        which,
+        [this](const std::string& vehicle, ::mlmap_msgs::msg::dds_::Submap_&& msg,
+               const eprosima::fastdds::dds::SampleInfo&) { takePrior(vehicle, msg); },
+        [this](const std::string& what) {
+          counters.add(&NodeCounters::fleet_samples_refused);
+          log.limited(LogLevel::kWarning, node::kReasonFleet, what);
+        });
   }
 
-  /// Fast DDS's listener thread: checks another vehicle's submap and hands it to the engine.
-  void takePrior(const ::mlmap_msgs::msg::dds_::Submap_& msg) {
-    if (msg.vehicle_() == fleet_vehicle) return;
-    // The header and the grid first: a sample of another grid is refused before its payload
-    // is decoded (a submap of up to 2^24 voxels).
+  /// Fast DDS's listener thread: checks another vehicle's submap (from the topic of
+  /// `topic_vehicle`) and hands it to the engine.
+  void takePrior(const std::string& topic_vehicle, const ::mlmap_msgs::msg::dds_::Submap_& msg) {
+    // The name, the header and the grid first: a sample of another grid is refused before its
+    // payload is decoded (a submap of up to 2^24 voxels).
     DecodedSubmap submap;
-    std::string problem = submapHeaderProblem(msg);
+    std::string problem;
+    if (msg.vehicle_() != topic_vehicle) problem = "named for another vehicle than its topic's";
+    if (problem.empty()) problem = submapHeaderProblem(msg);
     const LocalMapConfig& lm = config.map.local_map;
     const Eigen::Vector3i cells(static_cast<int>(msg.size_x_()), static_cast<int>(msg.size_y_()),
                                 static_cast<int>(msg.size_z_()));
@@ -320,6 +331,7 @@ struct MappingNode::Impl {
     }
     pacing.reset();  // the participant's listener, removed before the participant goes
     // Readers and writers first (their listeners die with the parts), then everything else.
+    if (fleet_readers) fleet_readers->stop();  // no more readers created
     participant.reset();
     readers.reset();
     fleet_readers.reset();

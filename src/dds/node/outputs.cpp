@@ -490,7 +490,7 @@ Outputs::Outputs(fdds::Publisher* publisher, const DdsConfig& dds, const Transfo
   if (dds.fleet.publish) {
     const LocalMapConfig& lm = engine.config().local_map;
     auto fleet = std::make_unique<FleetOutput>(
-        std::make_unique<SubmapWriter>(publisher, ddsTopicName("", dds.fleet.topic),
+        std::make_unique<SubmapWriter>(publisher, dds.fleet.topic,
                                        resolveFleetVehicle(dds),
                                        SubmapGeometry{lm.resolution_m, lm.submap_cells()},
                                        dds.world_frame),

@@ -27,31 +27,6 @@ std::string number(double value) {
   return out.str();
 }
 
-/// Why `name` is not a valid ROS topic name or namespace ("" when it is): tokens of letters,
-/// digits and '_' that do not start with a digit, separated by single '/', optionally starting
-/// with '/', not ending with '/' (rcl's rules, without substitutions such as `~` or `{node}`).
-std::string rosNameProblem(const std::string& name) {
-  const std::size_t begin = (!name.empty() && name[0] == '/') ? 1 : 0;
-  if (begin == name.size()) return "must contain at least one token";
-  bool token_start = true;
-  for (std::size_t i = begin; i < name.size(); ++i) {
-    const char c = name[i];
-    if (c == '/') {
-      if (token_start) return "must not contain an empty token ('//')";
-      token_start = true;
-      continue;
-    }
-    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') {
-      return std::string("may only contain letters, digits, '_' and '/' (found '") + c + "')";
-    }
-    if (token_start && std::isdigit(static_cast<unsigned char>(c))) {
-      return "a token must not start with a digit";
-    }
-    token_start = false;
-  }
-  if (token_start) return "must not end with '/'";
-  return "";
-}
 
 /// "dds.<path>" of `field`, a member (or nested member) of `dds`, from the key list.
 template <class T>
@@ -144,6 +119,29 @@ bool parseStrategy(const std::string& text, SecurityStrategy* strategy) {
 }
 
 }  // namespace
+
+std::string rosNameProblem(const std::string& name) {
+  const std::size_t begin = (!name.empty() && name[0] == '/') ? 1 : 0;
+  if (begin == name.size()) return "must contain at least one token";
+  bool token_start = true;
+  for (std::size_t i = begin; i < name.size(); ++i) {
+    const char c = name[i];
+    if (c == '/') {
+      if (token_start) return "must not contain an empty token ('//')";
+      token_start = true;
+      continue;
+    }
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') {
+      return std::string("may only contain letters, digits, '_' and '/' (found '") + c + "')";
+    }
+    if (token_start && std::isdigit(static_cast<unsigned char>(c))) {
+      return "a token must not start with a digit";
+    }
+    token_start = false;
+  }
+  if (token_start) return "must not end with '/'";
+  return "";
+}
 
 void SecurityConfig::validate(std::vector<std::string>* errors) const {
   SecurityStrategy parsed{};

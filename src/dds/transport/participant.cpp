@@ -399,7 +399,8 @@ ParticipantSetup participantSetup(const DdsConfig& config, const std::string& na
   return setup;
 }
 
-ParticipantPtr createParticipant(const DdsConfig& config, const std::string& name) {
+ParticipantPtr createParticipant(const DdsConfig& config, const std::string& name,
+                                 fdds::DomainParticipantListener* listener) {
   const ParticipantSetup setup = participantSetup(config, name);
   // As rmw: a Permissive fallback is said, not silent.
   if (!setup.security.warning.empty()) std::cerr << "[mlmap dds] warning: " << setup.security.warning << "\n";
@@ -414,7 +415,8 @@ ParticipantPtr createParticipant(const DdsConfig& config, const std::string& nam
   }
   fdds::DomainParticipant* participant =
       fdds::DomainParticipantFactory::get_instance()->create_participant(
-          static_cast<fdds::DomainId_t>(setup.domain_id), qos);
+          static_cast<fdds::DomainId_t>(setup.domain_id), qos, listener,
+          fdds::StatusMask::none());
   lock.unlock();
   if (participant == nullptr) {
     std::string security;
