@@ -211,6 +211,7 @@ void LocalMap::retireSubmap(const SubmapIndex& m, GlobalMap* global) {
                       static_cast<std::size_t>(t0.z());
       if (y + kAhead < submap_.y()) __builtin_prefetch(row + kAhead * nz, 1);
       for (int z = 0; z < submap_.z(); ++z, ++offset) {
+        if (row[z] == 0) continue;  // unknown already: never written, so a page never touched stays so
         const LogOddsQ v = flipUnknown(row[z]);
         if (model_.isOccupied(v)) scratch_.push_back({offset, v});
         row[z] = 0;  // unknown, stored
