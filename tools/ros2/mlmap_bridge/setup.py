@@ -22,7 +22,7 @@ setup(
     maintainer='mlmap dev',
     maintainer_email='dev@mlmap.dev',
     description="mlmap_node's layers as RViz2 markers, and the integration checker",
-    license='Proprietary',
+    license='Apache-2.0',
     tests_require=['pytest'],
     entry_points={
         'console_scripts': [
