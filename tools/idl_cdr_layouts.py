@@ -2,7 +2,7 @@
 """CDR layouts of the DDS IDL structs under idl/, as a C++ header for the build.
 
 mlmap checks every received sample against its type's layout before Fast CDR deserialises it
-(include/mlmap/dds/cdr_check.h): Fast CDR 1.0 sizes a sequence from its declared count, so a
+(include/mlmap/dds/wire/cdr_check.h): Fast CDR 1.0 sizes a sequence from its declared count, so a
 count the payload cannot hold must be refused first. The layout of a struct is its members in
 wire order, each a number (its size), a string (its bound) or a nested struct, single, in a fixed
 array or in a (bounded) sequence, and the least bytes one value takes on the wire; a struct of
@@ -175,7 +175,7 @@ def header(table):
     return f"""// Generated at build time by tools/idl_cdr_layouts.py from idl/; do not edit.
 #pragma once
 
-#include "mlmap/dds/cdr_check.h"
+#include "mlmap/dds/wire/cdr_check.h"
 
 namespace mlmap::dds::generated {{
 

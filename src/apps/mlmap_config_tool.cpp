@@ -3,7 +3,7 @@
 // Run from the source tree after changing a key: `build/mlmap_config_tool --write`.
 
 #include "mlmap/config/yaml_section.h"
-#include "mlmap/dds/config_reference.h"
+#include "mlmap/dds/node/config_reference.h"
 
 #include <CLI/CLI.hpp>
 

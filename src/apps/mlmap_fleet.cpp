@@ -4,7 +4,7 @@
 
 #include "mlmap/apps/stop_signal.h"
 #include "mlmap/config/config_yaml.h"
-#include "mlmap/dds/fleet_merger.h"
+#include "mlmap/dds/fleet/fleet_merger.h"
 #include "mlmap/map_io/map_file.h"
 
 #include <CLI/CLI.hpp>

@@ -1,8 +1,8 @@
 // mlmap_node: the onboard mapping process. ROS 2 topics in (PointCloud2 / depth Image + pose),
 // map layers out, over plain Fast DDS: no ROS installation needed on the vehicle.
 
-#include "mlmap/dds/mapping_node.h"
-#include "mlmap/dds/node_config.h"
+#include "mlmap/dds/node/mapping_node.h"
+#include "mlmap/dds/node/node_config.h"
 #include "mlmap/apps/stop_signal.h"
 
 #include <CLI/CLI.hpp>

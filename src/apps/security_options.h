@@ -5,7 +5,7 @@
 /// `dds.security` section, from the command line. Unset options leave the configuration (and,
 /// through it, the ROS 2 environment variables) in charge.
 
-#include "mlmap/dds/dds_config.h"
+#include "mlmap/dds/transport/dds_config.h"
 
 #include <CLI/CLI.hpp>
 

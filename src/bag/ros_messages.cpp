@@ -1,6 +1,6 @@
 #include "mlmap/bag/ros_messages.h"
 
-#include "mlmap/dds/cdr_check.h"
+#include "mlmap/dds/wire/cdr_check.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
 #include "nav_msgs/msg/Odometry_PubSubTypes.h"

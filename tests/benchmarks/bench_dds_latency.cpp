@@ -15,11 +15,11 @@
 // (the ctest smoke run) fails, when a frame sent did not reach this program or no status came.
 
 #include "mlmap/apps/stop_signal.h"
-#include "mlmap/dds/entities.h"
+#include "mlmap/dds/transport/entities.h"
 #include "mlmap/pipeline/map_engine.h"
-#include "mlmap/dds/node_config.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/node/node_config.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 
 #include "mlmap_msgs/msg/Status_PubSubTypes.h"
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"

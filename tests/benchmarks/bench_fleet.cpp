@@ -6,8 +6,8 @@
 // (wall clock, median and p99 per round: say the load next to it).
 
 #include "mlmap/core/stopwatch.h"
-#include "mlmap/dds/ros_conversions.h"
-#include "mlmap/dds/submap_messages.h"
+#include "mlmap/dds/wire/ros_conversions.h"
+#include "mlmap/dds/fleet/submap_messages.h"
 #include "mlmap/fleet/fleet_map.h"
 #include "mlmap/fleet/submap_share.h"
 #include "mlmap/pipeline/map_engine.h"

@@ -10,10 +10,10 @@
 // another participant floods save_map with requests whose reply reader never matches (about
 // 2,000 a second, from 2 s before). Figures (median, p99), not pass/fail.
 
-#include "mlmap/dds/mapping_node.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/ros_graph.h"
-#include "mlmap/dds/ros_services.h"
+#include "mlmap/dds/node/mapping_node.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/node/ros_graph.h"
+#include "mlmap/dds/node/ros_services.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include "../dds/service_client.h"

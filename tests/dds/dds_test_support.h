@@ -1,7 +1,7 @@
 #pragma once
 // Helpers of the DDS tests: waiting for a condition, loopback-only participant settings, matching.
 
-#include "mlmap/dds/dds_config.h"
+#include "mlmap/dds/transport/dds_config.h"
 
 #include <fastdds/dds/publisher/DataWriter.hpp>
 #include <fastdds/dds/subscriber/DataReader.hpp>

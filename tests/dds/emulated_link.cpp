@@ -2,7 +2,7 @@
 
 #include "dds_test_support.h"
 
-#include "mlmap/dds/udp_send_guard.h"
+#include "mlmap/dds/transport/udp_send_guard.h"
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/rtps/common/LocatorsIterator.hpp>

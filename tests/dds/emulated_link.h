@@ -3,7 +3,7 @@
 // on its interface (this VM's kernel has no netem, see tests/fleet/fleet_netns.sh).
 #pragma once
 
-#include "mlmap/dds/participant.h"
+#include "mlmap/dds/transport/participant.h"
 
 #include <fastdds/rtps/transport/ChainingTransport.h>
 #include <fastdds/rtps/transport/ChainingTransportDescriptor.h>

@@ -2,8 +2,8 @@
 // A ROS 2 service client that does what rmw_fastrtps_cpp's does (Jazzy), for the service tests
 // and the service benchmark.
 
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/ros_services.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/node/ros_services.h"
 
 #include "dds_test_support.h"
 

@@ -1,5 +1,5 @@
 // CDR payloads checked against idl/'s layouts before Fast CDR deserialises them
-// (mlmap/dds/cdr_check.h, CheckedType in mlmap/dds/entities.h): the walker agrees with Fast
+// (mlmap/dds/wire/cdr_check.h, CheckedType in mlmap/dds/transport/entities.h): the walker agrees with Fast
 // CDR's generated code on random messages of every IDL type, refuses truncated payloads and
 // counts the payload cannot hold at every nesting level, and a sample declaring millions of
 // elements is refused before anything is allocated (issue 43, item 10). This binary counts every
@@ -20,9 +20,9 @@
 #include <vector>
 
 #include "../support/allocation_counter.h"
-#include "mlmap/dds/cdr_check.h"
-#include "mlmap/dds/cloud_sample.h"
-#include "mlmap/dds/entities.h"
+#include "mlmap/dds/wire/cdr_check.h"
+#include "mlmap/dds/wire/cloud_sample.h"
+#include "mlmap/dds/transport/entities.h"
 #include "mlmap_idl_types.h"  // every struct's generated Fast DDS type, generated from idl/
 
 namespace mlmap::dds {

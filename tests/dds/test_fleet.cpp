@@ -7,12 +7,12 @@
 #include "dds_test_support.h"
 #include "emulated_link.h"
 
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/fleet_merger.h"
-#include "mlmap/dds/mapping_node.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/ros_conversions.h"
-#include "mlmap/dds/submap_messages.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/fleet/fleet_merger.h"
+#include "mlmap/dds/node/mapping_node.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/wire/ros_conversions.h"
+#include "mlmap/dds/fleet/submap_messages.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
 #include "mlmap_msgs/msg/FleetStatus_PubSubTypes.h"

@@ -1,8 +1,8 @@
 // FleetIntake, the fleet's trust checks without DDS (docs/fleet.md#trust): the configured grid
 // and vehicle list, sequence numbers bounded ahead, restarts, memory budgets checked from the
 // declared sizes before anything is allocated, every refusal counted by reason.
-#include "mlmap/dds/fleet_intake.h"
-#include "mlmap/dds/submap_messages.h"
+#include "mlmap/dds/fleet/fleet_intake.h"
+#include "mlmap/dds/fleet/submap_messages.h"
 
 #include <gtest/gtest.h>
 

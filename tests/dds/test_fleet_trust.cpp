@@ -6,10 +6,10 @@
 #include "../fleet/fleet_test_support.h"
 #include "dds_test_support.h"
 
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/fleet_merger.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/submap_messages.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/fleet/fleet_merger.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/fleet/submap_messages.h"
 
 #include "mlmap_msgs/msg/Submap_PubSubTypes.h"
 

@@ -4,8 +4,8 @@
 // tests put their process in a network namespace of its own, with a multicast-capable veth, so
 // that the multicast they cause never reaches the host's real interfaces; they need root.
 
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/udp_send_guard.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/transport/udp_send_guard.h"
 
 #include "dds_test_support.h"
 

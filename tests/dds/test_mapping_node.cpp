@@ -1,12 +1,12 @@
 // The mapping node's input side over DDS: malformed samples (bad CDR, bad layouts, bad values,
 // bad poses, bad stamps) are rejected and counted while good frames keep being mapped.
 // Participants on loopback only (DiscoveryRange::kLocalhost), domains 170..189.
-#include "mlmap/dds/cloud_sample.h"
-#include "mlmap/dds/cloud_writer.h"
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/mapping_node.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/wire/cloud_sample.h"
+#include "mlmap/dds/transport/cloud_writer.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/node/mapping_node.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 
 #include "dds_test_support.h"
 #include "raw_type.h"

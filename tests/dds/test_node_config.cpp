@@ -1,6 +1,6 @@
-#include "mlmap/dds/node_config.h"
+#include "mlmap/dds/node/node_config.h"
 
-#include "mlmap/dds/mapping_node.h"
+#include "mlmap/dds/node/mapping_node.h"
 
 #include "mlmap/config/config_yaml.h"
 #include "mlmap/config/yaml_section.h"

@@ -1,11 +1,11 @@
 // Participants on loopback only: every participant created here either uses
 // DiscoveryRange::kLocalhost or a profile whose transports are restricted to 127.0.0.1, and each
 // test has its own domain id (150..169), so parallel test processes never meet.
-#include "mlmap/dds/participant.h"
+#include "mlmap/dds/transport/participant.h"
 
-#include "mlmap/dds/cloud_sample.h"
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/udp_send_guard.h"
+#include "mlmap/dds/wire/cloud_sample.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/transport/udp_send_guard.h"
 
 #include "dds_test_support.h"
 #include "scoped_env.h"

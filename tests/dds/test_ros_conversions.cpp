@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "mlmap/dds/cloud_sample.h"
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/wire/cloud_sample.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 
 #include <fastdds/rtps/common/SerializedPayload.h>
 

@@ -3,11 +3,11 @@
 // reach /rosout with rcl's QoS. Each test reads the node from a participant of its own, through
 // Fast DDS discovery, as a ROS 2 tool does; domains 220..229.
 
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/mapping_node.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/ros_graph.h"
-#include "mlmap/dds/type_hash.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/node/mapping_node.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/node/ros_graph.h"
+#include "mlmap/dds/wire/type_hash.h"
 
 #include "dds_test_support.h"
 

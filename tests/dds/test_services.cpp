@@ -4,13 +4,13 @@
 // clear; concurrent clients; malformed requests. Domains 214..219 (235..239 lie beyond 232, the
 // largest ROS domain id), loopback only.
 
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/fair_request_queue.h"
-#include "mlmap/dds/mapping_node.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/ros_graph.h"
-#include "mlmap/dds/ros_services.h"
-#include "mlmap/dds/type_hash.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/node/fair_request_queue.h"
+#include "mlmap/dds/node/mapping_node.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/node/ros_graph.h"
+#include "mlmap/dds/node/ros_services.h"
+#include "mlmap/dds/wire/type_hash.h"
 #include "mlmap/map_io/map_export.h"
 #include "mlmap/map_io/map_file.h"
 #include "mlmap/pipeline/map_engine.h"

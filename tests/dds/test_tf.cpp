@@ -3,10 +3,10 @@
 // map -> odom against T_W_B and the robot's odom -> base_link, sensor extrinsics resolved through
 // a chain of /tf_static transforms, and the frame checks' counters. Participants on loopback only
 // (DiscoveryRange::kLocalhost), domains 230..232 (the highest valid domain is 232).
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/mapping_node.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/node/mapping_node.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 
 #include "dds_test_support.h"
 

@@ -1,7 +1,7 @@
 // TfBuffer against a slow reference: a breadth-first search over every edge, both ways, that
 // composes the transforms along the one path between two frames; and its dynamic edges against
 // interpolation written out by hand.
-#include "mlmap/dds/tf_buffer.h"
+#include "mlmap/dds/node/tf_buffer.h"
 
 #include <gtest/gtest.h>
 

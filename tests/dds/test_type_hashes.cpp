@@ -1,8 +1,8 @@
 // The ROS 2 type hashes computed at build time from idl/ (tools/idl_type_hashes.py) against
 // ROS 2 Jazzy's own, and the USER_DATA that carries them.
 
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/type_hash.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/wire/type_hash.h"
 
 #include <fastdds/dds/publisher/qos/DataWriterQos.hpp>
 #include <fastdds/dds/subscriber/qos/DataReaderQos.hpp>

@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 #include "mlmap_msgs/msg/Status_PubSubTypes.h"
 #include "mlmap_msgs/msg/VoxelBlock_PubSubTypes.h"
 #include "nav_msgs/msg/OccupancyGrid_PubSubTypes.h"

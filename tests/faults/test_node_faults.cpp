@@ -3,10 +3,10 @@
 // clouds arrive faster than the engine maps; a subscriber leaves and returns. Each test asserts
 // the behaviour docs/soak-and-faults.md documents. The vehicle is a sparse simulated LiDAR
 // (the sensor frame is the body frame) in two rooms 40 m apart.
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/mapping_node.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/node/mapping_node.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 #include "mlmap/map_io/map_export.h"
 #include "mlmap/map_io/map_file.h"
 #include "mlmap/sim/lidar.h"

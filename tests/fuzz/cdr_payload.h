@@ -2,11 +2,11 @@
 /// @file
 /// Raw CDR bytes -> a generated ROS 2 type, the way mlmap_node receives a sample: the bytes become
 /// the SerializedPayload_t that Fast DDS hands to the reader's type, and the type is the
-/// CheckedType<PubSubType> that registerType() registers (mlmap/dds/entities.h), whose
+/// CheckedType<PubSubType> that registerType() registers (mlmap/dds/transport/entities.h), whose
 /// deserialize() reports malformed CDR instead of throwing. The payload starts with the 4-byte
 /// encapsulation header (00 01 00 00: CDR little endian).
 
-#include "mlmap/dds/entities.h"
+#include "mlmap/dds/transport/entities.h"
 
 #include <fastdds/rtps/common/SerializedPayload.h>
 

@@ -10,7 +10,7 @@
 #include "cdr_payload.h"
 #include "fuzz_support.h"
 
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 
 #include "sensor_msgs/msg/CameraInfo_PubSubTypes.h"
 #include "sensor_msgs/msg/Image_PubSubTypes.h"

@@ -9,8 +9,8 @@
 #include "cdr_payload.h"
 #include "fuzz_support.h"
 
-#include "mlmap/dds/cloud_sample.h"
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/wire/cloud_sample.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
 

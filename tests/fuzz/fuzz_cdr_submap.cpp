@@ -8,7 +8,7 @@
 #include "cdr_payload.h"
 #include "fuzz_support.h"
 
-#include "mlmap/dds/submap_messages.h"
+#include "mlmap/dds/fleet/submap_messages.h"
 
 #include "mlmap_msgs/msg/Submap_PubSubTypes.h"
 

@@ -3,7 +3,7 @@
 /// (cdr_payload.h: CheckedType, which checks the payload against the type's layout from idl/
 /// before Fast CDR reads it). The first byte picks the type (even: tf2_msgs/TFMessage, the /tf and
 /// /tf_static readers and the bag's /tf; odd: rcl_interfaces SetParameters request, the parameter
-/// service), the rest is the sample. Checks what mlmap/dds/cdr_check.h documents: every layout's
+/// service), the rest is the sample. Checks what mlmap/dds/wire/cdr_check.h documents: every layout's
 /// walk of the bytes stays inside them, and a sample taken holds no more elements than its bytes
 /// back (each element takes at least its type's minimum bytes on the wire), so no count makes the
 /// reader allocate beyond the sample's size.
@@ -11,7 +11,7 @@
 #include "cdr_payload.h"
 #include "fuzz_support.h"
 
-#include "mlmap/dds/cdr_check.h"
+#include "mlmap/dds/wire/cdr_check.h"
 
 #include "rcl_interfaces/srv/SetParameters_PubSubTypes.h"
 #include "tf2_msgs/msg/TFMessage_PubSubTypes.h"

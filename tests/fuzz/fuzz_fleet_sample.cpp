@@ -14,7 +14,7 @@
 #include "cdr_payload.h"
 #include "fuzz_support.h"
 
-#include "mlmap/dds/fleet_intake.h"
+#include "mlmap/dds/fleet/fleet_intake.h"
 
 #include "mlmap_msgs/msg/Submap_PubSubTypes.h"
 

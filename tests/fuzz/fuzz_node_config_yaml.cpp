@@ -5,7 +5,7 @@
 
 #include "fuzz_support.h"
 
-#include "mlmap/dds/node_config.h"
+#include "mlmap/dds/node/node_config.h"
 
 #include <stdexcept>
 

@@ -5,8 +5,8 @@
 ///   cmake --build build-test --target mlmap_fuzz_make_seeds && build-test/tests/fuzz/mlmap_fuzz_make_seeds tests/fuzz/corpus
 
 #include "../support/small_map_state.h"
-#include "mlmap/dds/ros_conversions.h"
-#include "mlmap/dds/submap_messages.h"
+#include "mlmap/dds/wire/ros_conversions.h"
+#include "mlmap/dds/fleet/submap_messages.h"
 #include "mlmap/map_io/map_file.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"

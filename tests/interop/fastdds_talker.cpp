@@ -13,10 +13,10 @@
 //   3. the clouds, each acknowledged before the next (one of them 4.8 MB);
 //   4. a third grid, live (the reader is still alive and listening).
 
-#include "mlmap/dds/dds_config.h"
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/transport/dds_config.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 
 #include <fastdds/dds/topic/TopicDataType.hpp>
 #include <fastdds/rtps/common/SerializedPayload.h>

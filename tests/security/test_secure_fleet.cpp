@@ -3,10 +3,10 @@
 // merger (/fleet/merger, a closed fleet of uav1 and uav2) reads each vehicle's own topic and
 // refuses a sample whose name is not its topic's: the vehicle name is bound to the publisher's
 // authenticated identity (docs/fleet.md#trust).
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/fleet_merger.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/submap_messages.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/fleet/fleet_merger.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/fleet/submap_messages.h"
 
 #include "dds_test_support.h"
 

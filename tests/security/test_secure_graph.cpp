@@ -8,12 +8,12 @@
 //   and poses;
 // - the services are called as the permissions say (domain 191).
 // The node's counters show what reached it. Encryption on the wire: capture_plaintext.sh.
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/mapping_node.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/ros_conversions.h"
-#include "mlmap/dds/ros_graph.h"
-#include "mlmap/dds/ros_services.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/node/mapping_node.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/wire/ros_conversions.h"
+#include "mlmap/dds/node/ros_graph.h"
+#include "mlmap/dds/node/ros_services.h"
 
 #include "dds_test_support.h"
 #include "scoped_env.h"

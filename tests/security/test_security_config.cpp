@@ -1,8 +1,8 @@
 // dds.security: the YAML keys and their checks, the ROS 2 environment variables read as rcl reads
 // them, the SROS2 file lookup, the properties rmw_fastrtps sets, and the Enforce / Permissive
 // fallbacks. No participant talks to another here (test_secure_graph.cpp does that).
-#include "mlmap/dds/node_config.h"
-#include "mlmap/dds/participant.h"
+#include "mlmap/dds/node/node_config.h"
+#include "mlmap/dds/transport/participant.h"
 
 #include "expect_throw.h"
 #include "scoped_env.h"

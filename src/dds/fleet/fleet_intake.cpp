@@ -1,6 +1,6 @@
-#include "mlmap/dds/fleet_intake.h"
+#include "mlmap/dds/fleet/fleet_intake.h"
 
-#include "mlmap/dds/submap_messages.h"
+#include "mlmap/dds/fleet/submap_messages.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,11 +1,11 @@
-#include "mlmap/dds/fleet_merger.h"
+#include "mlmap/dds/fleet/fleet_merger.h"
 
 #include "mlmap/core/stopwatch.h"
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/ros_conversions.h"
-#include "mlmap/dds/submap_messages.h"
-#include "mlmap/dds/submap_readers.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/wire/ros_conversions.h"
+#include "mlmap/dds/fleet/submap_messages.h"
+#include "mlmap/dds/fleet/submap_readers.h"
 
 #include "mlmap_msgs/msg/FleetStatus_PubSubTypes.h"
 #include "mlmap_msgs/msg/Submap_PubSubTypes.h"

@@ -1,9 +1,9 @@
-#include "mlmap/dds/submap_messages.h"
+#include "mlmap/dds/fleet/submap_messages.h"
 
-#include "mlmap/dds/dds_config.h"
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/transport/dds_config.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 #include "mlmap/fleet/submap_codec.h"
 
 #include "mlmap_msgs/msg/Submap_PubSubTypes.h"

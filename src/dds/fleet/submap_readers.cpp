@@ -1,6 +1,6 @@
-#include "mlmap/dds/submap_readers.h"
+#include "mlmap/dds/fleet/submap_readers.h"
 
-#include "mlmap/dds/submap_messages.h"
+#include "mlmap/dds/fleet/submap_messages.h"
 
 #include "mlmap_msgs/msg/Submap_PubSubTypes.h"
 

@@ -1,8 +1,8 @@
-#include "mlmap/dds/config_reference.h"
+#include "mlmap/dds/node/config_reference.h"
 
 #include "mlmap/config/config_yaml.h"
 #include "mlmap/config/yaml_section.h"
-#include "mlmap/dds/node_config.h"
+#include "mlmap/dds/node/node_config.h"
 
 #include <stdexcept>
 

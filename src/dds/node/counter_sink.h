@@ -2,7 +2,7 @@
 /// @file
 /// The node's counters (NodeCounters), written by every thread of the node.
 
-#include "mlmap/dds/mapping_node.h"
+#include "mlmap/dds/node/node_counters.h"
 
 #include <cstdint>
 #include <mutex>

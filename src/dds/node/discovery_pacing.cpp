@@ -1,4 +1,4 @@
-#include "mlmap/dds/discovery_pacing.h"
+#include "mlmap/dds/node/discovery_pacing.h"
 
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>
 #include <fastdds/rtps/common/VendorId_t.hpp>

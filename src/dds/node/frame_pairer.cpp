@@ -1,7 +1,7 @@
 #include "frame_pairer.h"
 
 #include "mlmap/core/stopwatch.h"
-#include "mlmap/dds/mapping_node.h"
+#include "mlmap/dds/node/node_config.h"
 
 #include <sstream>
 #include <string>

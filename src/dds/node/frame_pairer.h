@@ -9,7 +9,7 @@
 #include "tf_listener.h"
 
 #include "mlmap/core/pose_buffer.h"
-#include "mlmap/dds/dds_config.h"
+#include "mlmap/dds/transport/dds_config.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include <chrono>

@@ -2,8 +2,8 @@
 /// @file
 /// The hand-over between Fast DDS's listener threads and the node's input thread.
 
-#include "mlmap/dds/cloud_sample.h"
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/wire/cloud_sample.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 
 #include <chrono>
 #include <condition_variable>

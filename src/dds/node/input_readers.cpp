@@ -1,6 +1,6 @@
 #include "input_readers.h"
 
-#include "mlmap/dds/participant.h"
+#include "mlmap/dds/transport/participant.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
 #include "nav_msgs/msg/Odometry_PubSubTypes.h"

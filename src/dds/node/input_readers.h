@@ -7,8 +7,8 @@
 #include "input_queue.h"
 #include "node_log.h"
 
-#include "mlmap/dds/dds_config.h"
-#include "mlmap/dds/entities.h"
+#include "mlmap/dds/transport/dds_config.h"
+#include "mlmap/dds/transport/entities.h"
 
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 

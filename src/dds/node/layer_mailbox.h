@@ -4,7 +4,7 @@
 /// global layers (made at their publishing rates), and the news that a snapshot is out.
 
 #include "mlmap/awareness/awareness_map.h"
-#include "mlmap/dds/dds_config.h"
+#include "mlmap/dds/transport/dds_config.h"
 #include "mlmap/fleet/submap_share.h"
 #include "mlmap/global/global_map.h"
 #include "mlmap/planning/map_snapshot.h"

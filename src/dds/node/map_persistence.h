@@ -6,7 +6,7 @@
 #include "counter_sink.h"
 #include "node_log.h"
 
-#include "mlmap/dds/node_config.h"
+#include "mlmap/dds/node/node_config.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include <condition_variable>

@@ -1,4 +1,4 @@
-#include "mlmap/dds/mapping_node.h"
+#include "mlmap/dds/node/mapping_node.h"
 
 #include "counter_sink.h"
 #include "frame_pairer.h"
@@ -11,11 +11,11 @@
 #include "outputs.h"
 #include "tf_listener.h"
 
-#include "mlmap/dds/discovery_pacing.h"
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/ros_graph.h"
-#include "mlmap/dds/submap_messages.h"
-#include "mlmap/dds/submap_readers.h"
+#include "mlmap/dds/node/discovery_pacing.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/node/ros_graph.h"
+#include "mlmap/dds/fleet/submap_messages.h"
+#include "mlmap/dds/fleet/submap_readers.h"
 
 #include "mlmap_msgs/msg/Submap_PubSubTypes.h"
 
@@ -33,15 +33,6 @@
 
 namespace mlmap::dds {
 
-PoseBufferConfig poseBufferConfig(const DdsConfig& dds) {
-  PoseBufferConfig config;
-  config.tolerance_s = dds.pose_tolerance_s;
-  config.horizon_s = dds.pose_buffer_s;
-  config.max_future_s = dds.max_future_s;
-  config.max_speed_mps = dds.max_pose_speed_mps;
-  config.max_rotation_rate_dps = dds.max_pose_rotation_rate_dps;
-  return config;
-}
 
 /// The node's name in the ROS 2 graph (`ros2 node list`), and its participant's name.
 constexpr const char* kNodeName = "mlmap_node";

@@ -1,4 +1,4 @@
-#include "mlmap/dds/node_config.h"
+#include "mlmap/dds/node/node_config.h"
 
 #include "mlmap/config/config_keys.h"
 #include "mlmap/config/config_yaml.h"
@@ -97,6 +97,16 @@ std::string nodeKeyReference() {
   const NodeConfig defaults;
   NodeConfig::visitNodeSections(defaults, table);
   return io::MarkdownKeyTable::header() + table.rows();
+}
+
+PoseBufferConfig poseBufferConfig(const DdsConfig& dds) {
+  PoseBufferConfig config;
+  config.tolerance_s = dds.pose_tolerance_s;
+  config.horizon_s = dds.pose_buffer_s;
+  config.max_future_s = dds.max_future_s;
+  config.max_speed_mps = dds.max_pose_speed_mps;
+  config.max_rotation_rate_dps = dds.max_pose_rotation_rate_dps;
+  return config;
 }
 
 }  // namespace mlmap::dds

@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// mlmap_node's ROS 2 services (rmw_fastrtps_cpp's framing, mlmap/dds/ros_services.h): `~/save_map`
+/// mlmap_node's ROS 2 services (rmw_fastrtps_cpp's framing, mlmap/dds/node/ros_services.h): `~/save_map`
 /// and `~/clear_map` (std_srvs/srv/Trigger) and the read-only parameter services of rcl_interfaces
 /// (`~/list_parameters`, `~/get_parameters`, `~/describe_parameters`, `~/get_parameter_types`,
 /// `~/set_parameters`, `~/set_parameters_atomically`) over the node's effective configuration.
@@ -8,8 +8,8 @@
 #include "map_persistence.h"
 #include "node_log.h"
 
-#include "mlmap/dds/node_config.h"
-#include "mlmap/dds/ros_services.h"
+#include "mlmap/dds/node/node_config.h"
+#include "mlmap/dds/node/ros_services.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include "std_srvs/srv/Trigger_.h"

@@ -1,11 +1,11 @@
 #include "outputs.h"
 
 #include "mlmap/core/stopwatch.h"
-#include "mlmap/dds/cloud_sample.h"
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/ros_conversions.h"
-#include "mlmap/dds/submap_messages.h"
+#include "mlmap/dds/wire/cloud_sample.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/wire/ros_conversions.h"
+#include "mlmap/dds/fleet/submap_messages.h"
 #include "mlmap/planning/fixed_origin_grid.h"
 
 #include "mlmap_msgs/msg/Status_PubSubTypes.h"

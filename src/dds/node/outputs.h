@@ -9,7 +9,7 @@
 #include "node_log.h"
 #include "tf_listener.h"
 
-#include "mlmap/dds/dds_config.h"
+#include "mlmap/dds/transport/dds_config.h"
 #include "mlmap/pipeline/map_engine.h"
 
 #include <fastdds/dds/publisher/DataWriter.hpp>

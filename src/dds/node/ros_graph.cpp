@@ -1,9 +1,9 @@
-#include "mlmap/dds/ros_graph.h"
+#include "mlmap/dds/node/ros_graph.h"
 
-#include "mlmap/dds/dds_config.h"
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/transport/dds_config.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 
 #include "rcl_interfaces/msg/Log_PubSubTypes.h"
 #include "rmw_dds_common/msg/ParticipantEntitiesInfo_PubSubTypes.h"

@@ -1,7 +1,7 @@
-#include "mlmap/dds/ros_services.h"
+#include "mlmap/dds/node/ros_services.h"
 
 #include "mlmap/core/key_list.h"
-#include "mlmap/dds/participant.h"
+#include "mlmap/dds/transport/participant.h"
 
 #include <Eigen/Core>
 

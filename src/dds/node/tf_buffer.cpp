@@ -1,4 +1,4 @@
-#include "mlmap/dds/tf_buffer.h"
+#include "mlmap/dds/node/tf_buffer.h"
 
 #include <algorithm>
 #include <utility>

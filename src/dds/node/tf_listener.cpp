@@ -1,7 +1,7 @@
 #include "tf_listener.h"
 
-#include "mlmap/dds/participant.h"
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 
 #include "tf2_msgs/msg/TFMessage_PubSubTypes.h"
 

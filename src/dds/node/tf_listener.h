@@ -7,9 +7,9 @@
 #include "counter_sink.h"
 #include "node_log.h"
 
-#include "mlmap/dds/dds_config.h"
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/tf_buffer.h"
+#include "mlmap/dds/transport/dds_config.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/node/tf_buffer.h"
 
 #include "tf2_msgs/msg/TFMessage_.h"
 

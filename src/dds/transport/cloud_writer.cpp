@@ -1,9 +1,9 @@
-#include "mlmap/dds/cloud_writer.h"
+#include "mlmap/dds/transport/cloud_writer.h"
 
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/participant.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/transport/participant.h"
 
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
 

@@ -1,4 +1,4 @@
-#include "mlmap/dds/dds_config.h"
+#include "mlmap/dds/transport/dds_config.h"
 
 #include "mlmap/core/key_list.h"
 

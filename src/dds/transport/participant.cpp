@@ -1,6 +1,6 @@
-#include "mlmap/dds/participant.h"
+#include "mlmap/dds/transport/participant.h"
 
-#include "mlmap/dds/udp_send_guard.h"
+#include "mlmap/dds/transport/udp_send_guard.h"
 
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/domain/qos/DomainParticipantQos.hpp>

@@ -1,4 +1,4 @@
-#include "mlmap/dds/udp_send_guard.h"
+#include "mlmap/dds/transport/udp_send_guard.h"
 
 #include <fastdds/rtps/common/LocatorList.hpp>
 #include <fastdds/rtps/transport/ChainingTransport.h>

@@ -1,4 +1,4 @@
-#include "mlmap/dds/cdr_check.h"
+#include "mlmap/dds/wire/cdr_check.h"
 
 #include <algorithm>
 #include <cstring>

@@ -1,4 +1,4 @@
-#include "mlmap/dds/cloud_sample.h"
+#include "mlmap/dds/wire/cloud_sample.h"
 
 #include <fastcdr/Cdr.h>
 #include <fastcdr/FastBuffer.h>

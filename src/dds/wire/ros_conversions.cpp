@@ -1,4 +1,4 @@
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 
 #include <algorithm>
 #include <cfloat>

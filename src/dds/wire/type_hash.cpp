@@ -1,4 +1,4 @@
-#include "mlmap/dds/type_hash.h"
+#include "mlmap/dds/wire/type_hash.h"
 
 #include "mlmap_type_hashes.h"  // generated from idl/ at build time
 

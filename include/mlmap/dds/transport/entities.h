@@ -4,8 +4,8 @@
 /// reader or writer (with the ROS 2 type hash in its USER_DATA, as rmw does), a listener that
 /// takes samples and hands them over, and a set of readers with their listeners (TakeReaders).
 
-#include "mlmap/dds/cdr_check.h"
-#include "mlmap/dds/type_hash.h"
+#include "mlmap/dds/wire/cdr_check.h"
+#include "mlmap/dds/wire/type_hash.h"
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>

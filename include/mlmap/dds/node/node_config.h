@@ -10,7 +10,8 @@
 /// every problem of both parts is reported in one std::runtime_error.
 
 #include "mlmap/core/config.h"
-#include "mlmap/dds/dds_config.h"
+#include "mlmap/core/pose_buffer.h"
+#include "mlmap/dds/transport/dds_config.h"
 
 #include <string>
 #include <vector>
@@ -86,6 +87,10 @@ NodeConfig loadNodeConfigYaml(const std::string& path);
 NodeConfig nodeConfigOrDefaults(const std::string& path);
 /// The effective configuration as YAML, every key present (parses back to the same config).
 std::string toYaml(const NodeConfig& config);
+
+/// The node's pairing of clouds and depth images with poses, from the `dds` section:
+/// pose_tolerance_s, pose_buffer_s, max_future_s and the pose-jump limits.
+PoseBufferConfig poseBufferConfig(const DdsConfig& dds);
 
 /// The prose at the top of config/mlmap_node.yaml.
 inline constexpr const char* kNodeDefaultsHeader =

@@ -11,8 +11,8 @@
 
 #include "mlmap/core/config.h"
 #include "mlmap/core/log_odds.h"
-#include "mlmap/dds/dds_config.h"
-#include "mlmap/dds/fleet_intake.h"
+#include "mlmap/dds/transport/dds_config.h"
+#include "mlmap/dds/fleet/fleet_intake.h"
 #include "mlmap/fleet/fleet_map.h"
 #include "mlmap/pipeline/rate_limited_log.h"
 

@@ -3,7 +3,7 @@
 /// Creating a DomainParticipant the way a ROS 2 Jazzy node does, and the QoS presets ROS 2 users
 /// expect (sensor data, default, maps / tf_static).
 
-#include "mlmap/dds/dds_config.h"
+#include "mlmap/dds/transport/dds_config.h"
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantListener.hpp>

@@ -5,7 +5,7 @@
 /// cloud) into the message, and the node would then read that copy; here the one pass that
 /// replaces the copy is the decode itself.
 
-#include "mlmap/dds/ros_conversions.h"
+#include "mlmap/dds/wire/ros_conversions.h"
 
 #include "sensor_msgs/msg/PointCloud2_PubSubTypes.h"
 

@@ -21,9 +21,9 @@
 /// - a client takes every reply on its topic and keeps those whose related_sample_identity's writer
 ///   GUID is its reply reader's or its request writer's, pairing them by sequence number.
 
-#include "mlmap/dds/entities.h"
-#include "mlmap/dds/fair_request_queue.h"
-#include "mlmap/dds/node_config.h"
+#include "mlmap/dds/transport/entities.h"
+#include "mlmap/dds/node/fair_request_queue.h"
+#include "mlmap/dds/node/node_config.h"
 
 #include "rcl_interfaces/srv/DescribeParameters_.h"
 #include "rcl_interfaces/srv/GetParameterTypes_.h"

@@ -11,7 +11,7 @@
 /// given to the participant when it is created), up to a bound; entities are never created on
 /// Fast DDS's discovery thread, but on a thread of this class.
 
-#include "mlmap/dds/entities.h"
+#include "mlmap/dds/transport/entities.h"
 
 #include "mlmap_msgs/msg/Submap_.h"
 
