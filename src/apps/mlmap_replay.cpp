@@ -4,6 +4,7 @@
 
 #include "mlmap/core/stopwatch.h"
 #include "mlmap/eval/json_output.h"
+#include "mlmap/eval/recorded_run.h"
 #include "mlmap/eval/run_outputs.h"
 #include "mlmap/map_io/map_file.h"
 #include "mlmap/datasets/cloud_sequence.h"
@@ -33,174 +34,6 @@
 namespace {
 
 using namespace mlmap;
-using Clock = SteadyClock;
-
-/// One frame of the run, for --stats-out.
-struct FrameRecord {
-  std::string name;
-  double stamp_s = 0.0;
-  std::size_t points = 0;              ///< points handed to the engine (depth: pixels)
-  std::size_t non_finite_dropped = 0;  ///< NaN / Inf points the cloud reader dropped
-  FrameStatus status = FrameStatus::kAccepted;
-  double read_ms = 0.0;         ///< reading and parsing the file, or rendering (simulator)
-  double read_wait_ms = 0.0;    ///< the mapping waiting for the reader thread (0 without one)
-  double awareness_ms = 0.0;    ///< submit() until the awareness map is updated
-  double local_global_ms = 0.0; ///< re-centring and log-odds updates
-  double planning_ms = 0.0;     ///< snapshot copy, 2D grid and ESDF when due
-  double engine_ms = 0.0;       ///< the whole submit() call
-  std::size_t engine_bytes = 0; ///< the engine's own memory accounting after the frame
-};
-
-/// Times the stages of each frame of a synchronous engine through its observers.
-class FrameTimer {
- public:
-  EngineObservers observers() {
-    EngineObservers o;
-    o.awareness = [this](const AwarenessMap&, double, const Transform&) { awareness_done_ = Clock::now(); };
-    // After the local-global update and the planning layers, if any, of every mapped frame.
-    o.global = [this](const GlobalMap&, double, std::uint64_t) { mapped_done_ = Clock::now(); };
-    return o;
-  }
-  void begin() {
-    start_ = Clock::now();
-    awareness_done_ = mapped_done_ = Clock::time_point{};
-  }
-  /// Fills the timings and memory of `r` after submit() returned; updates the engine peak.
-  /// Returns true when the engine mapped a frame since the previous call.
-  bool end(const MapEngine& engine, FrameRecord* r) {
-    const Clock::time_point now = Clock::now();
-    r->engine_ms = msBetween(start_, now);
-    const EngineStats s = engine.stats();
-    if (awareness_done_ != Clock::time_point{} && mapped_done_ != Clock::time_point{}) {
-      r->awareness_ms = msBetween(start_, awareness_done_);
-      const PlanningStats& p = s.planning;
-      r->planning_ms = p.last_snapshot_ms + (p.grid_updates != last_.grid_updates ? p.last_grid_ms : 0.0) +
-                       (p.esdf_updates != last_.esdf_updates ? p.last_esdf_ms : 0.0);
-      r->local_global_ms = std::max(0.0, msBetween(awareness_done_, mapped_done_) - r->planning_ms);
-    }
-    last_ = s.planning;
-    r->engine_bytes = s.memory.total();
-    peak_engine_bytes_ = std::max(peak_engine_bytes_, r->engine_bytes);
-    const bool mapped = s.frames_mapped != frames_mapped_;
-    frames_mapped_ = s.frames_mapped;
-    return mapped;
-  }
-  [[nodiscard]] std::size_t peakEngineBytes() const { return peak_engine_bytes_; }
-
- private:
-  Clock::time_point start_, awareness_done_, mapped_done_;
-  PlanningStats last_;
-  std::uint64_t frames_mapped_ = 0;
-  std::size_t peak_engine_bytes_ = 0;
-};
-
-TimingSummary summarize(const std::vector<FrameRecord>& frames, double FrameRecord::*field) {
-  std::vector<double> values;
-  for (const FrameRecord& f : frames) {
-    if (f.status == FrameStatus::kAccepted) values.push_back(f.*field);
-  }
-  return summarizeTimings(values);
-}
-
-/// What --stats-out holds besides the frames.
-struct RunInfo {
-  std::string source;
-  std::string kind;
-  std::string pairing;
-  std::size_t clouds_without_pose = 0;
-  std::size_t points_in_files = 0;
-};
-
-/// stats.json's timing_ms: each stage's median, p99, mean and maximum over the accepted frames.
-eval::Json timingJson(const std::vector<FrameRecord>& frames) {
-  return {{"read", eval::toJson(summarize(frames, &FrameRecord::read_ms))},
-          {"read_wait", eval::toJson(summarize(frames, &FrameRecord::read_wait_ms))},
-          {"awareness", eval::toJson(summarize(frames, &FrameRecord::awareness_ms))},
-          {"local_global", eval::toJson(summarize(frames, &FrameRecord::local_global_ms))},
-          {"planning", eval::toJson(summarize(frames, &FrameRecord::planning_ms))},
-          {"engine", eval::toJson(summarize(frames, &FrameRecord::engine_ms))}};
-}
-
-/// stats.json's memory_bytes: the process's peak, the engine's peak and its final accounting.
-eval::Json memoryJson(const EngineStats& s, std::size_t peak_engine_bytes) {
-  return {{"peak_rss", eval::peakRssBytes()},
-          {"engine_peak", peak_engine_bytes},
-          {"engine_final", {{"awareness", s.memory.awareness_bytes},
-                            {"local", s.memory.local_bytes},
-                            {"global", s.memory.global_bytes},
-                            {"planning", s.memory.planning_bytes},
-                            {"total", s.memory.total()}}}};
-}
-
-/// stats.json's counters: frames, points and voxels.
-eval::Json countersJson(const RunInfo& info, const EngineStats& s, const std::vector<FrameRecord>& frames,
-                        std::size_t occupied) {
-  std::size_t reader_dropped = 0;
-  for (const FrameRecord& f : frames) reader_dropped += f.non_finite_dropped;
-  return {{"frames", frames.size()},
-          {"frames_mapped", s.frames_mapped},
-          {"rejected_invalid_pose", s.rejected_invalid_pose},
-          {"rejected_out_of_order", s.rejected_out_of_order},
-          {"rejected_empty", s.rejected_empty},
-          {"rejected_bad_image", s.rejected_bad_image},
-          {"clouds_without_pose", info.clouds_without_pose},
-          {"points_in_files", info.points_in_files},
-          {"non_finite_dropped_by_reader", reader_dropped},
-          {"points_in", s.points.points_in},
-          {"no_data_or_non_finite", s.points.rejected_non_finite},
-          {"too_close", s.points.rejected_too_close},
-          {"beyond_max_range", s.points.beyond_max_range},
-          {"hit_voxels", s.points.hit_voxels},
-          {"hits_beyond_local_map", s.points.hits_beyond_local_map},
-          {"hits_above_or_below_local_map", s.points.hits_above_or_below_local_map},
-          {"hits_outside_window", s.local.hits_outside_window},
-          {"hits_to_global_map", s.hits_to_global},
-          {"hits_lost", s.hits_lost},
-          {"free_outside_window", s.local.outside_window - s.local.hits_outside_window},
-          {"free_voxels", s.points.free_voxels},
-          {"occupied_voxels", occupied},
-          {"global_voxels", s.global_voxels},
-          {"global_submaps", s.global_submaps},
-          {"local_shifts", s.local.shifts},
-          {"submaps_retired", s.local.submaps_retired},
-          {"submaps_restored", s.local.submaps_restored},
-          {"esdf_updates", s.planning.esdf_updates}};
-}
-
-/// One entry of stats.json's frames.
-eval::Json frameJson(const FrameRecord& f) {
-  return {{"name", f.name},
-          {"stamp_s", f.stamp_s},  // printed to full double precision: epoch stamps keep their ns
-          {"status", toString(f.status)},
-          {"points", f.points},
-          {"non_finite_dropped", f.non_finite_dropped},
-          {"read_ms", f.read_ms},
-          {"read_wait_ms", f.read_wait_ms},
-          {"awareness_ms", f.awareness_ms},
-          {"local_global_ms", f.local_global_ms},
-          {"planning_ms", f.planning_ms},
-          {"engine_ms", f.engine_ms},
-          {"engine_bytes", f.engine_bytes}};
-}
-
-/// Writes stats.json (--stats-out) to `path`. @throws std::runtime_error when it cannot.
-void writeStats(const std::string& path, const RunInfo& info, const MapConfig& config,
-                const EngineStats& s, const std::vector<FrameRecord>& frames,
-                std::size_t occupied, std::size_t peak_engine_bytes) {
-  eval::Json stats;
-  stats["source"] = info.source;
-  stats["kind"] = info.kind;
-  stats["pairing"] = info.pairing;
-  stats["resolution_m"] = config.local_map.resolution_m;
-  stats["max_range_m"] = config.awareness.max_range_m;
-  stats["awareness_threads"] = config.awareness.num_threads;
-  stats["timing_ms"] = timingJson(frames);
-  stats["memory_bytes"] = memoryJson(s, peak_engine_bytes);
-  stats["counters"] = countersJson(info, s, frames, occupied);
-  stats["frames"] = eval::Json::array();
-  for (const FrameRecord& f : frames) stats["frames"].push_back(frameJson(f));
-  eval::writeJsonFile(path, stats, /*expanded_levels=*/2);
-}
 
 /// The command line of mlmap_replay.
 struct Options {
@@ -471,79 +304,34 @@ void logEngineMessage(LogLevel level, const std::string& message) {
   }
 }
 
-/// The engine of one replay with what it records: frames, source, outputs.
-struct Replay {
-  Replay(const MapConfig& config, const std::string& out_dir)
-      : engine(config, logEngineMessage, timer.observers()) {
-    outputs.out_dir = out_dir;
-  }
-  /// Maps `frame`, recording its status and timings in `record`.
-  template <typename Frame>
-  void submit(Frame frame, FrameRecord record) {
-    outputs.trajectory_W.push_back(frame.T_W_B.translation());
-    record.stamp_s = frame.stamp_s;
-    timer.begin();
-    record.status = engine.submit(std::move(frame));
-    (void)timer.end(engine, &record);
-    records.push_back(std::move(record));
-  }
-  [[nodiscard]] double resolution_m() const { return engine.config().local_map.resolution_m; }
-
-  FrameTimer timer;  // before the engine: the engine holds its observers
-  MapEngine engine;
-  std::vector<FrameRecord> records;
-  RunInfo info;
-  eval::MapOutputs outputs;
-  eval::ScoredFlight scored;  ///< the simulator's flight and accuracy
-};
-
 /// The number of frames to map of `available`, --max-frames applied.
 std::size_t frameCount(const Options& o, std::size_t available) {
   return o.max_frames > 0 ? std::min<std::size_t>(available, static_cast<std::size_t>(o.max_frames))
                           : available;
 }
 
-/// Maps the first frames of `source` (--max-frames of them) in order, recording each; with
-/// --reader-threads 1 they are read and decoded on a reader thread ahead of the mapping.
-void mapFrames(const Options& o, const io::FrameSource& source, Replay* replay) {
-  const std::size_t n = frameCount(o, source.size());
-  io::FramePrefetcher reader(source, n, o.reader_threads > 0 ? kReadAheadFrames : 0);
-  eval::ProgressBar bar("mapping");
-  io::PrefetchedFrame read;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Clock::time_point wait_start = Clock::now();
-    if (!reader.next(&read)) break;
-    FrameRecord record;
-    record.read_wait_ms = msSince(wait_start);
-    record.read_ms = read.read_ms;
-    record.name = read.info.name;
-    if (std::holds_alternative<PointCloudFrame>(read.frame)) {
-      record.points = std::get<PointCloudFrame>(read.frame).points_S.size();
-      record.non_finite_dropped = read.info.non_finite_dropped;
-      replay->info.points_in_files += read.info.points_in_file;
-    } else {
-      record.points = read.info.points_in_file;  // the image's pixels
-    }
-    std::visit([&](auto& f) { replay->submit(std::move(f), std::move(record)); }, read.frame);
-    bar.update(static_cast<int>(i + 1), static_cast<int>(n));
-  }
+/// Maps the first frames of `source` (--max-frames of them), read ahead on a reader thread
+/// with --reader-threads 1.
+void mapFrames(const Options& o, const io::FrameSource& source, eval::RecordedRun* run) {
+  eval::mapFrames(source, frameCount(o, source.size()), o.reader_threads > 0 ? kReadAheadFrames : 0,
+                  run);
 }
 
 /// Maps the RGB-D frames of --frames.
-void mapFrameDirectory(const Options& o, Replay* replay) {
+void mapFrameDirectory(const Options& o, eval::RecordedRun* run) {
   const io::FrameDirectorySource frames(o.frames_dir);
   spdlog::info("mapping {} RGB-D frames of {} at {} m", frameCount(o, frames.size()), o.frames_dir,
-               replay->resolution_m());
-  replay->info = {o.frames_dir, "frames", "frame files", 0, 0};
-  mapFrames(o, frames, replay);
-  replay->outputs.optical_world = true;  // the world is the first camera's optical frame
+               run->resolution_m());
+  run->info() = {o.frames_dir, "frames", "frame files", 0, 0};
+  mapFrames(o, frames, run);
+  run->outputs().optical_world = true;  // the world is the first camera's optical frame
 }
 
 /// Maps the clouds of --clouds at the poses of --poses.
-void mapCloudSequence(const Options& o, const io::CloudSequenceOptions& cloud_options, Replay* replay) {
+void mapCloudSequence(const Options& o, const io::CloudSequenceOptions& cloud_options, eval::RecordedRun* run) {
   const io::CloudSequenceSource source(o.clouds_dir, o.poses_path, cloud_options);
   const io::CloudSequence& clouds = source.sequence();
-  replay->info = {o.clouds_dir + " + " + o.poses_path, "clouds", io::toString(clouds.pairing()),
+  run->info() = {o.clouds_dir + " + " + o.poses_path, "clouds", io::toString(clouds.pairing()),
                   clouds.unpaired().size(), 0};
   if (!clouds.unpaired().empty()) {
     spdlog::warn("{} of {} clouds have no pose within {} s of their stamp and are skipped (first: {})",
@@ -552,13 +340,13 @@ void mapCloudSequence(const Options& o, const io::CloudSequenceOptions& cloud_op
   }
   spdlog::info("mapping {} clouds of {} paired {} with {} poses at {} m, max range {} m",
                frameCount(o, clouds.size()), o.clouds_dir, io::toString(clouds.pairing()),
-               clouds.poseCount(), replay->resolution_m(), replay->engine.config().awareness.max_range_m);
-  mapFrames(o, source, replay);
+               clouds.poseCount(), run->resolution_m(), run->engine().config().awareness.max_range_m);
+  mapFrames(o, source, run);
 }
 
 #if MLMAP_HAVE_BAG
 /// Maps the frames of --bag, its inputs named by the options or chosen from the bag.
-void mapBag(const Options& o, Replay* replay) {
+void mapBag(const Options& o, eval::RecordedRun* run) {
   std::shared_ptr<const bag::BagReader> reader = bag::openBag(o.bag_path);  // its errors name the file
   spdlog::info("{}: {} messages on {} topics:\n{}", o.bag_path, reader->entries().size(),
                reader->topics().size(), reader->describeTopics());
@@ -586,95 +374,27 @@ void mapBag(const Options& o, Replay* replay) {
   }
   spdlog::info("mapping {} of {} with {} poses at {} m, max range {} m",
                frameCount(o, source.size()), source.describe(), source.poseCount(),
-               replay->resolution_m(), replay->engine.config().awareness.max_range_m);
-  replay->info = {o.bag_path, "bag", "poses at the messages' stamps", source.unpairedCount(), 0};
-  mapFrames(o, source, replay);
+               run->resolution_m(), run->engine().config().awareness.max_range_m);
+  run->info() = {o.bag_path, "bag", "poses at the messages' stamps", source.unpairedCount(), 0};
+  mapFrames(o, source, run);
 }
 #endif
 
 /// Flies the simulator through --scenario (or the built-in room) and scores the map.
-void flySimulator(const Options& o, Replay* replay) {
+void flySimulator(const Options& o, eval::RecordedRun* run) {
   const io::Scenario scenario =
       o.scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(o.scenario_path);
-  eval::FlightOptions options;
-  if (o.max_frames > 0) options.max_frames = o.max_frames;
-  eval::ProgressBar bar("flying ");
-  Clock::time_point frame_start = Clock::now();
-  FrameRecord record;
-  options.before_submit = [&](int i) {
-    record = FrameRecord{};
-    record.name = "sim-" + std::to_string(i);
-    record.read_ms = msSince(frame_start);
-    record.points = static_cast<std::size_t>(scenario.camera.intrinsics.width) *
-                    static_cast<std::size_t>(scenario.camera.intrinsics.height);
-    replay->timer.begin();
-  };
-  options.progress = [&](int done, int total) {
-    // Called right after submit(): the frame's status is the engine's last counters'.
-    record.status = replay->timer.end(replay->engine, &record) ? FrameStatus::kAccepted : FrameStatus::kEmpty;
-    record.stamp_s = eval::frameTime(scenario, done - 1);
-    replay->records.push_back(record);
-    bar.update(done, total);
-    frame_start = Clock::now();
-  };
   spdlog::info("flying the {} scenario at {} m voxels",
-               o.scenario_path.empty() ? "built-in room" : o.scenario_path, replay->resolution_m());
-  replay->scored = eval::flyAndScore(scenario, replay->engine, options);
-  replay->outputs.trajectory_W = replay->scored.flight.trajectory_W;
-  replay->outputs.scored = &replay->scored;
-  replay->info = {o.scenario_path.empty() ? "simulator: built-in room" : "simulator: " + o.scenario_path,
-                  "simulator", "simulated poses", 0, 0};
-}
-
-/// Prints the hits outside the local window: points in range beyond what the local map holds
-/// around the body and hit voxels outside its window, whose occupied evidence went to the global
-/// map (their free space is not mapped), and hits no layer could hold; a warning on the log says
-/// how to map them whole.
-void printHitsNotMapped(const EngineStats& s) {
-  const std::uint64_t points = s.points.hits_beyond_local_map;
-  const std::uint64_t voxels = s.local.hits_outside_window;
-  std::printf(
-      "  beyond the window    %llu points beyond the local map's reach, %llu hit voxels outside "
-      "its window: %llu hit updates to the global map, %llu hits lost\n",
-      static_cast<unsigned long long>(points), static_cast<unsigned long long>(voxels),
-      static_cast<unsigned long long>(s.hits_to_global),
-      static_cast<unsigned long long>(s.hits_lost));
-  if (points + voxels > 0) {
-    const std::uint64_t vertical = s.points.hits_above_or_below_local_map;
-    spdlog::warn(
-        "{} points in range and {} hit voxels fell outside the local window: their hits went to "
-        "the global map ({} updates, {} lost), their free space was not mapped. Of the points, "
-        "{} lay beyond its horizontal reach (a wider local_map.size_cells x, y, or --max-range, "
-        "maps them whole) and {} above or below it (a taller local_map.size_cells z does)",
-        points, voxels, s.hits_to_global, s.hits_lost, points - vertical, vertical);
-  }
+               o.scenario_path.empty() ? "built-in room" : o.scenario_path, run->resolution_m());
+  run->flyRecorded(scenario, o.max_frames);
+  run->info() = {o.scenario_path.empty() ? "simulator: built-in room" : "simulator: " + o.scenario_path,
+                 "simulator", "simulated poses", 0, 0};
 }
 
 /// Prints the replay's own figures after the engine's: per-frame timings, memory, the files.
-void printReplaySummary(const Options& o, const Replay& replay, const std::vector<std::string>& written,
-                        std::size_t occupied) {
-  const TimingSummary read = summarize(replay.records, &FrameRecord::read_ms);
-  const TimingSummary planning = summarize(replay.records, &FrameRecord::planning_ms);
-  const TimingSummary whole = summarize(replay.records, &FrameRecord::engine_ms);
-  std::printf("  replay per frame [ms] median   p99\n");
-  if (replay.engine.config().pipeline.planning_layers) {
-    std::printf("    planning layers    %7.2f %7.2f   (snapshot, 2D grid)\n", planning.median_ms,
-                planning.p99_ms);
-  } else {
-    std::printf("    planning layers       off          (no output needs them)\n");
-  }
-  std::printf("    submit() in all    %7.2f %7.2f\n", whole.median_ms, whole.p99_ms);
-  std::printf("    reading the input  %7.2f %7.2f   (%s)\n", read.median_ms, read.p99_ms,
-              o.reader_threads > 0 && replay.info.kind != "simulator" ? "on the reader thread"
-                                                                      : "on the mapping thread");
-  if (o.reader_threads > 0 && replay.info.kind != "simulator") {
-    const TimingSummary wait = summarize(replay.records, &FrameRecord::read_wait_ms);
-    std::printf("    waiting for it     %7.2f %7.2f\n", wait.median_ms, wait.p99_ms);
-  }
-  printHitsNotMapped(replay.engine.stats());
-  std::printf("  peak memory          %.1f MB resident (process), %.1f MB engine accounting\n",
-              static_cast<double>(eval::peakRssBytes()) / 1e6,
-              static_cast<double>(replay.timer.peakEngineBytes()) / 1e6);
+void printReplaySummary(const Options& o, const eval::RecordedRun& run,
+                        const std::vector<std::string>& written, std::size_t occupied) {
+  eval::printRunSummary(run, o.reader_threads > 0 && run.info().kind != "simulator");
   std::string names;
   for (const std::string& name : written) names += (names.empty() ? "" : ", ") + name;
   std::printf("\n  wrote %s/{%s}\n        %s (%zu occupied voxels)\n        %s\n", o.out_dir.c_str(),
@@ -695,31 +415,30 @@ void writeGrid(const std::string& base, const MapEngine& engine) {
 /// then the 2D grid, the pictures with report.json and stats.json, and prints the summary.
 /// Returns the exit status: 0, or 3 when no frame was mapped. @throws std::runtime_error naming
 /// the file it cannot write; the files written before it are complete.
-int finish(const Options& o, const MapConfig& config, Replay* replay) {
-  replay->engine.flush();
-  replay->outputs.source = replay->info.source;
-  const double res = replay->resolution_m();
-  const EngineStats s = replay->engine.stats();
-  const std::vector<VoxelIndex> occupied = replay->engine.occupiedVoxels();
-  if (!o.save_map_path.empty()) eval::saveMap(replay->engine, o.save_map_path);
+int finish(const Options& o, eval::RecordedRun* run) {
+  run->engine().flush();
+  run->outputs().source = run->info().source;
+  const double res = run->resolution_m();
+  const EngineStats s = run->engine().stats();
+  const std::vector<VoxelIndex> occupied = run->engine().occupiedVoxels();
+  if (!o.save_map_path.empty()) eval::saveMap(run->engine(), o.save_map_path);
   // The voxel list is sorted and written while the pictures are drawn (a second core hides it);
   // its error, if any, is passed on by get() first.
   std::future<void> voxels = std::async(std::launch::async, [&o, &occupied, res] {
     io::writeVoxelText(o.voxels_out, occupied, res);
   });
-  if (!o.grid_out.empty()) writeGrid(o.grid_out, replay->engine);
+  if (!o.grid_out.empty()) writeGrid(o.grid_out, run->engine());
   std::vector<std::string> written;
   try {
-    written = eval::writeMapOutputs(replay->outputs, s, occupied, res);
+    written = eval::writeMapOutputs(run->outputs(), s, occupied, res);
   } catch (...) {
     voxels.get();  // its own error first: the files are written in this order
     throw;
   }
   voxels.get();
-  writeStats(o.stats_out, replay->info, config, s, replay->records, occupied.size(),
-             replay->timer.peakEngineBytes());
-  eval::printSummary(s, res, replay->outputs.scored != nullptr ? &replay->scored.accuracy : nullptr);
-  printReplaySummary(o, *replay, written, occupied.size());
+  eval::writeJsonFile(o.stats_out, eval::runStatsJson(*run, occupied.size()), /*expanded_levels=*/2);
+  eval::printSummary(s, res, run->scored() != nullptr ? &run->scored()->accuracy : nullptr);
+  printReplaySummary(o, *run, written, occupied.size());
   return s.frames_mapped > 0 ? 0 : 3;
 }
 
@@ -757,19 +476,19 @@ int replaySource(const Options& o) {
   std::filesystem::create_directories(o.out_dir);
   if (!o.save_map_path.empty()) eval::checkSaveMapTarget(o.save_map_path, o.overwrite);  // before the run
 
-  Replay replay(config, o.out_dir);
+  eval::RecordedRun run(config, o.out_dir, logEngineMessage);
   if (kind == eval::DataKind::kFrameDirectory) {
-    mapFrameDirectory(o, &replay);
+    mapFrameDirectory(o, &run);
 #if MLMAP_HAVE_BAG
   } else if (!o.bag_path.empty()) {
-    mapBag(o, &replay);
+    mapBag(o, &run);
 #endif
   } else if (kind == eval::DataKind::kPointClouds) {
-    mapCloudSequence(o, *cloud_options, &replay);
+    mapCloudSequence(o, *cloud_options, &run);
   } else {
-    flySimulator(o, &replay);
+    flySimulator(o, &run);
   }
-  return finish(o, config, &replay);
+  return finish(o, &run);
 }
 
 /// Runs the replay the options describe; returns the exit status (1: an error, logged).

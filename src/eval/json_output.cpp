@@ -59,4 +59,30 @@ Json toJson(const TimingSummary& timing) {
               {"frames", timing.samples}};
 }
 
+Json engineCountersJson(const EngineStats& s) {
+  return {{"frames_mapped", s.frames_mapped},
+          {"rejected_invalid_pose", s.rejected_invalid_pose},
+          {"rejected_out_of_order", s.rejected_out_of_order},
+          {"rejected_empty", s.rejected_empty},
+          {"rejected_bad_image", s.rejected_bad_image},
+          {"points_in", s.points.points_in},
+          {"no_data_or_non_finite", s.points.rejected_non_finite},
+          {"too_close", s.points.rejected_too_close},
+          {"beyond_max_range", s.points.beyond_max_range},
+          {"hit_voxels", s.points.hit_voxels},
+          {"hits_beyond_local_map", s.points.hits_beyond_local_map},
+          {"hits_above_or_below_local_map", s.points.hits_above_or_below_local_map},
+          {"hits_outside_window", s.local.hits_outside_window},
+          {"hits_to_global_map", s.hits_to_global},
+          {"hits_lost", s.hits_lost},
+          {"free_outside_window", s.local.outside_window - s.local.hits_outside_window},
+          {"free_voxels", s.points.free_voxels},
+          {"global_voxels", s.global_voxels},
+          {"global_submaps", s.global_submaps},
+          {"local_shifts", s.local.shifts},
+          {"submaps_retired", s.local.submaps_retired},
+          {"submaps_restored", s.local.submaps_restored},
+          {"esdf_updates", s.planning.esdf_updates}};
+}
+
 }  // namespace mlmap::eval

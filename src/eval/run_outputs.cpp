@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <future>
+#include <sstream>
 #include <stdexcept>
 
 namespace mlmap::eval {
@@ -168,6 +169,28 @@ std::vector<std::string> writeMapOutputs(const MapOutputs& outputs, const Engine
                 /*expanded_levels=*/1);
   written.push_back("report.json");
   return written;
+}
+
+void printHitsOutsideWindow(const EngineStats& s, const LogSink& log) {
+  const std::uint64_t points = s.points.hits_beyond_local_map;
+  const std::uint64_t voxels = s.local.hits_outside_window;
+  std::printf(
+      "  beyond the window    %llu points beyond the local map's reach, %llu hit voxels outside "
+      "its window: %llu hit updates to the global map, %llu hits lost\n",
+      static_cast<unsigned long long>(points), static_cast<unsigned long long>(voxels),
+      static_cast<unsigned long long>(s.hits_to_global),
+      static_cast<unsigned long long>(s.hits_lost));
+  if (points + voxels == 0 || !log) return;
+  const std::uint64_t vertical = s.points.hits_above_or_below_local_map;
+  std::ostringstream m;
+  m << points << " points in range and " << voxels
+    << " hit voxels fell outside the local window: their hits went to the global map ("
+    << s.hits_to_global << " updates, " << s.hits_lost
+    << " lost), their free space was not mapped. Of the points, " << points - vertical
+    << " lay beyond its horizontal reach (a wider local_map.size_cells x, y, or --max-range, "
+       "maps them whole) and "
+    << vertical << " above or below it (a taller local_map.size_cells z does)";
+  log(LogLevel::kWarning, m.str());
 }
 
 void printSummary(const EngineStats& s, double res, const Accuracy* accuracy) {

@@ -29,4 +29,8 @@ void writeJsonFile(const std::string& path, const Json& json, int expanded_level
 /// `{"median_ms": ..., "p99_ms": ..., "mean_ms": ..., "max_ms": ..., "frames": ...}`.
 [[nodiscard]] Json toJson(const TimingSummary& timing);
 
+/// The engine's counters as one flat object (stats.json's `counters`): frames mapped and
+/// rejected by reason, points by fate, voxels, the local map's shifts and submaps, ESDF updates.
+[[nodiscard]] Json engineCountersJson(const EngineStats& stats);
+
 }  // namespace mlmap::eval

@@ -81,6 +81,11 @@ void saveMap(const MapEngine& engine, const std::string& path);
 
 /// Prints the engine's figures (and the accuracy, when given) to stdout.
 void printSummary(const EngineStats& stats, double resolution_m, const Accuracy* accuracy);
+/// Prints the hits outside the local window to stdout: points in range beyond what the local
+/// map holds around the body and hit voxels outside its window, whose occupied evidence went to
+/// the global map (their free space is not mapped), and hits no layer could hold. When there are
+/// any, `log` gets a warning saying how to map them whole.
+void printHitsOutsideWindow(const EngineStats& stats, const LogSink& log);
 
 /// `s` as a JSON string literal, quotes included (quotes, backslashes and control characters
 /// escaped; bytes that are not UTF-8 replaced by U+FFFD).
