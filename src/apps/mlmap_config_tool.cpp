@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
       const std::string path = source_dir + "/" + file.path;
       std::string current;
       try {
-        current = mlmap::io::readConfigFile(path);
+        current = mlmap::config::readConfigFile(path);
       } catch (const std::runtime_error&) {
         // a missing file differs
       }

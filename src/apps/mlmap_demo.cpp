@@ -70,13 +70,13 @@ void logEngineMessage(LogLevel level, const std::string& message) {
 
 /// Maps the frames of --frames into `engine`.
 void mapFrames(const Options& o, MapEngine& engine, eval::MapOutputs* outputs) {
-  const io::FrameDirectorySource frames(o.frames_dir);
+  const datasets::FrameDirectorySource frames(o.frames_dir);
   const std::size_t n = o.max_frames > 0 ? std::min<std::size_t>(frames.size(), o.max_frames) : frames.size();
   spdlog::info("mapping {} frames of {} at {} m", n, o.frames_dir, engine.config().local_map.resolution_m);
   eval::ProgressBar bar("mapping");
   for (std::size_t i = 0; i < n; ++i) {
-    io::SourceFrame frame = frames.read(i);
-    outputs->trajectory_W.push_back(io::bodyPoseOf(frame).translation());
+    datasets::SourceFrame frame = frames.read(i);
+    outputs->trajectory_W.push_back(datasets::bodyPoseOf(frame).translation());
     std::visit([&engine](auto& f) { engine.submit(std::move(f)); }, frame);
     bar.update(static_cast<int>(i + 1), static_cast<int>(n));
   }
@@ -88,7 +88,7 @@ void mapFrames(const Options& o, MapEngine& engine, eval::MapOutputs* outputs) {
 
 /// Flies the simulator through --scenario (or the built-in room) into `engine` and scores it.
 eval::ScoredFlight flySimulator(const Options& o, MapEngine& engine) {
-  io::Scenario scenario = o.scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(o.scenario_path);
+  datasets::Scenario scenario = o.scenario_path.empty() ? datasets::defaultScenario() : datasets::loadScenarioYaml(o.scenario_path);
   if (o.noise >= 0.0) scenario.camera.noise_coeff_per_m = o.noise;
   eval::FlightOptions options;
   if (o.max_frames > 0) options.max_frames = o.max_frames;
@@ -135,7 +135,7 @@ int run(const Options& o) {
         o.resolution_m);
     if (o.threaded) config.pipeline.threaded = true;
     if (o.print_config) {
-      std::cout << io::toYaml(config);
+      std::cout << config::toYaml(config);
       return 0;
     }
     const std::vector<std::string> problems = config.validate();

@@ -107,7 +107,7 @@ int run(Options o) {
     o.merger.dds.domain_id = o.domain_id;
     o.merger.dds.discovery_range = o.discovery_range;
     if (!o.config_path.empty()) {
-      const MapConfig vehicles = io::loadConfigYaml(o.config_path, io::kNodeOnlySections);
+      const MapConfig vehicles = config::loadConfigYaml(o.config_path, config::kNodeOnlySections);
       o.merger.log_odds = vehicles.log_odds;
       o.merger.trust.resolution_m = vehicles.local_map.resolution_m;
       o.merger.trust.submap_cells = vehicles.local_map.submap_cells();

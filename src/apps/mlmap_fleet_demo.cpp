@@ -73,7 +73,7 @@ void addOptions(CLI::App& app, Options& o) {
 
 /// One simulated vehicle: its frames, its engine and what it shared.
 struct Vehicle {
-  Vehicle(std::string vehicle_name, io::Scenario flight, const MapConfig& config)
+  Vehicle(std::string vehicle_name, datasets::Scenario flight, const MapConfig& config)
       : name(std::move(vehicle_name)),
         scenario(std::move(flight)),
         source(scenario, config.sensor.T_B_S()),
@@ -81,8 +81,8 @@ struct Vehicle {
         share(config.local_map.submap_cells()) {}
 
   std::string name;
-  io::Scenario scenario;
-  io::SimulatedFlightSource source;
+  datasets::Scenario scenario;
+  datasets::SimulatedFlightSource source;
   MapEngine engine;
   fleet::SubmapShare share;
   std::vector<Eigen::Vector3d> trajectory_W;
@@ -142,7 +142,7 @@ cv::Mat renderMergedByVehicle(const Options& o, const fleet::FleetMap& fleet,
   const double res = fleet.resolution_m();
   // Per column: the highest voxel's height and vehicle bits.
   std::map<std::pair<int, int>, std::pair<int, std::uint64_t>> columns;
-  io::VoxelList voxels;
+  pictures::VoxelList voxels;
   voxels.resolution_m = res;
   fleet.forEachOccupied([&](const VoxelIndex& g, LogOddsQ, std::uint64_t bits) {
     if (!inView(o, g, res)) return;
@@ -150,13 +150,13 @@ cv::Mat renderMergedByVehicle(const Options& o, const fleet::FleetMap& fleet,
     auto [it, inserted] = columns.try_emplace({g.x(), g.y()}, g.z(), bits);
     if (!inserted && g.z() > it->second.first) it->second = {g.z(), bits};
   });
-  io::MapImageOptions options;
+  pictures::MapImageOptions options;
   options.title = "fleet map: " + std::to_string(vehicles.size()) + " vehicles, " +
                   std::to_string(fleet.voxelCount()) + " occupied voxels, coloured by vehicle (" +
                   fixed(o.view_min_z_m) + " .. " + fixed(o.view_max_z_m) + " m high)";
   options.legend = false;
-  io::MapImageGeometry geometry;
-  cv::Mat image = io::renderTopDown(voxels, options, &geometry);
+  pictures::MapImageGeometry geometry;
+  cv::Mat image = pictures::renderTopDown(voxels, options, &geometry);
   if (voxels.centers_W.empty()) return image;
   const int px = std::max(1, geometry.pixels_per_voxel);
   for (const auto& [xy, top] : columns) {
@@ -233,7 +233,7 @@ std::vector<VoxelIndex> singleEngineVoxels(const std::vector<std::unique_ptr<Veh
 /// its own evidence raised, in the height band) and its path. Returns how many it raised.
 std::size_t writeOwnVoxelsPicture(const Options& o, const fleet::FleetMap& fleet, const Vehicle& v,
                                   int index, double resolution_m) {
-  io::VoxelList own;
+  pictures::VoxelList own;
   own.resolution_m = resolution_m;
   std::size_t own_count = 0;
   const std::uint64_t bit = std::uint64_t{1} << index;
@@ -244,12 +244,12 @@ std::size_t writeOwnVoxelsPicture(const Options& o, const fleet::FleetMap& fleet
       own.centers_W.push_back((g.cast<double>() + Eigen::Vector3d::Constant(0.5)) * resolution_m);
     }
   });
-  io::MapImageOptions options;
+  pictures::MapImageOptions options;
   options.trajectory_W = v.trajectory_W;
   options.title = v.name + ": the " + std::to_string(own_count) +
                   " merged voxels its own evidence raised (" + fixed(o.view_min_z_m) + " .. " +
                   fixed(o.view_max_z_m) + " m high)";
-  io::writePng(o.out_dir + "/" + v.name + "_top.png", io::renderTopDown(own, options));
+  pictures::writePng(o.out_dir + "/" + v.name + "_top.png", pictures::renderTopDown(own, options));
   return own_count;
 }
 
@@ -263,7 +263,7 @@ void run(const Options& o) {
   std::filesystem::create_directories(o.out_dir);
   std::vector<std::unique_ptr<Vehicle>> vehicles;
   for (const std::string& path : o.scenario_paths) {
-    io::Scenario scenario = io::loadScenarioYaml(path);
+    datasets::Scenario scenario = datasets::loadScenarioYaml(path);
     scenario.camera.noise_coeff_per_m = o.noise;
     auto v = std::make_unique<Vehicle>(std::filesystem::path(path).stem().string(),
                                        std::move(scenario), config);
@@ -288,7 +288,7 @@ void run(const Options& o) {
   const eval::Accuracy single_accuracy = eval::scoreOccupancy(single_voxels, truth.voxels(), world, res);
   const double iou = eval::compareVoxels(merged, single_voxels).iou;
 
-  io::writePng(o.out_dir + "/fleet_top.png", renderMergedByVehicle(o, fleet, vehicles));
+  pictures::writePng(o.out_dir + "/fleet_top.png", renderMergedByVehicle(o, fleet, vehicles));
   eval::Json json_vehicles = eval::Json::array();
   double seconds = 0.0;
   for (std::size_t k = 0; k < vehicles.size(); ++k) {

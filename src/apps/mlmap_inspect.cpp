@@ -327,8 +327,8 @@ struct Score {
 Score scoreAgainstScenario(const Options& o, const Received& rx, double res) {
   Score score;
   if (o.scenario_path.empty() && !o.use_default_scenario) return score;
-  const io::Scenario scenario =
-      o.scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(o.scenario_path);
+  const datasets::Scenario scenario =
+      o.scenario_path.empty() ? datasets::defaultScenario() : datasets::loadScenarioYaml(o.scenario_path);
   eval::VoxelSet voxels;
   for (const auto* list : {&rx.local, &rx.global}) {
     for (const Eigen::Vector3f& p : *list) voxels.insert(voxelIndexOf(p.cast<double>(), res));
@@ -386,7 +386,7 @@ cv::Mat esdfSliceImage(const std::vector<Eigen::Vector3f>& points, const std::ve
     const int x = static_cast<int>(std::lround((points[i].x() - lo.x()) / res));
     const int y = h - 1 - static_cast<int>(std::lround((points[i].y() - lo.y()) / res));
     const double f = d_hi > d_lo ? (distance_m[i] - d_lo) / (d_hi - d_lo) : 0.0;
-    const cv::Vec3b c = io::heightColorBgr(f);
+    const cv::Vec3b c = pictures::heightColorBgr(f);
     cv::rectangle(image, cv::Rect(x * px, y * px, px, px), cv::Scalar(c[0], c[1], c[2]), cv::FILLED);
   }
   cv::putText(image, cv::format("ESDF slice: %.2f m (blue) .. %.2f m (red)", d_lo, d_hi),
@@ -395,8 +395,8 @@ cv::Mat esdfSliceImage(const std::vector<Eigen::Vector3f>& points, const std::ve
 }
 
 /// Received points as voxel centres of size `res` [m], for the pictures.
-io::VoxelList voxelList(const std::vector<Eigen::Vector3f>& points, double res) {
-  io::VoxelList list{res, {}};
+pictures::VoxelList voxelList(const std::vector<Eigen::Vector3f>& points, double res) {
+  pictures::VoxelList list{res, {}};
   list.centers_W.reserve(points.size());
   for (const Eigen::Vector3f& p : points) {
     // Re-snap to the voxel centre (float transport rounds a little).
@@ -410,15 +410,15 @@ io::VoxelList voxelList(const std::vector<Eigen::Vector3f>& points, double res) 
 void writePictures(const std::string& out_dir, const Received& rx, double res) {
   std::vector<Eigen::Vector3f> all = rx.global;
   all.insert(all.end(), rx.local.begin(), rx.local.end());
-  io::MapImageOptions options;
+  pictures::MapImageOptions options;
   options.trajectory_W = rx.trajectory_W;
   options.title = "received over DDS: local + global occupied voxels";
-  io::writePng(out_dir + "/dds_map_top.png", io::renderTopDown(voxelList(all, res), options));
+  pictures::writePng(out_dir + "/dds_map_top.png", pictures::renderTopDown(voxelList(all, res), options));
   options.title = "received over DDS: awareness occupied cells (last frame)";
-  io::writePng(out_dir + "/dds_awareness_top.png", io::renderTopDown(voxelList(rx.awareness, res), options));
-  if (!rx.grid.data_().empty()) io::writePng(out_dir + "/dds_grid.png", gridImage(rx.grid));
+  pictures::writePng(out_dir + "/dds_awareness_top.png", pictures::renderTopDown(voxelList(rx.awareness, res), options));
+  if (!rx.grid.data_().empty()) pictures::writePng(out_dir + "/dds_grid.png", gridImage(rx.grid));
   if (!rx.esdf_slice.empty() && rx.esdf_slice_distance.size() == rx.esdf_slice.size()) {
-    io::writePng(out_dir + "/dds_esdf_slice.png", esdfSliceImage(rx.esdf_slice, rx.esdf_slice_distance, res));
+    pictures::writePng(out_dir + "/dds_esdf_slice.png", esdfSliceImage(rx.esdf_slice, rx.esdf_slice_distance, res));
   }
 }
 

@@ -213,11 +213,11 @@ eval::DataKind dataKind(const Options& o) {
 
 /// The cloud sequence's options: --extrinsic parsed (the cloud sequence gives T_B_S from it and
 /// the viewpoints; the config's sensor is unused). Empty when --extrinsic is malformed (logged).
-std::optional<io::CloudSequenceOptions> cloudOptions(const Options& o) {
-  io::CloudSequenceOptions cloud_options;
+std::optional<datasets::CloudSequenceOptions> cloudOptions(const Options& o) {
+  datasets::CloudSequenceOptions cloud_options;
   if (o.extrinsic_text.empty()) return cloud_options;
   try {
-    cloud_options.T_P_C = io::parseTransformXyzQuat(o.extrinsic_text);
+    cloud_options.T_P_C = datasets::parseTransformXyzQuat(o.extrinsic_text);
   } catch (const std::invalid_argument& e) {
     spdlog::error("--extrinsic '{}': {}", o.extrinsic_text, e.what());
     return std::nullopt;
@@ -312,14 +312,14 @@ std::size_t frameCount(const Options& o, std::size_t available) {
 
 /// Maps the first frames of `source` (--max-frames of them), read ahead on a reader thread
 /// with --reader-threads 1.
-void mapFrames(const Options& o, const io::FrameSource& source, eval::RecordedRun* run) {
+void mapFrames(const Options& o, const datasets::FrameSource& source, eval::RecordedRun* run) {
   eval::mapFrames(source, frameCount(o, source.size()), o.reader_threads > 0 ? kReadAheadFrames : 0,
                   run);
 }
 
 /// Maps the RGB-D frames of --frames.
 void mapFrameDirectory(const Options& o, eval::RecordedRun* run) {
-  const io::FrameDirectorySource frames(o.frames_dir);
+  const datasets::FrameDirectorySource frames(o.frames_dir);
   spdlog::info("mapping {} RGB-D frames of {} at {} m", frameCount(o, frames.size()), o.frames_dir,
                run->resolution_m());
   run->info() = {o.frames_dir, "frames", "frame files", 0, 0};
@@ -328,10 +328,10 @@ void mapFrameDirectory(const Options& o, eval::RecordedRun* run) {
 }
 
 /// Maps the clouds of --clouds at the poses of --poses.
-void mapCloudSequence(const Options& o, const io::CloudSequenceOptions& cloud_options, eval::RecordedRun* run) {
-  const io::CloudSequenceSource source(o.clouds_dir, o.poses_path, cloud_options);
-  const io::CloudSequence& clouds = source.sequence();
-  run->info() = {o.clouds_dir + " + " + o.poses_path, "clouds", io::toString(clouds.pairing()),
+void mapCloudSequence(const Options& o, const datasets::CloudSequenceOptions& cloud_options, eval::RecordedRun* run) {
+  const datasets::CloudSequenceSource source(o.clouds_dir, o.poses_path, cloud_options);
+  const datasets::CloudSequence& clouds = source.sequence();
+  run->info() = {o.clouds_dir + " + " + o.poses_path, "clouds", datasets::toString(clouds.pairing()),
                   clouds.unpaired().size(), 0};
   if (!clouds.unpaired().empty()) {
     spdlog::warn("{} of {} clouds have no pose within {} s of their stamp and are skipped (first: {})",
@@ -339,7 +339,7 @@ void mapCloudSequence(const Options& o, const io::CloudSequenceOptions& cloud_op
                  cloud_options.pose_tolerance_s, clouds.unpaired().front());
   }
   spdlog::info("mapping {} clouds of {} paired {} with {} poses at {} m, max range {} m",
-               frameCount(o, clouds.size()), o.clouds_dir, io::toString(clouds.pairing()),
+               frameCount(o, clouds.size()), o.clouds_dir, datasets::toString(clouds.pairing()),
                clouds.poseCount(), run->resolution_m(), run->engine().config().awareness.max_range_m);
   mapFrames(o, source, run);
 }
@@ -382,8 +382,8 @@ void mapBag(const Options& o, eval::RecordedRun* run) {
 
 /// Flies the simulator through --scenario (or the built-in room) and scores the map.
 void flySimulator(const Options& o, eval::RecordedRun* run) {
-  const io::Scenario scenario =
-      o.scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(o.scenario_path);
+  const datasets::Scenario scenario =
+      o.scenario_path.empty() ? datasets::defaultScenario() : datasets::loadScenarioYaml(o.scenario_path);
   spdlog::info("flying the {} scenario at {} m voxels",
                o.scenario_path.empty() ? "built-in room" : o.scenario_path, run->resolution_m());
   run->flyRecorded(scenario, o.max_frames);
@@ -468,7 +468,7 @@ void checkOutputs(const Options& o) {
 int replaySource(const Options& o) {
   const eval::DataKind kind = dataKind(o);
   MapConfig config = eval::runConfig(o.config_path, kind, o.resolution_m);
-  const std::optional<io::CloudSequenceOptions> cloud_options = cloudOptions(o);
+  const std::optional<datasets::CloudSequenceOptions> cloud_options = cloudOptions(o);
   if (!cloud_options) return 2;
   adjustConfig(o, &config);
   if (!validConfig(config)) return 2;

@@ -197,11 +197,11 @@ struct PreparedFrame {
   }
 };
 
-/// Where the frames come from (an io::FrameSource: the simulator flying a scenario, or a folder
+/// Where the frames come from (an datasets::FrameSource: the simulator flying a scenario, or a folder
 /// of recorded frames) and how they go out.
 struct SensorFeed {
-  std::unique_ptr<io::FrameSource> frames_in;  ///< the frames
-  const io::SimulatedFlightSource* simulator = nullptr;  ///< frames_in when it is the simulator
+  std::unique_ptr<datasets::FrameSource> frames_in;  ///< the frames
+  const datasets::SimulatedFlightSource* simulator = nullptr;  ///< frames_in when it is the simulator
   double rate_hz = 0.0;                        ///< frames per second
   double speed = 1.0;                          ///< flight seconds per wall-clock second
   int frames = 0;                              ///< frames to publish
@@ -240,19 +240,19 @@ SensorFeed openSource(const Options& o, const mlmap::dds::NodeConfig& config) {
   SensorFeed source;
   const Transform T_B_S = config.map.sensor.T_B_S();
   if (!o.frames_dir.empty()) {
-    source.frames_in = std::make_unique<io::FrameDirectorySource>(o.frames_dir);
-    source.rate_hz = o.rate_hz > 0 ? o.rate_hz : io::kFrameDirectoryRate_hz;
+    source.frames_in = std::make_unique<datasets::FrameDirectorySource>(o.frames_dir);
+    source.rate_hz = o.rate_hz > 0 ? o.rate_hz : datasets::kFrameDirectoryRate_hz;
     if (!T_B_S.isApprox(Transform::Identity())) {
       spdlog::warn("replayed frames are camera poses (T_B_S = identity) but the configuration mounts "
                    "the sensor elsewhere: give mlmap_node a config with sensor translation 0 and "
                    "rotation 0 (config/mlmap_node_replay.yaml)");
     }
   } else {
-    io::Scenario scenario = o.scenario_path.empty() ? io::defaultScenario() : io::loadScenarioYaml(o.scenario_path);
-    io::SimulatedTiming timing;
+    datasets::Scenario scenario = o.scenario_path.empty() ? datasets::defaultScenario() : datasets::loadScenarioYaml(o.scenario_path);
+    datasets::SimulatedTiming timing;
     timing.rate_hz = o.rate_hz > 0 ? o.rate_hz : scenario.frame_rate_hz;
     timing.speed = o.speed;
-    auto simulator = std::make_unique<io::SimulatedFlightSource>(std::move(scenario), T_B_S, timing);
+    auto simulator = std::make_unique<datasets::SimulatedFlightSource>(std::move(scenario), T_B_S, timing);
     source.simulator = simulator.get();
     source.rate_hz = timing.rate_hz;
     source.frames_in = std::move(simulator);

@@ -379,7 +379,7 @@ void BagFrameSource::indexFrames() {
   }
 }
 
-io::SourceFrame BagFrameSource::read(std::size_t i, io::SourceFrameInfo* info) const {
+datasets::SourceFrame BagFrameSource::read(std::size_t i, datasets::SourceFrameInfo* info) const {
   if (i >= frames_.size()) {
     throw std::out_of_range(bag_->path() + ": frame " + std::to_string(i) + " of " +
                             std::to_string(frames_.size()));

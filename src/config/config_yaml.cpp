@@ -7,7 +7,7 @@
 
 #include <stdexcept>
 
-namespace mlmap::io {
+namespace mlmap::config {
 
 void readEngineSections(Section& top, MapConfig* config) {
   YamlReader reader(top);
@@ -58,4 +58,4 @@ std::string engineKeyReference() {
   return MarkdownKeyTable::header() + table.rows();
 }
 
-}  // namespace mlmap::io
+}  // namespace mlmap::config

@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <system_error>
 
-namespace mlmap::io {
+namespace mlmap {
 namespace {
 
 std::string errnoText(const std::string& step, int err) {
@@ -92,4 +92,4 @@ std::size_t removeLeftoverTemporaries(const std::string& path) {
   return removed;
 }
 
-}  // namespace mlmap::io
+}  // namespace mlmap

@@ -11,7 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 namespace {
 
 namespace fs = std::filesystem;
@@ -191,4 +191,4 @@ PointCloudFrame CloudSequence::read(std::size_t i, PointCloudFile* file) const {
   return frame;
 }
 
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

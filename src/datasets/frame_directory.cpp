@@ -15,7 +15,7 @@
 #include <stdexcept>
 #include <system_error>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 namespace {
 
 namespace fs = std::filesystem;
@@ -169,7 +169,7 @@ cv::Mat loadDepthImage(const std::string& path) {
   checkDepthPngHeader(bytes, path);
   cv::Mat image;
   try {
-    image = decodePng(bytes.data(), bytes.size());
+    image = pictures::decodePng(bytes.data(), bytes.size());
   } catch (const std::runtime_error& e) {
     throw std::runtime_error("FrameDirectory: cannot decode depth image '" + path +
                              "' (a corrupted PNG: " + e.what() + ")");
@@ -299,4 +299,4 @@ DepthFrame FrameDirectory::read(std::size_t i) const {
   return frame;
 }
 
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

@@ -4,7 +4,7 @@
 
 #include <utility>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 
 FramePrefetcher::FramePrefetcher(const FrameSource& source, std::size_t count,
                                  std::size_t capacity_frames)
@@ -75,4 +75,4 @@ bool FramePrefetcher::next(PrefetchedFrame* out) {
   return true;
 }
 
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

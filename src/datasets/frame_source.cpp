@@ -4,7 +4,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 namespace {
 
 void checkIndex(std::size_t i, std::size_t size, const char* what) {
@@ -104,4 +104,4 @@ std::string SimulatedFlightSource::describe() const {
   return text.str();
 }
 
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

@@ -12,7 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 namespace {
 
 [[noreturn]] void fail(const std::string& source, const std::string& what) {
@@ -724,4 +724,4 @@ PointCloudFile readPointCloudFile(const std::string& path) {
                                                         : parsePly(content, path);
 }
 
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

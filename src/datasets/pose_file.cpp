@@ -10,7 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 namespace {
 
 std::string trim(const std::string& s) {
@@ -252,4 +252,4 @@ Transform parseTransformXyzQuat(const std::string& text) {
   return T;
 }
 
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

@@ -16,7 +16,7 @@
 #include <utility>
 #include <vector>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 namespace {
 
 constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
@@ -313,7 +313,7 @@ Scenario parseRoot(const YAML::Node& root, const std::string& dir, int depth) {
 
 Scenario parseWithName(const std::string& text, const std::string& source_name,
                        const std::string& dir, int depth) {
-  const YAML::Node root = io::parseYamlDocument(text, source_name);  // one document, no duplicates
+  const YAML::Node root = config::parseYamlDocument(text, source_name);  // one document, no duplicates
   try {
     return parseRoot(root, dir, depth);
   } catch (const ParseError& e) {
@@ -351,4 +351,4 @@ Scenario defaultScenario() {
   return scenario;
 }
 
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

@@ -48,7 +48,7 @@ std::string formatJson(const Json& json, int expanded_levels) {
 }
 
 void writeJsonFile(const std::string& path, const Json& json, int expanded_levels) {
-  io::writeFileAtomically(path, formatJson(json, expanded_levels) + '\n');
+  writeFileAtomically(path, formatJson(json, expanded_levels) + '\n');
 }
 
 Json toJson(const TimingSummary& timing) {

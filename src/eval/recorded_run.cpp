@@ -75,7 +75,7 @@ void RecordedRun::submit(DepthFrame frame, FrameRecord record) {
   submitFrame(std::move(frame), std::move(record));
 }
 
-void RecordedRun::flyRecorded(const io::Scenario& scenario, int max_frames) {
+void RecordedRun::flyRecorded(const datasets::Scenario& scenario, int max_frames) {
   FlightOptions options;
   if (max_frames > 0) options.max_frames = max_frames;
   ProgressBar bar("flying ");
@@ -102,11 +102,11 @@ void RecordedRun::flyRecorded(const io::Scenario& scenario, int max_frames) {
   outputs_.scored = &scored_;
 }
 
-void mapFrames(const io::FrameSource& source, std::size_t count, std::size_t read_ahead,
+void mapFrames(const datasets::FrameSource& source, std::size_t count, std::size_t read_ahead,
                RecordedRun* run) {
-  io::FramePrefetcher reader(source, count, read_ahead);
+  datasets::FramePrefetcher reader(source, count, read_ahead);
   ProgressBar bar("mapping");
-  io::PrefetchedFrame read;
+  datasets::PrefetchedFrame read;
   for (std::size_t i = 0; i < count; ++i) {
     const Clock::time_point wait_start = Clock::now();
     if (!reader.next(&read)) break;

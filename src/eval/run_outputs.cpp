@@ -24,9 +24,9 @@ namespace {
 double megabytes(std::size_t bytes) { return static_cast<double>(bytes) / 1e6; }
 
 /// Voxel centres for the pictures, turned by `R_display_W` (identity, or optical -> FLU).
-io::VoxelList voxelList(const std::vector<VoxelIndex>& voxels, double res,
+pictures::VoxelList voxelList(const std::vector<VoxelIndex>& voxels, double res,
                         const Eigen::Matrix3d& R_display_W) {
-  io::VoxelList list{res, {}};
+  pictures::VoxelList list{res, {}};
   list.centers_W.reserve(voxels.size());
   for (const VoxelIndex& v : voxels) list.centers_W.push_back(R_display_W * voxelCenter(v, res));
   return list;
@@ -104,7 +104,7 @@ void setResolution(MapConfig* c, double resolution_m) {
 MapConfig runConfig(const std::string& config_path, DataKind kind, double resolution_m) {
   // mlmap_node's files work too: their dds and map_file sections do not concern the engine.
   MapConfig config =
-      config_path.empty() ? MapConfig{} : io::loadConfigYaml(config_path, io::kNodeOnlySections);
+      config_path.empty() ? MapConfig{} : config::loadConfigYaml(config_path, config::kNodeOnlySections);
   const bool frames = kind == DataKind::kFrameDirectory;
   if (resolution_m > 0.0 || config_path.empty()) {
     setResolution(&config, resolution_m > 0.0 ? resolution_m : (frames ? 0.02 : 0.1));
@@ -117,7 +117,7 @@ MapConfig runConfig(const std::string& config_path, DataKind kind, double resolu
   return config;
 }
 
-ScoredFlight flyAndScore(const io::Scenario& scenario, MapEngine& engine, const FlightOptions& options) {
+ScoredFlight flyAndScore(const datasets::Scenario& scenario, MapEngine& engine, const FlightOptions& options) {
   ScoredFlight s;
   s.flight = flyScenario(scenario, engine, options);
   const double res = engine.config().local_map.resolution_m;
@@ -134,34 +134,34 @@ std::vector<std::string> writeMapOutputs(const MapOutputs& outputs, const Engine
                                          const std::vector<VoxelIndex>& occupied, double res) {
   const std::string& out_dir = outputs.out_dir;
   std::vector<std::string> written;
-  io::MapImageOptions image_options;
+  pictures::MapImageOptions image_options;
   image_options.trajectory_W = outputs.trajectory_W;
   // The rotation is exact, so the voxels stay on one grid.
   Eigen::Matrix3d R_display_W = Eigen::Matrix3d::Identity();
   if (outputs.optical_world) R_display_W << 0, 0, 1, -1, 0, 0, 0, -1, 0;
   for (Eigen::Vector3d& p : image_options.trajectory_W) p = R_display_W * p;
-  const io::VoxelList list = voxelList(occupied, res, R_display_W);
+  const pictures::VoxelList list = voxelList(occupied, res, R_display_W);
   const std::string what = "mlmap, " + std::to_string(occupied.size()) + " occupied voxels";
   // The two views drawn and encoded at the same time (a second core halves the wait; the
   // future's get() passes on an error of its file).
-  io::MapImageOptions side_options = image_options;
+  pictures::MapImageOptions side_options = image_options;
   side_options.title = what + " - side view";
   std::future<void> side = std::async(std::launch::async, [&out_dir, &list, &side_options] {
-    io::writePng(out_dir + "/map_side.png", io::renderSide(list, side_options));
+    pictures::writePng(out_dir + "/map_side.png", pictures::renderSide(list, side_options));
   });
   image_options.title = what + " - top view";
-  io::writePng(out_dir + "/map_top.png", io::renderTopDown(list, image_options));
+  pictures::writePng(out_dir + "/map_top.png", pictures::renderTopDown(list, image_options));
   side.get();
   written = {"map_top.png", "map_side.png"};
   const Accuracy* accuracy = outputs.scored != nullptr ? &outputs.scored->accuracy : nullptr;
   if (accuracy != nullptr) {
-    io::VoxelList truth_list{res, {}};
+    pictures::VoxelList truth_list{res, {}};
     for (const VoxelIndex& v : outputs.scored->truth) truth_list.centers_W.push_back(voxelCenter(v, res));
     char title[160];
     std::snprintf(title, sizeof(title), "occupied voxels vs ground truth, F1 %.3f (report.json)",
                   accuracy->f1);
     image_options.title = title;
-    io::writePng(out_dir + "/accuracy_top.png", io::renderComparison(list, truth_list, image_options));
+    pictures::writePng(out_dir + "/accuracy_top.png", pictures::renderComparison(list, truth_list, image_options));
     written.push_back("accuracy_top.png");
   }
 

@@ -20,9 +20,9 @@ bool touchesSolid(const sim::World& world, const VoxelIndex& v, double resolutio
   return world.intersectsBox(lo, lo + Eigen::Vector3d::Constant(resolution_m), 1e-6);
 }
 
-int frameCount(const io::Scenario& scenario) { return io::SimulatedFlightSource::frameCount(scenario); }
+int frameCount(const datasets::Scenario& scenario) { return datasets::SimulatedFlightSource::frameCount(scenario); }
 
-double frameTime(const io::Scenario& scenario, int i) { return i / scenario.frame_rate_hz; }
+double frameTime(const datasets::Scenario& scenario, int i) { return i / scenario.frame_rate_hz; }
 
 void ObservedTruth::observe(const DepthFrame& frame, const sim::World& world, const MapConfig& config) {
   // Voxels of measured points whose interior overlaps a static solid. A voxel that only touches a
@@ -47,12 +47,12 @@ void ObservedTruth::observe(const DepthFrame& frame, const sim::World& world, co
   }
 }
 
-FlightResult flyScenario(const io::Scenario& scenario, MapEngine& engine,
+FlightResult flyScenario(const datasets::Scenario& scenario, MapEngine& engine,
                          const FlightOptions& options) {
   FlightResult result;
-  io::SimulatedTiming timing;
+  datasets::SimulatedTiming timing;
   timing.start_time_s = options.start_time_s;
-  const io::SimulatedFlightSource source(scenario, engine.config().sensor.T_B_S(), timing);
+  const datasets::SimulatedFlightSource source(scenario, engine.config().sensor.T_B_S(), timing);
   const int planned = static_cast<int>(std::min<std::size_t>(source.size(),
                                                              static_cast<std::size_t>(std::max(options.max_frames, 0))));
   std::vector<double> render_ms;

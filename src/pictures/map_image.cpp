@@ -15,7 +15,7 @@
 #include <unordered_set>
 #include <utility>
 
-namespace mlmap::io {
+namespace mlmap::pictures {
 namespace {
 
 // ---- Look ---------------------------------------------------------------------------------------
@@ -927,4 +927,4 @@ void writePng(const std::string& path, const cv::Mat& image) {
   writeFileAtomically(path, bytes);
 }
 
-}  // namespace mlmap::io
+}  // namespace mlmap::pictures

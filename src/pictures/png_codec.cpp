@@ -14,7 +14,7 @@
 // no C++ object with a destructor in its own frame, and the objects it writes to live in its
 // caller's frame, which the jump never leaves.
 
-namespace mlmap::io {
+namespace mlmap::pictures {
 namespace {
 
 /// Largest image decoded [bytes of samples]: 256 MB, far above any depth image or picture.
@@ -212,4 +212,4 @@ cv::Mat decodePng(const void* bytes, std::size_t size) {
   return image;
 }
 
-}  // namespace mlmap::io
+}  // namespace mlmap::pictures

@@ -70,7 +70,7 @@ TEST(Replay, SimulatedCloudsWithTumPosesMapLikeTheEngineDirectly) {
   // A 10-frame stretch of the demo's flight, from a 160 x 120 camera, as organised clouds in
   // the camera frame (NaN where the camera saw nothing); the poses are the body's, the camera's
   // mounting is the extrinsic.
-  io::Scenario scenario = io::defaultScenario();
+  datasets::Scenario scenario = datasets::defaultScenario();
   scenario.camera.intrinsics = test::quarterCamera();
   const sim::DepthCamera camera(scenario.camera);
   MapConfig config;

@@ -56,7 +56,7 @@ void expectGeneratedClouds(const BagFrameSource& source) {
   ASSERT_EQ(source.size(), clouds.size());
   for (std::size_t i = 0; i < source.size(); ++i) {
     SCOPED_TRACE(i);
-    mlmap::io::SourceFrameInfo info;
+    mlmap::datasets::SourceFrameInfo info;
     const auto frame = std::get<mlmap::PointCloudFrame>(source.read(i, &info));
     const double t = secondsAfterT0(clouds[i]["stamp_ns"]);
     EXPECT_NEAR(frame.stamp_s - static_cast<double>(expected()["t0_s"]), t, 1e-6);
@@ -261,7 +261,7 @@ TEST(BagFrameSource, SeveralCloudTopicsAndFramesWithoutAPose) {
   EXPECT_EQ(source.unpairedCount(), 1U);
   ASSERT_EQ(source.warnings().size(), 1U);
   EXPECT_NE(source.warnings()[0].find("1 of 6 input frames have no pose"), std::string::npos);
-  mlmap::io::SourceFrameInfo info;
+  mlmap::datasets::SourceFrameInfo info;
   const auto aux = std::get<mlmap::PointCloudFrame>(source.read(1, &info));
   EXPECT_EQ(info.name, "/points_aux@1700000001.050000");
   expectNear(aux.T_W_B, bodyPose(1.05), 1e-6);

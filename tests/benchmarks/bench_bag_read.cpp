@@ -60,8 +60,8 @@ int main(int argc, char** argv) {
     std::uint64_t points = 0;
     const auto read_start = std::chrono::steady_clock::now();
     for (std::size_t i = 0; i < source.size(); ++i) {
-      mlmap::io::SourceFrameInfo info;
-      const mlmap::io::SourceFrame frame = source.read(i, &info);
+      mlmap::datasets::SourceFrameInfo info;
+      const mlmap::datasets::SourceFrame frame = source.read(i, &info);
       points += info.points_in_file;
       message_bytes += std::visit(
           [](const auto& f) -> std::uint64_t {

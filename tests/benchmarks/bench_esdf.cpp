@@ -240,7 +240,7 @@ struct Streamed {
 };
 
 Streamed streamedBoxes(double res, int frames) {
-  const io::Scenario scenario = io::defaultScenario();
+  const datasets::Scenario scenario = datasets::defaultScenario();
   MapConfig config;
   config.local_map.resolution_m = res;
   const int n = static_cast<int>(std::lround(19.0 / res / 5.0)) * 5;

@@ -128,7 +128,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   // Render the simulated frames once (the simulator's cost is not measured).
-  const io::Scenario scenario = io::defaultScenario();
+  const datasets::Scenario scenario = datasets::defaultScenario();
   const sim::DepthCamera camera(scenario.camera);
   const Transform T_B_S = SensorConfig{}.T_B_S();
   std::vector<DepthFrame> sim_frames;
@@ -162,7 +162,7 @@ int main(int argc, char** argv) {
     print(rows.back(), nullptr, false);
   }
   if (!real_dir.empty() && std::filesystem::exists(real_dir)) {
-    const io::FrameDirectory dir(real_dir);
+    const datasets::FrameDirectory dir(real_dir);
     std::vector<DepthFrame> real;
     for (std::size_t i = 0; i < dir.size(); ++i) real.push_back(dir.read(i));
     for (double res : {0.05, 0.02}) {

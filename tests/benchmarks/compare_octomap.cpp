@@ -72,7 +72,7 @@ struct Dataset {
   double window_z_m = 0.0;  ///< 0: the window is 2.5 x the range along z too
   Transform T_B_S = Transform::Identity();
   std::function<Frame(int)> frame;
-  std::shared_ptr<const io::Scenario> scenario;  ///< simulated datasets: the ground truth
+  std::shared_ptr<const datasets::Scenario> scenario;  ///< simulated datasets: the ground truth
   /// Simulated datasets: what every pose was moved by after rendering (the scene's offset from
   /// the world the ground truth describes).
   Eigen::Vector3d scene_offset_W = Eigen::Vector3d::Zero();
@@ -101,7 +101,7 @@ Dataset makeDataset(const std::string& kind, const Options& o) {
   Dataset d;
   d.kind = kind;
   if (kind == "realsense") {
-    auto dir = std::make_shared<io::FrameDirectory>(o.realsense_dir);
+    auto dir = std::make_shared<datasets::FrameDirectory>(o.realsense_dir);
     const int n = framesOr(o.frames, static_cast<int>(dir->size()));
     d.description = "real RealSense frames (" + o.realsense_dir + "), 640x480 depth";
     d.frames = n;
@@ -121,8 +121,8 @@ Dataset makeDataset(const std::string& kind, const Options& o) {
     throw std::runtime_error("unknown dataset '" + kind +
                              "' (known: realsense, depth, lidar, building, building-lidar)");
   }
-  auto scenario = std::make_shared<io::Scenario>(building ? io::loadScenarioYaml(o.building_yaml)
-                                                          : io::defaultScenario());
+  auto scenario = std::make_shared<datasets::Scenario>(building ? datasets::loadScenarioYaml(o.building_yaml)
+                                                          : datasets::defaultScenario());
   const int total = eval::frameCount(*scenario);
   // With --stream-hz: frames `step` camera frames apart from the start, as a sensor streams them.
   const int step = o.stream_hz > 0.0
@@ -594,7 +594,7 @@ void writeFrameDirectory(const Dataset& d, const std::string& dir) {
       std::ostringstream k;
       k.precision(17);
       k << K.fx << " 0 " << K.cx << "\n0 " << K.fy << " " << K.cy << "\n0 0 1\n";
-      io::writeFileAtomically(dir + "/intrinsics.K.txt", k.str());
+      writeFileAtomically(dir + "/intrinsics.K.txt", k.str());
     }
     cv::Mat depth_mm(K.height, K.width, CV_16UC1);
     for (int v = 0; v < K.height; ++v) {
@@ -608,14 +608,14 @@ void writeFrameDirectory(const Dataset& d, const std::string& dir) {
     }
     char name[64];
     std::snprintf(name, sizeof(name), "/frame-%06d", i);
-    io::writePng(dir + name + ".depth.png", depth_mm);
+    pictures::writePng(dir + name + ".depth.png", depth_mm);
     const Eigen::Matrix4d T_W_C = (f.depth.T_W_B * f.depth.T_B_S).matrix();
     std::ostringstream pose;
     pose.precision(17);
     for (int r = 0; r < 4; ++r) {
       pose << T_W_C(r, 0) << ' ' << T_W_C(r, 1) << ' ' << T_W_C(r, 2) << ' ' << T_W_C(r, 3) << '\n';
     }
-    io::writeFileAtomically(dir + name + ".pose.txt", pose.str());
+    writeFileAtomically(dir + name + ".pose.txt", pose.str());
   }
 }
 
@@ -638,14 +638,14 @@ void writeCloudSequence(const Dataset& d, const std::string& dir) {
       bytes.append(reinterpret_cast<const char*>(p.data()), 3 * sizeof(float));
     char name[64];
     std::snprintf(name, sizeof(name), "/clouds/scan_%06d.pcd", i);
-    io::writeFileAtomically(dir + name, bytes);
+    writeFileAtomically(dir + name, bytes);
     const Transform T_W_S = f.cloud.T_W_B * f.cloud.T_B_S;
     const Eigen::Quaterniond q(T_W_S.linear());
     const Eigen::Vector3d t = T_W_S.translation();
     tum << 1.0 + 0.1 * i << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' '
         << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
   }
-  io::writeFileAtomically(dir + "/poses.tum", tum.str());
+  writeFileAtomically(dir + "/poses.tum", tum.str());
 }
 
 /// --write-frames: the frames of `d` as files both mlmap_replay and --octomap-replay read.
@@ -709,12 +709,12 @@ struct OctomapReplayOptions {
 /// resolution and range; prints the frames and the time. Returns the exit status.
 int octomapReplay(const OctomapReplayOptions& o) {
   const Clock::time_point start = Clock::now();
-  std::unique_ptr<io::FrameSource> source;
+  std::unique_ptr<datasets::FrameSource> source;
   if (!o.frames_dir.empty()) {
-    source = std::make_unique<io::FrameDirectorySource>(o.frames_dir);
+    source = std::make_unique<datasets::FrameDirectorySource>(o.frames_dir);
   } else {
-    source = std::make_unique<io::CloudSequenceSource>(o.clouds_dir, o.poses_path,
-                                                       io::CloudSequenceOptions{});
+    source = std::make_unique<datasets::CloudSequenceSource>(o.clouds_dir, o.poses_path,
+                                                       datasets::CloudSequenceOptions{});
   }
   octomap::OcTree tree(o.resolution_m);
   const float min_range = static_cast<float>(AwarenessConfig{}.min_range_m);
@@ -723,7 +723,7 @@ int octomapReplay(const OctomapReplayOptions& o) {
   double read_ms = 0.0;
   for (std::size_t i = 0; i < source->size(); ++i) {
     const Clock::time_point read_start = Clock::now();
-    io::SourceFrame frame = source->read(i);
+    datasets::SourceFrame frame = source->read(i);
     read_ms += msSince(read_start);
     Transform T_W_S;
     if (const auto* depth = std::get_if<DepthFrame>(&frame)) {

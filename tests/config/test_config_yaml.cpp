@@ -9,17 +9,17 @@ namespace {
 
 std::string errorOf(const std::string& yaml) {
   try {
-    io::parseConfigYaml(yaml, "test.yaml");
+    config::parseConfigYaml(yaml, "test.yaml");
   } catch (const std::runtime_error& e) {
     return e.what();
   }
   return "";
 }
 
-bool sameConfig(const MapConfig& a, const MapConfig& b) { return io::toYaml(a) == io::toYaml(b); }
+bool sameConfig(const MapConfig& a, const MapConfig& b) { return config::toYaml(a) == config::toYaml(b); }
 
 TEST(ConfigYaml, EmptyDocumentGivesThePaperDefaults) {
-  const MapConfig c = io::parseConfigYaml("{}");
+  const MapConfig c = config::parseConfigYaml("{}");
   EXPECT_EQ(c.awareness.rho_cells, 100);
   EXPECT_EQ(c.awareness.phi_cells, 180);
   EXPECT_EQ(c.awareness.z_cells, 25);
@@ -35,28 +35,28 @@ TEST(ConfigYaml, PrintedConfigReadsBackIdentically) {
   c.local_map.size_cells = {165, 165, 75};
   c.pipeline.threaded = true;
   c.sensor.translation_B_m = {0.05, -0.02, 0.1};
-  EXPECT_TRUE(sameConfig(io::parseConfigYaml(io::toYaml(c)), c));
+  EXPECT_TRUE(sameConfig(config::parseConfigYaml(config::toYaml(c)), c));
 }
 
 TEST(ConfigYaml, ShippedDefaultFileEqualsTheDefaultsInCode) {
-  EXPECT_TRUE(sameConfig(io::loadConfigYaml(MLMAP_SOURCE_DIR "/config/mlmap.yaml"), MapConfig{}));
+  EXPECT_TRUE(sameConfig(config::loadConfigYaml(MLMAP_SOURCE_DIR "/config/mlmap.yaml"), MapConfig{}));
 }
 
 TEST(ConfigYaml, OfflineProgramsReadTheEngineSectionsOfANodeConfiguration) {
   const std::string node = "local_map: {resolution_m: 0.2}\ndds: {domain_id: 7}\nmap_file: {save_path: m}\n";
-  EXPECT_DOUBLE_EQ(io::parseConfigYaml(node, "node.yaml", io::kNodeOnlySections).local_map.resolution_m, 0.2);
+  EXPECT_DOUBLE_EQ(config::parseConfigYaml(node, "node.yaml", config::kNodeOnlySections).local_map.resolution_m, 0.2);
   // Skipped means not read, not anything goes: typos elsewhere are still errors.
   EXPECT_NE(errorOf(node).find("dds: unknown key"), std::string::npos);
   try {
-    (void)io::parseConfigYaml(node + "lokal_map: {}\n", "node.yaml", io::kNodeOnlySections);
+    (void)config::parseConfigYaml(node + "lokal_map: {}\n", "node.yaml", config::kNodeOnlySections);
     ADD_FAILURE() << "a typo next to skipped sections was accepted";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("lokal_map: unknown key"), std::string::npos) << e.what();
   }
   // The shipped node configurations load this way.
   for (const char* name : {"mlmap_node.yaml", "mlmap_node_replay.yaml", "mlmap_node_depth.yaml"}) {
-    EXPECT_NO_THROW((void)io::loadConfigYaml(std::string(MLMAP_SOURCE_DIR "/config/") + name,
-                                             io::kNodeOnlySections))
+    EXPECT_NO_THROW((void)config::loadConfigYaml(std::string(MLMAP_SOURCE_DIR "/config/") + name,
+                                             config::kNodeOnlySections))
         << name;
   }
 }
@@ -98,7 +98,7 @@ TEST(ConfigYaml, UnknownKeysAndBadValuesAreClearErrors) {
   const std::string both = errorOf("awareness: {rho_cells: -1}\nlog_odds: {hit: -1}");
   EXPECT_NE(both.find("awareness.rho_cells"), std::string::npos);
   EXPECT_NE(both.find("log_odds.hit"), std::string::npos);
-  EXPECT_THROW(io::loadConfigYaml("/nonexistent/mlmap.yaml"), std::runtime_error);
+  EXPECT_THROW(config::loadConfigYaml("/nonexistent/mlmap.yaml"), std::runtime_error);
 }
 
 // YAML forbids a key twice in a mapping; yaml-cpp keeps the first value without a word, so the

@@ -21,7 +21,7 @@
 #error "MLMAP_SHARED_DATA_DIR must name the shared data folder (e.g. /work/shared/data)"
 #endif
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 namespace {
 
 namespace fs = std::filesystem;
@@ -359,4 +359,4 @@ TEST_F(TempFrameDir, UnparsableOrDuplicateFrameNumbersAreReported) {
 }
 
 }  // namespace
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 namespace {
 
 /// Frames whose stamp is their index; reading frame `bad` throws.
@@ -78,4 +78,4 @@ TEST(FramePrefetcher, ReadsAtMostItsCapacityAheadAndStopsWhenDestroyed) {
 }
 
 }  // namespace
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

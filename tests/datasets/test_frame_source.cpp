@@ -13,7 +13,7 @@
 #error "MLMAP_SHARED_DATA_DIR must name the shared data folder (e.g. /work/shared/data)"
 #endif
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 namespace {
 
 const std::string kTabletopDir = std::string(MLMAP_SHARED_DATA_DIR) + "/realsense_tabletop";
@@ -109,4 +109,4 @@ TEST(SimulatedFlightSource, FramesAreTheRenderersAtTheScenariosTimes) {
 }
 
 }  // namespace
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

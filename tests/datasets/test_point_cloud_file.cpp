@@ -14,7 +14,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 namespace {
 
 using mlmap::testing::makePcd;
@@ -265,4 +265,4 @@ TEST(PointCloudFile, ReadsByExtensionAndNamesThePath) {
 }
 
 }  // namespace
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

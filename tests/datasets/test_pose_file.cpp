@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <stdexcept>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 namespace {
 
 void expectError(const std::function<void()>& fn, const std::vector<std::string>& parts) {
@@ -199,4 +199,4 @@ TEST(CloudSequence, AppliesTheExtrinsicAndTheViewpoint) {
 }
 
 }  // namespace
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 namespace {
 
 using Eigen::Vector3d;
@@ -268,9 +268,9 @@ TEST(WorldYaml, ParseFromStringUsesSourceName) {
 }
 
 }  // namespace
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 namespace {
 
 // The building of the OctoMap comparison's long walk (config/worlds/building.yaml).
@@ -380,4 +380,4 @@ TEST(WorldYaml, ABaseGivesItsSectionsAndASectionGivenReplacesTheBases) {
 }
 
 }  // namespace
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

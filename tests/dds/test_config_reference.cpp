@@ -16,7 +16,7 @@ namespace {
 
 TEST(ConfigReference, CheckedInFilesEqualTheKeyLists) {
   for (const GeneratedFile& file : generatedConfigFiles(MLMAP_SOURCE_DIR)) {
-    EXPECT_EQ(io::readConfigFile(std::string(MLMAP_SOURCE_DIR "/") + file.path), file.text)
+    EXPECT_EQ(config::readConfigFile(std::string(MLMAP_SOURCE_DIR "/") + file.path), file.text)
         << file.path << " differs from the key lists in code. Regenerate it from the source tree "
         << "with `build/mlmap_config_tool --write` (after building mlmap_config_tool), then "
         << "review and commit the diff.";
@@ -25,15 +25,15 @@ TEST(ConfigReference, CheckedInFilesEqualTheKeyLists) {
 
 TEST(ConfigReference, GeneratedDefaultsReadBackAsTheDefaultsInCode) {
   const auto printed = [](const NodeConfig& c) { return toYaml(c); };
-  EXPECT_EQ(printed(parseNodeConfigYaml(io::engineDefaultsYaml() + "\n" + nodeDefaultsYaml())),
+  EXPECT_EQ(printed(parseNodeConfigYaml(config::engineDefaultsYaml() + "\n" + nodeDefaultsYaml())),
             printed(NodeConfig{}));
 }
 
 TEST(ConfigReference, TheNodeOnlySectionsAreTheNodesOwnSections) {
-  io::SectionNames names;
+  config::SectionNames names;
   const NodeConfig defaults;
   NodeConfig::visitNodeSections(defaults, names);
-  EXPECT_EQ(names.names(), io::kNodeOnlySections);
+  EXPECT_EQ(names.names(), config::kNodeOnlySections);
 }
 
 /// Every key path once, with a meaning.
@@ -47,13 +47,13 @@ class KeyChecker {
   template <class S>
   void section(const char* name, const S& sub, const char* doc) {
     record(name, doc);
-    KeyChecker nested(io::childPath(path_, name));
+    KeyChecker nested(config::childPath(path_, name));
     visitConfig(sub, nested);
   }
 
  private:
   void record(const char* name, const char* doc) {
-    const std::string path = io::childPath(path_, name);
+    const std::string path = config::childPath(path_, name);
     EXPECT_TRUE(seen_.insert(path).second) << path << " is listed twice";
     EXPECT_NE(std::string(doc), "") << path << " has no meaning";
   }
@@ -78,15 +78,15 @@ TEST(ConfigReference, TheReferenceGoesBetweenTheMarkers) {
 }
 
 TEST(ConfigReference, DefaultValuesPrintAsTheyReadBack) {
-  EXPECT_EQ(io::DefaultText::of(10.0), "10.0");
-  EXPECT_EQ(io::DefaultText::of(0.05), "0.05");
-  EXPECT_EQ(io::DefaultText::of(-1), "-1");
-  EXPECT_EQ(io::DefaultText::of(std::string()), "\"\"");
-  EXPECT_EQ(io::DefaultText::of(std::string("mlmap/grid")), "mlmap/grid");
-  EXPECT_EQ(io::DefaultText::of(std::string("true")), "\"true\"");
-  EXPECT_EQ(io::DefaultText::of(std::string("/a b")), "\"/a b\"");
-  EXPECT_EQ(io::DefaultText::of(Eigen::Vector3i(95, 95, 35)), "[95, 95, 35]");
-  EXPECT_EQ(io::DefaultText::of(std::optional<bool>()), "");
+  EXPECT_EQ(config::DefaultText::of(10.0), "10.0");
+  EXPECT_EQ(config::DefaultText::of(0.05), "0.05");
+  EXPECT_EQ(config::DefaultText::of(-1), "-1");
+  EXPECT_EQ(config::DefaultText::of(std::string()), "\"\"");
+  EXPECT_EQ(config::DefaultText::of(std::string("mlmap/grid")), "mlmap/grid");
+  EXPECT_EQ(config::DefaultText::of(std::string("true")), "\"true\"");
+  EXPECT_EQ(config::DefaultText::of(std::string("/a b")), "\"/a b\"");
+  EXPECT_EQ(config::DefaultText::of(Eigen::Vector3i(95, 95, 35)), "[95, 95, 35]");
+  EXPECT_EQ(config::DefaultText::of(std::optional<bool>()), "");
 }
 
 }  // namespace

@@ -30,7 +30,7 @@ bool sameConfig(const NodeConfig& a, const NodeConfig& b) { return toYaml(a) == 
 
 TEST(NodeConfigYaml, EmptyDocumentGivesTheDefaultsOfBothParts) {
   const NodeConfig c = parseNodeConfigYaml("{}");
-  EXPECT_EQ(io::toYaml(c.map), io::toYaml(MapConfig{}));
+  EXPECT_EQ(config::toYaml(c.map), config::toYaml(MapConfig{}));
   EXPECT_EQ(c.dds.domain_id, -1);
   EXPECT_EQ(c.dds.topics.cloud, "cloud");
   EXPECT_EQ(c.dds.topics.grid, "mlmap/grid");
@@ -143,7 +143,7 @@ TEST(NodeConfigYaml, UnknownKeysAreErrorsNamingThem) {
   // The message lists the known keys of that section.
   EXPECT_TRUE(contains(errorOf("dds: {topics: {clouds: points}}"), "camera_info"));
   // The engine loader alone still rejects a `dds` section (it is the node's, not the engine's).
-  EXPECT_THROW(io::parseConfigYaml("dds: {}"), std::runtime_error);
+  EXPECT_THROW(config::parseConfigYaml("dds: {}"), std::runtime_error);
 }
 
 TEST(NodeConfigYaml, WrongTypesAreErrorsNamingTheKey) {
@@ -277,8 +277,8 @@ TEST(NodeConfigYaml, ShippedFilesEqualTheDefaultsInCode) {
   EXPECT_TRUE(sameConfig(loadNodeConfigYaml(MLMAP_SOURCE_DIR "/config/mlmap_node.yaml"),
                          NodeConfig{}));
   // The engine file and the node file together are one valid node configuration.
-  const std::string both = io::readConfigFile(MLMAP_SOURCE_DIR "/config/mlmap.yaml") + "\n" +
-                           io::readConfigFile(MLMAP_SOURCE_DIR "/config/mlmap_node.yaml");
+  const std::string both = config::readConfigFile(MLMAP_SOURCE_DIR "/config/mlmap.yaml") + "\n" +
+                           config::readConfigFile(MLMAP_SOURCE_DIR "/config/mlmap_node.yaml");
   EXPECT_TRUE(sameConfig(parseNodeConfigYaml(both, "both"), NodeConfig{}));
 }
 

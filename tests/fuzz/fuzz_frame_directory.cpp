@@ -1,6 +1,6 @@
 /// @file
-/// Fuzz target: the text files of an RGB-D frame directory (io::FrameDirectory): the intrinsics
-/// file (io::parseIntrinsicsK) and a pose file (io::parsePoseMatrix), both on the same text.
+/// Fuzz target: the text files of an RGB-D frame directory (datasets::FrameDirectory): the intrinsics
+/// file (datasets::parseIntrinsicsK) and a pose file (datasets::parsePoseMatrix), both on the same text.
 /// Errors are std::runtime_error. (The depth PNGs are OpenCV's to decode.)
 
 #include "fuzz_support.h"
@@ -14,7 +14,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   using mlmap::fuzz::requireThat;
   const std::string text = mlmap::fuzz::asString(data, size);
   try {
-    const mlmap::PinholeIntrinsics k = mlmap::io::parseIntrinsicsK(text, "intrinsics.K.txt");
+    const mlmap::PinholeIntrinsics k = mlmap::datasets::parseIntrinsicsK(text, "intrinsics.K.txt");
     requireThat(k.fx > 0.0 && k.fy > 0.0 && std::isfinite(k.fx) && std::isfinite(k.fy) &&
                     std::isfinite(k.cx) && std::isfinite(k.cy),
                 "parseIntrinsicsK: not finite or fx, fy <= 0");
@@ -22,7 +22,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // the documented answer to bad input
   }
   try {
-    const mlmap::Transform T = mlmap::io::parsePoseMatrix(text, "frame-000000.pose.txt");
+    const mlmap::Transform T = mlmap::datasets::parsePoseMatrix(text, "frame-000000.pose.txt");
     requireThat(mlmap::isValidPose(T, 1e-9), "parsePoseMatrix: not a rigid transform");
   } catch (const std::runtime_error&) {
     // the documented answer to bad input

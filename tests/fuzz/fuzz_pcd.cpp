@@ -1,5 +1,5 @@
 /// @file
-/// Fuzz target: PCD files (io::parsePcd: ascii, binary, binary_compressed). Errors are
+/// Fuzz target: PCD files (datasets::parsePcd: ascii, binary, binary_compressed). Errors are
 /// std::runtime_error.
 
 #include "point_cloud_checks.h"
@@ -8,7 +8,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {
-    mlmap::fuzz::checkPointCloudFile(mlmap::io::parsePcd(mlmap::fuzz::asString(data, size), "fuzz.pcd"));
+    mlmap::fuzz::checkPointCloudFile(mlmap::datasets::parsePcd(mlmap::fuzz::asString(data, size), "fuzz.pcd"));
   } catch (const std::runtime_error&) {
     // the documented answer to bad input
   }

@@ -1,8 +1,8 @@
 /// @file
 /// Fuzz target: the trajectory readers of the dataset replay, on the same text: the format
-/// detection + reader of readPoseFile(), both parsers (io::parseTumPoses, io::parseCsvPoses;
-/// std::runtime_error), the `--extrinsic` parser (io::parseTransformXyzQuat;
-/// std::invalid_argument) and the time stamp in a cloud file name (io::stampFromFileName, on each
+/// detection + reader of readPoseFile(), both parsers (datasets::parseTumPoses, datasets::parseCsvPoses;
+/// std::runtime_error), the `--extrinsic` parser (datasets::parseTransformXyzQuat;
+/// std::invalid_argument) and the time stamp in a cloud file name (datasets::stampFromFileName, on each
 /// line). Accepted poses must be rigid with strictly increasing stamps.
 
 #include "fuzz_support.h"
@@ -18,7 +18,7 @@ namespace {
 
 using mlmap::fuzz::requireThat;
 
-void checkPoses(const std::vector<mlmap::io::StampedPose>& poses) {
+void checkPoses(const std::vector<mlmap::datasets::StampedPose>& poses) {
   requireThat(!poses.empty(), "a trajectory without poses was accepted");
   for (std::size_t i = 0; i < poses.size(); ++i) {
     requireThat(std::isfinite(poses[i].stamp_s) && mlmap::isValidPose(poses[i].T_W_P, 1e-9),
@@ -41,17 +41,17 @@ void parsePoses(Parse parse) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text = mlmap::fuzz::asString(data, size);
   // readPoseFile() picks one parser by detectPoseFileFormat(); both run here.
-  (void)mlmap::io::detectPoseFileFormat("fuzz.txt", text);
-  parsePoses([&] { return mlmap::io::parseTumPoses(text, "fuzz.tum"); });
-  parsePoses([&] { return mlmap::io::parseCsvPoses(text, "fuzz.csv"); });
+  (void)mlmap::datasets::detectPoseFileFormat("fuzz.txt", text);
+  parsePoses([&] { return mlmap::datasets::parseTumPoses(text, "fuzz.tum"); });
+  parsePoses([&] { return mlmap::datasets::parseCsvPoses(text, "fuzz.csv"); });
   try {
-    const mlmap::Transform T = mlmap::io::parseTransformXyzQuat(text);
+    const mlmap::Transform T = mlmap::datasets::parseTransformXyzQuat(text);
     requireThat(mlmap::isValidPose(T, 1e-9), "parseTransformXyzQuat: not a rigid transform");
   } catch (const std::invalid_argument&) {
     // the documented answer to bad input
   }
   std::istringstream lines(text);
   std::string line;
-  while (std::getline(lines, line)) (void)mlmap::io::stampFromFileName(line);
+  while (std::getline(lines, line)) (void)mlmap::datasets::stampFromFileName(line);
   return 0;
 }

@@ -1,5 +1,5 @@
 /// @file
-/// Fuzz target: a simulation scenario (world, flight, camera) in YAML (io::parseScenarioYaml).
+/// Fuzz target: a simulation scenario (world, flight, camera) in YAML (datasets::parseScenarioYaml).
 /// Errors are std::runtime_error.
 
 #include "fuzz_support.h"
@@ -11,8 +11,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {
-    const mlmap::io::Scenario scenario =
-        mlmap::io::parseScenarioYaml(mlmap::fuzz::asString(data, size), "fuzz.yaml");
+    const mlmap::datasets::Scenario scenario =
+        mlmap::datasets::parseScenarioYaml(mlmap::fuzz::asString(data, size), "fuzz.yaml");
     mlmap::fuzz::requireThat(std::isfinite(scenario.frame_rate_hz) && scenario.frame_rate_hz > 0.0,
                              "parseScenarioYaml: frame_rate_hz not positive");
   } catch (const std::runtime_error&) {

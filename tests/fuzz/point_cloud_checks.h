@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// What io::parsePcd() and io::parsePly() document about a file they accept.
+/// What datasets::parsePcd() and datasets::parsePly() document about a file they accept.
 
 #include "fuzz_support.h"
 
@@ -9,7 +9,7 @@
 namespace mlmap::fuzz {
 
 /// Every declared point is kept (finite) or counted as dropped.
-inline void checkPointCloudFile(const io::PointCloudFile& cloud) {
+inline void checkPointCloudFile(const datasets::PointCloudFile& cloud) {
   requireThat(cloud.points_C.size() + cloud.non_finite_dropped == cloud.points_in_file,
               "kept + dropped points != points in the file");
   for (const Eigen::Vector3f& p : cloud.points_C) requireThat(p.allFinite(), "a kept point is not finite");

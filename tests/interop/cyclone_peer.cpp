@@ -458,7 +458,7 @@ bool publicationMatched(dds_entity_t writer) {
 }
 
 int fly(int domain_id, const FlyOptions& o) {
-  const io::Scenario scenario = io::defaultScenario();
+  const datasets::Scenario scenario = datasets::defaultScenario();
   const double rate_hz = o.rate_hz > 0 ? o.rate_hz : scenario.frame_rate_hz;
   const Transform T_B_S = MapConfig{}.sensor.T_B_S();  // mlmap_node's default mounting
 

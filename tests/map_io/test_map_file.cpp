@@ -361,7 +361,7 @@ TEST(MapFile, TheNextSaveRemovesTemporaryFilesOfAnInterruptedOne) {
   std::sort(left.begin(), left.end());
   EXPECT_EQ(left, (std::vector<std::string>{"map.mlmap", "map.mlmap.tmp-", "map.mlmap.tmp-toolong1",
                                             "other.mlmap.tmp-a1B2c3"}));
-  EXPECT_EQ(io::removeLeftoverTemporaries(path), 0u);
+  EXPECT_EQ(removeLeftoverTemporaries(path), 0u);
 }
 
 TEST(MapFile, AFailedSaveLeavesThePreviousFileAndNoTemporaryFile) {

@@ -11,7 +11,7 @@
 #include <string>
 #include <unistd.h>
 
-namespace mlmap::io {
+namespace mlmap::pictures {
 namespace {
 
 constexpr double kRes = 0.1;
@@ -251,4 +251,4 @@ TEST(MapImage, WritePngRoundTripsAndReportsFailures) {
 }
 
 }  // namespace
-}  // namespace mlmap::io
+}  // namespace mlmap::pictures

@@ -10,7 +10,7 @@
 
 // mlmap's libpng codec against OpenCV's imgcodecs: a PNG reader and writer that is not mlmap's.
 
-namespace mlmap::io {
+namespace mlmap::pictures {
 namespace {
 
 /// A `type` image of random samples (noise, so the compressed data take every path of zlib), with
@@ -103,4 +103,4 @@ TEST(PngCodec, BadDataGetAClearErrorNotACrash) {
 }
 
 }  // namespace
-}  // namespace mlmap::io
+}  // namespace mlmap::pictures

@@ -52,7 +52,7 @@ TEST(TimingSummary, NearestRankOnTheSortedValuesWhateverTheirOrder) {
 }
 
 TEST(MapEngine, NoiseFreeSimulatedFlightReachesF1OfAtLeast095At10cm) {
-  const io::Scenario scenario = io::defaultScenario();
+  const datasets::Scenario scenario = datasets::defaultScenario();
   MapEngine engine(configAt(0.1));
   eval::FlightOptions options;
   options.max_frames = 120;  // the first 12 s of the default flight
@@ -76,7 +76,7 @@ TEST(MapEngine, NoiseFreeSimulatedFlightReachesF1OfAtLeast095At10cm) {
 // whole window, over a box, and off (the awareness grid, whose point buffers vary with the
 // frames, within 30 %).
 TEST(MapEngine, MemoryEstimateMatchesTheEngineAccounting) {
-  const io::Scenario scenario = io::defaultScenario();
+  const datasets::Scenario scenario = datasets::defaultScenario();
   for (int variant = 0; variant < 3; ++variant) {
     MapConfig c = configAt(0.1);
     if (variant == 1) c.esdf.box_size_m = Eigen::Vector3d(8.0, 8.0, 4.0);
@@ -100,7 +100,7 @@ TEST(MapEngine, MemoryEstimateMatchesTheEngineAccounting) {
 
 TEST(MapEngine, MovingObstacleLeavesNoTraceWithinTenFramesOfLeaving) {
   // A camera hovering in front of a wall; a person-sized box walks across the view.
-  io::Scenario scenario;
+  datasets::Scenario scenario;
   scenario.world.addBox({{6.0, -6.0, -0.2}, {6.3, 6.0, 3.0}});  // wall 6 m ahead
   scenario.world.addBox({{-1.0, -6.0, -0.2}, {6.0, 6.0, 0.0}});  // floor
   sim::MovingBox person;
@@ -203,7 +203,7 @@ TEST(MapEngine, InvalidConfigurationIsAClearError) {
 }
 
 TEST(MapEngine, ThreadedModeBuildsTheSameMapAsTheSynchronousMode) {
-  const io::Scenario scenario = io::defaultScenario();
+  const datasets::Scenario scenario = datasets::defaultScenario();
   MapConfig sync_config = configAt(0.2);
   MapConfig threaded_config = sync_config;
   threaded_config.pipeline.threaded = true;
@@ -344,7 +344,7 @@ TEST(MapEngine, FullInputQueueDropsTheOldestFrameAndCountsIt) {
 }
 
 TEST(MapEngine, MapsTheSharedRealDepthFrames) {
-  const io::FrameDirectory frames(MLMAP_SHARED_DATA_DIR "/realsense_tabletop");
+  const datasets::FrameDirectory frames(MLMAP_SHARED_DATA_DIR "/realsense_tabletop");
   ASSERT_EQ(frames.size(), 50u);
   MapConfig c = configAt(0.2);
   c.local_map.resolution_m = 0.02;
@@ -400,7 +400,7 @@ namespace {
 // The snapshot after a synchronous flight holds exactly the engine's window, the grid of that
 // window, and (with no rate limit) the ESDF of that window.
 TEST(MapEngine, SnapshotHoldsTheWindowItsGridAndItsEsdf) {
-  const io::Scenario scenario = io::defaultScenario();
+  const datasets::Scenario scenario = datasets::defaultScenario();
   MapConfig config;
   config.esdf.max_rate_hz = 0.0;
   MapEngine engine(config);
@@ -471,7 +471,7 @@ TEST(MapEngine, IncrementalGridEqualsADirectProjectionAfterEveryFrame) {
     config.projected_grid.band_min_m = c.band_min_m;
     config.projected_grid.band_max_m = c.band_max_m;
     MapEngine engine(config);
-    const io::Scenario scenario = test::cheapScenario();
+    const datasets::Scenario scenario = test::cheapScenario();
     eval::FlightOptions options;
     options.max_frames = 60;
     std::size_t known_cells = 0;
@@ -580,7 +580,7 @@ EsdfMap fullEsdfOf(const MapSnapshot& snap, const EsdfConfig& config) {
 // of a long sliding flight (the moving person, both unknown policies), across window shifts and
 // after loading an older map, the snapshot's field equals a full recompute bit for bit.
 TEST(MapEngine, IncrementalEsdfEqualsAFullRecomputeAfterEveryFrame) {
-  const io::Scenario scenario = test::cheapScenario();
+  const datasets::Scenario scenario = test::cheapScenario();
   const int frames = eval::frameCount(scenario);
   ASSERT_GE(frames, 80);
   for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
@@ -646,7 +646,7 @@ TEST(MapEngine, IncrementalEsdfEqualsAFullRecomputeAfterEveryFrame) {
 // moves): after every frame of a sliding flight it answers exactly as a copy freshly built from
 // the snapshot's field, at every cell centre and between them. Without the key there is none.
 TEST(MapEngine, SnapshotQueryGridEqualsAFreshBuildAfterEveryFrame) {
-  const io::Scenario scenario = test::cheapScenario();
+  const datasets::Scenario scenario = test::cheapScenario();
   MapConfig config = test::smallWindowConfig();
   config.esdf.max_rate_hz = 0.0;
   config.esdf.query_grid = true;
@@ -703,7 +703,7 @@ TEST(MapEngine, SnapshotQueryGridEqualsAFreshBuildAfterEveryFrame) {
 
 // The ESDF is updated at most at its rate (frame stamps) and the skips are counted.
 TEST(MapEngine, EsdfIsRateLimitedByFrameStamps) {
-  const io::Scenario scenario = io::defaultScenario();
+  const datasets::Scenario scenario = datasets::defaultScenario();
   MapConfig config;
   config.esdf.max_rate_hz = 2.0;
   MapEngine engine(config);

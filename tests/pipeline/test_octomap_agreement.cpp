@@ -98,7 +98,7 @@ MapConfig lidarConfig() {
 }
 
 /// Scan i of the default flight at 10 Hz, its pose shifted by `shift_W` after rendering.
-PointCloudFrame lidarScan(const io::Scenario& scenario, const sim::Lidar& lidar, int i,
+PointCloudFrame lidarScan(const datasets::Scenario& scenario, const sim::Lidar& lidar, int i,
                           const Eigen::Vector3d& shift_W) {
   const double t = eval::frameTime(scenario, i);
   PointCloudFrame f;
@@ -111,7 +111,7 @@ PointCloudFrame lidarScan(const io::Scenario& scenario, const sim::Lidar& lidar,
 
 /// Both maps of the first kLidarScans scans.
 eval::VoxelAgreement mapLidarScans(const Eigen::Vector3d& shift_W) {
-  const io::Scenario scenario = io::defaultScenario();
+  const datasets::Scenario scenario = datasets::defaultScenario();
   EXPECT_DOUBLE_EQ(scenario.frame_rate_hz, 10.0);
   const sim::Lidar lidar;
   const MapConfig config = lidarConfig();
@@ -156,7 +156,7 @@ TEST(OctomapAgreement, LidarScansOnTheVoxelGridDifferOnlyWithinOneCell) {
 // world coordinates in double) and OctoMap's (its key from the float coordinates) differ, the
 // point lies on a voxel face, within float precision.
 TEST(OctomapAgreement, PointsFallInDifferentVoxelsOnlyOnVoxelFaces) {
-  const io::Scenario scenario = io::defaultScenario();
+  const datasets::Scenario scenario = datasets::defaultScenario();
   const sim::Lidar lidar;
   octomap::OcTree tree(kLidarResolution_m);
   std::size_t differing = 0;
@@ -192,7 +192,7 @@ TEST(OctomapAgreement, PointsFallInDifferentVoxelsOnlyOnVoxelFaces) {
 // though no ray crosses them (see docs/comparison.md): fewer with direction bins one voxel wide
 // (the default) than two.
 eval::VoxelAgreement realSenseAgreement(const std::string& dir, double bin_width_voxels) {
-  const io::FrameDirectory frames(dir);
+  const datasets::FrameDirectory frames(dir);
   MapConfig config = eval::runConfig("", eval::DataKind::kFrameDirectory, 0.02);
   config.awareness.bin_width_voxels = bin_width_voxels;
   config.awareness.max_range_m = 2.0;

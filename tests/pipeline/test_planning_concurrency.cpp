@@ -15,7 +15,7 @@ namespace mlmap {
 namespace {
 
 TEST(PlanningConcurrency, PlannerThreadsQueryWhileTheMapSlides) {
-  io::Scenario scenario = io::defaultScenario();
+  datasets::Scenario scenario = datasets::defaultScenario();
   // A 160 x 120 camera (same field of view): the races are between mapping and queries, and
   // rendering 640 x 480 frames under ThreadSanitizer would take most of the test's time.
   scenario.camera.intrinsics = test::quarterCamera();

@@ -182,7 +182,7 @@ void writeChart(const std::string& path, const std::vector<Sample>& samples, int
                 cv::Scalar(0, 0, 0));
     legend_y += 22;
   }
-  io::writePng(path, img);
+  pictures::writePng(path, img);
 }
 
 }  // namespace

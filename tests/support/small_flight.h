@@ -22,8 +22,8 @@ inline MapConfig smallWindowConfig() {
 /// subject is not the image (tests/support/small_camera_scenario.sh writes the same for YAML).
 inline PinholeIntrinsics quarterCamera() { return {96.25, 96.25, 79.5, 59.5, 160, 120}; }
 
-inline io::Scenario cheapScenario() {
-  io::Scenario s = io::defaultScenario();
+inline datasets::Scenario cheapScenario() {
+  datasets::Scenario s = datasets::defaultScenario();
   s.camera.intrinsics = quarterCamera();
   s.frame_rate_hz = 2.5;
   return s;
@@ -31,7 +31,7 @@ inline io::Scenario cheapScenario() {
 
 /// Flies frames [first, first + frames) of cheapScenario() into `engine`.
 inline void flyCheap(MapEngine& engine, int first, int frames) {
-  const io::Scenario scenario = cheapScenario();
+  const datasets::Scenario scenario = cheapScenario();
   eval::FlightOptions options;
   options.start_time_s = eval::frameTime(scenario, first);
   options.max_frames = frames;

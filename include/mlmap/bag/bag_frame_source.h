@@ -62,7 +62,7 @@ struct BagFrameSourceOptions {
                                    const std::string& world_frame);
 
 /// The frames of a bag (see the file comment).
-class BagFrameSource : public io::FrameSource {
+class BagFrameSource : public datasets::FrameSource {
  public:
   /// Opens `bag` with `options` (inputs completed by autoSelect()), reads the poses and the
   /// extrinsics, and indexes and pairs the frames. @throws std::runtime_error naming the bag, the
@@ -71,8 +71,8 @@ class BagFrameSource : public io::FrameSource {
   BagFrameSource(std::shared_ptr<const BagReader> bag, const BagFrameSourceOptions& options);
 
   [[nodiscard]] std::size_t size() const override { return frames_.size(); }
-  [[nodiscard]] io::SourceFrame read(std::size_t i,
-                                     io::SourceFrameInfo* info = nullptr) const override;
+  [[nodiscard]] datasets::SourceFrame read(std::size_t i,
+                                     datasets::SourceFrameInfo* info = nullptr) const override;
   [[nodiscard]] std::string describe() const override;
 
   /// The inputs used (after autoSelect()).

@@ -24,7 +24,7 @@
 #include <utility>
 #include <vector>
 
-namespace mlmap::io {
+namespace mlmap::config {
 
 /// `name` under the dotted `parent` path ("" is the document's top level).
 inline std::string childPath(const std::string& parent, const std::string& name) {
@@ -327,4 +327,4 @@ class SectionNames {
   std::vector<std::string> names_;
 };
 
-}  // namespace mlmap::io
+}  // namespace mlmap::config

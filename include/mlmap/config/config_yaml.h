@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace mlmap::io {
+namespace mlmap::config {
 
 class Section;  // mlmap/config/yaml_section.h
 
@@ -46,4 +46,4 @@ std::string engineDefaultsYaml();
 /// docs/configuration.md, from the same key lists.
 std::string engineKeyReference();
 
-}  // namespace mlmap::io
+}  // namespace mlmap::config

@@ -19,7 +19,7 @@
 #include <utility>
 #include <vector>
 
-namespace mlmap::io {
+namespace mlmap::config {
 
 /// Reads the keys of one YAML mapping into typed fields, remembering every problem as
 /// "<path>.<key>: what is wrong". When it goes out of scope it reports every key of the mapping
@@ -236,4 +236,4 @@ inline void stripTopLevelDots(std::vector<std::string>* errors) {
   throw std::runtime_error(out.str());
 }
 
-}  // namespace mlmap::io
+}  // namespace mlmap::config

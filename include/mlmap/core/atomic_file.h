@@ -7,7 +7,7 @@
 #include <cstddef>
 #include <string>
 
-namespace mlmap::io {
+namespace mlmap {
 
 /// Writes `bytes` to `path`: into a temporary file `path`.tmp-XXXXXX in the same folder, flushed
 /// to disk, then renamed over `path`. When anything fails (folder missing or read-only, disk
@@ -22,4 +22,4 @@ void writeFileAtomically(const std::string& path, const std::string& bytes);
 /// after each write; the node calls it at start for its save path. Never throws.
 std::size_t removeLeftoverTemporaries(const std::string& path);
 
-}  // namespace mlmap::io
+}  // namespace mlmap

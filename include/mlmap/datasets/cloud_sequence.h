@@ -32,7 +32,7 @@
 #include <string>
 #include <vector>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 
 /// Default of CloudSequenceOptions::pose_tolerance_s (the same as mlmap_node's default).
 inline constexpr double kCloudPoseTolerance_s = 0.05;
@@ -103,4 +103,4 @@ class CloudSequence {
   std::size_t pose_count_ = 0;
 };
 
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 
 /// Nominal frame rate of the layout; a frame's stamp is its frame number divided by this.
 inline constexpr double kFrameDirectoryRate_hz = 30.0;
@@ -93,4 +93,4 @@ class FrameDirectory {
   PinholeIntrinsics intrinsics_;
 };
 
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

@@ -14,7 +14,7 @@
 #include <mutex>
 #include <thread>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 
 /// A frame as read, with what the source said of it and how long reading it took.
 struct PrefetchedFrame {
@@ -59,4 +59,4 @@ class FramePrefetcher {
   std::thread reader_;
 };
 
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

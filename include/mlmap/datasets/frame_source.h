@@ -16,7 +16,7 @@
 #include <string>
 #include <variant>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 
 /// A frame as the engine takes it (MapEngine::submit() has an overload for each).
 using SourceFrame = std::variant<DepthFrame, PointCloudFrame>;
@@ -114,4 +114,4 @@ class SimulatedFlightSource : public FrameSource {
   std::size_t count_ = 0;
 };
 
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

@@ -23,7 +23,7 @@
 #include <string>
 #include <vector>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 
 /// What a point-cloud file held.
 struct PointCloudFile {
@@ -68,4 +68,4 @@ inline constexpr std::uintmax_t kMaxInputFileBytes = std::uintmax_t{1} << 30;
 [[nodiscard]] std::string readFileBytes(const std::string& path,
                                         std::uintmax_t max_bytes = kMaxInputFileBytes);
 
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 
 /// How far a quaternion's norm may be from 1 before a pose is refused.
 inline constexpr double kQuaternionNormTolerance = 1e-3;
@@ -63,4 +63,4 @@ enum class PoseFileFormat {
 /// @throws std::invalid_argument saying what is wrong.
 [[nodiscard]] Transform parseTransformXyzQuat(const std::string& text);
 
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

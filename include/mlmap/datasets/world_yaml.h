@@ -31,7 +31,7 @@
 
 #include <string>
 
-namespace mlmap::io {
+namespace mlmap::datasets {
 
 /// Everything needed to run a simulated flight.
 struct Scenario {
@@ -56,4 +56,4 @@ struct Scenario {
 /// config/worlds/default_room.yaml describes the same scenario.
 [[nodiscard]] Scenario defaultScenario();
 
-}  // namespace mlmap::io
+}  // namespace mlmap::datasets

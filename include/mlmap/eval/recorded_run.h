@@ -95,7 +95,7 @@ class RecordedRun {
 
   /// Flies `scenario` (at most `max_frames` frames, 0: all), recording each frame, and scores
   /// the map against the simulator's ground truth.
-  void flyRecorded(const io::Scenario& scenario, int max_frames);
+  void flyRecorded(const datasets::Scenario& scenario, int max_frames);
 
  private:
   template <typename Frame>
@@ -113,7 +113,7 @@ class RecordedRun {
 /// Maps the first `count` frames of `source` into `run` in order, recording each, with a
 /// progress bar; with `read_ahead` > 0 they are read and decoded on a reader thread that many
 /// frames ahead of the mapping.
-void mapFrames(const io::FrameSource& source, std::size_t count, std::size_t read_ahead,
+void mapFrames(const datasets::FrameSource& source, std::size_t count, std::size_t read_ahead,
                RecordedRun* run);
 
 /// stats.json: the source, the engine's settings, timings per stage (median, p99, mean, max over

@@ -51,7 +51,7 @@ struct ScoredFlight {
 };
 
 /// Flies `scenario` into `engine` (flyScenario()) and scores the occupied voxels.
-[[nodiscard]] ScoredFlight flyAndScore(const io::Scenario& scenario, MapEngine& engine,
+[[nodiscard]] ScoredFlight flyAndScore(const datasets::Scenario& scenario, MapEngine& engine,
                                        const FlightOptions& options);
 
 /// What writeMapOutputs() writes about.

@@ -62,9 +62,9 @@ struct FlightResult {
 [[nodiscard]] bool touchesSolid(const sim::World& world, const VoxelIndex& v, double resolution_m);
 
 /// Number of frames the scenario's trajectory yields at its frame rate.
-[[nodiscard]] int frameCount(const io::Scenario& scenario);
+[[nodiscard]] int frameCount(const datasets::Scenario& scenario);
 /// Body pose and time of frame `i`.
-[[nodiscard]] double frameTime(const io::Scenario& scenario, int i);
+[[nodiscard]] double frameTime(const datasets::Scenario& scenario, int i);
 
 /// The true voxels a flight observed: voxels of measured points whose interior overlaps a static
 /// solid of the world, gathered frame by frame.
@@ -80,10 +80,10 @@ class ObservedTruth {
   VoxelBitset seen_;                       ///< scratch: the frame's voxels already looked at
 };
 
-/// Renders every frame of the scenario (io::SimulatedFlightSource, the camera mounted as
+/// Renders every frame of the scenario (datasets::SimulatedFlightSource, the camera mounted as
 /// `config.sensor` says) and submits it to `engine` as a depth image. Also gathers the observed
 /// ground truth.
-FlightResult flyScenario(const io::Scenario& scenario, MapEngine& engine,
+FlightResult flyScenario(const datasets::Scenario& scenario, MapEngine& engine,
                          const FlightOptions& options = {});
 
 /// Scores occupied voxels (see Accuracy).

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-namespace mlmap::io {
+namespace mlmap::pictures {
 
 /// Voxels to draw: the world-frame centres of equal-size voxels on one grid.
 struct VoxelList {
@@ -94,4 +94,4 @@ enum class ComparisonClass {
 /// @throws std::runtime_error naming the path when the image is empty or cannot be written.
 void writePng(const std::string& path, const cv::Mat& image);
 
-}  // namespace mlmap::io
+}  // namespace mlmap::pictures

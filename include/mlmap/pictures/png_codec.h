@@ -10,7 +10,7 @@
 #include <cstddef>
 #include <string>
 
-namespace mlmap::io {
+namespace mlmap::pictures {
 
 /// Encodes `image` as PNG: 8-bit gray (CV_8UC1), 8-bit BGR (CV_8UC3, stored as RGB) or 16-bit
 /// gray (CV_16UC1). Lossless, compressed for speed (zlib level 1): 16-bit images with the "sub"
@@ -26,4 +26,4 @@ namespace mlmap::io {
 ///         corrupted, or hold another colour type (palette, alpha).
 [[nodiscard]] cv::Mat decodePng(const void* bytes, std::size_t size);
 
-}  // namespace mlmap::io
+}  // namespace mlmap::pictures

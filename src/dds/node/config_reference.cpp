@@ -9,7 +9,7 @@
 namespace mlmap::dds {
 
 std::string keyReferenceMarkdown() {
-  return "### Engine keys (`config/mlmap.yaml`)\n\n" + io::engineKeyReference() +
+  return "### Engine keys (`config/mlmap.yaml`)\n\n" + config::engineKeyReference() +
          "\n### Node keys (`config/mlmap_node.yaml`)\n\n" + nodeKeyReference();
 }
 
@@ -27,8 +27,8 @@ std::string withKeyReference(const std::string& document, const std::string& ref
 
 std::vector<GeneratedFile> generatedConfigFiles(const std::string& source_dir) {
   const std::string doc_path = "docs/configuration.md";
-  const std::string doc = io::readConfigFile(source_dir + "/" + doc_path);
-  return {{"config/mlmap.yaml", io::engineDefaultsYaml()},
+  const std::string doc = config::readConfigFile(source_dir + "/" + doc_path);
+  return {{"config/mlmap.yaml", config::engineDefaultsYaml()},
           {"config/mlmap_node.yaml", nodeDefaultsYaml()},
           {doc_path, withKeyReference(doc, keyReferenceMarkdown())}};
 }

@@ -53,7 +53,7 @@ bool MapPersistence::loadIfAsked() {
 void MapPersistence::checkSavePath(bool loaded) {
   const std::string& path = options_.save_path;
   if (path.empty()) return;
-  const std::size_t leftovers = io::removeLeftoverTemporaries(path);
+  const std::size_t leftovers = removeLeftoverTemporaries(path);
   if (leftovers > 0) {
     log_.always(LogLevel::kWarning, "removed " + std::to_string(leftovers) +
                                         " temporary file(s) of an interrupted save of '" + path +

@@ -41,20 +41,20 @@ void MapFileOptions::validate(std::vector<std::string>* errors) const {
 }
 
 NodeConfig parseNodeConfigYaml(const std::string& text, const std::string& source_name) {
-  const YAML::Node root = io::parseYamlDocument(text, source_name);
+  const YAML::Node root = config::parseYamlDocument(text, source_name);
   NodeConfig c;
   std::vector<std::string> errors;
   std::size_t engine_problems = 0;
   std::size_t dds_problems = 0;
   {
-    io::Section top(root, "", &errors);
-    io::readEngineSections(top, &c.map);
+    config::Section top(root, "", &errors);
+    config::readEngineSections(top, &c.map);
     engine_problems = errors.size();
-    io::YamlReader reader(top);
+    config::YamlReader reader(top);
     NodeConfig::visitNodeSections(c, reader);
     dds_problems = reader.problemsIn(&c.dds);
   }  // reports unknown top-level keys
-  io::stripTopLevelDots(&errors);
+  config::stripTopLevelDots(&errors);
   if (engine_problems == 0) {
     for (std::string& e : c.map.validate()) errors.push_back(std::move(e));
   }
@@ -62,12 +62,12 @@ NodeConfig parseNodeConfigYaml(const std::string& text, const std::string& sourc
     for (std::string& e : c.dds.validate()) errors.push_back(std::move(e));
   }
   c.map_file.validate(&errors);
-  if (!errors.empty()) io::throwConfigErrors(source_name, errors);
+  if (!errors.empty()) config::throwConfigErrors(source_name, errors);
   return c;
 }
 
 NodeConfig loadNodeConfigYaml(const std::string& path) {
-  return parseNodeConfigYaml(io::readConfigFile(path), path);
+  return parseNodeConfigYaml(config::readConfigFile(path), path);
 }
 
 NodeConfig nodeConfigOrDefaults(const std::string& path) {
@@ -78,25 +78,25 @@ std::string toYaml(const NodeConfig& config) {
   YAML::Emitter out;
   out.SetDoublePrecision(15);  // as the engine sections: typed values round-trip
   out << YAML::BeginMap;
-  io::YamlWriter writer(out);
+  config::YamlWriter writer(out);
   NodeConfig::visitNodeSections(config, writer);
   out << YAML::EndMap;
   // Two block mappings at the top level, one after the other, are one mapping.
-  return io::toYaml(config.map) + std::string(out.c_str()) + "\n";
+  return config::toYaml(config.map) + std::string(out.c_str()) + "\n";
 }
 
 std::string nodeDefaultsYaml() {
-  io::CommentedYamlWriter writer;
+  config::CommentedYamlWriter writer;
   const NodeConfig defaults;
   NodeConfig::visitNodeSections(defaults, writer);
   return std::string(kNodeDefaultsHeader) + "\n" + writer.text();
 }
 
 std::string nodeKeyReference() {
-  io::MarkdownKeyTable table;
+  config::MarkdownKeyTable table;
   const NodeConfig defaults;
   NodeConfig::visitNodeSections(defaults, table);
-  return io::MarkdownKeyTable::header() + table.rows();
+  return config::MarkdownKeyTable::header() + table.rows();
 }
 
 PoseBufferConfig poseBufferConfig(const DdsConfig& dds) {
