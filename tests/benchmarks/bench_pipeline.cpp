@@ -1,15 +1,22 @@
 // mlmap_bench: per-frame cost of the engine (synchronous mode, one core) on simulated 640x480
 // depth frames, on the shared real RealSense frames and on simulated 360-degree LiDAR scans.
-// Prints median and p99 per stage and the memory by layer. Figures, not pass/fail: see
-// docs/performance.md.
+// Prints median and p99 per stage and the memory by layer. With --files, maps recorded files
+// (an RGB-D frame directory, or clouds with --poses) at the engine's defaults instead and prints
+// each frame's wall and thread CPU time, as a peer library is timed on the same files.
+// Figures, not pass/fail: see docs/performance.md.
 
+#include "mlmap/core/stopwatch.h"
 #include "mlmap/eval/run_outputs.h"
 #include "mlmap/eval/sim_flight.h"
 #include "mlmap/datasets/frame_directory.h"
+#include "mlmap/datasets/frame_source.h"
+#include "mlmap/map_io/voxel_text.h"
 #include "mlmap/pipeline/map_engine.h"
 #include "mlmap/sim/lidar.h"
 
 #include <CLI/CLI.hpp>
+
+#include <time.h>
 
 #include <algorithm>
 #include <cmath>
@@ -98,6 +105,86 @@ void print(const Row& r, std::FILE* json, bool last) {
   }
 }
 
+/// What --files maps: recorded frames at the engine's defaults but for the resolution, the range
+/// and a window that holds every point within range.
+struct FilesOptions {
+  std::string dir;    ///< an RGB-D frame directory, or a folder of clouds (with `poses`)
+  std::string poses;  ///< the clouds' trajectory (TUM or CSV); empty: `dir` is a frame directory
+  double resolution_m = 0.02;
+  double max_range_m = 2.0;
+  double window_z_m = 0.0;  ///< the window's height [m]; 0: 2.5 x the range, as across
+  int passes = 5;
+  std::string voxels_out;  ///< the first pass's occupied voxels (empty: none)
+};
+
+/// CPU time of the calling thread [ms].
+double threadCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+}
+
+/// --files: every frame of the files read first (untimed), then mapped `passes` times, each pass
+/// by a fresh engine (so each is the same work, as one pass of a peer library over the files).
+/// Each submit() is timed by the wall clock and by the thread's CPU time: on a shared machine the
+/// CPU time leaves out the time the thread waited for a core.
+int runFiles(const FilesOptions& o) {
+  std::unique_ptr<io::FrameSource> source;
+  if (o.poses.empty()) {
+    source = std::make_unique<io::FrameDirectorySource>(o.dir);
+  } else {
+    source = std::make_unique<io::CloudSequenceSource>(o.dir, o.poses, io::CloudSequenceOptions{});
+  }
+  std::vector<io::SourceFrame> frames;
+  for (std::size_t i = 0; i < source->size(); ++i) frames.push_back(source->read(i));
+  auto cells = [&](double m) {
+    return std::max(5, static_cast<int>(std::ceil(m / o.resolution_m / 5.0)) * 5);
+  };
+  const int across = cells(2.5 * o.max_range_m);
+  MapConfig c = at(o.resolution_m, {across, across, o.window_z_m > 0.0 ? cells(o.window_z_m) : across});
+  c.awareness.max_range_m = o.max_range_m;
+  c.awareness.rho_cells = std::max(c.awareness.rho_cells,
+                                   static_cast<int>(std::ceil(o.max_range_m / c.awareness.rho_cell_m)));
+  c.sensor.translation_B_m.setZero();  // the frames carry their own sensor pose
+  c.sensor.rotation_rpy_deg.setZero();
+  c.pipeline.planning_layers = false;  // mapping only, as a peer library maps
+  std::vector<double> wall_ms, cpu_ms;
+  double points = 0.0;
+  std::size_t occupied = 0;
+  for (int pass = 0; pass < o.passes; ++pass) {
+    MapEngine engine(c);
+    for (const io::SourceFrame& frame : frames) {
+      io::SourceFrame f = frame;  // copied untimed: submit() takes the frame
+      const double cpu0 = threadCpuMs();
+      const SteadyClock::time_point t0 = SteadyClock::now();
+      const FrameStatus status = std::visit([&](auto& x) { return engine.submit(std::move(x)); }, f);
+      wall_ms.push_back(msSince(t0));
+      cpu_ms.push_back(threadCpuMs() - cpu0);
+      if (status != FrameStatus::kAccepted) {
+        std::fprintf(stderr, "mlmap_bench: a frame was rejected (%s)\n", toString(status));
+        return 1;
+      }
+    }
+    const EngineStats s = engine.stats();
+    points = static_cast<double>(s.points.points_in - s.points.rejected_non_finite) /
+             static_cast<double>(std::max<std::uint64_t>(s.frames_mapped, 1));
+    if (pass == 0) {
+      const std::vector<VoxelIndex> voxels = engine.occupiedVoxels();
+      occupied = voxels.size();
+      if (!o.voxels_out.empty()) io::writeVoxelText(o.voxels_out, voxels, o.resolution_m);
+    }
+  }
+  std::printf("%s: %zu frames, %.0f valid points / frame, %.3f m, range %.1f m, window %d x %d x %d, "
+              "%d passes (a fresh engine each), %zu occupied voxels\n",
+              source->describe().c_str(), frames.size(), points, o.resolution_m, o.max_range_m,
+              c.local_map.size_cells.x(), c.local_map.size_cells.y(), c.local_map.size_cells.z(),
+              o.passes, occupied);
+  std::printf("submit() per frame [ms]: wall median %.3f p99 %.3f; thread CPU median %.3f p99 %.3f\n",
+              quantile(wall_ms, 0.5), quantile(wall_ms, 0.99), quantile(cpu_ms, 0.5),
+              quantile(cpu_ms, 0.99));
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -125,7 +212,33 @@ int main(int argc, char** argv) {
                  "from the start of the flight, mapped at 0.1 m (0: skip)")
       ->check(CLI::Range(0, 10000))
       ->capture_default_str();
+  FilesOptions files;
+  auto* files_option = app.add_option("--files", files.dir,
+                                      "map these files instead (an RGB-D frame directory, or a folder "
+                                      "of PCD / PLY clouds with --poses) at the engine's defaults, "
+                                      "and print each frame's wall and thread CPU time");
+  app.add_option("--poses", files.poses, "--files: the clouds' trajectory (TUM or CSV)")
+      ->needs(files_option);
+  app.add_option("--resolution", files.resolution_m, "--files: voxel size [m]")
+      ->needs(files_option)->check(CLI::Range(0.01, 2.0))->capture_default_str();
+  app.add_option("--max-range", files.max_range_m, "--files: maximum range [m]; the window is 2.5 x it across")
+      ->needs(files_option)->check(CLI::Range(0.1, 400.0))->capture_default_str();
+  app.add_option("--window-z", files.window_z_m, "--files: the window's height [m] (0: 2.5 x the range)")
+      ->needs(files_option)->check(CLI::NonNegativeNumber)->capture_default_str();
+  app.add_option("--passes", files.passes, "--files: passes over the files, each by a fresh engine")
+      ->needs(files_option)->check(CLI::Range(1, 1000))->capture_default_str();
+  app.add_option("--voxels-out", files.voxels_out,
+                 "--files: write the first pass's occupied voxels here (as mlmap_replay's occupied_voxels.txt)")
+      ->needs(files_option);
   CLI11_PARSE(app, argc, argv);
+  if (!files.dir.empty()) {
+    try {
+      return runFiles(files);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "mlmap_bench: %s\n", e.what());
+      return 1;
+    }
+  }
 
   // Render the simulated frames once (the simulator's cost is not measured).
   const datasets::Scenario scenario = datasets::defaultScenario();
