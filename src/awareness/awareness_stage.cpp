@@ -139,6 +139,26 @@ void convertPixels(const Raw* __restrict raw, const float* __restrict rx, float 
   }
 }
 
+// The pixels with data among `count`, converted as convertPixels() converts them and packed in
+// pixel order, without a branch on the data: every pixel is converted and written at the next
+// free place, which advances only past a pixel with data. For the pixels of sensors whose valid
+// pixels alternate with invalid ones one or two at a time (a RealSense's sparse pattern), where
+// a branch per run of pixels mispredicts about every other pixel. Writes stay below `count`.
+template <typename Raw, typename Valid>
+std::size_t packPixels(const Raw* __restrict raw, const float* __restrict rx, float ray_y,
+                       std::size_t count, Valid valid, float* __restrict xs,
+                       float* __restrict ys, float* __restrict zs) {
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    const float z = depthMetres(raw[k]);
+    xs[n] = rx[k] * z;
+    ys[n] = ray_y * z;
+    zs[n] = z;
+    n += valid(raw[k]) ? 1 : 0;
+  }
+  return n;
+}
+
 double distanceToBox(const Eigen::Vector3d& o, const VoxelSpaceBox& b) {
   const Eigen::Vector3d d = (b.min.cast<double>() - o).cwiseMax(o - b.max.cast<double>()).cwiseMax(0.0);
   return d.norm();
@@ -222,33 +242,28 @@ std::size_t AwarenessStage::Source::fill(std::size_t first, std::size_t len, flo
     return len;
   }
   // Depth pixels, row segment by row segment. Pixels without data are left out (a quarter of a
-  // simulated frame: the point loop need not classify them); the runs of pixels with data in
-  // between are converted in loops the compiler vectorises.
+  // simulated frame: the point loop need not classify them). A segment goes 32 pixels at a time:
+  // their pixels with data counted without a branch (the compiler vectorises the count), none
+  // skipped, all converted in a loop the compiler vectorises, and a mix packed by packPixels();
+  // the same points in the same order either way.
   const std::size_t width = static_cast<std::size_t>(depth->intrinsics.width);
   std::size_t done = 0;
   std::size_t n = 0;
-  auto copyRuns = [&](const auto* raw, std::size_t seg, auto valid, const float* rx, float ray_y) {
-    // The end of the run of pixels from `at` whose validity is `want`: 32 at a time while all
-    // of them agree (a branch-free count the compiler vectorises; 8 at a time it does not),
-    // then one by one.
-    auto runEnd = [&](std::size_t at, bool want) {
-      constexpr std::size_t kStep = 32;
-      for (; at + kStep <= seg; at += kStep) {
-        int agree = 0;
-        for (std::size_t k = 0; k < kStep; ++k) agree += valid(raw[at + k]) == want ? 1 : 0;
-        if (agree != static_cast<int>(kStep)) break;
-      }
-      while (at < seg && valid(raw[at]) == want) ++at;
-      return at;
-    };
+  auto copyValid = [&](const auto* raw, std::size_t seg, auto valid, const float* rx, float ray_y) {
+    constexpr std::size_t kStep = 32;
     std::size_t i = 0;
-    while (i < seg) {
-      i = runEnd(i, false);
-      const std::size_t end = runEnd(i, true);
-      convertPixels(raw + i, rx + i, ray_y, end - i, xs + n, ys + n, zs + n);
-      n += end - i;
-      i = end;
+    for (; i + kStep <= seg; i += kStep) {
+      int with_data = 0;
+      for (std::size_t k = 0; k < kStep; ++k) with_data += valid(raw[i + k]) ? 1 : 0;
+      if (with_data == 0) continue;
+      if (with_data == static_cast<int>(kStep)) {
+        convertPixels(raw + i, rx + i, ray_y, kStep, xs + n, ys + n, zs + n);
+        n += kStep;
+      } else {
+        n += packPixels(raw + i, rx + i, ray_y, kStep, valid, xs + n, ys + n, zs + n);
+      }
     }
+    n += packPixels(raw + i, rx + i, ray_y, seg - i, valid, xs + n, ys + n, zs + n);
   };
   while (done < len) {
     const std::size_t pixel = first + done;
@@ -259,18 +274,18 @@ std::size_t AwarenessStage::Source::fill(std::size_t first, std::size_t len, flo
     const float* rx = ray_x->data() + u0;
     if (depth->encoding == DepthEncoding::kUint16Millimetres) {
       // Neither 0 nor 0xFFFF, in one comparison.
-      copyRuns(depth->depth_mm.data() + pixel, seg,
-               [](std::uint16_t r) { return static_cast<std::uint16_t>(r - 1u) < 0xFFFEu; }, rx,
-               ray_y);
+      copyValid(depth->depth_mm.data() + pixel, seg,
+                [](std::uint16_t r) { return static_cast<std::uint16_t>(r - 1u) < 0xFFFEu; }, rx,
+                ray_y);
     } else {
       // 0 < r <= FLT_MAX (no NaN, no infinity), in one comparison of the bits.
-      copyRuns(depth->depth_m.data() + pixel, seg,
-               [](float r) {
-                 std::uint32_t bits = 0;
-                 std::memcpy(&bits, &r, sizeof bits);
-                 return bits - 1u < 0x7F7FFFFFu;
-               },
-               rx, ray_y);
+      copyValid(depth->depth_m.data() + pixel, seg,
+                [](float r) {
+                  std::uint32_t bits = 0;
+                  std::memcpy(&bits, &r, sizeof bits);
+                  return bits - 1u < 0x7F7FFFFFu;
+                },
+                rx, ray_y);
     }
     done += seg;
   }

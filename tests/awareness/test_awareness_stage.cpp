@@ -245,63 +245,75 @@ TEST(AwarenessStage, SampleCountKeepsThatManyPoints) {
 }
 
 // A depth image read pixel by pixel gives exactly what its back-projected cloud gives, with the
-// pixels that have no data counted as non-finite points; both encodings.
+// pixels that have no data counted as non-finite points; both encodings, and two patterns of
+// pixels without data: scattered (every 7th pixel), and a RealSense's sparse rows, where runs of
+// one or two pixels with data alternate with single holes between long runs with and without
+// data (every row has 32 pixels in a row without data, 32 in a row with data, and mixes: each
+// way a group of 32 pixels is read).
 TEST(AwarenessStage, DepthImageMatchesItsBackProjectedCloud) {
-  for (const DepthEncoding encoding :
-       {DepthEncoding::kUint16Millimetres, DepthEncoding::kFloat32Metres}) {
-    DepthFrame depth;
-    depth.encoding = encoding;
-    depth.intrinsics = {60.0, 55.0, 39.5, 30.0, 80, 61};  // odd sizes: row segments in blocks
-    depth.T_W_B.translation() = Eigen::Vector3d(1.37, -2.21, 1.05);
-    depth.T_W_B.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    depth.T_B_S = SensorConfig{}.T_B_S();
-    std::mt19937 rng(5);
-    std::uniform_real_distribution<float> z(0.3f, 8.0f);  // some beyond max range 6 m
-    const std::size_t n = std::size_t{80} * 61;
-    for (std::size_t i = 0; i < n; ++i) {
-      const bool hole = i % 7 == 0;
-      const float d = z(rng);
-      if (encoding == DepthEncoding::kUint16Millimetres) {
-        depth.depth_mm.push_back(hole ? (i % 2 ? 0 : 0xFFFF) : static_cast<std::uint16_t>(d * 1000));
-      } else {
-        const float bad[] = {0.0f, std::numeric_limits<float>::quiet_NaN(),
-                             std::numeric_limits<float>::infinity(), -1.0f};
-        depth.depth_m.push_back(hole ? bad[i % 4] : d);
+  for (const bool sparse_rows : {false, true}) {
+    for (const DepthEncoding encoding :
+         {DepthEncoding::kUint16Millimetres, DepthEncoding::kFloat32Metres}) {
+      SCOPED_TRACE(sparse_rows ? "sparse rows" : "every 7th pixel");
+      DepthFrame depth;
+      depth.encoding = encoding;
+      // Odd sizes: row segments in blocks.
+      depth.intrinsics = sparse_rows ? PinholeIntrinsics{90.0, 85.0, 64.5, 30.0, 131, 61}
+                                     : PinholeIntrinsics{60.0, 55.0, 39.5, 30.0, 80, 61};
+      const std::size_t width = static_cast<std::size_t>(depth.intrinsics.width);
+      depth.T_W_B.translation() = Eigen::Vector3d(1.37, -2.21, 1.05);
+      depth.T_W_B.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      depth.T_B_S = SensorConfig{}.T_B_S();
+      std::mt19937 rng(5);
+      std::uniform_real_distribution<float> z(0.3f, 8.0f);  // some beyond max range 6 m
+      const std::size_t n = width * 61;
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t u = i % width;
+        // Sparse rows: 40 without data, 54 of holes every third pixel, the rest with data.
+        const bool hole = sparse_rows ? u < 40 || (u < 94 && u % 3 == 0) : i % 7 == 0;
+        const float d = z(rng);
+        if (encoding == DepthEncoding::kUint16Millimetres) {
+          depth.depth_mm.push_back(hole ? (i % 2 ? 0 : 0xFFFF) : static_cast<std::uint16_t>(d * 1000));
+        } else {
+          const float bad[] = {0.0f, std::numeric_limits<float>::quiet_NaN(),
+                               std::numeric_limits<float>::infinity(), -1.0f};
+          depth.depth_m.push_back(hole ? bad[i % 4] : d);
+        }
       }
-    }
-    PointCloudFrame cloud;
-    cloud.T_W_B = depth.T_W_B;
-    cloud.T_B_S = depth.T_B_S;
-    std::size_t skipped = 0;
-    ASSERT_TRUE(backProject(depth, &cloud.points_S, &skipped));
-    ASSERT_GT(skipped, n / 8);
+      PointCloudFrame cloud;
+      cloud.T_W_B = depth.T_W_B;
+      cloud.T_B_S = depth.T_B_S;
+      std::size_t skipped = 0;
+      ASSERT_TRUE(backProject(depth, &cloud.points_S, &skipped));
+      ASSERT_GT(skipped, n / 8);
 
-    const MapConfig config = testConfig(0.1);
-    AwarenessStage from_depth(config);
-    AwarenessStage from_cloud(config);
-    MeasurementBatch a;
-    MeasurementBatch b;
-    PointCounters ca;
-    PointCounters cb;
-    ASSERT_TRUE(from_depth.process(depth, &a, &ca));
-    from_cloud.process(cloud, &b, &cb);
-    EXPECT_EQ(ca.points_in, n);
-    EXPECT_EQ(ca.points_in, cb.points_in + skipped);
-    EXPECT_EQ(ca.rejected_non_finite, cb.rejected_non_finite + skipped);
-    EXPECT_EQ(ca.beyond_max_range, cb.beyond_max_range);
-    EXPECT_GT(ca.beyond_max_range, 0u);
-    ASSERT_EQ(a.hits.size(), b.hits.size());
-    for (std::size_t i = 0; i < a.hits.size(); ++i) {
-      EXPECT_TRUE(a.hits[i].index == b.hits[i].index);
-      EXPECT_EQ(a.hits[i].p_W, b.hits[i].p_W);
-    }
-    EXPECT_EQ(a.free_count, b.free_count);
-    const std::size_t words = static_cast<std::size_t>(a.free.dims().x()) *
-                              static_cast<std::size_t>(a.free.dims().y()) * a.free.wordsPerRow();
-    EXPECT_TRUE(std::equal(a.free.data(), a.free.data() + words, b.free.data()));
+      const MapConfig config = testConfig(0.1);
+      AwarenessStage from_depth(config);
+      AwarenessStage from_cloud(config);
+      MeasurementBatch a;
+      MeasurementBatch b;
+      PointCounters ca;
+      PointCounters cb;
+      ASSERT_TRUE(from_depth.process(depth, &a, &ca));
+      from_cloud.process(cloud, &b, &cb);
+      EXPECT_EQ(ca.points_in, n);
+      EXPECT_EQ(ca.points_in, cb.points_in + skipped);
+      EXPECT_EQ(ca.rejected_non_finite, cb.rejected_non_finite + skipped);
+      EXPECT_EQ(ca.beyond_max_range, cb.beyond_max_range);
+      EXPECT_GT(ca.beyond_max_range, 0u);
+      ASSERT_EQ(a.hits.size(), b.hits.size());
+      for (std::size_t i = 0; i < a.hits.size(); ++i) {
+        EXPECT_TRUE(a.hits[i].index == b.hits[i].index);
+        EXPECT_EQ(a.hits[i].p_W, b.hits[i].p_W);
+      }
+      EXPECT_EQ(a.free_count, b.free_count);
+      const std::size_t words = static_cast<std::size_t>(a.free.dims().x()) *
+                                static_cast<std::size_t>(a.free.dims().y()) * a.free.wordsPerRow();
+      EXPECT_TRUE(std::equal(a.free.data(), a.free.data() + words, b.free.data()));
 
-    depth.intrinsics.width = 79;  // size no longer matches the data
-    EXPECT_FALSE(from_depth.process(depth, &a, &ca));
+      depth.intrinsics.width -= 1;  // size no longer matches the data
+      EXPECT_FALSE(from_depth.process(depth, &a, &ca));
+    }
   }
 }
 
