@@ -129,13 +129,13 @@ double threadCpuMs() {
 /// Each submit() is timed by the wall clock and by the thread's CPU time: on a shared machine the
 /// CPU time leaves out the time the thread waited for a core.
 int runFiles(const FilesOptions& o) {
-  std::unique_ptr<io::FrameSource> source;
+  std::unique_ptr<datasets::FrameSource> source;
   if (o.poses.empty()) {
-    source = std::make_unique<io::FrameDirectorySource>(o.dir);
+    source = std::make_unique<datasets::FrameDirectorySource>(o.dir);
   } else {
-    source = std::make_unique<io::CloudSequenceSource>(o.dir, o.poses, io::CloudSequenceOptions{});
+    source = std::make_unique<datasets::CloudSequenceSource>(o.dir, o.poses, datasets::CloudSequenceOptions{});
   }
-  std::vector<io::SourceFrame> frames;
+  std::vector<datasets::SourceFrame> frames;
   for (std::size_t i = 0; i < source->size(); ++i) frames.push_back(source->read(i));
   auto cells = [&](double m) {
     return std::max(5, static_cast<int>(std::ceil(m / o.resolution_m / 5.0)) * 5);
@@ -153,8 +153,8 @@ int runFiles(const FilesOptions& o) {
   std::size_t occupied = 0;
   for (int pass = 0; pass < o.passes; ++pass) {
     MapEngine engine(c);
-    for (const io::SourceFrame& frame : frames) {
-      io::SourceFrame f = frame;  // copied untimed: submit() takes the frame
+    for (const datasets::SourceFrame& frame : frames) {
+      datasets::SourceFrame f = frame;  // copied untimed: submit() takes the frame
       const double cpu0 = threadCpuMs();
       const SteadyClock::time_point t0 = SteadyClock::now();
       const FrameStatus status = std::visit([&](auto& x) { return engine.submit(std::move(x)); }, f);
