@@ -1,0 +1,123 @@
+#pragma once
+/// @file
+/// The reference planner as a whole: the global route on mlmap's projected grid (accumulated on a
+/// fixed origin, inflated, searched with A*), the local plan on the ESDF and the local map, when
+/// each is computed again, and the setpoints that fly the committed segment.
+///
+/// Policies, stated once:
+/// - global route: unknown cells are free (optimistic), cells within inflation_m of an occupied
+///   cell are not entered; replanned with every new map snapshot and at least every
+///   replan_period_s;
+/// - committed segment: never enters unknown space nor comes nearer than
+///   local.commit_clearance_m to a known obstacle (local_planner.h); checked against every new
+///   snapshot, and planned again at once when the snapshot blocks it (a reactive replan);
+/// - speed: the vehicle can always stop before the end of the committed segment (braking at
+///   max_accel_mps2, stop_margin_m short of it).
+/// Frames: world frame W, metres, seconds, radians (yaw about W +z, 0 facing +x).
+
+#include "mlmap/nav/grid_search.h"
+#include "mlmap/nav/local_planner.h"
+#include "mlmap/planning/fixed_origin_grid.h"
+#include "mlmap/planning/map_snapshot.h"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <vector>
+
+namespace mlmap::nav {
+
+/// Parameters of the navigator.
+struct NavigatorConfig {
+  double inflation_m = 0.6;        ///< the global route keeps this far from occupied cells [m]
+  double replan_period_s = 0.1;    ///< longest time between two plans [s]
+  double goal_tolerance_m = 0.3;   ///< horizontal distance at which the goal counts as reached [m]
+  double max_speed_mps = 1.5;      ///< speed the setpoints never exceed [m/s]
+  double max_accel_mps2 = 2.0;     ///< braking the setpoints assume [m/s^2]
+  double stop_margin_m = 0.2;      ///< the vehicle stops this short of the committed end [m]
+  double carrot_m = 0.5;           ///< the setpoint's direction looks this far ahead [m]
+  double planning_margin_m = 4.0;  ///< the route may leave the start-goal box by this much [m]
+  LocalPlannerConfig local;        ///< the local planner
+};
+
+/// What the vehicle is asked to do: be at position_W moving at velocity_W, heading yaw_rad.
+struct Setpoint {
+  Eigen::Vector3d position_W = Eigen::Vector3d::Zero();  ///< [m]
+  Eigen::Vector3d velocity_W = Eigen::Vector3d::Zero();  ///< [m/s]
+  double yaw_rad = 0.0;                                  ///< [rad]
+};
+
+/// Why a plan was made (Navigator::update()).
+enum class PlanReason : std::uint8_t {
+  kNone,      ///< no plan this time
+  kNewMap,    ///< a new snapshot arrived, the committed segment still clear
+  kPeriodic,  ///< replan_period_s elapsed without a new snapshot
+  kBlocked,   ///< the new snapshot blocks the committed segment: planned again at once
+};
+
+/// Global route, local plan and setpoints for one vehicle and goal.
+class Navigator {
+ public:
+  /// A navigator without a goal (it hovers).
+  explicit Navigator(const NavigatorConfig& config = {});
+
+  /// Sets the goal; the route is planned at the next update().
+  void setGoal(const Eigen::Vector3d& goal_W);
+
+  /// Brings the plan up to date with `map` for a vehicle at `p_W` at `time_s`: a snapshot not seen
+  /// before is absorbed into the accumulated grid, the committed segment is checked against it,
+  /// and global route and local plan are computed again when it is blocked, when the snapshot is
+  /// new, or when replan_period_s has elapsed. Returns why it planned (kNone: it did not).
+  PlanReason update(const MapSnapshot& map, const Eigen::Vector3d& p_W, double time_s);
+
+  /// The setpoint for a vehicle at `p_W` heading `yaw_rad` (cheap: call it at the control rate).
+  [[nodiscard]] Setpoint setpoint(const Eigen::Vector3d& p_W, double yaw_rad) const;
+
+  /// True when `p_W` lies within goal_tolerance_m of the goal, horizontally.
+  [[nodiscard]] bool reached(const Eigen::Vector3d& p_W) const;
+
+  /// The current global route (shortened, start at the vehicle, goal last; empty before a plan or
+  /// when none was found), at the goal's height.
+  [[nodiscard]] const std::vector<Eigen::Vector3d>& route_W() const { return route_W_; }
+  /// The current local plan.
+  [[nodiscard]] const LocalPlan& localPlan() const { return plan_; }
+  /// The accumulated 2D grid the route is planned on.
+  [[nodiscard]] const ProjectedGrid& grid() const { return accumulated_.grid(); }
+  /// Plans made, those made at once because a snapshot blocked the committed segment, and
+  /// global searches that found no route (the previous route is kept).
+  [[nodiscard]] std::uint64_t plans() const { return plans_; }
+  [[nodiscard]] std::uint64_t blockedReplans() const { return blocked_replans_; }
+  [[nodiscard]] std::uint64_t routeFailures() const { return route_failures_; }
+  /// Thread CPU time of the last plan's global and local parts [ms].
+  [[nodiscard]] double lastGlobalCpu_ms() const { return last_global_cpu_ms_; }
+  [[nodiscard]] double lastLocalCpu_ms() const { return last_local_cpu_ms_; }
+
+ private:
+  void planRoute(const Eigen::Vector3d& p_W);
+
+  NavigatorConfig config_;
+  bool has_goal_ = false;
+  Eigen::Vector3d goal_W_ = Eigen::Vector3d::Zero();
+  FixedOriginGrid accumulated_;
+  std::uint64_t last_frame_ = 0;
+  bool planned_once_ = false;
+  double last_plan_time_s_ = 0.0;
+  std::vector<Eigen::Vector3d> route_W_;
+  LocalPlan plan_;
+  std::uint64_t plans_ = 0;
+  std::uint64_t blocked_replans_ = 0;
+  std::uint64_t route_failures_ = 0;
+  double last_global_cpu_ms_ = 0.0;
+  double last_local_cpu_ms_ = 0.0;
+};
+
+/// Thread CPU time of the calling thread [s] (CLOCK_THREAD_CPUTIME_ID).
+[[nodiscard]] double threadCpu_s();
+
+/// A grid covering `grid` and the box of `points_W` grown by margin_m, on the lattice of `grid`
+/// (or of resolution_m from the origin when `grid` is empty), the new cells unknown.
+[[nodiscard]] ProjectedGrid coverPoints(const ProjectedGrid& grid,
+                                        const std::vector<Eigen::Vector2d>& points_W,
+                                        double margin_m, double resolution_m);
+
+}  // namespace mlmap::nav

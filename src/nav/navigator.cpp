@@ -1,0 +1,186 @@
+#include "mlmap/nav/navigator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <ctime>
+
+namespace mlmap::nav {
+
+double threadCpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+ProjectedGrid coverPoints(const ProjectedGrid& grid, const std::vector<Eigen::Vector2d>& points_W,
+                          double margin_m, double resolution_m) {
+  const double res = grid.width > 0 ? grid.resolution_m : resolution_m;
+  const Eigen::Vector2d lattice = grid.width > 0 ? grid.origin_W : Eigen::Vector2d::Zero();
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(1e300);
+  Eigen::Vector2d hi = Eigen::Vector2d::Constant(-1e300);
+  for (const Eigen::Vector2d& p : points_W) {
+    lo = lo.cwiseMin(p - Eigen::Vector2d::Constant(margin_m));
+    hi = hi.cwiseMax(p + Eigen::Vector2d::Constant(margin_m));
+  }
+  if (grid.width > 0) {
+    lo = lo.cwiseMin(grid.origin_W);
+    hi = hi.cwiseMax(grid.origin_W + Eigen::Vector2d(grid.width, grid.height) * res);
+  }
+  ProjectedGrid out;
+  out.resolution_m = res;
+  out.band_min_z_m = grid.band_min_z_m;
+  out.band_max_z_m = grid.band_max_z_m;
+  if (points_W.empty() && grid.width == 0) return out;
+  // Whole cells of the lattice; the offset of `grid` inside is then a whole number of cells.
+  const Eigen::Vector2d first = ((lo - lattice) / res).array().floor();
+  const Eigen::Vector2d last = ((hi - lattice) / res).array().ceil();
+  out.origin_W = lattice + first * res;
+  out.width = static_cast<int>(last.x() - first.x());
+  out.height = static_cast<int>(last.y() - first.y());
+  out.cells.assign(static_cast<std::size_t>(out.width) * static_cast<std::size_t>(out.height),
+                   ProjectedGrid::kUnknown);
+  if (grid.width > 0) {
+    const int ox = static_cast<int>(std::lround((grid.origin_W.x() - out.origin_W.x()) / res));
+    const int oy = static_cast<int>(std::lround((grid.origin_W.y() - out.origin_W.y()) / res));
+    for (int y = 0; y < grid.height; ++y) {
+      std::copy_n(grid.cells.begin() + static_cast<std::ptrdiff_t>(y) * grid.width, grid.width,
+                  out.cells.begin() + static_cast<std::ptrdiff_t>(y + oy) * out.width + ox);
+    }
+  }
+  return out;
+}
+
+Navigator::Navigator(const NavigatorConfig& config) : config_(config) {}
+
+void Navigator::setGoal(const Eigen::Vector3d& goal_W) {
+  goal_W_ = goal_W;
+  has_goal_ = true;
+  route_W_.clear();
+  plan_ = LocalPlan{};
+  planned_once_ = false;
+}
+
+bool Navigator::reached(const Eigen::Vector3d& p_W) const {
+  return has_goal_ && (p_W.head<2>() - goal_W_.head<2>()).norm() <= config_.goal_tolerance_m;
+}
+
+void Navigator::planRoute(const Eigen::Vector3d& p_W) {
+  const ProjectedGrid& accumulated = accumulated_.grid();
+  const ProjectedGrid canvas =
+      coverPoints(accumulated, {p_W.head<2>(), goal_W_.head<2>()}, config_.planning_margin_m,
+                  accumulated.width > 0 ? accumulated.resolution_m : 0.2);
+  const PlanningGrid grid = inflateGrid(canvas, config_.inflation_m, UnknownAs::kFree);
+  const GridPath path = searchGrid(grid, grid.cellOf(p_W.head<2>()), grid.cellOf(goal_W_.head<2>()));
+  if (!path.found) {
+    ++route_failures_;
+    return;
+  }
+  std::vector<Eigen::Vector2d> points = shortenPath(grid, path.cells);
+  points.front() = p_W.head<2>();
+  if (points.size() == 1) points.push_back(goal_W_.head<2>());
+  points.back() = goal_W_.head<2>();
+  route_W_.clear();
+  for (const Eigen::Vector2d& p : points) route_W_.emplace_back(p.x(), p.y(), goal_W_.z());
+}
+
+PlanReason Navigator::update(const MapSnapshot& map, const Eigen::Vector3d& p_W, double time_s) {
+  if (!has_goal_) return PlanReason::kNone;
+  const double cpu0 = threadCpu_s();
+  const bool new_map = map.frame() != last_frame_;
+  PlanReason reason = PlanReason::kNone;
+  if (new_map) {
+    last_frame_ = map.frame();
+    accumulated_.absorb(map.grid());
+    // The rest of the committed segment, from the vehicle on, under the new map.
+    const std::vector<Eigen::Vector3d> committed = plan_.committedPoints();
+    if (committed.size() > 1) {
+      std::vector<Eigen::Vector3d> rest =
+          routeAhead(committed, p_W, polylineLength(committed), config_.local.sample_step_m);
+      if (committablePrefix(map, config_.local, rest) < rest.size()) {
+        reason = PlanReason::kBlocked;
+        ++blocked_replans_;
+      }
+    }
+    if (reason == PlanReason::kNone) reason = PlanReason::kNewMap;
+  } else if (!planned_once_ || time_s - last_plan_time_s_ >= config_.replan_period_s - 1e-9) {
+    reason = PlanReason::kPeriodic;
+  }
+  if (reason == PlanReason::kNone) return reason;
+  planRoute(p_W);
+  const double cpu1 = threadCpu_s();
+  plan_ = planLocal(map, config_.local, route_W_, p_W);
+  const double cpu2 = threadCpu_s();
+  last_global_cpu_ms_ = 1e3 * (cpu1 - cpu0);
+  last_local_cpu_ms_ = 1e3 * (cpu2 - cpu1);
+  planned_once_ = true;
+  last_plan_time_s_ = time_s;
+  ++plans_;
+  return reason;
+}
+
+Setpoint Navigator::setpoint(const Eigen::Vector3d& p_W, double yaw_rad) const {
+  Setpoint sp;
+  sp.position_W = p_W;
+  sp.yaw_rad = yaw_rad;
+  const std::vector<Eigen::Vector3d> committed = plan_.committedPoints();
+  // Where the vehicle is along the committed segment, and what is left of it.
+  double along = 0.0;
+  double best = 1e300;
+  double total = 0.0;
+  Eigen::Vector3d nearest = p_W;
+  for (std::size_t i = 0; i + 1 < committed.size(); ++i) {
+    const Eigen::Vector3d ab = committed[i + 1] - committed[i];
+    const double len = ab.norm();
+    const double t = len > 0.0 ? std::clamp((p_W - committed[i]).dot(ab) / (len * len), 0.0, 1.0) : 0.0;
+    const Eigen::Vector3d q = committed[i] + t * ab;
+    const double d = (q - p_W).squaredNorm();
+    if (d < best) {
+      best = d;
+      along = total + t * len;
+      nearest = q;
+    }
+    total += len;
+  }
+  const double left = total - along;
+  // The point carrot_m further on (or the end).
+  auto pointAt = [&committed](double s) {
+    double walked = 0.0;
+    for (std::size_t i = 0; i + 1 < committed.size(); ++i) {
+      const double len = (committed[i + 1] - committed[i]).norm();
+      if (walked + len >= s && len > 0.0) {
+        return Eigen::Vector3d(committed[i] + (committed[i + 1] - committed[i]) * ((s - walked) / len));
+      }
+      walked += len;
+    }
+    return committed.back();
+  };
+  const double speed =
+      std::min(config_.max_speed_mps,
+               std::sqrt(2.0 * config_.max_accel_mps2 * std::max(0.0, left - config_.stop_margin_m)));
+  if (committed.size() > 1) {
+    sp.position_W = nearest;
+    Eigen::Vector3d dir = pointAt(std::min(total, along + config_.carrot_m)) - p_W;
+    dir.z() = 0.0;
+    if (dir.norm() > 1e-3 && speed > 0.0) {
+      sp.velocity_W = dir.normalized() * speed;
+      sp.velocity_W.z() = 0.0;
+    }
+  }
+  // Heading: the direction of travel; when (nearly) stopped, towards where the plan goes next,
+  // so that a forward camera looks at the space the vehicle waits to see.
+  if (sp.velocity_W.norm() > 0.1) {
+    sp.yaw_rad = std::atan2(sp.velocity_W.y(), sp.velocity_W.x());
+  } else {
+    const std::vector<Eigen::Vector3d>& ahead = plan_.points_W;
+    for (const Eigen::Vector3d& q : ahead) {
+      const Eigen::Vector2d d = q.head<2>() - p_W.head<2>();
+      if (d.norm() > 0.5) {
+        sp.yaw_rad = std::atan2(d.y(), d.x());
+        break;
+      }
+    }
+  }
+  return sp;
+}
+
+}  // namespace mlmap::nav
