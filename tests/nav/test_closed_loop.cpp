@@ -1,0 +1,55 @@
+// The closed loop on a few small worlds: simulated camera -> mapping engine -> reference planner
+// -> vehicle. Every flight reaches its goal without touching anything (ground truth), the person
+// crossing the route included.
+#include "mlmap/nav/nav_flight.h"
+
+#include <gtest/gtest.h>
+
+namespace mlmap::nav {
+namespace {
+
+void expectReachedWithoutCollision(const NavWorld& world) {
+  NavFlightOptions options;
+  options.timeout_s = 60.0;
+  const NavFlightResult r = flyToGoal(world, options);
+  SCOPED_TRACE(world.name);
+  EXPECT_TRUE(r.reached) << "stopped at " << r.trajectory_W.back().transpose() << " after "
+                         << r.time_s << " s";
+  EXPECT_EQ(r.collisions, 0);
+  EXPECT_GE(r.min_clearance_m, options.vehicle_radius_m);
+  EXPECT_GT(r.shortest_path_m, 0.0);
+  EXPECT_GE(r.path_length_m, 0.8 * r.shortest_path_m);
+  // Planned at least at 10 Hz of simulated time, each frame's plan made.
+  EXPECT_GE(static_cast<double>(r.plans), 10.0 * r.time_s - 1.0);
+  EXPECT_EQ(r.map_to_plan_ms.size(), r.frames);
+}
+
+TEST(ClosedLoop, ReachesTheGoalThroughAForestWithoutCollision) {
+  expectReachedWithoutCollision(forestWorld(21, 0.08, {14.0, 8.0}));
+}
+
+TEST(ClosedLoop, ReachesTheGoalThroughADoorWithoutCollision) {
+  expectReachedWithoutCollision(roomsWorld(22, 2));
+}
+
+TEST(ClosedLoop, StopsForAPersonCrossingInFrontAndReachesTheGoalWithoutCollision) {
+  // The person crosses the path the vehicle flies without them, halfway, timed to step onto it
+  // when the vehicle is 3 m away: in view, across the committed segment.
+  NavWorld world = forestWorld(23, 0.03, {18.0, 8.0});
+  NavFlightOptions options;
+  options.timeout_s = 60.0;
+  const NavFlightResult alone = flyToGoal(world, options);
+  ASSERT_TRUE(alone.reached);
+  std::vector<Eigen::Vector2d> flown;
+  for (const Eigen::Vector3d& p : alone.trajectory_W) flown.push_back(p.head<2>());
+  addCrossingPerson(&world, flown, alone.path_length_m / alone.time_s, 3.0);
+  const NavFlightResult r = flyToGoal(world, options);
+  EXPECT_TRUE(r.reached);
+  EXPECT_EQ(r.collisions, 0);
+  EXPECT_GE(r.min_clearance_m, options.vehicle_radius_m);
+  EXPECT_GE(r.blocked_replans, 1u);  // the person crossed the committed segment: planned at once
+  EXPECT_GT(r.time_s, alone.time_s);  // and it cost time
+}
+
+}  // namespace
+}  // namespace mlmap::nav
