@@ -87,13 +87,23 @@ void pushAwayFromObstacles(const MapSnapshot& map, const LocalPlannerConfig& con
   }
 }
 
+double nearestPointDistance(const std::vector<Eigen::Vector3d>& points_W, const Eigen::Vector3d& p_W) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const Eigen::Vector3d& q : points_W) best = std::min(best, (q - p_W).squaredNorm());
+  return std::sqrt(best);
+}
+
 std::size_t committablePrefix(const MapSnapshot& map, const LocalPlannerConfig& config,
-                              const std::vector<Eigen::Vector3d>& points_W) {
+                              const std::vector<Eigen::Vector3d>& points_W,
+                              const std::vector<Eigen::Vector3d>* recent_obstacles_W) {
   if (map.esdf() == nullptr || points_W.empty()) return 0;
   const Eigen::Vector3d& p0 = points_W.front();
   const EsdfMap::Query here = map.distance(p0);
   const double required =
       here.valid ? std::min(config.commit_clearance_m, here.distance_m) : config.commit_clearance_m;
+  const bool recent = recent_obstacles_W != nullptr && !recent_obstacles_W->empty();
+  const double required_recent =
+      recent ? std::min(config.commit_clearance_m, nearestPointDistance(*recent_obstacles_W, p0)) : 0.0;
   std::size_t n = 1;
   for (std::size_t i = 1; i < points_W.size(); ++i) {
     Eigen::Vector3d a = points_W[i - 1];
@@ -110,17 +120,19 @@ std::size_t committablePrefix(const MapSnapshot& map, const LocalPlannerConfig& 
     if (a != b && !map.isSegmentFree(a, b, UnknownAs::kOccupied)) break;
     const EsdfMap::Query q = map.distance(b);
     if (!q.valid || q.distance_m < required) break;
+    if (recent && nearestPointDistance(*recent_obstacles_W, b) < required_recent) break;
     n = i + 1;
   }
   return n;
 }
 
 LocalPlan planLocal(const MapSnapshot& map, const LocalPlannerConfig& config,
-                    const std::vector<Eigen::Vector3d>& route_W, const Eigen::Vector3d& p_W) {
+                    const std::vector<Eigen::Vector3d>& route_W, const Eigen::Vector3d& p_W,
+                    const std::vector<Eigen::Vector3d>* recent_obstacles_W) {
   LocalPlan plan;
   plan.points_W = routeAhead(route_W, p_W, config.horizon_m, config.sample_step_m);
   pushAwayFromObstacles(map, config, &plan.points_W);
-  plan.committed = committablePrefix(map, config, plan.points_W);
+  plan.committed = committablePrefix(map, config, plan.points_W, recent_obstacles_W);
   plan.committed_length_m = polylineLength(plan.committedPoints());
   return plan;
 }

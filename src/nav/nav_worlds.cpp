@@ -256,7 +256,7 @@ std::vector<NavWorld> benchmarkWorlds(int count, std::uint32_t seed, double infl
         w = paperRoomWorld(s);
         break;
     }
-    if (i % 3 == 2) addCrossingPerson(&w, shortestRoute(w, inflation_m, 0.1), speed_mps);
+    if (i % 3 == 2) addCrossingPerson(&w, shortestRoute(w, inflation_m, 0.1), speed_mps, 3.0);
     worlds.push_back(std::move(w));
   }
   return worlds;

@@ -83,20 +83,26 @@ void Navigator::planRoute(const Eigen::Vector3d& p_W) {
   for (const Eigen::Vector2d& p : points) route_W_.emplace_back(p.x(), p.y(), goal_W_.z());
 }
 
+void Navigator::setRecentObstacles(std::vector<Eigen::Vector3d> points_W) {
+  recent_obstacles_W_ = std::move(points_W);
+  recent_obstacles_new_ = true;
+}
+
 PlanReason Navigator::update(const MapSnapshot& map, const Eigen::Vector3d& p_W, double time_s) {
   if (!has_goal_) return PlanReason::kNone;
   const double cpu0 = threadCpu_s();
-  const bool new_map = map.frame() != last_frame_;
+  const bool new_map = map.frame() != last_frame_ || recent_obstacles_new_;
+  recent_obstacles_new_ = false;
   PlanReason reason = PlanReason::kNone;
   if (new_map) {
+    if (map.frame() != last_frame_) accumulated_.absorb(map.grid());
     last_frame_ = map.frame();
-    accumulated_.absorb(map.grid());
     // The rest of the committed segment, from the vehicle on, under the new map.
     const std::vector<Eigen::Vector3d> committed = plan_.committedPoints();
     if (committed.size() > 1) {
       std::vector<Eigen::Vector3d> rest =
           routeAhead(committed, p_W, polylineLength(committed), config_.local.sample_step_m);
-      if (committablePrefix(map, config_.local, rest) < rest.size()) {
+      if (committablePrefix(map, config_.local, rest, &recent_obstacles_W_) < rest.size()) {
         reason = PlanReason::kBlocked;
         ++blocked_replans_;
       }
@@ -108,7 +114,9 @@ PlanReason Navigator::update(const MapSnapshot& map, const Eigen::Vector3d& p_W,
   if (reason == PlanReason::kNone) return reason;
   planRoute(p_W);
   const double cpu1 = threadCpu_s();
-  plan_ = planLocal(map, config_.local, route_W_, p_W);
+  plan_ = planLocal(map, config_.local, route_W_, p_W, &recent_obstacles_W_);
+  evade_W_ = evadeVelocity(map, p_W);
+  cautious_ = nearestMoved(map, p_W, config_.caution_radius_m) != nullptr;
   const double cpu2 = threadCpu_s();
   last_global_cpu_ms_ = 1e3 * (cpu1 - cpu0);
   last_local_cpu_ms_ = 1e3 * (cpu2 - cpu1);
@@ -118,10 +126,52 @@ PlanReason Navigator::update(const MapSnapshot& map, const Eigen::Vector3d& p_W,
   return reason;
 }
 
+const Eigen::Vector3d* Navigator::nearestMoved(const MapSnapshot& map, const Eigen::Vector3d& p_W,
+                                               double radius_m) const {
+  // Only what stands in open space the map knows free, two voxels from any mapped obstacle:
+  // something that moved there. A static obstacle is in the map (its measured surface points
+  // lie in or next to its occupied voxels), and the plan keeps its clearance from it.
+  const double open_m = 2.0 * map.window().resolution_m;
+  const Eigen::Vector3d* nearest = nullptr;
+  double best = radius_m;
+  for (const Eigen::Vector3d& q : recent_obstacles_W_) {
+    const double d = (q - p_W).norm();
+    if (d >= best) continue;
+    const EsdfMap::Query at = map.distance(q);
+    if (map.state(q) == Occupancy::kFree && at.valid && at.distance_m >= open_m) {
+      best = d;
+      nearest = &q;
+    }
+  }
+  return nearest;
+}
+
+Eigen::Vector3d Navigator::evadeVelocity(const MapSnapshot& map, const Eigen::Vector3d& p_W) const {
+  const Eigen::Vector3d* nearest = nearestMoved(map, p_W, config_.evade_radius_m);
+  if (nearest == nullptr) return Eigen::Vector3d::Zero();
+  Eigen::Vector3d away = p_W - *nearest;
+  away.z() = 0.0;
+  if (away.norm() < 1e-6) return Eigen::Vector3d::Zero();
+  away.normalize();
+  const Eigen::Vector3d to = p_W + away * config_.local.own_radius_m * 2.0;
+  const EsdfMap::Query q = map.distance(to);
+  if (!map.isSegmentFree(p_W + away * config_.local.own_radius_m, to, UnknownAs::kOccupied) ||
+      !q.valid || q.distance_m < config_.local.commit_clearance_m) {
+    return Eigen::Vector3d::Zero();
+  }
+  const double gap = (*nearest - p_W).norm();
+  const double urgency = std::min(1.0, 2.0 * (config_.evade_radius_m - gap) / config_.evade_radius_m);
+  return away * (config_.max_speed_mps * urgency);
+}
+
 Setpoint Navigator::setpoint(const Eigen::Vector3d& p_W, double yaw_rad) const {
   Setpoint sp;
   sp.position_W = p_W;
   sp.yaw_rad = yaw_rad;
+  if (evading()) {
+    sp.velocity_W = evade_W_;
+    return sp;
+  }
   const std::vector<Eigen::Vector3d> committed = plan_.committedPoints();
   // Where the vehicle is along the committed segment, and what is left of it.
   double along = 0.0;
@@ -155,7 +205,7 @@ Setpoint Navigator::setpoint(const Eigen::Vector3d& p_W, double yaw_rad) const {
     return committed.back();
   };
   const double speed =
-      std::min(config_.max_speed_mps,
+      std::min(cautious_ ? std::min(config_.caution_speed_mps, config_.max_speed_mps) : config_.max_speed_mps,
                std::sqrt(2.0 * config_.max_accel_mps2 * std::max(0.0, left - config_.stop_margin_m)));
   if (committed.size() > 1) {
     sp.position_W = nearest;

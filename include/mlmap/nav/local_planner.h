@@ -6,7 +6,11 @@
 /// Unknown-space policy: the committed segment never enters unknown space. Its centre line
 /// crosses only voxels the map knows free (MapSnapshot::isSegmentFree() with UnknownAs::kOccupied),
 /// and each of its points keeps an ESDF distance of at least commit_clearance_m from the known
-/// obstacles. Frames: world frame W, metres; the flight height is the route's z.
+/// obstacles, and as much from the obstacles of the latest frame when the caller passes them
+/// (its measured points, what the awareness map holds as the frame's hits, paper IV-A: they show
+/// a walking person in the frame that sees it, where the local map's log-odds need several hits
+/// to turn a free voxel occupied).
+/// Frames: world frame W, metres; the flight height is the route's z.
 
 #include "mlmap/planning/map_snapshot.h"
 
@@ -58,15 +62,22 @@ void pushAwayFromObstacles(const MapSnapshot& map, const LocalPlannerConfig& con
 /// each following segment must cross only known-free voxels (the part within own_radius_m of the
 /// first point excepted) and reach a point whose ESDF distance is valid and at least
 /// min(commit_clearance_m, the distance at the first point), so a vehicle already nearer may
-/// still move away. Returns 0 when there is no ESDF, else at least 1 (the vehicle's point).
-[[nodiscard]] std::size_t committablePrefix(const MapSnapshot& map,
-                                            const LocalPlannerConfig& config,
-                                            const std::vector<Eigen::Vector3d>& points_W);
+/// still move away; with `recent_obstacles_W`, that point must also be as far (the same rule)
+/// from each of them. Returns 0 when there is no ESDF, else at least 1 (the vehicle's point).
+[[nodiscard]] std::size_t committablePrefix(
+    const MapSnapshot& map, const LocalPlannerConfig& config,
+    const std::vector<Eigen::Vector3d>& points_W,
+    const std::vector<Eigen::Vector3d>* recent_obstacles_W = nullptr);
 
 /// Plans: routeAhead(), pushAwayFromObstacles(), committablePrefix().
 [[nodiscard]] LocalPlan planLocal(const MapSnapshot& map, const LocalPlannerConfig& config,
                                   const std::vector<Eigen::Vector3d>& route_W,
-                                  const Eigen::Vector3d& p_W);
+                                  const Eigen::Vector3d& p_W,
+                                  const std::vector<Eigen::Vector3d>* recent_obstacles_W = nullptr);
+
+/// Distance from p_W to the nearest of `points_W` [m] (+infinity when there is none).
+[[nodiscard]] double nearestPointDistance(const std::vector<Eigen::Vector3d>& points_W,
+                                          const Eigen::Vector3d& p_W);
 
 /// Length of a polyline [m].
 [[nodiscard]] double polylineLength(const std::vector<Eigen::Vector3d>& points_W);

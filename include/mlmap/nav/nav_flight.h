@@ -63,6 +63,13 @@ struct NavFlightResult {
   ProjectedGrid grid;                             ///< the planner's accumulated grid at the end
 };
 
+/// What the planner gets of a frame beside the map (Navigator::setRecentObstacles()): its
+/// measured points `points_S` (sensor frame, non-finite ones skipped) within 5 m of the sensor
+/// and 0.6 m of the flight height `height_m`, in W, one per cell of `cell_m`.
+[[nodiscard]] std::vector<Eigen::Vector3d> recentObstacles(const std::vector<Eigen::Vector3f>& points_S,
+                                                           const Transform& T_W_S, double height_m,
+                                                           double cell_m);
+
 /// Flies `world` from its start to its goal. Deterministic for given world and options (apart
 /// from the timings).
 [[nodiscard]] NavFlightResult flyToGoal(const NavWorld& world, const NavFlightOptions& options = {});

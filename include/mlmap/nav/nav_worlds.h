@@ -64,7 +64,8 @@ void addCrossingPerson(NavWorld* world, const std::vector<Eigen::Vector2d>& rout
                        double speed_mps, double lead_m = 4.0);
 
 /// The benchmark's `count` worlds from `seed`: forests at three densities, rooms (2 or 3) and the
-/// paper room in turn, a crossing person in every third (routes planned with inflation_m).
+/// paper room in turn, a person in every third crossing the shortest route (planned with
+/// inflation_m) 3 m ahead of a vehicle flying it at `speed_mps` on average.
 [[nodiscard]] std::vector<NavWorld> benchmarkWorlds(int count, std::uint32_t seed,
                                                     double inflation_m, double speed_mps);
 

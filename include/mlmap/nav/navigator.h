@@ -37,6 +37,15 @@ struct NavigatorConfig {
   double stop_margin_m = 0.2;      ///< the vehicle stops this short of the committed end [m]
   double carrot_m = 0.5;           ///< the setpoint's direction looks this far ahead [m]
   double planning_margin_m = 4.0;  ///< the route may leave the start-goal box by this much [m]
+  /// A recent obstacle (setRecentObstacles()) in open space the map knows free, two voxels or
+  /// more from any mapped obstacle (something that moved there), nearer than this makes the
+  /// vehicle back away from it, into known-free space, whatever the plan: a person walking into
+  /// the vehicle [m].
+  double evade_radius_m = 0.9;
+  /// Such an obstacle (something that moved) nearer than this caps the speed at
+  /// caution_speed_mps, so that what it does next leaves time to stop [m].
+  double caution_radius_m = 3.0;
+  double caution_speed_mps = 0.5;  ///< [m/s]
   LocalPlannerConfig local;        ///< the local planner
 };
 
@@ -64,13 +73,20 @@ class Navigator {
   /// Sets the goal; the route is planned at the next update().
   void setGoal(const Eigen::Vector3d& goal_W);
 
+  /// The obstacles of the latest frame (its measured points near the flight height, in W), which
+  /// the committed segment keeps local.commit_clearance_m from; the next update() checks the
+  /// committed segment against them as against a new snapshot.
+  void setRecentObstacles(std::vector<Eigen::Vector3d> points_W);
+
   /// Brings the plan up to date with `map` for a vehicle at `p_W` at `time_s`: a snapshot not seen
-  /// before is absorbed into the accumulated grid, the committed segment is checked against it,
-  /// and global route and local plan are computed again when it is blocked, when the snapshot is
-  /// new, or when replan_period_s has elapsed. Returns why it planned (kNone: it did not).
+  /// before is absorbed into the accumulated grid, the committed segment is checked against it
+  /// (and the recent obstacles, when new ones were set), and global route and local plan are
+  /// computed again when it is blocked, when the snapshot is new, or when replan_period_s has
+  /// elapsed. Returns why it planned (kNone: it did not).
   PlanReason update(const MapSnapshot& map, const Eigen::Vector3d& p_W, double time_s);
 
-  /// The setpoint for a vehicle at `p_W` heading `yaw_rad` (cheap: call it at the control rate).
+  /// The setpoint for a vehicle at `p_W` heading `yaw_rad` (cheap: call it at the control rate):
+  /// along the committed segment, or away from a recent obstacle within evade_radius_m.
   [[nodiscard]] Setpoint setpoint(const Eigen::Vector3d& p_W, double yaw_rad) const;
 
   /// True when `p_W` lies within goal_tolerance_m of the goal, horizontally.
@@ -83,6 +99,10 @@ class Navigator {
   [[nodiscard]] const LocalPlan& localPlan() const { return plan_; }
   /// The accumulated 2D grid the route is planned on.
   [[nodiscard]] const ProjectedGrid& grid() const { return accumulated_.grid(); }
+  /// True when the last update() found a recent obstacle within evade_radius_m.
+  [[nodiscard]] bool evading() const { return evade_W_.squaredNorm() > 0.0; }
+  /// True when the last update() found one within caution_radius_m.
+  [[nodiscard]] bool cautious() const { return cautious_; }
   /// Plans made, those made at once because a snapshot blocked the committed segment, and
   /// global searches that found no route (the previous route is kept).
   [[nodiscard]] std::uint64_t plans() const { return plans_; }
@@ -94,16 +114,27 @@ class Navigator {
 
  private:
   void planRoute(const Eigen::Vector3d& p_W);
+  /// The nearest recent obstacle in open known-free space (see evade_radius_m) within
+  /// `radius_m` of p_W, or nullptr.
+  [[nodiscard]] const Eigen::Vector3d* nearestMoved(const MapSnapshot& map, const Eigen::Vector3d& p_W,
+                                                    double radius_m) const;
+  /// The velocity away from the nearest moved obstacle within evade_radius_m (zero when there is
+  /// none, or when the step away is not into known-free space with clearance).
+  [[nodiscard]] Eigen::Vector3d evadeVelocity(const MapSnapshot& map, const Eigen::Vector3d& p_W) const;
 
   NavigatorConfig config_;
   bool has_goal_ = false;
   Eigen::Vector3d goal_W_ = Eigen::Vector3d::Zero();
   FixedOriginGrid accumulated_;
   std::uint64_t last_frame_ = 0;
+  std::vector<Eigen::Vector3d> recent_obstacles_W_;
+  bool recent_obstacles_new_ = false;
   bool planned_once_ = false;
   double last_plan_time_s_ = 0.0;
   std::vector<Eigen::Vector3d> route_W_;
   LocalPlan plan_;
+  Eigen::Vector3d evade_W_ = Eigen::Vector3d::Zero();
+  bool cautious_ = false;
   std::uint64_t plans_ = 0;
   std::uint64_t blocked_replans_ = 0;
   std::uint64_t route_failures_ = 0;
