@@ -12,10 +12,22 @@
 # does, merged as mlmap_fleet merges them (in one process, no DDS: docs/fleet.md), and writes
 # fleet_output/: fleet_top.png (the merged map coloured by vehicle), <vehicle>_top.png and
 # summary.json. Further arguments go to mlmap_fleet_demo (`build/mlmap_fleet_demo --help`).
+# With --navigate it instead flies the reference planner (mlmap_nav) on mlmap's maps through
+# seeded unknown worlds (forests, rooms joined by doors, the paper's room; a person crossing in
+# some), in one process, and writes nav_output/: a picture per world (the map, the ground truth,
+# the path flown, the goal, where a new frame made it plan at once) and summary.json
+# (docs/planners.md, "Flying on mlmap"). Further arguments go to mlmap_navigate
+# (`build/mlmap_navigate --help`), e.g. --worlds 20.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/install_deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DMLMAP_BUILD_TESTS=OFF -DMLMAP_BUILD_DDS=ON >/dev/null
+if [ "${1:-}" = --navigate ]; then
+  shift
+  cmake --build build -j2 --target mlmap_navigate
+  ./build/mlmap_navigate --out nav_output "$@"
+  exit 0
+fi
 cmake --build build -j2 --target mlmap_demo mlmap_node mlmap_sensor_publisher mlmap_inspect
 if [ "${1:-}" = --fleet ]; then
   vehicles=${2:-}

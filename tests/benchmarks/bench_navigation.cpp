@@ -45,9 +45,12 @@ int main(int argc, char** argv) {
   app.add_option("--resolution", resolution_m, "voxel edge [m]")->check(CLI::Range(0.05, 0.5));
   app.add_flag("--per-world", per_world, "a line per world");
   app.add_option("--only", only, "fly only the worlds whose name contains this");
-  CLI11_PARSE(app, argc, argv);
-
   nav::NavFlightOptions options;
+  app.add_option("--evade-radius", options.planner.evade_radius_m,
+                 "back away from something that moved within this [m]")->capture_default_str();
+  app.add_option("--caution-radius", options.planner.caution_radius_m,
+                 "slow down when something that moved is within this [m]")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
   options.map = nav::navMapConfig(resolution_m);
   const std::vector<nav::NavWorld> worlds =
       nav::benchmarkWorlds(count, seed, options.planner.inflation_m, kMeanSpeedShare * options.vehicle.max_speed_mps);

@@ -41,10 +41,10 @@ struct NavigatorConfig {
   /// more from any mapped obstacle (something that moved there), nearer than this makes the
   /// vehicle back away from it, into known-free space, whatever the plan: a person walking into
   /// the vehicle [m].
-  double evade_radius_m = 0.9;
+  double evade_radius_m = 1.2;
   /// Such an obstacle (something that moved) nearer than this caps the speed at
   /// caution_speed_mps, so that what it does next leaves time to stop [m].
-  double caution_radius_m = 3.0;
+  double caution_radius_m = 4.0;
   double caution_speed_mps = 0.5;  ///< [m/s]
   LocalPlannerConfig local;        ///< the local planner
 };
