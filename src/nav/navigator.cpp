@@ -117,6 +117,13 @@ PlanReason Navigator::update(const MapSnapshot& map, const Eigen::Vector3d& p_W,
   plan_ = planLocal(map, config_.local, route_W_, p_W, &recent_obstacles_W_);
   evade_W_ = evadeVelocity(map, p_W);
   cautious_ = nearestMoved(map, p_W, config_.caution_radius_m) != nullptr;
+  if ((p_W - anchor_W_).norm() >= config_.stuck_move_m) {
+    anchor_W_ = p_W;
+    anchor_time_s_ = time_s;
+    looking_round_ = false;
+  } else if (time_s - anchor_time_s_ >= config_.stuck_s) {
+    looking_round_ = true;
+  }
   const double cpu2 = threadCpu_s();
   last_global_cpu_ms_ = 1e3 * (cpu1 - cpu0);
   last_local_cpu_ms_ = 1e3 * (cpu2 - cpu1);
@@ -217,9 +224,11 @@ Setpoint Navigator::setpoint(const Eigen::Vector3d& p_W, double yaw_rad) const {
     }
   }
   // Heading: the direction of travel; when (nearly) stopped, towards where the plan goes next,
-  // so that a forward camera looks at the space the vehicle waits to see.
+  // so that a forward camera looks at the space the vehicle waits to see, or round when stuck.
   if (sp.velocity_W.norm() > 0.1) {
     sp.yaw_rad = std::atan2(sp.velocity_W.y(), sp.velocity_W.x());
+  } else if (looking_round_) {
+    sp.yaw_rad = yaw_rad + 1.0;  // keep turning, as fast as the vehicle turns
   } else {
     const std::vector<Eigen::Vector3d>& ahead = plan_.points_W;
     for (const Eigen::Vector3d& q : ahead) {

@@ -46,6 +46,11 @@ struct NavigatorConfig {
   /// caution_speed_mps, so that what it does next leaves time to stop [m].
   double caution_radius_m = 4.0;
   double caution_speed_mps = 0.5;  ///< [m/s]
+  /// When the vehicle has not moved stuck_move_m for stuck_s, it turns on the spot until it
+  /// moves again: a forward camera looks round, and what it sees (a door a walking person left
+  /// occupied in the map, a way round) may open a route [m], [s].
+  double stuck_move_m = 0.3;
+  double stuck_s = 3.0;
   LocalPlannerConfig local;        ///< the local planner
 };
 
@@ -103,6 +108,8 @@ class Navigator {
   [[nodiscard]] bool evading() const { return evade_W_.squaredNorm() > 0.0; }
   /// True when the last update() found one within caution_radius_m.
   [[nodiscard]] bool cautious() const { return cautious_; }
+  /// True while the vehicle turns on the spot to look round (see stuck_s).
+  [[nodiscard]] bool lookingRound() const { return looking_round_; }
   /// Plans made, those made at once because a snapshot blocked the committed segment, and
   /// global searches that found no route (the previous route is kept).
   [[nodiscard]] std::uint64_t plans() const { return plans_; }
@@ -135,6 +142,9 @@ class Navigator {
   LocalPlan plan_;
   Eigen::Vector3d evade_W_ = Eigen::Vector3d::Zero();
   bool cautious_ = false;
+  bool looking_round_ = false;
+  Eigen::Vector3d anchor_W_ = Eigen::Vector3d::Constant(1e300);  ///< where it last moved from
+  double anchor_time_s_ = 0.0;                                     ///< and when
   std::uint64_t plans_ = 0;
   std::uint64_t blocked_replans_ = 0;
   std::uint64_t route_failures_ = 0;
