@@ -50,6 +50,7 @@ struct View {
 void drawPolyline(cv::Mat* image, const View& view, const std::vector<Eigen::Vector2d>& points_W,
                   const cv::Scalar& bgr, int thickness) {
   std::vector<cv::Point> pixels;
+  pixels.reserve(points_W.size());
   for (const Eigen::Vector2d& p : points_W) pixels.push_back(view.toPixel(p));
   if (pixels.size() >= 2) cv::polylines(*image, pixels, false, bgr, thickness, cv::LINE_AA);
 }
@@ -108,6 +109,7 @@ cv::Mat renderFlight(const nav::NavWorld& world, const nav::NavFlightResult& r) 
   // Ground-truth shortest route, path flown, replan points, start and goal.
   drawPolyline(&image, view, r.shortest_route_W, cv::Scalar(60, 200, 60), 1);
   std::vector<Eigen::Vector2d> flown;
+  flown.reserve(r.trajectory_W.size());
   for (const Eigen::Vector3d& p : r.trajectory_W) flown.push_back(p.head<2>());
   drawPolyline(&image, view, flown, cv::Scalar(200, 90, 20), 2);
   for (const Eigen::Vector3d& p : r.replan_points_W) {

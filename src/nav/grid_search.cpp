@@ -66,8 +66,9 @@ PlanningGrid inflateGrid(const ProjectedGrid& grid, double radius_m, UnknownAs u
       const int gy = y - margin_cells;
       const bool in_grid = gx >= 0 && gy >= 0 && gx < grid.width && gy < grid.height;
       const int value = in_grid ? grid.at(gx, gy) : ProjectedGrid::kUnknown;
-      const bool source = value < 0 ? unknown_blocks : value > occupied_threshold;
-      if (!source) continue;
+      const bool unknown_cell = value < 0;  // -1, and any negative value
+      const bool occupied_cell = value > occupied_threshold;
+      if (!(unknown_cell ? unknown_blocks : occupied_cell)) continue;
       for (const Eigen::Vector2i& d : disc) {
         const int nx = x + d.x();
         const int ny = y + d.y();

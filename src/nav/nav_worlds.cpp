@@ -183,7 +183,7 @@ NavWorld roomsWorld(std::uint32_t seed, int rooms) {
 
 NavWorld paperRoomWorld(std::uint32_t seed) {
   const sim::World room = sim::World::defaultRoom();
-  std::mt19937 rng(seed * 15485863u);
+  std::mt19937 rng(static_cast<std::mt19937::result_type>(seed * 15485863u));
   std::uniform_real_distribution<double> jitter(-0.8, 0.8);
   NavWorld w;
   w.name = "paper_room_s" + std::to_string(seed);

@@ -177,7 +177,13 @@ TEST(GridSearch, AStarLeavesAnInflatedZoneByTheShortestWayThenStaysOut) {
     std::vector<Eigen::Vector2i> blocked;
     std::vector<Eigen::Vector2i> free;
     for (int y = 0; y < p.height; ++y) {
-      for (int x = 0; x < p.width; ++x) (p.isBlocked(x, y) ? blocked : free).emplace_back(x, y);
+      for (int x = 0; x < p.width; ++x) {
+        if (p.isBlocked(x, y)) {
+          blocked.emplace_back(x, y);
+        } else {
+          free.emplace_back(x, y);
+        }
+      }
     }
     if (blocked.empty() || free.empty()) continue;
     const Eigen::Vector2i s = blocked[std::uniform_int_distribution<std::size_t>(0, blocked.size() - 1)(rng)];
