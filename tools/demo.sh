@@ -22,13 +22,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash tools/install_deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DMLMAP_BUILD_TESTS=OFF -DMLMAP_BUILD_DDS=ON >/dev/null
+cmake --build build -j2 --target mlmap_demo mlmap_node mlmap_sensor_publisher mlmap_inspect
 if [ "${1:-}" = --navigate ]; then
   shift
   cmake --build build -j2 --target mlmap_navigate
   ./build/mlmap_navigate --out nav_output "$@"
   exit 0
 fi
-cmake --build build -j2 --target mlmap_demo mlmap_node mlmap_sensor_publisher mlmap_inspect
 if [ "${1:-}" = --fleet ]; then
   vehicles=${2:-}
   case "$vehicles" in

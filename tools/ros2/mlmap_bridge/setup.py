@@ -28,6 +28,7 @@ setup(
         'console_scripts': [
             'mlmap_bridge = mlmap_bridge.bridge_node:main',
             'mlmap_check = mlmap_bridge.checker_node:main',
+            'mlmap_plan = mlmap_bridge.planner_node:main',
         ],
     },
 )
