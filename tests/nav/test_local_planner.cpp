@@ -171,6 +171,51 @@ TEST(Navigator, ANewObstacleAcrossTheCommittedSegmentMakesAPlanAtOnceThatStopsBe
   EXPECT_TRUE(round);
 }
 
+TEST(Navigator, TheLatestFramesPointsBlockTheSegmentBeforeTheMapShowsThem) {
+  // The map still has the space free; the frame's points show a person 1.5 m ahead.
+  const auto clear = snapshotOf(
+      [](const VoxelIndex& g) { return freeExcept(g, [](const Eigen::Vector3d&) { return false; }); }, 1);
+  NavigatorConfig config;
+  Navigator navigator(config);
+  const Eigen::Vector3d start(0.0, 0.1, 1.1);
+  navigator.setGoal({6.0, 0.1, 1.1});
+  ASSERT_EQ(navigator.update(*clear, start, 0.0), PlanReason::kNewMap);
+  ASSERT_GT(navigator.localPlan().committed_length_m, 2.5);
+  EXPECT_FALSE(navigator.cautious());
+  std::vector<Eigen::Vector3d> person;
+  for (double y = -0.15; y <= 0.35; y += 0.1) {
+    for (double z = 0.7; z <= 1.5; z += 0.2) person.emplace_back(1.5, y, z);
+  }
+  navigator.setRecentObstacles(person);
+  EXPECT_EQ(navigator.update(*clear, start, 0.02), PlanReason::kBlocked);  // same map, new frame
+  for (const Eigen::Vector3d& p : navigator.localPlan().committedPoints()) {
+    EXPECT_GE(nearestPointDistance(person, p), config.local.commit_clearance_m - 1e-9);
+  }
+  // In open space the map knows free: something moved there. Within caution_radius_m the
+  // setpoints slow down; within evade_radius_m the vehicle backs away from it.
+  EXPECT_TRUE(navigator.cautious());
+  EXPECT_FALSE(navigator.evading());
+  EXPECT_LE(navigator.setpoint(start, 0.0).velocity_W.norm(), config.caution_speed_mps + 1e-9);
+  const Eigen::Vector3d near(0.6, 0.1, 1.1);
+  navigator.setRecentObstacles(person);
+  navigator.update(*clear, near, 0.04);
+  ASSERT_TRUE(navigator.evading());
+  const Setpoint away = navigator.setpoint(near, 0.0);
+  EXPECT_LT(away.velocity_W.x(), -0.1);  // back, away from the person at x = 1.5
+  // The same points on an obstacle the map holds are not something that moved.
+  const auto pillar = snapshotOf(
+      [](const VoxelIndex& g) {
+        return freeExcept(g, [](const Eigen::Vector3d& c) {
+          return std::abs(c.x() - 1.7) < 0.25 && std::abs(c.y() - 0.1) < 0.3;
+        });
+      },
+      2);
+  navigator.setRecentObstacles(person);
+  navigator.update(*pillar, near, 0.06);
+  EXPECT_FALSE(navigator.evading());
+  EXPECT_FALSE(navigator.cautious());
+}
+
 TEST(Navigator, TheSetpointsStopTheVehicleBeforeTheEndOfTheCommittedSegment) {
   const auto wall = snapshotOf(
       [](const VoxelIndex& g) {
