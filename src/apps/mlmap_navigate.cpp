@@ -164,7 +164,7 @@ int run(const Options& o) {
     const nav::NavFlightResult r = nav::flyToGoal(world, options);
     reached += r.reached ? 1 : 0;
     collisions += r.collisions;
-    io::writePng(o.out_dir + "/" + world.name + ".png", renderFlight(world, r));
+    pictures::writePng(o.out_dir + "/" + world.name + ".png", renderFlight(world, r));
     json_worlds.push_back({{"name", world.name},
                            {"reached", r.reached},
                            {"collisions", r.collisions},
