@@ -5,10 +5,12 @@
 #   bash tools/install_deps.sh --programs  the programs without their tests (docker/sim.Dockerfile)
 #   bash tools/install_deps.sh --onboard   mlmap_node alone (docker/onboard.Dockerfile): no OpenCV,
 #                                          no OctoMap (cmake -DMLMAP_BUILD_APPS=OFF)
+#   bash tools/install_deps.sh --containers  podman and what the containerized integration test
+#                                          needs to make its base image (tools/container_images.sh)
 set -euo pipefail
 case "${1:-}" in
-  "" | --programs | --onboard) ;;
-  *) echo "usage: $0 [--programs | --onboard]" >&2; exit 2 ;;
+  "" | --programs | --onboard | --containers) ;;
+  *) echo "usage: $0 [--programs | --onboard | --containers]" >&2; exit 2 ;;
 esac
 
 # mlmap_node: the core, the configuration, map files and the DDS component.
@@ -19,6 +21,7 @@ packages=(
   libcli11-dev libspdlog-dev           # command line, logging
   libfastrtps-dev libfastcdr-dev fastddsgen  # DDS component (Fast DDS 2.9, ROS 2 wire types)
   libzstd-dev                          # the fleet's shared submaps (mlmap_node, mlmap_fleet)
+  python3                              # the build: the IDL's type hashes and CDR layouts (tools/idl_*.py)
 )
 # The offline programs (demo, replay, map tool, sensor publisher, inspector, benchmarks).
 programs=(
@@ -38,7 +41,7 @@ test_tools=(
   clang-tidy cppcheck                  # static analysis (tools/lint.sh)
   cyclonedds-dev cyclonedds-tools      # cross-vendor interoperability test (ROS 2's other tier-1 DDS)
   iproute2                             # network-namespace tests
-  openssl python3                      # DDS Security: test keystores (tools/make_test_keystore.sh), the capture test
+  openssl                              # DDS Security: test keystores (tools/make_test_keystore.sh); python3 runs the capture test
 )
 # The ROS 2 ground-station tools (tools/ros2, docker/): no ROS in Debian 12, so their tests run
 # the ROS-free parts under /usr/bin/python3 and lint the rest.
@@ -50,9 +53,14 @@ ground_tools=(
   python3-flake8 pydocstyle shellcheck  # lint (the ament flake8 / pep257 rules)
   python3-matplotlib                   # the charts of the OctoMap comparison (tools/plot_octomap_comparison.py)
 )
+# The containerized integration test (tests/integration/containers_podman.sh): Debian's podman
+# with runc (crun refuses a cgroup v1 hybrid layout), debootstrap for the local Debian 12 base
+# image (no registry), iproute2 for the network namespaces the containers run in.
+containers=(podman runc debootstrap iproute2)
 case "${1:-}" in
   --onboard) ;;
   --programs) packages+=("${programs[@]}") ;;
+  --containers) packages=("${containers[@]}") ;;
   *) packages+=("${programs[@]}" "${test_tools[@]}" "${ground_tools[@]}") ;;
 esac
 

@@ -6,7 +6,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 python_dirs=(tools/ros2 tests/ros2 tests/benchmarks)
-shell_scripts=(docker/run_integration_test.sh docker/ground_entrypoint.sh tests/ros2/lint.sh)
+shell_scripts=(docker/run_integration_test.sh docker/ground_entrypoint.sh docker/runtime_packages.sh
+               tests/ros2/lint.sh)
 # The project's other scripts: warnings and errors (quoting, word splitting), not style.
 other_scripts=(tools/*.sh tests/dds/*.sh tests/interop/*.sh tests/integration/*.sh tests/faults/*.sh
                tests/security/*.sh tests/benchmarks/*.sh tests/support/*.sh .ci/run)

@@ -287,29 +287,67 @@ def test_the_profile_is_udp_only_and_in_both_images_at_the_same_path():
     assert ('COPY', 'config/dds/udp_only.xml /opt/mlmap/config/dds/udp_only.xml') in ground
 
 
+def _stages(instructions):
+    """The stages of a Dockerfile: lists of instructions, each starting with its FROM."""
+    stages = []
+    for instruction in instructions:
+        if instruction[0] == 'FROM':
+            stages.append([])
+        stages[-1].append(instruction)
+    return stages
+
+
+def test_every_image_of_mlmap_starts_from_the_local_debian_base():
+    """Every FROM is debian:12 (a stage's name aside), the base tools/container_images.sh makes
+    without a registry: no other image is pulled."""
+    for image in ('onboard.Dockerfile', 'sim.Dockerfile'):
+        for stage in _stages(_dockerfile(image)):
+            assert stage[0][1].split()[0] == 'debian:12', image
+
+
 def test_sim_image_builds_like_tools_demo_sh():
-    """Debian 12, Debian packages through install_deps.sh, and demo.sh's configure and build."""
+    """Debian 12, Debian packages through install_deps.sh, and demo.sh's configure (with the
+    programs on again, after the onboard build stage it starts with) and its targets."""
     sim = _dockerfile('sim.Dockerfile')
-    assert sim[0] == ('FROM', 'debian:12')
     runs = ' && '.join(args for keyword, args in sim if keyword == 'RUN')
     assert 'bash tools/install_deps.sh --programs' in runs
     assert '--programs)' in (REPO / 'tools' / 'install_deps.sh').read_text()
     demo = (REPO / 'tools' / 'demo.sh').read_text()
-    for command in ('cmake -S . -B build', 'cmake --build build'):
-        in_demo = re.search(re.escape(command) + r'[^\n>]*', demo).group(0).split()
-        in_image = re.search(re.escape(command) + r'[^&\n]*', runs).group(0).split()
-        assert in_image == in_demo, command
+    configure = re.search(r'cmake -S \. -B build[^\n>]*', demo).group(0).split()
+    in_image = re.findall(r'cmake -S \. -B build[^&\n]*', runs)[-1].split()
+    assert in_image == configure + ['-DMLMAP_BUILD_APPS=ON']
+    targets = re.search(r'cmake --build build[^\n>]*', demo).group(0).split()
+    in_image = re.findall(r'cmake --build build[^&\n]*', runs)[-1].split()
+    assert in_image == targets + ['mlmap_map_tool']
+
+
+def test_sim_image_starts_with_the_onboard_build_stage():
+    """The onboard image's build stage, instruction for instruction, so that a builder with a
+    layer cache compiles mlmap_node's libraries once for both images."""
+    build_stage = _stages(_dockerfile('onboard.Dockerfile'))[0]
+    assert build_stage[0] == ('FROM', 'debian:12 AS build')
+    common = [i for i in build_stage[1:] if 'runtime_packages' not in i[1]]
+    sim = _dockerfile('sim.Dockerfile')
+    assert sim[:len(common) + 1] == [('FROM', 'debian:12')] + common
 
 
 def test_onboard_image_builds_mlmap_node_alone_without_opencv_or_octomap():
-    """The onboard image installs and builds only what mlmap_node needs."""
-    onboard = _dockerfile('onboard.Dockerfile')
-    assert onboard[0] == ('FROM', 'debian:12')
-    runs = ' && '.join(args for keyword, args in onboard if keyword == 'RUN')
+    """The onboard image builds only what mlmap_node needs, and holds only what it loads."""
+    build, image = _stages(_dockerfile('onboard.Dockerfile'))
+    runs = ' && '.join(args for keyword, args in build if keyword == 'RUN')
     assert 'bash tools/install_deps.sh --onboard' in runs
     assert '-DMLMAP_BUILD_APPS=OFF' in runs and '-DMLMAP_BUILD_TESTS=OFF' in runs
     assert re.search(r'cmake --build build -j2 --target mlmap_node\b', runs)
-    assert dict(onboard)['CMD'].startswith('["mlmap_node"')
+    assert 'bash docker/runtime_packages.sh build/mlmap_node > build/runtime_packages.txt' in runs
+    # The image: the runtime packages, the program and the configurations; no install_deps.sh.
+    image_runs = ' && '.join(args for keyword, args in image if keyword == 'RUN')
+    assert 'install_deps' not in image_runs and '/tmp/runtime_packages.txt' in image_runs
+    copied = [args for keyword, args in image if keyword == 'COPY']
+    assert copied == [
+        '--from=build /opt/mlmap/build/runtime_packages.txt /tmp/runtime_packages.txt',
+        '--from=build /opt/mlmap/build/mlmap_node bin/mlmap_node', 'config ./config']
+    assert ('ENV', 'PATH=/opt/mlmap/bin:$PATH') in image
+    assert dict(image)['CMD'].startswith('["mlmap_node"')
     # What --onboard installs: bash's own expansion of the script's lists, not a copy of them.
     script = (REPO / 'tools' / 'install_deps.sh').read_text()
     listing = script[:script.index('missing=()')] + 'printf "%s\\n" "${packages[@]}"\n'
@@ -322,22 +360,33 @@ def test_onboard_image_builds_mlmap_node_alone_without_opencv_or_octomap():
     assert set(onboard_packages) < set(everything)
 
 
-def _cmake_folders() -> set:
-    """Top-level folders that the CMakeLists.txt files read (src/, idl, cmake, ...)."""
+def _cmake_reads():
+    """Top-level folders that the CMakeLists.txt files read (src/, idl, cmake, ...), and the
+    files of tools/ they run."""
     used = set()
     for cmake in [REPO / 'CMakeLists.txt', *REPO.glob('src/**/CMakeLists.txt')]:
+        text = cmake.read_text()
         pattern = r'(?:PROJECT_SOURCE_DIR\}/|[\s(])(cmake|idl|include|src|tests)\b[/)]'
-        used |= set(re.findall(pattern, cmake.read_text()))
+        used |= set(re.findall(pattern, text))
+        used |= set(re.findall(r'PROJECT_SOURCE_DIR\}/(tools/[\w.]+)', text))
     return used
 
 
 def test_images_copy_everything_cmake_reads():
-    """Each top-level folder the CMakeLists.txt files name is copied into both mlmap images
-    (tests/ only where the benchmarks are built)."""
-    used = _cmake_folders()
-    assert {'cmake', 'idl', 'include', 'src', 'tests'} <= used
-    for image, needed in (('onboard.Dockerfile', used - {'tests'}), ('sim.Dockerfile', used)):
-        copied = {args.split()[0] for keyword, args in _dockerfile(image) if keyword == 'COPY'}
+    """Each top-level folder the CMakeLists.txt files name, and each tools/ script the build
+    runs, is copied into both mlmap images; of tests/, the images (built without the tests)
+    need tests/benchmarks alone, built with the programs, and only where they are built."""
+    used = _cmake_reads()
+    assert {'cmake', 'idl', 'include', 'src', 'tests', 'tools/idl_type_hashes.py'} <= used
+    top = (REPO / 'CMakeLists.txt').read_text()
+    assert 'add_subdirectory(tests/benchmarks)' in top and 'add_subdirectory(tests)' in top
+    benchmarks = (REPO / 'tests' / 'benchmarks' / 'CMakeLists.txt').read_text()
+    assert 'CMAKE_CURRENT_SOURCE_DIR}/..' not in benchmarks
+    assert 'PROJECT_SOURCE_DIR}/tests' not in benchmarks
+    programs = (used - {'tests'}) | {'tests/benchmarks'}
+    for image, needed in (('onboard.Dockerfile', used - {'tests'}), ('sim.Dockerfile', programs)):
+        copied = {source for keyword, args in _dockerfile(image) if keyword == 'COPY'
+                  and not args.startswith('--from') for source in args.split()[:-1]}
         assert needed | {'CMakeLists.txt', 'config'} <= copied, image
 
 
@@ -390,6 +439,24 @@ def test_commands_name_the_programs_and_files_the_images_hold():
         assert f"DeclareLaunchArgument(\n            '{argument}'" in launch, argument
     script = (DOCKER / 'run_integration_test.sh').read_text()
     assert 'run --rm checker' in script and 'exit "$verdict"' in script
+
+
+def test_the_podman_test_runs_the_images_as_compose_does():
+    """tests/integration/containers_podman.sh: compose's DDS environment with a domain of its
+    own, the node's compose configuration, the camera in depth mode, and the images of
+    tools/container_images.sh run in the test's own network namespaces."""
+    script = (REPO / 'tests' / 'integration' / 'containers_podman.sh').read_text()
+    env = dict(re.findall(r'-e "?(\w+)=([^"\s)]+)', script))
+    compose_env = dict(_compose()['services']['node']['environment'])
+    assert env.pop('ROS_DOMAIN_ID') == '$domain' and compose_env.pop('ROS_DOMAIN_ID')
+    assert env == compose_env
+    assert re.search(r'^domain=211 ', script, re.MULTILINE)
+    node = _command('node')
+    assert f'cat {node[node.index("--config") + 1]}' in script
+    assert '--mode depth' in script
+    assert 'bash tools/container_images.sh --env' in script
+    assert '--network "ns:/proc/$ns/ns/net"' in script
+    assert 'bash tests/integration/containers_podman.sh' in (REPO / '.ci' / 'run').read_text()
 
 
 BIN_DIR = os.environ.get('MLMAP_BIN_DIR')
