@@ -77,7 +77,7 @@ if ! pm image exists debian:12; then
     if [ -n "$security" ]; then echo "deb $security bookworm-security main"; fi
   } > "$rootfs/etc/apt/sources.list"
   rm -rf "$rootfs"/var/cache/apt/archives/*.deb "$rootfs"/var/lib/apt/lists/*
-  tar -C "$rootfs" -c . | pm import --change 'CMD ["bash"]' \
+  tar -C "$rootfs" -c . | pm import --quiet --change 'CMD ["bash"]' \
     --change 'ENV PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin' - debian:12 > /dev/null
   rm -rf "$rootfs"
   trap - EXIT

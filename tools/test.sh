@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The whole test suite (CI runs exactly this). Installs what is missing, then:
+# The whole test suite (CI runs it, then tests/integration/containers_podman.sh: .ci/run).
+# Installs what is missing, then:
 #   1. builds everything with clang, AddressSanitizer + UndefinedBehaviorSanitizer and warnings as
 #      errors (build-asan/), and runs every test through ctest: a memory error, undefined
 #      behaviour or a leak at exit (LeakSanitizer) fails the test that caused it;
