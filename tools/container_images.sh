@@ -121,8 +121,9 @@ build() {  # build NAME DOCKERFILE: mlmap-NAME:KEY, built unless it exists
     step "build mlmap-$1"
   fi
   pm tag "$image" "mlmap-$1:latest"
-  # Older keys' tags go (their layers stay in podman's cache for a day, for the next build).
-  pm images --format '{{.Repository}}:{{.Tag}}' --filter "reference=mlmap-$1" |
+  # Other keys' tags go once a day old (another tree of the same machine may be using a newer
+  # one); their layers stay in podman's cache for another day, for the next build.
+  pm images --format '{{.Repository}}:{{.Tag}}' --filter "reference=mlmap-$1" --filter until=24h |
     grep -v -e ":$key\$" -e ':latest$' | xargs -r podman --runtime runc --cgroup-manager=cgroupfs rmi > /dev/null 2>&1 || true
 }
 log_dir=build-containers
