@@ -94,6 +94,8 @@ fi
 
 # The key: the Dockerfiles, every file their COPY instructions take from the build context (the
 # files git tracks or would track there: no build output) and the base image.
+git rev-parse --git-dir > /dev/null 2>&1 ||
+  { echo "$0: needs a git checkout (the images' key hashes the files git tracks or would track)" >&2; exit 1; }
 base_id=$(pm image inspect --format '{{.Id}}' debian:12)
 dockerfiles=(docker/onboard.Dockerfile docker/sim.Dockerfile)
 mapfile -t copied < <(awk '$1 == "COPY" && $2 !~ /^--from/ { for (i = 2; i < NF; i++) print $i }' \
@@ -102,7 +104,7 @@ sources=("${dockerfiles[@]}" .dockerignore "${copied[@]}")
 key=$({
   echo "$base_id"
   git ls-files -z --cached --others --exclude-standard -- "${sources[@]}" | sort -zu |
-    while IFS= read -r -d '' f; do [ -f "$f" ] && sha256sum "$f"; done
+    while IFS= read -r -d '' f; do if [ -f "$f" ]; then sha256sum "$f"; fi; done   # (not deleted ones)
 } | sha256sum | cut -c1-16)
 
 build() {  # build NAME DOCKERFILE: mlmap-NAME:KEY, built unless it exists
