@@ -1,6 +1,5 @@
 #!/usr/bin/env bash
-# The whole test suite (CI runs it, then tests/integration/containers_podman.sh: .ci/run).
-# Installs what is missing, then:
+# The whole test suite (CI runs exactly this). Installs what is missing, then:
 #   1. builds everything with clang, AddressSanitizer + UndefinedBehaviorSanitizer and warnings as
 #      errors (build-asan/), and runs every test through ctest: a memory error, undefined
 #      behaviour or a leak at exit (LeakSanitizer) fails the test that caused it;
@@ -10,7 +9,10 @@
 #      the build, in the background at the lowest CPU priority (nice 19), so that it takes the CPU
 #      the ctest run leaves idle (the DDS tests run one at a time and mostly wait on the wall
 #      clock: ctest keeps the two cores about 55 % busy), and yields it to everything else; its
-#      report is printed at the end.
+#      report is printed at the end;
+#   5. the containerized integration test (tests/integration/containers_podman.sh): the onboard
+#      and simulation images built with podman (reused while their files are unchanged) and run
+#      as sensor, node and ground station in network namespaces of its own.
 # Each part prints its duration, and a summary closes the run. Benchmarks and the demo use the
 # Release build of tools/demo.sh (build/), never these instrumented ones.
 set -euo pipefail
@@ -87,6 +89,12 @@ endPart "build + run, gcc + TSan"
 echo "== 3. fuzzing: every target for a short, bounded time (docs/fuzzing.md)"
 bash tools/fuzz.sh --build build-asan --no-build --seconds 15 --jobs 2
 endPart "libFuzzer, 15 s per target"
+
+# The onboard and simulation images built with podman (reused while the files they are built
+# from are unchanged; a new machine builds them from scratch) and run in network namespaces.
+echo "== 5. the containerized integration test (tests/integration/containers_podman.sh)"
+bash tests/integration/containers_podman.sh
+endPart "containers: images + sensor, node, ground"
 
 echo "== 4. static analysis (cppcheck + clang-tidy), started after the build"
 lint_status=0

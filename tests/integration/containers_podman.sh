@@ -20,7 +20,7 @@
 # The ROS 2 ground image (ros:jazzy) needs a registry with ROS 2: not built here (docker/compose.yaml
 # and docker/run_integration_test.sh run it where Docker and the registry are).
 #   bash tests/integration/containers_podman.sh [--out DIR]   (default build-containers/test)
-# .ci/run runs it after tools/test.sh. Needs root (podman, network namespaces); DDS domain 211.
+# tools/test.sh runs it as its last part. Needs root (podman, network namespaces); DDS domain 211.
 # Exits 0 with a line saying SKIP where podman cannot start a container at all.
 set -uo pipefail
 cd "$(dirname "$0")/../.." || exit 1
