@@ -62,9 +62,18 @@
 ///
 /// For many queries, EsdfQueryGrid (esdf_query_grid.h) keeps a 16-bit copy of the field that
 /// answers within a documented bound of query() at about 1.6x its rate.
+///
+/// The parts: the field's storage and queries are EsdfField (esdf_field.h); the kept states,
+/// the changed voxels and the marks of the lines to transform again are EsdfChangeTracker
+/// (esdf_change_tracker.h); the line kernels are free functions (esdf_window_kernel.h and,
+/// inside the library, esdf_line_kernels.h). EsdfMap runs the passes: src/planning/esdf.cpp the
+/// full compute(), esdf_update.cpp the incremental update() up to pass 1 and
+/// esdf_update_lines.cpp its passes 2 and 3.
 
 #include "mlmap/core/config.h"
 #include "mlmap/core/types.h"
+#include "mlmap/planning/esdf_change_tracker.h"
+#include "mlmap/planning/esdf_field.h"
 #include "mlmap/planning/esdf_window_kernel.h"
 
 #include <algorithm>
@@ -75,51 +84,6 @@
 #include <vector>
 
 namespace mlmap {
-
-/// A trilinear interpolation: its value and its partial derivatives per unit of the fractions.
-struct Trilinear {
-  double value = 0.0;
-  double d_dtx = 0.0;
-  double d_dty = 0.0;
-  double d_dtz = 0.0;
-};
-
-/// Interpolates the corner values c<x><y><z> of a cell at fractions (tx, ty, tz) in [0, 1]^3:
-/// z first, then y, then x, with the derivatives of the same lines (the one arithmetic of
-/// EsdfMap::query() and EsdfQueryGrid::query()).
-inline Trilinear trilinear(double c000, double c001, double c010, double c011, double c100,
-                           double c101, double c110, double c111, double tx, double ty,
-                           double tz) {
-  const double dz00 = c001 - c000;
-  const double dz01 = c011 - c010;
-  const double dz10 = c101 - c100;
-  const double dz11 = c111 - c110;
-  const double c00 = c000 + tz * dz00;
-  const double c01 = c010 + tz * dz01;
-  const double c10 = c100 + tz * dz10;
-  const double c11 = c110 + tz * dz11;
-  const double dy0 = c01 - c00;
-  const double dy1 = c11 - c10;
-  const double c0 = c00 + ty * dy0;
-  const double c1 = c10 + ty * dy1;
-  const double dz0 = dz00 + ty * (dz01 - dz00);
-  const double dz1 = dz10 + ty * (dz11 - dz10);
-  return {c0 + tx * (c1 - c0), c1 - c0, dy0 + tx * (dy1 - dy0), dz0 + tx * (dz1 - dz0)};
-}
-
-/// Answers `count` queries in order into `out` while prefetching the cells of the point `ahead`
-/// places later (the one loop of EsdfMap::queryBatch() and EsdfQueryGrid::queryBatch()), so the
-/// memory latencies of many queries overlap.
-template <typename Result, typename Prefetch, typename Query>
-void prefetchedQueries(const Eigen::Vector3d* points_W, std::size_t count, std::size_t ahead,
-                       Result* out, const Prefetch& prefetch, const Query& query) {
-  ahead = std::min(count, ahead);
-  for (std::size_t i = 0; i < ahead; ++i) prefetch(points_W[i]);
-  for (std::size_t i = 0; i < count; ++i) {
-    if (i + ahead < count) prefetch(points_W[i + ahead]);
-    out[i] = query(points_W[i]);
-  }
-}
 
 /// Dense box of occupancy states on the world voxel grid (voxel i spans [i * res, (i + 1) * res)
 /// per axis). `states[(x * size.y() + y) * size.z() + z]` holds box-relative voxel (x, y, z),
@@ -171,16 +135,8 @@ class EsdfMap {
   /// Largest accepted box in voxels (about 2.3 GB of buffers at 9 bytes per voxel).
   static constexpr std::int64_t kMaxCells = std::int64_t{1} << 28;
 
-  /// Result of query(): distance, gradient and whether they may be trusted.
-  struct Query {
-    /// Interpolated signed distance [m]; 0 outside the box.
-    double distance_m = 0.0;
-    /// d distance_m / d p_W (dimensionless); zero outside the box.
-    Eigen::Vector3d gradient = Eigen::Vector3d::Zero();
-    /// True when p_W is inside the box and its voxel is known (free or occupied). Inside the box
-    /// but in an unknown voxel, distance_m and gradient are still filled in, with valid = false.
-    bool valid = false;
-  };
+  /// Result of query(): distance, gradient and whether they may be trusted (see EsdfQuery).
+  using Query = EsdfQuery;
 
   /// Throws std::invalid_argument listing every problem when `config` is not valid.
   explicit EsdfMap(const EsdfConfig& config);
@@ -223,10 +179,7 @@ class EsdfMap {
   /// Single-threaded except in the fallback.
   [[nodiscard]] bool update(const OccupancyBox& box);
   /// A part of a box, voxels [lo, hi) in box coordinates (from the box's min_index).
-  struct Region {
-    Eigen::Vector3i lo;  ///< first voxel, inclusive
-    Eigen::Vector3i hi;  ///< one past the last voxel
-  };
+  using Region = EsdfRegion;
   /// As update(box), where the caller knows where states may have changed since the last
   /// compute() or update(): only inside `may_have_changed` (clipped to the box; overlaps are
   /// allowed). A map engine knows this from its submaps' change stamps, and the box is then
@@ -263,62 +216,53 @@ class EsdfMap {
   /// Allocation-free; `out` must hold `count` results.
   void queryBatch(const Eigen::Vector3d* points_W, std::size_t count, Query* out) const;
   /// How many points ahead queryBatch() prefetches.
-  static constexpr std::size_t kQueryPrefetchAhead = 12;
+  static constexpr std::size_t kQueryPrefetchAhead = EsdfField::kQueryPrefetchAhead;
 
   /// Cell value of a world voxel [m] (the value at its centre); NaN outside the box.
   [[nodiscard]] float distanceAt(const VoxelIndex& world_index) const;
   /// True when the world voxel lies inside the box of the last successful compute().
   [[nodiscard]] bool contains(const VoxelIndex& world_index) const {
-    return boxContains(min_index_, size_, world_index);
+    return field_.contains(world_index);
   }
   /// True when box-relative voxel (x, y, z) (inside the box, unchecked) was unknown in the box
   /// given to compute() / update().
-  [[nodiscard]] bool isUnknownCell(int x, int y, int z) const { return unknownBit(x, y, z); }
+  [[nodiscard]] bool isUnknownCell(int x, int y, int z) const {
+    return field_.isUnknownCell(x, y, z);
+  }
   /// True when the world voxel is inside the box and was unknown in the box given to compute().
   [[nodiscard]] bool isUnknown(const VoxelIndex& world_index) const {
-    if (!contains(world_index)) return false;
-    const VoxelIndex r = world_index - min_index_;
-    return unknownBit(r.x(), r.y(), r.z());
+    return field_.isUnknown(world_index);
   }
 
   /// True until the first successful compute() (and after a failed one).
-  [[nodiscard]] bool empty() const { return size_.prod() == 0; }
+  [[nodiscard]] bool empty() const { return field_.empty(); }
   /// First voxel of the box (world index, inclusive).
-  [[nodiscard]] const VoxelIndex& minIndex() const { return min_index_; }
+  [[nodiscard]] const VoxelIndex& minIndex() const { return field_.minIndex(); }
   /// One past the last voxel of the box (world index).
-  [[nodiscard]] VoxelIndex maxIndex() const { return min_index_ + size_; }
+  [[nodiscard]] VoxelIndex maxIndex() const { return field_.maxIndex(); }
   /// Box size in voxels.
-  [[nodiscard]] const Eigen::Vector3i& size() const { return size_; }
+  [[nodiscard]] const Eigen::Vector3i& size() const { return field_.size(); }
   /// Voxel edge length of the last successful compute() [m].
-  [[nodiscard]] double resolution_m() const { return resolution_m_; }
+  [[nodiscard]] double resolution_m() const { return field_.resolution_m(); }
   /// Lower corner of the box in W [m].
   [[nodiscard]] Eigen::Vector3d minCorner_W() const {
-    return min_index_.cast<double>() * resolution_m_;
+    return minIndex().cast<double>() * resolution_m();
   }
   /// Upper corner of the box in W [m].
   [[nodiscard]] Eigen::Vector3d maxCorner_W() const {
-    return maxIndex().cast<double>() * resolution_m_;
+    return maxIndex().cast<double>() * resolution_m();
   }
   /// Cell values [m] in OccupancyBox order (x-major, z fastest), e.g. for publishing; empty
   /// after a failed compute().
-  [[nodiscard]] const std::vector<float>& distances() const { return field_; }
+  [[nodiscard]] const std::vector<float>& distances() const { return field_.values_m(); }
   /// The configuration in use.
   [[nodiscard]] const EsdfConfig& config() const { return config_; }
   /// Bytes held by the field (4 per voxel), the unknown mask (1 bit per voxel), the kept box and
   /// the x and y passes' results (9 per voxel, 4 with the windowed passes, which keep them in 8
-  /// and 16 bits; none in a copy) and a
-  /// little per thread.
+  /// and 16 bits; none in a copy) and a little per thread.
   [[nodiscard]] std::size_t memoryBytes() const;
 
  private:
-  /// A y line (across = z) or z line (across = y) of x slab x that update()'s windowed passes
-  /// transform again, and the range [lo, hi] along it where its inputs changed.
-  struct MarkedLine {
-    int x;       ///< x slab
-    int across;  ///< z of a y line, y of a z line
-    int lo;      ///< first changed input along the line
-    int hi;      ///< last changed input (inclusive)
-  };
   /// Per-thread scratch (envelopes sized for the longest y or z line + 1).
   struct Scratch {
     std::vector<std::int32_t> runs;           ///< starts of the same-sign runs of a line
@@ -333,34 +277,40 @@ class EsdfMap {
     std::vector<std::int32_t> line;           ///< one y or z line being transformed
     std::vector<std::int32_t> sweep;          ///< x pass: 32-bit results before the 8-bit copy
     esdf_kernel::WindowBuffers window;        ///< the windowed passes' slab buffers
-    std::vector<MarkedLine> marked;           ///< update(): the lines its next pass transforms
-    std::vector<MarkedLine> sorted;           ///< ... ordered by the start of their range
-    std::vector<int> starts;                  ///< ... and the counting sort's buckets
     std::vector<std::int16_t> gathered;       ///< update(): z lines one after another
     std::vector<std::int8_t> narrow_rows;     ///< update() after a move: x pass rows in 8 bits
   };
 
-  /// Unknown bit of box-relative voxel (x, y, z) (inside the box).
-  [[nodiscard]] bool unknownBit(int x, int y, int z) const {
-    const std::size_t bit = static_cast<std::size_t>(x) * slab_bits_ +
-                            static_cast<std::size_t>(y) * static_cast<std::size_t>(size_.z()) +
-                            static_cast<std::size_t>(z);
-    return ((unknown_bits_[bit >> 6] >> (bit & 63)) & 1u) != 0;
-  }
-  [[nodiscard]] std::size_t offsetOf(const VoxelIndex& world_index) const {
-    return boxOffset(min_index_, size_, world_index);
-  }
-  /// Prefetches what query(p_W) reads (nothing outside the box).
-  void prefetchQuery(const Eigen::Vector3d& p_W) const;
+  /// Rows (y) swept together by the x pass.
+  static constexpr int kRowBlock = 32;
+  /// The same where the x pass's results are kept in 8 bits (the windowed passes): its 32-bit
+  /// work buffer over the whole x extent of that many rows stays in the L2 cache.
+  static constexpr int kNarrowRowBlock = 8;
+
+  // ---- The full compute (esdf.cpp) ----
+
+  /// True when compute() accepts the box (see compute()).
+  [[nodiscard]] static bool wellFormed(const OccupancyBox& box);
+
   /// Empties the map (size 0, every query invalid); keeps the buffers' capacity.
   void clear();
+  /// Sets the geometry and the size-dependent constants (clamp, metres table) for the box and
+  /// sizes the buffers (setClamp(), sizeBuffers()); allocates.
+  void prepare(const OccupancyBox& box);
+  /// The clamp constants (cap_sq_, inf_, cap_d_, narrow_keys_, window_kernel_) and the metres
+  /// table for the field's geometry.
+  void setClamp();
+  /// Sizes the pass buffers, the tracker and the per-thread scratch for the field's geometry
+  /// (grown only).
+  void sizeBuffers();
   /// Pass 1 (x, two sweeps) over the y rows [y_begin, y_end): 1D distances into pass1_.
   void sweepRows(const std::uint8_t* states, int y_begin, int y_end, Scratch* scratch);
   /// Pass 2 (y, into pass2_) and pass 3 (z) over the x slabs [x_begin, x_end), writing the field
   /// in metres and the unknown mask.
   void transformSlabs(const std::uint8_t* states, int x_begin, int x_end, Scratch* scratch);
-  /// The unknown bits of x slab x from the box states.
-  void writeUnknownBits(const std::uint8_t* states, int x);
+  /// Pass 2 and 3 of x slab x with the envelope code (transformSlabs() without the windowed
+  /// passes); `table` is the metres table at [inf_] or null.
+  void transformSlabEnvelope(int x, const float* table, Scratch* scratch);
   /// Transforms the part [begin, end) of one y line (pass1_ at (x, z)) as a line of its own,
   /// into `line` (end - begin values).
   void transformYLine(int x, int z, int begin, int end, std::int32_t* line,
@@ -372,19 +322,23 @@ class EsdfMap {
   [[nodiscard]] float metres(std::int32_t value) const {
     return metres_table_.empty() ? slowMetres(value) : metres_table_[value + inf_];
   }
-  /// Sets the size-dependent constants (cap, table, query steps) for the box; allocates.
-  void prepare(const OccupancyBox& box);
-  /// Shifts the kept state by `delta` voxels (new min - old min); new voxels are marked unseen.
-  void shiftKept(const VoxelIndex& delta);
-  /// Sizes and clears the marks of the y and z lines that update() transforms again (in
-  /// prepare()); update() takes the lines it transforms off the marks, leaving them clear.
-  void resetLineMarks();
+  /// What pass 1 writes for "beyond the cap": inf_, or cap_d_ + 1 where its results are kept in
+  /// 8 bits (the windowed passes read any distance above cap_d_ as beyond).
+  [[nodiscard]] std::int32_t pass1Inf() const { return window_kernel_ ? cap_d_ + 1 : inf_; }
+  /// Signed squared voxel distance (or +-inf_) -> clamped signed metres, without the table.
+  /// Needs cap_sq_, inf_ and the field's resolution of the current compute().
+  [[nodiscard]] float slowMetres(std::int32_t value) const;
+  /// 1 where unknown voxels are obstacles (UnknownAs::kOccupied), else 0: what pass 1 reads.
+  [[nodiscard]] std::int32_t unknownIsObstacle() const {
+    return config_.unknown_as == UnknownAs::kOccupied ? 1 : 0;
+  }
+
+  // ---- The incremental update (esdf_update.cpp) ----
+
   /// update()'s common part; `regions` null: the whole box may have changed.
   [[nodiscard]] bool updateWithin(const OccupancyBox& box, const std::vector<Region>* regions);
-  /// Lists in changed_states_ the voxels of `box` whose state differs from the kept one, inside
-  /// `regions` (null: everywhere); false once more than `budget` did.
-  [[nodiscard]] bool collectChangedStates(const OccupancyBox& box, std::size_t budget,
-                                          const std::vector<Region>* regions);
+  /// Shifts the kept state by `delta` voxels (new min - old min); new voxels are marked unseen.
+  void shiftKept(const VoxelIndex& delta);
   /// update() for a box moved by `delta` (delta.z() == 0) where the windowed passes apply:
   /// brings the map to B', the new box's geometry with the kept states where the boxes overlap
   /// and the new box's states elsewhere. The new x slabs are computed whole; in the kept ones
@@ -392,9 +346,23 @@ class EsdfMap {
   /// (next to a new or removed x face, in the new rows) or next to a removed y face are marked
   /// for updateChanged(), which transforms them with the frame's own changes.
   void moveWindowed(const OccupancyBox& box, const VoxelIndex& delta);
+  /// moveWindowed()'s first step: the kept slabs' states and results moved to their new place,
+  /// the new rows and slabs given the new box's states.
+  void moveKeptSlabs(const OccupancyBox& box, const VoxelIndex& delta);
+  /// moveWindowed()'s second step: pass 1 of B' where it may differ from the moved results,
+  /// marking the y lines where it does.
+  void sweepMovedRows(const VoxelIndex& delta, Scratch* scratch);
   /// The incremental part of update(): box has the kept geometry after a shift by `shift`
   /// voxels (zero: none).
   void updateChanged(const OccupancyBox& box, const VoxelIndex& shift);
+  /// updateChanged()'s first step: the changed states into the kept ones, the unknown bits and
+  /// the row spans of those whose kind changed.
+  void applyChangedStates(const std::uint8_t* states, const VoxelIndex& shift);
+  /// updateChanged()'s second step: pass 1 again over the row spans, marking the y lines whose
+  /// results changed.
+  void resweepChangedRows(const std::uint8_t* states, int reach, Scratch* scratch);
+  // ---- The incremental update's passes 2 and 3 (esdf_update_lines.cpp) ----
+
   /// The y and z passes of updateChanged() over the lines its x pass marked, `reach` = cap_d_ + 1:
   /// line by line with the envelope code ...
   void updateLinesEnvelope(int reach, Scratch* scratch);
@@ -405,21 +373,9 @@ class EsdfMap {
   void updateYLinesWindowed(int reach, Scratch* scratch);
   /// ... then the z pass, into the field.
   void updateZLinesWindowed(int reach, Scratch* scratch);
-  /// What pass 1 writes for "beyond the cap": inf_, or cap_d_ + 1 where its results are kept in
-  /// 8 bits (the windowed passes read any distance above cap_d_ as beyond).
-  [[nodiscard]] std::int32_t pass1Inf() const { return window_kernel_ ? cap_d_ + 1 : inf_; }
-  /// Signed squared voxel distance (or +-inf_) -> clamped signed metres, without the table.
-  /// Needs cap_sq_, inf_ and resolution_m_ of the current compute().
-  [[nodiscard]] float slowMetres(std::int32_t value) const;
 
   EsdfConfig config_;
-  VoxelIndex min_index_ = VoxelIndex::Zero();
-  Eigen::Vector3i size_ = Eigen::Vector3i::Zero();
-  double resolution_m_ = 1.0;
-  double inv_resolution_ = 1.0;
-  std::ptrdiff_t step_x_ = 0;  ///< query stencil: offset of the +1 neighbour in x (0 if nx = 1)
-  std::ptrdiff_t step_y_ = 0;  ///< ... in y
-  std::ptrdiff_t step_z_ = 0;  ///< ... in z
+  EsdfField field_;  ///< the field and its geometry
 
   std::int32_t cap_sq_ = 0;  ///< squared voxel distances above this clamp to max_distance_m
   std::int32_t inf_ = 1;     ///< cap_sq_ + 1: "farther than the cap" in the work buffer
@@ -427,11 +383,6 @@ class EsdfMap {
   bool narrow_keys_ = true;  ///< the envelope arithmetic of every line fits 32 bits
   bool envelope_only_ = false;  ///< see setEnvelopeOnly()
   bool window_kernel_ = false;  ///< compute() runs the windowed y and z passes
-  std::vector<float> field_;           ///< clamped signed distance per voxel [m]
-  /// One bit per voxel, set where the box voxel was unknown; each x slab starts on a new
-  /// 64-bit word (slab_bits_ apart) so that threads never share a word.
-  std::vector<std::uint64_t> unknown_bits_;
-  std::size_t slab_bits_ = 0;
   /// Pass 1's result: +d (non-obstacle) / -d (obstacle) along x, in voxels, or +-inf_.
   std::vector<std::int32_t> pass1_;
   /// The same in 8 bits, where the windowed passes apply (pass1_ is then empty), with
@@ -441,119 +392,22 @@ class EsdfMap {
   std::vector<std::int32_t> pass2_;
   /// The same in 16 bits, where the windowed passes apply (pass2_ is then empty).
   std::vector<std::int16_t> pass2_narrow_;
-  /// The box states of the last compute() / update() (what update() compares with).
-  std::vector<std::uint8_t> kept_states_;
-  bool kept_ = false;  ///< pass1_, pass 2's results and kept_states_ hold the current box
+  EsdfChangeTracker tracker_;  ///< the kept states, what changed, the lines to transform again
+  bool kept_ = false;  ///< the passes' results and the tracker's kept states hold the current box
   UpdateStats last_update_;
   std::vector<std::uint32_t> changed_cells_;
-  std::vector<std::uint32_t> changed_states_;  ///< offsets of the states update() found changed
-  std::vector<Region> merged_regions_;  ///< update(box, regions): the regions clipped and merged
-  std::vector<int> row_z_lo_;               ///< per y: lowest z of a changed state (nz: none)
-  std::vector<int> row_z_hi_;               ///< per y: highest z of a changed state (-1: none)
-  std::vector<int> row_x_lo_;               ///< per y: lowest x of a changed state
-  std::vector<int> row_x_hi_;               ///< per y: highest x of a changed state
-  std::vector<int> dirty_y_lo_;  ///< per (x, z): lowest y where pass 1 changed (ny: none)
-  std::vector<int> dirty_y_hi_;  ///< per (x, z): highest y where pass 1 changed (-1: none)
-  std::vector<int> dirty_z_lo_;  ///< per (x, y): lowest z where pass 2 changed (nz: none)
-  std::vector<int> dirty_z_hi_;  ///< per (x, y): highest z where pass 2 changed (-1: none)
-  std::vector<std::int32_t> row_buffer_;    ///< one y row of pass 1 (nx * nz)
-  std::vector<float> metres_table_;    ///< slowMetres(v) at [v + inf_] (when the cap is small)
-  std::vector<Scratch> scratch_;       ///< one per thread
+  std::vector<std::int32_t> row_buffer_;  ///< one y row of pass 1 (nx * nz)
+  std::vector<float> metres_table_;       ///< slowMetres(v) at [v + inf_] (when the cap is small)
+  std::vector<Scratch> scratch_;          ///< one per thread
 };
 
 inline EsdfMap::Query EsdfMap::query(const Eigen::Vector3d& p_W) const {
-  Query q;
-  // Continuous grid coordinates; the range test also rejects NaN before any float->int cast.
-  constexpr double kMaxGrid = 1073741824.0;  // 2^30
-  const double gx = p_W.x() * inv_resolution_;
-  const double gy = p_W.y() * inv_resolution_;
-  const double gz = p_W.z() * inv_resolution_;
-  if (!(std::abs(gx) < kMaxGrid && std::abs(gy) < kMaxGrid && std::abs(gz) < kMaxGrid)) return q;
-  const int vx = floorToInt(gx) - min_index_.x();
-  const int vy = floorToInt(gy) - min_index_.y();
-  const int vz = floorToInt(gz) - min_index_.z();
-  if (static_cast<unsigned>(vx) >= static_cast<unsigned>(size_.x()) ||
-      static_cast<unsigned>(vy) >= static_cast<unsigned>(size_.y()) ||
-      static_cast<unsigned>(vz) >= static_cast<unsigned>(size_.z())) {
-    return q;
-  }
-  const std::ptrdiff_t ny = size_.y();
-  const std::ptrdiff_t nz = size_.z();
-  q.valid = !unknownBit(vx, vy, vz);
-
-  // Cell-centre coordinates: cell i has its centre at i. Lower stencil corner clamped to
-  // [0, n - 2] (0 when n = 1), fraction clamped to [0, 1].
-  const double ux = gx - (static_cast<double>(min_index_.x()) + 0.5);
-  const double uy = gy - (static_cast<double>(min_index_.y()) + 0.5);
-  const double uz = gz - (static_cast<double>(min_index_.z()) + 0.5);
-  const int ix = std::clamp(floorToInt(ux), 0, std::max(size_.x() - 2, 0));
-  const int iy = std::clamp(floorToInt(uy), 0, std::max(size_.y() - 2, 0));
-  const int iz = std::clamp(floorToInt(uz), 0, std::max(size_.z() - 2, 0));
-  const double rx = ux - ix;
-  const double ry = uy - iy;
-  const double rz = uz - iz;
-  const double tx = std::clamp(rx, 0.0, 1.0);
-  const double ty = std::clamp(ry, 0.0, 1.0);
-  const double tz = std::clamp(rz, 0.0, 1.0);
-  const double kx = rx == tx ? inv_resolution_ : 0.0;  // d t / d p, 0 where held constant
-  const double ky = ry == ty ? inv_resolution_ : 0.0;
-  const double kz = rz == tz ? inv_resolution_ : 0.0;
-
-  const float* c = field_.data() + (ix * ny + iy) * nz + iz;
-  const Trilinear t = trilinear(c[0], c[step_z_], c[step_y_], c[step_y_ + step_z_], c[step_x_],
-                                c[step_x_ + step_z_], c[step_x_ + step_y_],
-                                c[step_x_ + step_y_ + step_z_], tx, ty, tz);
-  q.distance_m = t.value;
-  q.gradient.x() = t.d_dtx * kx;
-  q.gradient.y() = t.d_dty * ky;
-  q.gradient.z() = t.d_dtz * kz;
-  return q;
-}
-
-inline void EsdfMap::prefetchQuery(const Eigen::Vector3d& p_W) const {
-  constexpr double kMaxGrid = 1073741824.0;  // 2^30 (as query())
-  const double gx = p_W.x() * inv_resolution_;
-  const double gy = p_W.y() * inv_resolution_;
-  const double gz = p_W.z() * inv_resolution_;
-  if (!(std::abs(gx) < kMaxGrid && std::abs(gy) < kMaxGrid && std::abs(gz) < kMaxGrid)) return;
-  const int vx = floorToInt(gx) - min_index_.x();
-  const int vy = floorToInt(gy) - min_index_.y();
-  const int vz = floorToInt(gz) - min_index_.z();
-  if (static_cast<unsigned>(vx) >= static_cast<unsigned>(size_.x()) ||
-      static_cast<unsigned>(vy) >= static_cast<unsigned>(size_.y()) ||
-      static_cast<unsigned>(vz) >= static_cast<unsigned>(size_.z())) {
-    return;
-  }
-  // The stencil's lower corner (as query(), within a voxel of the point's own).
-  const int ix = std::clamp(floorToInt(gx - (static_cast<double>(min_index_.x()) + 0.5)), 0,
-                            std::max(size_.x() - 2, 0));
-  const int iy = std::clamp(floorToInt(gy - (static_cast<double>(min_index_.y()) + 0.5)), 0,
-                            std::max(size_.y() - 2, 0));
-  const int iz = std::clamp(floorToInt(gz - (static_cast<double>(min_index_.z()) + 0.5)), 0,
-                            std::max(size_.z() - 2, 0));
-  const float* c =
-      field_.data() + (static_cast<std::ptrdiff_t>(ix) * size_.y() + iy) * size_.z() + iz;
-#if defined(__GNUC__)
-  __builtin_prefetch(c);
-  __builtin_prefetch(c + step_z_);
-  __builtin_prefetch(c + step_y_ + step_z_);
-  __builtin_prefetch(c + step_x_ + step_z_);
-  __builtin_prefetch(c + step_x_ + step_y_ + step_z_);
-  const std::size_t bit = static_cast<std::size_t>(vx) * slab_bits_ +
-                          static_cast<std::size_t>(vy) * static_cast<std::size_t>(size_.z()) +
-                          static_cast<std::size_t>(vz);
-  __builtin_prefetch(unknown_bits_.data() + (bit >> 6));
-#else
-  (void)c;
-#endif
+  return field_.query(p_W);
 }
 
 inline void EsdfMap::queryBatch(const Eigen::Vector3d* points_W, std::size_t count,
                                 Query* out) const {
-  prefetchedQueries(
-      points_W, count, kQueryPrefetchAhead, out,
-      [this](const Eigen::Vector3d& p_W) { prefetchQuery(p_W); },
-      [this](const Eigen::Vector3d& p_W) { return query(p_W); });
+  field_.queryBatch(points_W, count, out);
 }
 
 }  // namespace mlmap
