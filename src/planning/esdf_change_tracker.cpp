@@ -11,6 +11,7 @@ void EsdfLineMarks::take(int nx, int per_slab, std::vector<EsdfMarkedLine>* mark
   constexpr int kScan = 16;
   int* const lo_at = lo_.data();
   int* const hi_at = hi_.data();
+  const int length = length_;  // (a local: the stores through lo_at cannot change it)
   for (int x = 0; x < nx; ++x) {
     const std::size_t first = static_cast<std::size_t>(x) * static_cast<std::size_t>(per_slab);
     for (int a0 = 0; a0 < per_slab; a0 += kScan) {
@@ -22,13 +23,13 @@ void EsdfLineMarks::take(int nx, int per_slab, std::vector<EsdfMarkedLine>* mark
         const std::size_t i = first + static_cast<std::size_t>(a);
         if (hi_at[i] < 0) continue;
         marked->push_back({x, a, lo_at[i], hi_at[i]});
-        lo_at[i] = length_;
+        lo_at[i] = length;
         hi_at[i] = -1;
       }
     }
   }
   std::vector<int>& at = *starts;
-  at.assign(static_cast<std::size_t>(length_) + 1, 0);
+  at.assign(static_cast<std::size_t>(length) + 1, 0);
   for (const EsdfMarkedLine& l : *marked) ++at[static_cast<std::size_t>(l.lo) + 1];
   for (std::size_t i = 1; i < at.size(); ++i) at[i] += at[i - 1];
   sorted->resize(marked->size());

@@ -303,7 +303,7 @@ void EsdfMap::applyChangedStates(const std::uint8_t* states, const VoxelIndex& s
     const int z = static_cast<int>(r - y * static_cast<std::size_t>(nz));
     if (kind_changed(states[i], kept[i])) tracker_.addRowChange(static_cast<int>(x), y, z);
     if (!u.shifted && (states[i] == kUnknown) != (kept[i] == kUnknown)) {
-      field_.flipUnknownBit(i);
+      field_.flipUnknownBit(x, r);
       changed_cells_.push_back(c);
     }
     kept[i] = states[i];

@@ -139,11 +139,9 @@ class EsdfField {
   /// Sets the unknown bits of x slab `x` from the box states `states` (the whole box's,
   /// OccupancyBox order, as bytes: Occupancy::kUnknown is 0).
   void writeUnknownBits(const std::uint8_t* states, int x);
-  /// Flips the unknown bit of the cell at box offset `offset` (OccupancyBox order).
-  void flipUnknownBit(std::size_t offset) {
-    const std::size_t slab = static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(size_.z());
-    const std::size_t x = offset / slab;
-    const std::size_t bit = x * slab_bits_ + (offset - x * slab);
+  /// Flips the unknown bit of the cell at `in_slab` = y * nz + z of x slab `x`.
+  void flipUnknownBit(std::size_t x, std::size_t in_slab) {
+    const std::size_t bit = x * slab_bits_ + in_slab;
     unknown_bits_[bit >> 6] ^= std::uint64_t{1} << (bit & 63);
   }
   /// Copies the unknown bits of x slab `from_x` to x slab `to_x`.
