@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <iterator>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -13,7 +12,6 @@ namespace mlmap {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr std::size_t kTimingWindow = 2000;   // frames kept for median / p99
 
 const MapConfig& validated(const MapConfig& config) {
   throwIfInvalid(config.validate(), "mlmap configuration");
@@ -40,36 +38,6 @@ const char* toString(FrameStatus status) {
   return "invalid";
 }
 
-void MapEngine::Samples::add(double v) {
-  if (values.size() < kTimingWindow) {
-    values.push_back(v);
-  } else {
-    values[next] = v;
-  }
-  next = (next + 1) % kTimingWindow;
-}
-
-double sortedQuantile(const std::vector<double>& sorted, double q) {
-  const auto i = static_cast<std::size_t>(std::lround(q * static_cast<double>(sorted.size() - 1)));
-  return sorted[std::min(i, sorted.size() - 1)];
-}
-
-TimingSummary summarizeTimings(std::vector<double> values_ms) {
-  TimingSummary s;
-  s.samples = values_ms.size();
-  if (values_ms.empty()) return s;
-  std::sort(values_ms.begin(), values_ms.end());
-  s.median_ms = sortedQuantile(values_ms, 0.5);
-  s.p99_ms = sortedQuantile(values_ms, 0.99);
-  s.max_ms = values_ms.back();
-  double sum = 0.0;
-  for (double v : values_ms) sum += v;
-  s.mean_ms = sum / static_cast<double>(values_ms.size());
-  return s;
-}
-
-TimingSummary MapEngine::Samples::summary() const { return summarizeTimings(values); }
-
 MapEngine::MapEngine(const MapConfig& config, LogSink log, EngineObservers observers)
     : config_(validated(config)),
       log_(std::move(log), 8),
@@ -78,52 +46,47 @@ MapEngine::MapEngine(const MapConfig& config, LogSink log, EngineObservers obser
       local_(config_.local_map, config_.log_odds),
       global_(config_.local_map.submap_cells(), config_.local_map.resolution_m),
       log_odds_model_(config_.log_odds),
-      planning_(config_, config_.pipeline.threaded && config_.pipeline.planning_layers) {
+      planning_(config_, config_.pipeline.threaded && config_.pipeline.planning_layers),
+      priors_(log_odds_model_) {
   if (config_.pipeline.threaded) {
-    for (int i = 0; i < config_.pipeline.batch_queue_capacity + 1; ++i) {
-      batch_pool_.push_back(std::make_unique<MeasurementBatch>());
-    }
-    awareness_thread_ = std::thread([this] { awarenessLoop(); });
-    local_thread_ = std::thread([this] { localLoop(); });
+    stages_ = std::make_unique<StageThreads>(
+        config_.pipeline.input_queue_capacity, config_.pipeline.batch_queue_capacity,
+        [this](Input& input, MeasurementBatch* batch) { awarenessStep(input, batch); },
+        [this](const MeasurementBatch& batch) { localStep(batch); });
   }
 }
 
-MapEngine::~MapEngine() {
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    stopping_ = true;
-  }
-  queue_cv_.notify_all();
-  if (awareness_thread_.joinable()) awareness_thread_.join();
-  if (local_thread_.joinable()) local_thread_.join();
-}
+MapEngine::~MapEngine() { stages_.reset(); }  // the threads stop before the layers go
 
 FrameStatus MapEngine::admit(double stamp_s, const Transform& T_W_B, const Transform& T_B_S) {
   double loaded_stamp_s = 0.0;  ///< set when this frame restarts the stamp order after a load
   bool restarted = false;
-  {
-    std::lock_guard<std::mutex> lock(stats_mutex_);
-    ++stats_.frames_in;
+  const FrameStatus status = stats_.update([&](EngineStatsRecorder::Record& r) {
+    ++r.stats.frames_in;
     const bool pose_ok =
         isMappablePose(T_W_B) && isValidPose(T_B_S) && T_B_S.translation().norm() < 100.0;
     if (!pose_ok) {
-      ++stats_.rejected_invalid_pose;
+      ++r.stats.rejected_invalid_pose;
       return FrameStatus::kInvalidPose;
     }
-    const bool in_order = !config_.pipeline.reject_out_of_order || !have_stamp_ || stamp_s > last_stamp_s_;
-    if (!std::isfinite(stamp_s) || (!in_order && !stamp_from_load_)) {
-      ++stats_.rejected_out_of_order;
+    StampOrder& order = r.stamps;
+    const bool in_order = !config_.pipeline.reject_out_of_order || !order.have_stamp ||
+                          stamp_s > order.last_stamp_s;
+    if (!std::isfinite(stamp_s) || (!in_order && !order.from_load)) {
+      ++r.stats.rejected_out_of_order;
       return FrameStatus::kOutOfOrder;
     }
     if (!in_order) {  // the first frame after a load, older than the map: another time base
       restarted = true;
-      loaded_stamp_s = last_stamp_s_;
-      ++stats_.stamp_order_restarts;
+      loaded_stamp_s = order.last_stamp_s;
+      ++r.stats.stamp_order_restarts;
     }
-    last_stamp_s_ = stamp_s;
-    have_stamp_ = true;
-    stamp_from_load_ = false;
-  }
+    order.last_stamp_s = stamp_s;
+    order.have_stamp = true;
+    order.from_load = false;
+    return FrameStatus::kAccepted;
+  });
+  if (status != FrameStatus::kAccepted) return status;
   if (restarted) {
     std::ostringstream m;
     m.precision(15);
@@ -140,8 +103,7 @@ FrameStatus MapEngine::admit(double stamp_s, const Transform& T_W_B, const Trans
 FrameStatus MapEngine::submit(PointCloudFrame frame) {
   FrameStatus status = admit(frame.stamp_s, frame.T_W_B, frame.T_B_S);
   if (status == FrameStatus::kAccepted && frame.points_S.empty()) {
-    std::lock_guard<std::mutex> lock(stats_mutex_);
-    ++stats_.rejected_empty;
+    stats_.update([](EngineStatsRecorder::Record& r) { ++r.stats.rejected_empty; });
     status = FrameStatus::kEmpty;
   }
   if (status != FrameStatus::kAccepted) {
@@ -164,8 +126,7 @@ FrameStatus MapEngine::submit(DepthFrame frame) {
                                  : frame.depth_m.size();
     if (n == 0 || have != n || !(K.fx > 0.0) || !(K.fy > 0.0) || !std::isfinite(K.cx) ||
         !std::isfinite(K.cy)) {
-      std::lock_guard<std::mutex> lock(stats_mutex_);
-      ++stats_.rejected_bad_image;
+      stats_.update([](EngineStatsRecorder::Record& r) { ++r.stats.rejected_bad_image; });
       status = FrameStatus::kBadImage;
     }
   }
@@ -183,22 +144,10 @@ FrameStatus MapEngine::enqueue(Input input) {
     process(input, &sync_batch_);
     return FrameStatus::kAccepted;
   }
-  bool dropped = false;
-  {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
-    if (stopping_) return FrameStatus::kStopped;
-    if (inputs_.size() >= static_cast<std::size_t>(config_.pipeline.input_queue_capacity)) {
-      inputs_.pop_front();  // the oldest waiting frame gives way to the newest
-      dropped = true;
-    }
-    inputs_.push_back(std::move(input));
-  }
-  queue_cv_.notify_all();
-  if (dropped) {
-    {
-      std::lock_guard<std::mutex> lock(stats_mutex_);
-      ++stats_.frames_dropped;
-    }
+  const StageThreads::Queued queued = stages_->push(std::move(input));
+  if (queued == StageThreads::Queued::kStopped) return FrameStatus::kStopped;
+  if (queued == StageThreads::Queued::kDroppedOldest) {
+    stats_.update([](EngineStatsRecorder::Record& r) { ++r.stats.frames_dropped; });
     log_.log(LogLevel::kWarning, 6, "input queue full: dropped the oldest waiting frame");
   }
   return FrameStatus::kAccepted;
@@ -216,144 +165,23 @@ void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
   if (observers_.awareness) observers_.awareness(awareness_.map(), batch->stamp_s, batch->T_W_B);
   const std::size_t bytes = awareness_.memoryBytes() + batch->free.memoryBytes() +
                             batch->hits.capacity() * sizeof(HitMeasurement);
-  std::lock_guard<std::mutex> lock(stats_mutex_);
-  stats_.points += counters;
-  stats_.memory.awareness_bytes = bytes;
-  awareness_ms_.add(batch->awareness_ms);
+  stats_.update([&](EngineStatsRecorder::Record& r) {
+    r.stats.points += counters;
+    r.stats.memory.awareness_bytes = bytes;
+    r.awareness_ms.add(batch->awareness_ms);
+  });
 }
 
-namespace {
-/// A submap index as 64 bits (21 per axis), for the pending priors' map.
-std::uint64_t priorKey(const SubmapIndex& m) {
-  std::uint64_t key = 0;
-  for (int a = 0; a < 3; ++a) key = (key << 21) | (static_cast<std::uint64_t>(m[a] + (1 << 20)) & 0x1fffff);
-  return key;
-}
-
-/// The submap holding world voxel `g` (floor division per axis).
-SubmapIndex submapOfVoxel(const VoxelIndex& g, const Eigen::Vector3i& submap_cells) {
-  SubmapIndex m;
-  for (int a = 0; a < 3; ++a) {
-    const int q = g[a] / submap_cells[a];
-    m[a] = g[a] % submap_cells[a] < 0 ? q - 1 : q;
-  }
-  return m;
-}
-}  // namespace
-
-PriorVoxels::PriorVoxels(const PriorVoxels& earlier, const Eigen::Vector3i& submap_cells,
-                         const std::vector<std::pair<SubmapIndex, std::vector<VoxelRecord>>>& added)
-    : submap_cells_(submap_cells), submaps_(earlier.submaps_), size_(earlier.size_) {
-  auto by_offset = [](const VoxelRecord& a, const VoxelRecord& b) { return a.offset < b.offset; };
-  for (const auto& [m, records] : added) {
-    std::vector<VoxelRecord>& held = submaps_[priorKey(m)];
-    std::vector<VoxelRecord> merged;  // a voxel added again takes its new value
-    merged.reserve(held.size() + records.size());
-    std::set_union(records.begin(), records.end(), held.begin(), held.end(),
-                   std::back_inserter(merged), by_offset);
-    size_ += merged.size() - held.size();
-    held = std::move(merged);
-  }
-}
-
-bool PriorVoxels::isPrior(const VoxelIndex& g, const LocalWindow& window) const {
-  if (!window.contains(g)) return false;
-  const SubmapIndex m = submapOfVoxel(g, submap_cells_);
-  const std::vector<VoxelRecord>* held = inSubmap(m);
-  if (held == nullptr) return false;
-  const VoxelIndex t = g - m.cwiseProduct(submap_cells_);
-  const auto offset =
-      static_cast<std::uint32_t>((t.x() * submap_cells_.y() + t.y()) * submap_cells_.z() + t.z());
-  const auto it = std::lower_bound(held->begin(), held->end(), VoxelRecord{offset, 0},
-                                   [](const VoxelRecord& a, const VoxelRecord& b) {
-                                     return a.offset < b.offset;
-                                   });
-  return it != held->end() && it->offset == offset && window.at(g) == it->log_odds;
-}
-
-const std::vector<VoxelRecord>* PriorVoxels::inSubmap(const SubmapIndex& m) const {
-  const auto it = submaps_.find(priorKey(m));
-  return it == submaps_.end() ? nullptr : &it->second;
-}
-
-std::shared_ptr<const PriorVoxels> MapEngine::priors() const {
-  std::lock_guard<std::mutex> lock(prior_mutex_);
-  return prior_voxels_;
-}
+std::shared_ptr<const PriorVoxels> MapEngine::priors() const { return priors_.published(); }
 
 void MapEngine::addPrior(const SubmapIndex& m, std::vector<VoxelRecord> records) {
-  // Only occupied evidence is prior knowledge (a fleet sample also carries free evidence).
-  records.erase(std::remove_if(records.begin(), records.end(),
-                               [&](const VoxelRecord& r) { return !log_odds_model_.isOccupied(r.log_odds); }),
-                records.end());
-  if (records.empty()) return;
-  if ((m.array() < -GlobalMap::kSubmapIndexLimit).any() ||
-      (m.array() >= GlobalMap::kSubmapIndexLimit).any()) {
-    return;
-  }
-  std::lock_guard<std::mutex> lock(prior_mutex_);
-  auto [it, inserted] = priors_.try_emplace(priorKey(m), m, std::vector<VoxelRecord>{});
-  if (inserted) {
-    it->second.second = std::move(records);
-    return;
-  }
-  // Merged with the one waiting: the union, the higher log-odds where both hold a voxel.
-  std::vector<VoxelRecord>& waiting = it->second.second;
-  std::vector<VoxelRecord> merged;
-  merged.reserve(waiting.size() + records.size());
-  auto a = waiting.begin();
-  auto b = records.begin();
-  while (a != waiting.end() || b != records.end()) {
-    if (b == records.end() || (a != waiting.end() && a->offset < b->offset)) {
-      merged.push_back(*a++);
-    } else if (a == waiting.end() || b->offset < a->offset) {
-      merged.push_back(*b++);
-    } else {
-      merged.push_back({a->offset, std::max(a->log_odds, b->log_odds)});
-      ++a;
-      ++b;
-    }
-  }
-  waiting = std::move(merged);
+  priors_.add(m, std::move(records));
 }
 
 void MapEngine::applyPriors() {
-  std::lock_guard<std::mutex> lock(prior_mutex_);
-  priors_waiting_ = 0;
-  if (priors_.empty()) return;
-  const Eigen::Vector3i cells = global_.submapCells();
-  std::vector<std::pair<SubmapIndex, std::vector<VoxelRecord>>> added;
-  for (auto it = priors_.begin(); it != priors_.end();) {
-    const SubmapIndex& m = it->second.first;
-    if (local_.placed() && local_.contains(m.cwiseProduct(cells))) {
-      ++priors_waiting_;  // the window holds it: it waits until the submap leaves
-      ++it;
-      continue;
-    }
-    // A prior never reaches clamp_max, so the vehicle's own first hit changes it (and marks it
-    // confirmed, PriorVoxels); it stays within the bounds the map keeps.
-    for (VoxelRecord& r : it->second.second) {
-      r.log_odds = static_cast<LogOddsQ>(std::clamp<int>(r.log_odds, log_odds_model_.clampMin(),
-                                                         log_odds_model_.clampMax() - 1));
-    }
-    // The voxels the global map does not hold yet are the ones addPrior() adds.
-    const std::vector<VoxelRecord>* own = global_.find(m);
-    std::vector<VoxelRecord> taken;
-    for (const VoxelRecord& r : it->second.second) {
-      if (own != nullptr &&
-          std::binary_search(own->begin(), own->end(), r,
-                             [](const VoxelRecord& a, const VoxelRecord& b) { return a.offset < b.offset; })) {
-        continue;
-      }
-      taken.push_back(r);
-    }
-    prior_voxels_added_ += global_.addPrior(m, it->second.second);
-    if (!taken.empty()) added.emplace_back(m, std::move(taken));
-    it = priors_.erase(it);
-  }
-  if (!added.empty()) {
-    prior_voxels_ = std::make_shared<const PriorVoxels>(*prior_voxels_, cells, added);
-  }
+  const PriorStore::Applied applied = priors_.apply(local_, &global_);
+  prior_voxels_added_ += applied.voxels_added;
+  priors_waiting_ = applied.submaps_waiting;
 }
 
 void MapEngine::localStep(const MeasurementBatch& batch) {
@@ -386,20 +214,22 @@ void MapEngine::localStep(const MeasurementBatch& batch) {
   if (observers_.global) observers_.global(global_, batch.stamp_s, global_.modifications());
   const std::size_t global_bytes = global_.memoryBytes();
   const std::size_t planning_bytes = planning_.memoryBytes();
-  std::lock_guard<std::mutex> lock(stats_mutex_);
-  stats_.memory.planning_bytes = planning_bytes;
-  ++stats_.frames_mapped;
-  stats_.local = local_.counters();
-  stats_.memory.local_bytes = local_.memoryBytes();
-  stats_.memory.global_bytes = global_bytes;
-  stats_.global_voxels = global_.voxelCount();
-  stats_.global_submaps = global_.submapCount();
-  stats_.hits_to_global = hits_to_global_;
-  stats_.hits_lost = hits_lost_;
-  stats_.prior_voxels_added = prior_voxels_added_;
-  stats_.prior_submaps_waiting = priors_waiting_;
-  local_ms_.add(ms);
-  total_ms_.add(ms + batch.awareness_ms);
+  stats_.update([&](EngineStatsRecorder::Record& r) {
+    EngineStats& s = r.stats;
+    s.memory.planning_bytes = planning_bytes;
+    ++s.frames_mapped;
+    s.local = local_.counters();
+    s.memory.local_bytes = local_.memoryBytes();
+    s.memory.global_bytes = global_bytes;
+    s.global_voxels = global_.voxelCount();
+    s.global_submaps = global_.submapCount();
+    s.hits_to_global = hits_to_global_;
+    s.hits_lost = hits_lost_;
+    s.prior_voxels_added = prior_voxels_added_;
+    s.prior_submaps_waiting = priors_waiting_;
+    r.local_ms.add(ms);
+    r.total_ms.add(ms + batch.awareness_ms);
+  });
 }
 
 void MapEngine::process(Input& input, MeasurementBatch* batch) {
@@ -407,70 +237,14 @@ void MapEngine::process(Input& input, MeasurementBatch* batch) {
   localStep(*batch);
 }
 
-void MapEngine::awarenessLoop() {
-  for (;;) {
-    Input input;
-    std::unique_ptr<MeasurementBatch> batch;
-    {
-      std::unique_lock<std::mutex> lock(queue_mutex_);
-      queue_cv_.wait(lock, [&] { return stopping_ || (!inputs_.empty() && !batch_pool_.empty()); });
-      if (stopping_) return;
-      input = std::move(inputs_.front());
-      inputs_.pop_front();
-      batch = std::move(batch_pool_.back());
-      batch_pool_.pop_back();
-      ++in_flight_;
-    }
-    awarenessStep(input, batch.get());
-    {
-      std::unique_lock<std::mutex> lock(queue_mutex_);
-      // Back-pressure: wait for room rather than drop computed measurements.
-      queue_cv_.wait(lock, [&] {
-        return stopping_ ||
-               batches_.size() < static_cast<std::size_t>(config_.pipeline.batch_queue_capacity);
-      });
-      if (stopping_) return;
-      batches_.push_back(std::move(batch));
-    }
-    queue_cv_.notify_all();
-  }
-}
-
-void MapEngine::localLoop() {
-  for (;;) {
-    std::unique_ptr<MeasurementBatch> batch;
-    {
-      std::unique_lock<std::mutex> lock(queue_mutex_);
-      queue_cv_.wait(lock, [&] { return stopping_ || !batches_.empty(); });
-      if (stopping_) return;
-      batch = std::move(batches_.front());
-      batches_.pop_front();
-    }
-    localStep(*batch);
-    {
-      std::lock_guard<std::mutex> lock(queue_mutex_);
-      batch_pool_.push_back(std::move(batch));
-      --in_flight_;
-    }
-    queue_cv_.notify_all();
-  }
-}
-
 void MapEngine::flush() {
   if (!config_.pipeline.threaded) return;
-  {
-    std::unique_lock<std::mutex> lock(queue_mutex_);
-    queue_cv_.wait(lock, [&] { return stopping_ || (inputs_.empty() && in_flight_ == 0); });
-  }
+  stages_->waitIdle();
   planning_.flush();
 }
 
 EngineStats MapEngine::stats() const {
-  std::lock_guard<std::mutex> lock(stats_mutex_);
-  EngineStats s = stats_;
-  s.awareness = awareness_ms_.summary();
-  s.local_global = local_ms_.summary();
-  s.total = total_ms_.summary();
+  EngineStats s = stats_.stats();
   s.planning = planning_.stats();
   return s;
 }
@@ -530,10 +304,7 @@ void MapEngine::restoreState(const MapState& state) {
   {
     std::lock_guard<std::mutex> lock(layers_mutex_);
     global_.clear();
-    {
-      std::lock_guard<std::mutex> prior_lock(prior_mutex_);  // the loaded map holds none of them
-      prior_voxels_ = std::make_shared<const PriorVoxels>();
-    }
+    priors_.forgetAdded();  // the loaded map holds none of them
     for (const auto& [m, records] : state.global_submaps) {
       global_.store(m, std::vector<VoxelRecord>(records));
     }
@@ -543,15 +314,14 @@ void MapEngine::restoreState(const MapState& state) {
     last_T_W_B_ = state.T_W_B;
     frames_restored_ = state.frames_mapped - std::min(state.frames_mapped, frames_integrated_);
   }
-  {
-    std::lock_guard<std::mutex> lock(stats_mutex_);
-    have_stamp_ = state.has_last_stamp;
-    last_stamp_s_ = state.has_last_stamp ? state.last_stamp_s : -1e300;
-    stamp_from_load_ = state.has_last_stamp;
-    stats_.global_voxels = global_.voxelCount();
-    stats_.global_submaps = global_.submapCount();
-    stats_.memory.global_bytes = global_.memoryBytes();
-  }
+  stats_.update([&](EngineStatsRecorder::Record& r) {
+    r.stamps.have_stamp = state.has_last_stamp;
+    r.stamps.last_stamp_s = state.has_last_stamp ? state.last_stamp_s : -1e300;
+    r.stamps.from_load = state.has_last_stamp;
+    r.stats.global_voxels = global_.voxelCount();
+    r.stats.global_submaps = global_.submapCount();
+    r.stats.memory.global_bytes = global_.memoryBytes();
+  });
   if (!config_.pipeline.planning_layers) return;
   planning_.update(local_, global_, frames_integrated_, state.last_stamp_s, state.T_W_B);
   planning_.flush();
@@ -561,10 +331,7 @@ void MapEngine::clear() {
   // Threaded: wait until no frame is queued or in flight, and keep the queue locked so that
   // neither stage starts one while the layers are emptied (both take this lock first).
   std::unique_lock<std::mutex> idle;
-  if (config_.pipeline.threaded) {
-    idle = std::unique_lock<std::mutex>(queue_mutex_);
-    queue_cv_.wait(idle, [&] { return stopping_ || (inputs_.empty() && in_flight_ == 0); });
-  }
+  if (config_.pipeline.threaded) idle = stages_->holdIdle();
   double stamp_s = 0.0;
   Transform T_W_B;  // set under the lock below
   std::uint64_t version = 0;
@@ -572,22 +339,18 @@ void MapEngine::clear() {
     std::lock_guard<std::mutex> lock(layers_mutex_);
     global_.clear();
     local_.restoreWindow(LocalWindow{});  // an empty window unplaces the map
-    {
-      // The priors added are gone with the map (ones still waiting are added later as usual).
-      std::lock_guard<std::mutex> prior_lock(prior_mutex_);
-      prior_voxels_ = std::make_shared<const PriorVoxels>();
-    }
+    // The priors added are gone with the map (ones still waiting are added later as usual).
+    priors_.forgetAdded();
     stamp_s = last_mapped_stamp_s_;
     T_W_B = last_T_W_B_;
     version = global_.modifications();  // clear() counts as a modification
   }
-  {
-    std::lock_guard<std::mutex> lock(stats_mutex_);
-    stats_.global_voxels = 0;
-    stats_.global_submaps = 0;
-    stats_.memory.global_bytes = global_.memoryBytes();
-    stats_.memory.local_bytes = local_.memoryBytes();
-  }
+  stats_.update([&](EngineStatsRecorder::Record& r) {
+    r.stats.global_voxels = 0;
+    r.stats.global_submaps = 0;
+    r.stats.memory.global_bytes = global_.memoryBytes();
+    r.stats.memory.local_bytes = local_.memoryBytes();
+  });
   if (config_.pipeline.planning_layers) {
     planning_.update(local_, global_, frames_integrated_, stamp_s, T_W_B);
     planning_.flush();

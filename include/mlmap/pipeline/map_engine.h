@@ -3,6 +3,11 @@
 /// The mapping engine (paper V-A, Figure 5): input validation, the awareness stage and the
 /// local-global stage, either synchronously on the caller's thread (deterministic; tests,
 /// benchmarks, replay) or on two threads joined by bounded queues.
+///
+/// The parts: the threads and the hand-over between them are StageThreads (stage_threads.h),
+/// the fleet's priors PriorStore (prior_store.h), the counters, timings and stamp order
+/// EngineStatsRecorder (engine_stats.h); MapEngine validates frames, runs the two stages on the
+/// layers and saves, restores and clears them.
 
 #include "mlmap/awareness/awareness_stage.h"
 #include "mlmap/core/config.h"
@@ -10,16 +15,15 @@
 #include "mlmap/local/local_map.h"
 #include "mlmap/local/map_state.h"
 #include "mlmap/planning/planning_layers.h"
+#include "mlmap/pipeline/engine_stats.h"
+#include "mlmap/pipeline/prior_store.h"
 #include "mlmap/pipeline/rate_limited_log.h"
+#include "mlmap/pipeline/stage_threads.h"
 
-#include <condition_variable>
-#include <deque>
 #include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
-#include <thread>
-#include <unordered_map>
 #include <variant>
 #include <vector>
 
@@ -34,97 +38,8 @@ enum class FrameStatus {
   kBadImage,         ///< depth image size disagrees with its intrinsics
   kStopped,          ///< engine shutting down
 };
+/// The status's name, for logs.
 const char* toString(FrameStatus status);
-
-/// Median, 99th percentile, mean and maximum of the recent samples of a stage, in ms.
-struct TimingSummary {
-  double median_ms = 0.0;
-  double p99_ms = 0.0;
-  double mean_ms = 0.0;
-  double max_ms = 0.0;
-  std::size_t samples = 0;
-};
-
-/// The q-quantile (0..1) of ascending, non-empty `sorted` values, by nearest rank: the one rule
-/// behind every median and p99 mlmap reports.
-double sortedQuantile(const std::vector<double>& sorted, double q);
-/// Median, p99, mean and maximum of `values_ms` (any order).
-TimingSummary summarizeTimings(std::vector<double> values_ms);
-
-/// Memory in bytes by layer.
-struct MemoryUsage {
-  std::size_t awareness_bytes = 0;  ///< cylindrical grid, per-frame scratch and batch
-  std::size_t local_bytes = 0;      ///< active-area voxels
-  std::size_t global_bytes = 0;     ///< retired submaps' occupied voxels
-  std::size_t planning_bytes = 0;   ///< snapshots (window copies, 2D grids) and ESDF buffers
-  [[nodiscard]] std::size_t total() const {
-    return awareness_bytes + local_bytes + global_bytes + planning_bytes;
-  }
-};
-
-/// Everything the engine counts. Frames: in = accepted + rejected_*; dropped counts accepted
-/// frames that were discarded because the input queue was full (threaded mode only).
-struct EngineStats {
-  std::uint64_t frames_in = 0;
-  std::uint64_t frames_mapped = 0;
-  std::uint64_t frames_dropped = 0;
-  std::uint64_t rejected_invalid_pose = 0;
-  std::uint64_t rejected_out_of_order = 0;
-  /// First frames after restoreState() older than the loaded map's last stamp (another time
-  /// base: a map saved on wall-clock time, a sensor on sim time): accepted, the stamp order
-  /// restarted from them (at most one per load).
-  std::uint64_t stamp_order_restarts = 0;
-  std::uint64_t rejected_empty = 0;
-  std::uint64_t rejected_bad_image = 0;
-  PointCounters points;
-  LocalMapCounters local;
-  TimingSummary awareness;     ///< points -> awareness map + measurements
-  TimingSummary local_global;  ///< re-centring + log-odds updates
-  TimingSummary total;         ///< both stages of one frame
-  MemoryUsage memory;
-  std::size_t global_voxels = 0;
-  std::size_t global_submaps = 0;
-  /// Hit voxel updates beyond the local window (its hits_outside_window and the points'
-  /// hits_beyond_local_map, one per voxel and frame) applied to the global map instead.
-  std::uint64_t hits_to_global = 0;
-  /// Hits in range that no layer could hold (beyond the global map's submap index range).
-  std::uint64_t hits_lost = 0;
-  /// Voxels of other vehicles added as prior knowledge (addPrior()), and the submaps still
-  /// waiting because they lie in the local window.
-  std::uint64_t prior_voxels_added = 0;
-  std::size_t prior_submaps_waiting = 0;
-  PlanningStats planning;      ///< snapshots, 2D grid and ESDF (not part of `total`)
-};
-
-
-/// The voxels other vehicles' submaps added as prior knowledge (MapEngine::addPrior()), with the
-/// log-odds each came with, for planners to tell them apart (read it next to a snapshot:
-/// MapEngine::priors()) and for the fleet's share to send the vehicle's own evidence only
-/// (fleet::SubmapShare: its value minus the prior's). A voxel counts as prior while it holds the
-/// value it came with; the vehicle's own measurements change it (a prior is kept below
-/// clamp_max, so even the first own hit does). Immutable.
-class PriorVoxels {
- public:
-  PriorVoxels() = default;
-  /// A copy of `earlier` with `added` on top: per submap, the voxels added (ascending offsets
-  /// inside the submap, with the log-odds each came with); `submap_cells`: voxels per submap and
-  /// axis (the engine's).
-  PriorVoxels(const PriorVoxels& earlier, const Eigen::Vector3i& submap_cells,
-              const std::vector<std::pair<SubmapIndex, std::vector<VoxelRecord>>>& added);
-  /// True when `g` came from another vehicle and `window` (a snapshot's) still holds it with
-  /// the value it came with. False outside the window.
-  [[nodiscard]] bool isPrior(const VoxelIndex& g, const LocalWindow& window) const;
-  /// The voxels of submap `m` added as priors (ascending offsets, the log-odds each came with);
-  /// null when there are none.
-  [[nodiscard]] const std::vector<VoxelRecord>* inSubmap(const SubmapIndex& m) const;
-  /// Voxels ever added as priors.
-  [[nodiscard]] std::size_t size() const { return size_; }
-
- private:
-  Eigen::Vector3i submap_cells_ = Eigen::Vector3i::Ones();
-  std::unordered_map<std::uint64_t, std::vector<VoxelRecord>> submaps_;  ///< by packed index
-  std::size_t size_ = 0;
-};
 
 /// Optional observers of the layers the snapshot does not carry, and of each new snapshot,
 /// called on the engine's own threads (the caller's in synchronous mode) while that layer is not
@@ -151,6 +66,7 @@ class MapEngine {
  public:
   /// Throws std::invalid_argument listing every problem when `config` is not valid.
   explicit MapEngine(const MapConfig& config, LogSink log = {}, EngineObservers observers = {});
+  /// Stops the threads (threaded mode): frames still queued are not mapped.
   ~MapEngine();
   MapEngine(const MapEngine&) = delete;
   MapEngine& operator=(const MapEngine&) = delete;
@@ -168,12 +84,16 @@ class MapEngine {
   /// pipeline.planning_layers false it stays the empty snapshot of a new engine.
   [[nodiscard]] std::shared_ptr<const MapSnapshot> snapshot() const { return planning_.snapshot(); }
 
+  /// What the engine counted and timed so far (any thread).
   [[nodiscard]] EngineStats stats() const;
+  /// The configuration in use.
   [[nodiscard]] const MapConfig& config() const { return config_; }
 
-  /// Layers, valid to read after flush() while no frame is being submitted.
+  /// Layers, valid to read after flush() while no frame is being submitted: the awareness map,
   [[nodiscard]] const AwarenessMap& awareness() const { return awareness_.map(); }
+  /// the local map,
   [[nodiscard]] const LocalMap& localMap() const { return local_; }
+  /// the global map.
   [[nodiscard]] const GlobalMap& globalMap() const { return global_; }
   /// State of a world voxel: the local map inside the window, the global map outside it
   /// (occupied if stored there, unknown otherwise).
@@ -219,14 +139,12 @@ class MapEngine {
   void clear();
 
  private:
-  using Input = std::variant<PointCloudFrame, DepthFrame>;
+  using Input = EngineInput;
   FrameStatus admit(double stamp_s, const Transform& T_W_B, const Transform& T_B_S);
   void process(Input& input, MeasurementBatch* batch);
   void awarenessStep(Input& input, MeasurementBatch* batch);
   void localStep(const MeasurementBatch& batch);
   void applyPriors();
-  void awarenessLoop();
-  void localLoop();
   FrameStatus enqueue(Input input);
 
   MapConfig config_;
@@ -244,11 +162,8 @@ class MapEngine {
   std::uint64_t prior_voxels_added_ = 0; // EngineStats::prior_voxels_added (same stage)
   std::size_t priors_waiting_ = 0;       // EngineStats::prior_submaps_waiting (same stage)
 
-  // Priors handed over by addPrior() (any thread), by packed submap index, and those added
-  // (published like a snapshot: a pointer swapped under prior_mutex_).
-  mutable std::mutex prior_mutex_;
-  std::shared_ptr<const PriorVoxels> prior_voxels_ = std::make_shared<const PriorVoxels>();
-  std::unordered_map<std::uint64_t, std::pair<SubmapIndex, std::vector<VoxelRecord>>> priors_;
+  // Priors handed over by addPrior() (any thread) and those added (published like a snapshot).
+  PriorStore priors_;
 
   // Guards local_ and global_ against exportState() while the local-global stage writes them,
   // and the state of the last mapped frame.
@@ -258,31 +173,13 @@ class MapEngine {
   Transform last_T_W_B_ = Transform::Identity();
   std::uint64_t frames_restored_ = 0;  // frames mapped before the state restored last
 
-  // Statistics, guarded by stats_mutex_.
-  mutable std::mutex stats_mutex_;
-  EngineStats stats_;
-  struct Samples {
-    std::vector<double> values;
-    std::size_t next = 0;
-    void add(double v);
-    [[nodiscard]] TimingSummary summary() const;
-  };
-  Samples awareness_ms_, local_ms_, total_ms_;
-  double last_stamp_s_ = -1e300;
-  bool have_stamp_ = false;
-  bool stamp_from_load_ = false;  ///< last_stamp_s_ came from restoreState(), no frame since
+  // Counters, stage timings and the stamp order (its own mutex).
+  EngineStatsRecorder stats_;
 
-  // Threaded mode.
-  std::mutex queue_mutex_;
-  std::condition_variable queue_cv_;
-  std::deque<Input> inputs_;
-  std::deque<std::unique_ptr<MeasurementBatch>> batches_;
-  std::vector<std::unique_ptr<MeasurementBatch>> batch_pool_;
-  std::size_t in_flight_ = 0;  // frames taken from the input queue, not yet mapped
-  bool stopping_ = false;
-  std::thread awareness_thread_;
-  std::thread local_thread_;
-  MeasurementBatch sync_batch_;
+  MeasurementBatch sync_batch_;  // synchronous mode's one batch
+  // Threaded mode: the two stage threads and their queues (null in synchronous mode; last, so
+  // that the threads stop before anything they use is destroyed).
+  std::unique_ptr<StageThreads> stages_;
 };
 
 }  // namespace mlmap
