@@ -457,7 +457,8 @@ def test_the_podman_test_runs_the_images_as_compose_does():
     assert 'bash tools/container_images.sh --env' in script
     assert '--network "ns:/proc/$ns/ns/net"' in script
     # The test command's last part; CI runs exactly the test command.
-    assert 'bash tests/integration/containers_podman.sh' in (REPO / 'tools' / 'test.sh').read_text()
+    test_command = (REPO / 'tools' / 'test.sh').read_text()
+    assert 'bash tests/integration/containers_podman.sh' in test_command
     assert (REPO / '.ci' / 'run').read_text().rstrip().endswith('bash tools/test.sh')
 
 
