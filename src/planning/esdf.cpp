@@ -16,7 +16,6 @@
 namespace mlmap {
 namespace {
 
-using esdf_kernel::LineBuffers;
 using esdf_kernel::StridedLine;
 using esdf_kernel::sweepBlock;
 using esdf_kernel::transformLine;
