@@ -8,7 +8,7 @@
 #include "mlmap/dds/transport/participant.h"
 #include "mlmap/dds/fleet/submap_messages.h"
 
-#include "dds_test_support.h"
+#include "secure_peer.h"
 
 #include "mlmap_msgs/msg/Submap_PubSubTypes.h"
 
@@ -23,27 +23,12 @@ namespace mlmap::dds {
 namespace {
 
 namespace fdds = eprosima::fastdds::dds;
+using test_support::kSecureTimeout;
+using test_support::peerConfig;
 using test_support::waitFor;
 
-const std::string kKeystore = MLMAP_TEST_KEYSTORE;
-/// Handshakes (PKI-DH, permissions) on a loaded 2-core machine under sanitizers.
-constexpr std::chrono::milliseconds kSecureTimeout{30000};
 const SubmapGeometry kGrid{0.2, {16, 16, 6}};
 const fleet::SubmapUpdate kTwoVoxels{SubmapIndex(1, 2, 0), {{3, 2000}, {40, 3500}}};
-
-/// A loopback participant's configuration as `enclave` of the test keystore (Enforce); none: no
-/// credentials.
-DdsConfig peerConfig(int domain_id, const std::optional<std::string>& enclave) {
-  DdsConfig config = test_support::localhostConfig(domain_id);
-  config.large_data = false;
-  config.security.enable = enclave.has_value();
-  if (enclave) {
-    config.security.keystore = kKeystore;
-    config.security.enclave = *enclave;
-    config.security.strategy = "Enforce";
-  }
-  return config;
-}
 
 fdds::DataWriter* rawSubmapWriter(fdds::Publisher* publisher, const std::string& vehicle) {
   return createWriter<::mlmap_msgs::msg::dds_::Submap_PubSubType>(

@@ -17,6 +17,7 @@
 
 #include "dds_test_support.h"
 #include "scoped_env.h"
+#include "secure_peer.h"
 #include "service_client.h"
 #include "temp_dir.h"
 
@@ -45,22 +46,9 @@ namespace fdds = eprosima::fastdds::dds;
 using test_support::ScopedEnv;
 using test_support::waitFor;
 
-const std::string kKeystore = MLMAP_TEST_KEYSTORE;
-/// Handshakes (PKI-DH, permissions) on a loaded 2-core machine under sanitizers.
-constexpr std::chrono::milliseconds kSecureTimeout{30000};
-
-/// A loopback participant as `enclave` of the test keystore (Enforce); none: no credentials.
-DdsConfig peerConfig(int domain_id, const std::optional<std::string>& enclave) {
-  DdsConfig config = test_support::localhostConfig(domain_id);
-  config.large_data = false;
-  config.security.enable = enclave.has_value();
-  if (enclave) {
-    config.security.keystore = kKeystore;
-    config.security.enclave = *enclave;
-    config.security.strategy = "Enforce";
-  }
-  return config;
-}
+using test_support::kKeystore;
+using test_support::kSecureTimeout;
+using test_support::peerConfig;
 
 /// The same identity as `enclave`, but secured only by a Fast DDS XML profile's properties (the
 /// way a Fast DDS program without mlmap's options, or a ROS 2 XML profile, would do it).
