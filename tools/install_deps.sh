@@ -38,7 +38,7 @@ test_tools=(
   libgtest-dev                         # tests
   libopencv-imgcodecs-dev              # the tests' independent PNG reader and writer
   clang libclang-rt-14-dev llvm-14     # fuzzing: libFuzzer + sanitizer runtimes, llvm-symbolizer (tools/fuzz.sh)
-  clang-tidy cppcheck                  # static analysis (tools/lint.sh)
+  clang-tidy cppcheck clang-format     # static analysis and the C++ layout (tools/lint.sh)
   cyclonedds-dev cyclonedds-tools      # cross-vendor interoperability test (ROS 2's other tier-1 DDS)
   iproute2                             # network-namespace tests
   openssl                              # DDS Security: test keystores (tools/make_test_keystore.sh); python3 runs the capture test

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Static analysis of mlmap's own code (src/, include/, tests/) with the checked-in configuration:
-# cppcheck (tools/analysis/cppcheck-suppressions.txt) and clang-tidy (.clang-tidy).
+# the layout (.clang-format, every C++ file git knows), cppcheck
+# (tools/analysis/cppcheck-suppressions.txt) and clang-tidy (.clang-tidy).
 #   bash tools/lint.sh [--build DIR] [--cppcheck-only | --clang-tidy-only] [--deep] [FILE...]
 # DIR holds compile_commands.json (default: build-asan, the test command's tree; any configured
 # tree works). FILEs limit clang-tidy to those sources (default: src/). --deep adds the clang static
@@ -18,13 +19,21 @@ while [ $# -gt 0 ]; do
     --cppcheck-only) run_tidy=0; shift ;;
     --clang-tidy-only) run_cppcheck=0; shift ;;
     --deep) tidy_checks=(-checks='clang-analyzer-*'); shift ;;
-    -h | --help) sed -n '2,8p' "$0"; exit 0 ;;
+    -h | --help) sed -n '2,9p' "$0"; exit 0 ;;
     -*) echo "lint.sh: unknown option $1" >&2; exit 2 ;;
     *) files+=("$1"); shift ;;
   esac
 done
 jobs=$(nproc)
 status=0
+
+# The layout first: a few seconds. `clang-format -i FILE` fixes what it reports.
+echo "== clang-format $(clang-format --version | sed -n 's/.*version \([0-9.]*\).*/\1/p'): C++ layout"
+mapfile -t cxx < <(git ls-files '*.cpp' '*.h')
+clang-format --dry-run --Werror "${cxx[@]}" || {
+  echo "   clang-format: the files above differ from .clang-format's layout (clang-format -i FILE)"
+  status=1
+}
 
 if [ "$run_cppcheck" = 1 ]; then
   echo "== cppcheck $(cppcheck --version | cut -d' ' -f2): src/ include/ tests/"

@@ -11,8 +11,9 @@
 #include <iostream>
 
 int main(int argc, char** argv) {
-  CLI::App app{"mlmap_config_tool: the default configuration files and the key reference, "
-               "generated from the key lists in code"};
+  CLI::App app{
+      "mlmap_config_tool: the default configuration files and the key reference, "
+      "generated from the key lists in code"};
   std::string source_dir = ".";
   bool write = false;
   app.add_option("--source-dir", source_dir, "the mlmap source tree (default: the current folder)")

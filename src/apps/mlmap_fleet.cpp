@@ -1,6 +1,7 @@
 // mlmap_fleet: the fleet's merger (ground station or any vehicle). Every vehicle's
-// mlmap_msgs/Submap samples in (each on its own rt/<vehicle>/mlmap/submaps), the merged map out as standard ROS 2 topics,
-// over plain Fast DDS: no ROS installation needed. The work is mlmap::dds::FleetMerger's.
+// mlmap_msgs/Submap samples in (each on its own rt/<vehicle>/mlmap/submaps), the merged map out as
+// standard ROS 2 topics, over plain Fast DDS: no ROS installation needed. The work is
+// mlmap::dds::FleetMerger's.
 
 #include "mlmap/apps/stop_signal.h"
 #include "mlmap/config/config_yaml.h"
@@ -21,13 +22,13 @@ using namespace mlmap;
 /// The command line of mlmap_fleet.
 struct Options {
   dds::FleetMergerConfig merger;
-  int domain_id = -1;           ///< --domain (-1: ROS_DOMAIN_ID, else 0)
-  std::string discovery_range;  ///< --discovery-range ("": ROS_AUTOMATIC_DISCOVERY_RANGE)
-  double duration_s = 0.0;      ///< --duration (0: until SIGINT / SIGTERM)
-  double report_every_s = 5.0;  ///< --report-every (0: none)
-  std::string config_path;      ///< --config: the vehicles' configuration ("": the defaults)
-  std::string save_map_path;    ///< --save-map: the merged map's file at the end ("": none)
-  bool overwrite = false;       ///< --overwrite: --save-map may replace an existing map file
+  int domain_id = -1;                ///< --domain (-1: ROS_DOMAIN_ID, else 0)
+  std::string discovery_range;       ///< --discovery-range ("": ROS_AUTOMATIC_DISCOVERY_RANGE)
+  double duration_s = 0.0;           ///< --duration (0: until SIGINT / SIGTERM)
+  double report_every_s = 5.0;       ///< --report-every (0: none)
+  std::string config_path;           ///< --config: the vehicles' configuration ("": the defaults)
+  std::string save_map_path;         ///< --save-map: the merged map's file at the end ("": none)
+  bool overwrite = false;            ///< --overwrite: --save-map may replace an existing map file
   double vehicle_budget_mb = 256.0;  ///< --vehicle-budget [MiB]
   double fleet_budget_mb = 1024.0;   ///< --fleet-budget [MiB]
 };
@@ -68,8 +69,7 @@ void addOptions(CLI::App& app, Options& o) {
   app.add_option("--vehicle-budget", o.vehicle_budget_mb,
                  "memory one vehicle's submaps may take in the merger [MiB]")
       ->check(CLI::Range(1.0, 1048576.0));
-  app.add_option("--fleet-budget", o.fleet_budget_mb,
-                 "memory the merged map may take [MiB]")
+  app.add_option("--fleet-budget", o.fleet_budget_mb, "memory the merged map may take [MiB]")
       ->check(CLI::Range(1.0, 1048576.0));
   app.add_option("--save-map", o.save_map_path,
                  "at the end, write the merged map to this mlmap map file (global layer; "
@@ -84,8 +84,7 @@ std::string saveMapProblem(const Options& o) {
   const std::string conflict =
       io::outputConflict(o.save_map_path, {o.config_path}, o.overwrite, "--overwrite");
   if (!conflict.empty()) return "--save-map: not writing " + conflict;
-  const std::filesystem::path parent =
-      std::filesystem::absolute(o.save_map_path).parent_path();
+  const std::filesystem::path parent = std::filesystem::absolute(o.save_map_path).parent_path();
   if (!std::filesystem::is_directory(parent)) {
     return "--save-map: the folder " + parent.string() + " does not exist";
   }
@@ -142,8 +141,9 @@ int run(Options o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"mlmap_fleet: merges the submaps every mlmap_node of a fleet shares "
-               "(dds.fleet.publish) and publishes the merged map as ROS 2 topics"};
+  CLI::App app{
+      "mlmap_fleet: merges the submaps every mlmap_node of a fleet shares "
+      "(dds.fleet.publish) and publishes the merged map as ROS 2 topics"};
   Options options;
   addOptions(app, options);
   CLI11_PARSE(app, argc, argv);

@@ -35,27 +35,30 @@ using namespace mlmap;
 
 /// The command line of mlmap_fleet_demo.
 struct Options {
-  std::vector<std::string> scenario_paths;  ///< --scenario, one per vehicle (its file stem names it)
-  std::string out_dir = "fleet_output";     ///< --out
-  double resolution_m = 0.1;                ///< --resolution
-  double share_hz = 1.0;                    ///< --share-hz: sharing rounds per second of flight
-  double noise = 0.0;                       ///< --noise: depth noise coefficient [1/m]
-  int max_frames = 0;                       ///< --max-frames per vehicle (0: all)
-  bool share_back = true;                   ///< --no-share-back clears it
-  double view_min_z_m = 0.2;                ///< --view-min-z: the pictures' height band, bottom
-  double view_max_z_m = 2.0;                ///< --view-max-z: top (floor and ceiling left out)
+  std::vector<std::string>
+      scenario_paths;                    ///< --scenario, one per vehicle (its file stem names it)
+  std::string out_dir = "fleet_output";  ///< --out
+  double resolution_m = 0.1;             ///< --resolution
+  double share_hz = 1.0;                 ///< --share-hz: sharing rounds per second of flight
+  double noise = 0.0;                    ///< --noise: depth noise coefficient [1/m]
+  int max_frames = 0;                    ///< --max-frames per vehicle (0: all)
+  bool share_back = true;                ///< --no-share-back clears it
+  double view_min_z_m = 0.2;             ///< --view-min-z: the pictures' height band, bottom
+  double view_max_z_m = 2.0;             ///< --view-max-z: top (floor and ceiling left out)
 };
 
 void addOptions(CLI::App& app, Options& o) {
-  app.add_option("--scenario", o.scenario_paths, "a vehicle's scenario YAML (repeat per vehicle; "
-                                                 "its file name without .yaml names the vehicle)")
+  app.add_option("--scenario", o.scenario_paths,
+                 "a vehicle's scenario YAML (repeat per vehicle; "
+                 "its file name without .yaml names the vehicle)")
       ->required()
       ->check(CLI::ExistingFile);
   app.add_option("--out", o.out_dir, "output folder")->capture_default_str();
   app.add_option("--resolution", o.resolution_m, "voxel size [m]")
       ->check(CLI::Range(0.05, 1.0))
       ->capture_default_str();
-  app.add_option("--share-hz", o.share_hz, "sharing rounds per second of flight (dds.fleet.rate_hz)")
+  app.add_option("--share-hz", o.share_hz,
+                 "sharing rounds per second of flight (dds.fleet.rate_hz)")
       ->check(CLI::Range(0.1, 100.0))
       ->capture_default_str();
   app.add_option("--noise", o.noise, "depth noise: sigma = K * z^2 [1/m] (0: noise-free)")
@@ -285,7 +288,8 @@ void run(const Options& o) {
   const sim::World& world = vehicles.front()->scenario.world;
   const double res = config.local_map.resolution_m;
   const eval::Accuracy accuracy = eval::scoreOccupancy(merged, truth.voxels(), world, res);
-  const eval::Accuracy single_accuracy = eval::scoreOccupancy(single_voxels, truth.voxels(), world, res);
+  const eval::Accuracy single_accuracy =
+      eval::scoreOccupancy(single_voxels, truth.voxels(), world, res);
   const double iou = eval::compareVoxels(merged, single_voxels).iou;
 
   pictures::writePng(o.out_dir + "/fleet_top.png", renderMergedByVehicle(o, fleet, vehicles));
@@ -296,15 +300,16 @@ void run(const Options& o) {
     const double flight_s = v.frames_planned / v.scenario.frame_rate_hz;
     seconds = std::max(seconds, flight_s);
     const std::size_t own_count = writeOwnVoxelsPicture(o, fleet, v, static_cast<int>(k), res);
-    json_vehicles.push_back({{"name", v.name},
-                             {"frames_mapped", v.frames_mapped},
-                             {"frames_planned", v.frames_planned},
-                             {"bytes_sent", v.bytes_sent},
-                             {"bytes_per_s", flight_s > 0.0 ? static_cast<double>(v.bytes_sent) / flight_s : 0.0},
-                             {"submaps_sent", v.submaps_sent},
-                             {"merged_voxels_raised", own_count},
-                             {"flight_s", flight_s},
-                             {"colour_rgb", fleet::vehicleColourRgb(static_cast<int>(k))}});
+    json_vehicles.push_back(
+        {{"name", v.name},
+         {"frames_mapped", v.frames_mapped},
+         {"frames_planned", v.frames_planned},
+         {"bytes_sent", v.bytes_sent},
+         {"bytes_per_s", flight_s > 0.0 ? static_cast<double>(v.bytes_sent) / flight_s : 0.0},
+         {"submaps_sent", v.submaps_sent},
+         {"merged_voxels_raised", own_count},
+         {"flight_s", flight_s},
+         {"colour_rgb", fleet::vehicleColourRgb(static_cast<int>(k))}});
   }
   eval::Json summary;
   summary["vehicles"] = json_vehicles;
@@ -330,15 +335,17 @@ void run(const Options& o) {
   std::printf("\nfleet of %zu over %.1f s of flight, %.1f m voxels, sharing at %.1f Hz%s\n",
               vehicles.size(), seconds, res, o.share_hz, o.share_back ? ", sharing back" : "");
   for (const auto& v : vehicles) {
-    std::printf("  %-8s %5d frames mapped, %8zu B sent (%.0f B/s) in %zu submaps\n", v->name.c_str(),
-                v->frames_mapped, v->bytes_sent,
-                static_cast<double>(v->bytes_sent) / std::max(1e-9, v->frames_planned / v->scenario.frame_rate_hz),
+    std::printf("  %-8s %5d frames mapped, %8zu B sent (%.0f B/s) in %zu submaps\n",
+                v->name.c_str(), v->frames_mapped, v->bytes_sent,
+                static_cast<double>(v->bytes_sent) /
+                    std::max(1e-9, v->frames_planned / v->scenario.frame_rate_hz),
                 v->submaps_sent);
   }
-  std::printf("  merged: %zu occupied voxels, F1 %.4f (precision %.4f, recall %.4f), IoU vs one "
-              "engine %.4f (its F1 %.4f)\n  wrote %s/{fleet_top.png, <vehicle>_top.png, summary.json}\n",
-              merged.size(), accuracy.f1, accuracy.precision, accuracy.recall, iou,
-              single_accuracy.f1, o.out_dir.c_str());
+  std::printf(
+      "  merged: %zu occupied voxels, F1 %.4f (precision %.4f, recall %.4f), IoU vs one "
+      "engine %.4f (its F1 %.4f)\n  wrote %s/{fleet_top.png, <vehicle>_top.png, summary.json}\n",
+      merged.size(), accuracy.f1, accuracy.precision, accuracy.recall, iou, single_accuracy.f1,
+      o.out_dir.c_str());
 }
 
 }  // namespace

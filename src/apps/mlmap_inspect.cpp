@@ -56,9 +56,9 @@ struct Options {
   bool expect_all = false;            ///< --expect-all: exit 2 unless every enabled layer arrived
   bool as_bridge = false;             ///< --as-bridge: subscribe with the ROS 2 bridge's QoS
   std::vector<std::string> expect_topics;  ///< --expect: exit 2 unless these arrived
-  bool until_expected = false;        ///< --until-expected: stop once the expected layers arrived
-  double min_precision = 0.0;         ///< --min-precision: exit 2 below it (0: no check)
-  apps::SecurityOptions security;     ///< --keystore, --enclave, --security-strategy
+  bool until_expected = false;     ///< --until-expected: stop once the expected layers arrived
+  double min_precision = 0.0;      ///< --min-precision: exit 2 below it (0: no check)
+  apps::SecurityOptions security;  ///< --keystore, --enclave, --security-strategy
 };
 
 /// Adds every option of mlmap_inspect to `app`.
@@ -66,17 +66,21 @@ void addOptions(CLI::App& app, Options& o) {
   app.add_option("-c,--config", o.config_path, "node configuration (topics, namespace, domain)")
       ->check(CLI::ExistingFile);
   app.add_option("--duration", o.duration_s, "stop after this many seconds (0: until SIGINT)");
-  app.add_option("--idle-stop", o.idle_s, "stop once nothing arrived for this many seconds after the first message (0: never)");
+  app.add_option(
+      "--idle-stop", o.idle_s,
+      "stop once nothing arrived for this many seconds after the first message (0: never)");
   app.add_option("--out", o.out_dir, "write pictures and summary.json into this folder");
-  app.add_option("--scenario", o.scenario_path, "score received voxels against this scenario's world")
+  app.add_option("--scenario", o.scenario_path,
+                 "score received voxels against this scenario's world")
       ->check(CLI::ExistingFile);
   app.add_flag("--default-scenario", o.use_default_scenario, "score against the built-in scenario");
   app.add_flag("--expect-all", o.expect_all, "exit 2 unless every enabled layer arrived");
   app.add_flag("--as-bridge", o.as_bridge,
                "subscribe as the ROS 2 ground-station bridge does over a radio link: BEST_EFFORT "
                "for the awareness, local map and ESDF slice, no ESDF block");
-  app.add_option("--expect", o.expect_topics,
-                 "exit 2 unless these layers arrived (topic names as in the config, e.g. mlmap/grid)")
+  app.add_option(
+         "--expect", o.expect_topics,
+         "exit 2 unless these layers arrived (topic names as in the config, e.g. mlmap/grid)")
       ->delimiter(',');
   app.add_flag("--until-expected", o.until_expected,
                "stop as soon as the expected layers arrived (--expect, or every layer with "
@@ -91,7 +95,7 @@ struct TopicLog {
   std::uint64_t bytes = 0;
   std::size_t last_points = 0;  // points / cells / voxels of the last message
   Clock::time_point first, last;
-  std::vector<double> age_ms;   // wall clock at arrival minus header stamp, per message
+  std::vector<double> age_ms;  // wall clock at arrival minus header stamp, per message
 };
 
 /// Everything received, guarded by one mutex (listener threads write, main reads).
@@ -127,7 +131,7 @@ struct Subscription {
   mlmap::dds::ParticipantPtr participant;
   std::unique_ptr<mlmap::dds::TakeReaders> readers;
   std::vector<std::string> expected;
-  std::string ns;  ///< the node's DDS namespace
+  std::string ns;                           ///< the node's DDS namespace
   std::atomic<bool>* node_found = nullptr;  ///< Received's: set when a reader matches
 
   /// Deletes the readers and then their listeners: no more callbacks from here on.
@@ -142,12 +146,11 @@ struct Subscription {
   void add(const std::string& name, const fdds::DataReaderQos& qos,
            std::function<void(typename PubSubType::type&&)> sink, bool absolute = false) {
     expected.push_back(name);
-    readers->add<PubSubType>(
-        mlmap::dds::ddsTopicName(absolute ? "" : ns, name), qos, std::move(sink),
-        [name, found = node_found](int publishers) {
-          spdlog::info("{}: {} publisher(s) matched", name, publishers);
-          if (publishers > 0) found->store(true);
-        });
+    readers->add<PubSubType>(mlmap::dds::ddsTopicName(absolute ? "" : ns, name), qos,
+                             std::move(sink), [name, found = node_found](int publishers) {
+                               spdlog::info("{}: {} publisher(s) matched", name, publishers);
+                               if (publishers > 0) found->store(true);
+                             });
   }
 };
 
@@ -176,16 +179,19 @@ std::function<void(CloudMsg&&)> cloudSink(Received* rx, const std::string& name,
 /// Subscribes to the four PointCloud2 layers the configuration enables. With --as-bridge the
 /// heavy ones are read best-effort, as over a lossy link: a lost sample is never repaired, the
 /// next one replaces it.
-void subscribeClouds(const Options& o, const mlmap::dds::DdsConfig& dds, Subscription* sub, Received* rx) {
+void subscribeClouds(const Options& o, const mlmap::dds::DdsConfig& dds, Subscription* sub,
+                     Received* rx) {
   const mlmap::dds::TopicNames& n = dds.topics;
   const mlmap::dds::PublishRates& r = dds.rates;
   const fdds::DataReaderQos heavy =
       o.as_bridge ? mlmap::dds::sensorReaderQos(1) : mlmap::dds::reliableReaderQos(false, 2);
   const fdds::DataReaderQos latched = mlmap::dds::reliableReaderQos(true, 2);
   auto cloudTopic = [&](const std::string& name, double rate_hz, const fdds::DataReaderQos& qos,
-                        std::vector<Eigen::Vector3f> Received::*store, std::vector<float> Received::*intensity) {
+                        std::vector<Eigen::Vector3f> Received::*store,
+                        std::vector<float> Received::*intensity) {
     if (name.empty() || rate_hz <= 0) return;
-    sub->add<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(name, qos, cloudSink(rx, name, store, intensity));
+    sub->add<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(
+        name, qos, cloudSink(rx, name, store, intensity));
   };
   cloudTopic(n.awareness, r.awareness_hz, heavy, &Received::awareness, nullptr);
   cloudTopic(n.local_map, r.local_map_hz, heavy, &Received::local, nullptr);
@@ -194,7 +200,8 @@ void subscribeClouds(const Options& o, const mlmap::dds::DdsConfig& dds, Subscri
 }
 
 /// Subscribes to the 2D grid and the ESDF block (not with --as-bridge), when enabled.
-void subscribeGridAndEsdf(const Options& o, const mlmap::dds::DdsConfig& dds, Subscription* sub, Received* rx) {
+void subscribeGridAndEsdf(const Options& o, const mlmap::dds::DdsConfig& dds, Subscription* sub,
+                          Received* rx) {
   const mlmap::dds::TopicNames& n = dds.topics;
   if (!n.grid.empty() && dds.rates.grid_hz > 0) {
     sub->add<mlmap::dds::nav_msgs::OccupancyGrid_PubSubType>(
@@ -220,7 +227,8 @@ void subscribeStatusAndTf(const mlmap::dds::DdsConfig& dds, Subscription* sub, R
   const std::string& status = dds.topics.status;
   if (!status.empty() && dds.rates.status_hz > 0) {
     sub->add<mlmap::dds::mlmap_msgs::Status_PubSubType>(
-        status, mlmap::dds::reliableReaderQos(false, 10), [rx, status](mlmap::dds::mlmap_msgs::Status_&& msg) {
+        status, mlmap::dds::reliableReaderQos(false, 10),
+        [rx, status](mlmap::dds::mlmap_msgs::Status_&& msg) {
           std::lock_guard<std::mutex> lock(rx->mutex);
           rx->note(status, sizeof(msg), 1, msg.header_().stamp_());
           rx->status = std::move(msg);
@@ -229,7 +237,8 @@ void subscribeStatusAndTf(const mlmap::dds::DdsConfig& dds, Subscription* sub, R
   // The trajectory is world -> body, which the node sends in tf_mode world_body only.
   if (mlmap::dds::resolveTfMode(dds) != mlmap::dds::TfMode::kWorldBody) return;
   sub->add<::tf2_msgs::msg::dds_::TFMessage_PubSubType>(
-      "tf", mlmap::dds::reliableReaderQos(false, 100), [rx](::tf2_msgs::msg::dds_::TFMessage_&& msg) {
+      "tf", mlmap::dds::reliableReaderQos(false, 100),
+      [rx](::tf2_msgs::msg::dds_::TFMessage_&& msg) {
         std::lock_guard<std::mutex> lock(rx->mutex);
         if (msg.transforms_().empty()) return;
         rx->note("tf", 0, msg.transforms_().size(), msg.transforms_().front().header_().stamp_());
@@ -248,11 +257,12 @@ Subscription subscribe(const Options& o, const mlmap::dds::DdsConfig& dds, Recei
   sub.node_found = &rx->node_found;
   sub.participant = mlmap::dds::createParticipant(dds, "mlmap_inspect");
   fdds::Subscriber* subscriber = sub.participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
-  sub.readers = std::make_unique<mlmap::dds::TakeReaders>(subscriber, [rx](const std::string& what) {
-    std::lock_guard<std::mutex> lock(rx->mutex);
-    ++rx->malformed;
-    spdlog::warn("{}", what);
-  });
+  sub.readers =
+      std::make_unique<mlmap::dds::TakeReaders>(subscriber, [rx](const std::string& what) {
+        std::lock_guard<std::mutex> lock(rx->mutex);
+        ++rx->malformed;
+        spdlog::warn("{}", what);
+      });
   subscribeClouds(o, dds, &sub, rx);
   subscribeGridAndEsdf(o, dds, &sub, rx);
   subscribeStatusAndTf(dds, &sub, rx);
@@ -307,13 +317,14 @@ void printTopics(const Received& rx) {
   for (const auto& [name, t] : rx.topics) {
     const TimingSummary age = summarizeTimings(t.age_ms);
     const double span = secondsBetween(t.first, t.last);
-    const std::string age_text =
-        t.age_ms.empty() ? std::string("no stamped message")
-                         : fmt::format("age at arrival median {:.1f} ms, p99 {:.1f} ms", age.median_ms, age.p99_ms);
-    spdlog::info("{:28} {:6} messages {:8.2f} Hz {:9.1f} kB/msg, last {} points/cells, {}",
-                 name, t.messages, span > 0 ? static_cast<double>(t.messages - 1) / span : 0.0,
-                 static_cast<double>(t.bytes) / 1e3 / static_cast<double>(t.messages), t.last_points,
-                 age_text);
+    const std::string age_text = t.age_ms.empty()
+                                     ? std::string("no stamped message")
+                                     : fmt::format("age at arrival median {:.1f} ms, p99 {:.1f} ms",
+                                                   age.median_ms, age.p99_ms);
+    spdlog::info("{:28} {:6} messages {:8.2f} Hz {:9.1f} kB/msg, last {} points/cells, {}", name,
+                 t.messages, span > 0 ? static_cast<double>(t.messages - 1) / span : 0.0,
+                 static_cast<double>(t.bytes) / 1e3 / static_cast<double>(t.messages),
+                 t.last_points, age_text);
   }
 }
 
@@ -327,8 +338,9 @@ struct Score {
 Score scoreAgainstScenario(const Options& o, const Received& rx, double res) {
   Score score;
   if (o.scenario_path.empty() && !o.use_default_scenario) return score;
-  const datasets::Scenario scenario =
-      o.scenario_path.empty() ? datasets::defaultScenario() : datasets::loadScenarioYaml(o.scenario_path);
+  const datasets::Scenario scenario = o.scenario_path.empty()
+                                          ? datasets::defaultScenario()
+                                          : datasets::loadScenarioYaml(o.scenario_path);
   eval::VoxelSet voxels;
   for (const auto* list : {&rx.local, &rx.global}) {
     for (const Eigen::Vector3f& p : *list) voxels.insert(voxelIndexOf(p.cast<double>(), res));
@@ -336,9 +348,11 @@ Score scoreAgainstScenario(const Options& o, const Received& rx, double res) {
   std::size_t right = 0;
   for (const VoxelIndex& v : voxels) right += eval::touchesSolid(scenario.world, v, res) ? 1 : 0;
   score.voxels = voxels.size();
-  score.precision = score.voxels > 0 ? static_cast<double>(right) / static_cast<double>(score.voxels) : 0.0;
-  spdlog::info("received occupied voxels (local + global): {}, precision against the scenario: {:.3f}",
-               score.voxels, score.precision);
+  score.precision =
+      score.voxels > 0 ? static_cast<double>(right) / static_cast<double>(score.voxels) : 0.0;
+  spdlog::info(
+      "received occupied voxels (local + global): {}, precision against the scenario: {:.3f}",
+      score.voxels, score.precision);
   return score;
 }
 
@@ -368,8 +382,8 @@ cv::Mat gridImage(const mlmap::dds::nav_msgs::OccupancyGrid_& grid) {
 }
 
 /// The ESDF slice seen from above, each voxel coloured by its distance (TURBO, low = near).
-cv::Mat esdfSliceImage(const std::vector<Eigen::Vector3f>& points, const std::vector<float>& distance_m,
-                       double res) {
+cv::Mat esdfSliceImage(const std::vector<Eigen::Vector3f>& points,
+                       const std::vector<float>& distance_m, double res) {
   Eigen::Vector2f lo(1e9f, 1e9f), hi(-1e9f, -1e9f);
   float d_lo = 1e9f, d_hi = -1e9f;
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -387,7 +401,8 @@ cv::Mat esdfSliceImage(const std::vector<Eigen::Vector3f>& points, const std::ve
     const int y = h - 1 - static_cast<int>(std::lround((points[i].y() - lo.y()) / res));
     const double f = d_hi > d_lo ? (distance_m[i] - d_lo) / (d_hi - d_lo) : 0.0;
     const cv::Vec3b c = pictures::heightColorBgr(f);
-    cv::rectangle(image, cv::Rect(x * px, y * px, px, px), cv::Scalar(c[0], c[1], c[2]), cv::FILLED);
+    cv::rectangle(image, cv::Rect(x * px, y * px, px, px), cv::Scalar(c[0], c[1], c[2]),
+                  cv::FILLED);
   }
   cv::putText(image, cv::format("ESDF slice: %.2f m (blue) .. %.2f m (red)", d_lo, d_hi),
               cv::Point(4, 14), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0));
@@ -413,18 +428,22 @@ void writePictures(const std::string& out_dir, const Received& rx, double res) {
   pictures::MapImageOptions options;
   options.trajectory_W = rx.trajectory_W;
   options.title = "received over DDS: local + global occupied voxels";
-  pictures::writePng(out_dir + "/dds_map_top.png", pictures::renderTopDown(voxelList(all, res), options));
+  pictures::writePng(out_dir + "/dds_map_top.png",
+                     pictures::renderTopDown(voxelList(all, res), options));
   options.title = "received over DDS: awareness occupied cells (last frame)";
-  pictures::writePng(out_dir + "/dds_awareness_top.png", pictures::renderTopDown(voxelList(rx.awareness, res), options));
+  pictures::writePng(out_dir + "/dds_awareness_top.png",
+                     pictures::renderTopDown(voxelList(rx.awareness, res), options));
   if (!rx.grid.data_().empty()) pictures::writePng(out_dir + "/dds_grid.png", gridImage(rx.grid));
   if (!rx.esdf_slice.empty() && rx.esdf_slice_distance.size() == rx.esdf_slice.size()) {
-    pictures::writePng(out_dir + "/dds_esdf_slice.png", esdfSliceImage(rx.esdf_slice, rx.esdf_slice_distance, res));
+    pictures::writePng(out_dir + "/dds_esdf_slice.png",
+                       esdfSliceImage(rx.esdf_slice, rx.esdf_slice_distance, res));
   }
 }
 
 /// summary.json: per topic the counts and ages, the missing layers, the score and the node's
 /// own counts.
-eval::Json summaryJson(const Received& rx, const std::vector<std::string>& missing, const Score& score) {
+eval::Json summaryJson(const Received& rx, const std::vector<std::string>& missing,
+                       const Score& score) {
   eval::Json topics = eval::Json::object();
   for (const auto& [name, t] : rx.topics) {
     const TimingSummary age = summarizeTimings(t.age_ms);
@@ -446,22 +465,26 @@ eval::Json summaryJson(const Received& rx, const std::vector<std::string>& missi
 
 /// Prints what arrived, scores it, writes the pictures and summary.json (--out) and returns the
 /// exit status: 2 when an expected layer is missing or the precision is too low, else 0.
-int report(const Options& o, const Received& rx, const std::vector<std::string>& expected, double res) {
+int report(const Options& o, const Received& rx, const std::vector<std::string>& expected,
+           double res) {
   const std::vector<std::string> missing = missingOf(rx, expected);
   const std::vector<std::string> missing_listed = missingOf(rx, o.expect_topics);
   printTopics(rx);
   for (const std::string& name : missing) spdlog::warn("{:28} nothing received", name);
-  for (const std::string& name : missing_listed) spdlog::error("{:28} expected, nothing received", name);
+  for (const std::string& name : missing_listed)
+    spdlog::error("{:28} expected, nothing received", name);
   if (!rx.node_found.load()) {
-    spdlog::error("no publisher of mlmap_node matched any reader: the node was not discovered (is it "
-                  "running, on this domain and namespace, in reach of the discovery range, with the "
-                  "same security?)");
+    spdlog::error(
+        "no publisher of mlmap_node matched any reader: the node was not discovered (is it "
+        "running, on this domain and namespace, in reach of the discovery range, with the "
+        "same security?)");
   }
   const Score score = scoreAgainstScenario(o, rx, res);
   if (!o.out_dir.empty()) {
     std::filesystem::create_directories(o.out_dir);
     writePictures(o.out_dir, rx, res);
-    eval::writeJsonFile(o.out_dir + "/summary.json", summaryJson(rx, missing, score), /*expanded_levels=*/2);
+    eval::writeJsonFile(o.out_dir + "/summary.json", summaryJson(rx, missing, score),
+                        /*expanded_levels=*/2);
     spdlog::info("wrote pictures and summary.json to {}", o.out_dir);
   }
   if (o.expect_all && !missing.empty()) return 2;
@@ -478,7 +501,8 @@ int run(const Options& o) {
     o.security.apply(&config.dds.security);
     Received rx;
     Subscription sub = subscribe(o, config.dds, &rx);
-    spdlog::info("listening for {} layers of mlmap_node (namespace '{}')", sub.expected.size(), sub.ns);
+    spdlog::info("listening for {} layers of mlmap_node (namespace '{}')", sub.expected.size(),
+                 sub.ns);
     listen(o, &rx, sub.expected);
     sub.close();
     return report(o, rx, sub.expected, config.map.local_map.resolution_m);

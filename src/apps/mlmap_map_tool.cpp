@@ -28,16 +28,16 @@ using namespace mlmap;
 
 /// The command line of mlmap_map_tool.
 struct Options {
-  std::string map_path;     ///< the map file
-  bool info = false;        ///< --info: print what the file holds
-  std::string ply_path;     ///< --ply (empty: none)
-  std::string pcd_path;     ///< --pcd (empty: none)
-  std::string grid_base;    ///< --grid: BASE of BASE.pgm + BASE.yaml (empty: none)
-  std::vector<double> band; ///< --band MIN MAX [m] (empty: the engine's default band)
-  bool local_only = false;  ///< --grid-local-only
-  std::string bt_path;      ///< --bt (empty: none)
-  int bench_runs = 0;       ///< --bench: load and save N times (0: no benchmark)
-  bool overwrite = false;   ///< --overwrite: outputs may replace existing mlmap map files
+  std::string map_path;      ///< the map file
+  bool info = false;         ///< --info: print what the file holds
+  std::string ply_path;      ///< --ply (empty: none)
+  std::string pcd_path;      ///< --pcd (empty: none)
+  std::string grid_base;     ///< --grid: BASE of BASE.pgm + BASE.yaml (empty: none)
+  std::vector<double> band;  ///< --band MIN MAX [m] (empty: the engine's default band)
+  bool local_only = false;   ///< --grid-local-only
+  std::string bt_path;       ///< --bt (empty: none)
+  int bench_runs = 0;        ///< --bench: load and save N times (0: no benchmark)
+  bool overwrite = false;    ///< --overwrite: outputs may replace existing mlmap map files
 
   /// Every file the options write.
   [[nodiscard]] std::vector<std::string> outputs() const {
@@ -57,29 +57,37 @@ struct Options {
 void addOptions(CLI::App& app, Options& o) {
   app.add_option("map", o.map_path, "the map file")->required()->check(CLI::ExistingFile);
   app.add_flag("--info", o.info, "print the header, the layers' sizes and the load time");
-  app.add_option("--ply", o.ply_path, "write the occupied voxels (local + global) as binary PLY: "
-                                      "float x y z (voxel centre, W, m), log_odds, probability");
-  app.add_option("--pcd", o.pcd_path, "write the occupied voxels as binary PCD: float x y z intensity "
-                                      "(= occupancy probability)");
-  app.add_option("--grid", o.grid_base, "write the 2D grid as BASE.pgm + BASE.yaml (map_server / "
-                                        "nav2 map_saver trinary format)");
-  app.add_option("--band", o.band, "the grid's height band MIN MAX in W [m] (default: the engine's "
-                                   "default band, -0.3..+0.3 m around the map's last body height)")
+  app.add_option("--ply", o.ply_path,
+                 "write the occupied voxels (local + global) as binary PLY: "
+                 "float x y z (voxel centre, W, m), log_odds, probability");
+  app.add_option("--pcd", o.pcd_path,
+                 "write the occupied voxels as binary PCD: float x y z intensity "
+                 "(= occupancy probability)");
+  app.add_option("--grid", o.grid_base,
+                 "write the 2D grid as BASE.pgm + BASE.yaml (map_server / "
+                 "nav2 map_saver trinary format)");
+  app.add_option("--band", o.band,
+                 "the grid's height band MIN MAX in W [m] (default: the engine's "
+                 "default band, -0.3..+0.3 m around the map's last body height)")
       ->expected(2);
-  app.add_flag("--grid-local-only", o.local_only, "grid of the local window only (default: local + global)");
-  app.add_option("--bt", o.bt_path, "write an OctoMap binary tree (.bt): occupied and known-free voxels");
-  app.add_option("--bench", o.bench_runs, "load the map and save it (to a new temporary file "
-                                         "beside it, removed after) N times each; print median / "
-                                         "p99 / best times")
+  app.add_flag("--grid-local-only", o.local_only,
+               "grid of the local window only (default: local + global)");
+  app.add_option("--bt", o.bt_path,
+                 "write an OctoMap binary tree (.bt): occupied and known-free voxels");
+  app.add_option("--bench", o.bench_runs,
+                 "load the map and save it (to a new temporary file "
+                 "beside it, removed after) N times each; print median / "
+                 "p99 / best times")
       ->check(CLI::PositiveNumber);
-  app.add_flag("--overwrite", o.overwrite, "outputs may replace existing mlmap map files (never "
-                                           "the input map)");
+  app.add_flag("--overwrite", o.overwrite,
+               "outputs may replace existing mlmap map files (never "
+               "the input map)");
 }
 
 /// False (the reason printed) when the options ask for nothing or for what this build cannot do.
 bool checkOptions(const Options& o) {
-  if (o.bench_runs == 0 && !o.info && o.ply_path.empty() && o.pcd_path.empty() && o.grid_base.empty() &&
-      o.bt_path.empty()) {
+  if (o.bench_runs == 0 && !o.info && o.ply_path.empty() && o.pcd_path.empty() &&
+      o.grid_base.empty() && o.bt_path.empty()) {
     std::cerr << "nothing to do: give --info, --ply, --pcd, --grid or --bt (see --help)\n";
     return false;
   }
@@ -90,7 +98,9 @@ bool checkOptions(const Options& o) {
   }
 #endif
   if (!o.band.empty()) {
-    const auto inRange = [](double z) { return std::isfinite(z) && std::abs(z) < kMaxAbsCoordinate_m; };
+    const auto inRange = [](double z) {
+      return std::isfinite(z) && std::abs(z) < kMaxAbsCoordinate_m;
+    };
     if (!inRange(o.band[0]) || !inRange(o.band[1])) {
       std::cerr << "--band: heights must be finite and within " << kMaxAbsCoordinate_m
                 << " m of the origin\n";
@@ -114,28 +124,32 @@ bool checkOptions(const Options& o) {
 /// Prints a written file's size and its bytes per occupied voxel.
 void reportFile(const std::string& what, const std::string& path, std::size_t occupied) {
   const auto bytes = static_cast<double>(std::filesystem::file_size(path));
-  std::printf("wrote %-7s %s: %.0f bytes, %zu occupied voxels", what.c_str(), path.c_str(), bytes, occupied);
-  if (occupied > 0) std::printf(" (%.2f bytes per occupied voxel)", bytes / static_cast<double>(occupied));
+  std::printf("wrote %-7s %s: %.0f bytes, %zu occupied voxels", what.c_str(), path.c_str(), bytes,
+              occupied);
+  if (occupied > 0)
+    std::printf(" (%.2f bytes per occupied voxel)", bytes / static_cast<double>(occupied));
   std::printf("\n");
 }
 
 /// --info: the header, the layers' sizes and the load time `load_ms` [ms].
-void printInfo(const std::string& map_path, const MapState& state, std::size_t occupied, double load_ms) {
+void printInfo(const std::string& map_path, const MapState& state, std::size_t occupied,
+               double load_ms) {
   const LocalWindow& w = state.window;
   const double res = state.local_map.resolution_m;
   std::size_t known = 0;
   for (LogOddsQ v : w.log_odds) known += v != kUnknownLogOdds ? 1 : 0;
   std::printf("%s: mlmap map file version %u, %ju bytes, loaded in %.1f ms\n", map_path.c_str(),
-              io::kMapFileVersion, static_cast<std::uintmax_t>(std::filesystem::file_size(map_path)),
-              load_ms);
-  std::printf("  configuration fingerprint %016jx: resolution %g m, window %d x %d x %d voxels, "
-              "log-odds hit %g miss %g clamp [%g, %g] occupied > %g\n",
-              static_cast<std::uintmax_t>(io::mapConfigFingerprint(state.local_map, state.log_odds)),
-              res, state.local_map.size_cells.x(), state.local_map.size_cells.y(),
-              state.local_map.size_cells.z(), state.log_odds.hit, state.log_odds.miss,
-              state.log_odds.clamp_min, state.log_odds.clamp_max, state.log_odds.occupied_threshold);
-  std::printf("  local window from voxel (%d, %d, %d): %zu observed voxels of %zu\n", w.min_index.x(),
-              w.min_index.y(), w.min_index.z(), known, w.log_odds.size());
+              io::kMapFileVersion,
+              static_cast<std::uintmax_t>(std::filesystem::file_size(map_path)), load_ms);
+  std::printf(
+      "  configuration fingerprint %016jx: resolution %g m, window %d x %d x %d voxels, "
+      "log-odds hit %g miss %g clamp [%g, %g] occupied > %g\n",
+      static_cast<std::uintmax_t>(io::mapConfigFingerprint(state.local_map, state.log_odds)), res,
+      state.local_map.size_cells.x(), state.local_map.size_cells.y(),
+      state.local_map.size_cells.z(), state.log_odds.hit, state.log_odds.miss,
+      state.log_odds.clamp_min, state.log_odds.clamp_max, state.log_odds.occupied_threshold);
+  std::printf("  local window from voxel (%d, %d, %d): %zu observed voxels of %zu\n",
+              w.min_index.x(), w.min_index.y(), w.min_index.z(), known, w.log_odds.size());
   std::printf("  global map: %zu occupied voxels in %zu submaps\n", state.globalVoxelCount(),
               state.global_submaps.size());
   std::printf("  occupied voxels in all: %zu; %ju frames mapped, last stamp %s\n", occupied,
@@ -196,8 +210,10 @@ void writeGrid(const Options& o, const MapState& state) {
               grid.band_min_z_m, grid.band_max_z_m);
 }
 
-/// --bt: the OctoMap binary tree (only in builds with OctoMap; checkOptions() refuses it otherwise).
-void writeOctomap([[maybe_unused]] const MapState& state, [[maybe_unused]] const std::string& bt_path) {
+/// --bt: the OctoMap binary tree (only in builds with OctoMap; checkOptions() refuses it
+/// otherwise).
+void writeOctomap([[maybe_unused]] const MapState& state,
+                  [[maybe_unused]] const std::string& bt_path) {
 #if MLMAP_HAVE_OCTOMAP
   const io::OctomapExportCounts c = io::writeOctomapBinary(state, bt_path);
   reportFile("OctoMap", bt_path, c.occupied);
@@ -237,9 +253,10 @@ int run(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"mlmap_map_tool: converts a saved mlmap map (mlmap_demo --save-map, mlmap_node "
-               "map_file.save_path) to PLY / PCD point clouds of the occupied voxels, a map_server "
-               "PGM + YAML 2D grid, or an OctoMap .bt tree; --info prints what the file holds."};
+  CLI::App app{
+      "mlmap_map_tool: converts a saved mlmap map (mlmap_demo --save-map, mlmap_node "
+      "map_file.save_path) to PLY / PCD point clouds of the occupied voxels, a map_server "
+      "PGM + YAML 2D grid, or an OctoMap .bt tree; --info prints what the file holds."};
   Options options;
   addOptions(app, options);
   CLI11_PARSE(app, argc, argv);

@@ -98,7 +98,8 @@ cv::Mat renderFlight(const nav::NavWorld& world, const nav::NavFlightResult& r) 
     if (dz > s.radius_m) continue;
     const double r_cut = std::sqrt(s.radius_m * s.radius_m - dz * dz);
     cv::circle(image, view.toPixel(s.center_W.head<2>()),
-               std::max(1, static_cast<int>(std::lround(r_cut * view.px_per_m))), truth, 1, cv::LINE_AA);
+               std::max(1, static_cast<int>(std::lround(r_cut * view.px_per_m))), truth, 1,
+               cv::LINE_AA);
   }
   for (const sim::MovingBox& m : world.world.movingBoxes()) {  // the person's walk
     const Eigen::Vector3d from = m.centerAt(m.t_start_s);
@@ -123,16 +124,19 @@ cv::Mat renderFlight(const nav::NavWorld& world, const nav::NavFlightResult& r) 
   std::snprintf(title, sizeof(title), "%s: %s, %d collisions, clearance >= %.2f m",
                 world.name.c_str(), r.reached ? "reached" : "NOT reached", r.collisions,
                 r.min_clearance_m);
-  cv::putText(image, title, {8, 24}, cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-  std::snprintf(title, sizeof(title), "flown %.1f m (shortest %.1f m) in %.1f s, %llu plans, %llu at once",
-                r.path_length_m, r.shortest_path_m, r.time_s,
-                static_cast<unsigned long long>(r.plans),
-                static_cast<unsigned long long>(r.blocked_replans));
-  cv::putText(image, title, {8, 48}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+  cv::putText(image, title, {8, 24}, cv::FONT_HERSHEY_SIMPLEX, 0.55, cv::Scalar(0, 0, 0), 1,
+              cv::LINE_AA);
+  std::snprintf(
+      title, sizeof(title), "flown %.1f m (shortest %.1f m) in %.1f s, %llu plans, %llu at once",
+      r.path_length_m, r.shortest_path_m, r.time_s, static_cast<unsigned long long>(r.plans),
+      static_cast<unsigned long long>(r.blocked_replans));
+  cv::putText(image, title, {8, 48}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1,
+              cv::LINE_AA);
   const int y0 = image.rows - legend_px + 22;
   const auto legend = [&image](int x, int y, const cv::Scalar& colour, const char* text) {
     cv::rectangle(image, cv::Rect(x, y - 9, 14, 10), colour, cv::FILLED);
-    cv::putText(image, text, {x + 20, y}, cv::FONT_HERSHEY_SIMPLEX, 0.42, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
+    cv::putText(image, text, {x + 20, y}, cv::FONT_HERSHEY_SIMPLEX, 0.42, cv::Scalar(0, 0, 0), 1,
+                cv::LINE_AA);
   };
   legend(8, y0, cv::Scalar(80, 80, 80), "mapped occupied");
   legend(180, y0, cv::Scalar(228, 228, 228), "mapped free (white: unknown)");
@@ -155,8 +159,9 @@ int run(const Options& o) {
   std::filesystem::create_directories(o.out_dir);
   nav::NavFlightOptions options;
   options.map = nav::navMapConfig(o.resolution_m);
-  const std::vector<nav::NavWorld> worlds = nav::benchmarkWorlds(
-      o.worlds, o.seed, options.planner.inflation_m, kMeanSpeedShare * options.vehicle.max_speed_mps);
+  const std::vector<nav::NavWorld> worlds =
+      nav::benchmarkWorlds(o.worlds, o.seed, options.planner.inflation_m,
+                           kMeanSpeedShare * options.vehicle.max_speed_mps);
   eval::Json json_worlds = eval::Json::array();
   int reached = 0;
   int collisions = 0;
@@ -174,14 +179,17 @@ int run(const Options& o) {
                            {"time_s", r.time_s},
                            {"replans", r.blocked_replans},
                            {"map_to_plan_ms_p99", p99(r.map_to_plan_ms)}});
-    std::printf("%-32s %s  collisions %d  min clearance %.2f m  flown %.1f m / shortest %.1f m  %.1f s\n",
-                world.name.c_str(), r.reached ? "reached" : "NOT reached", r.collisions,
-                r.min_clearance_m, r.path_length_m, r.shortest_path_m, r.time_s);
+    std::printf(
+        "%-32s %s  collisions %d  min clearance %.2f m  flown %.1f m / shortest %.1f m  %.1f s\n",
+        world.name.c_str(), r.reached ? "reached" : "NOT reached", r.collisions, r.min_clearance_m,
+        r.path_length_m, r.shortest_path_m, r.time_s);
   }
   eval::Json summary;
   summary["worlds"] = json_worlds;
-  summary["totals"] = {{"reached_fraction", worlds.empty() ? 0.0 : static_cast<double>(reached) / static_cast<double>(worlds.size())},
-                       {"collisions", collisions}};
+  summary["totals"] = {
+      {"reached_fraction",
+       worlds.empty() ? 0.0 : static_cast<double>(reached) / static_cast<double>(worlds.size())},
+      {"collisions", collisions}};
   eval::writeJsonFile(o.out_dir + "/summary.json", summary, 2);
   std::printf("reached %d of %zu goals, %d collisions; wrote %s/{<world>.png, summary.json}\n",
               reached, worlds.size(), collisions, o.out_dir.c_str());
@@ -191,8 +199,9 @@ int run(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Flies the reference planner on mlmap's maps through seeded unknown worlds and "
-               "writes a picture per world and summary.json"};
+  CLI::App app{
+      "Flies the reference planner on mlmap's maps through seeded unknown worlds and "
+      "writes a picture per world and summary.json"};
   Options o;
   app.add_option("--out", o.out_dir, "output folder")->capture_default_str();
   app.add_option("--worlds", o.worlds, "how many of the benchmark's worlds to fly")

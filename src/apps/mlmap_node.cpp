@@ -20,10 +20,10 @@ using namespace mlmap;
 
 /// The command line of mlmap_node.
 struct Options {
-  std::string config_path;     ///< -c, --config (empty: defaults)
-  double duration_s = 0.0;     ///< --duration (0: until SIGINT / SIGTERM)
-  double report_every_s = 5.0; ///< --report-every: seconds between progress lines (0: none)
-  bool print_config = false;   ///< --print-config
+  std::string config_path;      ///< -c, --config (empty: defaults)
+  double duration_s = 0.0;      ///< --duration (0: until SIGINT / SIGTERM)
+  double report_every_s = 5.0;  ///< --report-every: seconds between progress lines (0: none)
+  bool print_config = false;    ///< --print-config
 };
 
 /// Adds every option of mlmap_node to `app`.
@@ -32,7 +32,8 @@ void addOptions(CLI::App& app, Options& o) {
                  "YAML configuration: engine sections as config/mlmap.yaml plus a dds section "
                  "(config/mlmap_node.yaml); defaults when omitted")
       ->check(CLI::ExistingFile);
-  app.add_option("--duration", o.duration_s, "stop after this many seconds (0: until SIGINT/SIGTERM)")
+  app.add_option("--duration", o.duration_s,
+                 "stop after this many seconds (0: until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--report-every", o.report_every_s, "seconds between progress lines (0: none)")
       ->check(CLI::NonNegativeNumber);
@@ -54,11 +55,13 @@ void logInputs(const mlmap::dds::NodeConfig& config, const mlmap::dds::MappingNo
   const std::vector<std::string> peers = mlmap::dds::resolveStaticPeers(config.dds);
   for (std::size_t i = 0; i < peers.size(); ++i) discovery += (i == 0 ? " peers " : ";") + peers[i];
   // A profile may change discovery itself (a Discovery Server client): name it.
-  if (!config.dds.participant_profile.empty()) discovery += ", profile " + config.dds.participant_profile;
+  if (!config.dds.participant_profile.empty())
+    discovery += ", profile " + config.dds.participant_profile;
   std::string inputs;
   const mlmap::dds::TopicNames& t = config.dds.topics;
   for (const std::string* name : {&t.cloud, &t.depth_image, &t.camera_info, &t.pose, &t.odometry}) {
-    if (!name->empty()) inputs += (inputs.empty() ? "" : ", ") + mlmap::dds::ddsTopicName(config.dds.ns, *name);
+    if (!name->empty())
+      inputs += (inputs.empty() ? "" : ", ") + mlmap::dds::ddsTopicName(config.dds.ns, *name);
   }
   node.log(LogLevel::kInfo,
            fmt::format("mapping on DDS domain {} (discovery {}, namespace '{}'), inputs: {}",
@@ -69,15 +72,17 @@ void logInputs(const mlmap::dds::NodeConfig& config, const mlmap::dds::MappingNo
 /// not expect, or the robot's odometry missing on /tf (docs/dds-and-ros2.md, TF).
 void logFrameChecks(const mlmap::dds::MappingNode& node, const mlmap::dds::NodeCounters& c) {
   if (c.frames_unexpected_frame_id + c.frames_unresolved_frame_id +
-          c.odometry_child_frame_mismatch + c.tf_odom_missing == 0) {
+          c.odometry_child_frame_mismatch + c.tf_odom_missing ==
+      0) {
     return;
   }
-  node.log(LogLevel::kWarning,
-           fmt::format("frame checks: {} frames in an unexpected frame_id, {} frames with an "
-                       "unresolved frame_id (dropped), {} odometry child_frame_id mismatches, {} "
-                       "poses without the robot's odom -> body; {} transforms received",
-                       c.frames_unexpected_frame_id, c.frames_unresolved_frame_id,
-                       c.odometry_child_frame_mismatch, c.tf_odom_missing, c.tf_transforms_received));
+  node.log(
+      LogLevel::kWarning,
+      fmt::format("frame checks: {} frames in an unexpected frame_id, {} frames with an "
+                  "unresolved frame_id (dropped), {} odometry child_frame_id mismatches, {} "
+                  "poses without the robot's odom -> body; {} transforms received",
+                  c.frames_unexpected_frame_id, c.frames_unresolved_frame_id,
+                  c.odometry_child_frame_mismatch, c.tf_odom_missing, c.tf_transforms_received));
 }
 
 /// The hits outside the local window, when there are any: their evidence went to the global map
@@ -111,14 +116,14 @@ void warnOfHitsOutsideWindowOnce(const mlmap::dds::MappingNode& node, const Engi
 void logProgress(const mlmap::dds::MappingNode& node, bool* warned_outside) {
   const EngineStats s = node.engineStats();
   const mlmap::dds::NodeCounters c = node.counters();
-  node.log(LogLevel::kInfo,
-           fmt::format("frames: {} received, {} mapped, {} without pose, {} malformed; total "
-                       "{:.1f} ms median, {:.1f} ms p99; {:.1f} MB; {} hit updates outside the "
-                       "local window",
-                       c.clouds_received + c.images_received, s.frames_mapped,
-                       c.frames_without_pose, c.inputs_malformed, s.total.median_ms,
-                       s.total.p99_ms, static_cast<double>(s.memory.total()) / 1e6,
-                       s.hits_to_global + s.hits_lost));
+  node.log(
+      LogLevel::kInfo,
+      fmt::format("frames: {} received, {} mapped, {} without pose, {} malformed; total "
+                  "{:.1f} ms median, {:.1f} ms p99; {:.1f} MB; {} hit updates outside the "
+                  "local window",
+                  c.clouds_received + c.images_received, s.frames_mapped, c.frames_without_pose,
+                  c.inputs_malformed, s.total.median_ms, s.total.p99_ms,
+                  static_cast<double>(s.memory.total()) / 1e6, s.hits_to_global + s.hits_lost));
   logFrameChecks(node, c);
   warnOfHitsOutsideWindowOnce(node, s, warned_outside);
 }
@@ -188,7 +193,8 @@ int run(const Options& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"mlmap_node: multilayer mapping over ROS 2 compatible DDS topics (Fast DDS, no ROS)"};
+  CLI::App app{
+      "mlmap_node: multilayer mapping over ROS 2 compatible DDS topics (Fast DDS, no ROS)"};
   Options options;
   addOptions(app, options);
   CLI11_PARSE(app, argc, argv);

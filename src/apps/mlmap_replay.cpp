@@ -45,24 +45,24 @@ struct Options {
   std::string bag_path;        ///< --bag: a ROS 2 bag (folder with metadata.yaml, .mcap or .db3)
 #if MLMAP_HAVE_BAG
   std::vector<std::string> cloud_topics;  ///< --cloud-topic (empty: chosen from the bag)
-  std::string depth_topic;        ///< --depth-topic
-  std::string camera_info_topic;  ///< --camera-info-topic
-  std::string pose_topic;         ///< --pose-topic (PoseStamped or Odometry)
-  std::string world_frame;        ///< --world-frame: poses from /tf, this frame to --body-frame
+  std::string depth_topic;                ///< --depth-topic
+  std::string camera_info_topic;          ///< --camera-info-topic
+  std::string pose_topic;                 ///< --pose-topic (PoseStamped or Odometry)
+  std::string world_frame;  ///< --world-frame: poses from /tf, this frame to --body-frame
   std::string body_frame = "base_link";  ///< --body-frame
 #endif
-  std::string config_path;     ///< --config: engine configuration YAML (empty: defaults)
-  double resolution_m = 0.0;   ///< --resolution (0: the config's, or the kind's default)
-  double max_range_m = 0.0;    ///< --max-range (0: the config's)
-  int awareness_threads = 0;   ///< --awareness-threads (0: not given, see defaultAwarenessThreads())
-  int max_frames = 0;          ///< --max-frames (0: all)
+  std::string config_path;    ///< --config: engine configuration YAML (empty: defaults)
+  double resolution_m = 0.0;  ///< --resolution (0: the config's, or the kind's default)
+  double max_range_m = 0.0;   ///< --max-range (0: the config's)
+  int awareness_threads = 0;  ///< --awareness-threads (0: not given, see defaultAwarenessThreads())
+  int max_frames = 0;         ///< --max-frames (0: all)
   std::string out_dir = "mlmap_replay_out";  ///< --out
-  std::string voxels_out;      ///< --voxels-out (empty: OUT/occupied_voxels.txt)
-  std::string stats_out;       ///< --stats-out (empty: OUT/stats.json)
-  std::string save_map_path;   ///< --save-map (empty: not saved)
-  std::string grid_out;        ///< --grid-out: the final 2D grid's PGM + YAML base (empty: none)
-  int reader_threads = 1;      ///< --reader-threads: 1 reads ahead on a thread, 0 in turn
-  bool overwrite = false;      ///< --overwrite: --save-map may replace an existing map
+  std::string voxels_out;                    ///< --voxels-out (empty: OUT/occupied_voxels.txt)
+  std::string stats_out;                     ///< --stats-out (empty: OUT/stats.json)
+  std::string save_map_path;                 ///< --save-map (empty: not saved)
+  std::string grid_out;    ///< --grid-out: the final 2D grid's PGM + YAML base (empty: none)
+  int reader_threads = 1;  ///< --reader-threads: 1 reads ahead on a thread, 0 in turn
+  bool overwrite = false;  ///< --overwrite: --save-map may replace an existing map
 };
 
 /// Frames the reader thread keeps decoded ahead of the mapping: enough to ride out a slow file,
@@ -104,12 +104,15 @@ void addBagOptions(CLI::App& app, Options& o, const std::vector<CLI::Option*>& o
   for (CLI::Option* other : others) bag_opt->excludes(other);
   const std::vector<CLI::Option*> bag_only = {
       app.add_option("--cloud-topic", o.cloud_topics, "--bag: a PointCloud2 topic (repeatable)"),
-      app.add_option("--depth-topic", o.depth_topic, "--bag: a depth Image topic (16UC1 mm, 32FC1 m)"),
+      app.add_option("--depth-topic", o.depth_topic,
+                     "--bag: a depth Image topic (16UC1 mm, 32FC1 m)"),
       app.add_option("--camera-info-topic", o.camera_info_topic,
                      "--bag: the CameraInfo of --depth-topic (default: the one beside it)"),
-      app.add_option("--pose-topic", o.pose_topic, "--bag: a PoseStamped or Odometry topic giving the body pose"),
-      app.add_option("--world-frame", o.world_frame,
-                     "--bag: take the body pose from /tf, from this frame (e.g. map) to --body-frame"),
+      app.add_option("--pose-topic", o.pose_topic,
+                     "--bag: a PoseStamped or Odometry topic giving the body pose"),
+      app.add_option(
+          "--world-frame", o.world_frame,
+          "--bag: take the body pose from /tf, from this frame (e.g. map) to --body-frame"),
       app.add_option("--body-frame", o.body_frame,
                      "--bag: the body frame (/tf child; sensors' extrinsics from /tf_static)")
           ->capture_default_str()};
@@ -126,22 +129,24 @@ void addBagOptions(CLI::App& app, Options& o, const std::vector<CLI::Option*>& o
 void addSourceOptions(CLI::App& app, Options& o) {
   auto* frames_opt = app.add_option("--frames", o.frames_dir, "RGB-D frame directory to map")
                          ->check(CLI::ExistingDirectory);
-  auto* clouds_opt = app.add_option("--clouds", o.clouds_dir, "directory of .pcd / .ply point clouds "
-                                                              "(in the sensor frame; a PCD VIEWPOINT is taken "
-                                                              "as the sensor's pose in the cloud's frame) to map")
+  auto* clouds_opt = app.add_option("--clouds", o.clouds_dir,
+                                    "directory of .pcd / .ply point clouds "
+                                    "(in the sensor frame; a PCD VIEWPOINT is taken "
+                                    "as the sensor's pose in the cloud's frame) to map")
                          ->check(CLI::ExistingDirectory);
   auto* poses_opt =
-      app.add_option("--poses", o.poses_path,
-                     "trajectory of the clouds: TUM ('t tx ty tz qx qy qz qw', '#' comments) or CSV "
-                     "with a header (t|time|timestamp|stamp[_s|_ms|_us|_ns], x|tx|px|pos_x|position_x "
-                     "..., qx|q_x|rot_x|orientation_x ... qw); CSV when the name ends in .csv or the "
-                     "first line has a comma. The poses are the sensor's unless --extrinsic is given")
+      app.add_option(
+             "--poses", o.poses_path,
+             "trajectory of the clouds: TUM ('t tx ty tz qx qy qz qw', '#' comments) or CSV "
+             "with a header (t|time|timestamp|stamp[_s|_ms|_us|_ns], x|tx|px|pos_x|position_x "
+             "..., qx|q_x|rot_x|orientation_x ... qw); CSV when the name ends in .csv or the "
+             "first line has a comma. The poses are the sensor's unless --extrinsic is given")
           ->check(CLI::ExistingFile);
-  auto* extrinsic_opt =
-      app.add_option("--extrinsic", o.extrinsic_text,
-                     "the sensor (cloud frame) in the pose frame, \"x y z qx qy qz qw\" (metres, unit "
-                     "quaternion), e.g. a LiDAR on a vehicle whose poses --poses gives (default: "
-                     "identity, the poses are the sensor's)");
+  auto* extrinsic_opt = app.add_option(
+      "--extrinsic", o.extrinsic_text,
+      "the sensor (cloud frame) in the pose frame, \"x y z qx qy qz qw\" (metres, unit "
+      "quaternion), e.g. a LiDAR on a vehicle whose poses --poses gives (default: "
+      "identity, the poses are the sensor's)");
   clouds_opt->needs(poses_opt);
   poses_opt->needs(clouds_opt);
   extrinsic_opt->needs(clouds_opt);
@@ -159,19 +164,22 @@ void addEngineOptions(CLI::App& app, Options& o) {
                  "voxel size [m]; the local map keeps ~19x19x7 m (default: --config's, or without "
                  "--config 0.02 for --frames and 0.1 otherwise)")
       ->check(CLI::Range(0.01, 2.0));
-  app.add_option("--max-range", o.max_range_m,
-                 "maximum range [m] (awareness.max_range_m; default: --config's, 10): farther points "
-                 "clear their ray up to here and mark nothing; the awareness grid grows to reach it")
+  app.add_option(
+         "--max-range", o.max_range_m,
+         "maximum range [m] (awareness.max_range_m; default: --config's, 10): farther points "
+         "clear their ray up to here and mark nothing; the awareness grid grows to reach it")
       ->check(CLI::Range(0.1, 400.0));
-  app.add_option("--awareness-threads", o.awareness_threads,
-                 "threads carving a frame's free space (awareness.num_threads; default: --config's, "
-                 "or without --config 2 on a machine with two cores or more, else 1): the same map "
-                 "with any count, faster where a core is free (a second core shares the reading)")
+  app.add_option(
+         "--awareness-threads", o.awareness_threads,
+         "threads carving a frame's free space (awareness.num_threads; default: --config's, "
+         "or without --config 2 on a machine with two cores or more, else 1): the same map "
+         "with any count, faster where a core is free (a second core shares the reading)")
       ->check(CLI::Range(1, AwarenessConfig::kMaxThreads));
-  app.add_option("--config", o.config_path, "engine configuration YAML (config/mlmap.yaml documents "
-                                            "every key; an mlmap_node file works too, its dds and "
-                                            "map_file sections are skipped; the replay always runs "
-                                            "synchronously)")
+  app.add_option("--config", o.config_path,
+                 "engine configuration YAML (config/mlmap.yaml documents "
+                 "every key; an mlmap_node file works too, its dds and "
+                 "map_file sections are skipped; the replay always runs "
+                 "synchronously)")
       ->check(CLI::ExistingFile);
 }
 
@@ -179,13 +187,15 @@ void addEngineOptions(CLI::App& app, Options& o) {
 /// --grid-out to `app`.
 void addOutputOptions(CLI::App& app, Options& o) {
   app.add_option("--out", o.out_dir, "output folder")->capture_default_str();
-  app.add_option("--voxels-out", o.voxels_out, "occupied voxels as text (default: OUT/occupied_voxels.txt)");
+  app.add_option("--voxels-out", o.voxels_out,
+                 "occupied voxels as text (default: OUT/occupied_voxels.txt)");
   app.add_option(
       "--stats-out", o.stats_out,
       "statistics JSON (default: OUT/stats.json): per-frame timings by stage (read, read_wait, "
       "awareness, local_global, planning, engine) with their median / p99, peak memory "
       "(process RSS, engine accounting) and counters");
-  app.add_option("--max-frames", o.max_frames, "stop after N frames (0: all)")->check(CLI::NonNegativeNumber);
+  app.add_option("--max-frames", o.max_frames, "stop after N frames (0: all)")
+      ->check(CLI::NonNegativeNumber);
   app.add_option(
          "--reader-threads", o.reader_threads,
          "--frames / --clouds: 1 reads and decodes the files on a thread of their own, a few "
@@ -254,25 +264,27 @@ void sizeWindowForRange(double range_m, MapConfig* config) {
     local_map.size_cells = before;
     return;
   }
-  spdlog::info("--max-range {} m: the local window grows from {} x {} to {} x {} voxels ({:.1f} x "
-               "{:.1f} m) so that every hit in range is mapped",
-               range_m, before.x(), before.y(), local_map.size_cells.x(), local_map.size_cells.y(),
-               local_map.size_cells.x() * local_map.resolution_m,
-               local_map.size_cells.y() * local_map.resolution_m);
+  spdlog::info(
+      "--max-range {} m: the local window grows from {} x {} to {} x {} voxels ({:.1f} x "
+      "{:.1f} m) so that every hit in range is mapped",
+      range_m, before.x(), before.y(), local_map.size_cells.x(), local_map.size_cells.y(),
+      local_map.size_cells.x() * local_map.resolution_m,
+      local_map.size_cells.y() * local_map.resolution_m);
 }
 
-/// --max-range applied (the awareness grid and the local window grow to reach it), the engine made synchronous and
-/// the planning layers limited to what the outputs need.
-/// The replay's awareness threads without --awareness-threads or --config: an offline run has the
-/// machine to itself, so two where there are two cores (the map is the same with any count; more
-/// than two gain little beside the reader thread), else one.
+/// --max-range applied (the awareness grid and the local window grow to reach it), the engine made
+/// synchronous and the planning layers limited to what the outputs need. The replay's awareness
+/// threads without --awareness-threads or --config: an offline run has the machine to itself, so
+/// two where there are two cores (the map is the same with any count; more than two gain little
+/// beside the reader thread), else one.
 int defaultAwarenessThreads() { return std::thread::hardware_concurrency() >= 2 ? 2 : 1; }
 
 void adjustConfig(const Options& o, MapConfig* config) {
   if (o.max_range_m > 0.0) {
     config->awareness.max_range_m = o.max_range_m;
     if (config->awareness.radius_m() < o.max_range_m) {
-      config->awareness.rho_cells = static_cast<int>(std::ceil(o.max_range_m / config->awareness.rho_cell_m));
+      config->awareness.rho_cells =
+          static_cast<int>(std::ceil(o.max_range_m / config->awareness.rho_cell_m));
     }
     sizeWindowForRange(o.max_range_m, config);
   }
@@ -282,7 +294,8 @@ void adjustConfig(const Options& o, MapConfig* config) {
     config->awareness.num_threads = defaultAwarenessThreads();
   }
   if (config->pipeline.threaded) {
-    spdlog::warn("pipeline.threaded: the replay runs synchronously (every frame is mapped, in order)");
+    spdlog::warn(
+        "pipeline.threaded: the replay runs synchronously (every frame is mapped, in order)");
     config->pipeline.threaded = false;
   }
   planningForOutputs(o, config);
@@ -328,26 +341,30 @@ void mapFrameDirectory(const Options& o, eval::RecordedRun* run) {
 }
 
 /// Maps the clouds of --clouds at the poses of --poses.
-void mapCloudSequence(const Options& o, const datasets::CloudSequenceOptions& cloud_options, eval::RecordedRun* run) {
+void mapCloudSequence(const Options& o, const datasets::CloudSequenceOptions& cloud_options,
+                      eval::RecordedRun* run) {
   const datasets::CloudSequenceSource source(o.clouds_dir, o.poses_path, cloud_options);
   const datasets::CloudSequence& clouds = source.sequence();
-  run->info() = {o.clouds_dir + " + " + o.poses_path, "clouds", datasets::toString(clouds.pairing()),
-                  clouds.unpaired().size(), 0};
+  run->info() = {o.clouds_dir + " + " + o.poses_path, "clouds",
+                 datasets::toString(clouds.pairing()), clouds.unpaired().size(), 0};
   if (!clouds.unpaired().empty()) {
-    spdlog::warn("{} of {} clouds have no pose within {} s of their stamp and are skipped (first: {})",
-                 clouds.unpaired().size(), clouds.size() + clouds.unpaired().size(),
-                 cloud_options.pose_tolerance_s, clouds.unpaired().front());
+    spdlog::warn(
+        "{} of {} clouds have no pose within {} s of their stamp and are skipped (first: {})",
+        clouds.unpaired().size(), clouds.size() + clouds.unpaired().size(),
+        cloud_options.pose_tolerance_s, clouds.unpaired().front());
   }
   spdlog::info("mapping {} clouds of {} paired {} with {} poses at {} m, max range {} m",
                frameCount(o, clouds.size()), o.clouds_dir, datasets::toString(clouds.pairing()),
-               clouds.poseCount(), run->resolution_m(), run->engine().config().awareness.max_range_m);
+               clouds.poseCount(), run->resolution_m(),
+               run->engine().config().awareness.max_range_m);
   mapFrames(o, source, run);
 }
 
 #if MLMAP_HAVE_BAG
 /// Maps the frames of --bag, its inputs named by the options or chosen from the bag.
 void mapBag(const Options& o, eval::RecordedRun* run) {
-  std::shared_ptr<const bag::BagReader> reader = bag::openBag(o.bag_path);  // its errors name the file
+  std::shared_ptr<const bag::BagReader> reader =
+      bag::openBag(o.bag_path);  // its errors name the file
   spdlog::info("{}: {} messages on {} topics:\n{}", o.bag_path, reader->entries().size(),
                reader->topics().size(), reader->describeTopics());
   bag::BagFrameSourceOptions options;
@@ -382,13 +399,15 @@ void mapBag(const Options& o, eval::RecordedRun* run) {
 
 /// Flies the simulator through --scenario (or the built-in room) and scores the map.
 void flySimulator(const Options& o, eval::RecordedRun* run) {
-  const datasets::Scenario scenario =
-      o.scenario_path.empty() ? datasets::defaultScenario() : datasets::loadScenarioYaml(o.scenario_path);
+  const datasets::Scenario scenario = o.scenario_path.empty()
+                                          ? datasets::defaultScenario()
+                                          : datasets::loadScenarioYaml(o.scenario_path);
   spdlog::info("flying the {} scenario at {} m voxels",
                o.scenario_path.empty() ? "built-in room" : o.scenario_path, run->resolution_m());
   run->flyRecorded(scenario, o.max_frames);
-  run->info() = {o.scenario_path.empty() ? "simulator: built-in room" : "simulator: " + o.scenario_path,
-                 "simulator", "simulated poses", 0, 0};
+  run->info() = {
+      o.scenario_path.empty() ? "simulator: built-in room" : "simulator: " + o.scenario_path,
+      "simulator", "simulated poses", 0, 0};
 }
 
 /// Prints the replay's own figures after the engine's: per-frame timings, memory, the files.
@@ -397,8 +416,9 @@ void printReplaySummary(const Options& o, const eval::RecordedRun& run,
   eval::printRunSummary(run, o.reader_threads > 0 && run.info().kind != "simulator");
   std::string names;
   for (const std::string& name : written) names += (names.empty() ? "" : ", ") + name;
-  std::printf("\n  wrote %s/{%s}\n        %s (%zu occupied voxels)\n        %s\n", o.out_dir.c_str(),
-              names.c_str(), o.voxels_out.c_str(), occupied, o.stats_out.c_str());
+  std::printf("\n  wrote %s/{%s}\n        %s (%zu occupied voxels)\n        %s\n",
+              o.out_dir.c_str(), names.c_str(), o.voxels_out.c_str(), occupied,
+              o.stats_out.c_str());
 }
 
 /// Writes the final 2D grid (--grid-out) as BASE.pgm + BASE.yaml. @throws std::runtime_error
@@ -436,7 +456,8 @@ int finish(const Options& o, eval::RecordedRun* run) {
     throw;
   }
   voxels.get();
-  eval::writeJsonFile(o.stats_out, eval::runStatsJson(*run, occupied.size()), /*expanded_levels=*/2);
+  eval::writeJsonFile(o.stats_out, eval::runStatsJson(*run, occupied.size()),
+                      /*expanded_levels=*/2);
   eval::printSummary(s, res, run->scored() != nullptr ? &run->scored()->accuracy : nullptr);
   printReplaySummary(o, *run, written, occupied.size());
   return s.frames_mapped > 0 ? 0 : 3;
@@ -447,10 +468,11 @@ int finish(const Options& o, eval::RecordedRun* run) {
 /// spelling of the path, or a file inside an input folder) or, but for --save-map with
 /// --overwrite, an existing mlmap map.
 void checkOutputs(const Options& o) {
-  const std::vector<std::string> inputs = {o.bag_path,    o.frames_dir,  o.clouds_dir,
-                                           o.poses_path,  o.config_path, o.scenario_path};
-  std::vector<std::pair<std::string, std::string>> outputs = {
-      {"--save-map", o.save_map_path}, {"--voxels-out", o.voxels_out}, {"--stats-out", o.stats_out}};
+  const std::vector<std::string> inputs = {o.bag_path,   o.frames_dir,  o.clouds_dir,
+                                           o.poses_path, o.config_path, o.scenario_path};
+  std::vector<std::pair<std::string, std::string>> outputs = {{"--save-map", o.save_map_path},
+                                                              {"--voxels-out", o.voxels_out},
+                                                              {"--stats-out", o.stats_out}};
   if (!o.grid_out.empty()) {
     outputs.emplace_back("--grid-out", o.grid_out + ".pgm");
     outputs.emplace_back("--grid-out", o.grid_out + ".yaml");
@@ -474,7 +496,8 @@ int replaySource(const Options& o) {
   if (!validConfig(config)) return 2;
   checkOutputs(o);  // before anything is written or read
   std::filesystem::create_directories(o.out_dir);
-  if (!o.save_map_path.empty()) eval::checkSaveMapTarget(o.save_map_path, o.overwrite);  // before the run
+  if (!o.save_map_path.empty())
+    eval::checkSaveMapTarget(o.save_map_path, o.overwrite);  // before the run
 
   eval::RecordedRun run(config, o.out_dir, logEngineMessage);
   if (kind == eval::DataKind::kFrameDirectory) {

@@ -54,30 +54,34 @@ using Clock = SteadyClock;
 
 /// The command line of mlmap_sensor_publisher.
 struct Options {
-  std::string config_path;    ///< -c, --config: node configuration (empty: defaults)
-  std::string scenario_path;  ///< --scenario (empty: the built-in room)
-  std::string frames_dir;     ///< --frames-dir: replay these RGB-D frames instead
-  std::string mode = "cloud";  ///< --mode: cloud (PointCloud2) or depth (Image + CameraInfo)
-  double rate_hz = 0.0;       ///< --rate (0: the scenario's, or 30 for a replay)
-  double pose_rate_hz = 50.0;  ///< --pose-rate: poses per second of flight (simulator)
-  double wait_s = 10.0;       ///< --wait-for-subscriber [s]
-  double speed = 1.0;         ///< --speed: flight seconds per wall-clock second (simulator)
-  int max_frames = 0;         ///< --max-frames (0: all)
-  bool prerender = false;     ///< --prerender: render and encode every frame first
+  std::string config_path;         ///< -c, --config: node configuration (empty: defaults)
+  std::string scenario_path;       ///< --scenario (empty: the built-in room)
+  std::string frames_dir;          ///< --frames-dir: replay these RGB-D frames instead
+  std::string mode = "cloud";      ///< --mode: cloud (PointCloud2) or depth (Image + CameraInfo)
+  double rate_hz = 0.0;            ///< --rate (0: the scenario's, or 30 for a replay)
+  double pose_rate_hz = 50.0;      ///< --pose-rate: poses per second of flight (simulator)
+  double wait_s = 10.0;            ///< --wait-for-subscriber [s]
+  double speed = 1.0;              ///< --speed: flight seconds per wall-clock second (simulator)
+  int max_frames = 0;              ///< --max-frames (0: all)
+  bool prerender = false;          ///< --prerender: render and encode every frame first
   apps::SecurityOptions security;  ///< --keystore, --enclave, --security-strategy
 };
 
 /// Adds every option of mlmap_sensor_publisher to `app`.
 void addOptions(CLI::App& app, Options& o) {
-  app.add_option("-c,--config", o.config_path, "node configuration (its dds section and sensor mounting)")
+  app.add_option("-c,--config", o.config_path,
+                 "node configuration (its dds section and sensor mounting)")
       ->check(CLI::ExistingFile);
   app.add_option("--scenario", o.scenario_path, "scenario YAML (default: the built-in room)")
       ->check(CLI::ExistingFile);
-  app.add_option("--frames-dir", o.frames_dir, "replay a folder of RGB-D frames instead (see docs/replay.md)")
+  app.add_option("--frames-dir", o.frames_dir,
+                 "replay a folder of RGB-D frames instead (see docs/replay.md)")
       ->check(CLI::ExistingDirectory);
-  app.add_option("--mode", o.mode, "what the sensor publishes: cloud (PointCloud2) or depth (Image)")
+  app.add_option("--mode", o.mode,
+                 "what the sensor publishes: cloud (PointCloud2) or depth (Image)")
       ->check(CLI::IsMember({"cloud", "depth"}));
-  app.add_option("--rate", o.rate_hz, "frames per second (default: the scenario's; 30 for a replay)")
+  app.add_option("--rate", o.rate_hz,
+                 "frames per second (default: the scenario's; 30 for a replay)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--speed", o.speed,
                  "flight seconds per wall-clock second (simulator only): > 1 flies farther in the "
@@ -99,7 +103,7 @@ void addOptions(CLI::App& app, Options& o) {
 /// An organised cloud (width x height) of float32 x, y, z, intensity (16 bytes per point, as a
 /// depth camera driver publishes it); pixels without a return are NaN (is_dense false).
 mlmap::dds::sensor_msgs::PointCloud2_ organisedCloud(const DepthFrame& frame, double stamp_s,
-                                              const std::string& frame_id) {
+                                                     const std::string& frame_id) {
   mlmap::dds::sensor_msgs::PointCloud2_ msg;
   msg.header_().stamp_(mlmap::dds::toRosTime(stamp_s));
   msg.header_().frame_id_(frame_id);
@@ -128,8 +132,8 @@ mlmap::dds::sensor_msgs::PointCloud2_ organisedCloud(const DepthFrame& frame, do
       const double z = frame.encoding == DepthEncoding::kFloat32Metres ? frame.depth_m[i]
                                                                        : frame.depth_mm[i] * 1e-3;
       float p[4] = {nan, nan, nan, nan};
-      if (std::isfinite(z) && z > 0.0 && !(frame.encoding == DepthEncoding::kUint16Millimetres &&
-                                           frame.depth_mm[i] == 65535)) {
+      if (std::isfinite(z) && z > 0.0 &&
+          !(frame.encoding == DepthEncoding::kUint16Millimetres && frame.depth_mm[i] == 65535)) {
         p[0] = static_cast<float>((u - k.cx) * z / k.fx);
         p[1] = static_cast<float>((v - k.cy) * z / k.fy);
         p[2] = static_cast<float>(z);
@@ -142,7 +146,8 @@ mlmap::dds::sensor_msgs::PointCloud2_ organisedCloud(const DepthFrame& frame, do
 }
 
 /// The depth image of `frame` (16UC1 millimetres or 32FC1 metres, as it was captured).
-mlmap::dds::sensor_msgs::Image_ depthImage(const DepthFrame& frame, double stamp_s, const std::string& frame_id) {
+mlmap::dds::sensor_msgs::Image_ depthImage(const DepthFrame& frame, double stamp_s,
+                                           const std::string& frame_id) {
   mlmap::dds::sensor_msgs::Image_ msg;
   msg.header_().stamp_(mlmap::dds::toRosTime(stamp_s));
   msg.header_().frame_id_(frame_id);
@@ -154,15 +159,16 @@ mlmap::dds::sensor_msgs::Image_ depthImage(const DepthFrame& frame, double stamp
   msg.step_(msg.width_() * (mm ? 2u : 4u));
   const std::size_t bytes = static_cast<std::size_t>(msg.step_()) * msg.height_();
   msg.data_().resize(bytes);
-  std::memcpy(msg.data_().data(), mm ? static_cast<const void*>(frame.depth_mm.data())
-                                     : static_cast<const void*>(frame.depth_m.data()),
+  std::memcpy(msg.data_().data(),
+              mm ? static_cast<const void*>(frame.depth_mm.data())
+                 : static_cast<const void*>(frame.depth_m.data()),
               bytes);
   return msg;
 }
 
 /// The CameraInfo of a pinhole camera without distortion.
 mlmap::dds::sensor_msgs::CameraInfo_ cameraInfo(const PinholeIntrinsics& k, double stamp_s,
-                                         const std::string& frame_id) {
+                                                const std::string& frame_id) {
   mlmap::dds::sensor_msgs::CameraInfo_ msg;
   msg.header_().stamp_(mlmap::dds::toRosTime(stamp_s));
   msg.header_().frame_id_(frame_id);
@@ -178,7 +184,7 @@ mlmap::dds::sensor_msgs::CameraInfo_ cameraInfo(const PinholeIntrinsics& k, doub
 
 /// One frame ready to send: its sensor message(s), stamped at send time (setStamp()).
 struct PreparedFrame {
-  double flight_s = 0.0;  ///< simulator time the frame shows (replay: unused)
+  double flight_s = 0.0;                    ///< simulator time the frame shows (replay: unused)
   Transform T_W_B = Transform::Identity();  ///< body pose of a replayed frame
   std::optional<mlmap::dds::sensor_msgs::PointCloud2_> cloud;  ///< cloud mode
   std::optional<mlmap::dds::sensor_msgs::Image_> image;        ///< depth mode, with `info`
@@ -197,16 +203,17 @@ struct PreparedFrame {
   }
 };
 
-/// Where the frames come from (an datasets::FrameSource: the simulator flying a scenario, or a folder
-/// of recorded frames) and how they go out.
+/// Where the frames come from (an datasets::FrameSource: the simulator flying a scenario, or a
+/// folder of recorded frames) and how they go out.
 struct SensorFeed {
   std::unique_ptr<datasets::FrameSource> frames_in;  ///< the frames
-  const datasets::SimulatedFlightSource* simulator = nullptr;  ///< frames_in when it is the simulator
-  double rate_hz = 0.0;                        ///< frames per second
-  double speed = 1.0;                          ///< flight seconds per wall-clock second
-  int frames = 0;                              ///< frames to publish
-  bool depth_mode = false;                     ///< depth images instead of clouds
-  std::string sensor_frame;                    ///< frame_id of the sensor messages
+  const datasets::SimulatedFlightSource* simulator =
+      nullptr;               ///< frames_in when it is the simulator
+  double rate_hz = 0.0;      ///< frames per second
+  double speed = 1.0;        ///< flight seconds per wall-clock second
+  int frames = 0;            ///< frames to publish
+  bool depth_mode = false;   ///< depth images instead of clouds
+  std::string sensor_frame;  ///< frame_id of the sensor messages
 
   /// Frame i, encoded (stamps are set when it is sent).
   [[nodiscard]] PreparedFrame prepare(int i) const {
@@ -243,16 +250,20 @@ SensorFeed openSource(const Options& o, const mlmap::dds::NodeConfig& config) {
     source.frames_in = std::make_unique<datasets::FrameDirectorySource>(o.frames_dir);
     source.rate_hz = o.rate_hz > 0 ? o.rate_hz : datasets::kFrameDirectoryRate_hz;
     if (!T_B_S.isApprox(Transform::Identity())) {
-      spdlog::warn("replayed frames are camera poses (T_B_S = identity) but the configuration mounts "
-                   "the sensor elsewhere: give mlmap_node a config with sensor translation 0 and "
-                   "rotation 0 (config/mlmap_node_replay.yaml)");
+      spdlog::warn(
+          "replayed frames are camera poses (T_B_S = identity) but the configuration mounts "
+          "the sensor elsewhere: give mlmap_node a config with sensor translation 0 and "
+          "rotation 0 (config/mlmap_node_replay.yaml)");
     }
   } else {
-    datasets::Scenario scenario = o.scenario_path.empty() ? datasets::defaultScenario() : datasets::loadScenarioYaml(o.scenario_path);
+    datasets::Scenario scenario = o.scenario_path.empty()
+                                      ? datasets::defaultScenario()
+                                      : datasets::loadScenarioYaml(o.scenario_path);
     datasets::SimulatedTiming timing;
     timing.rate_hz = o.rate_hz > 0 ? o.rate_hz : scenario.frame_rate_hz;
     timing.speed = o.speed;
-    auto simulator = std::make_unique<datasets::SimulatedFlightSource>(std::move(scenario), T_B_S, timing);
+    auto simulator =
+        std::make_unique<datasets::SimulatedFlightSource>(std::move(scenario), T_B_S, timing);
     source.simulator = simulator.get();
     source.rate_hz = timing.rate_hz;
     source.frames_in = std::move(simulator);
@@ -279,24 +290,28 @@ struct Writers {
   fdds::DataWriter* tf = nullptr;
   /// rt/tf_static with the sensor's mounting, when the node reads it from there.
   fdds::DataWriter* tf_static = nullptr;
-  std::uint32_t cloud_bytes = 0;     ///< every cloud's serialised size, with data-sharing
-  std::string sensor_topic;          ///< the sensor's DDS topic name
+  std::uint32_t cloud_bytes = 0;  ///< every cloud's serialised size, with data-sharing
+  std::string sensor_topic;       ///< the sensor's DDS topic name
 };
 
 /// The sensor writer: images, or clouds (with data-sharing unless dds.data_sharing is false).
 void createSensorWriter(const mlmap::dds::DdsConfig& dds, const SensorFeed& source,
                         fdds::Publisher* publisher, const fdds::DataWriterQos& qos, Writers* w) {
   if (source.depth_mode) {
-    w->sensor = mlmap::dds::createWriter<mlmap::dds::sensor_msgs::Image_PubSubType>(publisher, w->sensor_topic, qos);
+    w->sensor = mlmap::dds::createWriter<mlmap::dds::sensor_msgs::Image_PubSubType>(
+        publisher, w->sensor_topic, qos);
   } else if (dds.data_sharing) {
     // Every cloud has the size of the first (one camera): the writer's slots get that size.
     PreparedFrame first = source.prepare(0);
     mlmap::dds::sensor_msgs::PointCloud2_PubSubType plain;
     w->cloud_bytes = plain.getSerializedSizeProvider(&*first.cloud)();
-    w->sensor = mlmap::dds::createDataSharingCloudWriter(publisher, w->sensor_topic, qos, w->cloud_bytes);
-    spdlog::info("clouds of {:.2f} MB offered with data-sharing (dds.data_sharing)", w->cloud_bytes / 1e6);
+    w->sensor =
+        mlmap::dds::createDataSharingCloudWriter(publisher, w->sensor_topic, qos, w->cloud_bytes);
+    spdlog::info("clouds of {:.2f} MB offered with data-sharing (dds.data_sharing)",
+                 w->cloud_bytes / 1e6);
   } else {
-    w->sensor = mlmap::dds::createWriter<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(publisher, w->sensor_topic, qos);
+    w->sensor = mlmap::dds::createWriter<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(
+        publisher, w->sensor_topic, qos);
   }
 }
 
@@ -304,8 +319,8 @@ void createSensorWriter(const mlmap::dds::DdsConfig& dds, const SensorFeed& sour
 /// pose's TF when the node publishes none or only map -> odom (rt/tf, absolute), and the sensor's
 /// mounting on rt/tf_static when the node reads it from there (as robot_state_publisher or a
 /// camera driver would, latched).
-void createRobotTf(const mlmap::dds::DdsConfig& dds, const Transform& T_B_S, fdds::Publisher* publisher,
-                   Writers* w) {
+void createRobotTf(const mlmap::dds::DdsConfig& dds, const Transform& T_B_S,
+                   fdds::Publisher* publisher, Writers* w) {
   using TfType = ::tf2_msgs::msg::dds_::TFMessage_PubSubType;
   if (mlmap::dds::resolveTfMode(dds) != mlmap::dds::TfMode::kWorldBody) {
     w->tf = mlmap::dds::createWriter<TfType>(publisher, mlmap::dds::ddsTopicName("", "tf"),
@@ -323,7 +338,8 @@ void createRobotTf(const mlmap::dds::DdsConfig& dds, const Transform& T_B_S, fdd
 }
 
 /// Joins the DDS graph and creates the writers. `T_B_S`: the sensor's mounting (sensor.*).
-Writers createWriters(const mlmap::dds::DdsConfig& dds, const SensorFeed& source, const Transform& T_B_S) {
+Writers createWriters(const mlmap::dds::DdsConfig& dds, const SensorFeed& source,
+                      const Transform& T_B_S) {
   Writers w;
   w.participant = mlmap::dds::createParticipant(dds, "mlmap_sensor_publisher");
   fdds::Publisher* publisher = w.participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
@@ -335,7 +351,8 @@ Writers createWriters(const mlmap::dds::DdsConfig& dds, const SensorFeed& source
   // (eProsima/Fast-DDS#3655, fixed after 2.9.1; Jazzy's 2.14 has the fix): every 4.9 MB cloud
   // crossed loopback UDP too, which doubled its transport cost in the latency benchmark.
   const fdds::DataWriterQos qos = mlmap::dds::reliableWriterQos(5);
-  w.sensor_topic = mlmap::dds::ddsTopicName(dds.ns, source.depth_mode ? topics.depth_image : topics.cloud);
+  w.sensor_topic =
+      mlmap::dds::ddsTopicName(dds.ns, source.depth_mode ? topics.depth_image : topics.cloud);
   createSensorWriter(dds, source, publisher, qos, &w);
   if (source.depth_mode) {
     w.info = mlmap::dds::createWriter<mlmap::dds::sensor_msgs::CameraInfo_PubSubType>(
@@ -380,7 +397,8 @@ int waitForSubscribers(const Writers& w, double wait_s) {
   if (matched) std::this_thread::sleep_for(std::chrono::milliseconds(250));
   fdds::PublicationMatchedStatus sensor_matched;
   w.sensor->get_publication_matched_status(sensor_matched);
-  if (!matched) spdlog::warn("not every topic has a subscriber after {} s: publishing anyway", wait_s);
+  if (!matched)
+    spdlog::warn("not every topic has a subscriber after {} s: publishing anyway", wait_s);
   return sensor_matched.current_count;
 }
 
@@ -405,10 +423,10 @@ std::vector<PreparedFrame> prerenderFrames(const SensorFeed& source) {
 
 /// What the stream did.
 struct StreamStats {
-  int sent = 0;             ///< frames written
-  int late = 0;             ///< frames sent more than kLate_ms after their capture time
-  int failed = 0;           ///< frames whose write failed
-  double max_late_ms = 0.0; ///< the latest a frame left after its capture time [ms]
+  int sent = 0;              ///< frames written
+  int late = 0;              ///< frames sent more than kLate_ms after their capture time
+  int failed = 0;            ///< frames whose write failed
+  double max_late_ms = 0.0;  ///< the latest a frame left after its capture time [ms]
 };
 
 /// A frame sent later than this after its capture time counts as late [ms].
@@ -421,10 +439,14 @@ class Streamer {
  public:
   Streamer(const SensorFeed& source, const Writers& writers, const mlmap::dds::DdsConfig& dds,
            double pose_rate_hz)
-      : source_(source), writers_(writers), frames_(mlmap::dds::resolveFrames(dds)),
+      : source_(source),
+        writers_(writers),
+        frames_(mlmap::dds::resolveFrames(dds)),
         tf_parent_(mlmap::dds::resolveTfMode(dds) == mlmap::dds::TfMode::kMapOdom ? frames_.odom
-                                                                                 : frames_.world),
-        pose_period_s_(1.0 / pose_rate_hz), start_(Clock::now()), wall0_s_(mlmap::dds::wallClockNow_s()) {}
+                                                                                  : frames_.world),
+        pose_period_s_(1.0 / pose_rate_hz),
+        start_(Clock::now()),
+        wall0_s_(mlmap::dds::wallClockNow_s()) {}
 
   /// Sends frame `i` at its capture time, with the poses up to it.
   void send(int i, PreparedFrame frame) {
@@ -441,9 +463,10 @@ class Streamer {
       ++stats_.sent;
     } else if (stats_.failed++ == 0) {
       spdlog::error("frame {}: the DDS write failed{}", i,
-                    writers_.cloud_bytes > 0 ? " (data-sharing: a cloud larger than the first, or every "
-                                               "slot still held by a reader that has not taken it)"
-                                             : "");
+                    writers_.cloud_bytes > 0
+                        ? " (data-sharing: a cloud larger than the first, or every "
+                          "slot still held by a reader that has not taken it)"
+                        : "");
     }
   }
   [[nodiscard]] const StreamStats& stats() const { return stats_; }
@@ -451,7 +474,8 @@ class Streamer {
  private:
   /// T_W_B as a PoseStamped or an Odometry (child: the body frame), and the robot's TF of it.
   void publishPose(const Transform& T_W_B, double stamp_s) {
-    mlmap::dds::geometry_msgs::PoseStamped_ pose = mlmap::dds::toPoseStamped(T_W_B, stamp_s, frames_.world);
+    mlmap::dds::geometry_msgs::PoseStamped_ pose =
+        mlmap::dds::toPoseStamped(T_W_B, stamp_s, frames_.world);
     if (writers_.pose != nullptr) writers_.pose->write(&pose);
     if (writers_.odometry != nullptr) {
       mlmap::dds::nav_msgs::Odometry_ odometry;
@@ -462,7 +486,8 @@ class Streamer {
     }
     if (writers_.tf != nullptr) {  // an odometry that equals the pose (map_odom: map -> odom = I)
       ::tf2_msgs::msg::dds_::TFMessage_ tf;
-      tf.transforms_().push_back(mlmap::dds::toTransformStamped(T_W_B, stamp_s, tf_parent_, frames_.body));
+      tf.transforms_().push_back(
+          mlmap::dds::toTransformStamped(T_W_B, stamp_s, tf_parent_, frames_.body));
       writers_.tf->write(&tf);
     }
   }
@@ -473,9 +498,11 @@ class Streamer {
     }
     // Odometry runs ahead of the camera by up to one pose period, as a fast IMU-based
     // estimator does, so each frame finds poses on both sides of its stamp.
-    for (; static_cast<double>(pose_k_) * pose_period_s_ <= frame.flight_s + pose_period_s_ + 1e-9; ++pose_k_) {
+    for (; static_cast<double>(pose_k_) * pose_period_s_ <= frame.flight_s + pose_period_s_ + 1e-9;
+         ++pose_k_) {
       const double pose_t_s = static_cast<double>(pose_k_) * pose_period_s_;
-      publishPose(source_.simulator->scenario().trajectory.poseAt(pose_t_s), wall0_s_ + pose_t_s / source_.speed);
+      publishPose(source_.simulator->scenario().trajectory.poseAt(pose_t_s),
+                  wall0_s_ + pose_t_s / source_.speed);
     }
   }
   bool write(PreparedFrame& frame) {
@@ -498,14 +525,16 @@ class Streamer {
 };
 
 /// Publishes every frame (prerendered ones if given) until done or stopped.
-StreamStats stream(const SensorFeed& source, const Writers& writers, const mlmap::dds::DdsConfig& dds,
-                   double pose_rate_hz, std::vector<PreparedFrame>* prerendered) {
+StreamStats stream(const SensorFeed& source, const Writers& writers,
+                   const mlmap::dds::DdsConfig& dds, double pose_rate_hz,
+                   std::vector<PreparedFrame>* prerendered) {
   Streamer streamer(source, writers, dds, pose_rate_hz);
   const int frames = source.frames;
   for (int i = 0; i < frames && !apps::stopRequested(); ++i) {
     streamer.send(i, prerendered != nullptr ? std::move((*prerendered)[static_cast<std::size_t>(i)])
                                             : source.prepare(i));
-    if (frames >= 10 && (i + 1) % (frames / 10) == 0) spdlog::info("{} / {} frames published", i + 1, frames);
+    if (frames >= 10 && (i + 1) % (frames / 10) == 0)
+      spdlog::info("{} / {} frames published", i + 1, frames);
   }
   return streamer.stats();
 }
@@ -513,14 +542,18 @@ StreamStats stream(const SensorFeed& source, const Writers& writers, const mlmap
 /// Reports late and failed frames; returns the exit status (1 when a frame could not be written).
 int finish(const StreamStats& s, bool prerender) {
   if (s.late > 0) {
-    spdlog::warn("{} of {} frames left more than {} ms after their capture time (max {:.1f} ms; "
-                 "their latency includes it): {}",
-                 s.late, s.sent + s.failed, kLate_ms, s.max_late_ms,
-                 prerender ? "the machine is busy" : "the simulator is slower than --rate (try --prerender)");
+    spdlog::warn(
+        "{} of {} frames left more than {} ms after their capture time (max {:.1f} ms; "
+        "their latency includes it): {}",
+        s.late, s.sent + s.failed, kLate_ms, s.max_late_ms,
+        prerender ? "the machine is busy"
+                  : "the simulator is slower than --rate (try --prerender)");
   }
-  if (s.failed > 0) spdlog::error("{} of {} frames could not be written", s.failed, s.sent + s.failed);
+  if (s.failed > 0)
+    spdlog::error("{} of {} frames could not be written", s.failed, s.sent + s.failed);
   std::this_thread::sleep_for(std::chrono::milliseconds(300));  // let the last samples leave
-  spdlog::info("done: {} frames published; at most {:.2f} ms after their capture time", s.sent, s.max_late_ms);
+  spdlog::info("done: {} frames published; at most {:.2f} ms after their capture time", s.sent,
+               s.max_late_ms);
   return s.failed > 0 ? 1 : 0;
 }
 
@@ -536,8 +569,9 @@ int run(const Options& o) {
     const int subscribers = waitForSubscribers(writers, o.wait_s);
     std::vector<PreparedFrame> prerendered;
     if (o.prerender) prerendered = prerenderFrames(source);
-    spdlog::info("publishing {} on {} ({} subscriber(s)) at {} Hz", source.depth_mode ? "depth images" : "clouds",
-                 writers.sensor_topic, subscribers, source.rate_hz);
+    spdlog::info("publishing {} on {} ({} subscriber(s)) at {} Hz",
+                 source.depth_mode ? "depth images" : "clouds", writers.sensor_topic, subscribers,
+                 source.rate_hz);
     const StreamStats stats =
         stream(source, writers, config.dds, o.pose_rate_hz, o.prerender ? &prerendered : nullptr);
     return finish(stats, o.prerender);

@@ -31,7 +31,8 @@ struct SecurityOptions {
                    "DDS Security: Enforce (refuse to start without the enclave's files) or "
                    "Permissive (warn, run unsecured) (default: dds.security.strategy, else "
                    "ROS_SECURITY_STRATEGY)")
-        ->transform(CLI::IsMember({"Enforce", "Permissive"}, CLI::ignore_case));  // any case, as the YAML
+        ->transform(
+            CLI::IsMember({"Enforce", "Permissive"}, CLI::ignore_case));  // any case, as the YAML
   }
 
   /// Writes the options given into `security` (the command line wins over the file).

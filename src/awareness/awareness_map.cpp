@@ -18,7 +18,8 @@ constexpr double kEdgeEpsilon = 1e-9;
 AwarenessMap::AwarenessMap(const AwarenessConfig& config)
     : config_(config),
       phi_cell_rad_(config.phi_cell_rad()),
-      cells_(static_cast<std::size_t>(config.rho_cells) * static_cast<std::size_t>(config.phi_cells) *
+      cells_(static_cast<std::size_t>(config.rho_cells) *
+                 static_cast<std::size_t>(config.phi_cells) *
                  static_cast<std::size_t>(config.z_cells),
              0) {
   for (int i = 0; i <= config.phi_cells; ++i) {
@@ -192,7 +193,8 @@ void AwarenessMap::clearRange(int phi, int rho, double z_lo, double z_hi) {
   const double inv_dz = 1.0 / config_.z_cell_m;
   const int below = config_.z_cells_below;
   const int k0 = std::max(floorToInt((z_lo + kEdgeEpsilon) * inv_dz) + below, 0);
-  const int k1 = std::min(ceilToInt((z_hi - kEdgeEpsilon) * inv_dz) - 1 + below, config_.z_cells - 1);
+  const int k1 =
+      std::min(ceilToInt((z_hi - kEdgeEpsilon) * inv_dz) - 1 + below, config_.z_cells - 1);
   std::uint8_t* column = cells_.data() + linear(rho, phi, 0);
   for (int k = k0; k <= k1; ++k) {
     std::uint8_t& v = column[k];

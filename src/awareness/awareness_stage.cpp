@@ -11,8 +11,8 @@
 #include <thread>
 
 // countBits() gets a popcnt clone next to the portable one, picked at load time (GCC ifunc).
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_ADDRESS__) && \
-    !defined(__SANITIZE_THREAD__)
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
+    !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
 #define MLMAP_POPCNT_CLONES __attribute__((target_clones("popcnt", "default")))
 #else
 #define MLMAP_POPCNT_CLONES
@@ -63,7 +63,7 @@ MLMAP_POPCNT_CLONES std::size_t countBits(const VoxelBitset& bits, int x_begin, 
 template <typename Cones>
 VoxelBitset::Rows conesRows(const Eigen::Vector3d& o, const Cones& cones) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
-  Eigen::Vector2d lo(kInf, kInf);    // x, y
+  Eigen::Vector2d lo(kInf, kInf);  // x, y
   Eigen::Vector2d hi(-kInf, -kInf);
   for (const auto& cone : cones) {
     const double s0 = std::max(cone.s_min, 0.0);
@@ -78,7 +78,9 @@ VoxelBitset::Rows conesRows(const Eigen::Vector3d& o, const Cones& cones) {
   }
   if (!(lo.x() <= hi.x()) || !(lo.y() <= hi.y())) return {};  // no cone
   // Clamped before the conversion (a cone may reach far outside the box).
-  const auto row = [](double v) { return static_cast<int>(std::clamp(std::floor(v), -2.0e9, 2.0e9)); };
+  const auto row = [](double v) {
+    return static_cast<int>(std::clamp(std::floor(v), -2.0e9, 2.0e9));
+  };
   return {row(lo.x()) - 1, row(hi.x()) + 2, row(lo.y()) - 1, row(hi.y()) + 2};
 }
 
@@ -88,8 +90,8 @@ VoxelBitset::Rows conesRows(const Eigen::Vector3d& o, const Cones& cones) {
 // the 30 m LiDAR scans the slower of two ranges then takes 5 % less than with the cones' centres
 // split in half. `work` is scratch space.
 template <typename Cones>
-std::vector<int> xRangesOfEqualWork(const Eigen::Vector3d& o, const Cones& cones, int dim_x, int threads,
-                                    std::vector<double>* work) {
+std::vector<int> xRangesOfEqualWork(const Eigen::Vector3d& o, const Cones& cones, int dim_x,
+                                    int threads, std::vector<double>* work) {
   constexpr double kSetUp = 10.0;
   work->assign(static_cast<std::size_t>(dim_x) + 1, 0.0);  // per x, as differences
   double total = 0.0;
@@ -117,7 +119,8 @@ std::vector<int> xRangesOfEqualWork(const Eigen::Vector3d& o, const Cones& cones
   for (int x = 0; x < dim_x && next < threads; ++x) {
     density += (*work)[static_cast<std::size_t>(x)];
     done += density;
-    while (next < threads && done >= total * next / threads) borders[static_cast<std::size_t>(next++)] = x + 1;
+    while (next < threads && done >= total * next / threads)
+      borders[static_cast<std::size_t>(next++)] = x + 1;
   }
   return borders;
 }
@@ -146,8 +149,8 @@ void convertPixels(const Raw* __restrict raw, const float* __restrict rx, float 
 // a branch per run of pixels mispredicts about every other pixel. Writes stay below `count`.
 template <typename Raw, typename Valid>
 std::size_t packPixels(const Raw* __restrict raw, const float* __restrict rx, float ray_y,
-                       std::size_t count, Valid valid, float* __restrict xs,
-                       float* __restrict ys, float* __restrict zs) {
+                       std::size_t count, Valid valid, float* __restrict xs, float* __restrict ys,
+                       float* __restrict zs) {
   std::size_t n = 0;
   for (std::size_t k = 0; k < count; ++k) {
     const float z = depthMetres(raw[k]);
@@ -160,7 +163,8 @@ std::size_t packPixels(const Raw* __restrict raw, const float* __restrict rx, fl
 }
 
 double distanceToBox(const Eigen::Vector3d& o, const VoxelSpaceBox& b) {
-  const Eigen::Vector3d d = (b.min.cast<double>() - o).cwiseMax(o - b.max.cast<double>()).cwiseMax(0.0);
+  const Eigen::Vector3d d =
+      (b.min.cast<double>() - o).cwiseMax(o - b.max.cast<double>()).cwiseMax(0.0);
   return d.norm();
 }
 }  // namespace
@@ -179,7 +183,10 @@ PointCounters& PointCounters::operator+=(const PointCounters& o) {
 }
 
 AwarenessStage::AwarenessStage(const MapConfig& config)
-    : config_(config), map_(config.awareness), table_(1u << 15), rng_(config.awareness.sample_seed) {
+    : config_(config),
+      map_(config.awareness),
+      table_(1u << 15),
+      rng_(config.awareness.sample_seed) {
   int n = config.awareness.binsPerFaceSide(config.local_map.resolution_m);
   bins_per_face_side_ = n;
   for (; n >= 1; n /= 2) {
@@ -196,8 +203,8 @@ std::uint32_t AwarenessStage::findOrAddEnd(std::uint32_t full_key) {
     for (std::uint32_t e = 0; e < ends_.size(); ++e) {
       const Eigen::Vector3i& v = ends_[e].voxel;  // only ends inside the box are in ends_ here
       const std::uint32_t k =
-          static_cast<std::uint32_t>((static_cast<std::size_t>(v.x()) * box_dims_.y() + v.y()) *
-                                         box_dims_.z() + v.z()) |
+          static_cast<std::uint32_t>(
+              (static_cast<std::size_t>(v.x()) * box_dims_.y() + v.y()) * box_dims_.z() + v.z()) |
           (ends_[e].cut ? kPointCutFlag : 0u);
       std::uint32_t h = hashKey(k) & mask;
       while (bigger[h].stamp == stamp_) h = (h + 1) & mask;
@@ -274,18 +281,19 @@ std::size_t AwarenessStage::Source::fill(std::size_t first, std::size_t len, flo
     const float* rx = ray_x->data() + u0;
     if (depth->encoding == DepthEncoding::kUint16Millimetres) {
       // Neither 0 nor 0xFFFF, in one comparison.
-      copyValid(depth->depth_mm.data() + pixel, seg,
-                [](std::uint16_t r) { return static_cast<std::uint16_t>(r - 1u) < 0xFFFEu; }, rx,
-                ray_y);
+      copyValid(
+          depth->depth_mm.data() + pixel, seg,
+          [](std::uint16_t r) { return static_cast<std::uint16_t>(r - 1u) < 0xFFFEu; }, rx, ray_y);
     } else {
       // 0 < r <= FLT_MAX (no NaN, no infinity), in one comparison of the bits.
-      copyValid(depth->depth_m.data() + pixel, seg,
-                [](float r) {
-                  std::uint32_t bits = 0;
-                  std::memcpy(&bits, &r, sizeof bits);
-                  return bits - 1u < 0x7F7FFFFFu;
-                },
-                rx, ray_y);
+      copyValid(
+          depth->depth_m.data() + pixel, seg,
+          [](float r) {
+            std::uint32_t bits = 0;
+            std::memcpy(&bits, &r, sizeof bits);
+            return bits - 1u < 0x7F7FFFFFu;
+          },
+          rx, ray_y);
     }
     done += seg;
   }
@@ -346,7 +354,8 @@ bool AwarenessStage::process(const DepthFrame& frame, MeasurementBatch* batch,
   const float inv_fx = static_cast<float>(1.0 / K.fx);
   ray_x_.resize(static_cast<std::size_t>(K.width));
   for (int u = 0; u < K.width; ++u) {
-    ray_x_[static_cast<std::size_t>(u)] = (static_cast<float>(u) - static_cast<float>(K.cx)) * inv_fx;
+    ray_x_[static_cast<std::size_t>(u)] =
+        (static_cast<float>(u) - static_cast<float>(K.cx)) * inv_fx;
   }
   Source source;
   source.depth = &frame;
@@ -564,7 +573,7 @@ void AwarenessStage::collectEnds(const Source& source, const FrameGeometry& g,
       const Slot& slot = table_[hashKey(key) & mask];
       last = &ends_[slot.stamp == stamp_ && slot.key == key ? slot.end : findOrAddEnd(key)];
       last_key = key;
-      last_cut = key >> 31;  // kPointCutFlag
+      last_cut = key >> 31;                                                         // kPointCutFlag
       if (last->points.min.x() > last->points.max.x()) last->p_W = worldPoint(at);  // first point
       run_min = run_max = v;
       c.beyond_max_range += last_cut;
@@ -632,14 +641,17 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
     if (m.z() > m[axis]) axis = 2;
     const double inv = 1.0 / std::max(m[axis], 1e-12);
     const int face = axis * 2 + (d[axis] < 0.0 ? 1 : 0);
-    const int iu = std::clamp(static_cast<int>((d[(axis + 1) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
-    const int iv = std::clamp(static_cast<int>((d[(axis + 2) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
+    const int iu =
+        std::clamp(static_cast<int>((d[(axis + 1) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
+    const int iv =
+        std::clamp(static_cast<int>((d[(axis + 2) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
     e.near = distanceToBox(o, e.points);
     e.bin = static_cast<std::uint32_t>((face * n0 + iu) * n0 + iv);
   }
   constexpr std::size_t kPrefetchAhead = 16;
   for (std::size_t i = 0; i < ends_.size(); ++i) {
-    if (i + kPrefetchAhead < ends_.size()) __builtin_prefetch(&slots_[0][ends_[i + kPrefetchAhead].bin]);
+    if (i + kPrefetchAhead < ends_.size())
+      __builtin_prefetch(&slots_[0][ends_[i + kPrefetchAhead].bin]);
     End& e = ends_[i];
     e.bin = findOrAddBin(0, e.bin, e.near);
   }

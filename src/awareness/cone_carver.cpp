@@ -95,11 +95,11 @@ inline void markSlab(int i, I2 first, I2 last, std::uint64_t* words, std::size_t
   if (j0 > j1 || k0 > k1) return;
   const std::size_t ui = static_cast<std::size_t>(i);
   if constexpr (A == 0) {  // b = y, c = z
-    markRuns(words + ui * stride_x + static_cast<std::size_t>(j0) * stride_y, stride_y,
-             j1 - j0 + 1, k0, k1);
+    markRuns(words + ui * stride_x + static_cast<std::size_t>(j0) * stride_y, stride_y, j1 - j0 + 1,
+             k0, k1);
   } else if constexpr (A == 1) {  // b = z, c = x
-    markRuns(words + static_cast<std::size_t>(k0) * stride_x + ui * stride_y, stride_x,
-             k1 - k0 + 1, j0, j1);
+    markRuns(words + static_cast<std::size_t>(k0) * stride_x + ui * stride_y, stride_x, k1 - k0 + 1,
+             j0, j1);
   } else {  // b = x, c = y: one bit of each row
     const std::uint64_t bit = std::uint64_t{1} << (i & 63);
     std::uint64_t* column = words + (ui >> 6) + static_cast<std::size_t>(j0) * stride_x;
@@ -136,8 +136,10 @@ void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std:
     if (!(s_lo <= s_hi)) return;
     const V2 lo_s = {s_lo, s_lo};
     const V2 hi_s = {s_hi, s_hi};
-    const V2 low = vmax(vfloor(w.base_lo + vmin(lo_s * w.coef_lo, hi_s * w.coef_lo) + eps), w.limit_lo);
-    const V2 high = vmax(vfloor(w.base_hi + vmin(lo_s * w.coef_hi, hi_s * w.coef_hi) + eps), w.limit_hi);
+    const V2 low =
+        vmax(vfloor(w.base_lo + vmin(lo_s * w.coef_lo, hi_s * w.coef_lo) + eps), w.limit_lo);
+    const V2 high =
+        vmax(vfloor(w.base_hi + vmin(lo_s * w.coef_hi, hi_s * w.coef_hi) + eps), w.limit_hi);
     markSlab<A>(i, __builtin_convertvector(low, I2), -__builtin_convertvector(high, I2) - 1, words,
                 stride_x, stride_y);
   };
@@ -149,7 +151,8 @@ void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std:
     // Unclamped: the bounds are affine in i. Truncation is floor here: `first` is clamped to
     // the first voxel marked (>= 0) first, `last` to >= -1 and shifted by one.
     const V2 vi = {static_cast<double>(i), static_cast<double>(i)};
-    const I2 first = __builtin_convertvector(vmax(w.first_at0 + vi * w.first_slope, first_floor), I2);
+    const I2 first =
+        __builtin_convertvector(vmax(w.first_at0 + vi * w.first_slope, first_floor), I2);
     const V2 x_last = vmax(vmin(w.last_at0 + vi * w.last_slope, w.last_limit), -one) + one;
     markSlab<A>(i, first, __builtin_convertvector(x_last, I2) - 1, words, stride_x, stride_y);
   }
@@ -260,7 +263,8 @@ std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, d
   return carveConeIn<true>(origin, box, s_min, x_begin, x_end, free);
 }
 
-std::size_t carveCone(const Eigen::Vector3d& origin, const Eigen::Vector3i& end, VoxelBitset* free) {
+std::size_t carveCone(const Eigen::Vector3d& origin, const Eigen::Vector3i& end,
+                      VoxelBitset* free) {
   const Eigen::Vector3f lo = end.cast<float>();
   // Just inside the far faces: a point on a far face belongs to the next voxel.
   const Eigen::Vector3f hi = lo + Eigen::Vector3f::Constant(1.0f - 1e-6f);

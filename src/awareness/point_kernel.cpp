@@ -22,9 +22,9 @@ inline int floorToIntVec(double x) {  // floorToInt in a form the vectoriser tak
 // bits.
 template <bool kMayCut>
 [[gnu::always_inline]] inline void classifyPointsImpl(const PointKernel& k, const float* xs,
-                                                     const float* ys, const float* zs,
-                                                     std::size_t n, std::uint32_t* keys,
-                                                     float* coords) {
+                                                      const float* ys, const float* zs,
+                                                      std::size_t n, std::uint32_t* keys,
+                                                      float* coords) {
   // Locals, so that the compiler knows the stores below do not change them.
   const double m0 = k.m[0], m1 = k.m[1], m2 = k.m[2], m3 = k.m[3], m4 = k.m[4], m5 = k.m[5];
   const double m6 = k.m[6], m7 = k.m[7], m8 = k.m[8];
@@ -75,8 +75,8 @@ template <bool kMayCut>
 
 // Whether every point is finite and within the maximum range (NaN fails the comparison). No
 // AVX2 clone: a CPU with AVX2 runs classifyPointsAvx2 instead.
-bool allWithinRange(const float* xs, const float* ys, const float* zs,
-                    std::size_t n, double max_range2) {
+bool allWithinRange(const float* xs, const float* ys, const float* zs, std::size_t n,
+                    double max_range2) {
   int beyond = 0;  // an OR reduction, which the compiler vectorises
   for (std::size_t i = 0; i < n; ++i) {
     const double x = xs[i];
@@ -87,8 +87,8 @@ bool allWithinRange(const float* xs, const float* ys, const float* zs,
   return beyond == 0;
 }
 
-void classifyPointsPortable(const PointKernel& k, const float* xs, const float* ys,
-                            const float* zs, std::size_t n, std::uint32_t* keys, float* coords) {
+void classifyPointsPortable(const PointKernel& k, const float* xs, const float* ys, const float* zs,
+                            std::size_t n, std::uint32_t* keys, float* coords) {
   if (allWithinRange(xs, ys, zs, n, k.max_range * k.max_range)) {
     classifyPointsImpl<false>(k, xs, ys, zs, n, keys, coords);
   } else {
@@ -102,8 +102,7 @@ void classifyPointsPortable(const PointKernel& k, const float* xs, const float* 
 // 64-bit lane masks to 32-bit lane masks.
 MLMAP_AVX2 __m128i lanes32(__m256d mask) {
   const __m256i even_first = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
-  return _mm256_castsi256_si128(
-      _mm256_permutevar8x32_epi32(_mm256_castpd_si256(mask), even_first));
+  return _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(_mm256_castpd_si256(mask), even_first));
 }
 
 // 0 <= f < d per lane (false for NaN).
@@ -115,9 +114,9 @@ MLMAP_AVX2 __m256d within(__m256d f, __m256d d) {
 // o + m_a x + m_b y + m_c z - box origin, added left to right as classifyPointsImpl does.
 MLMAP_AVX2 __m256d boxUnits(__m256d o, __m256d ma, __m256d mb, __m256d mc, __m256d bo, __m256d x,
                             __m256d y, __m256d z) {
-  const __m256d w = _mm256_add_pd(
-      _mm256_add_pd(_mm256_add_pd(o, _mm256_mul_pd(ma, x)), _mm256_mul_pd(mb, y)),
-      _mm256_mul_pd(mc, z));
+  const __m256d w =
+      _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(o, _mm256_mul_pd(ma, x)), _mm256_mul_pd(mb, y)),
+                    _mm256_mul_pd(mc, z));
   return _mm256_sub_pd(w, bo);
 }
 
@@ -160,8 +159,8 @@ __attribute__((target("avx2"))) void classifyPointsAvx2(const PointKernel& k, co
     __m256d x = _mm256_cvtps_pd(_mm_loadu_ps(xs + i));
     __m256d y = _mm256_cvtps_pd(_mm_loadu_ps(ys + i));
     __m256d z = _mm256_cvtps_pd(_mm_loadu_ps(zs + i));
-    const __m256d r2 = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)),
-                                     _mm256_mul_pd(z, z));
+    const __m256d r2 =
+        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(x, x), _mm256_mul_pd(y, y)), _mm256_mul_pd(z, z));
     const __m256d finite = _mm256_cmp_pd(r2, largest, _CMP_LE_OQ);
     const __m256d cut = _mm256_cmp_pd(r2, max_range2, _CMP_GT_OQ);
     if (_mm256_movemask_pd(_mm256_andnot_pd(cut, finite)) != 0xF) {
@@ -180,8 +179,8 @@ __attribute__((target("avx2"))) void classifyPointsAvx2(const PointKernel& k, co
     const __m256d f0 = _mm256_floor_pd(b0);
     const __m256d f1 = _mm256_floor_pd(b1);
     const __m256d f2 = _mm256_floor_pd(b2);
-    const __m256d inside_d = _mm256_and_pd(
-        _mm256_and_pd(within(f0, dd0), within(f1, dd1)), within(f2, dd2));
+    const __m256d inside_d =
+        _mm256_and_pd(_mm256_and_pd(within(f0, dd0), within(f1, dd1)), within(f2, dd2));
     const __m128i inside = lanes32(inside_d);
     const __m128i cut32 = lanes32(cut);
     const __m256d voxel_d =

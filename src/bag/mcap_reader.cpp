@@ -148,8 +148,9 @@ void visitChunkRecords(const std::vector<std::uint8_t>& records, const std::stri
 std::uint64_t maxDecompressedChunkBytes(std::uint64_t file_size) {
   constexpr std::uint64_t kFloor = std::uint64_t{64} << 20;
   constexpr std::uint64_t kPerFileByte = 256;
-  const std::uint64_t scaled =
-      file_size > kMaxMcapRecordBytes / kPerFileByte ? kMaxMcapRecordBytes : file_size * kPerFileByte;
+  const std::uint64_t scaled = file_size > kMaxMcapRecordBytes / kPerFileByte
+                                   ? kMaxMcapRecordBytes
+                                   : file_size * kPerFileByte;
   return std::min(kMaxMcapRecordBytes, std::max(kFloor, scaled));
 }
 

@@ -114,8 +114,9 @@ class SqliteBag : public BagReader {
   /// Throws when a table yields more rows than the file can hold.
   void countRow(std::size_t rows, const char* table) const {
     if (rows > max_rows_) {
-      throw std::runtime_error(path_ + ": " + table + " has more rows than a file of its size can " +
-                               "hold (" + std::to_string(max_rows_) + ")");
+      throw std::runtime_error(path_ + ": " + table +
+                               " has more rows than a file of its size can " + "hold (" +
+                               std::to_string(max_rows_) + ")");
     }
   }
 

@@ -27,7 +27,8 @@ void TfTree::addStatic(const std::string& parent, const std::string& child,
                        const Transform& T_parent_child) {
   const auto known = static_edges_.find(child);
   const bool new_parent = known == static_edges_.end() || known->second.parent != parent;
-  if (new_parent && known != static_edges_.end()) static_children_[known->second.parent].erase(child);
+  if (new_parent && known != static_edges_.end())
+    static_children_[known->second.parent].erase(child);
   static_edges_[child] = {parent, child, T_parent_child};
   static_children_[parent].insert(child);
   if (new_parent) updateAncestors();
@@ -133,8 +134,8 @@ std::vector<StampedTransform> TfTree::poses() {
     StampedTransform pose;
     pose.stamp_s = sample.stamp_s;
     for (auto edge = chain.rbegin(); edge != chain.rend(); ++edge) {
-      pose.T = pose.T * (edge->series == nullptr ? edge->T_parent_child
-                                                 : at(*edge->series, sample.stamp_s));
+      pose.T = pose.T *
+               (edge->series == nullptr ? edge->T_parent_child : at(*edge->series, sample.stamp_s));
     }
     poses.push_back(pose);
   }
@@ -164,8 +165,7 @@ std::optional<Transform> TfTree::staticFromBody(const std::string& sensor_frame)
       }
     }
     if (const auto up = static_edges_.find(here.frame); up != static_edges_.end()) {
-      neighbours.emplace_back(up->second.parent,
-                              here.T_B_F * inverse(up->second.T_parent_child));
+      neighbours.emplace_back(up->second.parent, here.T_B_F * inverse(up->second.T_parent_child));
     }
     for (auto& [next, T_B_N] : neighbours) {
       if (!seen.insert(next).second) continue;

@@ -30,7 +30,8 @@ MapConfig parseConfigYaml(const std::string& text, const std::string& source_nam
   return c;
 }
 
-MapConfig loadConfigYaml(const std::string& path, const std::vector<std::string>& skipped_sections) {
+MapConfig loadConfigYaml(const std::string& path,
+                         const std::vector<std::string>& skipped_sections) {
   return parseConfigYaml(readConfigFile(path), path, skipped_sections);
 }
 

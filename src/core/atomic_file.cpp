@@ -81,7 +81,8 @@ std::size_t removeLeftoverTemporaries(const std::string& path) {
     const std::filesystem::directory_entry& entry = *it;
     std::error_code entry_ec;
     const std::string name = entry.path().filename().string();
-    if (name.size() != prefix.size() + kSuffixChars || name.compare(0, prefix.size(), prefix) != 0 ||
+    if (name.size() != prefix.size() + kSuffixChars ||
+        name.compare(0, prefix.size(), prefix) != 0 ||
         !std::all_of(name.begin() + static_cast<std::ptrdiff_t>(prefix.size()), name.end(),
                      [](char c) { return std::isalnum(static_cast<unsigned char>(c)) != 0; }) ||
         !entry.is_regular_file(entry_ec)) {

@@ -62,7 +62,8 @@ void AwarenessConfig::validate(std::vector<std::string>* errors) const {
   require(num_threads >= 1 && num_threads <= kMaxThreads, sectionKey(*this, num_threads),
           "must be in [1, 64]", num_threads, errors);
   require(std::isfinite(bin_width_voxels) && bin_width_voxels >= 1.0 && bin_width_voxels <= 2.0,
-          sectionKey(*this, bin_width_voxels), "must be in [1, 2] voxels", bin_width_voxels, errors);
+          sectionKey(*this, bin_width_voxels), "must be in [1, 2] voxels", bin_width_voxels,
+          errors);
 }
 
 void LogOddsConfig::validate(std::vector<std::string>* errors) const {
@@ -212,8 +213,8 @@ std::vector<std::string> MapConfig::validate() const {
       std::ostringstream message;
       message << keyPath(*this, awareness.max_range_m) << " / "
               << keyPath(*this, local_map.resolution_m)
-              << ": the free-space scratch box around the sensor would hold "
-              << box_voxels << " voxels (limit 2^28); lower max_range_m, the resolution or the "
+              << ": the free-space scratch box around the sensor would hold " << box_voxels
+              << " voxels (limit 2^28); lower max_range_m, the resolution or the "
                  "local map size";
       errors.push_back(message.str());
     }
@@ -274,18 +275,18 @@ MemoryEstimate estimateMemory(const MapConfig& c) {
     for (int a = 0; a < 3; ++a) {
       const double edge_m = c.esdf.box_size_m[a];
       const double cells_on_axis = std::max(1.0, std::round(edge_m / c.local_map.resolution_m));
-    box *= edge_m > 0.0 ? std::min<double>(n[a], cells_on_axis) : n[a];
+      box *= edge_m > 0.0 ? std::min<double>(n[a], cells_on_axis) : n[a];
     }
     e.esdf_bytes = static_cast<std::size_t>(box * kEsdfPerBoxVoxel);
   }
-  const double cells = static_cast<double>(c.awareness.rho_cells) * c.awareness.phi_cells *
-                       c.awareness.z_cells;
+  const double cells =
+      static_cast<double>(c.awareness.rho_cells) * c.awareness.phi_cells * c.awareness.z_cells;
   double bin_slots = 0.0;
   for (int side = c.awareness.binsPerFaceSide(c.local_map.resolution_m); side >= 1; side /= 2) {
     bin_slots += 6.0 * side * side;
   }
-  e.awareness_bytes = static_cast<std::size_t>(cells * kAwarenessCellBytes + scratchBoxVoxels(c) / 8.0 +
-                                               bin_slots * kBinSlotBytes);
+  e.awareness_bytes = static_cast<std::size_t>(
+      cells * kAwarenessCellBytes + scratchBoxVoxels(c) / 8.0 + bin_slots * kBinSlotBytes);
   return e;
 }
 

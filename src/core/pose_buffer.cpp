@@ -86,9 +86,8 @@ PoseBuffer::LookupResult PoseBuffer::lookup(double stamp_s, Transform* T_W_B) co
   }
   if (stamp_s > newest.stamp_s) return LookupResult::kPending;
   // First pose newer than the stamp.
-  const auto after = std::upper_bound(
-      poses_.begin(), poses_.end(), stamp_s,
-      [](double t, const Stamped& p) { return t < p.stamp_s; });
+  const auto after = std::upper_bound(poses_.begin(), poses_.end(), stamp_s,
+                                      [](double t, const Stamped& p) { return t < p.stamp_s; });
   if (after == poses_.begin()) {
     // Older than every pose: only an exact match counts.
     if (std::abs(after->stamp_s - stamp_s) <= kSameStamp_s) {
@@ -111,7 +110,8 @@ PoseBuffer::LookupResult PoseBuffer::lookup(double stamp_s, Transform* T_W_B) co
   const double distance_m = (b.T_W_B.translation() - a.T_W_B.translation()).norm();
   const double angle_deg =
       Eigen::AngleAxisd(a.T_W_B.linear().transpose() * b.T_W_B.linear()).angle() * kDegPerRad;
-  if (distance_m > config_.max_speed_mps * span_s || angle_deg > config_.max_rotation_rate_dps * span_s) {
+  if (distance_m > config_.max_speed_mps * span_s ||
+      angle_deg > config_.max_rotation_rate_dps * span_s) {
     return LookupResult::kAcrossJump;
   }
   *T_W_B = interpolatePose(a.T_W_B, a.stamp_s, b.T_W_B, b.stamp_s, stamp_s);

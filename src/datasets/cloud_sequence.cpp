@@ -24,8 +24,9 @@ std::string stem(const std::string& file_name) {
 }
 
 bool allDigits(const std::string& s) {
-  return !s.empty() &&
-         std::all_of(s.begin(), s.end(), [](char c) { return std::isdigit(static_cast<unsigned char>(c)); });
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) {
+    return std::isdigit(static_cast<unsigned char>(c));
+  });
 }
 
 }  // namespace
@@ -113,7 +114,8 @@ std::vector<PairedCloud> pairCloudsWithPoses(std::vector<std::string> file_names
   *pairing = CloudPairing::kByTime;
   std::vector<std::size_t> order(file_names.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return *stamps[a] < *stamps[b]; });
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return *stamps[a] < *stamps[b]; });
   PoseBufferConfig config;
   config.tolerance_s = pose_tolerance_s;
   config.horizon_s = 1e12;  // keep the whole trajectory
@@ -127,8 +129,9 @@ std::vector<PairedCloud> pairCloudsWithPoses(std::vector<std::string> file_names
                                "' have the same time stamp");
     }
     // A pose with the cloud's stamp is used as read (PoseBuffer would pass it through slerp).
-    const auto same = std::lower_bound(poses.begin(), poses.end(), *stamps[i] - kSameStamp_s,
-                                       [](const StampedPose& p, double t) { return p.stamp_s < t; });
+    const auto same =
+        std::lower_bound(poses.begin(), poses.end(), *stamps[i] - kSameStamp_s,
+                         [](const StampedPose& p, double t) { return p.stamp_s < t; });
     Transform T = Transform::Identity();
     if (same != poses.end() && std::abs(same->stamp_s - *stamps[i]) <= kSameStamp_s) {
       out.push_back({file_names[i], *stamps[i], same->T_W_P});
@@ -154,7 +157,8 @@ CloudSequence::CloudSequence(const std::string& clouds_dir, const std::string& p
   if (!(std::isfinite(options.pose_tolerance_s) && options.pose_tolerance_s > 0.0)) {
     throw std::invalid_argument("pose_tolerance_s must be > 0");
   }
-  if (!isValidPose(options.T_P_C, 1e-6)) throw std::invalid_argument("the extrinsic is not a rigid transform");
+  if (!isValidPose(options.T_P_C, 1e-6))
+    throw std::invalid_argument("the extrinsic is not a rigid transform");
   std::error_code ec;
   if (!fs::is_directory(clouds_dir, ec)) throw std::runtime_error(clouds_dir + ": not a directory");
   std::vector<std::string> names;

@@ -34,7 +34,8 @@ bool endsWith(const std::string& s, const std::string& suffix) {
 
 /// Reads every whitespace-separated token of a text file's content as a finite double.
 /// `what` describes the content for error messages ("intrinsics", "pose"), `path` names the file.
-std::vector<double> parseNumbers(const std::string& text, const std::string& path, const char* what) {
+std::vector<double> parseNumbers(const std::string& text, const std::string& path,
+                                 const char* what) {
   std::istringstream in(text);
   std::vector<double> values;
   std::string token;

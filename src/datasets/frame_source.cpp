@@ -73,7 +73,8 @@ SimulatedFlightSource::SimulatedFlightSource(Scenario scenario, const Transform&
 }
 
 int SimulatedFlightSource::frameCount(const Scenario& scenario) {
-  return static_cast<int>(std::floor(scenario.trajectory.duration_s() * scenario.frame_rate_hz)) + 1;
+  return static_cast<int>(std::floor(scenario.trajectory.duration_s() * scenario.frame_rate_hz)) +
+         1;
 }
 
 double SimulatedFlightSource::frameTime(std::size_t i) const {

@@ -41,8 +41,9 @@ bool parseDouble(const std::string& token, double* value) {
 }
 
 bool parseCount(const std::string& token, std::uint64_t* value) {
-  if (token.empty() || !std::all_of(token.begin(), token.end(),
-                                    [](char c) { return std::isdigit(static_cast<unsigned char>(c)); })) {
+  if (token.empty() || !std::all_of(token.begin(), token.end(), [](char c) {
+        return std::isdigit(static_cast<unsigned char>(c));
+      })) {
     return false;
   }
   if (token.size() > 12) return false;  // > 10^12 points: not a real file
@@ -147,7 +148,8 @@ bool lzfDecompress(const unsigned char* in, std::size_t in_size, std::size_t exp
       if (ip >= in_size) return false;
       const std::size_t distance = ((ctrl & 0x1fu) << 8) + in[ip++] + 1u;
       if (distance > op || op + len > expected_size) return false;
-      for (std::size_t i = 0; i < len; ++i, ++op) (*out)[op] = (*out)[op - distance];  // may overlap
+      for (std::size_t i = 0; i < len; ++i, ++op)
+        (*out)[op] = (*out)[op - distance];  // may overlap
     }
   }
   return op == expected_size;
@@ -500,12 +502,13 @@ bool plyType(const std::string& name, ScalarType* type) {
     const char* name;
     Kind kind;
     std::size_t size;
-  } kTypes[] = {{"char", Kind::kInt, 1},    {"int8", Kind::kInt, 1},     {"uchar", Kind::kUint, 1},
-                {"uint8", Kind::kUint, 1},  {"short", Kind::kInt, 2},    {"int16", Kind::kInt, 2},
-                {"ushort", Kind::kUint, 2}, {"uint16", Kind::kUint, 2},  {"int", Kind::kInt, 4},
-                {"int32", Kind::kInt, 4},   {"uint", Kind::kUint, 4},    {"uint32", Kind::kUint, 4},
-                {"float", Kind::kFloat, 4}, {"float32", Kind::kFloat, 4}, {"double", Kind::kFloat, 8},
-                {"float64", Kind::kFloat, 8}};
+  } kTypes[] = {
+      {"char", Kind::kInt, 1},     {"int8", Kind::kInt, 1},      {"uchar", Kind::kUint, 1},
+      {"uint8", Kind::kUint, 1},   {"short", Kind::kInt, 2},     {"int16", Kind::kInt, 2},
+      {"ushort", Kind::kUint, 2},  {"uint16", Kind::kUint, 2},   {"int", Kind::kInt, 4},
+      {"int32", Kind::kInt, 4},    {"uint", Kind::kUint, 4},     {"uint32", Kind::kUint, 4},
+      {"float", Kind::kFloat, 4},  {"float32", Kind::kFloat, 4}, {"double", Kind::kFloat, 8},
+      {"float64", Kind::kFloat, 8}};
   for (const auto& t : kTypes) {
     if (name == t.name) {
       *type = {t.kind, t.size};
@@ -538,18 +541,21 @@ class PlyBody {
   /// Next value of `type`; `what` describes it for errors.
   double next(const ScalarType& type, const std::string& what) {
     if (ascii_) {
-      while (pos_ < content_.size() && std::isspace(static_cast<unsigned char>(content_[pos_]))) ++pos_;
+      while (pos_ < content_.size() && std::isspace(static_cast<unsigned char>(content_[pos_])))
+        ++pos_;
       const std::size_t begin = pos_;
-      while (pos_ < content_.size() && !std::isspace(static_cast<unsigned char>(content_[pos_]))) ++pos_;
+      while (pos_ < content_.size() && !std::isspace(static_cast<unsigned char>(content_[pos_])))
+        ++pos_;
       if (begin == pos_) fail(source_, "truncated: the file ends before " + what);
       const std::string token = content_.substr(begin, pos_ - begin);
       double v = 0.0;
       if (!parseDouble(token, &v)) fail(source_, what + ": '" + token + "' is not a number");
       return v;
     }
-    if (content_.size() - pos_ < type.size) fail(source_, "truncated: the file ends before " + what);
-    const double v =
-        loadScalar(reinterpret_cast<const unsigned char*>(content_.data()) + pos_, type, big_endian_);
+    if (content_.size() - pos_ < type.size)
+      fail(source_, "truncated: the file ends before " + what);
+    const double v = loadScalar(reinterpret_cast<const unsigned char*>(content_.data()) + pos_,
+                                type, big_endian_);
     pos_ += type.size;
     return v;
   }
@@ -557,7 +563,8 @@ class PlyBody {
   /// Throws unless only white space (ascii) or nothing (binary) is left.
   void expectEnd() {
     if (ascii_) {
-      while (pos_ < content_.size() && std::isspace(static_cast<unsigned char>(content_[pos_]))) ++pos_;
+      while (pos_ < content_.size() && std::isspace(static_cast<unsigned char>(content_[pos_])))
+        ++pos_;
     }
     if (pos_ != content_.size()) {
       fail(source_, std::to_string(content_.size() - pos_) +
@@ -578,7 +585,8 @@ class PlyBody {
 PointCloudFile parsePly(const std::string& content, const std::string& source) {
   std::size_t pos = 0;
   std::string line;
-  if (!nextLine(content, &pos, &line) || line != "ply") fail(source, "not a PLY file (no 'ply' first line)");
+  if (!nextLine(content, &pos, &line) || line != "ply")
+    fail(source, "not a PLY file (no 'ply' first line)");
   std::string format;
   std::vector<PlyElement> elements;
   int line_no = 1;
@@ -590,14 +598,16 @@ PointCloudFile parsePly(const std::string& content, const std::string& source) {
     if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
     if (w[0] == "end_header") break;
     if (w[0] == "format") {
-      if (w.size() != 3 || w[2] != "1.0") fail(source, where + ": expected 'format <encoding> 1.0'");
+      if (w.size() != 3 || w[2] != "1.0")
+        fail(source, where + ": expected 'format <encoding> 1.0'");
       format = w[1];
       if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian") {
         fail(source, where + ": unknown format '" + format + "'");
       }
     } else if (w[0] == "element") {
       std::uint64_t count = 0;
-      if (w.size() != 3 || !parseCount(w[2], &count)) fail(source, where + ": expected 'element <name> <count>'");
+      if (w.size() != 3 || !parseCount(w[2], &count))
+        fail(source, where + ": expected 'element <name> <count>'");
       elements.push_back({w[1], count, {}});
     } else if (w[0] == "property") {
       if (elements.empty()) fail(source, where + ": property before any element");
@@ -613,7 +623,9 @@ PointCloudFile parsePly(const std::string& content, const std::string& source) {
         p.name = w[2];
         if (!plyType(w[1], &p.type)) fail(source, where + ": unknown type '" + w[1] + "'");
       } else {
-        fail(source, where + ": expected 'property <type> <name>' or 'property list <count type> <type> <name>'");
+        fail(source, where +
+                         ": expected 'property <type> <name>' or 'property list <count type> "
+                         "<type> <name>'");
       }
       elements.back().properties.push_back(p);
     } else {
@@ -625,7 +637,8 @@ PointCloudFile parsePly(const std::string& content, const std::string& source) {
   // without properties takes none, so its count could only spin.
   for (const PlyElement& e : elements) {
     if (e.count > 0 && e.properties.empty()) {
-      fail(source, "PLY element '" + e.name + "' has " + std::to_string(e.count) + " items but no properties");
+      fail(source, "PLY element '" + e.name + "' has " + std::to_string(e.count) +
+                       " items but no properties");
     }
     if (e.count > content.size() - pos) {
       fail(source, "truncated: PLY element '" + e.name + "' declares " + std::to_string(e.count) +
@@ -649,7 +662,9 @@ PointCloudFile parsePly(const std::string& content, const std::string& source) {
     }
   }
   for (int a = 0; a < 3; ++a) {
-    if (xyz[a] < 0) fail(source, std::string("PLY vertex element has no property '") + static_cast<char>('x' + a) + "'");
+    if (xyz[a] < 0)
+      fail(source,
+           std::string("PLY vertex element has no property '") + static_cast<char>('x' + a) + "'");
   }
 
   PointCloudFile cloud;
@@ -670,7 +685,8 @@ PointCloudFile parsePly(const std::string& content, const std::string& source) {
           if (!(count >= 0.0) || count > 1e9 || count != std::floor(count)) {
             fail(source, what + ": bad list count " + std::to_string(count));
           }
-          for (std::uint64_t k = 0; k < static_cast<std::uint64_t>(count); ++k) body.next(p.type, what);
+          for (std::uint64_t k = 0; k < static_cast<std::uint64_t>(count); ++k)
+            body.next(p.type, what);
         } else {
           const double value = body.next(p.type, what);
           for (int a = 0; a < 3; ++a) {
@@ -721,7 +737,7 @@ PointCloudFile readPointCloudFile(const std::string& path) {
   if (!isPointCloudFileName(path)) throw std::runtime_error(path + ": not a .pcd or .ply file");
   const std::string content = readFileBytes(path);
   return lower(path.substr(path.size() - 4)) == ".pcd" ? parsePcd(content, path)
-                                                        : parsePly(content, path);
+                                                       : parsePly(content, path);
 }
 
 }  // namespace mlmap::datasets

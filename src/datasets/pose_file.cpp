@@ -47,7 +47,8 @@ double number(const std::string& token, const std::string& source, int line, con
   if (t.empty() || end != t.c_str() + t.size()) {
     throw std::runtime_error(at(source, line) + what + " '" + t + "' is not a number");
   }
-  if (!std::isfinite(v)) throw std::runtime_error(at(source, line) + what + " is not finite (" + t + ")");
+  if (!std::isfinite(v))
+    throw std::runtime_error(at(source, line) + what + " is not finite (" + t + ")");
   return v;
 }
 
@@ -101,7 +102,8 @@ int columnRole(std::string name, double* time_scale) {
       return 0;
     }
     for (const auto& u : kTimeUnits) {
-      if ((name == std::string(base) + "_" + u.suffix && unit.empty()) || (name == base && unit == u.suffix)) {
+      if ((name == std::string(base) + "_" + u.suffix && unit.empty()) ||
+          (name == base && unit == u.suffix)) {
         *time_scale = u.scale;
         return 0;
       }
@@ -131,7 +133,8 @@ std::vector<std::string> splitCsv(const std::string& line) {
   std::size_t start = 0;
   for (;;) {
     const std::size_t comma = line.find(',', start);
-    out.push_back(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    out.push_back(
+        line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
     if (comma == std::string::npos) return out;
     start = comma + 1;
   }
@@ -151,7 +154,8 @@ std::vector<StampedPose> parseTumPoses(const std::string& text, const std::strin
     std::string token;
     while (in >> token) tokens.push_back(token);
     if (tokens.size() != 8) {
-      throw std::runtime_error(at(source, line) + "expected 8 values 't tx ty tz qx qy qz qw', got " +
+      throw std::runtime_error(at(source, line) +
+                               "expected 8 values 't tx ty tz qx qy qz qw', got " +
                                std::to_string(tokens.size()));
     }
     static const char* kNames[] = {"t", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
@@ -177,13 +181,15 @@ std::vector<StampedPose> parseCsvPoses(const std::string& text, const std::strin
     const int role = columnRole(names[c], &scale);
     if (role < 0) continue;
     if (column[static_cast<std::size_t>(role)] >= 0) {
-      throw std::runtime_error(at(source, static_cast<int>(header + 1)) + "column '" + trim(names[c]) +
+      throw std::runtime_error(at(source, static_cast<int>(header + 1)) + "column '" +
+                               trim(names[c]) +
                                "' names a value that an earlier column already gives");
     }
     column[static_cast<std::size_t>(role)] = static_cast<int>(c);
     if (role == 0) time_scale = scale;
   }
-  static const char* kRoles[] = {"time (t, time, timestamp or stamp)", "x", "y", "z", "qx", "qy", "qz", "qw"};
+  static const char* kRoles[] = {
+      "time (t, time, timestamp or stamp)", "x", "y", "z", "qx", "qy", "qz", "qw"};
   for (std::size_t r = 0; r < 8; ++r) {
     if (column[r] < 0) {
       throw std::runtime_error(at(source, static_cast<int>(header + 1)) + "the CSV header has no " +
@@ -197,7 +203,8 @@ std::vector<StampedPose> parseCsvPoses(const std::string& text, const std::strin
     const std::vector<std::string> cells = splitCsv(all[i]);
     if (cells.size() != names.size()) {
       throw std::runtime_error(at(source, line) + "expected " + std::to_string(names.size()) +
-                               " comma-separated values (as the header), got " + std::to_string(cells.size()));
+                               " comma-separated values (as the header), got " +
+                               std::to_string(cells.size()));
     }
     std::array<double, 8> v{};
     for (std::size_t r = 0; r < 8; ++r) {
@@ -212,7 +219,8 @@ std::vector<StampedPose> parseCsvPoses(const std::string& text, const std::strin
 }
 
 PoseFileFormat detectPoseFileFormat(const std::string& path, const std::string& text) {
-  if (path.size() >= 4 && lower(path.substr(path.size() - 4)) == ".csv") return PoseFileFormat::kCsv;
+  if (path.size() >= 4 && lower(path.substr(path.size() - 4)) == ".csv")
+    return PoseFileFormat::kCsv;
   for (const std::string& line : lines(text)) {
     if (trim(line).empty()) continue;
     return line.find(',') != std::string::npos ? PoseFileFormat::kCsv : PoseFileFormat::kTum;
@@ -236,18 +244,20 @@ Transform parseTransformXyzQuat(const std::string& text) {
     char* end = nullptr;
     const double value = std::strtod(token.c_str(), &end);
     if (end != token.c_str() + token.size() || !std::isfinite(value)) {
-      throw std::invalid_argument("'" + token + "' is not a finite number (expected 'x y z qx qy qz qw')");
+      throw std::invalid_argument("'" + token +
+                                  "' is not a finite number (expected 'x y z qx qy qz qw')");
     }
     v.push_back(value);
   }
   if (v.size() != 7) {
-    throw std::invalid_argument("expected 7 numbers 'x y z qx qy qz qw', got " + std::to_string(v.size()));
+    throw std::invalid_argument("expected 7 numbers 'x y z qx qy qz qw', got " +
+                                std::to_string(v.size()));
   }
   Transform T = Transform::Identity();
   const Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
   if (!makePose(Eigen::Vector3d(v[0], v[1], v[2]), q, &T, kQuaternionNormTolerance)) {
-    throw std::invalid_argument("the quaternion (qx qy qz qw) has norm " + std::to_string(q.norm()) +
-                                ", not 1");
+    throw std::invalid_argument("the quaternion (qx qy qz qw) has norm " +
+                                std::to_string(q.norm()) + ", not 1");
   }
   return T;
 }

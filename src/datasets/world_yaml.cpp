@@ -313,7 +313,8 @@ Scenario parseRoot(const YAML::Node& root, const std::string& dir, int depth) {
 
 Scenario parseWithName(const std::string& text, const std::string& source_name,
                        const std::string& dir, int depth) {
-  const YAML::Node root = config::parseYamlDocument(text, source_name);  // one document, no duplicates
+  const YAML::Node root =
+      config::parseYamlDocument(text, source_name);  // one document, no duplicates
   try {
     return parseRoot(root, dir, depth);
   } catch (const ParseError& e) {

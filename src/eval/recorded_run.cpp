@@ -13,7 +13,9 @@ using Clock = SteadyClock;
 
 EngineObservers FrameTimer::observers() {
   EngineObservers o;
-  o.awareness = [this](const AwarenessMap&, double, const Transform&) { awareness_done_ = Clock::now(); };
+  o.awareness = [this](const AwarenessMap&, double, const Transform&) {
+    awareness_done_ = Clock::now();
+  };
   // After the local-global update and the planning layers, if any, of every mapped frame.
   o.global = [this](const GlobalMap&, double, std::uint64_t) { mapped_done_ = Clock::now(); };
   return o;
@@ -142,11 +144,12 @@ Json timingJson(const std::vector<FrameRecord>& frames) {
 Json memoryJson(const EngineStats& s, std::size_t peak_engine_bytes) {
   return {{"peak_rss", peakRssBytes()},
           {"engine_peak", peak_engine_bytes},
-          {"engine_final", {{"awareness", s.memory.awareness_bytes},
-                            {"local", s.memory.local_bytes},
-                            {"global", s.memory.global_bytes},
-                            {"planning", s.memory.planning_bytes},
-                            {"total", s.memory.total()}}}};
+          {"engine_final",
+           {{"awareness", s.memory.awareness_bytes},
+            {"local", s.memory.local_bytes},
+            {"global", s.memory.global_bytes},
+            {"planning", s.memory.planning_bytes},
+            {"total", s.memory.total()}}}};
 }
 
 /// stats.json's counters: the run's frames and points, then the engine's counters as

@@ -25,7 +25,7 @@ double megabytes(std::size_t bytes) { return static_cast<double>(bytes) / 1e6; }
 
 /// Voxel centres for the pictures, turned by `R_display_W` (identity, or optical -> FLU).
 pictures::VoxelList voxelList(const std::vector<VoxelIndex>& voxels, double res,
-                        const Eigen::Matrix3d& R_display_W) {
+                              const Eigen::Matrix3d& R_display_W) {
   pictures::VoxelList list{res, {}};
   list.centers_W.reserve(voxels.size());
   for (const VoxelIndex& v : voxels) list.centers_W.push_back(R_display_W * voxelCenter(v, res));
@@ -103,8 +103,9 @@ void setResolution(MapConfig* c, double resolution_m) {
 
 MapConfig runConfig(const std::string& config_path, DataKind kind, double resolution_m) {
   // mlmap_node's files work too: their dds and map_file sections do not concern the engine.
-  MapConfig config =
-      config_path.empty() ? MapConfig{} : config::loadConfigYaml(config_path, config::kNodeOnlySections);
+  MapConfig config = config_path.empty()
+                         ? MapConfig{}
+                         : config::loadConfigYaml(config_path, config::kNodeOnlySections);
   const bool frames = kind == DataKind::kFrameDirectory;
   if (resolution_m > 0.0 || config_path.empty()) {
     setResolution(&config, resolution_m > 0.0 ? resolution_m : (frames ? 0.02 : 0.1));
@@ -117,7 +118,8 @@ MapConfig runConfig(const std::string& config_path, DataKind kind, double resolu
   return config;
 }
 
-ScoredFlight flyAndScore(const datasets::Scenario& scenario, MapEngine& engine, const FlightOptions& options) {
+ScoredFlight flyAndScore(const datasets::Scenario& scenario, MapEngine& engine,
+                         const FlightOptions& options) {
   ScoredFlight s;
   s.flight = flyScenario(scenario, engine, options);
   const double res = engine.config().local_map.resolution_m;
@@ -156,16 +158,19 @@ std::vector<std::string> writeMapOutputs(const MapOutputs& outputs, const Engine
   const Accuracy* accuracy = outputs.scored != nullptr ? &outputs.scored->accuracy : nullptr;
   if (accuracy != nullptr) {
     pictures::VoxelList truth_list{res, {}};
-    for (const VoxelIndex& v : outputs.scored->truth) truth_list.centers_W.push_back(voxelCenter(v, res));
+    for (const VoxelIndex& v : outputs.scored->truth)
+      truth_list.centers_W.push_back(voxelCenter(v, res));
     char title[160];
     std::snprintf(title, sizeof(title), "occupied voxels vs ground truth, F1 %.3f (report.json)",
                   accuracy->f1);
     image_options.title = title;
-    pictures::writePng(out_dir + "/accuracy_top.png", pictures::renderComparison(list, truth_list, image_options));
+    pictures::writePng(out_dir + "/accuracy_top.png",
+                       pictures::renderComparison(list, truth_list, image_options));
     written.push_back("accuracy_top.png");
   }
 
-  writeJsonFile(out_dir + "/report.json", reportJson(outputs.source, s, occupied.size(), res, accuracy),
+  writeJsonFile(out_dir + "/report.json",
+                reportJson(outputs.source, s, occupied.size(), res, accuracy),
                 /*expanded_levels=*/1);
   written.push_back("report.json");
   return written;
@@ -194,29 +199,36 @@ void printHitsOutsideWindow(const EngineStats& s, const LogSink& log) {
 }
 
 void printSummary(const EngineStats& s, double res, const Accuracy* accuracy) {
-  std::printf("\n  frames mapped        %llu (rejected: pose %llu, order %llu, empty %llu; dropped %llu)\n",
-              static_cast<unsigned long long>(s.frames_mapped),
-              static_cast<unsigned long long>(s.rejected_invalid_pose),
-              static_cast<unsigned long long>(s.rejected_out_of_order),
-              static_cast<unsigned long long>(s.rejected_empty),
-              static_cast<unsigned long long>(s.frames_dropped));
+  std::printf(
+      "\n  frames mapped        %llu (rejected: pose %llu, order %llu, empty %llu; dropped %llu)\n",
+      static_cast<unsigned long long>(s.frames_mapped),
+      static_cast<unsigned long long>(s.rejected_invalid_pose),
+      static_cast<unsigned long long>(s.rejected_out_of_order),
+      static_cast<unsigned long long>(s.rejected_empty),
+      static_cast<unsigned long long>(s.frames_dropped));
   std::printf("  voxel size           %.3f m\n", res);
   std::printf("  per frame [ms]       median    p99\n");
   std::printf("    awareness          %7.2f %7.2f\n", s.awareness.median_ms, s.awareness.p99_ms);
-  std::printf("    local-global       %7.2f %7.2f\n", s.local_global.median_ms, s.local_global.p99_ms);
+  std::printf("    local-global       %7.2f %7.2f\n", s.local_global.median_ms,
+              s.local_global.p99_ms);
   std::printf("    total              %7.2f %7.2f\n", s.total.median_ms, s.total.p99_ms);
-  std::printf("  memory [MB]          awareness %.1f, local %.1f, global %.2f (%zu occupied voxels in %zu submaps)\n",
-              megabytes(s.memory.awareness_bytes), megabytes(s.memory.local_bytes),
-              megabytes(s.memory.global_bytes), s.global_voxels, s.global_submaps);
-  std::printf("  points               %llu in, %llu without data/NaN, %llu too close, %llu beyond range\n",
-              static_cast<unsigned long long>(s.points.points_in),
-              static_cast<unsigned long long>(s.points.rejected_non_finite),
-              static_cast<unsigned long long>(s.points.rejected_too_close),
-              static_cast<unsigned long long>(s.points.beyond_max_range));
+  std::printf(
+      "  memory [MB]          awareness %.1f, local %.1f, global %.2f (%zu occupied voxels in %zu "
+      "submaps)\n",
+      megabytes(s.memory.awareness_bytes), megabytes(s.memory.local_bytes),
+      megabytes(s.memory.global_bytes), s.global_voxels, s.global_submaps);
+  std::printf(
+      "  points               %llu in, %llu without data/NaN, %llu too close, %llu beyond range\n",
+      static_cast<unsigned long long>(s.points.points_in),
+      static_cast<unsigned long long>(s.points.rejected_non_finite),
+      static_cast<unsigned long long>(s.points.rejected_too_close),
+      static_cast<unsigned long long>(s.points.beyond_max_range));
   if (accuracy != nullptr) {
-    std::printf("  accuracy             precision %.4f, recall %.4f, F1 %.4f (%zu mapped, %zu observed true voxels)\n",
-                accuracy->precision, accuracy->recall, accuracy->f1, accuracy->mapped,
-                accuracy->observed_truth);
+    std::printf(
+        "  accuracy             precision %.4f, recall %.4f, F1 %.4f (%zu mapped, %zu observed "
+        "true voxels)\n",
+        accuracy->precision, accuracy->recall, accuracy->f1, accuracy->mapped,
+        accuracy->observed_truth);
   }
 }
 
@@ -243,7 +255,8 @@ void checkSaveMapTarget(const std::string& path, bool overwrite) {
 void saveMap(const MapEngine& engine, const std::string& path) {
   const auto start = std::chrono::steady_clock::now();
   io::saveMapFile(engine.exportState(), path);
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   std::printf("  saved the map to %s (%ju bytes, %.1f ms)\n", path.c_str(),
               static_cast<std::uintmax_t>(std::filesystem::file_size(path)), ms);
 }

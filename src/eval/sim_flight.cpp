@@ -20,11 +20,14 @@ bool touchesSolid(const sim::World& world, const VoxelIndex& v, double resolutio
   return world.intersectsBox(lo, lo + Eigen::Vector3d::Constant(resolution_m), 1e-6);
 }
 
-int frameCount(const datasets::Scenario& scenario) { return datasets::SimulatedFlightSource::frameCount(scenario); }
+int frameCount(const datasets::Scenario& scenario) {
+  return datasets::SimulatedFlightSource::frameCount(scenario);
+}
 
 double frameTime(const datasets::Scenario& scenario, int i) { return i / scenario.frame_rate_hz; }
 
-void ObservedTruth::observe(const DepthFrame& frame, const sim::World& world, const MapConfig& config) {
+void ObservedTruth::observe(const DepthFrame& frame, const sim::World& world,
+                            const MapConfig& config) {
   // Voxels of measured points whose interior overlaps a static solid. A voxel that only touches a
   // surface with a face (a floor at z = 0 under the voxel layer [0, res)) is empty inside: it is
   // not required, and accepted if mapped.
@@ -53,8 +56,8 @@ FlightResult flyScenario(const datasets::Scenario& scenario, MapEngine& engine,
   datasets::SimulatedTiming timing;
   timing.start_time_s = options.start_time_s;
   const datasets::SimulatedFlightSource source(scenario, engine.config().sensor.T_B_S(), timing);
-  const int planned = static_cast<int>(std::min<std::size_t>(source.size(),
-                                                             static_cast<std::size_t>(std::max(options.max_frames, 0))));
+  const int planned = static_cast<int>(std::min<std::size_t>(
+      source.size(), static_cast<std::size_t>(std::max(options.max_frames, 0))));
   std::vector<double> render_ms;
   ObservedTruth truth;
   for (int i = 0; i < planned; ++i) {
@@ -86,7 +89,8 @@ Accuracy scoreOccupancy(const std::vector<VoxelIndex>& mapped, const VoxelSet& o
     if (touchesSolid(world, v, resolution_m)) ++a.true_positives;
     if (observed_truth.count(v)) ++a.recalled;
   }
-  a.precision = a.mapped ? static_cast<double>(a.true_positives) / static_cast<double>(a.mapped) : 0.0;
+  a.precision =
+      a.mapped ? static_cast<double>(a.true_positives) / static_cast<double>(a.mapped) : 0.0;
   a.recall = a.observed_truth
                  ? static_cast<double>(a.recalled) / static_cast<double>(a.observed_truth)
                  : 0.0;

@@ -87,15 +87,14 @@ FleetMap::MemoryAfter FleetMap::memoryAfter(int index, const SubmapIndex& m,
       (c.vehicle == index ? held_records : other_records) += c.records.size();
     }
   }
-  const bool contributes = it != submaps_.end() &&
-                           std::any_of(it->second.contributions.begin(),
-                                       it->second.contributions.end(),
-                                       [index](const Contribution& c) { return c.vehicle == index; });
+  const bool contributes =
+      it != submaps_.end() &&
+      std::any_of(it->second.contributions.begin(), it->second.contributions.end(),
+                  [index](const Contribution& c) { return c.vehicle == index; });
   const std::size_t held_bytes = contributes ? contributionBytes(held_records) : 0;
-  const std::size_t vehicle_now =
-      index >= 0 && static_cast<std::size_t>(index) < vehicles_.size()
-          ? vehicles_[static_cast<std::size_t>(index)].memory_bytes
-          : 0;
+  const std::size_t vehicle_now = index >= 0 && static_cast<std::size_t>(index) < vehicles_.size()
+                                      ? vehicles_[static_cast<std::size_t>(index)].memory_bytes
+                                      : 0;
   // The fused voxels of the submap afterwards: at most one per offset any contribution holds.
   const auto submap_voxels = static_cast<std::size_t>(submap_cells_.x()) *
                              static_cast<std::size_t>(submap_cells_.y()) *
@@ -105,9 +104,9 @@ FleetMap::MemoryAfter FleetMap::memoryAfter(int index, const SubmapIndex& m,
   after.vehicle_bytes = vehicle_now - held_bytes + contributionBytes(voxels);
   // A new submap may rehash the table: libstdc++ grows it to the next prime past twice its
   // buckets, below three per submap.
-  const std::size_t buckets =
-      it == submaps_.end() ? std::max(submaps_.bucket_count(), 3 * (submaps_.size() + 1))
-                           : submaps_.bucket_count();
+  const std::size_t buckets = it == submaps_.end()
+                                  ? std::max(submaps_.bucket_count(), 3 * (submaps_.size() + 1))
+                                  : submaps_.bucket_count();
   after.fleet_bytes = held_bytes_ - held_bytes + contributionBytes(voxels) +
                       fused_growth * sizeof(FleetVoxel) +
                       (it == submaps_.end() ? nodeBytes<Entry>() : 0) + buckets * sizeof(void*);
@@ -184,8 +183,8 @@ void FleetMap::fuse(Entry* entry) {
       // A vehicle whose evidence lowers the voxel (free evidence) is no provenance of it.
       if (items[j].log_odds > 0) bits |= std::uint64_t{1} << items[j].vehicle;
     }
-    const auto clamped = static_cast<LogOddsQ>(
-        std::clamp<int>(sum, model_.clampMin(), model_.clampMax()));
+    const auto clamped =
+        static_cast<LogOddsQ>(std::clamp<int>(sum, model_.clampMin(), model_.clampMax()));
     // Only occupied fused voxels are kept: the map holds what the fleet claims occupied.
     if (model_.isOccupied(clamped)) entry->fused.push_back({items[i].offset, clamped, bits});
     i = j;

@@ -70,7 +70,7 @@ SubmapDecodeError parseRaw(const std::uint8_t* data, std::size_t size, std::uint
   }
   if (size - pos != std::size_t{count} * sizeof(LogOddsQ)) {
     return size - pos < std::size_t{count} * sizeof(LogOddsQ) ? SubmapDecodeError::kSizeMismatch
-                                                               : SubmapDecodeError::kTrailingBytes;
+                                                              : SubmapDecodeError::kTrailingBytes;
   }
   for (std::uint32_t i = 0; i < count; ++i, pos += 2) {
     const auto u = static_cast<std::uint16_t>(data[pos] | (data[pos + 1] << 8));

@@ -68,10 +68,10 @@ GlobalMapDelta collectGlobalDelta(const GlobalMap& map, std::uint64_t since) {
     delta.cleared = true;
     since = 0;
   }
-  map.forEachSubmapModifiedAfter(since, [&](const SubmapIndex& m,
-                                            const std::vector<VoxelRecord>* records) {
-    delta.changed.emplace_back(m, records != nullptr ? *records : std::vector<VoxelRecord>{});
-  });
+  map.forEachSubmapModifiedAfter(
+      since, [&](const SubmapIndex& m, const std::vector<VoxelRecord>* records) {
+        delta.changed.emplace_back(m, records != nullptr ? *records : std::vector<VoxelRecord>{});
+      });
   return delta;
 }
 

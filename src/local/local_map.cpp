@@ -65,22 +65,24 @@ bool LocalMap::missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint
     bits &= ~(std::uint64_t{0xFF} << k);
     LogOddsQ* p = column + t;
     const __m128i v = _mm_xor_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(p)), sign_bit);
-    const __m128i selected =
-        _mm_cmpeq_epi16(_mm_and_si128(_mm_set1_epi16(static_cast<short>(lanes)), lane_bits), lane_bits);
+    const __m128i selected = _mm_cmpeq_epi16(
+        _mm_and_si128(_mm_set1_epi16(static_cast<short>(lanes)), lane_bits), lane_bits);
     const __m128i was_unknown = _mm_cmpeq_epi16(v, unknown);
     // Unknown counts as 0; a saturating sum, so that the clamps see what the int sum would be.
-    const __m128i updated =
-        _mm_min_epi16(_mm_max_epi16(_mm_adds_epi16(_mm_andnot_si128(was_unknown, v), miss), lo), hi);
-    const __m128i out = _mm_or_si128(_mm_and_si128(selected, updated), _mm_andnot_si128(selected, v));
+    const __m128i updated = _mm_min_epi16(
+        _mm_max_epi16(_mm_adds_epi16(_mm_andnot_si128(was_unknown, v), miss), lo), hi);
+    const __m128i out =
+        _mm_or_si128(_mm_and_si128(selected, updated), _mm_andnot_si128(selected, v));
     _mm_storeu_si128(reinterpret_cast<__m128i*>(p), _mm_xor_si128(out, sign_bit));
     const __m128i changed = _mm_andnot_si128(_mm_cmpeq_epi16(out, v), selected);
     int changed8 = _mm_movemask_epi8(_mm_packs_epi16(changed, zero));
     if (changed8 == 0) continue;  // all saturated already: the common case in mapped space
     any_changed = true;
     // Unknown -> known, or across the occupied threshold (unknown is never above it).
-    const __m128i crossed = _mm_xor_si128(_mm_cmpgt_epi16(v, occupied), _mm_cmpgt_epi16(out, occupied));
-    const int state8 =
-        _mm_movemask_epi8(_mm_packs_epi16(_mm_and_si128(changed, _mm_or_si128(was_unknown, crossed)), zero));
+    const __m128i crossed =
+        _mm_xor_si128(_mm_cmpgt_epi16(v, occupied), _mm_cmpgt_epi16(out, occupied));
+    const int state8 = _mm_movemask_epi8(
+        _mm_packs_epi16(_mm_and_si128(changed, _mm_or_si128(was_unknown, crossed)), zero));
     const std::uint8_t* lane_submap = submap_of_torus_z_.data() + t;
     if (two_submaps_per_8_lanes) {
       // The eight lanes lie in at most two submaps, lower lanes in the lower one: the submaps of
@@ -122,7 +124,8 @@ bool LocalMap::anyOccupied(const LogOddsQ* column) const {
   const __m128i sign_bit = _mm_set1_epi16(kUnknownLogOdds);
   __m128i any = _mm_setzero_si128();
   for (; k + 8 <= nz; k += 8) {
-    const __m128i v = _mm_xor_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(column + k)), sign_bit);
+    const __m128i v =
+        _mm_xor_si128(_mm_loadu_si128(reinterpret_cast<const __m128i*>(column + k)), sign_bit);
     any = _mm_or_si128(any, _mm_cmpgt_epi16(v, above));
   }
   if (_mm_movemask_epi8(any) != 0) return true;
@@ -146,7 +149,8 @@ LocalMap::LocalMap(const LocalMapConfig& config, const LogOddsConfig& log_odds)
                              LocalMapConfig::kSubmapsPerAxis * LocalMapConfig::kSubmapsPerAxis,
                          0),
       submap_state_changed_at_(submap_changed_at_.size(), 0),
-      column_changed_at_(static_cast<std::size_t>(size_.x()) * static_cast<std::size_t>(size_.y()), 0),
+      column_changed_at_(static_cast<std::size_t>(size_.x()) * static_cast<std::size_t>(size_.y()),
+                         0),
       submap_of_torus_x_(static_cast<std::size_t>(size_.x())),
       submap_of_torus_y_(static_cast<std::size_t>(size_.y())),
       submap_of_torus_z_(static_cast<std::size_t>(size_.z())),
@@ -211,7 +215,8 @@ void LocalMap::retireSubmap(const SubmapIndex& m, GlobalMap* global) {
                       static_cast<std::size_t>(t0.z());
       if (y + kAhead < submap_.y()) __builtin_prefetch(row + kAhead * nz, 1);
       for (int z = 0; z < submap_.z(); ++z, ++offset) {
-        if (row[z] == 0) continue;  // unknown already: never written, so a page never touched stays so
+        if (row[z] == 0)
+          continue;  // unknown already: never written, so a page never touched stays so
         const LogOddsQ v = flipUnknown(row[z]);
         if (model_.isOccupied(v)) scratch_.push_back({offset, v});
         row[z] = 0;  // unknown, stored
@@ -262,10 +267,11 @@ void LocalMap::restoreSubmap(const SubmapIndex& m, GlobalMap* global) {
     const int x = static_cast<int>(r.offset / plane);
     const int y = static_cast<int>((r.offset % plane) / static_cast<std::uint32_t>(submap_.z()));
     const int z = static_cast<int>(r.offset % static_cast<std::uint32_t>(submap_.z()));
-    const std::size_t torus_column = static_cast<std::size_t>(t0.x() + x) * static_cast<std::size_t>(size_.y()) +
-                                     static_cast<std::size_t>(t0.y() + y);
-    cells_[torus_column * static_cast<std::size_t>(size_.z()) + static_cast<std::size_t>(t0.z() + z)] =
-        flipUnknown(r.log_odds);
+    const std::size_t torus_column =
+        static_cast<std::size_t>(t0.x() + x) * static_cast<std::size_t>(size_.y()) +
+        static_cast<std::size_t>(t0.y() + y);
+    cells_[torus_column * static_cast<std::size_t>(size_.z()) +
+           static_cast<std::size_t>(t0.z() + z)] = flipUnknown(r.log_odds);
     markMayHoldOccupied(torus_column);
   }
   ++counters_.submaps_restored;
@@ -323,7 +329,8 @@ std::string windowProblem(const LocalWindow& window, const Eigen::Vector3i& size
   for (int a = 0; a < 3; ++a) {
     const std::int64_t lo = window.min_index[a];
     if (lo < -kMaxAbsWindowVoxelIndex || lo + size[a] > kMaxAbsWindowVoxelIndex) {
-      m << "first voxel " << window.min_index.transpose() << " is beyond +-" << kMaxAbsWindowVoxelIndex;
+      m << "first voxel " << window.min_index.transpose() << " is beyond +-"
+        << kMaxAbsWindowVoxelIndex;
       return m.str();
     }
     if (((lo % submap_cells[a]) + submap_cells[a]) % submap_cells[a] != 0) {
@@ -436,7 +443,8 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
   const std::uint64_t now = ++change_clock_;
   // A voxel d = g - minIndex() inside the window sits at torus (first + d) per axis, wrapped
   // once: no division per hit (the slot() of a hit and its submap took a dozen).
-  const Eigen::Vector3i torus_first(floorMod(min_index_.x(), size_.x()), floorMod(min_index_.y(), size_.y()),
+  const Eigen::Vector3i torus_first(floorMod(min_index_.x(), size_.x()),
+                                    floorMod(min_index_.y(), size_.y()),
                                     floorMod(min_index_.z(), size_.z()));
   const auto ny = static_cast<std::size_t>(size_.y());
   const auto nz = static_cast<std::size_t>(size_.z());
@@ -464,9 +472,11 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
       }
       columns[i] = static_cast<std::size_t>(t.x()) * ny + static_cast<std::size_t>(t.y());
       cells[i] = columns[i] * nz + static_cast<std::size_t>(t.z());
-      submaps[i] = (static_cast<std::size_t>(submap_of_torus_x_[static_cast<std::size_t>(t.x())]) * kStride +
-                    submap_of_torus_y_[static_cast<std::size_t>(t.y())]) * kStride +
-                   submap_of_torus_z_[static_cast<std::size_t>(t.z())];
+      submaps[i] =
+          (static_cast<std::size_t>(submap_of_torus_x_[static_cast<std::size_t>(t.x())]) * kStride +
+           submap_of_torus_y_[static_cast<std::size_t>(t.y())]) *
+              kStride +
+          submap_of_torus_z_[static_cast<std::size_t>(t.z())];
       __builtin_prefetch(&cells_[cells[i]]);
     }
     for (std::size_t i = 0; i < n; ++i) {
@@ -503,9 +513,11 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
   // Rows outside the free set's marked ones hold no bit.
   const VoxelBitset::Rows& marked = free.markedRows();
   const Eigen::Vector3i first =
-      (min_index_ - origin).cwiseMax(Eigen::Vector3i(marked.x_begin, marked.y_begin, 0));  // box-relative
+      (min_index_ - origin)
+          .cwiseMax(Eigen::Vector3i(marked.x_begin, marked.y_begin, 0));  // box-relative
   const Eigen::Vector3i end =
-      (min_index_ + size_ - origin).cwiseMin(Eigen::Vector3i(marked.x_end, marked.y_end, dims.z()));  // exclusive
+      (min_index_ + size_ - origin)
+          .cwiseMin(Eigen::Vector3i(marked.x_end, marked.y_end, dims.z()));  // exclusive
   const int split = floorMod(min_index_.z(), size_.z());  // torus z of the window's first layer
   const int to_window_z = origin.z() - min_index_.z();    // bit k is window layer k + to_window_z
   std::uint64_t applied = 0;
@@ -537,7 +549,8 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
       // The column's submaps in the stamp arrays (torus slot x, y; z per voxel).
       const std::size_t column_submaps =
           (static_cast<std::size_t>(submap_of_torus_x_[static_cast<std::size_t>(sx)]) * kStride +
-           submap_of_torus_y_[static_cast<std::size_t>(sy)]) * kStride;
+           submap_of_torus_y_[static_cast<std::size_t>(sy)]) *
+          kStride;
       std::uint64_t* submaps_changed_at = submap_changed_at_.data() + column_submaps;
       std::uint64_t* submaps_state_changed_at = submap_state_changed_at_.data() + column_submaps;
       bool column_changed = false;
@@ -549,12 +562,13 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
         // are masked out, so every set bit lands in [0, nz)).
         const int base = split + 64 * w + to_window_z;
         const int wrap = size_.z() - base;  // the first bit past the wrap
-        const std::uint64_t before_wrap =
-            wrap >= 64 ? bits : wrap <= 0 ? 0 : bits & ((std::uint64_t{1} << wrap) - 1);
+        const std::uint64_t before_wrap = wrap >= 64  ? bits
+                                          : wrap <= 0 ? 0
+                                                      : bits & ((std::uint64_t{1} << wrap) - 1);
         // Past the wrap is rare: no call (and no setting up of its constants) for nothing.
         if (before_wrap != 0) {
-          column_changed |= missRun(column, base, before_wrap, now, submaps_changed_at,
-                                    submaps_state_changed_at);
+          column_changed |=
+              missRun(column, base, before_wrap, now, submaps_changed_at, submaps_state_changed_at);
         }
         if (bits != before_wrap) {
           column_changed |= missRun(column, base - size_.z(), bits & ~before_wrap, now,

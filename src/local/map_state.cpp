@@ -48,13 +48,15 @@ std::vector<std::string> mapStateProblems(const MapState& state) {
   const LocalWindow& w = state.window;
 
   // The window: empty, or the configured size on the submap grid, every value in bounds.
-  const std::string window_problem = windowProblem(w, state.local_map.size_cells, submap_cells, model);
+  const std::string window_problem =
+      windowProblem(w, state.local_map.size_cells, submap_cells, model);
   const bool window_ok = window_problem.empty();
   if (!window_ok) problems.push_back("local map window: " + window_problem);
 
   // Global submaps: in range, each once, none inside the window; records inside the submap,
   // strictly increasing, occupied and within the clamping bound.
-  const std::int64_t submap_voxels = std::int64_t{submap_cells.x()} * submap_cells.y() * submap_cells.z();
+  const std::int64_t submap_voxels =
+      std::int64_t{submap_cells.x()} * submap_cells.y() * submap_cells.z();
   std::vector<SubmapIndex> seen;
   seen.reserve(state.global_submaps.size());
   for (const auto& [m, records] : state.global_submaps) {

@@ -53,7 +53,8 @@ std::vector<OccupiedVoxel> occupiedVoxels(const MapState& state) {
     for (const VoxelRecord& r : records) {
       const int x = static_cast<int>(r.offset / plane);
       const int rest = static_cast<int>(r.offset % plane);
-      out.push_back({base + VoxelIndex(x, rest / s.z(), rest % s.z()), dequantizeLogOdds(r.log_odds), true});
+      out.push_back(
+          {base + VoxelIndex(x, rest / s.z(), rest % s.z()), dequantizeLogOdds(r.log_odds), true});
     }
   }
   return out;
@@ -78,7 +79,8 @@ ProjectedGrid projectMap(const MapState& state, const ProjectedGridConfig& confi
       const SubmapIndex& m = entry.first;
       const double z_lo = static_cast<double>(m.z()) * cells.z();
       if (z_lo + cells.z() <= k0 || z_lo >= k1) continue;
-      const Eigen::Vector2d a = m.head<2>().cast<double>().cwiseProduct(cells.head<2>().cast<double>());
+      const Eigen::Vector2d a =
+          m.head<2>().cast<double>().cwiseProduct(cells.head<2>().cast<double>());
       lo = lo.cwiseMin(a);
       hi = hi.cwiseMax(a + cells.head<2>().cast<double>());
     }
@@ -92,7 +94,8 @@ ProjectedGrid projectMap(const MapState& state, const ProjectedGridConfig& confi
     }
   }
   GlobalMap global(state.local_map.submap_cells(), state.local_map.resolution_m);
-  for (const auto& [m, records] : state.global_submaps) global.store(m, std::vector<VoxelRecord>(records));
+  for (const auto& [m, records] : state.global_submaps)
+    global.store(m, std::vector<VoxelRecord>(records));
   ProjectedGrid grid;
   projectToGrid(state.window, &global, config, state.T_W_B.translation().z(), &grid);
   return grid;
@@ -168,11 +171,13 @@ std::string encodeGridYaml(const ProjectedGrid& grid, const std::string& image_n
   return y.str();
 }
 
-void writePly(const std::vector<OccupiedVoxel>& voxels, double resolution_m, const std::string& path) {
+void writePly(const std::vector<OccupiedVoxel>& voxels, double resolution_m,
+              const std::string& path) {
   writeFileAtomically(path, encodePly(voxels, resolution_m));
 }
 
-void writePcd(const std::vector<OccupiedVoxel>& voxels, double resolution_m, const std::string& path) {
+void writePcd(const std::vector<OccupiedVoxel>& voxels, double resolution_m,
+              const std::string& path) {
   writeFileAtomically(path, encodePcd(voxels, resolution_m));
 }
 

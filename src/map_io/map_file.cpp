@@ -34,7 +34,8 @@ class Writer {
   void integer(T v) {
     using U = std::make_unsigned_t<T>;
     const U u = static_cast<U>(v);
-    for (std::size_t i = 0; i < sizeof(T); ++i) out_->push_back(static_cast<char>((u >> (8 * i)) & 0xFFu));
+    for (std::size_t i = 0; i < sizeof(T); ++i)
+      out_->push_back(static_cast<char>((u >> (8 * i)) & 0xFFu));
   }
   void real(double v) {
     std::uint64_t u = 0;
@@ -57,7 +58,8 @@ class Reader {
     using U = std::make_unsigned_t<T>;
     U u = 0;
     for (std::size_t i = 0; i < sizeof(T); ++i) {
-      u = static_cast<U>(u | (static_cast<U>(static_cast<std::uint8_t>(data_[pos_ + i])) << (8 * i)));
+      u = static_cast<U>(u |
+                         (static_cast<U>(static_cast<std::uint8_t>(data_[pos_ + i])) << (8 * i)));
     }
     pos_ += sizeof(T);
     return static_cast<T>(u);
@@ -86,7 +88,8 @@ void writeFingerprintFields(Writer& w, const LocalMapConfig& local_map, const Lo
 }
 
 std::string errnoText(const std::string& step, int err) {
-  return step + ": " + std::generic_category().message(err);  // not strerror: clang-tidy concurrency-mt-unsafe
+  return step + ": " +
+         std::generic_category().message(err);  // not strerror: clang-tidy concurrency-mt-unsafe
 }
 
 }  // namespace
@@ -266,11 +269,13 @@ void readConfiguration(const std::string& source, Reader* r, MapState* state) {
   std::vector<std::string> config_errors;
   state->local_map.validate(&config_errors);
   lo.validate(&config_errors);
-  if (!config_errors.empty()) refuse(source, "invalid configuration in the header: " + config_errors[0]);
+  if (!config_errors.empty())
+    refuse(source, "invalid configuration in the header: " + config_errors[0]);
 }
 
 /// The rest of the header: stamp, pose, frame count, the window's place and the section sizes.
-void readHeaderFields(const std::string& source, Reader* r, MapState* state, MapFileLayout* layout) {
+void readHeaderFields(const std::string& source, Reader* r, MapState* state,
+                      MapFileLayout* layout) {
   state->has_last_stamp = r->integer<std::uint8_t>() != 0;
   layout->placed = r->integer<std::uint8_t>() != 0;
   (void)r->integer<std::uint16_t>();
@@ -295,8 +300,8 @@ void checkSections(const std::string& bytes, const std::string& source, const Ma
   l->window_voxels = l->placed ? static_cast<std::size_t>(state.local_map.size_cells.prod()) : 0;
   if (l->local_bytes < 4 || l->local_bytes > l->total || (l->placed && l->local_bytes < 12) ||
       l->local_bytes > l->window_voxels * (sizeof(LogOddsQ) + 8) + 4) {
-    refuse(source, "local section of " + std::to_string(l->local_bytes) + " bytes for a window of " +
-                       std::to_string(l->window_voxels) + " voxels");
+    refuse(source, "local section of " + std::to_string(l->local_bytes) +
+                       " bytes for a window of " + std::to_string(l->window_voxels) + " voxels");
   }
   const std::uint64_t rest = l->total - kHeaderBytes - l->local_bytes - sizeof kTrailer;
   if (l->total < kHeaderBytes + l->local_bytes + sizeof kTrailer ||
@@ -341,7 +346,8 @@ void readLocalWindow(const std::string& bytes, const std::string& source, const 
       break;
     }
     filled += unknown;
-    for (std::uint32_t k = 0; k < known; ++k) state->window.log_odds[filled++] = lr.integer<std::int16_t>();
+    for (std::uint32_t k = 0; k < known; ++k)
+      state->window.log_odds[filled++] = lr.integer<std::int16_t>();
   }
   if (filled != l.window_voxels || lr.pos() != end) {
     refuse(source, "local map: its runs do not cover the " + std::to_string(l.window_voxels) +
@@ -370,7 +376,8 @@ void readGlobalSubmaps(const std::string& bytes, const std::string& source, cons
   }
   if (voxels_read != l.global_voxels) {
     refuse(source, "global map: " + std::to_string(voxels_read) +
-                       " voxels in the submaps, the header announces " + std::to_string(l.global_voxels));
+                       " voxels in the submaps, the header announces " +
+                       std::to_string(l.global_voxels));
   }
 }
 
@@ -392,7 +399,8 @@ MapState decodeMapFile(const std::string& bytes, const std::string& source) {
   return state;
 }
 
-void checkMapMatchesConfig(const MapState& state, const MapConfig& config, const std::string& source) {
+void checkMapMatchesConfig(const MapState& state, const MapConfig& config,
+                           const std::string& source) {
   const std::vector<std::string> differences = mapConfigDifferences(state, config);
   if (differences.empty()) return;
   std::ostringstream m;
@@ -480,8 +488,9 @@ MapState loadMapFile(const std::string& path) {
     bytes->resize(to);
     in.read(bytes->data() + from, static_cast<std::streamsize>(to - from));
     if (static_cast<std::size_t>(in.gcount()) != to - from) {
-      refuse(path, "read error after " + std::to_string(from + static_cast<std::size_t>(in.gcount())) +
-                       " of " + std::to_string(file_bytes) + " bytes (did the file change?)");
+      refuse(path, "read error after " +
+                       std::to_string(from + static_cast<std::size_t>(in.gcount())) + " of " +
+                       std::to_string(file_bytes) + " bytes (did the file change?)");
     }
   };
   std::string bytes;

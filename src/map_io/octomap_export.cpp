@@ -40,7 +40,8 @@ OctomapExportCounts writeOctomapBinary(const MapState& state, const std::string&
       ++counts.out_of_range;
       continue;
     }
-    tree.setNodeValue(key, std::max(static_cast<float>(v.log_odds), tree.getOccupancyThresLog()), true);
+    tree.setNodeValue(key, std::max(static_cast<float>(v.log_odds), tree.getOccupancyThresLog()),
+                      true);
     ++counts.occupied;
   }
   const LocalWindow& w = state.window;
@@ -53,7 +54,8 @@ OctomapExportCounts writeOctomapBinary(const MapState& state, const std::string&
           ++counts.out_of_range;
           continue;
         }
-        tree.setNodeValue(key, std::min(static_cast<float>(dequantizeLogOdds(w.at(g))), free_max), true);
+        tree.setNodeValue(key, std::min(static_cast<float>(dequantizeLogOdds(w.at(g))), free_max),
+                          true);
         ++counts.free;
       }
     }

@@ -16,7 +16,8 @@ std::vector<VoxelIndex> sortedUnique(std::vector<VoxelIndex> voxels) {
     return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
   };
   // A local map lists its voxels in this order already (a replay whose window held everything).
-  if (!std::is_sorted(voxels.begin(), voxels.end(), less)) std::sort(voxels.begin(), voxels.end(), less);
+  if (!std::is_sorted(voxels.begin(), voxels.end(), less))
+    std::sort(voxels.begin(), voxels.end(), less);
   voxels.erase(std::unique(voxels.begin(), voxels.end()), voxels.end());
   return voxels;
 }

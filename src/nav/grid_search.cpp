@@ -56,7 +56,8 @@ PlanningGrid inflateGrid(const ProjectedGrid& grid, double radius_m, UnknownAs u
   std::vector<Eigen::Vector2i> disc;
   for (int dy = -reach; dy <= reach; ++dy) {
     for (int dx = -reach; dx <= reach; ++dx) {
-      if (static_cast<double>(dx * dx + dy * dy) <= r_cells * r_cells + 1e-9) disc.emplace_back(dx, dy);
+      if (static_cast<double>(dx * dx + dy * dy) <= r_cells * r_cells + 1e-9)
+        disc.emplace_back(dx, dy);
     }
   }
   const bool unknown_blocks = unknown == UnknownAs::kOccupied;
@@ -190,7 +191,8 @@ std::vector<Eigen::Vector2d> shortenPath(const PlanningGrid& grid,
 
 double polylineLength(const std::vector<Eigen::Vector2d>& points_W) {
   double length = 0.0;
-  for (std::size_t i = 1; i < points_W.size(); ++i) length += (points_W[i] - points_W[i - 1]).norm();
+  for (std::size_t i = 1; i < points_W.size(); ++i)
+    length += (points_W[i] - points_W[i - 1]).norm();
   return length;
 }
 

@@ -8,7 +8,8 @@ namespace mlmap::nav {
 
 double polylineLength(const std::vector<Eigen::Vector3d>& points_W) {
   double length = 0.0;
-  for (std::size_t i = 1; i < points_W.size(); ++i) length += (points_W[i] - points_W[i - 1]).norm();
+  for (std::size_t i = 1; i < points_W.size(); ++i)
+    length += (points_W[i] - points_W[i - 1]).norm();
   return length;
 }
 
@@ -81,13 +82,15 @@ void pushAwayFromObstacles(const MapSnapshot& map, const LocalPlannerConfig& con
       const double step = std::min(0.5 * (config.push_clearance_m - q.distance_m), 0.1);
       Eigen::Vector3d moved = p + g.normalized() * step;
       const Eigen::Vector3d offset = moved - original;
-      if (offset.norm() > config.max_push_m) moved = original + offset.normalized() * config.max_push_m;
+      if (offset.norm() > config.max_push_m)
+        moved = original + offset.normalized() * config.max_push_m;
       p = moved;
     }
   }
 }
 
-double nearestPointDistance(const std::vector<Eigen::Vector3d>& points_W, const Eigen::Vector3d& p_W) {
+double nearestPointDistance(const std::vector<Eigen::Vector3d>& points_W,
+                            const Eigen::Vector3d& p_W) {
   double best = std::numeric_limits<double>::infinity();
   for (const Eigen::Vector3d& q : points_W) best = std::min(best, (q - p_W).squaredNorm());
   return std::sqrt(best);
@@ -103,7 +106,8 @@ std::size_t committablePrefix(const MapSnapshot& map, const LocalPlannerConfig& 
       here.valid ? std::min(config.commit_clearance_m, here.distance_m) : config.commit_clearance_m;
   const bool recent = recent_obstacles_W != nullptr && !recent_obstacles_W->empty();
   const double required_recent =
-      recent ? std::min(config.commit_clearance_m, nearestPointDistance(*recent_obstacles_W, p0)) : 0.0;
+      recent ? std::min(config.commit_clearance_m, nearestPointDistance(*recent_obstacles_W, p0))
+             : 0.0;
   std::size_t n = 1;
   for (std::size_t i = 1; i < points_W.size(); ++i) {
     Eigen::Vector3d a = points_W[i - 1];

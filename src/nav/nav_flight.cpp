@@ -96,8 +96,8 @@ NavFlightResult flyToGoal(const NavWorld& world, const NavFlightOptions& options
       frame.T_W_B = state.T_W_B();
       frame.T_B_S = T_B_S;
       backProject(frame, &points_S);
-      navigator.setRecentObstacles(
-          recentObstacles(points_S, frame.T_W_B * T_B_S, flight_z, options.map.local_map.resolution_m));
+      navigator.setRecentObstacles(recentObstacles(points_S, frame.T_W_B * T_B_S, flight_z,
+                                                   options.map.local_map.resolution_m));
       const double cpu1 = threadCpu_s();
       submitted = std::chrono::steady_clock::now();
       if (engine.submit(std::move(frame)) == FrameStatus::kAccepted) ++result.frames;

@@ -20,16 +20,22 @@ constexpr int kMaxAttempts = 50;
 /// Floor slab (top at z = 0) and four walls around [min, max].
 void addFloorAndWalls(sim::World* world, const Eigen::Vector2d& min, const Eigen::Vector2d& max) {
   const double t = kWallThickness_m;
-  world->addBox({Eigen::Vector3d(min.x() - t, min.y() - t, -0.2), Eigen::Vector3d(max.x() + t, max.y() + t, 0.0)});
-  world->addBox({Eigen::Vector3d(min.x() - t, min.y() - t, 0.0), Eigen::Vector3d(max.x() + t, min.y(), kWallHeight_m)});
-  world->addBox({Eigen::Vector3d(min.x() - t, max.y(), 0.0), Eigen::Vector3d(max.x() + t, max.y() + t, kWallHeight_m)});
-  world->addBox({Eigen::Vector3d(min.x() - t, min.y(), 0.0), Eigen::Vector3d(min.x(), max.y(), kWallHeight_m)});
-  world->addBox({Eigen::Vector3d(max.x(), min.y(), 0.0), Eigen::Vector3d(max.x() + t, max.y(), kWallHeight_m)});
+  world->addBox({Eigen::Vector3d(min.x() - t, min.y() - t, -0.2),
+                 Eigen::Vector3d(max.x() + t, max.y() + t, 0.0)});
+  world->addBox({Eigen::Vector3d(min.x() - t, min.y() - t, 0.0),
+                 Eigen::Vector3d(max.x() + t, min.y(), kWallHeight_m)});
+  world->addBox({Eigen::Vector3d(min.x() - t, max.y(), 0.0),
+                 Eigen::Vector3d(max.x() + t, max.y() + t, kWallHeight_m)});
+  world->addBox({Eigen::Vector3d(min.x() - t, min.y(), 0.0),
+                 Eigen::Vector3d(min.x(), max.y(), kWallHeight_m)});
+  world->addBox({Eigen::Vector3d(max.x(), min.y(), 0.0),
+                 Eigen::Vector3d(max.x() + t, max.y(), kWallHeight_m)});
 }
 
 /// True when the world is a fair task: a route exists and the start does not see the goal.
 bool isFair(const NavWorld& w) {
-  return !seesPoint(w.world, w.start_W, w.goal_W) && !shortestRoute(w, kRouteClearance_m, 0.1).empty();
+  return !seesPoint(w.world, w.start_W, w.goal_W) &&
+         !shortestRoute(w, kRouteClearance_m, 0.1).empty();
 }
 
 double headingTo(const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
@@ -66,7 +72,8 @@ std::vector<Eigen::Vector2d> shortestRoute(const NavWorld& world, double inflati
   const Eigen::Vector2d size = world.max_xy_W - world.min_xy_W;
   grid.width = static_cast<int>(std::ceil(size.x() / resolution_m));
   grid.height = static_cast<int>(std::ceil(size.y() / resolution_m));
-  grid.blocked.assign(static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height), 0);
+  grid.blocked.assign(static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height),
+                      0);
   const double z = world.start_W.z();
   for (int y = 0; y < grid.height; ++y) {
     for (int x = 0; x < grid.width; ++x) {
@@ -77,8 +84,8 @@ std::vector<Eigen::Vector2d> shortestRoute(const NavWorld& world, double inflati
       }
     }
   }
-  const GridPath path = searchGrid(grid, grid.cellOf(world.start_W.head<2>()),
-                                   grid.cellOf(world.goal_W.head<2>()));
+  const GridPath path =
+      searchGrid(grid, grid.cellOf(world.start_W.head<2>()), grid.cellOf(world.goal_W.head<2>()));
   if (!path.found || grid.isBlocked(path.cells.front().x(), path.cells.front().y())) return {};
   std::vector<Eigen::Vector2d> route = shortenPath(grid, path.cells);
   route.front() = world.start_W.head<2>();
@@ -104,7 +111,8 @@ NavWorld forestWorld(std::uint32_t seed, double trees_per_m2, const Eigen::Vecto
     const int trees = static_cast<int>(std::lround(trees_per_m2 * size_m.x() * size_m.y()));
     std::vector<sim::Cylinder> placed;
     // The first tree stands on the line from start to goal, so the start cannot see the goal.
-    for (int tries = 0; tries < trees * 60 && static_cast<int>(placed.size()) < trees + 1; ++tries) {
+    for (int tries = 0; tries < trees * 60 && static_cast<int>(placed.size()) < trees + 1;
+         ++tries) {
       sim::Cylinder c;
       c.radius_m = 0.15 + 0.3 * unit(rng);
       if (placed.empty()) {
@@ -112,13 +120,15 @@ NavWorld forestWorld(std::uint32_t seed, double trees_per_m2, const Eigen::Vecto
         c.center_xy_W = (w.start_W + s * (w.goal_W - w.start_W)).head<2>();
         c.radius_m = 0.45;
       } else {
-        c.center_xy_W = {1.0 + unit(rng) * (size_m.x() - 2.0), 1.0 + unit(rng) * (size_m.y() - 2.0)};
+        c.center_xy_W = {1.0 + unit(rng) * (size_m.x() - 2.0),
+                         1.0 + unit(rng) * (size_m.y() - 2.0)};
       }
       c.z_min_m = 0.0;
       c.z_max_m = kWallHeight_m;
       bool ok = true;
       const Eigen::Vector2d& p = c.center_xy_W;
-      const double wall_gap = std::min({p.x(), p.y(), size_m.x() - p.x(), size_m.y() - p.y()}) - c.radius_m;
+      const double wall_gap =
+          std::min({p.x(), p.y(), size_m.x() - p.x(), size_m.y() - p.y()}) - c.radius_m;
       if (wall_gap < 1.5 && !placed.empty()) ok = false;
       for (const Eigen::Vector3d& q : {w.start_W, w.goal_W}) {
         if ((q.head<2>() - p).norm() - c.radius_m < 1.2) ok = false;
@@ -152,8 +162,10 @@ NavWorld roomsWorld(std::uint32_t seed, int rooms) {
       const double x = room_x * k;
       const double door_lo = 1.0 + unit(rng) * (room_y - 4.0);
       const double door_hi = door_lo + 2.0;
-      w.world.addBox({Eigen::Vector3d(x - half_t, 0.0, 0.0), Eigen::Vector3d(x + half_t, door_lo, kWallHeight_m)});
-      w.world.addBox({Eigen::Vector3d(x - half_t, door_hi, 0.0), Eigen::Vector3d(x + half_t, room_y, kWallHeight_m)});
+      w.world.addBox({Eigen::Vector3d(x - half_t, 0.0, 0.0),
+                      Eigen::Vector3d(x + half_t, door_lo, kWallHeight_m)});
+      w.world.addBox({Eigen::Vector3d(x - half_t, door_hi, 0.0),
+                      Eigen::Vector3d(x + half_t, room_y, kWallHeight_m)});
       doors.emplace_back(x, 0.5 * (door_lo + door_hi));
     }
     w.start_W = {1.5, 1.5 + unit(rng) * (room_y - 3.0), kFlightHeight_m};
@@ -164,12 +176,14 @@ NavWorld roomsWorld(std::uint32_t seed, int rooms) {
       int added = 0;
       for (int tries = 0; tries < 200 && added < 2; ++tries) {
         const Eigen::Vector2d half(0.3 + 0.4 * unit(rng), 0.3 + 0.4 * unit(rng));
-        const Eigen::Vector2d c(room_x * k + 1.6 + half.x() + unit(rng) * (room_x - 3.2 - 2 * half.x()),
-                                1.6 + half.y() + unit(rng) * (room_y - 3.2 - 2 * half.y()));
+        const Eigen::Vector2d c(
+            room_x * k + 1.6 + half.x() + unit(rng) * (room_x - 3.2 - 2 * half.x()),
+            1.6 + half.y() + unit(rng) * (room_y - 3.2 - 2 * half.y()));
         const double reach = half.norm();
         bool ok = true;
         for (const Eigen::Vector2d& d : doors) ok = ok && (d - c).norm() - reach > 2.0;
-        for (const Eigen::Vector3d& q : {w.start_W, w.goal_W}) ok = ok && (q.head<2>() - c).norm() - reach > 1.2;
+        for (const Eigen::Vector3d& q : {w.start_W, w.goal_W})
+          ok = ok && (q.head<2>() - c).norm() - reach > 1.2;
         if (!ok) continue;
         const double height = 0.8 + 1.4 * unit(rng);
         w.world.addBox({Eigen::Vector3d(c.x() - half.x(), c.y() - half.y(), 0.0),

@@ -70,7 +70,8 @@ void Navigator::planRoute(const Eigen::Vector3d& p_W) {
       coverPoints(accumulated, {p_W.head<2>(), goal_W_.head<2>()}, config_.planning_margin_m,
                   accumulated.width > 0 ? accumulated.resolution_m : 0.2);
   const PlanningGrid grid = inflateGrid(canvas, config_.inflation_m, UnknownAs::kFree);
-  const GridPath path = searchGrid(grid, grid.cellOf(p_W.head<2>()), grid.cellOf(goal_W_.head<2>()));
+  const GridPath path =
+      searchGrid(grid, grid.cellOf(p_W.head<2>()), grid.cellOf(goal_W_.head<2>()));
   if (!path.found) {
     ++route_failures_;
     return;
@@ -167,7 +168,8 @@ Eigen::Vector3d Navigator::evadeVelocity(const MapSnapshot& map, const Eigen::Ve
     return Eigen::Vector3d::Zero();
   }
   const double gap = (*nearest - p_W).norm();
-  const double urgency = std::min(1.0, 2.0 * (config_.evade_radius_m - gap) / config_.evade_radius_m);
+  const double urgency =
+      std::min(1.0, 2.0 * (config_.evade_radius_m - gap) / config_.evade_radius_m);
   return away * (config_.max_speed_mps * urgency);
 }
 
@@ -188,7 +190,8 @@ Setpoint Navigator::setpoint(const Eigen::Vector3d& p_W, double yaw_rad) const {
   for (std::size_t i = 0; i + 1 < committed.size(); ++i) {
     const Eigen::Vector3d ab = committed[i + 1] - committed[i];
     const double len = ab.norm();
-    const double t = len > 0.0 ? std::clamp((p_W - committed[i]).dot(ab) / (len * len), 0.0, 1.0) : 0.0;
+    const double t =
+        len > 0.0 ? std::clamp((p_W - committed[i]).dot(ab) / (len * len), 0.0, 1.0) : 0.0;
     const Eigen::Vector3d q = committed[i] + t * ab;
     const double d = (q - p_W).squaredNorm();
     if (d < best) {
@@ -205,15 +208,17 @@ Setpoint Navigator::setpoint(const Eigen::Vector3d& p_W, double yaw_rad) const {
     for (std::size_t i = 0; i + 1 < committed.size(); ++i) {
       const double len = (committed[i + 1] - committed[i]).norm();
       if (walked + len >= s && len > 0.0) {
-        return Eigen::Vector3d(committed[i] + (committed[i + 1] - committed[i]) * ((s - walked) / len));
+        return Eigen::Vector3d(committed[i] +
+                               (committed[i + 1] - committed[i]) * ((s - walked) / len));
       }
       walked += len;
     }
     return committed.back();
   };
-  const double speed =
-      std::min(cautious_ ? std::min(config_.caution_speed_mps, config_.max_speed_mps) : config_.max_speed_mps,
-               std::sqrt(2.0 * config_.max_accel_mps2 * std::max(0.0, left - config_.stop_margin_m)));
+  const double speed = std::min(
+      cautious_ ? std::min(config_.caution_speed_mps, config_.max_speed_mps)
+                : config_.max_speed_mps,
+      std::sqrt(2.0 * config_.max_accel_mps2 * std::max(0.0, left - config_.stop_margin_m)));
   if (committed.size() > 1) {
     sp.position_W = nearest;
     Eigen::Vector3d dir = pointAt(std::min(total, along + config_.carrot_m)) - p_W;

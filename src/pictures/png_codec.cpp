@@ -105,8 +105,8 @@ struct PngHeader {
 bool readHeader(png_structp png, png_infop info, PngHeader* header) {
   if (setjmp(png_jmpbuf(png)) != 0) return false;
   png_read_info(png, info);
-  png_get_IHDR(png, info, &header->width, &header->height, &header->bit_depth,
-               &header->color_type, nullptr, nullptr, nullptr);
+  png_get_IHDR(png, info, &header->width, &header->height, &header->bit_depth, &header->color_type,
+               nullptr, nullptr, nullptr);
   return true;
 }
 
@@ -159,9 +159,9 @@ std::string encodePng(const cv::Mat& image) {
   bytes.reserve(image.total() * image.elemSize() / 8 + 1024);
   PngSink sink{&bytes, false};
   png_set_write_fn(png, &sink, writeBytes, flushBytes);
-  const bool ok = writeImage(png, info, static_cast<png_uint_32>(image.cols),
-                             static_cast<png_uint_32>(image.rows), bit_depth, color_type,
-                             rows.data());
+  const bool ok =
+      writeImage(png, info, static_cast<png_uint_32>(image.cols),
+                 static_cast<png_uint_32>(image.rows), bit_depth, color_type, rows.data());
   png_destroy_write_struct(&png, &info);
   if (!ok) throw std::runtime_error(std::string("encodePng: ") + error.message);
   return bytes;
@@ -187,7 +187,8 @@ cv::Mat decodePng(const void* bytes, std::size_t size) {
   PngSource source{static_cast<const unsigned char*>(bytes), size, 0};
   png_set_read_fn(png, &source, readBytes);
   PngHeader header;
-  if (!readHeader(png, info, &header)) throw std::runtime_error(std::string("decodePng: ") + error.message);
+  if (!readHeader(png, info, &header))
+    throw std::runtime_error(std::string("decodePng: ") + error.message);
   int channels = 0;
   if (header.color_type == PNG_COLOR_TYPE_GRAY) channels = 1;
   if (header.color_type == PNG_COLOR_TYPE_RGB) channels = 3;
@@ -197,13 +198,15 @@ cv::Mat decodePng(const void* bytes, std::size_t size) {
   }
   const int depth = header.bit_depth == 16 ? CV_16U : CV_8U;
   const std::uint64_t sample_bytes = header.bit_depth == 16 ? 2 : 1;
-  if (std::uint64_t{header.width} * header.height * static_cast<std::uint64_t>(channels) * sample_bytes >
+  if (std::uint64_t{header.width} * header.height * static_cast<std::uint64_t>(channels) *
+          sample_bytes >
       kMaxDecodedBytes) {
     throw std::runtime_error("decodePng: the image (" + std::to_string(header.width) + " x " +
                              std::to_string(header.height) + ") is larger than " +
                              std::to_string(kMaxDecodedBytes >> 20) + " MB decoded");
   }
-  cv::Mat image(static_cast<int>(header.height), static_cast<int>(header.width), CV_MAKETYPE(depth, channels));
+  cv::Mat image(static_cast<int>(header.height), static_cast<int>(header.width),
+                CV_MAKETYPE(depth, channels));
   std::vector<png_bytep> rows(static_cast<std::size_t>(image.rows));
   for (int r = 0; r < image.rows; ++r) rows[static_cast<std::size_t>(r)] = image.ptr<png_byte>(r);
   if (!readImage(png, info, header, rows.data())) {

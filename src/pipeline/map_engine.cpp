@@ -70,8 +70,8 @@ FrameStatus MapEngine::admit(double stamp_s, const Transform& T_W_B, const Trans
       return FrameStatus::kInvalidPose;
     }
     StampOrder& order = r.stamps;
-    const bool in_order = !config_.pipeline.reject_out_of_order || !order.have_stamp ||
-                          stamp_s > order.last_stamp_s;
+    const bool in_order =
+        !config_.pipeline.reject_out_of_order || !order.have_stamp || stamp_s > order.last_stamp_s;
     if (!std::isfinite(stamp_s) || (!in_order && !order.from_load)) {
       ++r.stats.rejected_out_of_order;
       return FrameStatus::kOutOfOrder;

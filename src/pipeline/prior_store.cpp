@@ -8,7 +8,8 @@ namespace {
 /// A submap index as 64 bits (21 per axis), for the pending priors' map.
 std::uint64_t priorKey(const SubmapIndex& m) {
   std::uint64_t key = 0;
-  for (int a = 0; a < 3; ++a) key = (key << 21) | (static_cast<std::uint64_t>(m[a] + (1 << 20)) & 0x1fffff);
+  for (int a = 0; a < 3; ++a)
+    key = (key << 21) | (static_cast<std::uint64_t>(m[a] + (1 << 20)) & 0x1fffff);
   return key;
 }
 
@@ -46,10 +47,9 @@ bool PriorVoxels::isPrior(const VoxelIndex& g, const LocalWindow& window) const 
   const VoxelIndex t = g - m.cwiseProduct(submap_cells_);
   const auto offset =
       static_cast<std::uint32_t>((t.x() * submap_cells_.y() + t.y()) * submap_cells_.z() + t.z());
-  const auto it = std::lower_bound(held->begin(), held->end(), VoxelRecord{offset, 0},
-                                   [](const VoxelRecord& a, const VoxelRecord& b) {
-                                     return a.offset < b.offset;
-                                   });
+  const auto it = std::lower_bound(
+      held->begin(), held->end(), VoxelRecord{offset, 0},
+      [](const VoxelRecord& a, const VoxelRecord& b) { return a.offset < b.offset; });
   return it != held->end() && it->offset == offset && window.at(g) == it->log_odds;
 }
 
@@ -60,9 +60,10 @@ const std::vector<VoxelRecord>* PriorVoxels::inSubmap(const SubmapIndex& m) cons
 
 void PriorStore::add(const SubmapIndex& m, std::vector<VoxelRecord> records) {
   // Only occupied evidence is prior knowledge (a fleet sample also carries free evidence).
-  records.erase(std::remove_if(records.begin(), records.end(),
-                               [&](const VoxelRecord& r) { return !log_odds_.isOccupied(r.log_odds); }),
-                records.end());
+  records.erase(
+      std::remove_if(records.begin(), records.end(),
+                     [&](const VoxelRecord& r) { return !log_odds_.isOccupied(r.log_odds); }),
+      records.end());
   if (records.empty()) return;
   if ((m.array() < -GlobalMap::kSubmapIndexLimit).any() ||
       (m.array() >= GlobalMap::kSubmapIndexLimit).any()) {
@@ -110,16 +111,17 @@ PriorStore::Applied PriorStore::apply(const LocalMap& local, GlobalMap* global) 
     // A prior never reaches clamp_max, so the vehicle's own first hit changes it (and marks it
     // confirmed, PriorVoxels); it stays within the bounds the map keeps.
     for (VoxelRecord& r : it->second.second) {
-      r.log_odds = static_cast<LogOddsQ>(std::clamp<int>(r.log_odds, log_odds_.clampMin(),
-                                                         log_odds_.clampMax() - 1));
+      r.log_odds = static_cast<LogOddsQ>(
+          std::clamp<int>(r.log_odds, log_odds_.clampMin(), log_odds_.clampMax() - 1));
     }
     // The voxels the global map does not hold yet are the ones addPrior() adds.
     const std::vector<VoxelRecord>* own = global->find(m);
     std::vector<VoxelRecord> taken;
     for (const VoxelRecord& r : it->second.second) {
-      if (own != nullptr &&
-          std::binary_search(own->begin(), own->end(), r,
-                             [](const VoxelRecord& a, const VoxelRecord& b) { return a.offset < b.offset; })) {
+      if (own != nullptr && std::binary_search(own->begin(), own->end(), r,
+                                               [](const VoxelRecord& a, const VoxelRecord& b) {
+                                                 return a.offset < b.offset;
+                                               })) {
         continue;
       }
       taken.push_back(r);

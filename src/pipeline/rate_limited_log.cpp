@@ -14,9 +14,8 @@ void RateLimitedLog::log(LogLevel level, int reason, const std::string& message)
   {
     std::lock_guard<std::mutex> lock(mutex_);
     Limit& limit = limits_[static_cast<std::size_t>(reason) % limits_.size()];
-    const double now_s = std::chrono::duration<double>(
-                             std::chrono::steady_clock::now().time_since_epoch())
-                             .count();
+    const double now_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
     if (now_s - limit.last_s < interval_s_) {
       ++limit.suppressed;
       return;

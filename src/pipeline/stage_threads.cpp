@@ -73,7 +73,8 @@ void StageThreads::awarenessLoop() {
       std::unique_lock<std::mutex> lock(mutex_);
       // Back-pressure: wait for room rather than drop computed measurements.
       changed_.wait(lock, [&] { return stopping_ || batches_.size() < batch_capacity_; });
-      // cppcheck-suppress knownConditionTrueFalse ; stop() sets it while wait() has the lock released
+      // cppcheck-suppress knownConditionTrueFalse ; stop() sets it while wait() has the lock
+      // released
       if (stopping_) return;
       batches_.push_back(std::move(batch));
     }

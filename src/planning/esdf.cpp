@@ -202,9 +202,9 @@ void EsdfMap::sweepRows(const std::uint8_t* states, int y_begin, int y_end, Scra
     for (int y0 = y_begin; y0 < y_end; y0 += kNarrowRowBlock) {
       const std::size_t row = static_cast<std::size_t>(y0) * nz;
       const int n = std::min(kNarrowRowBlock, y_end - y0) * nz;
-      sweepBlock(states + row, slab, scratch->sweep.data(), static_cast<std::size_t>(n),
-                 size.x(), n, scratch->near_free.data(), scratch->near_obstacle.data(),
-                 unknown_is_obstacle, cap_d_, pass1Inf(), pass1_narrow_.data() + row, slab);
+      sweepBlock(states + row, slab, scratch->sweep.data(), static_cast<std::size_t>(n), size.x(),
+                 n, scratch->near_free.data(), scratch->near_obstacle.data(), unknown_is_obstacle,
+                 cap_d_, pass1Inf(), pass1_narrow_.data() + row, slab);
     }
     return;
   }
@@ -222,8 +222,8 @@ void EsdfMap::transformYLine(int x, int z, int begin, int end, std::int32_t* lin
                              Scratch* scratch) const {
   const int ny = end - begin;
   const int nz = field_.size().z();
-  const std::int32_t* in = pass1_.data() +
-                           (static_cast<std::size_t>(x) * field_.size().y() + begin) * nz + z;
+  const std::int32_t* in =
+      pass1_.data() + (static_cast<std::size_t>(x) * field_.size().y() + begin) * nz + z;
   for (int y = 0; y < ny; ++y) line[y] = in[static_cast<std::ptrdiff_t>(y) * nz];
   if (narrow_keys_) {
     transformLine<std::int32_t, std::int32_t*, true>(
@@ -242,8 +242,7 @@ void EsdfMap::transformZLine(int x, int y, int begin, int end, std::int32_t* lin
                              Scratch* scratch) const {
   const int nz = end - begin;
   const Eigen::Vector3i& size = field_.size();
-  std::memcpy(line,
-              pass2_.data() + (static_cast<std::size_t>(x) * size.y() + y) * size.z() + begin,
+  std::memcpy(line, pass2_.data() + (static_cast<std::size_t>(x) * size.y() + y) * size.z() + begin,
               static_cast<std::size_t>(nz) * sizeof(std::int32_t));
   if (size.z() == 1) return;  // (as compute(): no z pass)
   if (narrow_keys_) {
@@ -259,8 +258,7 @@ void EsdfMap::transformZLine(int x, int y, int begin, int end, std::int32_t* lin
   }
 }
 
-void EsdfMap::transformSlabs(const std::uint8_t* states, int x_begin, int x_end,
-                             Scratch* scratch) {
+void EsdfMap::transformSlabs(const std::uint8_t* states, int x_begin, int x_end, Scratch* scratch) {
   const int ny = field_.size().y();
   const int nz = field_.size().z();
   const std::size_t slab = static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
@@ -357,26 +355,25 @@ float EsdfMap::distanceAt(const VoxelIndex& world_index) const {
 }
 
 std::size_t EsdfMap::memoryBytes() const {
-  std::size_t bytes = field_.memoryBytes() + tracker_.memoryBytes() +
-                      (pass1_.capacity() + pass2_.capacity() + row_buffer_.capacity()) *
-                          sizeof(std::int32_t) +
-                      pass2_narrow_.capacity() * sizeof(std::int16_t) +
-                      pass1_narrow_.capacity() * sizeof(std::int8_t) +
-                      changed_cells_.capacity() * sizeof(std::uint32_t) +
-                      metres_table_.capacity() * sizeof(float) +
-                      scratch_.capacity() * sizeof(Scratch);
+  std::size_t bytes =
+      field_.memoryBytes() + tracker_.memoryBytes() +
+      (pass1_.capacity() + pass2_.capacity() + row_buffer_.capacity()) * sizeof(std::int32_t) +
+      pass2_narrow_.capacity() * sizeof(std::int16_t) +
+      pass1_narrow_.capacity() * sizeof(std::int8_t) +
+      changed_cells_.capacity() * sizeof(std::uint32_t) + metres_table_.capacity() * sizeof(float) +
+      scratch_.capacity() * sizeof(Scratch);
   for (const Scratch& s : scratch_) {
-    bytes += (s.runs.capacity() + s.out_sites.capacity() + s.in_sites.capacity() +
-              s.out_keys32.capacity() + s.in_keys32.capacity() + s.near_free.capacity() +
-              s.near_obstacle.capacity() + s.line.capacity() + s.sweep.capacity()) *
-                 sizeof(std::int32_t) +
-             (s.out_keys64.capacity() + s.in_keys64.capacity()) * sizeof(std::int64_t) +
-             s.gathered.capacity() * sizeof(std::int16_t) + s.narrow_rows.capacity() +
-             (s.window.magnitude.capacity() + s.window.best.capacity() +
-              s.window.near_free.capacity() + s.window.near_obstacle.capacity() +
-              s.window.lines.capacity() + s.window.transposed.capacity() +
-              s.window.signed_sq.capacity()) *
-                 sizeof(std::int16_t);
+    bytes +=
+        (s.runs.capacity() + s.out_sites.capacity() + s.in_sites.capacity() +
+         s.out_keys32.capacity() + s.in_keys32.capacity() + s.near_free.capacity() +
+         s.near_obstacle.capacity() + s.line.capacity() + s.sweep.capacity()) *
+            sizeof(std::int32_t) +
+        (s.out_keys64.capacity() + s.in_keys64.capacity()) * sizeof(std::int64_t) +
+        s.gathered.capacity() * sizeof(std::int16_t) + s.narrow_rows.capacity() +
+        (s.window.magnitude.capacity() + s.window.best.capacity() + s.window.near_free.capacity() +
+         s.window.near_obstacle.capacity() + s.window.lines.capacity() +
+         s.window.transposed.capacity() + s.window.signed_sq.capacity()) *
+            sizeof(std::int16_t);
   }
   return bytes;
 }

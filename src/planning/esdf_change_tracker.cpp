@@ -103,8 +103,10 @@ bool EsdfChangeTracker::collectChangedStates(const std::uint8_t* now, std::size_
     const Eigen::Vector3i& hi = r.hi;
     for (int x = lo.x(); x < hi.x(); ++x) {
       for (int y = lo.y(); y < hi.y(); ++y) {
-        const std::size_t column = (static_cast<std::size_t>(x) * ny + static_cast<std::size_t>(y)) * nz;
-        compare(column + static_cast<std::size_t>(lo.z()), column + static_cast<std::size_t>(hi.z()));
+        const std::size_t column =
+            (static_cast<std::size_t>(x) * ny + static_cast<std::size_t>(y)) * nz;
+        compare(column + static_cast<std::size_t>(lo.z()),
+                column + static_cast<std::size_t>(hi.z()));
       }
     }
     if (changed_states_.size() > budget) return false;

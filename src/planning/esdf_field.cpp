@@ -61,7 +61,8 @@ float EsdfField::distanceAt(const VoxelIndex& world_index) const {
 
 void EsdfField::writeUnknownBits(const std::uint8_t* states, int x) {
   constexpr auto kUnknown = static_cast<std::uint8_t>(Occupancy::kUnknown);
-  const std::size_t slab = static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(size_.z());
+  const std::size_t slab =
+      static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(size_.z());
   const std::uint8_t* slab_states = states + static_cast<std::size_t>(x) * slab;
   std::uint64_t* words = unknown_bits_.data() + static_cast<std::size_t>(x) * (slab_bits_ / 64);
   std::size_t i = 0;
@@ -92,7 +93,8 @@ bool EsdfField::copyCells(const EsdfField& source, const std::vector<std::uint32
       source.values_m_.size() != values_m_.size()) {
     return false;
   }
-  const std::size_t slab = static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(size_.z());
+  const std::size_t slab =
+      static_cast<std::size_t>(size_.y()) * static_cast<std::size_t>(size_.z());
   for (const std::uint32_t o : offsets) {
     if (o >= values_m_.size()) continue;
     values_m_[o] = source.values_m_[o];

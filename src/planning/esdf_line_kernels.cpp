@@ -27,8 +27,8 @@ inline __attribute__((always_inline)) void sweepForward(const std::uint8_t* __re
 inline __attribute__((always_inline)) void sweepBackward(std::int32_t* __restrict a,
                                                          std::int32_t* __restrict next_free,
                                                          std::int32_t* __restrict next_obstacle,
-                                                         int n, std::int32_t x,
-                                                         std::int32_t cap_d, std::int32_t inf) {
+                                                         int n, std::int32_t x, std::int32_t cap_d,
+                                                         std::int32_t inf) {
   for (int z = 0; z < n; ++z) {
     // Branch-free so that it vectorises: m is all ones for an obstacle, 0 otherwise.
     const std::int32_t left = a[z];
@@ -41,7 +41,7 @@ inline __attribute__((always_inline)) void sweepBackward(std::int32_t* __restric
     const std::int32_t from_right = ((nf & m) | (no & ~m)) - x;
     const std::int32_t d = std::min(from_left, from_right);
     const std::int32_t v = d <= cap_d ? d : inf;  // distance, not squared: the y pass squares it
-    a[z] = (v ^ m) - m;                            // -v for obstacles
+    a[z] = (v ^ m) - m;                           // -v for obstacles
   }
 }
 

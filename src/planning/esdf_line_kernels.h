@@ -171,8 +171,8 @@ void transformLine(Line line, int n, std::int32_t cap, std::int32_t cap_d,
   const int first_free = line[0] > 0 ? 0 : 1;
   // Sentinel: far right and above every real value at every position of the line.
   const int sentinel_site = n + cap_d + 1;
-  const Key sentinel_key = static_cast<Key>(cap) + static_cast<Key>(n) * n +
-                           2 * static_cast<Key>(n) * sentinel_site + 1;
+  const Key sentinel_key =
+      static_cast<Key>(cap) + static_cast<Key>(n) * n + 2 * static_cast<Key>(n) * sentinel_site + 1;
   if (out_count > 0) {
     out_sites[out_count] = sentinel_site;
     out_keys[out_count] = sentinel_key;

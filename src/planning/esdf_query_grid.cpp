@@ -135,9 +135,9 @@ bool EsdfQueryGrid::syncCells(const EsdfMap& map, const std::vector<std::uint32_
     const std::uint32_t r = offset - x * slab;
     const std::uint32_t y = r / nz;
     const std::uint32_t z = r - y * nz;
-    const std::int16_t value = encode(field[offset], map.isUnknownCell(static_cast<int>(x),
-                                                                       static_cast<int>(y),
-                                                                       static_cast<int>(z)));
+    const std::int16_t value =
+        encode(field[offset],
+               map.isUnknownCell(static_cast<int>(x), static_cast<int>(y), static_cast<int>(z)));
     cells_[static_cast<std::size_t>(x + 1) * static_cast<std::size_t>(stride_x_) +
            static_cast<std::size_t>(y + 1) * static_cast<std::size_t>(stride_y_) + z + 1] = value;
     if (x == 0 || y == 0 || z == 0 || static_cast<int>(x) == size_.x() - 1 ||

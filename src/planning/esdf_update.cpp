@@ -155,10 +155,10 @@ void EsdfMap::moveKeptSlabs(const OccupancyBox& box, const VoxelIndex& delta) {
     const int x = dx >= 0 ? i : nx - 1 - i;
     if (!kept_slab(x)) continue;
     const std::size_t first = static_cast<std::size_t>(x) * slab;
-    std::memmove(kept + first + static_cast<std::size_t>(row_lo) * nz,
-                 kept + static_cast<std::size_t>(x + dx) * slab +
-                     static_cast<std::size_t>(row_lo + dy) * nz,
-                 kept_rows);
+    std::memmove(
+        kept + first + static_cast<std::size_t>(row_lo) * nz,
+        kept + static_cast<std::size_t>(x + dx) * slab + static_cast<std::size_t>(row_lo + dy) * nz,
+        kept_rows);
     std::memcpy(kept + first, now + first, static_cast<std::size_t>(row_lo) * nz);
     const std::size_t high = static_cast<std::size_t>(row_hi) * nz;
     std::memcpy(kept + first + high, now + first + high, slab - high);
@@ -209,8 +209,8 @@ void EsdfMap::sweepMovedRows(const VoxelIndex& delta, Scratch* scratch) {
   // ones, marking the y lines where a kept slab's differ.
   const auto merge = [&](int x, const std::int32_t* from, int y0, int n) {
     for (int i = 0; i < n; ++i) narrow[i] = static_cast<std::int8_t>(from[i]);
-    std::int8_t* to =
-        pass1_narrow_.data() + static_cast<std::size_t>(x) * slab + static_cast<std::size_t>(y0) * nz;
+    std::int8_t* to = pass1_narrow_.data() + static_cast<std::size_t>(x) * slab +
+                      static_cast<std::size_t>(y0) * nz;
     if (kept_slab(x) && std::memcmp(to, narrow, static_cast<std::size_t>(n)) != 0) {
       int* lo = y_marks.lo(static_cast<std::size_t>(x) * nz);
       int* hi = y_marks.hi(static_cast<std::size_t>(x) * nz);
@@ -278,7 +278,8 @@ void EsdfMap::updateChanged(const OccupancyBox& box, const VoxelIndex& shift) {
 void EsdfMap::applyChangedStates(const std::uint8_t* states, const VoxelIndex& shift) {
   const int nx = field_.size().x();
   const int nz = field_.size().z();
-  const std::size_t slab = static_cast<std::size_t>(field_.size().y()) * static_cast<std::size_t>(nz);
+  const std::size_t slab =
+      static_cast<std::size_t>(field_.size().y()) * static_cast<std::size_t>(nz);
   constexpr auto kUnknown = static_cast<std::uint8_t>(Occupancy::kUnknown);
   UpdateStats& u = last_update_;
   // Changed states: the rows of those whose kind changed (obstacle or not: all pass 1 reads) are

@@ -83,7 +83,8 @@ void EsdfMap::updateLinesEnvelope(int reach, Scratch* scratch) {
       ++u.z_lines;
       const ReachedPart part = reachedPart(lo, hi, reach, nz);
       transformZLine(x, y, part.in_begin, part.in_end, line, scratch);
-      const std::size_t first = static_cast<std::size_t>(x) * slab + static_cast<std::size_t>(y) * nz;
+      const std::size_t first =
+          static_cast<std::size_t>(x) * slab + static_cast<std::size_t>(y) * nz;
       float* field = field_.mutableValues_m().data() + first;
       for (int z = part.out_begin; z < part.out_end; ++z) {
         const float m = metres(line[z - part.in_begin]);
@@ -181,7 +182,8 @@ void EsdfMap::updateYLinesWindowed(int reach, Scratch* scratch) {
 
 void EsdfMap::updateZLinesWindowed(int reach, Scratch* scratch) {
   const int nz = field_.size().z();
-  const std::size_t slab = static_cast<std::size_t>(field_.size().y()) * static_cast<std::size_t>(nz);
+  const std::size_t slab =
+      static_cast<std::size_t>(field_.size().y()) * static_cast<std::size_t>(nz);
   const std::vector<EsdfMarkedLine>& sorted = tracker_.takeZLines();
   last_update_.z_lines = sorted.size();
   // The metres table is there: windowFits() keeps 2 inf_ + 1 below its limit.

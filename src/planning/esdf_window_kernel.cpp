@@ -122,8 +122,7 @@ inline __attribute__((always_inline)) void sweepRight(const std::int16_t* __rest
                                                       std::int16_t* __restrict best,
                                                       std::int16_t* __restrict near_free,
                                                       std::int16_t* __restrict near_obstacle,
-                                                      int lanes, std::int16_t y,
-                                                      std::int16_t far) {
+                                                      int lanes, std::int16_t y, std::int16_t far) {
   for (int l = 0; l < lanes; ++l) {
     const bool obstacle = s[l] < 0;
     const std::int16_t f = near_free[l];
@@ -142,10 +141,9 @@ inline __attribute__((always_inline)) void sweepRight(const std::int16_t* __rest
 /// lanes values of inf before and after, already holding |values|. kLanes > 0: `lanes` is
 /// kLanes, known here, and the sweeps keep their last / next positions in registers.
 template <int kLanes>
-inline __attribute__((always_inline)) void windowPass(std::int16_t* values, std::int16_t* m,
-                                                      int n, int lanes_in, int out_begin,
-                                                      int out_end, std::int32_t cap_sq,
-                                                      std::int32_t cap_d,
+inline __attribute__((always_inline)) void windowPass(std::int16_t* values, std::int16_t* m, int n,
+                                                      int lanes_in, int out_begin, int out_end,
+                                                      std::int32_t cap_sq, std::int32_t cap_d,
                                                       WindowBuffers* buffers) {
   const int lanes = kLanes > 0 ? kLanes : lanes_in;
   const auto inf = static_cast<std::int16_t>(cap_sq + 1);

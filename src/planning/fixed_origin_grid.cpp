@@ -34,13 +34,15 @@ FixedOriginGrid::FixedOriginGrid(int chunk_cells, std::size_t max_cells)
 }
 
 bool FixedOriginGrid::cover(const Eigen::Vector2i& min_cell, const Eigen::Vector2i& max_cell) {
-  Eigen::Vector2i chunk_min(floorDiv(min_cell.x(), chunk_cells_), floorDiv(min_cell.y(), chunk_cells_));
-  Eigen::Vector2i chunk_max(floorDiv(max_cell.x(), chunk_cells_), floorDiv(max_cell.y(), chunk_cells_));
+  Eigen::Vector2i chunk_min(floorDiv(min_cell.x(), chunk_cells_),
+                            floorDiv(min_cell.y(), chunk_cells_));
+  Eigen::Vector2i chunk_max(floorDiv(max_cell.x(), chunk_cells_),
+                            floorDiv(max_cell.y(), chunk_cells_));
   if (!grid_.cells.empty()) {
     const Eigen::Vector2i have_min(floorDiv(origin_cell_.x(), chunk_cells_),
                                    floorDiv(origin_cell_.y(), chunk_cells_));
-    const Eigen::Vector2i have_max = have_min + Eigen::Vector2i(grid_.width / chunk_cells_ - 1,
-                                                                grid_.height / chunk_cells_ - 1);
+    const Eigen::Vector2i have_max =
+        have_min + Eigen::Vector2i(grid_.width / chunk_cells_ - 1, grid_.height / chunk_cells_ - 1);
     if ((chunk_min.array() >= have_min.array()).all() &&
         (chunk_max.array() <= have_max.array()).all()) {
       return true;
@@ -60,7 +62,8 @@ bool FixedOriginGrid::cover(const Eigen::Vector2i& min_cell, const Eigen::Vector
     const std::size_t new_y = static_cast<std::size_t>(y + origin_cell_.y() - new_origin.y());
     const std::size_t new_x0 = static_cast<std::size_t>(origin_cell_.x() - new_origin.x());
     const auto row = grid_.cells.begin() + static_cast<std::ptrdiff_t>(y) * grid_.width;
-    std::copy(row, row + grid_.width, cells.begin() + static_cast<std::ptrdiff_t>(new_y * width + new_x0));
+    std::copy(row, row + grid_.width,
+              cells.begin() + static_cast<std::ptrdiff_t>(new_y * width + new_x0));
   }
   grid_.cells = std::move(cells);
   grid_.width = static_cast<int>(width);
@@ -87,7 +90,8 @@ bool FixedOriginGrid::absorb(const ProjectedGrid& rolling) {
   grid_.band_max_z_m = rolling.band_max_z_m;
 
   const std::uint64_t growths_before = growths_;
-  const Eigen::Vector2i rolling_max = rolling_origin + Eigen::Vector2i(rolling.width - 1, rolling.height - 1);
+  const Eigen::Vector2i rolling_max =
+      rolling_origin + Eigen::Vector2i(rolling.width - 1, rolling.height - 1);
   const bool covered = cover(rolling_origin, rolling_max);
   bool changed = growths_ != growths_before;
   for (int y = 0; y < rolling.height; ++y) {
@@ -100,8 +104,9 @@ bool FixedOriginGrid::absorb(const ProjectedGrid& rolling) {
         ++cells_dropped_;
         continue;
       }
-      std::int8_t& cell = grid_.cells[static_cast<std::size_t>(gy) * static_cast<std::size_t>(grid_.width) +
-                                      static_cast<std::size_t>(gx)];
+      std::int8_t& cell =
+          grid_.cells[static_cast<std::size_t>(gy) * static_cast<std::size_t>(grid_.width) +
+                      static_cast<std::size_t>(gx)];
       changed = changed || cell != value;
       cell = value;
     }

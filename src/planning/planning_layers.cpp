@@ -37,7 +37,8 @@ PlanningLayers::~PlanningLayers() {
 // thread of the pool calls this; a use count of 1 (the pool's own) cannot grow behind its back
 // because readers only reach buffers through snapshots.
 template <typename T, typename... Args>
-std::shared_ptr<T> PlanningLayers::reuse(std::vector<std::shared_ptr<T>>* pool, const Args&... args) {
+std::shared_ptr<T> PlanningLayers::reuse(std::vector<std::shared_ptr<T>>* pool,
+                                         const Args&... args) {
   for (const std::shared_ptr<T>& p : *pool) {
     if (p.use_count() == 1) return p;
   }
@@ -51,9 +52,9 @@ std::shared_ptr<const MapSnapshot> PlanningLayers::snapshot() const {
 }
 
 void PlanningLayers::publish(std::shared_ptr<const LocalWindow> window,
-                             std::shared_ptr<const ProjectedGrid> grid,
-                             PublishedEsdf esdf, bool keep_esdf, std::uint64_t frame,
-                             double stamp_s, const Transform& T_W_B) {
+                             std::shared_ptr<const ProjectedGrid> grid, PublishedEsdf esdf,
+                             bool keep_esdf, std::uint64_t frame, double stamp_s,
+                             const Transform& T_W_B) {
   std::shared_ptr<const MapSnapshot> old;
   std::lock_guard<std::mutex> lock(snapshot_mutex_);
   // Read and replace under one lock, so that a field the planning thread published meanwhile
@@ -64,9 +65,8 @@ void PlanningLayers::publish(std::shared_ptr<const LocalWindow> window,
     esdf_frame = snapshot_->esdfFrame();
   }
   old = std::exchange(snapshot_, std::make_shared<const MapSnapshot>(
-                                     std::move(window), std::move(grid), std::move(esdf.map),
-                                     frame, stamp_s, T_W_B, esdf_frame,
-                                     std::move(esdf.query_grid)));
+                                     std::move(window), std::move(grid), std::move(esdf.map), frame,
+                                     stamp_s, T_W_B, esdf_frame, std::move(esdf.query_grid)));
 }
 
 void PlanningLayers::update(const LocalMap& local, const GlobalMap& global, std::uint64_t frame,
@@ -262,7 +262,8 @@ VoxelIndex PlanningLayers::esdfBoxMin(const LocalWindow& window, const Eigen::Ve
   for (int a = 0; a < 3; ++a) {
     const double edge_m = config_.esdf.box_size_m[a];
     if (!(edge_m > 0.0)) continue;  // 0: the whole window along this axis
-    const int cells = std::min(window.size[a], std::max(1, static_cast<int>(std::lround(edge_m / res))));
+    const int cells =
+        std::min(window.size[a], std::max(1, static_cast<int>(std::lround(edge_m / res))));
     (*size)[a] = cells;
     box_min[a] = std::clamp(body[a] - cells / 2, window.min_index[a],
                             window.min_index[a] + window.size[a] - cells);
@@ -280,8 +281,7 @@ bool PlanningLayers::fillEsdfBox(const EsdfJob& job) {
   const bool in_place = esdf_box_filled_ && box_min == esdf_box_.min_index &&
                         size == esdf_box_.size && window.min_index == esdf_box_window_ &&
                         window.resolution_m == esdf_box_.resolution_m &&
-                        job.submap_stamps.size() == kSubmaps &&
-                        window.size == cells * kN;
+                        job.submap_stamps.size() == kSubmaps && window.size == cells * kN;
   if (!in_place) esdf_box_.reset(box_min, size, window.resolution_m);
   esdf_refilled_.clear();
   const LogOddsModel& model = window.model;
@@ -327,7 +327,8 @@ bool PlanningLayers::fillEsdfBox(const EsdfJob& job) {
 PlanningLayers::PublishedEsdf PlanningLayers::computeEsdf(const EsdfJob& job) {
   // Refilled in place, the box changed only in the refilled submaps: the ESDF compares it with
   // its kept box there alone.
-  const bool ok = fillEsdfBox(job) ? esdf_.update(esdf_box_, esdf_refilled_) : esdf_.update(esdf_box_);
+  const bool ok =
+      fillEsdfBox(job) ? esdf_.update(esdf_box_, esdf_refilled_) : esdf_.update(esdf_box_);
   PublishedEsdf published = ok ? publishEsdfCopy() : PublishedEsdf{};
   std::size_t bytes = esdf_box_.states.capacity() * sizeof(Occupancy) + esdf_.memoryBytes();
   for (const EsdfCopy& c : esdf_copies_) {
@@ -427,10 +428,10 @@ void PlanningLayers::planningLoop() {
       std::shared_ptr<const MapSnapshot> old;
       std::lock_guard<std::mutex> lock(snapshot_mutex_);
       const MapSnapshot& s = *snapshot_;
-      old = std::exchange(snapshot_, std::make_shared<const MapSnapshot>(
-                                         s.windowPtr(), s.gridPtr(), std::move(esdf.map),
-                                         s.frame(), s.stamp_s(), s.T_W_B(), job.frame,
-                                         std::move(esdf.query_grid)));
+      old = std::exchange(
+          snapshot_, std::make_shared<const MapSnapshot>(
+                         s.windowPtr(), s.gridPtr(), std::move(esdf.map), s.frame(), s.stamp_s(),
+                         s.T_W_B(), job.frame, std::move(esdf.query_grid)));
     }
     {
       std::lock_guard<std::mutex> lock(stats_mutex_);

@@ -8,9 +8,9 @@ namespace mlmap {
 namespace {
 
 std::int8_t scaledProbability(LogOddsQ v) {
-  return static_cast<std::int8_t>(std::lround(100.0 * probabilityFromLogOdds(dequantizeLogOdds(v))));
+  return static_cast<std::int8_t>(
+      std::lround(100.0 * probabilityFromLogOdds(dequantizeLogOdds(v))));
 }
-
 
 /// Writes into `out` (whose cell (0, 0) is world column `lo`) the value of the window columns
 /// [begin, end) (window-relative x, y) from the band's layers [k0, k1) of the window: unknown
@@ -28,7 +28,8 @@ void projectWindowColumns(const LocalWindow& window, const ProjectedGridConfig& 
       const LogOddsQ* column =
           window.log_odds.data() +
           (static_cast<std::size_t>(x) * static_cast<std::size_t>(window.size.y()) +
-           static_cast<std::size_t>(y)) * nz;
+           static_cast<std::size_t>(y)) *
+              nz;
       LogOddsQ highest = kUnknownLogOdds;  // the unknown value is the smallest
       for (int z = z0; z < z1; ++z) highest = std::max(highest, column[z]);
       std::int8_t value = ProjectedGrid::kUnknown;
@@ -118,9 +119,9 @@ void projectToGrid(const LocalWindow& window, const GlobalMap* global,
   if (use_global) {
     global->forEachVoxel([&](const VoxelIndex& g, double log_odds) {
       if (g.z() < k0 || g.z() >= k1 || window.contains(g)) return;
-      const std::size_t i = static_cast<std::size_t>(g.y() - lo.y()) *
-                                static_cast<std::size_t>(out->width) +
-                            static_cast<std::size_t>(g.x() - lo.x());
+      const std::size_t i =
+          static_cast<std::size_t>(g.y() - lo.y()) * static_cast<std::size_t>(out->width) +
+          static_cast<std::size_t>(g.x() - lo.x());
       const std::int8_t value = config.probability_values
                                     ? scaledProbability(quantizeLogOdds(log_odds))
                                     : ProjectedGrid::kOccupied;
@@ -137,8 +138,8 @@ void reprojectWindowColumns(const LocalWindow& window, const ProjectedGridConfig
   bandLayers(grid->band_min_z_m, grid->band_max_z_m, grid->resolution_m, &k0, &k1);
   const Eigen::Vector2i lo(static_cast<int>(std::lround(grid->origin_W.x() / grid->resolution_m)),
                            static_cast<int>(std::lround(grid->origin_W.y() / grid->resolution_m)));
-  projectWindowColumns(window, config, k0, k1, begin.cwiseMax(0), end.cwiseMin(window.size.head<2>()),
-                       lo, grid);
+  projectWindowColumns(window, config, k0, k1, begin.cwiseMax(0),
+                       end.cwiseMin(window.size.head<2>()), lo, grid);
 }
 
 }  // namespace mlmap

@@ -59,8 +59,8 @@ Eigen::Vector3d Lidar::rayDirection_S(int beam, int azimuth_step) const {
   const double elevation_deg =
       model_.beams == 1
           ? 0.5 * (model_.vertical_min_deg + model_.vertical_max_deg)
-          : model_.vertical_min_deg + beam * (model_.vertical_max_deg - model_.vertical_min_deg) /
-                                          (model_.beams - 1);
+          : model_.vertical_min_deg +
+                beam * (model_.vertical_max_deg - model_.vertical_min_deg) / (model_.beams - 1);
   const double elevation = elevation_deg * kDegToRad;
   const double azimuth = azimuth_step * (2.0 * kPi / model_.azimuth_steps);
   return {std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),

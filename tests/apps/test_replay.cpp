@@ -25,7 +25,8 @@
 
 #if !defined(MLMAP_REPLAY_BIN) || !defined(MLMAP_DEMO_BIN) || !defined(MLMAP_SHARED_DATA_DIR) || \
     !defined(MLMAP_SOURCE_DIR)
-#error "MLMAP_REPLAY_BIN, MLMAP_DEMO_BIN, MLMAP_SHARED_DATA_DIR and MLMAP_SOURCE_DIR must be defined"
+#error \
+    "MLMAP_REPLAY_BIN, MLMAP_DEMO_BIN, MLMAP_SHARED_DATA_DIR and MLMAP_SOURCE_DIR must be defined"
 #endif
 
 namespace mlmap {
@@ -59,8 +60,8 @@ std::string xyzQuat(const Transform& T, Transform* as_read) {
   const Eigen::Quaterniond q(T.linear());
   const Eigen::Vector3d t = T.translation();
   EXPECT_TRUE(makePose(t, q, as_read));  // %.17g round-trips every double exactly
-  return fmt(t.x()) + " " + fmt(t.y()) + " " + fmt(t.z()) + " " + fmt(q.x()) + " " + fmt(q.y()) + " " +
-         fmt(q.z()) + " " + fmt(q.w());
+  return fmt(t.x()) + " " + fmt(t.y()) + " " + fmt(t.z()) + " " + fmt(q.x()) + " " + fmt(q.y()) +
+         " " + fmt(q.z()) + " " + fmt(q.w());
 }
 
 TEST(Replay, SimulatedCloudsWithTumPosesMapLikeTheEngineDirectly) {
@@ -112,14 +113,16 @@ TEST(Replay, SimulatedCloudsWithTumPosesMapLikeTheEngineDirectly) {
     }
     mlmap::testing::PcdOptions o;
     o.height = static_cast<std::uint32_t>(K.height);
-    o.data = i % 3 == 0 ? mlmap::testing::PcdData::kAscii
+    o.data = i % 3 == 0   ? mlmap::testing::PcdData::kAscii
              : i % 3 == 1 ? mlmap::testing::PcdData::kBinary
                           : mlmap::testing::PcdData::kBinaryCompressed;
     if (i == 9) {
-      mlmap::testing::writeFile(dir + "/clouds/" + stamp + ".ply",
-                                mlmap::testing::makePly(organised, mlmap::testing::PlyFormat::kBinaryBigEndian, false));
+      mlmap::testing::writeFile(
+          dir + "/clouds/" + stamp + ".ply",
+          mlmap::testing::makePly(organised, mlmap::testing::PlyFormat::kBinaryBigEndian, false));
     } else {
-      mlmap::testing::writeFile(dir + "/clouds/" + stamp + ".pcd", mlmap::testing::makePcd(organised, o));
+      mlmap::testing::writeFile(dir + "/clouds/" + stamp + ".pcd",
+                                mlmap::testing::makePcd(organised, o));
     }
     ASSERT_EQ(reference.submit(std::move(frame)), FrameStatus::kAccepted);
   }
@@ -127,10 +130,10 @@ TEST(Replay, SimulatedCloudsWithTumPosesMapLikeTheEngineDirectly) {
   ASSERT_GT(nan_points, 0u);
 
   const std::string out = dir + "/out";
-  const std::string command = std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir + "/clouds' --poses '" + dir +
-                              "/poses.tum' --extrinsic '" + extrinsic +
-                              "' --resolution 0.1 --max-range 8 --out '" + out + "' --voxels-out '" + dir +
-                              "/voxels.txt' --stats-out '" + dir + "/stats.json'";
+  const std::string command =
+      std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir + "/clouds' --poses '" + dir +
+      "/poses.tum' --extrinsic '" + extrinsic + "' --resolution 0.1 --max-range 8 --out '" + out +
+      "' --voxels-out '" + dir + "/voxels.txt' --stats-out '" + dir + "/stats.json'";
   ASSERT_EQ(run(command, dir + "/replay.log"), 0) << readText(dir + "/replay.log");
 
   const std::vector<VoxelIndex> replayed = io::readVoxelText(dir + "/voxels.txt");
@@ -162,11 +165,13 @@ TEST(Replay, VoxelIndicesAreFloorOfCoordinateOverResolution) {
       points.emplace_back(-2.05, 0.1 * j + 0.05, 0.1 * k + 0.05);
     }
   }
-  mlmap::testing::writeFile(dir + "/clouds/scan_a.ply",
-                            mlmap::testing::makePly(points, mlmap::testing::PlyFormat::kAscii, true));
+  mlmap::testing::writeFile(
+      dir + "/clouds/scan_a.ply",
+      mlmap::testing::makePly(points, mlmap::testing::PlyFormat::kAscii, true));
   mlmap::testing::writeFile(dir + "/poses.csv", "t,x,y,z,qx,qy,qz,qw\n1,0,0,0,0,0,0,1\n");
-  const std::string command = std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir + "/clouds' --poses '" + dir +
-                              "/poses.csv' --resolution 0.1 --out '" + dir + "/out'";
+  const std::string command = std::string(MLMAP_REPLAY_BIN) + " --clouds '" + dir +
+                              "/clouds' --poses '" + dir + "/poses.csv' --resolution 0.1 --out '" +
+                              dir + "/out'";
   ASSERT_EQ(run(command, dir + "/replay.log"), 0) << readText(dir + "/replay.log");
   const std::vector<VoxelIndex> voxels = io::readVoxelText(dir + "/out/occupied_voxels.txt");
   ASSERT_GT(voxels.size(), 100u);
@@ -177,7 +182,8 @@ TEST(Replay, VoxelIndicesAreFloorOfCoordinateOverResolution) {
     negative += v.x() < 0 ? 1 : 0;
   }
   EXPECT_GT(negative, 50u);
-  EXPECT_EQ(readText(dir + "/out/occupied_voxels.txt").rfind("# mlmap occupied voxels: ix iy iz", 0), 0u);
+  EXPECT_EQ(
+      readText(dir + "/out/occupied_voxels.txt").rfind("# mlmap occupied voxels: ix iy iz", 0), 0u);
 }
 
 /// One scan of `points` (sensor frame) taken at the origin, in `dir`: clouds/scan_a.ply and
@@ -216,10 +222,10 @@ TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
   const std::string command = source + " --config '" + dir + "/fixed.yaml' --out '" + dir + "/out'";
   ASSERT_EQ(run(command, dir + "/replay.log"), 0) << readText(dir + "/replay.log");
   const std::string stats = readText(dir + "/out/stats.json");
-  EXPECT_EQ(jsonInt(stats, "hits_beyond_local_map"), 21 * 11);  // every point of the far wall
+  EXPECT_EQ(jsonInt(stats, "hits_beyond_local_map"), 21 * 11);    // every point of the far wall
   EXPECT_EQ(jsonInt(stats, "hits_above_or_below_local_map"), 0);  // beyond it horizontally
   EXPECT_EQ(jsonInt(stats, "hits_outside_window"), 0);
-  EXPECT_EQ(jsonInt(stats, "hit_voxels"), 21 * 11);  // the near wall's
+  EXPECT_EQ(jsonInt(stats, "hit_voxels"), 21 * 11);          // the near wall's
   EXPECT_EQ(jsonInt(stats, "hits_to_global_map"), 21 * 11);  // the far wall's, one per voxel
   EXPECT_EQ(jsonInt(stats, "hits_lost"), 0);
   std::size_t near_wall = 0;
@@ -295,19 +301,23 @@ TEST(Replay, BadInputIsRefusedWithAMessage) {
   mlmap::testing::writeFile(dir + "/clouds/a.pcd", "VERSION 0.7\nFIELDS x y\n");
   mlmap::testing::writeFile(dir + "/poses.txt", "0 0 0 0 0 0 0 1\n");
   const std::string bin = MLMAP_REPLAY_BIN;
-  const std::string base = bin + " --out '" + dir + "/out' --clouds '" + dir + "/clouds' --poses '" + dir + "/poses.txt'";
+  const std::string base = bin + " --out '" + dir + "/out' --clouds '" + dir +
+                           "/clouds' --poses '" + dir + "/poses.txt'";
   EXPECT_NE(run(base, dir + "/a.log"), 0);
-  EXPECT_NE(readText(dir + "/a.log").find(dir + "/clouds/a.pcd: PCD header ends before its DATA line"),
-            std::string::npos)
+  EXPECT_NE(
+      readText(dir + "/a.log").find(dir + "/clouds/a.pcd: PCD header ends before its DATA line"),
+      std::string::npos)
       << readText(dir + "/a.log");
   EXPECT_NE(run(base + " --extrinsic '0 0 0 0 0 0'", dir + "/b.log"), 0);
-  EXPECT_NE(readText(dir + "/b.log").find("expected 7 numbers"), std::string::npos) << readText(dir + "/b.log");
+  EXPECT_NE(readText(dir + "/b.log").find("expected 7 numbers"), std::string::npos)
+      << readText(dir + "/b.log");
   EXPECT_NE(run(bin + " --clouds '" + dir + "/clouds'", dir + "/c.log"), 0);  // --poses missing
-  EXPECT_NE(readText(dir + "/c.log").find("--poses"), std::string::npos) << readText(dir + "/c.log");
+  EXPECT_NE(readText(dir + "/c.log").find("--poses"), std::string::npos)
+      << readText(dir + "/c.log");
   EXPECT_EQ(run(bin + " --help", dir + "/help.log"), 0);
   const std::string help = readText(dir + "/help.log");
-  for (const char* option : {"--frames", "--clouds", "--poses", "--extrinsic", "--resolution", "--max-range",
-                             "--config", "--out", "--voxels-out", "--stats-out"}) {
+  for (const char* option : {"--frames", "--clouds", "--poses", "--extrinsic", "--resolution",
+                             "--max-range", "--config", "--out", "--voxels-out", "--stats-out"}) {
     EXPECT_NE(help.find(option), std::string::npos) << option;
   }
 }
@@ -365,11 +375,12 @@ TEST(Replay, SimulatorIsTheDefaultSource) {
   const std::string dir = ::testing::TempDir() + "/mlmap_replay_sim";
   fs::remove_all(dir);
   // A --save-map folder that does not exist is refused before the run, not after it.
-  EXPECT_NE(run(std::string(MLMAP_REPLAY_BIN) + " --max-frames 5 --out '" + dir +
-                    "' --save-map '" + dir + "/no/such/folder/map.mlmap'",
+  EXPECT_NE(run(std::string(MLMAP_REPLAY_BIN) + " --max-frames 5 --out '" + dir + "' --save-map '" +
+                    dir + "/no/such/folder/map.mlmap'",
                 dir + ".log"),
             0);
-  EXPECT_NE(readText(dir + ".log").find("does not exist"), std::string::npos) << readText(dir + ".log");
+  EXPECT_NE(readText(dir + ".log").find("does not exist"), std::string::npos)
+      << readText(dir + ".log");
   EXPECT_FALSE(fs::exists(dir + "/stats.json"));
   ASSERT_EQ(run(std::string(MLMAP_REPLAY_BIN) + " --max-frames 5 --out '" + dir + "' --save-map '" +
                     dir + "/map.mlmap'",
@@ -378,7 +389,8 @@ TEST(Replay, SimulatorIsTheDefaultSource) {
       << readText(dir + ".log");
   // The saved map holds exactly the voxels of the text list.
   std::vector<VoxelIndex> saved;
-  for (const io::OccupiedVoxel& v : io::occupiedVoxels(io::loadMapFile(dir + "/map.mlmap"))) saved.push_back(v.index);
+  for (const io::OccupiedVoxel& v : io::occupiedVoxels(io::loadMapFile(dir + "/map.mlmap")))
+    saved.push_back(v.index);
   std::vector<VoxelIndex> listed = io::readVoxelText(dir + "/occupied_voxels.txt");
   const auto less = [](const VoxelIndex& a, const VoxelIndex& b) {
     return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
@@ -430,8 +442,10 @@ TEST(Replay, AwarenessThreadsGiveTheSameMapAsOne) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   const std::string base = std::string(MLMAP_REPLAY_BIN) + " --max-frames 8 --awareness-threads ";
-  ASSERT_EQ(run(base + "1 --out '" + dir + "/one'", dir + "/one.log"), 0) << readText(dir + "/one.log");
-  ASSERT_EQ(run(base + "3 --out '" + dir + "/three'", dir + "/three.log"), 0) << readText(dir + "/three.log");
+  ASSERT_EQ(run(base + "1 --out '" + dir + "/one'", dir + "/one.log"), 0)
+      << readText(dir + "/one.log");
+  ASSERT_EQ(run(base + "3 --out '" + dir + "/three'", dir + "/three.log"), 0)
+      << readText(dir + "/three.log");
   const std::string one = readText(dir + "/one/occupied_voxels.txt");
   EXPECT_GT(io::readVoxelText(dir + "/one/occupied_voxels.txt").size(), 1000u);
   EXPECT_EQ(readText(dir + "/three/occupied_voxels.txt"), one);
@@ -440,7 +454,9 @@ TEST(Replay, AwarenessThreadsGiveTheSameMapAsOne) {
   EXPECT_NE(run(base + "0 --out '" + dir + "/none'", dir + "/none.log"), 0);
   // Without the option or --config: two threads where the machine has two cores.
   ASSERT_EQ(run(std::string(MLMAP_REPLAY_BIN) + " --max-frames 8 --out '" + dir + "/auto'",
-                dir + "/auto.log"), 0) << readText(dir + "/auto.log");
+                dir + "/auto.log"),
+            0)
+      << readText(dir + "/auto.log");
   EXPECT_EQ(jsonInt(readText(dir + "/auto/stats.json"), "awareness_threads"),
             std::thread::hardware_concurrency() >= 2 ? 2 : 1);
   EXPECT_EQ(readText(dir + "/auto/occupied_voxels.txt"), one);

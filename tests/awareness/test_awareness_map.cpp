@@ -12,12 +12,11 @@
 namespace mlmap {
 namespace {
 
-
 AwarenessConfig smallConfig() {
   AwarenessConfig c;
   c.rho_cell_m = 0.1;
-  c.rho_cells = 60;   // 6 m
-  c.phi_cells = 90;   // 4 deg
+  c.rho_cells = 60;  // 6 m
+  c.phi_cells = 90;  // 4 deg
   c.z_cell_m = 0.2;
   c.z_cells = 20;
   c.z_cells_below = 10;
@@ -100,8 +99,8 @@ void expectRayCleared(const AwarenessMap& map, const Eigen::Vector3d& from,
       ASSERT_EQ(map.state(cell), Occupancy::kOccupied) << what;
     } else {
       ASSERT_EQ(map.state(cell), Occupancy::kFree)
-          << what << ": cell rho " << cell.rho << " phi " << cell.phi << " z " << cell.z
-          << " at " << p.transpose() << " (sample " << i << "/" << steps << ") not cleared";
+          << what << ": cell rho " << cell.rho << " phi " << cell.phi << " z " << cell.z << " at "
+          << p.transpose() << " (sample " << i << "/" << steps << ") not cleared";
     }
   }
 }
@@ -123,7 +122,8 @@ TEST(AwarenessMap, RaysClearEveryCellUpToTheHitInEverySectorAndAtTheBorders) {
     double z = bottom + 0.01 + unit(rng) * (top - bottom - 0.02);
     if (phi % 5 == 1) z = top - 0.001;
     if (phi % 5 == 2) z = bottom + 0.001;
-    const Eigen::Vector3d hit = body + Eigen::Vector3d(rho * std::cos(angle), rho * std::sin(angle), z);
+    const Eigen::Vector3d hit =
+        body + Eigen::Vector3d(rho * std::cos(angle), rho * std::sin(angle), z);
     ASSERT_TRUE(map.markHit(hit));
     map.castRaysToHits();
     map.endFrame();
@@ -156,14 +156,16 @@ TEST(AwarenessMap, RaysClearNothingBeyondTheirCone) {
     map.endFrame();
     // Reference: cells crossed by rays to a 21 x 21 grid over each hit cell's rho-z rectangle.
     std::set<std::tuple<int, int, int>> reached;
-    for (const Eigen::Vector3d& h : {hit, Eigen::Vector3d(0.4 * hit + Eigen::Vector3d(0, 0, 0.5))}) {
+    for (const Eigen::Vector3d& h :
+         {hit, Eigen::Vector3d(0.4 * hit + Eigen::Vector3d(0, 0, 0.5))}) {
       AwarenessCell hc;
       ASSERT_TRUE(map.cellOf(h, &hc));
       const double phi = std::atan2(h.y(), h.x());
       for (int a = 0; a <= 20; ++a) {
         for (int b = 0; b <= 20; ++b) {
           const double r = (hc.rho + 0.001 + 0.998 * a / 20.0) * config.rho_cell_m;
-          const double zz = (hc.z - config.z_cells_below + 0.001 + 0.998 * b / 20.0) * config.z_cell_m;
+          const double zz =
+              (hc.z - config.z_cells_below + 0.001 + 0.998 * b / 20.0) * config.z_cell_m;
           const Eigen::Vector3d target(r * std::cos(phi), r * std::sin(phi), zz);
           // The ray from the origin to the target, cut where it crosses a rho or z cell border
           // (rho and z grow linearly along it); each piece's midpoint names a reached cell.
@@ -179,7 +181,8 @@ TEST(AwarenessMap, RaysClearNothingBeyondTheirCone) {
           for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
             AwarenessCell c;
             const double t = 0.5 * (cuts[i] + cuts[i + 1]);
-            if (cuts[i + 1] - cuts[i] > 1e-9 && map.cellOf(target * t, &c)) reached.insert({c.rho, c.phi, c.z});
+            if (cuts[i + 1] - cuts[i] > 1e-9 && map.cellOf(target * t, &c))
+              reached.insert({c.rho, c.phi, c.z});
           }
         }
       }
@@ -203,8 +206,8 @@ TEST(AwarenessMap, RhoZeroColumnAndSteepRays) {
   AwarenessMap map(config);
   map.beginFrame(body);
   // Almost straight up and down: the rays stay in rho index 0.
-  const std::vector<Eigen::Vector3d> hits = {{0.03, 0.02, 1.9}, {-0.02, 0.05, -1.95},
-                                             {0.5, 0.01, 1.95}};
+  const std::vector<Eigen::Vector3d> hits = {
+      {0.03, 0.02, 1.9}, {-0.02, 0.05, -1.95}, {0.5, 0.01, 1.95}};
   for (const auto& h : hits) ASSERT_TRUE(map.markHit(h));
   map.castRaysToHits();
   map.endFrame();
@@ -261,7 +264,8 @@ TEST(AwarenessMap, ObstaclesAreCarriedByThePoseChangeAndClearedByLaterRays) {
   EXPECT_EQ(map.occupiedPoints()[0], obstacle);  // the measured point, not a cell centre
   // Now a ray to something behind it passes through: the obstacle moved away.
   map.beginFrame({-1.3, 0.4, 0.2});
-  const Eigen::Vector3d behind = Eigen::Vector3d(-1.3, 0.4, 0.2) + 1.6 * (obstacle - Eigen::Vector3d(-1.3, 0.4, 0.2));
+  const Eigen::Vector3d behind =
+      Eigen::Vector3d(-1.3, 0.4, 0.2) + 1.6 * (obstacle - Eigen::Vector3d(-1.3, 0.4, 0.2));
   ASSERT_TRUE(map.markHit(behind));
   map.castRaysToHits();
   map.endFrame();

@@ -80,7 +80,8 @@ void expectCompleteCarving(double resolution, int points, std::uint32_t seed,
         o + T_W_S.linear() * p_S.cast<double>() * (cut ? config.awareness.max_range_m / r : 1.0);
     const VoxelIndex end_voxel = voxelIndexOf(end, resolution);
     const VoxelIndex end_rel = end_voxel - free.origin();
-    if (!cut && free.contains(end_rel.x(), end_rel.y(), end_rel.z())) {  // else beyond the map's reach
+    if (!cut &&
+        free.contains(end_rel.x(), end_rel.y(), end_rel.z())) {  // else beyond the map's reach
       ++hits_expected;
       EXPECT_EQ(hit_keys.count(test::key(end_voxel)), 1u);
     }
@@ -183,7 +184,8 @@ TEST(AwarenessStage, FreeSetBitsLieInTheMarkedRowsAndNoFrameLeavesBitsBehind) {
     const VoxelBitset::Rows& rows = free.markedRows();
     std::size_t outside = 0;
     free.forEach([&](int i, int j, int /*k*/) {
-      outside += (i < rows.x_begin || i >= rows.x_end || j < rows.y_begin || j >= rows.y_end) ? 1 : 0;
+      outside +=
+          (i < rows.x_begin || i >= rows.x_end || j < rows.y_begin || j >= rows.y_end) ? 1 : 0;
     });
     EXPECT_EQ(outside, 0u) << label;
   };
@@ -198,7 +200,8 @@ TEST(AwarenessStage, FreeSetBitsLieInTheMarkedRowsAndNoFrameLeavesBitsBehind) {
   ASSERT_EQ(batch.free.origin(), reference.free.origin());
   ASSERT_EQ(batch.free.dims(), reference.free.dims());
   const std::size_t words = static_cast<std::size_t>(batch.free.dims().x()) *
-                            static_cast<std::size_t>(batch.free.dims().y()) * batch.free.wordsPerRow();
+                            static_cast<std::size_t>(batch.free.dims().y()) *
+                            batch.free.wordsPerRow();
   std::size_t differing = 0;
   for (std::size_t w = 0; w < words; ++w)
     differing += batch.free.data()[w] != reference.free.data()[w] ? 1 : 0;
@@ -206,7 +209,8 @@ TEST(AwarenessStage, FreeSetBitsLieInTheMarkedRowsAndNoFrameLeavesBitsBehind) {
   EXPECT_EQ(batch.free_count, batch.free.count());
   EXPECT_GT(batch.free_count, 1000u);
   const VoxelBitset::Rows& rows = batch.free.markedRows();
-  const double marked = static_cast<double>(rows.x_end - rows.x_begin) * (rows.y_end - rows.y_begin);
+  const double marked =
+      static_cast<double>(rows.x_end - rows.x_begin) * (rows.y_end - rows.y_begin);
   EXPECT_LT(marked, 0.5 * batch.free.dims().x() * batch.free.dims().y());
 }
 
@@ -216,8 +220,8 @@ TEST(AwarenessStage, RejectsBadPointsWithCountersAndKeepsGoodOnes) {
   PointCloudFrame frame;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float inf = std::numeric_limits<float>::infinity();
-  frame.points_S = {{nan, 0, 1}, {0, inf, 1}, {0, 0, 0}, {0, 0, 0.05f}, {1e30f, 0, 0},
-                    {0, 0, 3.0f},  {0, 0, 3.01f}, {0, 0, 100.0f}};
+  frame.points_S = {{nan, 0, 1},   {0, inf, 1},  {0, 0, 0},     {0, 0, 0.05f},
+                    {1e30f, 0, 0}, {0, 0, 3.0f}, {0, 0, 3.01f}, {0, 0, 100.0f}};
   MeasurementBatch batch;
   PointCounters c;
   stage.process(frame, &batch, &c);
@@ -273,7 +277,8 @@ TEST(AwarenessStage, DepthImageMatchesItsBackProjectedCloud) {
         const bool hole = sparse_rows ? u < 40 || (u < 94 && u % 3 == 0) : i % 7 == 0;
         const float d = z(rng);
         if (encoding == DepthEncoding::kUint16Millimetres) {
-          depth.depth_mm.push_back(hole ? (i % 2 ? 0 : 0xFFFF) : static_cast<std::uint16_t>(d * 1000));
+          depth.depth_mm.push_back(hole ? (i % 2 ? 0 : 0xFFFF)
+                                        : static_cast<std::uint16_t>(d * 1000));
         } else {
           const float bad[] = {0.0f, std::numeric_limits<float>::quiet_NaN(),
                                std::numeric_limits<float>::infinity(), -1.0f};

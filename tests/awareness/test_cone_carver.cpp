@@ -118,9 +118,10 @@ TEST(ConeCarver, CarvesLittleMoreThanTheRays) {
     });
   }
   const double ratio = static_cast<double>(marked_total) / static_cast<double>(crossed_total);
-  std::printf("cone carving: %zu voxels marked for %zu crossed by dense rays (x%.2f), farthest "
-              "marked voxel centre %.2f voxels from the central ray\n",
-              marked_total, crossed_total, ratio, worst_distance);
+  std::printf(
+      "cone carving: %zu voxels marked for %zu crossed by dense rays (x%.2f), farthest "
+      "marked voxel centre %.2f voxels from the central ray\n",
+      marked_total, crossed_total, ratio, worst_distance);
   EXPECT_LT(ratio, 1.6);
   EXPECT_LT(worst_distance, 2.5);
 }
@@ -128,7 +129,8 @@ TEST(ConeCarver, CarvesLittleMoreThanTheRays) {
 // The reference: the float nearest to x, one step toward -infinity when that lies above x.
 float referenceFloatBelow(double x) {
   const float f = static_cast<float>(x);
-  return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+  return static_cast<double>(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity())
+                                    : f;
 }
 
 // Threads split the box by x: the cone clipped to each of a partition of x
@@ -196,8 +198,18 @@ TEST(ConeCarver, FloatBelowIsTheLargestFloatNotAboveItsArgument) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> coord(-300.0, 300.0);
   std::uniform_real_distribution<double> tiny(-1e-40, 1e-40);  // around zero, denormals
-  std::vector<double> xs = {0.0, -0.0, 1.0, -1.0, 0.5, -0.5, 1e-50, -1e-50, 3.0000001, -3.0000001,
-                            std::numeric_limits<float>::max(), -std::numeric_limits<float>::max() + 1e20};
+  std::vector<double> xs = {0.0,
+                            -0.0,
+                            1.0,
+                            -1.0,
+                            0.5,
+                            -0.5,
+                            1e-50,
+                            -1e-50,
+                            3.0000001,
+                            -3.0000001,
+                            std::numeric_limits<float>::max(),
+                            -std::numeric_limits<float>::max() + 1e20};
   for (int i = 0; i < 20000; ++i) xs.push_back(coord(rng));
   for (int i = 0; i < 2000; ++i) xs.push_back(tiny(rng));
   int stepped = 0;
@@ -206,7 +218,8 @@ TEST(ConeCarver, FloatBelowIsTheLargestFloatNotAboveItsArgument) {
     ASSERT_EQ(std::signbit(below), std::signbit(referenceFloatBelow(x))) << "x = " << x;
     ASSERT_EQ(below, referenceFloatBelow(x)) << "x = " << x;
     ASSERT_LE(static_cast<double>(below), x);
-    ASSERT_GT(static_cast<double>(std::nextafter(below, std::numeric_limits<float>::infinity())), x);
+    ASSERT_GT(static_cast<double>(std::nextafter(below, std::numeric_limits<float>::infinity())),
+              x);
     stepped += static_cast<double>(static_cast<float>(x)) > x ? 1 : 0;
   }
   // Both ways of rounding were exercised, on both signs.

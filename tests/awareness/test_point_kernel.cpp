@@ -19,8 +19,8 @@ void referencePoint(const PointKernel& k, float xf, float yf, float zf, std::uin
                     float coord[4]) {
   double p[3] = {xf, yf, zf};
   const double r2 = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
-  const bool finite = std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]) &&
-                      std::isfinite(r2);
+  const bool finite =
+      std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]) && std::isfinite(r2);
   const bool cut = finite && r2 > k.max_range * k.max_range;
   if (!finite) {
     p[0] = p[1] = p[2] = 0.0;  // documented: a non-finite point gets the origin's coordinates
@@ -63,11 +63,10 @@ struct Block {
 PointKernel randomKernel(std::mt19937& rng, double resolution_m) {
   std::uniform_real_distribution<double> angle(-3.2, 3.2);
   std::uniform_real_distribution<double> position(-50.0, 50.0);
-  const Eigen::Matrix3d R =
-      (Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitZ()) *
-       Eigen::AngleAxisd(angle(rng) / 4.0, Eigen::Vector3d::UnitY()) *
-       Eigen::AngleAxisd(angle(rng) / 4.0, Eigen::Vector3d::UnitX()))
-          .toRotationMatrix();
+  const Eigen::Matrix3d R = (Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(angle(rng) / 4.0, Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(angle(rng) / 4.0, Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
   PointKernel k;
   const Eigen::Matrix3d M = R / resolution_m;
   for (Eigen::Index r = 0; r < 3; ++r) {
@@ -100,12 +99,24 @@ Block randomBlock(std::mt19937& rng, const PointKernel& k, std::size_t n) {
     const float y = 6.5f * u(rng);
     const float z = 6.5f * u(rng);
     switch (kind(rng)) {
-      case 0: b.add(nan, y, z); break;
-      case 1: b.add(x, -inf, z); break;
-      case 2: b.add(0.0f, 0.0f, 0.0f); break;
-      case 3: b.add(0.05f * x, 0.05f * y, 0.05f * z); break;  // within the minimum range
-      case 4: b.add(1e30f * x, y, z); break;                  // absurd: cut at the range
-      case 5: b.add(3e38f, -3e38f, 1.0f); break;              // the largest floats: cut
+      case 0:
+        b.add(nan, y, z);
+        break;
+      case 1:
+        b.add(x, -inf, z);
+        break;
+      case 2:
+        b.add(0.0f, 0.0f, 0.0f);
+        break;
+      case 3:
+        b.add(0.05f * x, 0.05f * y, 0.05f * z);
+        break;  // within the minimum range
+      case 4:
+        b.add(1e30f * x, y, z);
+        break;  // absurd: cut at the range
+      case 5:
+        b.add(3e38f, -3e38f, 1.0f);
+        break;  // the largest floats: cut
       case 6: {
         // A point whose first world coordinate is an integer in voxel units: on a face.
         using RowMajor3d = Eigen::Matrix<double, 3, 3, Eigen::RowMajor>;
@@ -115,7 +126,9 @@ Block randomBlock(std::mt19937& rng, const PointKernel& k, std::size_t n) {
         b.add(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
         break;
       }
-      default: b.add(x, y, z); break;  // within and beyond the range
+      default:
+        b.add(x, y, z);
+        break;  // within and beyond the range
     }
   }
   return b;
@@ -138,11 +151,11 @@ void expectSameBits(const std::vector<std::uint32_t>& keys_a, const std::vector<
     for (std::size_t j = 4 * i; j < 4 * i + 4; ++j) {
       same = same && bitsOf(coords_a[j]) == bitsOf(coords_b[j]);
     }
-    ASSERT_TRUE(same)
-        << what << ": point " << i << " (" << block.xs[i] << ", " << block.ys[i] << ", "
-        << block.zs[i] << ") coordinates " << coords_a[4 * i] << " " << coords_a[4 * i + 1]
-        << " " << coords_a[4 * i + 2] << " against " << coords_b[4 * i] << " "
-        << coords_b[4 * i + 1] << " " << coords_b[4 * i + 2];
+    ASSERT_TRUE(same) << what << ": point " << i << " (" << block.xs[i] << ", " << block.ys[i]
+                      << ", " << block.zs[i] << ") coordinates " << coords_a[4 * i] << " "
+                      << coords_a[4 * i + 1] << " " << coords_a[4 * i + 2] << " against "
+                      << coords_b[4 * i] << " " << coords_b[4 * i + 1] << " "
+                      << coords_b[4 * i + 2];
   }
 }
 
@@ -175,11 +188,11 @@ TEST(PointKernel, EveryImplementationMatchesTheReferenceBitForBit) {
     for (std::size_t i = 0; i < n; ++i) {
       referencePoint(k, block.xs[i], block.ys[i], block.zs[i], &want_keys[i], &want_coords[4 * i]);
       const std::uint32_t key = want_keys[i];
-      ++kinds[key == kPointNonFiniteKey               ? 4
-              : key == kPointTooCloseKey              ? 3
-              : key >= kPointOutsideCutKey            ? 2
-              : (key & kPointCutFlag) != 0            ? 1
-                                                      : 0];
+      ++kinds[key == kPointNonFiniteKey    ? 4
+              : key == kPointTooCloseKey   ? 3
+              : key >= kPointOutsideCutKey ? 2
+              : (key & kPointCutFlag) != 0 ? 1
+                                           : 0];
       const float x = want_coords[4 * i];
       if (key < kPointOutsideCutKey && std::abs(x - std::round(x)) < 1e-9f) ++on_face;
     }
@@ -197,10 +210,11 @@ TEST(PointKernel, EveryImplementationMatchesTheReferenceBitForBit) {
   // The cases were all there.
   for (const std::size_t count : kinds) EXPECT_GT(count, 500u);
   EXPECT_GT(on_face, 500u);
-  std::printf("%zu points checked (%zu in box voxels, %zu cut there, %zu outside the box, %zu too "
-              "close, %zu non-finite; %zu on a voxel face); AVX2 kernel %s\n",
-              checked, kinds[0], kinds[1], kinds[2], kinds[3], kinds[4], on_face,
-              pointKernelAvx2Supported() ? "checked" : "not run (this CPU has no AVX2)");
+  std::printf(
+      "%zu points checked (%zu in box voxels, %zu cut there, %zu outside the box, %zu too "
+      "close, %zu non-finite; %zu on a voxel face); AVX2 kernel %s\n",
+      checked, kinds[0], kinds[1], kinds[2], kinds[3], kinds[4], on_face,
+      pointKernelAvx2Supported() ? "checked" : "not run (this CPU has no AVX2)");
 }
 
 }  // namespace

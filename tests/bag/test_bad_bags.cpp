@@ -333,11 +333,11 @@ TEST(BadBags, SqliteFileThatIsNotABag) {
 // `messages` or `topics` as a view: a recursive view never ends and a join makes rows without
 // bound from a small file; only tables are read, whose rows the file's size bounds.
 TEST(BadBags, ViewsInsteadOfTablesAreRefused) {
-  const std::string recursive = editedDb3(
-      "recursive_view.db3",
-      "ALTER TABLE messages RENAME TO m0; CREATE VIEW messages AS WITH RECURSIVE "
-      "r(id, topic_id, timestamp, data) AS (SELECT id, topic_id, timestamp, data FROM m0 "
-      "UNION ALL SELECT id, topic_id, timestamp + 1, data FROM r) SELECT * FROM r");
+  const std::string recursive =
+      editedDb3("recursive_view.db3",
+                "ALTER TABLE messages RENAME TO m0; CREATE VIEW messages AS WITH RECURSIVE "
+                "r(id, topic_id, timestamp, data) AS (SELECT id, topic_id, timestamp, data FROM m0 "
+                "UNION ALL SELECT id, topic_id, timestamp + 1, data FROM r) SELECT * FROM r");
   EXPECT_EQ(errorOf([&] { readEverything(recursive); }),
             recursive + ": not a rosbag2 sqlite3 bag: 'messages' is a view, not a table");
   const std::string topics = editedDb3(
@@ -378,7 +378,6 @@ TEST(BadBags, MetadataOfAnotherStorage) {
       std::string::npos);
 }
 
-
 // A chunk of tiny messages that compresses a thousandfold used to be indexed in full (24 bytes a
 // message, 2 GB for a 1 GiB chunk of a 300 KB file): the index is now bounded by the file's size.
 TEST(BadBags, ChunksOfTinyMessagesCannotOutgrowTheFile) {
@@ -390,8 +389,8 @@ TEST(BadBags, ChunksOfTinyMessagesCannotOutgrowTheFile) {
   writeAll(path, bytes);
   const std::string error = errorOf([&] { readEverything(path); });
   EXPECT_NE(error.find(path + ": Chunk record at byte "), std::string::npos) << error;
-  EXPECT_NE(error.find(": more than 4194304 messages in a file of " +
-                       std::to_string(bytes.size()) + " bytes"),
+  EXPECT_NE(error.find(": more than 4194304 messages in a file of " + std::to_string(bytes.size()) +
+                       " bytes"),
             std::string::npos)
       << error;
   // Fewer of the same messages are read.

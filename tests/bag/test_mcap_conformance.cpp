@@ -31,7 +31,7 @@ using Fields = std::map<std::string, Json>;
 fs::path dataDir() {
   const char* dir = std::getenv("MLMAP_MCAP_CONFORMANCE_DIR");  // NOLINT(concurrency-mt-unsafe)
   return dir != nullptr && *dir != '\0' ? fs::path(dir)
-                                         : fs::path(MLMAP_SHARED_DATA_DIR) / "mcap-conformance";
+                                        : fs::path(MLMAP_SHARED_DATA_DIR) / "mcap-conformance";
 }
 
 const fs::path kDataDir = dataDir();

@@ -57,8 +57,7 @@ TEST(TfTree, PosesEqualEveryEdgeComposedAtEveryStamp) {
   for (std::size_t k = 0; k < poses.size(); ++k) {
     const double t = d_base[k].stamp_s;
     ASSERT_DOUBLE_EQ(poses[k].stamp_s, t);
-    const Transform expected =
-        T_map_a * TfTree::at(a_b, t) * T_b_c * T_c_d * TfTree::at(d_base, t);
+    const Transform expected = T_map_a * TfTree::at(a_b, t) * T_b_c * T_c_d * TfTree::at(d_base, t);
     EXPECT_LT((poses[k].T.matrix() - expected.matrix()).cwiseAbs().maxCoeff(), 1e-9) << k;
   }
 }

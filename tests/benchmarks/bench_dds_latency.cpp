@@ -107,8 +107,9 @@ const char* verdict(bool ok) { return ok ? "met" : "MISSED"; }
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"mlmap_bench_dds_latency: end-to-end latency (capture -> local map at a subscriber) "
-               "of mlmap_node over DDS; run by tools/bench_dds_latency.sh"};
+  CLI::App app{
+      "mlmap_bench_dds_latency: end-to-end latency (capture -> local map at a subscriber) "
+      "of mlmap_node over DDS; run by tools/bench_dds_latency.sh"};
   std::string config_path, json_path, label = "run";
   int frames_sent = 0;
   double duration_s = 600.0, idle_s = 3.0, warmup_s = 1.0;
@@ -117,18 +118,22 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   app.add_option("--frames", frames_sent, "frames the sensor publisher sends (to count drops)")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--label", label, "name of this run in the table and the JSON")->capture_default_str();
+  app.add_option("--label", label, "name of this run in the table and the JSON")
+      ->capture_default_str();
   app.add_option("--json", json_path, "write the figures as JSON to this file");
   app.add_option("--duration", duration_s, "stop after this many seconds at most")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app.add_option("--idle-stop", idle_s,
                  "stop once neither a local map nor a status arrived for this many seconds after "
                  "the first local map")
-      ->check(CLI::PositiveNumber)->capture_default_str();
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app.add_option("--warmup", warmup_s,
                  "seconds of stamps after the first frame left out of the latency figures "
                  "(discovery, first allocations); every frame still counts for drops")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   app.add_flag("--probe-cloud", probe_cloud,
                "also subscribe to the sensor's clouds to time their transport alone (a second "
                "4.8 MB reader: adds load, for diagnosis only)");
@@ -171,8 +176,9 @@ int main(int argc, char** argv) {
             if (activity) rx.last_activity = Clock::now();
           },
           onError);
-      fdds::DataReader* reader = mlmap::dds::createReader<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(
-          subscriber, mlmap::dds::ddsTopicName(ns, name), qos, l.get());
+      fdds::DataReader* reader =
+          mlmap::dds::createReader<mlmap::dds::sensor_msgs::PointCloud2_PubSubType>(
+              subscriber, mlmap::dds::ddsTopicName(ns, name), qos, l.get());
       listeners.push_back(std::move(l));
       return reader;
     };
@@ -210,8 +216,8 @@ int main(int argc, char** argv) {
           },
           onError);
       status_reader = mlmap::dds::createReader<mlmap::dds::mlmap_msgs::Status_PubSubType>(
-          subscriber, mlmap::dds::ddsTopicName(ns, n.status), mlmap::dds::reliableReaderQos(false, 10),
-          l.get());
+          subscriber, mlmap::dds::ddsTopicName(ns, n.status),
+          mlmap::dds::reliableReaderQos(false, 10), l.get());
       listeners.push_back(std::move(l));
     }
 
@@ -285,13 +291,14 @@ int main(int argc, char** argv) {
     const auto sent = static_cast<std::int64_t>(frames_sent);
     const auto mapped = static_cast<std::int64_t>(st.frames_mapped_());
     const auto received = static_cast<std::int64_t>(local.size());
-    const auto node_lost = static_cast<std::int64_t>(st.frames_dropped_() + st.frames_rejected_() +
-                                                     st.clouds_without_pose_() +
-                                                     st.clouds_malformed_());
+    const auto node_lost =
+        static_cast<std::int64_t>(st.frames_dropped_() + st.frames_rejected_() +
+                                  st.clouds_without_pose_() + st.clouds_malformed_());
     const std::int64_t missing = sent - received;
     const std::int64_t lost_before_node = std::max<std::int64_t>(0, sent - mapped - node_lost);
     std::int64_t local_lost_in_transport = 0;
-    for (const auto& [stamp_s, ms] : tf) local_lost_in_transport += local.count(stamp_s) == 0 ? 1 : 0;
+    for (const auto& [stamp_s, ms] : tf)
+      local_lost_in_transport += local.count(stamp_s) == 0 ? 1 : 0;
     const std::int64_t local_not_published =
         std::max<std::int64_t>(0, mapped - received - local_lost_in_transport);
     const bool have_status = rx.statuses > 0;
@@ -304,16 +311,17 @@ int main(int argc, char** argv) {
     std::printf("frames: %d sent, %lld mapped, %lld local maps received (%lld missing)\n",
                 frames_sent, static_cast<long long>(mapped), static_cast<long long>(received),
                 static_cast<long long>(missing));
-    std::printf("  lost on the way to the node: %lld; in the node: %llu dropped (queue full), %llu "
-                "rejected, %llu without pose, %llu malformed; local maps not published: %lld, "
-                "published but lost on the way: %lld\n",
-                static_cast<long long>(lost_before_node),
-                static_cast<unsigned long long>(st.frames_dropped_()),
-                static_cast<unsigned long long>(st.frames_rejected_()),
-                static_cast<unsigned long long>(st.clouds_without_pose_()),
-                static_cast<unsigned long long>(st.clouds_malformed_()),
-                static_cast<long long>(local_not_published),
-                static_cast<long long>(local_lost_in_transport));
+    std::printf(
+        "  lost on the way to the node: %lld; in the node: %llu dropped (queue full), %llu "
+        "rejected, %llu without pose, %llu malformed; local maps not published: %lld, "
+        "published but lost on the way: %lld\n",
+        static_cast<long long>(lost_before_node),
+        static_cast<unsigned long long>(st.frames_dropped_()),
+        static_cast<unsigned long long>(st.frames_rejected_()),
+        static_cast<unsigned long long>(st.clouds_without_pose_()),
+        static_cast<unsigned long long>(st.clouds_malformed_()),
+        static_cast<long long>(local_not_published),
+        static_cast<long long>(local_lost_in_transport));
     std::printf("local map: %.0f voxels, %.1f kB per message\n", local_points, local_kb);
     std::printf("%-44s %8s %8s %8s %8s\n", "[ms]", "p50", "p90", "p99", "max");
     auto row = [](const char* name, const Summary& s) {
@@ -331,50 +339,57 @@ int main(int argc, char** argv) {
                 st.awareness_p99_ms_());
     std::printf("%-44s %8.2f %8s %8.2f\n", "  local-global stage", st.local_global_median_ms_(), "",
                 st.local_global_p99_ms_());
-    std::printf("targets: no dropped frame: %s; p50 %.2f <= %.2f ms (compute + 5): %s; "
-                "p99 %.2f <= %.2f ms (compute + 15): %s\n",
-                verdict(drops_ok), latency.p50_ms, p50_target_ms,
-                verdict(have_status && latency.count > 0 && latency.p50_ms <= p50_target_ms),
-                latency.p99_ms, p99_target_ms,
-                verdict(have_status && latency.count > 0 && latency.p99_ms <= p99_target_ms));
+    std::printf(
+        "targets: no dropped frame: %s; p50 %.2f <= %.2f ms (compute + 5): %s; "
+        "p99 %.2f <= %.2f ms (compute + 15): %s\n",
+        verdict(drops_ok), latency.p50_ms, p50_target_ms,
+        verdict(have_status && latency.count > 0 && latency.p50_ms <= p50_target_ms),
+        latency.p99_ms, p99_target_ms,
+        verdict(have_status && latency.count > 0 && latency.p99_ms <= p99_target_ms));
     if (!have_status) std::printf("no status message arrived: engine figures unknown\n");
     // One line for tools/bench_dds_latency.sh's comparison table.
-    std::printf("result %s sent=%d mapped=%lld received=%lld p50=%.2f p99=%.2f max=%.2f "
-                "engine_p50=%.2f engine_p99=%.2f to_tf_p50=%.2f output_p50=%.2f\n",
-                label.c_str(), frames_sent, static_cast<long long>(mapped),
-                static_cast<long long>(received), latency.p50_ms, latency.p99_ms,
-                latency.max_ms, st.total_median_ms_(), st.total_p99_ms_(), to_tf.p50_ms,
-                output.p50_ms);
+    std::printf(
+        "result %s sent=%d mapped=%lld received=%lld p50=%.2f p99=%.2f max=%.2f "
+        "engine_p50=%.2f engine_p99=%.2f to_tf_p50=%.2f output_p50=%.2f\n",
+        label.c_str(), frames_sent, static_cast<long long>(mapped),
+        static_cast<long long>(received), latency.p50_ms, latency.p99_ms, latency.max_ms,
+        st.total_median_ms_(), st.total_p99_ms_(), to_tf.p50_ms, output.p50_ms);
 
     if (!json_path.empty()) {
       std::ofstream out(json_path);
       out << "{\n  \"label\": \"" << label << "\",\n  \"warmup_s\": " << warmup_s
           << ",\n  \"frames_sent\": " << frames_sent << ",\n  \"local_maps_received\": " << received
-          << ",\n  \"frames_missing\": " << missing << ",\n  \"lost_before_node\": "
-          << lost_before_node << ",\n  \"local_maps_not_published\": " << local_not_published
+          << ",\n  \"frames_missing\": " << missing
+          << ",\n  \"lost_before_node\": " << lost_before_node
+          << ",\n  \"local_maps_not_published\": " << local_not_published
           << ",\n  \"local_maps_lost_in_transport\": " << local_lost_in_transport
-          << ",\n  \"node\": {\"frames_in\": "
-          << st.frames_in_() << ", \"frames_mapped\": " << st.frames_mapped_()
-          << ", \"frames_dropped\": " << st.frames_dropped_() << ", \"frames_rejected\": "
-          << st.frames_rejected_() << ", \"clouds_without_pose\": " << st.clouds_without_pose_()
-          << ", \"clouds_malformed\": " << st.clouds_malformed_() << ", \"statuses\": " << rx.statuses
+          << ",\n  \"node\": {\"frames_in\": " << st.frames_in_()
+          << ", \"frames_mapped\": " << st.frames_mapped_()
+          << ", \"frames_dropped\": " << st.frames_dropped_()
+          << ", \"frames_rejected\": " << st.frames_rejected_()
+          << ", \"clouds_without_pose\": " << st.clouds_without_pose_()
+          << ", \"clouds_malformed\": " << st.clouds_malformed_()
+          << ", \"statuses\": " << rx.statuses
           << "},\n  \"engine_ms\": {\"total_median\": " << st.total_median_ms_()
-          << ", \"total_p99\": " << st.total_p99_ms_() << ", \"awareness_median\": "
-          << st.awareness_median_ms_() << ", \"awareness_p99\": " << st.awareness_p99_ms_()
+          << ", \"total_p99\": " << st.total_p99_ms_()
+          << ", \"awareness_median\": " << st.awareness_median_ms_()
+          << ", \"awareness_p99\": " << st.awareness_p99_ms_()
           << ", \"local_global_median\": " << st.local_global_median_ms_()
           << ", \"local_global_p99\": " << st.local_global_p99_ms_()
-          << "},\n  \"latency\": " << json(latency) << ",\n  \"latency_all_frames\": "
-          << json(latency_all) << ",\n  \"to_tf\": " << json(to_tf)
-          << ",\n  \"tf_to_local_map\": " << json(output) << ",\n  \"cloud_transport\": "
-          << json(cloud) << ",\n  \"local_map_kb\": " << local_kb
+          << "},\n  \"latency\": " << json(latency)
+          << ",\n  \"latency_all_frames\": " << json(latency_all)
+          << ",\n  \"to_tf\": " << json(to_tf) << ",\n  \"tf_to_local_map\": " << json(output)
+          << ",\n  \"cloud_transport\": " << json(cloud) << ",\n  \"local_map_kb\": " << local_kb
           << ",\n  \"local_map_voxels\": " << local_points << ",\n  \"malformed\": " << rx.malformed
           << ",\n  \"targets\": {\"no_drops\": " << (drops_ok ? "true" : "false")
           << ", \"p50_limit_ms\": " << p50_target_ms << ", \"p99_limit_ms\": " << p99_target_ms
-          << ", \"p50_met\": " << (latency.count > 0 && latency.p50_ms <= p50_target_ms ? "true" : "false")
-          << ", \"p99_met\": " << (latency.count > 0 && latency.p99_ms <= p99_target_ms ? "true" : "false")
-          << "}\n}\n";
+          << ", \"p50_met\": "
+          << (latency.count > 0 && latency.p50_ms <= p50_target_ms ? "true" : "false")
+          << ", \"p99_met\": "
+          << (latency.count > 0 && latency.p99_ms <= p99_target_ms ? "true" : "false") << "}\n}\n";
     }
-    if (require_all && (!have_status || frames_sent == 0 || missing != 0 || latency_all.count == 0)) {
+    if (require_all &&
+        (!have_status || frames_sent == 0 || missing != 0 || latency_all.count == 0)) {
       std::printf("FAIL: %llu of %d frames reached the subscriber as local maps%s\n",
                   static_cast<unsigned long long>(received), frames_sent,
                   have_status ? "" : ", and no status arrived");

@@ -92,13 +92,13 @@ struct Row {
   double mqueries_path = 0.0;    ///< M queries/s along 2 m segments
   double mqueries_batch = 0.0;   ///< M queries/s at random points, queryBatch() of 256
   double checksum = 0.0;
-  double random_checksum = 0.0;  ///< query()'s sum at the random points
-  double batch_checksum = 0.0;   ///< queryBatch()'s at the same points (equal)
-  double grid_build_ms = 0.0;    ///< EsdfQueryGrid::build() from the map, median
-  std::size_t grid_bytes = 0;    ///< the query grid's memory
-  double grid_random = 0.0;      ///< M queries/s of EsdfQueryGrid::query() at the random points
-  double grid_path = 0.0;        ///< ... along the segments
-  double grid_batch = 0.0;       ///< ... EsdfQueryGrid::queryBatch() at the random points
+  double random_checksum = 0.0;   ///< query()'s sum at the random points
+  double batch_checksum = 0.0;    ///< queryBatch()'s at the same points (equal)
+  double grid_build_ms = 0.0;     ///< EsdfQueryGrid::build() from the map, median
+  std::size_t grid_bytes = 0;     ///< the query grid's memory
+  double grid_random = 0.0;       ///< M queries/s of EsdfQueryGrid::query() at the random points
+  double grid_path = 0.0;         ///< ... along the segments
+  double grid_batch = 0.0;        ///< ... EsdfQueryGrid::queryBatch() at the random points
   double grid_max_error_m = 0.0;  ///< largest |grid - exact| distance at the random points
 };
 
@@ -203,16 +203,17 @@ Row run(const std::string& name, const OccupancyBox& box, UnknownAs unknown_as, 
 
 void print(const Row& r, std::FILE* json, bool last) {
   if (json == nullptr) {
-    std::printf("%-24s %-9s %-8s %7d %7.3f %7.3f %7.3f %7.2f %8.1f %8.1f %8.1f   (checksums "
-                "%.6g, random %.6g, batch %.6g)\n",
-                r.name.c_str(), r.unknown_as.c_str(), r.passes.c_str(), r.threads, r.min_ms,
-                r.median_ms, r.p99_ms,
-                static_cast<double>(r.memory_bytes) / 1e6, r.mqueries_random, r.mqueries_path,
-                r.mqueries_batch, r.checksum, r.random_checksum, r.batch_checksum);
-    std::printf("%-24s   query grid: build %.3f ms, %.1f MB, M queries/s random %.1f, paths %.1f, "
-                "batch %.1f; max distance error %.1f um\n",
-                "", r.grid_build_ms, static_cast<double>(r.grid_bytes) / 1e6, r.grid_random,
-                r.grid_path, r.grid_batch, r.grid_max_error_m * 1e6);
+    std::printf(
+        "%-24s %-9s %-8s %7d %7.3f %7.3f %7.3f %7.2f %8.1f %8.1f %8.1f   (checksums "
+        "%.6g, random %.6g, batch %.6g)\n",
+        r.name.c_str(), r.unknown_as.c_str(), r.passes.c_str(), r.threads, r.min_ms, r.median_ms,
+        r.p99_ms, static_cast<double>(r.memory_bytes) / 1e6, r.mqueries_random, r.mqueries_path,
+        r.mqueries_batch, r.checksum, r.random_checksum, r.batch_checksum);
+    std::printf(
+        "%-24s   query grid: build %.3f ms, %.1f MB, M queries/s random %.1f, paths %.1f, "
+        "batch %.1f; max distance error %.1f um\n",
+        "", r.grid_build_ms, static_cast<double>(r.grid_bytes) / 1e6, r.grid_random, r.grid_path,
+        r.grid_batch, r.grid_max_error_m * 1e6);
     return;
   }
   std::fprintf(json,
@@ -269,7 +270,8 @@ Streamed streamedBoxes(double res, int frames) {
         for (int z = -half; z <= half; ++z) {
           const SubmapIndex m = local.centerSubmap() + SubmapIndex(x, y, z);
           if (local.submapStateChangedAt(m) <= clock) continue;
-          const Eigen::Vector3i lo = Eigen::Vector3i(x + half, y + half, z + half).cwiseProduct(cells);
+          const Eigen::Vector3i lo =
+              Eigen::Vector3i(x + half, y + half, z + half).cwiseProduct(cells);
           changed.push_back({lo, lo + cells});
         }
     out.changed.push_back(std::move(changed));
@@ -317,8 +319,8 @@ struct StreamRow {
   double update_max_ms = 0.0;
   double full_median_ms = 0.0;
   double full_p99_ms = 0.0;
-  int moves = 0;                     ///< frames where the window moved
-  double move_median_ms = 0.0;       ///< update() on those frames
+  int moves = 0;                ///< frames where the window moved
+  double move_median_ms = 0.0;  ///< update() on those frames
   double move_p99_ms = 0.0;
   double move_full_median_ms = 0.0;  ///< compute() on the same frames
   double grid_sync_median_ms = 0.0;  ///< EsdfQueryGrid::sync() after update(), per frame
@@ -344,9 +346,9 @@ std::unique_ptr<DynamicEDT3D> edtFor(const OccupancyBox& box, UnknownAs unknown_
   for (int x = 0; x < box.size.x(); ++x)
     for (int y = 0; y < box.size.y(); ++y)
       for (int z = 0; z < box.size.z(); ++z)
-        if (isObstacle(box.states[(static_cast<std::size_t>(x) * box.size.y() + y) * box.size.z() +
-                                  z],
-                       unknown_as)) {
+        if (isObstacle(
+                box.states[(static_cast<std::size_t>(x) * box.size.y() + y) * box.size.z() + z],
+                unknown_as)) {
           edt->occupyCell(x, y, z);
         }
   edt->update(true);
@@ -451,7 +453,8 @@ StreamRow stream(const std::string& name, const Streamed& streamed, UnknownAs un
     }
     edt->update(true);
     edt_ms.push_back(msSince(start));
-    if (edt_compare_every <= 0 || edt_ms.size() % static_cast<std::size_t>(edt_compare_every) != 0) {
+    if (edt_compare_every <= 0 ||
+        edt_ms.size() % static_cast<std::size_t>(edt_compare_every) != 0) {
       continue;
     }
     // Distances to obstacles at the non-obstacle voxels (DynamicEDT3D's field), both clamped.
@@ -506,41 +509,41 @@ StreamRow stream(const std::string& name, const Streamed& streamed, UnknownAs un
 
 void printStream(const StreamRow& r, std::FILE* json, bool last) {
   if (json == nullptr) {
-    std::printf("%-10s %-9s %4d %4d %4d %8.0f %7.3f %7.3f %7.3f %7.3f %7.3f %4d | %4d %8.3f %8.3f "
-                "%7.3f %6.1fx  all %d: %.1f / %.1f ms (%.1fx); mismatched %zu of %zu (max %.3f m); "
-                "lines %.0f %.0f %.0f; query grid sync %.3f / %.3f ms; %d moves: update() %.3f / "
-                "%.3f ms, compute() %.3f ms\n",
-                r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full,
-                r.changed_states, r.update_median_ms, r.update_p99_ms, r.update_max_ms,
-                r.full_median_ms, r.full_p99_ms, r.mismatched_frames, r.edt_updates,
-                r.edt_median_ms, r.edt_p99_ms, r.same_box_median_ms,
-                r.same_box_median_ms > 0.0 ? r.edt_median_ms / r.same_box_median_ms : 0.0,
-                r.edt_updates, r.edt_total_ms, r.same_box_total_ms,
-                r.same_box_total_ms > 0.0 ? r.edt_total_ms / r.same_box_total_ms : 0.0,
-                r.edt_mismatched, r.edt_compared, r.edt_max_error_m, r.rows, r.y_lines, r.z_lines,
-                r.grid_sync_median_ms, r.grid_sync_p99_ms, r.moves, r.move_median_ms,
-                r.move_p99_ms, r.move_full_median_ms);
+    std::printf(
+        "%-10s %-9s %4d %4d %4d %8.0f %7.3f %7.3f %7.3f %7.3f %7.3f %4d | %4d %8.3f %8.3f "
+        "%7.3f %6.1fx  all %d: %.1f / %.1f ms (%.1fx); mismatched %zu of %zu (max %.3f m); "
+        "lines %.0f %.0f %.0f; query grid sync %.3f / %.3f ms; %d moves: update() %.3f / "
+        "%.3f ms, compute() %.3f ms\n",
+        r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full, r.changed_states,
+        r.update_median_ms, r.update_p99_ms, r.update_max_ms, r.full_median_ms, r.full_p99_ms,
+        r.mismatched_frames, r.edt_updates, r.edt_median_ms, r.edt_p99_ms, r.same_box_median_ms,
+        r.same_box_median_ms > 0.0 ? r.edt_median_ms / r.same_box_median_ms : 0.0, r.edt_updates,
+        r.edt_total_ms, r.same_box_total_ms,
+        r.same_box_total_ms > 0.0 ? r.edt_total_ms / r.same_box_total_ms : 0.0, r.edt_mismatched,
+        r.edt_compared, r.edt_max_error_m, r.rows, r.y_lines, r.z_lines, r.grid_sync_median_ms,
+        r.grid_sync_p99_ms, r.moves, r.move_median_ms, r.move_p99_ms, r.move_full_median_ms);
     return;
   }
-  std::fprintf(json,
-               "  {\"case\": \"%s\", \"unknown_as\": \"%s\", \"updates\": %d, \"shifted\": %d, "
-               "\"full\": %d, \"changed_states_median\": %.0f, "
-               "\"lines_median\": {\"x_rows\": %.0f, \"y\": %.0f, \"z\": %.0f}, "
-               "\"update_ms\": {\"median\": %.4f, \"p99\": %.4f, \"max\": %.4f}, "
-               "\"compute_ms\": {\"median\": %.4f, \"p99\": %.4f}, "
-               "\"moves\": %d, \"move_update_ms\": {\"median\": %.4f, \"p99\": %.4f}, "
-               "\"move_compute_median_ms\": %.4f, "
-               "\"query_grid_sync_ms\": {\"median\": %.4f, \"p99\": %.4f}, \"mismatched_frames\": %d, "
-               "\"dynamicedt3d\": {\"updates\": %d, \"median_ms\": %.4f, \"p99_ms\": %.4f, "
-               "\"ours_same_frames_median_ms\": %.4f, \"total_ms\": %.3f, "
-               "\"ours_same_frames_total_ms\": %.3f, \"compared\": %zu, \"mismatched\": %zu, "
-               "\"max_error_m\": %.4f}}%s\n",
-               r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full,
-               r.changed_states, r.rows, r.y_lines, r.z_lines, r.update_median_ms,
-               r.update_p99_ms, r.update_max_ms, r.full_median_ms, r.full_p99_ms, r.moves,
-               r.move_median_ms, r.move_p99_ms, r.move_full_median_ms, r.grid_sync_median_ms, r.grid_sync_p99_ms, r.mismatched_frames, r.edt_updates, r.edt_median_ms, r.edt_p99_ms,
-               r.same_box_median_ms, r.edt_total_ms, r.same_box_total_ms, r.edt_compared,
-               r.edt_mismatched, r.edt_max_error_m, last ? "" : ",");
+  std::fprintf(
+      json,
+      "  {\"case\": \"%s\", \"unknown_as\": \"%s\", \"updates\": %d, \"shifted\": %d, "
+      "\"full\": %d, \"changed_states_median\": %.0f, "
+      "\"lines_median\": {\"x_rows\": %.0f, \"y\": %.0f, \"z\": %.0f}, "
+      "\"update_ms\": {\"median\": %.4f, \"p99\": %.4f, \"max\": %.4f}, "
+      "\"compute_ms\": {\"median\": %.4f, \"p99\": %.4f}, "
+      "\"moves\": %d, \"move_update_ms\": {\"median\": %.4f, \"p99\": %.4f}, "
+      "\"move_compute_median_ms\": %.4f, "
+      "\"query_grid_sync_ms\": {\"median\": %.4f, \"p99\": %.4f}, \"mismatched_frames\": %d, "
+      "\"dynamicedt3d\": {\"updates\": %d, \"median_ms\": %.4f, \"p99_ms\": %.4f, "
+      "\"ours_same_frames_median_ms\": %.4f, \"total_ms\": %.3f, "
+      "\"ours_same_frames_total_ms\": %.3f, \"compared\": %zu, \"mismatched\": %zu, "
+      "\"max_error_m\": %.4f}}%s\n",
+      r.name.c_str(), r.unknown_as.c_str(), r.updates, r.shifted, r.full, r.changed_states, r.rows,
+      r.y_lines, r.z_lines, r.update_median_ms, r.update_p99_ms, r.update_max_ms, r.full_median_ms,
+      r.full_p99_ms, r.moves, r.move_median_ms, r.move_p99_ms, r.move_full_median_ms,
+      r.grid_sync_median_ms, r.grid_sync_p99_ms, r.mismatched_frames, r.edt_updates,
+      r.edt_median_ms, r.edt_p99_ms, r.same_box_median_ms, r.edt_total_ms, r.same_box_total_ms,
+      r.edt_compared, r.edt_mismatched, r.edt_max_error_m, last ? "" : ",");
 }
 
 }  // namespace
@@ -551,9 +554,11 @@ int main(int argc, char** argv) {
   int queries = 10000000;
   std::string json_path;
   app.add_option("--repeats", repeats, "timed compute() calls per case")
-      ->check(CLI::Range(1, 10000))->capture_default_str();
+      ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
   app.add_option("--queries", queries, "timed queries per case and column")
-      ->check(CLI::Range(1, 1000000000))->capture_default_str();
+      ->check(CLI::Range(1, 1000000000))
+      ->capture_default_str();
   app.add_option("--json", json_path, "also write the figures as JSON");
   int frames = 150;
   bool with_edt = true;
@@ -561,7 +566,8 @@ int main(int argc, char** argv) {
   bool only_streamed = false;
   bool with_hints = true;
   app.add_option("--frames", frames, "streamed frames of the default flight (0: none)")
-      ->check(CLI::Range(0, 100000))->capture_default_str();
+      ->check(CLI::Range(0, 100000))
+      ->capture_default_str();
   app.add_flag("!--no-dynamicedt3d", with_edt, "skip DynamicEDT3D in the streamed part");
   app.add_option("--compare-every", edt_compare_every,
                  "compare with DynamicEDT3D's distances every N of its updates (0: never)")
@@ -571,7 +577,8 @@ int main(int argc, char** argv) {
                "compare each streamed box whole, not only in the window's changed submaps");
   std::vector<double> resolutions{0.2, 0.1};
   app.add_option("--resolution", resolutions, "resolutions in metres (0.2, 0.1 or both)")
-      ->check(CLI::IsMember({0.2, 0.1}))->capture_default_str();
+      ->check(CLI::IsMember({0.2, 0.1}))
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   const auto wanted = [&](double res) {
     return std::find(resolutions.begin(), resolutions.end(), res) != resolutions.end();
@@ -586,8 +593,8 @@ int main(int argc, char** argv) {
   };
   std::vector<Scene> scenes;
   if (wanted(0.2)) {
-    scenes.push_back({"room 0.2 m 95x95x35",
-                      rasterise(world, center_W, 0.2, {95, 95, 35}, unknown_beyond_x_m)});
+    scenes.push_back(
+        {"room 0.2 m 95x95x35", rasterise(world, center_W, 0.2, {95, 95, 35}, unknown_beyond_x_m)});
   }
   if (wanted(0.1)) {
     scenes.push_back({"room 0.1 m 190x190x70",
@@ -605,9 +612,10 @@ int main(int argc, char** argv) {
                 s.box.states.size(), 100.0 * static_cast<double>(occupied) / n,
                 100.0 * static_cast<double>(unknown) / n);
   }
-  std::printf("max_distance_m %.1f, %d timed compute() per case, %d queries per column, "
-              "%u hardware threads\n\n",
-              EsdfConfig{}.max_distance_m, repeats, queries, std::thread::hardware_concurrency());
+  std::printf(
+      "max_distance_m %.1f, %d timed compute() per case, %d queries per column, "
+      "%u hardware threads\n\n",
+      EsdfConfig{}.max_distance_m, repeats, queries, std::thread::hardware_concurrency());
   std::printf("%-24s %-9s %-8s %7s %23s %7s %26s\n", "", "", "", "", "compute() ms", "memory",
               "M queries/s");
   std::printf("%-24s %-9s %-8s %7s %7s %7s %7s %7s %8s %8s %8s\n", "case", "unknown", "passes",
@@ -632,21 +640,23 @@ int main(int argc, char** argv) {
     with_edt = false;
     std::printf("\n(built without DynamicEDT3D: install libdynamicedt3d-dev and reconfigure)\n");
 #endif
-    std::printf("\nStreamed: %d frames of the default flight, 19 x 19 x 7 m window; per frame "
-                "(one thread)\n",
-                frames);
-    std::printf("%-10s %-9s %4s %4s %4s %8s %23s %15s %4s | %s\n", "", "", "", "", "",
-                "changed", "update() ms", "compute() ms", "", "DynamicEDT3D (same frames)");
-    std::printf("%-10s %-9s %4s %4s %4s %8s %7s %7s %7s %7s %7s %4s | %4s %8s %8s %7s %7s\n",
-                "res", "unknown", "n", "move", "full", "states", "median", "p99", "max",
-                "median", "p99", "diff", "n", "median", "p99", "ours", "ratio");
+    std::printf(
+        "\nStreamed: %d frames of the default flight, 19 x 19 x 7 m window; per frame "
+        "(one thread)\n",
+        frames);
+    std::printf("%-10s %-9s %4s %4s %4s %8s %23s %15s %4s | %s\n", "", "", "", "", "", "changed",
+                "update() ms", "compute() ms", "", "DynamicEDT3D (same frames)");
+    std::printf("%-10s %-9s %4s %4s %4s %8s %7s %7s %7s %7s %7s %4s | %4s %8s %8s %7s %7s\n", "res",
+                "unknown", "n", "move", "full", "states", "median", "p99", "max", "median", "p99",
+                "diff", "n", "median", "p99", "ours", "ratio");
     for (const double res : {0.2, 0.1}) {
       if (!wanted(res)) continue;
       const Streamed streamed = streamedBoxes(res, frames);
       char name[32];
       std::snprintf(name, sizeof(name), "%.1f m", res);
       for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
-        stream_rows.push_back(stream(name, streamed, policy, with_edt, with_hints, edt_compare_every));
+        stream_rows.push_back(
+            stream(name, streamed, policy, with_edt, with_hints, edt_compare_every));
         printStream(stream_rows.back(), nullptr, false);
         if (stream_rows.back().fill_mismatches > 0) {
           std::printf("  error: in %d frames the changed submaps missed a changed state\n",

@@ -33,7 +33,7 @@ struct Options {
   int beams = 16;
   int azimuth_steps = 360;
   double range_m = 8.0;
-  bool rounds = false;  ///< print every round
+  bool rounds = false;      ///< print every round
   int merger_vehicles = 8;  ///< vehicles the merger's figure replays the stream as
 };
 
@@ -120,10 +120,11 @@ int run(const Options& o) {
   phases[1].seconds = std::min(kSettle_s, o.hover_s);
   phases[2].seconds = std::max(0.0, o.hover_s - kSettle_s);
   const TimingSummary step = summarizeTimings(share_ms);
-  std::printf("fleet bandwidth of one vehicle: %.2f m voxels, LiDAR %d x %d to %.0f m, frames at "
-              "%.0f Hz, shared at %.1f Hz; %zu occupied voxels mapped\n",
-              o.resolution_m, o.beams, o.azimuth_steps, o.range_m, o.frame_hz, o.share_hz,
-              engine.occupiedVoxels().size());
+  std::printf(
+      "fleet bandwidth of one vehicle: %.2f m voxels, LiDAR %d x %d to %.0f m, frames at "
+      "%.0f Hz, shared at %.1f Hz; %zu occupied voxels mapped\n",
+      o.resolution_m, o.beams, o.azimuth_steps, o.range_m, o.frame_hz, o.share_hz,
+      engine.occupiedVoxels().size());
   std::printf("%-10s %8s %11s %11s %28s\n", "phase", "seconds", "submaps/s", "bytes/s",
               "whole global map bytes/s");
   const char* names[3] = {"exploring", "settling", "hovering"};
@@ -131,12 +132,14 @@ int run(const Options& o) {
     const Phase& ph = phases[p];
     if (ph.seconds <= 0) continue;
     std::printf("%-10s %8.1f %11.1f %11.0f %28.0f\n", names[p], ph.seconds,
-                static_cast<double>(ph.submaps) / ph.seconds, static_cast<double>(ph.bytes) / ph.seconds,
+                static_cast<double>(ph.submaps) / ph.seconds,
+                static_cast<double>(ph.bytes) / ph.seconds,
                 static_cast<double>(ph.whole_map_bytes) / ph.seconds);
   }
-  std::printf("share step per round (collect, compare, encode): median %.2f ms, p99 %.2f ms over "
-              "%zu rounds\n",
-              step.median_ms, step.p99_ms, step.samples);
+  std::printf(
+      "share step per round (collect, compare, encode): median %.2f ms, p99 %.2f ms over "
+      "%zu rounds\n",
+      step.median_ms, step.p99_ms, step.samples);
 
   // The merger: the vehicle's whole stream replayed as `merger_vehicles` vehicles in turn (the
   // same voxels: the worst case for fusion, every voxel held by all), each sample decoded and
@@ -155,27 +158,31 @@ int run(const Options& o) {
   }
   const double merge_s = msSince(merge_start) / 1000.0;
   const TimingSummary apply = summarizeTimings(apply_us);  // in us, as apply_us
-  const double samples = static_cast<double>(stream.size() * static_cast<std::size_t>(o.merger_vehicles));
-  std::printf("merger, %d vehicles of this stream: %.0f samples fused in %.2f s wall clock (%.1f %% of "
-              "one core for %.0f s of flight); per sample median %.0f us, p99 %.0f us; %zu fused "
-              "voxels in %.1f MB (%.1f B per voxel and vehicle)\n",
-              o.merger_vehicles, samples, merge_s,
-              100.0 * merge_s / (flight_s + o.hover_s), flight_s + o.hover_s, apply.median_ms,
-              apply.p99_ms, merged.voxelCount(), static_cast<double>(merged.memoryBytes()) / 1e6,
-              static_cast<double>(merged.memoryBytes()) /
-                  static_cast<double>(merged.voxelCount() * static_cast<std::size_t>(o.merger_vehicles)));
+  const double samples =
+      static_cast<double>(stream.size() * static_cast<std::size_t>(o.merger_vehicles));
+  std::printf(
+      "merger, %d vehicles of this stream: %.0f samples fused in %.2f s wall clock (%.1f %% of "
+      "one core for %.0f s of flight); per sample median %.0f us, p99 %.0f us; %zu fused "
+      "voxels in %.1f MB (%.1f B per voxel and vehicle)\n",
+      o.merger_vehicles, samples, merge_s, 100.0 * merge_s / (flight_s + o.hover_s),
+      flight_s + o.hover_s, apply.median_ms, apply.p99_ms, merged.voxelCount(),
+      static_cast<double>(merged.memoryBytes()) / 1e6,
+      static_cast<double>(merged.memoryBytes()) /
+          static_cast<double>(merged.voxelCount() * static_cast<std::size_t>(o.merger_vehicles)));
   return 0;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"mlmap_bench_fleet: bytes a vehicle sends to the fleet, against whole-map republishing"};
+  CLI::App app{
+      "mlmap_bench_fleet: bytes a vehicle sends to the fleet, against whole-map republishing"};
   Options o;
   app.add_option("--resolution", o.resolution_m, "voxel edge [m]")->check(CLI::PositiveNumber);
   app.add_option("--frame-hz", o.frame_hz, "LiDAR scans per second")->check(CLI::PositiveNumber);
   app.add_option("--share-hz", o.share_hz, "dds.fleet.rate_hz")->check(CLI::PositiveNumber);
-  app.add_option("--hover-s", o.hover_s, "seconds hovering at the end")->check(CLI::NonNegativeNumber);
+  app.add_option("--hover-s", o.hover_s, "seconds hovering at the end")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--beams", o.beams, "LiDAR beams")->check(CLI::PositiveNumber);
   app.add_option("--azimuth-steps", o.azimuth_steps, "LiDAR columns")->check(CLI::PositiveNumber);
   app.add_option("--range", o.range_m, "LiDAR and map range [m]")->check(CLI::PositiveNumber);

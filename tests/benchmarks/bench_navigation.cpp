@@ -34,7 +34,8 @@ double median(std::vector<double> v) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Closed-loop flights of the reference planner on mlmap's maps (figures, not pass / fail)"};
+  CLI::App app{
+      "Closed-loop flights of the reference planner on mlmap's maps (figures, not pass / fail)"};
   int count = 100;
   unsigned seed = 1;
   double resolution_m = 0.2;
@@ -47,19 +48,21 @@ int main(int argc, char** argv) {
   app.add_option("--only", only, "fly only the worlds whose name contains this");
   nav::NavFlightOptions options;
   app.add_option("--evade-radius", options.planner.evade_radius_m,
-                 "back away from something that moved within this [m]")->capture_default_str();
+                 "back away from something that moved within this [m]")
+      ->capture_default_str();
   app.add_option("--caution-radius", options.planner.caution_radius_m,
-                 "slow down when something that moved is within this [m]")->capture_default_str();
+                 "slow down when something that moved is within this [m]")
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   options.map = nav::navMapConfig(resolution_m);
-  const std::vector<nav::NavWorld> worlds =
-      nav::benchmarkWorlds(count, seed, options.planner.inflation_m, kMeanSpeedShare * options.vehicle.max_speed_mps);
-  std::printf("mlmap_bench_navigation: %d worlds from seed %u, %.2f m voxels, camera %dx%d at %.0f Hz, "
-              "vehicle radius %.2f m, inflation %.2f m, %.1f m/s, %.1f m/s^2\n",
-              count, seed, resolution_m, options.camera.intrinsics.width,
-              options.camera.intrinsics.height, options.camera_rate_hz, options.vehicle_radius_m,
-              options.planner.inflation_m, options.vehicle.max_speed_mps,
-              options.vehicle.max_accel_mps2);
+  const std::vector<nav::NavWorld> worlds = nav::benchmarkWorlds(
+      count, seed, options.planner.inflation_m, kMeanSpeedShare * options.vehicle.max_speed_mps);
+  std::printf(
+      "mlmap_bench_navigation: %d worlds from seed %u, %.2f m voxels, camera %dx%d at %.0f Hz, "
+      "vehicle radius %.2f m, inflation %.2f m, %.1f m/s, %.1f m/s^2\n",
+      count, seed, resolution_m, options.camera.intrinsics.width, options.camera.intrinsics.height,
+      options.camera_rate_hz, options.vehicle_radius_m, options.planner.inflation_m,
+      options.vehicle.max_speed_mps, options.vehicle.max_accel_mps2);
   int flown = 0;
   int reached = 0;
   int collisions = 0;
@@ -99,21 +102,23 @@ int main(int argc, char** argv) {
     if (per_world || !r.reached || r.collisions > 0) {
       std::vector<double> l = r.map_to_plan_ms;
       std::sort(l.begin(), l.end());
-      std::printf("  %-34s %s collisions %d  min clearance %.2f m  path %.1f m / shortest %.1f m (x%.3f)  "
-                  "%.1f s  plans %llu (blocked %llu, no route %llu)  map-to-plan p99 %.1f ms\n",
-                  r.name.c_str(), r.reached ? "reached" : "FAILED ", r.collisions, r.min_clearance_m,
-                  r.path_length_m, r.shortest_path_m, ratio, r.time_s,
-                  static_cast<unsigned long long>(r.plans),
-                  static_cast<unsigned long long>(r.blocked_replans),
-                  static_cast<unsigned long long>(r.route_failures),
-                  l.empty() ? 0.0 : sortedQuantile(l, 0.99));
+      std::printf(
+          "  %-34s %s collisions %d  min clearance %.2f m  path %.1f m / shortest %.1f m (x%.3f)  "
+          "%.1f s  plans %llu (blocked %llu, no route %llu)  map-to-plan p99 %.1f ms\n",
+          r.name.c_str(), r.reached ? "reached" : "FAILED ", r.collisions, r.min_clearance_m,
+          r.path_length_m, r.shortest_path_m, ratio, r.time_s,
+          static_cast<unsigned long long>(r.plans),
+          static_cast<unsigned long long>(r.blocked_replans),
+          static_cast<unsigned long long>(r.route_failures),
+          l.empty() ? 0.0 : sortedQuantile(l, 0.99));
     }
   }
   std::sort(latency_ms.begin(), latency_ms.end());
   std::sort(ratios_forest.begin(), ratios_forest.end());
   std::sort(ratios_all.begin(), ratios_all.end());
   std::printf("worlds flown              %d\n", flown);
-  std::printf("goals reached             %d (%.1f %%)\n", reached, flown ? 100.0 * reached / flown : 0.0);
+  std::printf("goals reached             %d (%.1f %%)\n", reached,
+              flown ? 100.0 * reached / flown : 0.0);
   std::printf("collisions                %d (in %d worlds)\n", collisions, worlds_with_collision);
   std::printf("min clearance             %.3f m (vehicle radius %.2f m)\n", min_clearance,
               options.vehicle_radius_m);
@@ -124,7 +129,8 @@ int main(int argc, char** argv) {
   }
   if (!ratios_all.empty()) {
     std::printf("path / shortest, all      median %.3f  p90 %.3f  max %.3f\n",
-                sortedQuantile(ratios_all, 0.5), sortedQuantile(ratios_all, 0.9), ratios_all.back());
+                sortedQuantile(ratios_all, 0.5), sortedQuantile(ratios_all, 0.9),
+                ratios_all.back());
   }
   std::printf("time to goal              median %.1f s\n", median(times_s));
   if (!latency_ms.empty()) {
@@ -132,13 +138,16 @@ int main(int argc, char** argv) {
                 sortedQuantile(latency_ms, 0.5), sortedQuantile(latency_ms, 0.99),
                 latency_ms.back(), latency_ms.size());
   }
-  std::printf("plans                     %.1f per simulated second (%llu made at once on a blocked segment)\n",
-              sim_s > 0 ? static_cast<double>(plans) / sim_s : 0.0,
-              static_cast<unsigned long long>(blocked));
+  std::printf(
+      "plans                     %.1f per simulated second (%llu made at once on a blocked "
+      "segment)\n",
+      sim_s > 0 ? static_cast<double>(plans) / sim_s : 0.0,
+      static_cast<unsigned long long>(blocked));
   const auto share = [sim_s](double cpu_s) { return sim_s > 0 ? 100.0 * cpu_s / sim_s : 0.0; };
-  std::printf("CPU, %% of one core over simulated time: mapping %.1f  global plan %.1f  local plan %.1f  "
-              "control %.2f  (mapping + planning %.1f)  simulator's camera %.1f\n",
-              share(mapping_s), share(global_s), share(local_s), share(control_s),
-              share(mapping_s + global_s + local_s + control_s), share(render_s));
+  std::printf(
+      "CPU, %% of one core over simulated time: mapping %.1f  global plan %.1f  local plan %.1f  "
+      "control %.2f  (mapping + planning %.1f)  simulator's camera %.1f\n",
+      share(mapping_s), share(global_s), share(local_s), share(control_s),
+      share(mapping_s + global_s + local_s + control_s), share(render_s));
   return 0;
 }

@@ -87,10 +87,12 @@ Row run(const Case& c, const std::vector<FrameT>& frames, int repeats) {
 
 void print(const Row& r, std::FILE* json, bool last) {
   const EngineStats& s = r.stats;
-  if (json == nullptr) std::printf("%-34s %8.0f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.1f %7.1f\n", r.name.c_str(), r.points,
-              s.awareness.median_ms, s.awareness.p99_ms, s.local_global.median_ms,
-              s.local_global.p99_ms, s.total.median_ms, s.total.p99_ms,
-              megabytes(s.memory.local_bytes), megabytes(s.memory.awareness_bytes + s.memory.global_bytes));
+  if (json == nullptr)
+    std::printf("%-34s %8.0f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.1f %7.1f\n", r.name.c_str(),
+                r.points, s.awareness.median_ms, s.awareness.p99_ms, s.local_global.median_ms,
+                s.local_global.p99_ms, s.total.median_ms, s.total.p99_ms,
+                megabytes(s.memory.local_bytes),
+                megabytes(s.memory.awareness_bytes + s.memory.global_bytes));
   if (json != nullptr) {
     std::fprintf(json,
                  "  {\"case\": \"%s\", \"points_per_frame\": %.0f, \"frames\": %zu, "
@@ -133,7 +135,8 @@ int runFiles(const FilesOptions& o) {
   if (o.poses.empty()) {
     source = std::make_unique<datasets::FrameDirectorySource>(o.dir);
   } else {
-    source = std::make_unique<datasets::CloudSequenceSource>(o.dir, o.poses, datasets::CloudSequenceOptions{});
+    source = std::make_unique<datasets::CloudSequenceSource>(o.dir, o.poses,
+                                                             datasets::CloudSequenceOptions{});
   }
   std::vector<datasets::SourceFrame> frames;
   for (std::size_t i = 0; i < source->size(); ++i) frames.push_back(source->read(i));
@@ -141,10 +144,11 @@ int runFiles(const FilesOptions& o) {
     return std::max(5, static_cast<int>(std::ceil(m / o.resolution_m / 5.0)) * 5);
   };
   const int across = cells(2.5 * o.max_range_m);
-  MapConfig c = at(o.resolution_m, {across, across, o.window_z_m > 0.0 ? cells(o.window_z_m) : across});
+  MapConfig c =
+      at(o.resolution_m, {across, across, o.window_z_m > 0.0 ? cells(o.window_z_m) : across});
   c.awareness.max_range_m = o.max_range_m;
-  c.awareness.rho_cells = std::max(c.awareness.rho_cells,
-                                   static_cast<int>(std::ceil(o.max_range_m / c.awareness.rho_cell_m)));
+  c.awareness.rho_cells = std::max(
+      c.awareness.rho_cells, static_cast<int>(std::ceil(o.max_range_m / c.awareness.rho_cell_m)));
   c.sensor.translation_B_m.setZero();  // the frames carry their own sensor pose
   c.sensor.rotation_rpy_deg.setZero();
   c.pipeline.planning_layers = false;  // mapping only, as a peer library maps
@@ -157,7 +161,8 @@ int runFiles(const FilesOptions& o) {
       datasets::SourceFrame f = frame;  // copied untimed: submit() takes the frame
       const double cpu0 = threadCpuMs();
       const SteadyClock::time_point t0 = SteadyClock::now();
-      const FrameStatus status = std::visit([&](auto& x) { return engine.submit(std::move(x)); }, f);
+      const FrameStatus status =
+          std::visit([&](auto& x) { return engine.submit(std::move(x)); }, f);
       wall_ms.push_back(msSince(t0));
       cpu_ms.push_back(threadCpuMs() - cpu0);
       if (status != FrameStatus::kAccepted) {
@@ -174,21 +179,25 @@ int runFiles(const FilesOptions& o) {
       if (!o.voxels_out.empty()) io::writeVoxelText(o.voxels_out, voxels, o.resolution_m);
     }
   }
-  std::printf("%s: %zu frames, %.0f valid points / frame, %.3f m, range %.1f m, window %d x %d x %d, "
-              "%d passes (a fresh engine each), %zu occupied voxels\n",
-              source->describe().c_str(), frames.size(), points, o.resolution_m, o.max_range_m,
-              c.local_map.size_cells.x(), c.local_map.size_cells.y(), c.local_map.size_cells.z(),
-              o.passes, occupied);
-  std::printf("submit() per frame [ms]: wall median %.3f p99 %.3f; thread CPU median %.3f p99 %.3f\n",
-              quantile(wall_ms, 0.5), quantile(wall_ms, 0.99), quantile(cpu_ms, 0.5),
-              quantile(cpu_ms, 0.99));
+  std::printf(
+      "%s: %zu frames, %.0f valid points / frame, %.3f m, range %.1f m, window %d x %d x %d, "
+      "%d passes (a fresh engine each), %zu occupied voxels\n",
+      source->describe().c_str(), frames.size(), points, o.resolution_m, o.max_range_m,
+      c.local_map.size_cells.x(), c.local_map.size_cells.y(), c.local_map.size_cells.z(), o.passes,
+      occupied);
+  std::printf(
+      "submit() per frame [ms]: wall median %.3f p99 %.3f; thread CPU median %.3f p99 %.3f\n",
+      quantile(wall_ms, 0.5), quantile(wall_ms, 0.99), quantile(cpu_ms, 0.5),
+      quantile(cpu_ms, 0.99));
   return 0;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"mlmap benchmark: per-frame engine cost (synchronous, one core) on simulated and real depth frames"};
+  CLI::App app{
+      "mlmap benchmark: per-frame engine cost (synchronous, one core) on simulated and real depth "
+      "frames"};
   int frame_count = 60;
   int repeats = 2;
   std::string real_dir = MLMAP_SHARED_DATA_DIR "/realsense_tabletop";
@@ -197,12 +206,15 @@ int main(int argc, char** argv) {
   bool stream = false;
   CLI::Option* frames_option =
       app.add_option("--frames", frame_count, "simulated frames (spread over the default flight)")
-          ->check(CLI::Range(1, 10000))->capture_default_str();
+          ->check(CLI::Range(1, 10000))
+          ->capture_default_str();
   app.add_flag("--stream", stream,
                "every frame of the flight in order, as the camera streams them (631 at 10 Hz), "
                "instead of --frames spread over it (where the vehicle moves 1 m between frames)")
       ->excludes(frames_option);
-  app.add_option("--repeats", repeats, "passes over the frames")->check(CLI::Range(1, 100))->capture_default_str();
+  app.add_option("--repeats", repeats, "passes over the frames")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
   app.add_option("--real", real_dir, "RGB-D frame folder ('' to skip)")->capture_default_str();
   app.add_option("--json", json_path, "also write the figures as JSON");
   app.add_option("--only", only, "run only the cases whose name contains this text (e.g. '0.1 m')");
@@ -213,22 +225,34 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 10000))
       ->capture_default_str();
   FilesOptions files;
-  auto* files_option = app.add_option("--files", files.dir,
-                                      "map these files instead (an RGB-D frame directory, or a folder "
-                                      "of PCD / PLY clouds with --poses) at the engine's defaults, "
-                                      "and print each frame's wall and thread CPU time");
+  auto* files_option =
+      app.add_option("--files", files.dir,
+                     "map these files instead (an RGB-D frame directory, or a folder "
+                     "of PCD / PLY clouds with --poses) at the engine's defaults, "
+                     "and print each frame's wall and thread CPU time");
   app.add_option("--poses", files.poses, "--files: the clouds' trajectory (TUM or CSV)")
       ->needs(files_option);
   app.add_option("--resolution", files.resolution_m, "--files: voxel size [m]")
-      ->needs(files_option)->check(CLI::Range(0.01, 2.0))->capture_default_str();
-  app.add_option("--max-range", files.max_range_m, "--files: maximum range [m]; the window is 2.5 x it across")
-      ->needs(files_option)->check(CLI::Range(0.1, 400.0))->capture_default_str();
-  app.add_option("--window-z", files.window_z_m, "--files: the window's height [m] (0: 2.5 x the range)")
-      ->needs(files_option)->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->needs(files_option)
+      ->check(CLI::Range(0.01, 2.0))
+      ->capture_default_str();
+  app.add_option("--max-range", files.max_range_m,
+                 "--files: maximum range [m]; the window is 2.5 x it across")
+      ->needs(files_option)
+      ->check(CLI::Range(0.1, 400.0))
+      ->capture_default_str();
+  app.add_option("--window-z", files.window_z_m,
+                 "--files: the window's height [m] (0: 2.5 x the range)")
+      ->needs(files_option)
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   app.add_option("--passes", files.passes, "--files: passes over the files, each by a fresh engine")
-      ->needs(files_option)->check(CLI::Range(1, 1000))->capture_default_str();
+      ->needs(files_option)
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
   app.add_option("--voxels-out", files.voxels_out,
-                 "--files: write the first pass's occupied voxels here (as mlmap_replay's occupied_voxels.txt)")
+                 "--files: write the first pass's occupied voxels here (as mlmap_replay's "
+                 "occupied_voxels.txt)")
       ->needs(files_option);
   CLI11_PARSE(app, argc, argv);
   if (!files.dir.empty()) {
@@ -313,13 +337,13 @@ int main(int argc, char** argv) {
   }
   std::printf("\nplanning layers after each frame (ms; snapshot = window copy + publish):\n");
   std::printf("%-34s %15s %15s %15s %8s\n", "case", "snapshot", "2D grid", "ESDF", "ESDF");
-  std::printf("%-34s %7s %7s %7s %7s %7s %7s %8s\n", "", "median", "p99", "median", "p99",
-              "median", "p99", "updates");
+  std::printf("%-34s %7s %7s %7s %7s %7s %7s %8s\n", "", "median", "p99", "median", "p99", "median",
+              "p99", "updates");
   for (const Row& r : rows) {
     std::printf("%-34s %7.3f %7.3f %7.3f %7.3f %7.2f %7.2f %8zu\n", r.name.c_str(),
-                quantile(r.snapshot_ms, 0.5), quantile(r.snapshot_ms, 0.99), quantile(r.grid_ms, 0.5),
-                quantile(r.grid_ms, 0.99), quantile(r.esdf_ms, 0.5), quantile(r.esdf_ms, 0.99),
-                r.esdf_ms.size());
+                quantile(r.snapshot_ms, 0.5), quantile(r.snapshot_ms, 0.99),
+                quantile(r.grid_ms, 0.5), quantile(r.grid_ms, 0.99), quantile(r.esdf_ms, 0.5),
+                quantile(r.esdf_ms, 0.99), r.esdf_ms.size());
   }
   std::printf("peak resident memory of the benchmark process: %.0f MB\n",
               static_cast<double>(eval::peakRssBytes()) / (1024.0 * 1024.0));

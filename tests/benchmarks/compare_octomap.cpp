@@ -82,13 +82,15 @@ struct Dataset {
 struct Options {
   std::string realsense_dir = MLMAP_SHARED_DATA_DIR "/realsense_tabletop";
   std::string building_yaml = MLMAP_SOURCE_DIR "/config/worlds/building.yaml";
-  int frames = 0;          // 0: each dataset's default
-  double stream_hz = 0.0;  // simulated flights: frames as a sensor at this rate streams them; 0: spread
+  int frames = 0;  // 0: each dataset's default
+  double stream_hz =
+      0.0;  // simulated flights: frames as a sensor at this rate streams them; 0: spread
   double max_range_m = 0;  // 0: each dataset's default
   std::string mappers = "both";
   std::string out_dir;
   std::vector<double> window_m;  // empty: 2.5 x the range (z: 7.5 m in the simulated worlds)
-  std::vector<double> scene_offset_m;  // simulated datasets: every pose moved by this after rendering
+  std::vector<double>
+      scene_offset_m;  // simulated datasets: every pose moved by this after rendering
   bool voxels = false;
   bool quiet = false;
 };
@@ -109,7 +111,8 @@ Dataset makeDataset(const std::string& kind, const Options& o) {
     d.frame = [dir, n](int i) {
       Frame f;
       f.is_depth = true;
-      const std::size_t index = static_cast<std::size_t>(i) * dir->size() / static_cast<std::size_t>(n);
+      const std::size_t index =
+          static_cast<std::size_t>(i) * dir->size() / static_cast<std::size_t>(n);
       f.depth = dir->read(index);
       return f;
     };
@@ -121,23 +124,26 @@ Dataset makeDataset(const std::string& kind, const Options& o) {
     throw std::runtime_error("unknown dataset '" + kind +
                              "' (known: realsense, depth, lidar, building, building-lidar)");
   }
-  auto scenario = std::make_shared<datasets::Scenario>(building ? datasets::loadScenarioYaml(o.building_yaml)
-                                                          : datasets::defaultScenario());
+  auto scenario = std::make_shared<datasets::Scenario>(
+      building ? datasets::loadScenarioYaml(o.building_yaml) : datasets::defaultScenario());
   const int total = eval::frameCount(*scenario);
   // With --stream-hz: frames `step` camera frames apart from the start, as a sensor streams them.
-  const int step = o.stream_hz > 0.0
-                       ? std::max(1, static_cast<int>(std::lround(scenario->frame_rate_hz / o.stream_hz)))
-                       : 0;
+  const int step =
+      o.stream_hz > 0.0
+          ? std::max(1, static_cast<int>(std::lround(scenario->frame_rate_hz / o.stream_hz)))
+          : 0;
   const int available = step > 0 ? (total - 1) / step + 1 : total;
   // Defaults: a walk or a stream whole; spread, 60 frames (depth) or 30 scans (LiDAR).
-  const int n = framesOr(o.frames, building || step > 0 ? available : std::min(available, lidar ? 30 : 60));
+  const int n =
+      framesOr(o.frames, building || step > 0 ? available : std::min(available, lidar ? 30 : 60));
   d.frames = n;
   // The camera frame of the i-th frame of the case.
   const auto source = [n, total, step](int i) { return step > 0 ? i * step : (i * total) / n; };
   d.window_z_m = 7.5;
   d.scenario = scenario;
   if (o.scene_offset_m.size() == 3) {
-    d.scene_offset_W = Eigen::Vector3d(o.scene_offset_m[0], o.scene_offset_m[1], o.scene_offset_m[2]);
+    d.scene_offset_W =
+        Eigen::Vector3d(o.scene_offset_m[0], o.scene_offset_m[1], o.scene_offset_m[2]);
   }
   if (lidar) {
     d.default_max_range_m = 30.0;
@@ -206,8 +212,8 @@ MapConfig configFor(const Dataset& d, double resolution_m, double max_range_m,
     for (int a = 0; a < 3; ++a) c.local_map.size_cells[a] = roundUpTo5(window_m[a] / resolution_m);
   }
   c.awareness.max_range_m = max_range_m;
-  c.awareness.rho_cells = std::max(c.awareness.rho_cells,
-                                   static_cast<int>(std::ceil(max_range_m / c.awareness.rho_cell_m)));
+  c.awareness.rho_cells = std::max(
+      c.awareness.rho_cells, static_cast<int>(std::ceil(max_range_m / c.awareness.rho_cell_m)));
   // The frames carry T_B_S; the engine reads only the offset of the configured one (to size its
   // free-space scratch box).
   c.sensor.translation_B_m = d.T_B_S.translation();
@@ -226,9 +232,10 @@ class Progress {
     const int decile = 10 * done / total_;
     if (!tty_ && decile == last_decile_ && done != total_) return;
     last_decile_ = decile;
-    std::fprintf(stderr, "%s%s: %d/%d frames (%3d%%), %.0f s, last frame mlmap %.1f ms, OctoMap %.0f ms%s",
-                 tty_ ? "\r" : "", label_.c_str(), done, total_, 100 * done / total_,
-                 msSince(start_) / 1000.0, mlmap_ms, octomap_ms, (tty_ && done != total_) ? "" : "\n");
+    std::fprintf(
+        stderr, "%s%s: %d/%d frames (%3d%%), %.0f s, last frame mlmap %.1f ms, OctoMap %.0f ms%s",
+        tty_ ? "\r" : "", label_.c_str(), done, total_, 100 * done / total_,
+        msSince(start_) / 1000.0, mlmap_ms, octomap_ms, (tty_ && done != total_) ? "" : "\n");
     std::fflush(stderr);
   }
 
@@ -358,7 +365,8 @@ CaseResult runCase(const Dataset& d, double resolution_m, const Options& o) {
       // OctoMap gets the points mlmap maps: mlmap's back-projection of the depth image, every
       // finite point at least min_range_m from the sensor, in W, with the sensor origin.
       const Clock::time_point t0 = Clock::now();
-      const Transform T_W_S = f.is_depth ? f.depth.T_W_B * f.depth.T_B_S : f.cloud.T_W_B * f.cloud.T_B_S;
+      const Transform T_W_S =
+          f.is_depth ? f.depth.T_W_B * f.depth.T_B_S : f.cloud.T_W_B * f.cloud.T_B_S;
       if (f.is_depth) {
         backProject(f.depth, &points_S);
       } else {
@@ -374,8 +382,8 @@ CaseResult runCase(const Dataset& d, double resolution_m, const Options& o) {
     }
     if (engine) {
       const Clock::time_point t0 = Clock::now();
-      const FrameStatus status = f.is_depth ? engine->submit(std::move(f.depth))
-                                            : engine->submit(std::move(f.cloud));
+      const FrameStatus status =
+          f.is_depth ? engine->submit(std::move(f.depth)) : engine->submit(std::move(f.cloud));
       mlmap_ms = msSince(t0);
       if (status != FrameStatus::kAccepted) {
         throw std::runtime_error(r.name + ": frame " + std::to_string(i) + " rejected by mlmap (" +
@@ -440,53 +448,68 @@ void printCase(const CaseResult& r) {
   std::printf("   time per frame [ms]   median      p99     mean\n");
   const TimingSummary m = summarizeTimings(r.mlmap_mapping_ms);
   if (r.ran_mlmap) {
-    std::printf("   mlmap submit()     %9.2f %8.2f %8.2f   (all of it, planner snapshot included)\n",
-                a.median_ms, a.p99_ms, a.mean_ms);
+    std::printf(
+        "   mlmap submit()     %9.2f %8.2f %8.2f   (all of it, planner snapshot included)\n",
+        a.median_ms, a.p99_ms, a.mean_ms);
     std::printf("   mlmap mapping      %9.2f %8.2f %8.2f   (without the snapshot's window copy)\n",
                 m.median_ms, m.p99_ms, m.mean_ms);
   }
-  if (r.ran_octomap) std::printf("   OctoMap            %9.1f %8.1f %8.1f\n", b.median_ms, b.p99_ms, b.mean_ms);
+  if (r.ran_octomap)
+    std::printf("   OctoMap            %9.1f %8.1f %8.1f\n", b.median_ms, b.p99_ms, b.mean_ms);
   if (r.ran_mlmap && r.ran_octomap) {
     std::printf("   OctoMap / submit() %8.1fx %7.1fx %7.1fx\n", b.median_ms / a.median_ms,
                 b.p99_ms / a.p99_ms, b.mean_ms / a.mean_ms);
     std::printf("   OctoMap / mapping  %8.1fx %7.1fx %7.1fx\n", b.median_ms / m.median_ms,
                 b.p99_ms / m.p99_ms, b.mean_ms / m.mean_ms);
   }
-  std::printf("   memory [MB]: mlmap accounting peak %.1f / final %.1f; OcTree::memoryUsage peak %.1f / final %.1f;"
-              " process peak RSS %.1f (%.1f before mapping)\n",
-              mb(r.mlmap_peak_bytes), mb(r.mlmap_bytes.empty() ? 0 : r.mlmap_bytes.back()),
-              mb(r.octomap_peak_bytes), mb(r.octomap_bytes.empty() ? 0 : r.octomap_bytes.back()),
-              mb(r.rss_peak_bytes), mb(r.rss_before_bytes));
+  std::printf(
+      "   memory [MB]: mlmap accounting peak %.1f / final %.1f; OcTree::memoryUsage peak %.1f / "
+      "final %.1f;"
+      " process peak RSS %.1f (%.1f before mapping)\n",
+      mb(r.mlmap_peak_bytes), mb(r.mlmap_bytes.empty() ? 0 : r.mlmap_bytes.back()),
+      mb(r.octomap_peak_bytes), mb(r.octomap_bytes.empty() ? 0 : r.octomap_bytes.back()),
+      mb(r.rss_peak_bytes), mb(r.rss_before_bytes));
   if (r.ran_mlmap) {
-    std::printf("   mlmap stages, median / p99 [ms]: awareness %.2f / %.2f, local-global %.2f / %.2f "
-                "(the engine's recent frames)\n",
-                r.stats.awareness.median_ms, r.stats.awareness.p99_ms, r.stats.local_global.median_ms,
-                r.stats.local_global.p99_ms);
-    std::printf("   mlmap memory by layer [MB]: awareness %.1f, local %.1f, global %.1f, planning %.1f;"
-                " measurements outside the window (dropped): %llu\n",
-                mb(r.stats.memory.awareness_bytes), mb(r.stats.memory.local_bytes),
-                mb(r.stats.memory.global_bytes), mb(r.stats.memory.planning_bytes),
-                static_cast<unsigned long long>(r.stats.local.outside_window));
+    std::printf(
+        "   mlmap stages, median / p99 [ms]: awareness %.2f / %.2f, local-global %.2f / %.2f "
+        "(the engine's recent frames)\n",
+        r.stats.awareness.median_ms, r.stats.awareness.p99_ms, r.stats.local_global.median_ms,
+        r.stats.local_global.p99_ms);
+    std::printf(
+        "   mlmap memory by layer [MB]: awareness %.1f, local %.1f, global %.1f, planning %.1f;"
+        " measurements outside the window (dropped): %llu\n",
+        mb(r.stats.memory.awareness_bytes), mb(r.stats.memory.local_bytes),
+        mb(r.stats.memory.global_bytes), mb(r.stats.memory.planning_bytes),
+        static_cast<unsigned long long>(r.stats.local.outside_window));
   }
   if (r.ran_mlmap && r.ran_octomap) {
     const eval::VoxelAgreement& g = r.agreement;
-    std::printf("   occupied voxels: mlmap |A| %zu, OctoMap |B| %zu, both %zu\n", g.a, g.b, g.intersection);
-    std::printf("   exact:           IoU %.3f, precision %.3f, recall %.3f (mlmap against OctoMap)\n",
-                g.iou, g.precision, g.recall);
-    std::printf("   within one cell: IoU %.3f, precision %.3f, recall %.3f\n", g.iou_1, g.precision_1,
-                g.recall_1);
+    std::printf("   occupied voxels: mlmap |A| %zu, OctoMap |B| %zu, both %zu\n", g.a, g.b,
+                g.intersection);
+    std::printf(
+        "   exact:           IoU %.3f, precision %.3f, recall %.3f (mlmap against OctoMap)\n",
+        g.iou, g.precision, g.recall);
+    std::printf("   within one cell: IoU %.3f, precision %.3f, recall %.3f\n", g.iou_1,
+                g.precision_1, g.recall_1);
   }
   if (r.truth.known) {
     const CaseResult::Truth& t = r.truth;
-    auto pct = [](std::size_t n, std::size_t d) { return d ? 100.0 * static_cast<double>(n) / static_cast<double>(d) : 0.0; };
-    std::printf("   against the simulator's truth (a voxel is right when it touches a solid): mlmap %.1f %%, "
-                "OctoMap %.1f %%;\n   only mlmap: %zu voxels, %.1f %% right; only OctoMap: %zu voxels, %.1f %% right\n",
-                pct(t.mlmap_right, r.agreement.a), pct(t.octomap_right, r.agreement.b), t.only_mlmap,
-                pct(t.only_mlmap_right, t.only_mlmap), t.only_octomap, pct(t.only_octomap_right, t.only_octomap));
+    auto pct = [](std::size_t n, std::size_t d) {
+      return d ? 100.0 * static_cast<double>(n) / static_cast<double>(d) : 0.0;
+    };
+    std::printf(
+        "   against the simulator's truth (a voxel is right when it touches a solid): mlmap %.1f "
+        "%%, "
+        "OctoMap %.1f %%;\n   only mlmap: %zu voxels, %.1f %% right; only OctoMap: %zu voxels, "
+        "%.1f %% right\n",
+        pct(t.mlmap_right, r.agreement.a), pct(t.octomap_right, r.agreement.b), t.only_mlmap,
+        pct(t.only_mlmap_right, t.only_mlmap), t.only_octomap,
+        pct(t.only_octomap_right, t.only_octomap));
   }
   if (r.ran_octomap) {
-    std::printf("   OctoMap key check: %zu leaves, %zu whose key is not floor(centre / resolution)\n",
-                r.octomap_voxels.leaves_checked, r.octomap_voxels.key_mismatches);
+    std::printf(
+        "   OctoMap key check: %zu leaves, %zu whose key is not floor(centre / resolution)\n",
+        r.octomap_voxels.leaves_checked, r.octomap_voxels.key_mismatches);
   }
 }
 
@@ -512,9 +535,11 @@ void writeTiming(std::ostream& out, const std::vector<double>& ms) {
       << ", \"max\": " << s.max_ms << "}";
 }
 
-void writeJson(std::ostream& out, const std::vector<CaseResult>& results, const std::string& mappers) {
+void writeJson(std::ostream& out, const std::vector<CaseResult>& results,
+               const std::string& mappers) {
   out.precision(6);
-  out << "{\n  \"program\": \"mlmap_compare_octomap\",\n  \"mlmap_mode\": \"synchronous (one core)\",\n"
+  out << "{\n  \"program\": \"mlmap_compare_octomap\",\n  \"mlmap_mode\": \"synchronous (one "
+         "core)\",\n"
       << "  \"mappers\": \"" << mappers << "\",\n  \"cases\": [\n";
   for (std::size_t k = 0; k < results.size(); ++k) {
     const CaseResult& r = results[k];
@@ -531,15 +556,17 @@ void writeJson(std::ostream& out, const std::vector<CaseResult>& results, const 
     writeTiming(out, r.mlmap_mapping_ms);
     out << ", \"peak_memory_bytes\": " << r.mlmap_peak_bytes
         << ", \"memory_by_layer_bytes\": {\"awareness\": " << r.stats.memory.awareness_bytes
-        << ", \"local\": " << r.stats.memory.local_bytes << ", \"global\": " << r.stats.memory.global_bytes
-        << ", \"planning\": " << r.stats.memory.planning_bytes << "}, \"outside_window\": "
-        << r.stats.local.outside_window << ",\n       \"frame_ms\": ";
+        << ", \"local\": " << r.stats.memory.local_bytes
+        << ", \"global\": " << r.stats.memory.global_bytes
+        << ", \"planning\": " << r.stats.memory.planning_bytes
+        << "}, \"outside_window\": " << r.stats.local.outside_window << ",\n       \"frame_ms\": ";
     writeArray(out, r.mlmap_ms, 3);
     out << ",\n       \"memory_bytes\": ";
     writeArray(out, r.mlmap_bytes);
     out << ",\n       \"map_memory_bytes\": ";
     writeArray(out, r.mlmap_map_bytes);
-    out << "},\n     \"octomap\": {\"ran\": " << (r.ran_octomap ? "true" : "false") << ", \"time_ms\": ";
+    out << "},\n     \"octomap\": {\"ran\": " << (r.ran_octomap ? "true" : "false")
+        << ", \"time_ms\": ";
     writeTiming(out, r.octomap_ms);
     out << ", \"peak_memory_bytes\": " << r.octomap_peak_bytes
         << ", \"key_check\": {\"leaves\": " << r.octomap_voxels.leaves_checked
@@ -553,14 +580,16 @@ void writeJson(std::ostream& out, const std::vector<CaseResult>& results, const 
     out << ",\n     \"agreement\": {\"mlmap_voxels\": " << g.a << ", \"octomap_voxels\": " << g.b
         << ", \"intersection\": " << g.intersection << ", \"iou\": " << g.iou
         << ", \"precision\": " << g.precision << ", \"recall\": " << g.recall
-        << ", \"matched_mlmap_1\": " << g.matched_a_1 << ", \"matched_octomap_1\": " << g.matched_b_1
-        << ", \"iou_1\": " << g.iou_1 << ", \"precision_1\": " << g.precision_1
-        << ", \"recall_1\": " << g.recall_1 << "}";
+        << ", \"matched_mlmap_1\": " << g.matched_a_1
+        << ", \"matched_octomap_1\": " << g.matched_b_1 << ", \"iou_1\": " << g.iou_1
+        << ", \"precision_1\": " << g.precision_1 << ", \"recall_1\": " << g.recall_1 << "}";
     if (r.truth.known) {
       const CaseResult::Truth& t = r.truth;
-      out << ",\n     \"truth\": {\"mlmap_right\": " << t.mlmap_right << ", \"octomap_right\": " << t.octomap_right
-          << ", \"only_mlmap\": " << t.only_mlmap << ", \"only_mlmap_right\": " << t.only_mlmap_right
-          << ", \"only_octomap\": " << t.only_octomap << ", \"only_octomap_right\": " << t.only_octomap_right << "}";
+      out << ",\n     \"truth\": {\"mlmap_right\": " << t.mlmap_right
+          << ", \"octomap_right\": " << t.octomap_right << ", \"only_mlmap\": " << t.only_mlmap
+          << ", \"only_mlmap_right\": " << t.only_mlmap_right
+          << ", \"only_octomap\": " << t.only_octomap
+          << ", \"only_octomap_right\": " << t.only_octomap_right << "}";
     }
     out << "}" << (k + 1 < results.size() ? "," : "") << "\n";
   }
@@ -684,7 +713,8 @@ std::vector<VoxelIndex> readVoxelList(const std::string& path) {
 
 /// --agreement A B: how two voxel lists agree (A against B), exact and within one cell.
 int printListAgreement(const std::vector<std::string>& paths) {
-  const eval::VoxelAgreement g = eval::compareVoxels(readVoxelList(paths[0]), readVoxelList(paths[1]));
+  const eval::VoxelAgreement g =
+      eval::compareVoxels(readVoxelList(paths[0]), readVoxelList(paths[1]));
   std::printf("A %s: %zu voxels; B %s: %zu voxels; both %zu\n", paths[0].c_str(), g.a,
               paths[1].c_str(), g.b, g.intersection);
   std::printf("exact:           IoU %.3f, precision %.3f, recall %.3f (A against B)\n", g.iou,
@@ -714,7 +744,7 @@ int octomapReplay(const OctomapReplayOptions& o) {
     source = std::make_unique<datasets::FrameDirectorySource>(o.frames_dir);
   } else {
     source = std::make_unique<datasets::CloudSequenceSource>(o.clouds_dir, o.poses_path,
-                                                       datasets::CloudSequenceOptions{});
+                                                             datasets::CloudSequenceOptions{});
   }
   octomap::OcTree tree(o.resolution_m);
   const float min_range = static_cast<float>(AwarenessConfig{}.min_range_m);
@@ -751,33 +781,39 @@ int octomapReplay(const OctomapReplayOptions& o) {
 
 int main(int argc, char** argv) {
   CLI::App app{
-      "mlmap_compare_octomap: the same frames, resolution and maximum range into mlmap (synchronous "
+      "mlmap_compare_octomap: the same frames, resolution and maximum range into mlmap "
+      "(synchronous "
       "MapEngine, one core) and OctoMap (OcTree::insertPointCloud, default sensor model). Prints "
       "time per frame, memory and occupied-voxel agreement; writes JSON."};
   Options o;
   std::vector<std::string> cases = {"realsense:0.05", "realsense:0.02", "depth:0.1", "lidar:0.1"};
-  app.add_option("--cases", cases,
-                 "DATASET:RESOLUTION_M, datasets: realsense (the shared RealSense frames), depth "
-                 "(default room flight, 640x480 depth), lidar (same flight, 128 x 640 LiDAR, 30 m), "
-                 "building (the building walk, depth camera), building-lidar")
+  app.add_option(
+         "--cases", cases,
+         "DATASET:RESOLUTION_M, datasets: realsense (the shared RealSense frames), depth "
+         "(default room flight, 640x480 depth), lidar (same flight, 128 x 640 LiDAR, 30 m), "
+         "building (the building walk, depth camera), building-lidar")
       ->delimiter(',')
       ->capture_default_str();
-  app.add_option("--frames", o.frames,
-                 "frames per case, spread evenly or the first ones of a stream (0: realsense all 50, "
-                 "depth 60, lidar 30, building all; with --stream-hz the whole flight)")
+  app.add_option(
+         "--frames", o.frames,
+         "frames per case, spread evenly or the first ones of a stream (0: realsense all 50, "
+         "depth 60, lidar 30, building all; with --stream-hz the whole flight)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  app.add_option("--stream-hz", o.stream_hz,
-                 "simulated datasets: the frames as a sensor streaming at this rate gives them, "
-                 "from the start of the flight, at most the scenario's frame rate (0: spread evenly "
-                 "over the whole flight, so the vehicle moves metres between frames)")
+  app.add_option(
+         "--stream-hz", o.stream_hz,
+         "simulated datasets: the frames as a sensor streaming at this rate gives them, "
+         "from the start of the flight, at most the scenario's frame rate (0: spread evenly "
+         "over the whole flight, so the vehicle moves metres between frames)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  app.add_option("--max-range", o.max_range_m,
-                 "maximum range of both mappers [m] (0: realsense 2, depth and building 10, LiDAR 30)")
+  app.add_option(
+         "--max-range", o.max_range_m,
+         "maximum range of both mappers [m] (0: realsense 2, depth and building 10, LiDAR 30)")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--mappers", o.mappers,
-                 "both, or only mlmap / octomap (a run with one mapper gives that mapper's peak RSS)")
+  app.add_option(
+         "--mappers", o.mappers,
+         "both, or only mlmap / octomap (a run with one mapper gives that mapper's peak RSS)")
       ->check(CLI::IsMember({"both", "mlmap", "octomap"}))
       ->capture_default_str();
   app.add_option("--window", o.window_m,
@@ -786,18 +822,21 @@ int main(int argc, char** argv) {
       ->delimiter(',')
       ->expected(3)
       ->check(CLI::PositiveNumber);
-  app.add_option("--scene-offset", o.scene_offset_m,
-                 "simulated datasets: move every pose by X,Y,Z [m] after rendering, which moves the "
-                 "scene off the voxel grid (the simulated rooms' faces lie on voxel faces, where a "
-                 "point's voxel is a tie that rounding decides); no scoring against the truth then")
+  app.add_option(
+         "--scene-offset", o.scene_offset_m,
+         "simulated datasets: move every pose by X,Y,Z [m] after rendering, which moves the "
+         "scene off the voxel grid (the simulated rooms' faces lie on voxel faces, where a "
+         "point's voxel is a tie that rounding decides); no scoring against the truth then")
       ->delimiter(',')
       ->expected(3);
   app.add_option("--realsense", o.realsense_dir, "RGB-D frame directory of the realsense dataset")
       ->capture_default_str();
-  app.add_option("--building", o.building_yaml, "scenario YAML of the building walk")->capture_default_str();
+  app.add_option("--building", o.building_yaml, "scenario YAML of the building walk")
+      ->capture_default_str();
   app.add_option("--out", o.out_dir, "write compare.json (and voxel lists) into this directory");
-  app.add_flag("--voxels", o.voxels,
-               "also write <out>/<dataset>_<res>.voxels.txt: both maps' occupied voxels, for pictures");
+  app.add_flag(
+      "--voxels", o.voxels,
+      "also write <out>/<dataset>_<res>.voxels.txt: both maps' occupied voxels, for pictures");
   app.add_flag("--quiet", o.quiet, "no progress lines");
   std::string write_frames_dir;
   app.add_option("--write-frames", write_frames_dir,
@@ -858,13 +897,15 @@ int main(int argc, char** argv) {
         res = 0.0;
       }
       if (colon == std::string::npos || !(res > 0.0) || !std::isfinite(res)) {
-        throw std::runtime_error("--cases: '" + c + "' is not DATASET:RESOLUTION_M with a resolution > 0");
+        throw std::runtime_error("--cases: '" + c +
+                                 "' is not DATASET:RESOLUTION_M with a resolution > 0");
       }
       parsed.emplace_back(c.substr(0, colon), res);
     }
     if (!o.out_dir.empty()) std::filesystem::create_directories(o.out_dir);
-    std::printf("mlmap_compare_octomap: mlmap in synchronous mode (one core), OctoMap %s, mappers: %s\n",
-                "OcTree::insertPointCloud (default sensor model, no discretization)", o.mappers.c_str());
+    std::printf(
+        "mlmap_compare_octomap: mlmap in synchronous mode (one core), OctoMap %s, mappers: %s\n",
+        "OcTree::insertPointCloud (default sensor model, no discretization)", o.mappers.c_str());
     std::vector<CaseResult> results;
     bool keys_ok = true;
     for (const auto& [kind, res] : parsed) {

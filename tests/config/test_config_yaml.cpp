@@ -16,7 +16,9 @@ std::string errorOf(const std::string& yaml) {
   return "";
 }
 
-bool sameConfig(const MapConfig& a, const MapConfig& b) { return config::toYaml(a) == config::toYaml(b); }
+bool sameConfig(const MapConfig& a, const MapConfig& b) {
+  return config::toYaml(a) == config::toYaml(b);
+}
 
 TEST(ConfigYaml, EmptyDocumentGivesThePaperDefaults) {
   const MapConfig c = config::parseConfigYaml("{}");
@@ -39,12 +41,16 @@ TEST(ConfigYaml, PrintedConfigReadsBackIdentically) {
 }
 
 TEST(ConfigYaml, ShippedDefaultFileEqualsTheDefaultsInCode) {
-  EXPECT_TRUE(sameConfig(config::loadConfigYaml(MLMAP_SOURCE_DIR "/config/mlmap.yaml"), MapConfig{}));
+  EXPECT_TRUE(
+      sameConfig(config::loadConfigYaml(MLMAP_SOURCE_DIR "/config/mlmap.yaml"), MapConfig{}));
 }
 
 TEST(ConfigYaml, OfflineProgramsReadTheEngineSectionsOfANodeConfiguration) {
-  const std::string node = "local_map: {resolution_m: 0.2}\ndds: {domain_id: 7}\nmap_file: {save_path: m}\n";
-  EXPECT_DOUBLE_EQ(config::parseConfigYaml(node, "node.yaml", config::kNodeOnlySections).local_map.resolution_m, 0.2);
+  const std::string node =
+      "local_map: {resolution_m: 0.2}\ndds: {domain_id: 7}\nmap_file: {save_path: m}\n";
+  EXPECT_DOUBLE_EQ(
+      config::parseConfigYaml(node, "node.yaml", config::kNodeOnlySections).local_map.resolution_m,
+      0.2);
   // Skipped means not read, not anything goes: typos elsewhere are still errors.
   EXPECT_NE(errorOf(node).find("dds: unknown key"), std::string::npos);
   try {
@@ -56,7 +62,7 @@ TEST(ConfigYaml, OfflineProgramsReadTheEngineSectionsOfANodeConfiguration) {
   // The shipped node configurations load this way.
   for (const char* name : {"mlmap_node.yaml", "mlmap_node_replay.yaml", "mlmap_node_depth.yaml"}) {
     EXPECT_NO_THROW((void)config::loadConfigYaml(std::string(MLMAP_SOURCE_DIR "/config/") + name,
-                                             config::kNodeOnlySections))
+                                                 config::kNodeOnlySections))
         << name;
   }
 }
@@ -66,7 +72,8 @@ TEST(ConfigYaml, UnknownKeysAndBadValuesAreClearErrors) {
   // the program (tests/fuzz/regressions/fuzz_config_yaml).
   EXPECT_NE(errorOf("[a, b]: 1").find("(top level): a key must be plain text, not a list"),
             std::string::npos);
-  EXPECT_NE(errorOf("local_map: {? {x: 1} : 2}").find("local_map: a key must be plain text, not a mapping"),
+  EXPECT_NE(errorOf("local_map: {? {x: 1} : 2}")
+                .find("local_map: a key must be plain text, not a mapping"),
             std::string::npos);
   EXPECT_NE(errorOf("~: 1").find("a key must be plain text, not null"), std::string::npos);
   EXPECT_NE(errorOf("local_map: {resolutoin_m: 0.1}").find("local_map.resolutoin_m: unknown key"),

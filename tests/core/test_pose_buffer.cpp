@@ -23,9 +23,7 @@ PoseBufferConfig fastVehicle() {
   return config;
 }
 
-double yawOf(const Transform& T) {
-  return std::atan2(T.linear()(1, 0), T.linear()(0, 0));
-}
+double yawOf(const Transform& T) { return std::atan2(T.linear()(1, 0), T.linear()(0, 0)); }
 
 TEST(PoseBuffer, ExactStampsAndInterpolationBetweenNeighbours) {
   PoseBuffer buffer(fastVehicle());
@@ -70,8 +68,8 @@ TEST(PoseBuffer, GapsAndOldStampsHaveNoPose) {
   buffer.add(1.5, pose(2.0, 0.0));  // the pose stream paused for 0.5 s
   Transform T;
   EXPECT_EQ(buffer.lookup(1.25, &T), PoseBuffer::LookupResult::kNoPose);
-  EXPECT_EQ(buffer.lookup(1.04, &T), PoseBuffer::LookupResult::kFound);   // 40 ms after a pose
-  EXPECT_EQ(buffer.lookup(1.46, &T), PoseBuffer::LookupResult::kFound);   // 40 ms before one
+  EXPECT_EQ(buffer.lookup(1.04, &T), PoseBuffer::LookupResult::kFound);  // 40 ms after a pose
+  EXPECT_EQ(buffer.lookup(1.46, &T), PoseBuffer::LookupResult::kFound);  // 40 ms before one
   EXPECT_EQ(buffer.lookup(1.06, &T), PoseBuffer::LookupResult::kNoPose);
   EXPECT_EQ(buffer.lookup(0.99, &T), PoseBuffer::LookupResult::kNoPose);  // before the buffer
   EXPECT_EQ(buffer.lookup(std::numeric_limits<double>::quiet_NaN(), &T),

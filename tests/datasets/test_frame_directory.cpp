@@ -302,7 +302,8 @@ TEST_F(TempFrameDir, WrongImageTypeOrSizeIsRejected) {
   expectThrowWith([&] { (void)frames.read(2); },
                   {path("frame-000002.depth.png"), "16-bit samples of PNG colour type 2"});
   expectThrowWith([&] { (void)frames.read(3); }, {path("frame-000003.depth.png"), "80x60"});
-  expectThrowWith([&] { (void)frames.read(4); }, {path("frame-000004.depth.png"), "not a PNG file"});
+  expectThrowWith([&] { (void)frames.read(4); },
+                  {path("frame-000004.depth.png"), "not a PNG file"});
 }
 
 // A small PNG may declare a huge image (a decompression bomb: 1.7 MB declaring 30000 x 30000

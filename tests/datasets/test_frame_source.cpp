@@ -24,11 +24,10 @@ bool sameDepth(const DepthFrame& a, const DepthFrame& b) {
       a.depth_m.size() == b.depth_m.size() &&
       (a.depth_m.empty() ||
        std::memcmp(a.depth_m.data(), b.depth_m.data(), a.depth_m.size() * sizeof(float)) == 0);
-  return a.depth_mm == b.depth_mm && same_metres &&
-         a.intrinsics.width == b.intrinsics.width && a.intrinsics.height == b.intrinsics.height &&
-         a.intrinsics.fx == b.intrinsics.fx && a.intrinsics.cy == b.intrinsics.cy &&
-         a.T_W_B.matrix() == b.T_W_B.matrix() && a.T_B_S.matrix() == b.T_B_S.matrix() &&
-         a.stamp_s == b.stamp_s;
+  return a.depth_mm == b.depth_mm && same_metres && a.intrinsics.width == b.intrinsics.width &&
+         a.intrinsics.height == b.intrinsics.height && a.intrinsics.fx == b.intrinsics.fx &&
+         a.intrinsics.cy == b.intrinsics.cy && a.T_W_B.matrix() == b.T_W_B.matrix() &&
+         a.T_B_S.matrix() == b.T_B_S.matrix() && a.stamp_s == b.stamp_s;
 }
 
 TEST(FrameDirectorySource, EveryFrameIsTheDirectorysFrameWithItsNameAndPixels) {
@@ -80,7 +79,8 @@ TEST(SimulatedFlightSource, FramesAreTheRenderersAtTheScenariosTimes) {
     const SourceFrame frame = source.read(i, &info);
     const double t = static_cast<double>(i) / scenario.frame_rate_hz;
     EXPECT_EQ(source.frameTime(i), t);
-    EXPECT_TRUE(sameDepth(std::get<DepthFrame>(frame), renderDirectly(scenario, T_B_S, t))) << "frame " << i;
+    EXPECT_TRUE(sameDepth(std::get<DepthFrame>(frame), renderDirectly(scenario, T_B_S, t)))
+        << "frame " << i;
     EXPECT_EQ(info.name, "sim-" + std::to_string(i));
     EXPECT_EQ(info.points_in_file, 80u * 60u);
   }

@@ -37,23 +37,27 @@ TEST(TumPoses, BadLinesAreRefusedWithTheirNumber) {
   const std::string ok = "0 0 0 0 0 0 0 1\n";
   expectError([&] { (void)parseTumPoses(ok + "1 0 0 0 0 0 0.5 0.5\n", "q.txt"); },
               {"q.txt: line 2", "quaternion", "norm 0.707"});
-  expectError([&] { (void)parseTumPoses(ok + "1 nan 0 0 0 0 0 1\n", "n.txt"); }, {"n.txt: line 2", "tx is not finite"});
+  expectError([&] { (void)parseTumPoses(ok + "1 nan 0 0 0 0 0 1\n", "n.txt"); },
+              {"n.txt: line 2", "tx is not finite"});
   expectError([&] { (void)parseTumPoses(ok + "# c\n0 0 0 0 0 0 0 1\n", "s.txt"); },
               {"s.txt: line 3", "not after the previous one", "line 1"});
-  expectError([&] { (void)parseTumPoses(ok + "2 0 0 0 0 0 1\n", "c.txt"); }, {"c.txt: line 2", "expected 8 values", "got 7"});
-  expectError([&] { (void)parseTumPoses(ok + "2 0 0 x 0 0 0 1\n", "x.txt"); }, {"x.txt: line 2", "tz 'x' is not a number"});
+  expectError([&] { (void)parseTumPoses(ok + "2 0 0 0 0 0 1\n", "c.txt"); },
+              {"c.txt: line 2", "expected 8 values", "got 7"});
+  expectError([&] { (void)parseTumPoses(ok + "2 0 0 x 0 0 0 1\n", "x.txt"); },
+              {"x.txt: line 2", "tz 'x' is not a number"});
   expectError([&] { (void)parseTumPoses("# nothing\n", "e.txt"); }, {"e.txt", "no poses"});
 }
 
 TEST(CsvPoses, AcceptsTheDocumentedHeaders) {
-  const std::vector<StampedPose> a =
-      parseCsvPoses("t,x,y,z,qx,qy,qz,qw\n0.5,1,2,3,0,0,0.7071067811865476,0.7071067811865476\n", "a.csv");
+  const std::vector<StampedPose> a = parseCsvPoses(
+      "t,x,y,z,qx,qy,qz,qw\n0.5,1,2,3,0,0,0.7071067811865476,0.7071067811865476\n", "a.csv");
   ASSERT_EQ(a.size(), 1u);
   EXPECT_DOUBLE_EQ(a[0].stamp_s, 0.5);
   EXPECT_TRUE(a[0].T_W_P.linear().isApprox(kYaw90.toRotationMatrix(), 1e-12));
   // Other order, other names, units, spaces, a '#' on the header and extra columns.
   const std::vector<StampedPose> b = parseCsvPoses(
-      "# timestamp [ns], qw, qx, qy, qz, frame, position_x [m], position_y [m], position_z [m], vx\n"
+      "# timestamp [ns], qw, qx, qy, qz, frame, position_x [m], position_y [m], position_z [m], "
+      "vx\n"
       "1500000000, 0.7071067811865476, 0, 0, 0.7071067811865476, base, 1, 2, 3, 9\n"
       "2500000000, 1, 0, 0, 0, base, 4, 5, 6, 9\n",
       "b.csv");
@@ -65,27 +69,37 @@ TEST(CsvPoses, AcceptsTheDocumentedHeaders) {
   const std::vector<StampedPose> c =
       parseCsvPoses("time_ms,tx,ty,tz,q_x,q_y,q_z,q_w\n250,1,2,3,0,0,0,1\n", "c.csv");
   EXPECT_DOUBLE_EQ(c[0].stamp_s, 0.25);
-  const std::vector<StampedPose> d =
-      parseCsvPoses("stamp,pos_x,pos_y,pos_z,orientation_x,orientation_y,orientation_z,orientation_w\n1,1,2,3,0,0,0,1\n", "d.csv");
+  const std::vector<StampedPose> d = parseCsvPoses(
+      "stamp,pos_x,pos_y,pos_z,orientation_x,orientation_y,orientation_z,orientation_w\n1,1,2,3,0,"
+      "0,0,1\n",
+      "d.csv");
   EXPECT_TRUE(d[0].T_W_P.translation().isApprox(Eigen::Vector3d(1, 2, 3)));
 }
 
 TEST(CsvPoses, BadHeadersAndLinesAreRefusedWithTheirNumber) {
-  expectError([&] { (void)parseCsvPoses("t,x,y,z,qx,qy,qz\n", "a.csv"); }, {"a.csv: line 1", "no qw column"});
-  expectError([&] { (void)parseCsvPoses("t,x,y,z,qx,qy,qz,qw,x\n", "b.csv"); }, {"b.csv: line 1", "'x'", "earlier column"});
+  expectError([&] { (void)parseCsvPoses("t,x,y,z,qx,qy,qz\n", "a.csv"); },
+              {"a.csv: line 1", "no qw column"});
+  expectError([&] { (void)parseCsvPoses("t,x,y,z,qx,qy,qz,qw,x\n", "b.csv"); },
+              {"b.csv: line 1", "'x'", "earlier column"});
   const std::string h = "t,x,y,z,qx,qy,qz,qw\n0,0,0,0,0,0,0,1\n";
-  expectError([&] { (void)parseCsvPoses(h + "1,0,0,0,0,0,0,2\n", "c.csv"); }, {"c.csv: line 3", "norm 2"});
-  expectError([&] { (void)parseCsvPoses(h + "1,0,NaN,0,0,0,0,1\n", "d.csv"); }, {"d.csv: line 3", "not finite"});
-  expectError([&] { (void)parseCsvPoses(h + "0,0,0,0,0,0,0,1\n", "e.csv"); }, {"e.csv: line 3", "not after"});
-  expectError([&] { (void)parseCsvPoses(h + "1,0,0,0,0,0,1\n", "f.csv"); }, {"f.csv: line 3", "expected 8"});
+  expectError([&] { (void)parseCsvPoses(h + "1,0,0,0,0,0,0,2\n", "c.csv"); },
+              {"c.csv: line 3", "norm 2"});
+  expectError([&] { (void)parseCsvPoses(h + "1,0,NaN,0,0,0,0,1\n", "d.csv"); },
+              {"d.csv: line 3", "not finite"});
+  expectError([&] { (void)parseCsvPoses(h + "0,0,0,0,0,0,0,1\n", "e.csv"); },
+              {"e.csv: line 3", "not after"});
+  expectError([&] { (void)parseCsvPoses(h + "1,0,0,0,0,0,1\n", "f.csv"); },
+              {"f.csv: line 3", "expected 8"});
   expectError([&] { (void)parseCsvPoses("\n\n", "g.csv"); }, {"g.csv", "no CSV header"});
-  expectError([&] { (void)parseCsvPoses("t,x,y,z,qx,qy,qz,qw\n", "h.csv"); }, {"h.csv", "no poses"});
+  expectError([&] { (void)parseCsvPoses("t,x,y,z,qx,qy,qz,qw\n", "h.csv"); },
+              {"h.csv", "no poses"});
 }
 
 TEST(PoseFile, FormatIsDetectedByNameOrComma) {
   EXPECT_EQ(detectPoseFileFormat("a.CSV", "0 0 0 0 0 0 0 1\n"), PoseFileFormat::kCsv);
   EXPECT_EQ(detectPoseFileFormat("a.txt", "\nt,x,y,z,qx,qy,qz,qw\n"), PoseFileFormat::kCsv);
-  EXPECT_EQ(detectPoseFileFormat("a.txt", "# t tx ty tz qx qy qz qw\n0 0 0 0 0 0 0 1\n"), PoseFileFormat::kTum);
+  EXPECT_EQ(detectPoseFileFormat("a.txt", "# t tx ty tz qx qy qz qw\n0 0 0 0 0 0 0 1\n"),
+            PoseFileFormat::kTum);
 }
 
 TEST(PoseFile, ExtrinsicParses) {
@@ -124,9 +138,10 @@ TEST(CloudPairing, FileNamesThatAreStampsArePairedByTimeWithInterpolation) {
   std::vector<std::string> unpaired;
   // 10.03: between 10.0 and 10.1, nearer 0.03 s away -> interpolated (x = 10.03).
   // 10.1: exact. 10.35: nearer pose 0.15 s away -> none. 9.9, 10.7: outside -> none.
-  const std::vector<PairedCloud> paired = pairCloudsWithPoses(
-      {"10.350000.pcd", "10.100000.pcd", "9.900000.pcd", "10.030000.pcd", "10.700000.ply", "10.580000.pcd"},
-      poses, 0.05, &how, &unpaired);
+  const std::vector<PairedCloud> paired =
+      pairCloudsWithPoses({"10.350000.pcd", "10.100000.pcd", "9.900000.pcd", "10.030000.pcd",
+                           "10.700000.ply", "10.580000.pcd"},
+                          poses, 0.05, &how, &unpaired);
   EXPECT_EQ(how, CloudPairing::kByTime);
   ASSERT_EQ(paired.size(), 3u);
   EXPECT_EQ(paired[0].file_name, "10.030000.pcd");
@@ -137,8 +152,11 @@ TEST(CloudPairing, FileNamesThatAreStampsArePairedByTimeWithInterpolation) {
   EXPECT_NEAR(paired[2].T_W_P.translation().x(), 10.58, 1e-9);
   EXPECT_EQ(unpaired, (std::vector<std::string>{"9.900000.pcd", "10.350000.pcd", "10.700000.ply"}));
 
-  expectError([&] { (void)pairCloudsWithPoses({"1.5.pcd", "1.50.pcd"}, poses, 0.05, &how, nullptr); },
-              {"same time stamp"});
+  expectError(
+      [&] {
+        (void)pairCloudsWithPoses({"1.5.pcd", "1.50.pcd"}, poses, 0.05, &how, nullptr);
+      },
+      {"same time stamp"});
   expectError([&] { (void)pairCloudsWithPoses({"1.5.pcd"}, poses, 0.05, &how, nullptr); },
               {"no cloud has a pose within 0.05"});
 }
@@ -156,10 +174,14 @@ TEST(CloudPairing, OtherNamesArePairedByOrderAndNeedEqualCounts) {
   EXPECT_DOUBLE_EQ(paired[2].stamp_s, 3.0);
   EXPECT_DOUBLE_EQ(paired[2].T_W_P.translation().x(), 3.0);
   // One stamp-like name among others: by order.
-  EXPECT_NO_THROW((void)pairCloudsWithPoses({"1.5.pcd", "a.pcd", "b.pcd"}, poses, 0.05, &how, nullptr));
+  EXPECT_NO_THROW(
+      (void)pairCloudsWithPoses({"1.5.pcd", "a.pcd", "b.pcd"}, poses, 0.05, &how, nullptr));
   EXPECT_EQ(how, CloudPairing::kByOrder);
-  expectError([&] { (void)pairCloudsWithPoses({"a.pcd", "b.pcd"}, poses, 0.05, &how, nullptr); },
-              {"2 clouds but 3 poses", "by order"});
+  expectError(
+      [&] {
+        (void)pairCloudsWithPoses({"a.pcd", "b.pcd"}, poses, 0.05, &how, nullptr);
+      },
+      {"2 clouds but 3 poses", "by order"});
   EXPECT_TRUE(naturalLess("000009.pcd", "000010.pcd"));
   EXPECT_TRUE(naturalLess("a2", "a10"));
   EXPECT_FALSE(naturalLess("a10", "a2"));
@@ -173,8 +195,10 @@ TEST(CloudSequence, AppliesTheExtrinsicAndTheViewpoint) {
   std::filesystem::create_directories(dir + "/clouds");
   mlmap::testing::PcdOptions o;
   o.viewpoint = "0 0 1 0.7071067811865476 0 0 0.7071067811865476";  // sensor 1 m up, yawed 90 deg
-  mlmap::testing::writeFile(dir + "/clouds/0.pcd", mlmap::testing::makePcd({{2, 0, 0}, {0, 3, 1}}, o));
-  mlmap::testing::writeFile(dir + "/poses.txt", "5 10 0 0 0 0 0.7071067811865476 0.7071067811865476\n");
+  mlmap::testing::writeFile(dir + "/clouds/0.pcd",
+                            mlmap::testing::makePcd({{2, 0, 0}, {0, 3, 1}}, o));
+  mlmap::testing::writeFile(dir + "/poses.txt",
+                            "5 10 0 0 0 0 0.7071067811865476 0.7071067811865476\n");
   CloudSequenceOptions options;
   options.T_P_C = parseTransformXyzQuat("0.5 0 0 0 0 0 1");
   const CloudSequence seq(dir + "/clouds", dir + "/poses.txt", options);
@@ -189,13 +213,17 @@ TEST(CloudSequence, AppliesTheExtrinsicAndTheViewpoint) {
   const Transform T_W_S = frame.T_W_B * frame.T_B_S;
   const Transform T_W_C = frame.T_W_B * options.T_P_C;
   ASSERT_EQ(frame.points_S.size(), 2u);
-  EXPECT_TRUE((T_W_S * frame.points_S[0].cast<double>()).isApprox(T_W_C * Eigen::Vector3d(2, 0, 0), 1e-6));
-  EXPECT_TRUE((T_W_S * frame.points_S[1].cast<double>()).isApprox(T_W_C * Eigen::Vector3d(0, 3, 1), 1e-6));
+  EXPECT_TRUE(
+      (T_W_S * frame.points_S[0].cast<double>()).isApprox(T_W_C * Eigen::Vector3d(2, 0, 0), 1e-6));
+  EXPECT_TRUE(
+      (T_W_S * frame.points_S[1].cast<double>()).isApprox(T_W_C * Eigen::Vector3d(0, 3, 1), 1e-6));
   EXPECT_TRUE(T_W_S.translation().isApprox(T_W_C * Eigen::Vector3d(0, 0, 1), 1e-12));
 
-  expectError([&] { CloudSequence(dir + "/none", dir + "/poses.txt"); }, {dir + "/none", "not a directory"});
+  expectError([&] { CloudSequence(dir + "/none", dir + "/poses.txt"); },
+              {dir + "/none", "not a directory"});
   std::filesystem::create_directories(dir + "/empty");
-  expectError([&] { CloudSequence(dir + "/empty", dir + "/poses.txt"); }, {dir + "/empty", "no point-cloud files"});
+  expectError([&] { CloudSequence(dir + "/empty", dir + "/poses.txt"); },
+              {dir + "/empty", "no point-cloud files"});
 }
 
 }  // namespace

@@ -275,7 +275,8 @@ namespace {
 
 // The building of the OctoMap comparison's long walk (config/worlds/building.yaml).
 TEST(WorldYaml, BuildingWalkIsAbout250MetresOverThreeFloorsAndKeepsClearOfSolids) {
-  const Scenario s = loadScenarioYaml(std::string(MLMAP_SOURCE_DIR) + "/config/worlds/building.yaml");
+  const Scenario s =
+      loadScenarioYaml(std::string(MLMAP_SOURCE_DIR) + "/config/worlds/building.yaml");
   EXPECT_GT(s.trajectory.length_m(), 240.0);
   EXPECT_LT(s.trajectory.length_m(), 270.0);
   const Eigen::AlignedBox3d bounds = s.world.bounds();
@@ -349,9 +350,9 @@ std::string fileError(const std::string& path) {
 }
 
 TEST(WorldYaml, ABaseGivesItsSectionsAndASectionGivenReplacesTheBases) {
-  const std::string dir =
-      (std::filesystem::temp_directory_path() / ("mlmap_base_" + std::to_string(std::random_device{}())))
-          .string();
+  const std::string dir = (std::filesystem::temp_directory_path() /
+                           ("mlmap_base_" + std::to_string(std::random_device{}())))
+                              .string();
   std::filesystem::create_directories(dir + "/sub");
   std::ofstream(dir + "/base.yaml") << "world: {boxes: [{min_m: [0, 0, 0], max_m: [1, 1, 1]}]}\n"
                                        "trajectory: {waypoints: [{position_m: [3, 0, 0]}, "

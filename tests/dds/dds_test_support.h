@@ -31,12 +31,15 @@ inline bool waitFor(const std::function<bool()>& condition,
 /// data-sharing alike, switched off while it lives (set before the participants are made).
 class NoIntraprocessDelivery {
  public:
-  NoIntraprocessDelivery() : saved_(eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings()) {
+  NoIntraprocessDelivery()
+      : saved_(eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings()) {
     eprosima::fastrtps::LibrarySettingsAttributes off = saved_;
     off.intraprocess_delivery = eprosima::fastrtps::INTRAPROCESS_OFF;
     eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(off);
   }
-  ~NoIntraprocessDelivery() { eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(saved_); }
+  ~NoIntraprocessDelivery() {
+    eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(saved_);
+  }
   NoIntraprocessDelivery(const NoIntraprocessDelivery&) = delete;
   NoIntraprocessDelivery& operator=(const NoIntraprocessDelivery&) = delete;
 

@@ -64,8 +64,8 @@ class EmulatedLinkTransport final : public rtps::ChainingTransport {
     // The time a send may block, counted again from when the link hands the datagram on.
     const auto may_block = std::max(std::chrono::steady_clock::duration::zero(),
                                     timeout - std::chrono::steady_clock::now());
-    auto deliver = [low_sender_resource, data = std::vector<frtps::octet>(
-                                             send_buffer, send_buffer + send_buffer_size),
+    auto deliver = [low_sender_resource,
+                    data = std::vector<frtps::octet>(send_buffer, send_buffer + send_buffer_size),
                     to = std::move(to), may_block] {
       VectorLocators begin(to, 0);
       VectorLocators end(to, to.size());
@@ -79,13 +79,13 @@ class EmulatedLinkTransport final : public rtps::ChainingTransport {
   void receive(rtps::TransportReceiverInterface* next_receiver, const frtps::octet* receive_buffer,
                uint32_t receive_buffer_size, const frtps::Locator_t& local_locator,
                const frtps::Locator_t& remote_locator) override {
-    auto deliver = [next_receiver,
-                    data = std::vector<frtps::octet>(receive_buffer,
-                                                     receive_buffer + receive_buffer_size),
-                    local_locator, remote_locator] {
-      next_receiver->OnDataReceived(data.data(), static_cast<uint32_t>(data.size()), local_locator,
-                                    remote_locator);
-    };
+    auto deliver =
+        [next_receiver,
+         data = std::vector<frtps::octet>(receive_buffer, receive_buffer + receive_buffer_size),
+         local_locator, remote_locator] {
+          next_receiver->OnDataReceived(data.data(), static_cast<uint32_t>(data.size()),
+                                        local_locator, remote_locator);
+        };
     if (!link_->in().push(receive_buffer_size, deliver)) deliver();
   }
 
@@ -122,8 +122,8 @@ bool DelayLine::push(std::size_t bytes, std::function<void()> deliver) {
   const auto on_the_line = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(static_cast<double>(bytes) * 8.0 / shape_.rate_bit_s));
   line_free_ = std::max(line_free_, now) + on_the_line;
-  const auto delay = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(shape_.delay_s));
+  const auto delay =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(shape_.delay_s));
   queue_.push_back(Datagram{bytes, now, line_free_ + delay, std::move(deliver)});
   queued_bytes_ += bytes;
   wake_.notify_one();
@@ -193,8 +193,9 @@ ParticipantPtr participantOverLink(int domain_id, const std::shared_ptr<Emulated
           std::make_shared<EmulatedLinkTransportDescriptor>(guard->low_level_descriptor, link);
     }
   }
-  return ParticipantPtr(eprosima::fastdds::dds::DomainParticipantFactory::get_instance()
-                            ->create_participant(domain_id, setup.qos));
+  return ParticipantPtr(
+      eprosima::fastdds::dds::DomainParticipantFactory::get_instance()->create_participant(
+          domain_id, setup.qos));
 }
 
 }  // namespace mlmap::dds::test_support

@@ -23,11 +23,11 @@ namespace mlmap::dds::test_support {
 
 /// One direction of the link, as netem with a rate and a drop-tail queue shapes it.
 struct LinkShape {
-  double delay_s = 0.1;             ///< every datagram is delivered this long after it was sent
-  double rate_bit_s = 10e6;         ///< datagrams leave one after another at this rate
-  double loss_fraction = 0.05;      ///< this share of the datagrams is lost at random
+  double delay_s = 0.1;         ///< every datagram is delivered this long after it was sent
+  double rate_bit_s = 10e6;     ///< datagrams leave one after another at this rate
+  double loss_fraction = 0.05;  ///< this share of the datagrams is lost at random
   std::size_t queue_limit_bytes = 500000;  ///< a datagram that finds this much waiting is lost
-  std::uint32_t seed = 1;           ///< of the random losses
+  std::uint32_t seed = 1;                  ///< of the random losses
 };
 
 /// What one direction of the link did.
@@ -107,7 +107,8 @@ class EmulatedLink {
 };
 
 /// Chaining transport descriptor: `low_level` (UDPv4) through `link`.
-struct EmulatedLinkTransportDescriptor : public eprosima::fastdds::rtps::ChainingTransportDescriptor {
+struct EmulatedLinkTransportDescriptor
+    : public eprosima::fastdds::rtps::ChainingTransportDescriptor {
   EmulatedLinkTransportDescriptor(
       std::shared_ptr<eprosima::fastdds::rtps::TransportDescriptorInterface> low_level,
       std::shared_ptr<EmulatedLink> link_in)

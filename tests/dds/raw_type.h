@@ -33,7 +33,8 @@ class RawType : public eprosima::fastdds::dds::TopicDataType {
   }
   bool deserialize(eprosima::fastrtps::rtps::SerializedPayload_t*, void*) override { return false; }
   std::function<std::uint32_t()> getSerializedSizeProvider(void* data) override {
-    return [data] { return static_cast<std::uint32_t>(static_cast<const RawBytes*>(data)->size()); };
+    return
+        [data] { return static_cast<std::uint32_t>(static_cast<const RawBytes*>(data)->size()); };
   }
   void* createData() override { return new RawBytes(); }
   void deleteData(void* data) override { delete static_cast<RawBytes*>(data); }

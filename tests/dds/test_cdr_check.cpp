@@ -1,7 +1,7 @@
 // CDR payloads checked against idl/'s layouts before Fast CDR deserialises them
-// (mlmap/dds/wire/cdr_check.h, CheckedType in mlmap/dds/transport/entities.h): the walker agrees with Fast
-// CDR's generated code on random messages of every IDL type, refuses truncated payloads and
-// counts the payload cannot hold at every nesting level, and a sample declaring millions of
+// (mlmap/dds/wire/cdr_check.h, CheckedType in mlmap/dds/transport/entities.h): the walker agrees
+// with Fast CDR's generated code on random messages of every IDL type, refuses truncated payloads
+// and counts the payload cannot hold at every nesting level, and a sample declaring millions of
 // elements is refused before anything is allocated (issue 43, item 10). This binary counts every
 // allocation (../support/allocation_counter.cpp replaces operator new).
 
@@ -71,7 +71,9 @@ class RandomCdr {
   [[nodiscard]] const std::vector<CountSite>& sites() const { return sites_; }
 
  private:
-  std::uint32_t below(std::uint32_t n) { return n == 0 ? 0 : static_cast<std::uint32_t>((*rng_)() % n); }
+  std::uint32_t below(std::uint32_t n) {
+    return n == 0 ? 0 : static_cast<std::uint32_t>((*rng_)() % n);
+  }
 
   void align(std::size_t n) {
     while ((bytes_.size() - 4) % n != 0) bytes_.push_back(0);
@@ -97,7 +99,8 @@ class RandomCdr {
     const std::uint32_t most = bound > 0 ? std::min<std::uint32_t>(bound, 12) : 12;
     const std::uint32_t length = below(most + 1);
     u32(length + 1);
-    for (std::uint32_t i = 0; i < length; ++i) bytes_.push_back(static_cast<std::uint8_t>('a' + below(26)));
+    for (std::uint32_t i = 0; i < length; ++i)
+      bytes_.push_back(static_cast<std::uint8_t>('a' + below(26)));
     bytes_.push_back(0);
   }
 
@@ -286,7 +289,8 @@ TEST(CdrCheck, RefusesCountsThePayloadCannotHoldAtEveryNestingLevelBeforeAllocat
         const CdrCheck check = checkCdrPayload(layout, hostile.data(), hostile.size());
         EXPECT_FALSE(check.ok);
         EXPECT_NE(check.error.find("`"), std::string::npos) << check.error;
-        EXPECT_NE(check.error.find("declares 4294967295 elements"), std::string::npos) << check.error;
+        EXPECT_NE(check.error.find("declares 4294967295 elements"), std::string::npos)
+            << check.error;
         // The count Fast CDR's own check lets through (one byte per element), in a payload of
         // 256 KB: Fast CDR would allocate count x sizeof(element), many times the payload.
         // Checked first, nothing beyond the payload's size is allocated.
@@ -313,8 +317,9 @@ TEST(CdrCheck, RefusesCountsThePayloadCannotHoldAtEveryNestingLevelBeforeAllocat
         EXPECT_LE(peak_bytes, 2 * hostile.size());
         if (site.min_element_bytes > 1 || site.bound > 0) {
           EXPECT_FALSE(taken);
-          EXPECT_NE(detail::deserializeError().find("declares " + std::to_string(count) + " elements"),
-                    std::string::npos)
+          EXPECT_NE(
+              detail::deserializeError().find("declares " + std::to_string(count) + " elements"),
+              std::string::npos)
               << detail::deserializeError();
         }
       }
@@ -327,7 +332,8 @@ TEST(CdrCheck, RefusesCountsThePayloadCannotHoldAtEveryNestingLevelBeforeAllocat
 /// bytes after the count: the issue's sample is 16,777,216 transforms in 16 MB.
 Bytes hostileTf(std::uint32_t count, std::size_t body_bytes) {
   Bytes bytes{0x00, 0x01, 0x00, 0x00};
-  for (int i = 0; i < 4; ++i) bytes.push_back(static_cast<std::uint8_t>((count >> (8 * i)) & 0xFFU));
+  for (int i = 0; i < 4; ++i)
+    bytes.push_back(static_cast<std::uint8_t>((count >> (8 * i)) & 0xFFU));
   bytes.resize(bytes.size() + body_bytes, 0);
   return bytes;
 }
@@ -346,21 +352,24 @@ TEST(CdrCheck, IssueTfSampleDeclaringMillionsOfTransformsIsRefusedBeforeAllocati
     AllocationScope scope(64U * 1024 * 1024);
     taken = type.deserialize(&payload, &msg);
     peak_bytes = scope.peakBytes();
-    EXPECT_FALSE(scope.capHit()) << "refused an allocation of " << scope.largestRefusedBytes() << " bytes";
+    EXPECT_FALSE(scope.capHit()) << "refused an allocation of " << scope.largestRefusedBytes()
+                                 << " bytes";
   }
   EXPECT_FALSE(taken);
   EXPECT_TRUE(detail::deserializeFailed());
-  EXPECT_EQ(detail::deserializeError(),
-            "tf2_msgs::msg::dds_::TFMessage_ `transforms`: sequence declares 16777216 elements of >= 72 "
-            "bytes, 16777216 bytes remain");
+  EXPECT_EQ(
+      detail::deserializeError(),
+      "tf2_msgs::msg::dds_::TFMessage_ `transforms`: sequence declares 16777216 elements of >= 72 "
+      "bytes, 16777216 bytes remain");
   EXPECT_LT(peak_bytes, 4096U);  // the error message, no more
-  std::printf("16 MB /tf sample declaring 16777216 transforms: refused, peak allocation %zu bytes\n",
-              peak_bytes);
+  std::printf(
+      "16 MB /tf sample declaring 16777216 transforms: refused, peak allocation %zu bytes\n",
+      peak_bytes);
   // A count the bytes could hold at 72 bytes per transform is walked, and refused where the bytes
   // run out (zeroed transforms take 76 or 80 bytes with their padding).
   const Bytes short_tf = hostileTf(1000U, 1000U * 72U);
-  const CdrCheck check =
-      checkCdrPayload(layoutOf("tf2_msgs::msg::dds_::TFMessage_"), short_tf.data(), short_tf.size());
+  const CdrCheck check = checkCdrPayload(layoutOf("tf2_msgs::msg::dds_::TFMessage_"),
+                                         short_tf.data(), short_tf.size());
   EXPECT_FALSE(check.ok);
   EXPECT_NE(check.error.find("`transforms[9"), std::string::npos) << check.error;
   EXPECT_NE(check.error.find("truncated at byte"), std::string::npos) << check.error;
@@ -389,11 +398,13 @@ TEST(CdrCheck, CloudSampleFieldsCountIsCheckedToo) {
   {
     AllocationScope scope(2 * bytes.size());
     taken = type.deserialize(&payload, &sample);
-    EXPECT_FALSE(scope.capHit()) << "refused an allocation of " << scope.largestRefusedBytes() << " bytes";
+    EXPECT_FALSE(scope.capHit()) << "refused an allocation of " << scope.largestRefusedBytes()
+                                 << " bytes";
     EXPECT_LT(scope.peakBytes(), 4096U);
   }
   EXPECT_FALSE(taken);
-  EXPECT_NE(detail::deserializeError().find("`fields`: sequence declares 4194304 elements of >= 13 bytes"),
+  EXPECT_NE(detail::deserializeError().find(
+                "`fields`: sequence declares 4194304 elements of >= 13 bytes"),
             std::string::npos)
       << detail::deserializeError();
 }
@@ -407,30 +418,35 @@ TEST(CdrCheck, NamesTheFailingMemberAndRefusesBoundsAndEncapsulations) {
   msg.transforms_()[1].header_().frame_id_("odom");
   Bytes bytes = fastCdrWrites<::tf2_msgs::msg::dds_::TFMessage_PubSubType>(&msg);
   ASSERT_TRUE(checkCdrPayload(tf, bytes.data(), bytes.size()).ok);
-  const Bytes odom{5, 0, 0, 0, 'o', 'd', 'o', 'm', 0};  // "odom": its length with the NUL, its bytes
+  const Bytes odom{5,   0,   0,   0, 'o',
+                   'd', 'o', 'm', 0};  // "odom": its length with the NUL, its bytes
   const auto at = std::search(bytes.begin(), bytes.end(), odom.begin(), odom.end());
   ASSERT_NE(at, bytes.end());
   *at = 0xF0;
   CdrCheck check = checkCdrPayload(tf, bytes.data(), bytes.size());
   EXPECT_FALSE(check.ok);
-  EXPECT_NE(check.error.find("`transforms[1].header.frame_id`: string of 240 bytes"), std::string::npos)
+  EXPECT_NE(check.error.find("`transforms[1].header.frame_id`: string of 240 bytes"),
+            std::string::npos)
       << check.error;
 
   // A bounded sequence (ParameterDescriptor's floating_point_range, at most 1) and a bounded
   // string (NodeEntitiesInfo's node_name, at most 256 characters) past their bound.
   ::rcl_interfaces::msg::dds_::ParameterDescriptor_ descriptor;
   descriptor.floating_point_range_().resize(2);
-  Bytes over = fastCdrWrites<::rcl_interfaces::msg::dds_::ParameterDescriptor_PubSubType>(&descriptor);
-  check =
-      checkCdrPayload(layoutOf("rcl_interfaces::msg::dds_::ParameterDescriptor_"), over.data(), over.size());
+  Bytes over =
+      fastCdrWrites<::rcl_interfaces::msg::dds_::ParameterDescriptor_PubSubType>(&descriptor);
+  check = checkCdrPayload(layoutOf("rcl_interfaces::msg::dds_::ParameterDescriptor_"), over.data(),
+                          over.size());
   EXPECT_FALSE(check.ok);
-  EXPECT_NE(check.error.find("`floating_point_range`: sequence declares 2 elements, its bound is 1"),
-            std::string::npos)
+  EXPECT_NE(
+      check.error.find("`floating_point_range`: sequence declares 2 elements, its bound is 1"),
+      std::string::npos)
       << check.error;
   // "" (its length, its NUL, padding), then a length of 258.
   Bytes name{0x00, 0x01, 0x00, 0x00, 1, 0, 0, 0, 0, 0, 0, 0, 0x02, 0x01, 0x00, 0x00};
   name.resize(name.size() + 258 + 8, 'a');
-  check = checkCdrPayload(layoutOf("rmw_dds_common::msg::dds_::NodeEntitiesInfo_"), name.data(), name.size());
+  check = checkCdrPayload(layoutOf("rmw_dds_common::msg::dds_::NodeEntitiesInfo_"), name.data(),
+                          name.size());
   EXPECT_FALSE(check.ok);
   EXPECT_NE(check.error.find("`node_name`: string of 258 bytes, its bound is 256 characters"),
             std::string::npos)
@@ -442,7 +458,8 @@ TEST(CdrCheck, NamesTheFailingMemberAndRefusesBoundsAndEncapsulations) {
   Bytes stamp{0x00, 0x01, 0x00, 0x00, 1, 0, 0, 0, 2, 0, 0, 0};
   EXPECT_TRUE(checkCdrPayload(time, stamp.data(), stamp.size()).ok);
   EXPECT_FALSE(checkCdrPayload(time, stamp.data(), 3).ok);
-  EXPECT_EQ(checkCdrPayload(time, stamp.data(), 3).error, "payload of 3 bytes has no encapsulation header");
+  EXPECT_EQ(checkCdrPayload(time, stamp.data(), 3).error,
+            "payload of 3 bytes has no encapsulation header");
   stamp[0] = 1;
   EXPECT_FALSE(checkCdrPayload(time, stamp.data(), stamp.size()).ok);
   stamp[0] = 0;
@@ -486,8 +503,9 @@ TEST(CdrCheck, CostOnLargeValidMessages) {
   const double mb = static_cast<double>(bytes.size()) / 1e6;
   const double walk_ms = std::chrono::duration<double, std::milli>(t1 - t0).count();
   const double read_ms = std::chrono::duration<double, std::milli>(t2 - t1).count();
-  std::printf("TFMessage of %.1f MB (100000 transforms): walker %.2f ms (%.2f ms/MB), Fast CDR %.2f ms\n", mb,
-              walk_ms, walk_ms / mb, read_ms);
+  std::printf(
+      "TFMessage of %.1f MB (100000 transforms): walker %.2f ms (%.2f ms/MB), Fast CDR %.2f ms\n",
+      mb, walk_ms, walk_ms / mb, read_ms);
 
   ::sensor_msgs::msg::dds_::PointCloud2_ cloud;
   cloud.data_().resize(640U * 480U * 16U);
@@ -498,7 +516,8 @@ TEST(CdrCheck, CostOnLargeValidMessages) {
   const auto t4 = Clock::now();
   ASSERT_TRUE(cloud_check.ok) << cloud_check.error;
   EXPECT_EQ(cloud_check.consumed_bytes, cloud_bytes.size());
-  std::printf("PointCloud2 of %.1f MB: walker %.4f ms\n", static_cast<double>(cloud_bytes.size()) / 1e6,
+  std::printf("PointCloud2 of %.1f MB: walker %.4f ms\n",
+              static_cast<double>(cloud_bytes.size()) / 1e6,
               std::chrono::duration<double, std::milli>(t4 - t3).count());
 }
 

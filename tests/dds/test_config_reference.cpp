@@ -68,13 +68,14 @@ TEST(ConfigReference, EveryKeyIsListedOnceWithAMeaning) {
 }
 
 TEST(ConfigReference, TheReferenceGoesBetweenTheMarkers) {
-  const std::string doc = std::string("# Title\n") + kReferenceBegin + "\nold\n" + kReferenceEnd +
-                          "\nafter\n";
+  const std::string doc =
+      std::string("# Title\n") + kReferenceBegin + "\nold\n" + kReferenceEnd + "\nafter\n";
   EXPECT_EQ(withKeyReference(doc, "new\n"),
             std::string("# Title\n") + kReferenceBegin + "\nnew\n" + kReferenceEnd + "\nafter\n");
   EXPECT_THROW((void)withKeyReference("# Title\n", "new\n"), std::runtime_error);
   EXPECT_NE(keyReferenceMarkdown().find("| `dds.topics.cloud` | `cloud` |"), std::string::npos);
-  EXPECT_NE(keyReferenceMarkdown().find("| `awareness.rho_cell_m` | `0.1` | m |"), std::string::npos);
+  EXPECT_NE(keyReferenceMarkdown().find("| `awareness.rho_cell_m` | `0.1` | m |"),
+            std::string::npos);
 }
 
 TEST(ConfigReference, DefaultValuesPrintAsTheyReadBack) {

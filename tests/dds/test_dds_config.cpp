@@ -113,7 +113,7 @@ TEST(DdsConfig, AcceptsTheValuesItDocuments) {
   config.topics.odometry = "odom";
   config.topics.depth_image = "camera/depth/image_rect_raw";
   config.topics.camera_info = "camera/depth/camera_info";
-  config.topics.status = "";  // disabled
+  config.topics.status = "";         // disabled
   config.rates.global_map_hz = 0.0;  // disabled
   config.esdf_slice_height_m = -0.5;
   EXPECT_TRUE(config.validate().empty());

@@ -34,11 +34,11 @@ namespace mlmap::dds {
 namespace {
 
 namespace fdds = eprosima::fastdds::dds;
-using test_support::localhostConfig;
-using test_support::waitFor;
 using fleet::test_support::iou;
 using fleet::test_support::Key3;
 using fleet::test_support::keys;
+using test_support::localhostConfig;
+using test_support::waitFor;
 
 FleetMergerConfig mergerConfig(int domain_id) {
   FleetMergerConfig c;
@@ -61,7 +61,9 @@ class SharingVehicle {
                 SubmapGeometry{config.local_map.resolution_m, config.local_map.submap_cells()},
                 "map") {}
 
-  void map(const PointCloudFrame& frame) { ASSERT_EQ(engine_.submit(frame), FrameStatus::kAccepted); }
+  void map(const PointCloudFrame& frame) {
+    ASSERT_EQ(engine_.submit(frame), FrameStatus::kAccepted);
+  }
   /// One round of sharing, as the node's fleet output does; returns the bytes written, and adds
   /// to `*whole_map_bytes` what one PointCloud2 of the whole global map would take instead.
   std::size_t share(std::size_t* whole_map_bytes = nullptr) {
@@ -101,10 +103,12 @@ std::set<Key3> mergedKeys(const FleetMerger& merger) {
 /// Whether both vehicles' submap writers matched the merger's reader within `timeout`.
 bool bothMatched(const SharingVehicle& uav1, const SharingVehicle& uav2,
                  std::chrono::milliseconds timeout = test_support::kDiscoveryTimeout) {
-  return waitFor([&] {
-    return test_support::writerMatched(uav1.writer().get()) &&
-           test_support::writerMatched(uav2.writer().get());
-  }, timeout);
+  return waitFor(
+      [&] {
+        return test_support::writerMatched(uav1.writer().get()) &&
+               test_support::writerMatched(uav2.writer().get());
+      },
+      timeout);
 }
 
 /// Whether each merged voxel carries the bits of the vehicles whose maps hold it (uav1: bit 0,
@@ -147,7 +151,8 @@ TEST(FleetDds, MergedMapOfTwoVehiclesMatchesOneEngineFedEveryFrame) {
       // Each round taken before the next is written: KEEP_LAST 1 per submap would otherwise let
       // a later version replace one the merger's listener had not taken yet (a busy machine),
       // and every sample and byte is counted below.
-      ASSERT_TRUE(received(merger, uav1.writer().samplesWritten() + uav2.writer().samplesWritten()));
+      ASSERT_TRUE(
+          received(merger, uav1.writer().samplesWritten() + uav2.writer().samplesWritten()));
     }
   }
   bytes[0] += uav1.share();
@@ -185,18 +190,20 @@ TEST(FleetDds, MergedMapOfTwoVehiclesMatchesOneEngineFedEveryFrame) {
   EXPECT_GE(agreement, 0.93);
   EXPECT_GE(precision(merged), 0.99);
   EXPECT_GE(precision(extra), 0.95);
-  std::printf("precision vs the room: merged %.4f, single engine %.4f, merged-only voxels %.4f "
-              "(%zu)\n",
-              precision(merged), precision(reference), precision(extra), extra.size());
+  std::printf(
+      "precision vs the room: merged %.4f, single engine %.4f, merged-only voxels %.4f "
+      "(%zu)\n",
+      precision(merged), precision(reference), precision(extra), extra.size());
   const FleetMergerStats s = merger.stats();
   ASSERT_EQ(s.vehicles.size(), 2u);
   EXPECT_EQ(s.samples_rejected, 0u);
   const double flight_s = sim::Trajectory::defaultRoomFlight().duration_s();
-  std::printf("merged %zu voxels, IoU vs one engine %.4f; per vehicle over %.1f s of flight, "
-              "shared at 1 Hz: %zu / %zu B of submaps vs %zu / %zu B of whole global maps as "
-              "PointCloud2 at the same rate\n",
-              s.merged_voxels, agreement, flight_s / 2, bytes[0], bytes[1], whole_map_bytes[0],
-              whole_map_bytes[1]);
+  std::printf(
+      "merged %zu voxels, IoU vs one engine %.4f; per vehicle over %.1f s of flight, "
+      "shared at 1 Hz: %zu / %zu B of submaps vs %zu / %zu B of whole global maps as "
+      "PointCloud2 at the same rate\n",
+      s.merged_voxels, agreement, flight_s / 2, bytes[0], bytes[1], whole_map_bytes[0],
+      whole_map_bytes[1]);
   EXPECT_EQ(s.vehicles[0].info.bytes + s.vehicles[1].info.bytes, bytes[0] + bytes[1]);
 }
 
@@ -286,22 +293,21 @@ TEST(FleetDds, OverASlowLossyDelayedLinkCutMidFlightTheMergedMapConvergesToThePe
   EXPECT_GT(out.lost_at_random, 0u);
   EXPECT_GT(in.lost_at_random, 0u);
   EXPECT_GT(out.lost_link_down, 0u);
-  std::printf("over 10 Mbit/s, 5 %% loss, 100 ms, cut: %zu merged voxels (%zu during the cut) "
-              "from %llu of %llu samples written; vehicles to station %llu datagrams (%llu kB) "
-              "delivered, %llu lost at random, %llu at the full queue, %llu during the cut, "
-              "delay %.3f-%.3f s; back %llu delivered, %llu lost\n",
-              s.merged_voxels, during_the_cut.size(),
-              static_cast<unsigned long long>(s.samples_received),
-              static_cast<unsigned long long>(uav1.writer().samplesWritten()) +
-                  static_cast<unsigned long long>(uav2.writer().samplesWritten()),
-              static_cast<unsigned long long>(out.delivered),
-              static_cast<unsigned long long>(out.bytes_delivered / 1000),
-              static_cast<unsigned long long>(out.lost_at_random),
-              static_cast<unsigned long long>(out.lost_queue_full),
-              static_cast<unsigned long long>(out.lost_link_down), out.min_delay_s,
-              out.max_delay_s, static_cast<unsigned long long>(in.delivered),
-              static_cast<unsigned long long>(in.lost_at_random) + in.lost_queue_full +
-                  in.lost_link_down);
+  std::printf(
+      "over 10 Mbit/s, 5 %% loss, 100 ms, cut: %zu merged voxels (%zu during the cut) "
+      "from %llu of %llu samples written; vehicles to station %llu datagrams (%llu kB) "
+      "delivered, %llu lost at random, %llu at the full queue, %llu during the cut, "
+      "delay %.3f-%.3f s; back %llu delivered, %llu lost\n",
+      s.merged_voxels, during_the_cut.size(), static_cast<unsigned long long>(s.samples_received),
+      static_cast<unsigned long long>(uav1.writer().samplesWritten()) +
+          static_cast<unsigned long long>(uav2.writer().samplesWritten()),
+      static_cast<unsigned long long>(out.delivered),
+      static_cast<unsigned long long>(out.bytes_delivered / 1000),
+      static_cast<unsigned long long>(out.lost_at_random),
+      static_cast<unsigned long long>(out.lost_queue_full),
+      static_cast<unsigned long long>(out.lost_link_down), out.min_delay_s, out.max_delay_s,
+      static_cast<unsigned long long>(in.delivered),
+      static_cast<unsigned long long>(in.lost_at_random) + in.lost_queue_full + in.lost_link_down);
 }
 
 TEST(FleetDds, ALateMergerGetsEverySubmapFromTheWritersHistoryAndMarksSilentVehiclesStale) {
@@ -324,8 +330,8 @@ TEST(FleetDds, ALateMergerGetsEverySubmapFromTheWritersHistoryAndMarksSilentVehi
   FleetMerger merger(mc);
   merger.start();
   const std::set<Key3> expected = keys(uav1.engine().occupiedVoxels());
-  EXPECT_TRUE(waitFor([&] { return mergedKeys(merger) == expected; },
-                      std::chrono::milliseconds(20000)))
+  EXPECT_TRUE(
+      waitFor([&] { return mergedKeys(merger) == expected; }, std::chrono::milliseconds(20000)))
       << "merged " << merger.stats().merged_voxels << " of " << expected.size() << " voxels";
   ASSERT_EQ(merger.stats().vehicles.size(), 1u);
   EXPECT_FALSE(merger.stats().vehicles[0].stale);
@@ -414,11 +420,11 @@ TEST(FleetDds, TheMergedMapReachesRosReadersAsPointCloudGridAndStatusAlsoWhenThe
         std::lock_guard<std::mutex> lock(mutex);
         clouds.push_back(std::move(m));
       });
-  readers.add<nav_msgs::OccupancyGrid_PubSubType>(
-      "rt/mlmap/fleet/grid", reliableReaderQos(true, 1), [&](nav_msgs::OccupancyGrid_&& m) {
-        std::lock_guard<std::mutex> lock(mutex);
-        grids.push_back(std::move(m));
-      });
+  readers.add<nav_msgs::OccupancyGrid_PubSubType>("rt/mlmap/fleet/grid", reliableReaderQos(true, 1),
+                                                  [&](nav_msgs::OccupancyGrid_&& m) {
+                                                    std::lock_guard<std::mutex> lock(mutex);
+                                                    grids.push_back(std::move(m));
+                                                  });
   readers.add<::mlmap_msgs::msg::dds_::FleetStatus_PubSubType>(
       "rt/mlmap/fleet/status", reliableReaderQos(false, 10),
       [&](::mlmap_msgs::msg::dds_::FleetStatus_&& m) {
@@ -484,11 +490,13 @@ TEST(FleetDds, MappingNodeSharesItsWholeMapAndTheMergerHoldsIt) {
   }));
   // Stamped 0.1 s apart (a pose more than dds.max_future_s after the newest is suspect).
   std::vector<PointCloudFrame> frames = fleet::test_support::roomFlight(60);
-  for (std::size_t i = 0; i < frames.size(); ++i) frames[i].stamp_s = 0.1 * static_cast<double>(i + 1);
+  for (std::size_t i = 0; i < frames.size(); ++i)
+    frames[i].stamp_s = 0.1 * static_cast<double>(i + 1);
   for (const PointCloudFrame& f : frames) {
     geometry_msgs::PoseStamped_ p = toPoseStamped(f.T_W_B, f.stamp_s, "map");
     ASSERT_TRUE(pose->write(&p));
-    sensor_msgs::PointCloud2_ c = encodePointCloud2(f.points_S, nullptr, f.stamp_s, "camera_depth_optical_frame");
+    sensor_msgs::PointCloud2_ c =
+        encodePointCloud2(f.points_S, nullptr, f.stamp_s, "camera_depth_optical_frame");
     ASSERT_TRUE(cloud->write(&c));
     std::this_thread::sleep_for(std::chrono::milliseconds(30));
   }
@@ -540,7 +548,8 @@ TEST(FleetDds, ANodeTakingTheFleetsSubmapsHasAnotherVehiclesObstaclesOnEntry) {
   MappingNode node(config);
   ASSERT_TRUE(waitFor([&] {
     return node.counters().fleet_priors_received == uav1.writer().samplesWritten();
-  })) << node.counters().fleet_priors_received << " of " << uav1.writer().samplesWritten();
+  })) << node.counters().fleet_priors_received
+      << " of " << uav1.writer().samplesWritten();
   EXPECT_EQ(node.counters().fleet_samples_refused, 0u);
 
   const ParticipantPtr sensors = createParticipant(localhostConfig(kDomain), "uav2_sensors");
@@ -607,9 +616,10 @@ TEST(FleetDds, ANodeTakingTheFleetsSubmapsHasAnotherVehiclesObstaclesOnEntry) {
   std::size_t only_merged = 0, only_uav1 = 0;
   for (const Key3& k : merged) only_merged += by_uav1.count(k) == 0 ? 1 : 0;
   for (const Key3& k : by_uav1) only_uav1 += merged.count(k) == 0 ? 1 : 0;
-  std::printf("uav2 contributes %llu voxels; merged %zu, uav1 %zu: %zu only merged, %zu only uav1\n",
-              static_cast<unsigned long long>(uav2->info.voxels), merged.size(), by_uav1.size(),
-              only_merged, only_uav1);
+  std::printf(
+      "uav2 contributes %llu voxels; merged %zu, uav1 %zu: %zu only merged, %zu only uav1\n",
+      static_cast<unsigned long long>(uav2->info.voxels), merged.size(), by_uav1.size(),
+      only_merged, only_uav1);
   EXPECT_LE(only_merged, 1u);  // uav2's one return
   EXPECT_EQ(only_uav1, 0u);
 }

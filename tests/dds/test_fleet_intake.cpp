@@ -51,38 +51,39 @@ TEST(FleetIntake, AVehicleSpeaksOnlyForItselfOnItsOwnTopic) {
   FleetIntake intake(trust(), {});
   // uav2 (its topic) names itself uav1: refused before anything else is looked at, nothing
   // registered under either name.
-  const SubmapIntake r = intake.take(sample("uav1", 1, {0, 0, 0}, {{3, 2000}}), "uav2", kWriterA,
-                                     0.0, kNow_us);
+  const SubmapIntake r =
+      intake.take(sample("uav1", 1, {0, 0, 0}, {{3, 2000}}), "uav2", kWriterA, 0.0, kNow_us);
   EXPECT_FALSE(r.applied);
   EXPECT_EQ(r.refusal, SubmapRefusal::kNotItsTopic);
   EXPECT_NE(r.why.find("'uav1' on the topic of vehicle 'uav2'"), std::string::npos) << r.why;
   EXPECT_TRUE(intake.map().vehicles().empty());
   EXPECT_EQ(count(intake, SubmapRefusal::kNotItsTopic), 1u);
   // A prefix of the topic's name is another name.
-  EXPECT_EQ(intake.take(sample("uav", 1, {0, 0, 0}, {{3, 2000}}), "uav2", kWriterA, 0.0, kNow_us)
-                .refusal,
-            SubmapRefusal::kNotItsTopic);
+  EXPECT_EQ(
+      intake.take(sample("uav", 1, {0, 0, 0}, {{3, 2000}}), "uav2", kWriterA, 0.0, kNow_us).refusal,
+      SubmapRefusal::kNotItsTopic);
   // On its own topic it is taken.
-  EXPECT_TRUE(intake.take(sample("uav2", 1, {0, 0, 0}, {{3, 2000}}), "uav2", kWriterA, 0.0,
-                          kNow_us)
+  EXPECT_TRUE(intake.take(sample("uav2", 1, {0, 0, 0}, {{3, 2000}}), "uav2", kWriterA, 0.0, kNow_us)
                   .applied);
   EXPECT_EQ(intake.refusedTotal(), 2u);
 }
 
 TEST(FleetIntake, TheGridIsTheConfiguredOneWhateverTheFirstSampleSays) {
   FleetIntake intake(trust(), {});
-  const SubmapIntake r = takeOwn(intake, sample("x", 1, {0, 0, 0}, {}, {0.123, {16, 16, 6}}),
-                                     kWriterA, 0.0, kNow_us);
+  const SubmapIntake r =
+      takeOwn(intake, sample("x", 1, {0, 0, 0}, {}, {0.123, {16, 16, 6}}), kWriterA, 0.0, kNow_us);
   EXPECT_FALSE(r.applied);
   EXPECT_EQ(r.refusal, SubmapRefusal::kWrongGrid);
   EXPECT_NE(r.why.find("0.123"), std::string::npos) << r.why;
-  EXPECT_TRUE(takeOwn(intake, sample("uav1", 1, {0, 0, 0}, {{3, 2000}}), kWriterB, 0.0, kNow_us).applied);
+  EXPECT_TRUE(
+      takeOwn(intake, sample("uav1", 1, {0, 0, 0}, {{3, 2000}}), kWriterB, 0.0, kNow_us).applied);
   EXPECT_EQ(intake.map().resolution_m(), 0.2);
   EXPECT_EQ(intake.map().voxelCount(), 1u);
   // Another submap size is another grid too.
-  EXPECT_EQ(takeOwn(intake, sample("uav1", 2, {0, 0, 0}, {}, {0.2, {16, 16, 5}}), kWriterB, 0.0, kNow_us)
-                .refusal,
-            SubmapRefusal::kWrongGrid);
+  EXPECT_EQ(
+      takeOwn(intake, sample("uav1", 2, {0, 0, 0}, {}, {0.2, {16, 16, 5}}), kWriterB, 0.0, kNow_us)
+          .refusal,
+      SubmapRefusal::kWrongGrid);
   EXPECT_EQ(count(intake, SubmapRefusal::kWrongGrid), 2u);
 }
 
@@ -92,9 +93,11 @@ TEST(FleetIntake, AClosedFleetTakesItsListedVehiclesOnlyInTheListsOrder) {
   FleetIntake intake(t, {});
   ASSERT_EQ(intake.map().vehicles().size(), 2u);  // their places held from the start
   EXPECT_EQ(intake.map().vehicles()[0].name, "uav2");
-  const SubmapIntake r = takeOwn(intake, sample("ghost", 1, {0, 0, 0}, {{3, 2000}}), kWriterA, 0, kNow_us);
+  const SubmapIntake r =
+      takeOwn(intake, sample("ghost", 1, {0, 0, 0}, {{3, 2000}}), kWriterA, 0, kNow_us);
   EXPECT_EQ(r.refusal, SubmapRefusal::kUnknownVehicle);
-  EXPECT_TRUE(takeOwn(intake, sample("uav1", 1, {0, 0, 0}, {{3, 2000}}), kWriterB, 0, kNow_us).applied);
+  EXPECT_TRUE(
+      takeOwn(intake, sample("uav1", 1, {0, 0, 0}, {{3, 2000}}), kWriterB, 0, kNow_us).applied);
   EXPECT_EQ(intake.map().vehicles().size(), 2u);
   EXPECT_EQ(count(intake, SubmapRefusal::kUnknownVehicle), 1u);
   // A list that cannot be: refused at start.
@@ -108,20 +111,21 @@ TEST(FleetIntake, AClosedFleetTakesItsListedVehiclesOnlyInTheListsOrder) {
 TEST(FleetIntake, OnAnOpenDomainEmptyNewcomersTakeNoPlaceAndAFullFleetRefusesNewNames) {
   FleetIntake intake(trust(), {});
   for (int i = 0; i < 100; ++i) {
-    EXPECT_EQ(takeOwn(intake, sample("ghost" + std::to_string(i), 1, {0, 0, 0}, {}), kWriterA, 0,
-                          kNow_us)
-                  .refusal,
-              SubmapRefusal::kEmptyNewVehicle);
+    EXPECT_EQ(
+        takeOwn(intake, sample("ghost" + std::to_string(i), 1, {0, 0, 0}, {}), kWriterA, 0, kNow_us)
+            .refusal,
+        SubmapRefusal::kEmptyNewVehicle);
   }
   EXPECT_TRUE(intake.map().vehicles().empty());
   for (std::size_t i = 0; i < fleet::FleetMap::kMaxVehicles; ++i) {
-    const SubmapIntake r =
-        takeOwn(intake, sample("v" + std::to_string(i), 1, {0, 0, 0}, {{3, 2000}}), kWriterA, 0, kNow_us);
+    const SubmapIntake r = takeOwn(
+        intake, sample("v" + std::to_string(i), 1, {0, 0, 0}, {{3, 2000}}), kWriterA, 0, kNow_us);
     ASSERT_TRUE(r.applied);
     EXPECT_TRUE(r.joined);
   }
-  EXPECT_EQ(takeOwn(intake, sample("late", 1, {0, 0, 0}, {{3, 2000}}), kWriterB, 0, kNow_us).refusal,
-            SubmapRefusal::kFleetFull);
+  EXPECT_EQ(
+      takeOwn(intake, sample("late", 1, {0, 0, 0}, {{3, 2000}}), kWriterB, 0, kNow_us).refusal,
+      SubmapRefusal::kFleetFull);
   EXPECT_EQ(count(intake, SubmapRefusal::kEmptyNewVehicle), 100u);
   EXPECT_EQ(count(intake, SubmapRefusal::kFleetFull), 1u);
   EXPECT_EQ(intake.refusedTotal(), 101u);
@@ -132,16 +136,18 @@ TEST(FleetIntake, SequenceNumbersFarAheadAreRefusedAndARestartedVehicleIsTakenAg
   const SubmapIndex m(0, 0, 0);
   // At most an hour of microseconds ahead of the clock ...
   const std::uint64_t start = kNow_us + FleetIntake::kMaxClockLead_us;
-  EXPECT_EQ(takeOwn(intake, sample("uav1", start + 1, m, {{3, 2000}}), kWriterA, 0, kNow_us).refusal,
-            SubmapRefusal::kSequenceAhead);
-  EXPECT_EQ(takeOwn(intake, sample("uav1", std::numeric_limits<std::uint64_t>::max(), m, {{3, 2000}}),
-                        kWriterA, 0, kNow_us)
-                .refusal,
-            SubmapRefusal::kSequenceAhead);
+  EXPECT_EQ(
+      takeOwn(intake, sample("uav1", start + 1, m, {{3, 2000}}), kWriterA, 0, kNow_us).refusal,
+      SubmapRefusal::kSequenceAhead);
+  EXPECT_EQ(
+      takeOwn(intake, sample("uav1", std::numeric_limits<std::uint64_t>::max(), m, {{3, 2000}}),
+              kWriterA, 0, kNow_us)
+          .refusal,
+      SubmapRefusal::kSequenceAhead);
   ASSERT_TRUE(takeOwn(intake, sample("uav1", start, m, {{3, 2000}}), kWriterA, 0, kNow_us).applied);
   // ... or at most 2^24 ahead of the same writer's last.
-  EXPECT_EQ(takeOwn(intake, sample("uav1", start + FleetIntake::kMaxSequenceLead + 1, m, {}), kWriterA,
-                        0, kNow_us)
+  EXPECT_EQ(takeOwn(intake, sample("uav1", start + FleetIntake::kMaxSequenceLead + 1, m, {}),
+                    kWriterA, 0, kNow_us)
                 .refusal,
             SubmapRefusal::kSequenceAhead);
   // Another writer gets the clock bound only.
@@ -151,9 +157,11 @@ TEST(FleetIntake, SequenceNumbersFarAheadAreRefusedAndARestartedVehicleIsTakenAg
   // Not newer than what is held from the same writer: outdated, counted.
   EXPECT_EQ(takeOwn(intake, sample("uav1", start, m, {}), kWriterA, 0, kNow_us).refusal,
             SubmapRefusal::kOutdated);
-  ASSERT_TRUE(takeOwn(intake, sample("uav1", start + FleetIntake::kMaxSequenceLead, m, {{3, 2000}, {5, 2000}}),
-                          kWriterA, 0, kNow_us)
-                  .applied);
+  ASSERT_TRUE(
+      takeOwn(intake,
+              sample("uav1", start + FleetIntake::kMaxSequenceLead, m, {{3, 2000}, {5, 2000}}),
+              kWriterA, 0, kNow_us)
+          .applied);
   // A restart whose clock went back: lower sequence numbers from a new writer replace the
   // old writer's content.
   const SubmapIntake r = takeOwn(intake, sample("uav1", 5, m, {{9, 2000}}), kWriterB, 0, kNow_us);
@@ -167,27 +175,33 @@ TEST(FleetIntake, SequenceNumbersFarAheadAreRefusedAndARestartedVehicleIsTakenAg
 
 TEST(FleetIntake, BudgetsAreCheckedFromTheDeclaredSizeBeforeDecodingAndShrinkingAlwaysPasses) {
   FleetTrustConfig t = trust();
-  const std::uint32_t submap = 16 * 16 * 6;  // 1536 voxels
+  const std::uint32_t submap = 16 * 16 * 6;                                 // 1536 voxels
   t.vehicle_budget_bytes = fleet::FleetMap::contributionBytes(submap) * 2;  // two full submaps
   t.fleet_budget_bytes = 5 * submap * (sizeof(VoxelRecord) + sizeof(fleet::FleetVoxel)) / 2 + 4096;
   FleetIntake intake(t, {});
-  ASSERT_TRUE(takeOwn(intake, sample("uav1", 1, {0, 0, 0}, full(submap)), kWriterA, 0, kNow_us).applied);
-  ASSERT_TRUE(takeOwn(intake, sample("uav1", 2, {1, 0, 0}, full(submap)), kWriterA, 0, kNow_us).applied);
+  ASSERT_TRUE(
+      takeOwn(intake, sample("uav1", 1, {0, 0, 0}, full(submap)), kWriterA, 0, kNow_us).applied);
+  ASSERT_TRUE(
+      takeOwn(intake, sample("uav1", 2, {1, 0, 0}, full(submap)), kWriterA, 0, kNow_us).applied);
   // A third full submap is over uav1's budget; so is a lie about the voxel count with a payload
   // that would not even decode: the budget refuses it first, nothing decoded.
-  EXPECT_EQ(takeOwn(intake, sample("uav1", 3, {2, 0, 0}, full(submap)), kWriterA, 0, kNow_us).refusal,
-            SubmapRefusal::kVehicleBudget);
+  EXPECT_EQ(
+      takeOwn(intake, sample("uav1", 3, {2, 0, 0}, full(submap)), kWriterA, 0, kNow_us).refusal,
+      SubmapRefusal::kVehicleBudget);
   Submap lie = sample("uav1", 4, {3, 0, 0}, {{1, 2000}});
   lie.voxel_count_(submap);
   EXPECT_EQ(takeOwn(intake, lie, kWriterA, 0, kNow_us).refusal, SubmapRefusal::kVehicleBudget);
   // Replacing a submap by one of the same size, or emptying one, passes.
-  EXPECT_TRUE(takeOwn(intake, sample("uav1", 5, {1, 0, 0}, full(submap)), kWriterA, 0, kNow_us).applied);
+  EXPECT_TRUE(
+      takeOwn(intake, sample("uav1", 5, {1, 0, 0}, full(submap)), kWriterA, 0, kNow_us).applied);
   EXPECT_TRUE(takeOwn(intake, sample("uav1", 6, {1, 0, 0}, {}), kWriterA, 0, kNow_us).applied);
   EXPECT_LE(intake.map().vehicles()[0].memory_bytes, t.vehicle_budget_bytes);
   // The fleet's budget holds across vehicles: uav2 fits one full submap, not two.
-  ASSERT_TRUE(takeOwn(intake, sample("uav2", 1, {5, 0, 0}, full(submap)), kWriterB, 0, kNow_us).applied);
-  EXPECT_EQ(takeOwn(intake, sample("uav2", 2, {6, 0, 0}, full(submap)), kWriterB, 0, kNow_us).refusal,
-            SubmapRefusal::kFleetBudget);
+  ASSERT_TRUE(
+      takeOwn(intake, sample("uav2", 1, {5, 0, 0}, full(submap)), kWriterB, 0, kNow_us).applied);
+  EXPECT_EQ(
+      takeOwn(intake, sample("uav2", 2, {6, 0, 0}, full(submap)), kWriterB, 0, kNow_us).refusal,
+      SubmapRefusal::kFleetBudget);
   EXPECT_LE(intake.map().memoryBytes(), t.fleet_budget_bytes);
   EXPECT_EQ(count(intake, SubmapRefusal::kVehicleBudget), 2u);
   EXPECT_EQ(count(intake, SubmapRefusal::kFleetBudget), 1u);
@@ -208,8 +222,9 @@ TEST(FleetIntake, SixFullSubmapsUnderSixNamesStopAtTheFleetsBudget) {
   const std::vector<VoxelRecord> everything = full(64 * 64 * 64);
   int taken = 0;
   for (int i = 0; i < 6; ++i) {
-    const SubmapIntake r = takeOwn(intake, 
-        sample("v" + std::to_string(i), 1, {i, 0, 0}, everything, grid), kWriterA, 0, kNow_us);
+    const SubmapIntake r =
+        takeOwn(intake, sample("v" + std::to_string(i), 1, {i, 0, 0}, everything, grid), kWriterA,
+                0, kNow_us);
     if (r.applied) {
       ++taken;
     } else {

@@ -95,8 +95,7 @@ TEST(FleetTrust, AStrangersGridSentFirstDoesNotBecomeTheFleetsAndNothingMergedSa
   ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(uav1.get()); }));
   uav1.write({kTwoVoxels}, 2.0);
   ASSERT_TRUE(received(merger, 2));
-  EXPECT_TRUE(waitFor([&] { return merger.stats().merged_voxels == 2u; }))
-      << merger.statusLine();
+  EXPECT_TRUE(waitFor([&] { return merger.stats().merged_voxels == 2u; })) << merger.statusLine();
   EXPECT_EQ(merger.stats().samples_rejected, 1u);
   EXPECT_NE(merger.statusLine().find("grid 1"), std::string::npos) << merger.statusLine();
   EXPECT_EQ(merger.mapState().globalVoxelCount(), 2u);
@@ -129,8 +128,7 @@ TEST(FleetTrust, SixtyFourEmptySamplesUnderMadeUpNamesTakeNoPlaceOfARealVehicle)
   ASSERT_TRUE(waitFor([&] { return test_support::writerMatched(uav1.get()); }));
   uav1.write({kTwoVoxels}, 2.0);
   ASSERT_TRUE(received(merger, kNames + 1));
-  EXPECT_TRUE(waitFor([&] { return merger.stats().merged_voxels == 2u; }))
-      << merger.statusLine();
+  EXPECT_TRUE(waitFor([&] { return merger.stats().merged_voxels == 2u; })) << merger.statusLine();
   const FleetMergerStats s = merger.stats();
   ASSERT_EQ(s.vehicles.size(), 1u);
   EXPECT_EQ(s.vehicles[0].info.name, "uav1");
@@ -143,8 +141,8 @@ TEST(FleetTrust, ASampleUnderAVehiclesNameWithTheLastSequenceNumberNeitherErases
   MergerAndPublisher rig(mergerConfig(kDomain));
   FleetMerger& merger = rig.merger;
   fdds::Publisher* publisher = rig.publisher;
-  auto uav1 = std::make_unique<SubmapWriter>(publisher, "mlmap/submaps", "uav1", fleetGrid(),
-                                             "map");
+  auto uav1 =
+      std::make_unique<SubmapWriter>(publisher, "mlmap/submaps", "uav1", fleetGrid(), "map");
   fdds::DataWriter* stranger = strangerWriter(publisher, "uav1");
   ASSERT_TRUE(waitFor([&] {
     return test_support::writerMatched(uav1->get()) && test_support::writerMatched(stranger);
@@ -197,8 +195,8 @@ TEST(FleetTrust, AClosedFleetMergesItsListedVehiclesOnlyAndSaysWhoIsNotHeardYet)
     return test_support::writerMatched(uav1.get()) && test_support::writerMatched(stranger);
   }));
   ghost.write({{SubmapIndex(0, 0, 0), {{7, 2500}}}}, 1.0);
-  auto named_ghost = toSubmapMessage({SubmapIndex(0, 0, 1), {{7, 2500}}}, fleetGrid(), "ghost",
-                                     1, 1.0, "map");
+  auto named_ghost =
+      toSubmapMessage({SubmapIndex(0, 0, 1), {{7, 2500}}}, fleetGrid(), "ghost", 1, 1.0, "map");
   ASSERT_TRUE(stranger->write(&named_ghost));
   uav1.write({kTwoVoxels}, 1.0);
   ASSERT_TRUE(received(merger, 2));
@@ -210,8 +208,7 @@ TEST(FleetTrust, AClosedFleetMergesItsListedVehiclesOnlyAndSaysWhoIsNotHeardYet)
   EXPECT_EQ(s.samples_received, 2u);
   EXPECT_FALSE(test_support::writerMatched(ghost.get()));
   EXPECT_EQ(refused(merger, SubmapRefusal::kNotItsTopic), 1u);
-  EXPECT_NE(merger.statusLine().find("not its topic 1"), std::string::npos)
-      << merger.statusLine();
+  EXPECT_NE(merger.statusLine().find("not its topic 1"), std::string::npos) << merger.statusLine();
 }
 
 }  // namespace

@@ -47,7 +47,8 @@ using test_support::waitFor;
 /// routed through the veth, as a host on a LAN. "" when done, else why it could not be.
 std::string enterOwnNetwork() {
   if (geteuid() != 0) return "needs root to make a network namespace";
-  if (unshare(CLONE_NEWNET) != 0) return std::string("unshare(CLONE_NEWNET): ") + std::strerror(errno);
+  if (unshare(CLONE_NEWNET) != 0)
+    return std::string("unshare(CLONE_NEWNET): ") + std::strerror(errno);
   const char* commands[] = {
       "ip link set lo up",
       "ip link add mlfm0 type veth peer name mlfm1",
@@ -103,7 +104,8 @@ fdds::Topic* cloudTopic(fdds::DomainParticipant* participant, const std::string&
   return participant->create_topic(name, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
 }
 
-fdds::DataReader* reliableCloudReader(fdds::DomainParticipant* participant, const std::string& name) {
+fdds::DataReader* reliableCloudReader(fdds::DomainParticipant* participant,
+                                      const std::string& name) {
   fdds::Topic* topic = cloudTopic(participant, name);
   fdds::Subscriber* subscriber = participant->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
   if (topic == nullptr || subscriber == nullptr) return nullptr;
@@ -179,7 +181,8 @@ TEST(ForeignMulticastPeers, ASecondReaderOnTheSameMulticastLocatorIsServedWithou
     cloud = stampedCloud(stamp);
     ASSERT_TRUE(writer->write(&cloud));
     EXPECT_TRUE(receives(first_reader, stamp)) << "sample " << stamp << " missed the first reader";
-    EXPECT_TRUE(receives(second_reader, stamp)) << "sample " << stamp << " missed the second reader";
+    EXPECT_TRUE(receives(second_reader, stamp))
+        << "sample " << stamp << " missed the second reader";
   }
   const UdpSendGuardStats after = udpSendGuardStats();
   EXPECT_GT(after.destinations_opened, before.destinations_opened)

@@ -45,11 +45,11 @@ namespace fdds = eprosima::fastdds::dds;
 using sensor_msgs::PointCloud2_;
 using test_support::CdrBytes;
 using test_support::localhostConfig;
-using test_support::waitFor;
-using test_support::readerMatched;
-using test_support::writerMatched;
 using test_support::RawBytes;
 using test_support::RawType;
+using test_support::readerMatched;
+using test_support::waitFor;
+using test_support::writerMatched;
 
 constexpr const char* kCloudType = "sensor_msgs::msg::dds_::PointCloud2_";
 
@@ -104,8 +104,8 @@ TEST(TakeListener, PayloadsFastCdrCannotParseAreCountedOnceAndTheNextSampleArriv
       },
       [&](const std::string&) { ++errors; });
   fdds::Subscriber* subscriber = receiver->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
-  createReader<sensor_msgs::PointCloud2_PubSubType>(subscriber, "rt/test/cloud", reliableReaderQos(),
-                                                    &listener);
+  createReader<sensor_msgs::PointCloud2_PubSubType>(subscriber, "rt/test/cloud",
+                                                    reliableReaderQos(), &listener);
   ASSERT_TRUE(waitFor([&] { return writerMatched(writer); }));
 
   RawBytes sample = cloudBytes(1, 0);
@@ -150,7 +150,8 @@ TEST(TakeListener, ATfSampleDeclaringMoreTransformsThanItsBytesIsRefusedWithTheR
                                           });
   readers->add<::tf2_msgs::msg::dds_::TFMessage_PubSubType>(
       "rt/tf", reliableReaderQos(false, 100), [&](::tf2_msgs::msg::dds_::TFMessage_&& msg) {
-        if (msg.transforms_().size() == 1 && msg.transforms_()[0].child_frame_id_() == "base_link") ++good;
+        if (msg.transforms_().size() == 1 && msg.transforms_()[0].child_frame_id_() == "base_link")
+          ++good;
       });
   ASSERT_TRUE(waitFor([&] { return writerMatched(writer); }));
 
@@ -165,7 +166,8 @@ TEST(TakeListener, ATfSampleDeclaringMoreTransformsThanItsBytesIsRefusedWithTheR
   one.f64(1.0);  // rotation.w
   RawBytes valid = one.bytes();
   ASSERT_TRUE(writer->write(&valid));
-  ASSERT_TRUE(waitFor([&] { return good == 1; })) << "the valid /tf sample after the hostile one was lost";
+  ASSERT_TRUE(waitFor([&] { return good == 1; }))
+      << "the valid /tf sample after the hostile one was lost";
   std::lock_guard<std::mutex> lock(mutex);
   ASSERT_EQ(errors.size(), 1U);
   EXPECT_EQ(errors[0],
@@ -372,10 +374,14 @@ TEST(MappingNodeInput, MalformedCloudsAreRejectedCountedLoggedOnceAndGoodFramesS
   // bounds or map garbage.
   using Mutation = std::function<void(sensor_msgs::PointCloud2_&)>;
   const std::vector<Mutation> broken = {
-      [](auto& m) { m.data_().pop_back(); },                        // data shorter than the sizes
-      [](auto& m) { m.data_().push_back(0); },                      // data longer than the sizes
-      [](auto& m) { m.row_step_(m.row_step_() - 1); },              // row_step < width * point_step
-      [](auto& m) { m.point_step_(8); m.row_step_(8 * m.width_()); m.data_().resize(m.row_step_()); },
+      [](auto& m) { m.data_().pop_back(); },            // data shorter than the sizes
+      [](auto& m) { m.data_().push_back(0); },          // data longer than the sizes
+      [](auto& m) { m.row_step_(m.row_step_() - 1); },  // row_step < width * point_step
+      [](auto& m) {
+        m.point_step_(8);
+        m.row_step_(8 * m.width_());
+        m.data_().resize(m.row_step_());
+      },
       [](auto& m) { m.fields_().pop_back(); },                      // no z
       [](auto& m) { m.fields_()[0].datatype_(5); },                 // x as INT32
       [](auto& m) { m.fields_()[1].offset_(2); },                   // y overlaps x
@@ -398,15 +404,17 @@ TEST(MappingNodeInput, MalformedCloudsAreRejectedCountedLoggedOnceAndGoodFramesS
   sensor.rawCloud(truncated);
   sensor.rawCloud(cloudBytes(static_cast<std::int32_t>(t_s), 9));
   ASSERT_TRUE(counted(node, &NodeCounters::inputs_malformed, broken.size() + 2))
-      << "malformed clouds counted: " << node.counters().inputs_malformed << " (clouds received: "
-      << node.counters().clouds_received << ")";
+      << "malformed clouds counted: " << node.counters().inputs_malformed
+      << " (clouds received: " << node.counters().clouds_received << ")";
 
   // Non-finite points are not a malformed cloud: the frame is mapped, the points are counted.
   t_s += 0.1;
   sensor_msgs::PointCloud2_ with_nan = sensor.wallCloud(t_s);
-  const float bad[] = {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity(),
+  const float bad[] = {std::numeric_limits<float>::quiet_NaN(),
+                       std::numeric_limits<float>::infinity(),
                        -std::numeric_limits<float>::infinity()};
-  for (std::size_t i = 0; i < 3; ++i) std::memcpy(with_nan.data_().data() + 12 * i + 4 * i, &bad[i], 4);
+  for (std::size_t i = 0; i < 3; ++i)
+    std::memcpy(with_nan.data_().data() + 12 * i + 4 * i, &bad[i], 4);
   sensor.pose(t_s - 0.01);
   sensor.pose(t_s + 0.01);
   sensor.cloud(with_nan);
@@ -514,7 +522,8 @@ TEST(MappingNodeInput, PublishersAreCountedAndLoggedAsTheyMatchAndLeave) {
     EXPECT_EQ(log.count("rt/cloud: a publisher matched (2 now)"), 1);
     EXPECT_EQ(log.count("rt/pose: a publisher matched (1 now)"), 1);
   }
-  ASSERT_TRUE(counted(node, &NodeCounters::publishers_matched, 0)) << "the sensor's writers are gone";
+  ASSERT_TRUE(counted(node, &NodeCounters::publishers_matched, 0))
+      << "the sensor's writers are gone";
   EXPECT_EQ(log.count(": a publisher left ("), 3);
   EXPECT_EQ(log.count("rt/cloud: a publisher left (0 now)"), 1);
 }
@@ -575,7 +584,8 @@ TEST(MappingNodeOutput, SubscribersWithIncompatibleQosAreLoggedWithThePolicyAndC
 TEST(MappingNodeOutput, TheStatusCountsTheHitsOutsideTheLocalWindow) {
   constexpr int kDomain = 181;
   NodeConfig config = nodeConfig(kDomain);
-  config.map.local_map.size_cells = Eigen::Vector3i(15, 15, 35);  // reach 1.2-1.8 m; the wall is at 3 m
+  config.map.local_map.size_cells =
+      Eigen::Vector3i(15, 15, 35);  // reach 1.2-1.8 m; the wall is at 3 m
   ASSERT_LT(1.5 * config.map.local_map.horizontalReach_m(), 3.0);
   const ParticipantPtr ground = createParticipant(localhostConfig(kDomain), "ground");
   std::mutex mutex;
@@ -586,9 +596,9 @@ TEST(MappingNodeOutput, TheStatusCountsTheHitsOutsideTheLocalWindow) {
         last = std::move(status);
       },
       [](const std::string& what) { ADD_FAILURE() << what; });
-  createReader<mlmap_msgs::Status_PubSubType>(ground->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT),
-                                              "rt/" + config.dds.topics.status,
-                                              reliableReaderQos(), &listener);
+  createReader<mlmap_msgs::Status_PubSubType>(
+      ground->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT), "rt/" + config.dds.topics.status,
+      reliableReaderQos(), &listener);
   MappingNode node(config);
   SensorSide sensor(kDomain, config);
   ASSERT_TRUE(sensor.matched(node));
@@ -603,7 +613,8 @@ TEST(MappingNodeOutput, TheStatusCountsTheHitsOutsideTheLocalWindow) {
     std::lock_guard<std::mutex> lock(mutex);
     return last;
   };
-  ASSERT_TRUE(waitFor([&] { return status().frames_mapped_() == 3; })) << "no status after 3 frames";
+  ASSERT_TRUE(waitFor([&] { return status().frames_mapped_() == 3; }))
+      << "no status after 3 frames";
   const mlmap_msgs::Status_ m = status();
   EXPECT_EQ(m.version_(), 3u);
   EXPECT_EQ(m.hits_beyond_local_map_(), s.points.hits_beyond_local_map);
@@ -633,9 +644,12 @@ struct Samples {
 /// Value of the OccupancyGrid cell holding world point (x, y); -2 outside the grid.
 int gridValueAt(const nav_msgs::OccupancyGrid_& grid, double x_m, double y_m) {
   const auto& info = grid.info_();
-  const int cx = static_cast<int>(std::floor((x_m - info.origin_().position_().x_()) / info.resolution_()));
-  const int cy = static_cast<int>(std::floor((y_m - info.origin_().position_().y_()) / info.resolution_()));
-  if (cx < 0 || cy < 0 || cx >= static_cast<int>(info.width_()) || cy >= static_cast<int>(info.height_())) {
+  const int cx =
+      static_cast<int>(std::floor((x_m - info.origin_().position_().x_()) / info.resolution_()));
+  const int cy =
+      static_cast<int>(std::floor((y_m - info.origin_().position_().y_()) / info.resolution_()));
+  if (cx < 0 || cy < 0 || cx >= static_cast<int>(info.width_()) ||
+      cy >= static_cast<int>(info.height_())) {
     return -2;
   }
   return grid.data_()[static_cast<std::size_t>(cy) * info.width_() + static_cast<std::size_t>(cx)];
@@ -771,13 +785,15 @@ class DiscoveryLog : public fdds::DomainParticipantListener {
  public:
   struct Peer {
     std::vector<eprosima::fastrtps::rtps::Locator_t> locators;  ///< default + metatraffic unicast
-    std::vector<fdds::DataSharingQosPolicy> data_sharing;        ///< of each endpoint
-    std::vector<std::string> topics;                              ///< of each endpoint
+    std::vector<fdds::DataSharingQosPolicy> data_sharing;       ///< of each endpoint
+    std::vector<std::string> topics;                            ///< of each endpoint
   };
 
-  void on_participant_discovery(fdds::DomainParticipant*,
-                                eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
-    if (info.status != eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERED_PARTICIPANT) return;
+  void on_participant_discovery(
+      fdds::DomainParticipant*,
+      eprosima::fastrtps::rtps::ParticipantDiscoveryInfo&& info) override {
+    if (info.status != eprosima::fastrtps::rtps::ParticipantDiscoveryInfo::DISCOVERED_PARTICIPANT)
+      return;
     std::lock_guard<std::mutex> lock(mutex_);
     Peer& peer = peers_[prefixOf(info.info.m_guid)];
     for (const auto* list : {&info.info.default_locators, &info.info.metatraffic_locators}) {
@@ -859,8 +875,8 @@ TEST(ForeignPeer, IsOfferedNoSharedMemoryAndSamplesCrossBothWays) {
   const DiscoveryLog::Peer peer = discovered.peer("mlmap_node");
   ASSERT_FALSE(peer.locators.empty()) << "the node was not discovered";
   for (const eprosima::fastrtps::rtps::Locator_t& l : peer.locators) {
-    EXPECT_EQ(l.kind, LOCATOR_KIND_UDPv4) << "the node offers a locator of kind " << l.kind
-                                          << " (" << LOCATOR_KIND_SHM << " is shared memory)";
+    EXPECT_EQ(l.kind, LOCATOR_KIND_UDPv4) << "the node offers a locator of kind " << l.kind << " ("
+                                          << LOCATOR_KIND_SHM << " is shared memory)";
   }
   ASSERT_TRUE(waitFor([&] { return discovered.peer("mlmap_node").topics.size() >= 3; }));
   const DiscoveryLog::Peer endpoints = discovered.peer("mlmap_node");

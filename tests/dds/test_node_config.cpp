@@ -136,8 +136,8 @@ TEST(NodeConfigYaml, EmptyOrNullTextDisablesATopic) {
 
 TEST(NodeConfigYaml, UnknownKeysAreErrorsNamingThem) {
   EXPECT_TRUE(contains(errorOf("dds: {domian_id: 3}"), "dds.domian_id: unknown key"));
-  EXPECT_TRUE(contains(errorOf("dds: {topics: {clouds: points}}"),
-                       "dds.topics.clouds: unknown key"));
+  EXPECT_TRUE(
+      contains(errorOf("dds: {topics: {clouds: points}}"), "dds.topics.clouds: unknown key"));
   EXPECT_TRUE(contains(errorOf("dds: {rates: {grid: 2}}"), "dds.rates.grid: unknown key"));
   EXPECT_TRUE(contains(errorOf("ddss: {}"), "ddss: unknown key"));
   // The message lists the known keys of that section.
@@ -164,7 +164,8 @@ TEST(NodeConfigYaml, BadValuesAreValidated) {
   EXPECT_TRUE(contains(errorOf("dds: {rates: {esdf_hz: -1}}"), "dds.rates.esdf_hz"));
   EXPECT_TRUE(contains(errorOf("dds: {pose_tolerance_s: .nan}"), "dds.pose_tolerance_s"));
   EXPECT_TRUE(contains(errorOf("dds: {max_pose_speed_mps: 0}"), "dds.max_pose_speed_mps"));
-  EXPECT_TRUE(contains(errorOf("dds: {max_pose_rotation_rate_dps: -5}"), "dds.max_pose_rotation_rate_dps"));
+  EXPECT_TRUE(
+      contains(errorOf("dds: {max_pose_rotation_rate_dps: -5}"), "dds.max_pose_rotation_rate_dps"));
   EXPECT_TRUE(contains(errorOf("a: b: c"), "not valid YAML"));
   EXPECT_THROW(loadNodeConfigYaml("/nonexistent/mlmap_node.yaml"), std::runtime_error);
 }
@@ -274,8 +275,8 @@ TEST(NodeConfigYaml, MapFileSectionIsReadValidatedAndPrinted) {
 }
 
 TEST(NodeConfigYaml, ShippedFilesEqualTheDefaultsInCode) {
-  EXPECT_TRUE(sameConfig(loadNodeConfigYaml(MLMAP_SOURCE_DIR "/config/mlmap_node.yaml"),
-                         NodeConfig{}));
+  EXPECT_TRUE(
+      sameConfig(loadNodeConfigYaml(MLMAP_SOURCE_DIR "/config/mlmap_node.yaml"), NodeConfig{}));
   // The engine file and the node file together are one valid node configuration.
   const std::string both = config::readConfigFile(MLMAP_SOURCE_DIR "/config/mlmap.yaml") + "\n" +
                            config::readConfigFile(MLMAP_SOURCE_DIR "/config/mlmap_node.yaml");

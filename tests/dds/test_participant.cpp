@@ -64,7 +64,6 @@ void deliverThroughTransports() {
   eprosima::fastrtps::xmlparser::XMLProfileManager::library_settings(settings);
 }
 
-
 std::string profilePath(const std::string& file) {
   return std::string(MLMAP_SOURCE_DIR) + "/config/dds/" + file;
 }
@@ -199,7 +198,7 @@ TEST(ShippedProfiles, EachLoadsCreatesAParticipantAndHasOneDefaultProfile) {
               1);
     DdsConfig config = localhostConfig(domain_id++);  // LAN profiles: kept off the network
     const std::string file = p.file;
-    if (file == "loopback.xml") config.discovery_range = "";  // its own transports
+    if (file == "loopback.xml") config.discovery_range = "";              // its own transports
     if (file == "loopback_udp_only.xml") config.discovery_range = "OFF";  // as documented in it
     config.profiles_file = profilePath(p.file);
     config.participant_profile = p.name;
@@ -336,8 +335,8 @@ TEST(ParticipantSetup, LocalhostUsesTheHostsOwnAddressesOnlyAndSharedMemoryOnlyW
   const auto& builtin = qos.wire_protocol().builtin;
   EXPECT_TRUE(builtin.metatrafficMulticastLocatorList.empty());
   EXPECT_TRUE(qos.wire_protocol().default_multicast_locator_list.empty());
-  for (const frtps::LocatorList_t* list :
-       {&builtin.metatrafficUnicastLocatorList, &qos.wire_protocol().default_unicast_locator_list}) {
+  for (const frtps::LocatorList_t* list : {&builtin.metatrafficUnicastLocatorList,
+                                           &qos.wire_protocol().default_unicast_locator_list}) {
     std::vector<std::string> announced;
     for (const frtps::Locator_t& l : *list) {
       EXPECT_EQ(l.kind, LOCATOR_KIND_UDPv4);
@@ -518,7 +517,8 @@ TEST(ParticipantSetup, AProfilesSharedMemoryIsLeftOutUnlessAskedAndThatIsSaid) {
   ASSERT_NE(udp, nullptr);
   EXPECT_EQ(udp->interfaceWhiteList, std::vector<std::string>{"127.0.0.1"});
   ASSERT_EQ(setup.warnings.size(), 1u);
-  EXPECT_NE(setup.warnings[0].find("'mlmap_test_loopback_no_peers'"), std::string::npos) << setup.warnings[0];
+  EXPECT_NE(setup.warnings[0].find("'mlmap_test_loopback_no_peers'"), std::string::npos)
+      << setup.warnings[0];
   EXPECT_NE(setup.warnings[0].find("dds.shared_memory"), std::string::npos) << setup.warnings[0];
   const ParticipantPtr participant = createParticipant(config, "test");
   EXPECT_TRUE(participant);
@@ -534,7 +534,8 @@ TEST(ParticipantSetup, AProfilesSharedMemoryIsLeftOutUnlessAskedAndThatIsSaid) {
     EXPECT_NE(what.find("dds.shared_memory: true"), std::string::npos) << what;
   }
   config.shared_memory = true;
-  EXPECT_NE(onlyTransport<SharedMemTransportDescriptor>(participantSetup(config, "test").qos), nullptr);
+  EXPECT_NE(onlyTransport<SharedMemTransportDescriptor>(participantSetup(config, "test").qos),
+            nullptr);
 }
 
 TEST(Participant, OffAddsNoPeersAndNoMulticastSoTwoParticipantsNeverMeet) {
@@ -586,8 +587,10 @@ TEST(ParticipantSetup, LocalhostKeepsAProfilesTransportsAndAddsLoopbackUdpAsJazz
   // Both behind the send guard (udp_send_guard.h).
   EXPECT_TRUE(isUdpSendGuard(transports[0]));
   EXPECT_TRUE(isUdpSendGuard(transports[1]));
-  const auto profile_udp = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(unguarded(transports[0]));
-  const auto added_udp = std::dynamic_pointer_cast<UDPv4TransportDescriptor>(unguarded(transports[1]));
+  const auto profile_udp =
+      std::dynamic_pointer_cast<UDPv4TransportDescriptor>(unguarded(transports[0]));
+  const auto added_udp =
+      std::dynamic_pointer_cast<UDPv4TransportDescriptor>(unguarded(transports[1]));
   ASSERT_NE(profile_udp, nullptr);
   ASSERT_NE(added_udp, nullptr);
   EXPECT_EQ(profile_udp->receiveBufferSize, 8388608u);
@@ -769,8 +772,8 @@ TEST(Participant, LocalhostFindsANodeThatAnnouncesOnlyItsNetworkAddress) {
   ASSERT_TRUE(waitFor([&] {
     return writerMatched(to_node) && readerMatched(node_reads) && writerMatched(from_node) &&
            readerMatched(we_read);
-  })) << "mlmap's LOCALHOST participant and a node announcing only " << network_address
-      << " did not find each other";
+  })) << "mlmap's LOCALHOST participant and a node announcing only "
+      << network_address << " did not find each other";
   PointCloud2_ sent = makeCloud(1000, 21, 1);
   ASSERT_TRUE(to_node->write(&sent));
   PointCloud2_ received;
@@ -853,7 +856,8 @@ TEST(QosPresets, MatchRos2AndRmwFastrtps) {
   // bits), which every other same-host Fast DDS endpoint announces.
   EXPECT_EQ(sensor.data_sharing().domain_ids(), std::vector<std::uint64_t>{dataSharingDomainId()});
   EXPECT_NE(dataSharingDomainId(), 0u);
-  EXPECT_EQ(reliableReaderQos(true).data_sharing().domain_ids(), sensor.data_sharing().domain_ids());
+  EXPECT_EQ(reliableReaderQos(true).data_sharing().domain_ids(),
+            sensor.data_sharing().domain_ids());
 
   const fdds::DataWriterQos writer = reliableWriterQos();
   EXPECT_EQ(writer.reliability().kind, fdds::RELIABLE_RELIABILITY_QOS);

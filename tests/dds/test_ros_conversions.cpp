@@ -484,8 +484,8 @@ TEST(DecodePointCloud2, AbsurdSizesAreRejectedWithoutAllocating) {
 /// the node takes it: CheckedType<CloudSamplePubSubType>. Returns its deserialize()'s verdict.
 bool takeAsNode(const sensor_msgs::PointCloud2_& msg, CloudSample* sample, std::size_t keep = 0) {
   sensor_msgs::PointCloud2_PubSubType generated;
-  eprosima::fastrtps::rtps::SerializedPayload_t payload(generated.getSerializedSizeProvider(
-      const_cast<sensor_msgs::PointCloud2_*>(&msg))());
+  eprosima::fastrtps::rtps::SerializedPayload_t payload(
+      generated.getSerializedSizeProvider(const_cast<sensor_msgs::PointCloud2_*>(&msg))());
   EXPECT_TRUE(generated.serialize(const_cast<sensor_msgs::PointCloud2_*>(&msg), &payload));
   if (keep > 0) payload.length = static_cast<std::uint32_t>(keep);
   CheckedType<CloudSamplePubSubType> type;
@@ -498,11 +498,12 @@ bool takeAsNode(const sensor_msgs::PointCloud2_& msg, CloudSample* sample, std::
   std::vector<Eigen::Vector3f> points;
   const DecodeStatus status = decodePointCloud2(msg, &points);
   if (sample.status.error != status.error || sample.status.detail != status.detail) {
-    return ::testing::AssertionFailure() << "status '" << sample.status.detail << "', want '"
-                                         << status.detail << "'";
+    return ::testing::AssertionFailure()
+           << "status '" << sample.status.detail << "', want '" << status.detail << "'";
   }
   if (sample.points_S.size() != points.size()) {
-    return ::testing::AssertionFailure() << sample.points_S.size() << " points, want " << points.size();
+    return ::testing::AssertionFailure()
+           << sample.points_S.size() << " points, want " << points.size();
   }
   for (std::size_t i = 0; i < points.size(); ++i) {
     ::testing::AssertionResult same = samePoint(sample.points_S[i], points[i]);
@@ -543,7 +544,7 @@ TEST(CloudSampleType, ReportsTheReferenceDecodeErrors) {
   CloudSample sample;
   for (std::size_t i = 0; i < bad.size(); ++i) {
     ASSERT_TRUE(takeAsNode(makeRandomCloud(&rng).msg, &sample));  // leaves points behind
-    ASSERT_TRUE(takeAsNode(bad[i], &sample)) << "case " << i;      // valid CDR, bad layout
+    ASSERT_TRUE(takeAsNode(bad[i], &sample)) << "case " << i;     // valid CDR, bad layout
     EXPECT_FALSE(sample.status.ok()) << "case " << i;
     EXPECT_TRUE(sample.points_S.empty()) << "case " << i;
     EXPECT_TRUE(sameAsReference(sample, bad[i])) << "case " << i;
@@ -553,8 +554,8 @@ TEST(CloudSampleType, ReportsTheReferenceDecodeErrors) {
 TEST(CloudSampleType, RefusesEveryTruncatedPayloadAsTheGeneratedTypeDoes) {
   const sensor_msgs::PointCloud2_ msg = validOrganisedCloud();
   sensor_msgs::PointCloud2_PubSubType generated;
-  const std::size_t full = generated.getSerializedSizeProvider(
-      const_cast<sensor_msgs::PointCloud2_*>(&msg))();
+  const std::size_t full =
+      generated.getSerializedSizeProvider(const_cast<sensor_msgs::PointCloud2_*>(&msg))();
   CloudSample sample;
   for (std::size_t keep = 1; keep < full; ++keep) {
     EXPECT_FALSE(takeAsNode(msg, &sample, keep)) << keep << " of " << full << " bytes";

@@ -361,8 +361,9 @@ TEST(DiscoveryProbe, TimeUntilANewParticipantSeesTheNodesWriters) {
   Observer observer(std::atoi(domain));
   ASSERT_TRUE(waitFor([&] { return observer.log.on("rt/mlmap/status", true).has_value(); },
                       std::chrono::seconds(10)));
-  std::printf("PROBE %.1f\n",
-              std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  std::printf(
+      "PROBE %.1f\n",
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
 }
 
 }  // namespace

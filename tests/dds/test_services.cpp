@@ -726,7 +726,6 @@ TEST(NodeServices, ConcurrentClientsEachGetTheirOwnReplyAndMalformedRequestsAreC
   EXPECT_EQ(after->values_().size(), 1u);
 }
 
-
 // --- Bounds: a client that floods the services ---------------------------------------------------
 
 TEST(FairRequestQueue, ServesClientsInTurnWithinItsBounds) {

@@ -62,12 +62,12 @@ class TfRecorder {
       namespaced_ = readers_.add<TfType>(ddsTopicName(ns, "tf"), reliableReaderQos(false, 100),
                                          [](TfMessage&&) {});
     }
-    readers_.add<mlmap_msgs::Status_PubSubType>(
-        ddsTopicName(ns, TopicNames{}.status), reliableReaderQos(false, 10),
-        [this](mlmap_msgs::Status_&& status) {
-          std::lock_guard<std::mutex> lock(mutex_);
-          status_ = std::move(status);
-        });
+    readers_.add<mlmap_msgs::Status_PubSubType>(ddsTopicName(ns, TopicNames{}.status),
+                                                reliableReaderQos(false, 10),
+                                                [this](mlmap_msgs::Status_&& status) {
+                                                  std::lock_guard<std::mutex> lock(mutex_);
+                                                  status_ = std::move(status);
+                                                });
   }
 
   /// The node's latest mlmap_msgs/Status (all zero before the first).
@@ -85,7 +85,8 @@ class TfRecorder {
     return edges_;
   }
   /// A transform parent -> child stamped `stamp_s` was received.
-  [[nodiscard]] bool has(const std::string& parent, const std::string& child, double stamp_s) const {
+  [[nodiscard]] bool has(const std::string& parent, const std::string& child,
+                         double stamp_s) const {
     for (const Edge& e : edges(parent, child)) {
       if (std::abs(e.stamp_s - stamp_s) < 1e-6) return true;
     }
@@ -308,20 +309,54 @@ struct TreeCase {
 TEST(TfModes, EachModePublishesItsEdgesAndEveryChildKeepsOneParent) {
   constexpr int kDomain = 230;
   const std::vector<TreeCase> cases = {
-      {"world_body, sensor frame published (the simulator)", "world_body", true, false, false,
-       {{"map", "base_link"}, {"base_link", "camera_depth_optical_frame"}}, "", "base_link"},
-      {"map_odom (a localisation over the robot's EKF)", "map_odom", false, false, true,
-       {{"map", "odom"}, {"odom", "base_link"}}, "", "base_link"},
-      {"none (the pose source owns the TF)", "none", false, false, true, {{"odom", "base_link"}},
-       "", "base_link"},
-      {"auto with an odometry input: none; its child frame not the body", "auto", false, true,
-       true, {{"odom", "base_link"}}, "", "base_footprint"},
-      {"auto with a pose input: world_body", "auto", false, false, false, {{"map", "base_link"}},
-       "", "base_link"},
-      {"world_body under the namespace uav1 with its frame prefix", "world_body", true, false,
+      {"world_body, sensor frame published (the simulator)",
+       "world_body",
+       true,
+       false,
+       false,
+       {{"map", "base_link"}, {"base_link", "camera_depth_optical_frame"}},
+       "",
+       "base_link"},
+      {"map_odom (a localisation over the robot's EKF)",
+       "map_odom",
+       false,
+       false,
+       true,
+       {{"map", "odom"}, {"odom", "base_link"}},
+       "",
+       "base_link"},
+      {"none (the pose source owns the TF)",
+       "none",
+       false,
+       false,
+       true,
+       {{"odom", "base_link"}},
+       "",
+       "base_link"},
+      {"auto with an odometry input: none; its child frame not the body",
+       "auto",
+       false,
+       true,
+       true,
+       {{"odom", "base_link"}},
+       "",
+       "base_footprint"},
+      {"auto with a pose input: world_body",
+       "auto",
+       false,
+       false,
+       false,
+       {{"map", "base_link"}},
+       "",
+       "base_link"},
+      {"world_body under the namespace uav1 with its frame prefix",
+       "world_body",
+       true,
+       false,
        false,
        {{"map", "uav1/base_link"}, {"uav1/base_link", "uav1/camera_depth_optical_frame"}},
-       "uav1", "base_link"},
+       "uav1",
+       "base_link"},
   };
   for (const TreeCase& c : cases) {
     // A precaution, not a measured need: the last case's participants say goodbye before new
@@ -352,7 +387,8 @@ TEST(TfModes, EachModePublishesItsEdgesAndEveryChildKeepsOneParent) {
     // The robot's tf writer, and the node's when it has one; the node reads the robot's in
     // map_odom.
     ASSERT_TRUE(waitFor([&] { return recorder.tfWriters() == 1 + (node_publishes_tf ? 1 : 0); }));
-    ASSERT_TRUE(waitFor([&] { return robot.tfReaders() == 1 + (c.tf_mode == "map_odom" ? 1 : 0); }));
+    ASSERT_TRUE(
+        waitFor([&] { return robot.tfReaders() == 1 + (c.tf_mode == "map_odom" ? 1 : 0); }));
     // Frames until the node's transform of one arrives (at least 3): a volatile writer sends
     // nothing to a reader it has not matched yet, and the reader may know the writer before the
     // writer knows the reader.
@@ -431,8 +467,8 @@ TEST(TfModes, MapOdomIsThePoseTimesTheInverseOfTheRobotsOdometryAtItsStamp) {
     robot.cloud(t_s, T_W_B, config.dds.sensor_frame);
     ASSERT_TRUE(mapped(node, ++frames)) << describe(node);
     expected_T_W_O[t_s] = T_W_B * T_O_B.inverse();
-    if (k >= 3 && waitFor([&] { return recorder.has("map", "odom", t_s); },
-                          std::chrono::milliseconds(500))) {
+    if (k >= 3 &&
+        waitFor([&] { return recorder.has("map", "odom", t_s); }, std::chrono::milliseconds(500))) {
       break;
     }
   }

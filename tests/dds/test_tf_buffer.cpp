@@ -98,7 +98,8 @@ TEST(TfBuffer, StaticChainsEqualTheBreadthFirstReferenceOnRandomForests) {
     }
     for (int a = 0; a <= frames; ++a) {  // `frames` itself is a frame no edge names
       for (int b = 0; b <= frames; ++b) {
-        SCOPED_TRACE("forest " + std::to_string(forest) + ": " + frameName(a) + " <- " + frameName(b));
+        SCOPED_TRACE("forest " + std::to_string(forest) + ": " + frameName(a) + " <- " +
+                     frameName(b));
         Transform T_a_b = Transform::Identity();
         const TfBuffer::Lookup found = buffer.lookup(frameName(a), frameName(b), 0.0, &T_a_b);
         if (!reference.knows(frameName(a)) || !reference.knows(frameName(b))) {
@@ -161,9 +162,11 @@ TEST(TfBuffer, DynamicEdgesInterpolateBetweenSamplesAndRefuseStampsOutsideThem) 
     EXPECT_LT(difference(T, (T_O_B(t_s) * T_B_C).inverse()), 1e-9) << t_s;
   }
   // Within the tolerance of the ends: the end sample itself.
-  ASSERT_EQ(buffer.lookup("odom", "base_link", 1.2 + 0.5 * kTolerance_s, &T), TfBuffer::Lookup::kFound);
+  ASSERT_EQ(buffer.lookup("odom", "base_link", 1.2 + 0.5 * kTolerance_s, &T),
+            TfBuffer::Lookup::kFound);
   EXPECT_LT(difference(T, T_O_B(1.2)), 1e-12);
-  ASSERT_EQ(buffer.lookup("odom", "base_link", 1.0 - 0.5 * kTolerance_s, &T), TfBuffer::Lookup::kFound);
+  ASSERT_EQ(buffer.lookup("odom", "base_link", 1.0 - 0.5 * kTolerance_s, &T),
+            TfBuffer::Lookup::kFound);
   EXPECT_LT(difference(T, T_O_B(1.0)), 1e-12);
   EXPECT_EQ(buffer.lookup("odom", "camera", 1.3, &T), TfBuffer::Lookup::kNotYet);
   EXPECT_EQ(buffer.lookup("odom", "camera", 0.9, &T), TfBuffer::Lookup::kTooOld);

@@ -27,8 +27,9 @@ TEST(JsonOutput, OuterLevelsOneMemberPerLineDeeperOnOneLine) {
             "  \"missing\": [],\n"
             "  \"precision\": -1.0\n"
             "}");
-  EXPECT_EQ(formatJson(doc, 1).find("\n    "), std::string::npos);  // nothing below level 1 expanded
-  EXPECT_EQ(Json::parse(formatJson(doc, 0)), doc);                    // one line, the same document
+  EXPECT_EQ(formatJson(doc, 1).find("\n    "),
+            std::string::npos);                     // nothing below level 1 expanded
+  EXPECT_EQ(Json::parse(formatJson(doc, 0)), doc);  // one line, the same document
 }
 
 TEST(JsonOutput, StringsAreEscapedAndBadUtf8Replaced) {
@@ -40,12 +41,14 @@ TEST(JsonOutput, TimingSummaryKeys) {
   TimingSummary t;
   t.median_ms = 1.0;
   t.samples = 4;
-  EXPECT_EQ(formatJson(toJson(t), 0),
-            "{\"median_ms\": 1.0, \"p99_ms\": 0.0, \"mean_ms\": 0.0, \"max_ms\": 0.0, \"frames\": 4}");
+  EXPECT_EQ(
+      formatJson(toJson(t), 0),
+      "{\"median_ms\": 1.0, \"p99_ms\": 0.0, \"mean_ms\": 0.0, \"max_ms\": 0.0, \"frames\": 4}");
 }
 
 TEST(JsonOutput, WritesTheFileOrThrows) {
-  const std::string path = (std::filesystem::temp_directory_path() / "mlmap_json_output_test.json").string();
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "mlmap_json_output_test.json").string();
   writeJsonFile(path, Json{{"a", 1}}, 1);
   std::ifstream file(path);
   std::stringstream text;

@@ -9,7 +9,8 @@ namespace mlmap::eval {
 namespace {
 
 TEST(VoxelAgreement, HandComputedCase) {
-  // A: (0,0,0) (1,0,0) (5,5,5) (9,0,0) and a duplicate; B: (0,0,0) (1,0,0) (6,6,6) (20,0,0) (21,0,0).
+  // A: (0,0,0) (1,0,0) (5,5,5) (9,0,0) and a duplicate; B: (0,0,0) (1,0,0) (6,6,6) (20,0,0)
+  // (21,0,0).
   const std::vector<VoxelIndex> a = {{0, 0, 0}, {1, 0, 0}, {5, 5, 5}, {9, 0, 0}, {1, 0, 0}};
   const std::vector<VoxelIndex> b = {{0, 0, 0}, {1, 0, 0}, {6, 6, 6}, {20, 0, 0}, {21, 0, 0}};
   const VoxelAgreement r = compareVoxels(a, b);
@@ -68,8 +69,8 @@ TEST(VoxelAgreement, MatchesABruteForceOnRandomSets) {
     EXPECT_EQ(r.intersection, inter);
     EXPECT_EQ(r.matched_a_1, ma);
     EXPECT_EQ(r.matched_b_1, mb);
-    EXPECT_DOUBLE_EQ(r.iou, static_cast<double>(inter) /
-                                static_cast<double>(sa.size() + sb.size() - inter));
+    EXPECT_DOUBLE_EQ(
+        r.iou, static_cast<double>(inter) / static_cast<double>(sa.size() + sb.size() - inter));
   }
 }
 

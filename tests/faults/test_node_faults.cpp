@@ -1,7 +1,7 @@
 // Faults at the mapping node's inputs and outputs, in process, over DDS on loopback (domains
-// 200..205, 208, 209): the sensor stream stops and resumes; the pose stream lags, jumps and goes backwards;
-// clouds arrive faster than the engine maps; a subscriber leaves and returns. Each test asserts
-// the behaviour docs/soak-and-faults.md documents. The vehicle is a sparse simulated LiDAR
+// 200..205, 208, 209): the sensor stream stops and resumes; the pose stream lags, jumps and goes
+// backwards; clouds arrive faster than the engine maps; a subscriber leaves and returns. Each test
+// asserts the behaviour docs/soak-and-faults.md documents. The vehicle is a sparse simulated LiDAR
 // (the sensor frame is the body frame) in two rooms 40 m apart.
 #include "mlmap/dds/transport/entities.h"
 #include "mlmap/dds/node/mapping_node.h"
@@ -91,17 +91,18 @@ class Vehicle {
         }()),
         sensor_frame_(config.dds.sensor_frame) {
     fdds::Publisher* publisher = participant_->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
-    cloud_ = createWriter<sensor_msgs::PointCloud2_PubSubType>(publisher, "rt/" + config.dds.topics.cloud,
-                                                               reliableWriterQos(50));
-    pose_ = createWriter<geometry_msgs::PoseStamped_PubSubType>(publisher, "rt/" + config.dds.topics.pose,
-                                                                reliableWriterQos(200));
+    cloud_ = createWriter<sensor_msgs::PointCloud2_PubSubType>(
+        publisher, "rt/" + config.dds.topics.cloud, reliableWriterQos(50));
+    pose_ = createWriter<geometry_msgs::PoseStamped_PubSubType>(
+        publisher, "rt/" + config.dds.topics.pose, reliableWriterQos(200));
   }
 
   /// Waits until both writers and the node's readers matched each other, on both sides: the
   /// node's BEST_EFFORT readers drop what comes before they learnt of the writers.
   bool matched(const MappingNode& node) const {
     return waitFor([&] {
-      return writerMatched(cloud_) && writerMatched(pose_) && node.counters().publishers_matched == 2;
+      return writerMatched(cloud_) && writerMatched(pose_) &&
+             node.counters().publishers_matched == 2;
     });
   }
 
@@ -164,8 +165,9 @@ void expectEveryCloudAccountedFor(const MappingNode& node) {
   auto balanced = [&] {
     const NodeCounters c = node.counters();
     const EngineStats e = node.engineStats();
-    return c.clouds_received == c.frames_submitted + c.frames_engine_rejected + c.frames_without_pose +
-                                    c.frames_future + c.frames_across_pose_jump &&
+    return c.clouds_received == c.frames_submitted + c.frames_engine_rejected +
+                                    c.frames_without_pose + c.frames_future +
+                                    c.frames_across_pose_jump &&
            c.frames_submitted == e.frames_mapped + e.frames_dropped;
   };
   EXPECT_TRUE(waitFor(balanced)) << "received " << node.counters().clouds_received << ", submitted "
@@ -290,7 +292,8 @@ TEST(NodeFaults, PoseJumpIsMappedAtTheNewPoseAndNothingIsSmearedBetween) {
   }
   EXPECT_GT(room_a, 100u) << "room A before the jump";
   EXPECT_GT(room_b, 100u) << "room B after the jump";
-  EXPECT_EQ(between, 0u) << "voxels were mapped between the rooms: a frame was smeared across the jump";
+  EXPECT_EQ(between, 0u)
+      << "voxels were mapped between the rooms: a frame was smeared across the jump";
   std::filesystem::remove_all(dir);
 }
 
@@ -317,7 +320,8 @@ TEST(NodeFaults, PoseJumpLimitsComeFromTheConfiguration) {
 // said plainly; an existing map that was not loaded is never replaced without map_file.overwrite;
 // temporary files of a save killed before its rename are removed at start.
 TEST(NodeFaults, MapFileTimeBaseOverwriteAndLeftovers) {
-  const std::string dir = ::testing::TempDir() + "mlmap_fault_map_file_" + std::to_string(::getpid());
+  const std::string dir =
+      ::testing::TempDir() + "mlmap_fault_map_file_" + std::to_string(::getpid());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   NodeConfig config = lidarNodeConfig(209);
@@ -413,7 +417,9 @@ TEST(NodeFaults, CloudsFasterThanTheEngineAreDroppedOldestFirstAndNeverQueueUp) 
   // hundreds here.
   const std::uint64_t max_in_flight = 3 + 1 + config.map.pipeline.input_queue_capacity + 1 +
                                       config.map.pipeline.batch_queue_capacity + 1;
-  auto index_of = [&](double stamp_s) { return static_cast<int>(std::lround(stamp_s / kPeriod_s)); };
+  auto index_of = [&](double stamp_s) {
+    return static_cast<int>(std::lround(stamp_s / kPeriod_s));
+  };
   std::vector<int> backlog;  // frames sent since the one the latest snapshot shows (printed only)
   for (int i = 1; i <= kClouds; ++i) {
     const double t = i * kPeriod_s;
@@ -436,17 +442,19 @@ TEST(NodeFaults, CloudsFasterThanTheEngineAreDroppedOldestFirstAndNeverQueueUp) 
     return backlog.empty() ? 0 : *std::max_element(backlog.begin() + from, backlog.begin() + to);
   };
   const std::size_t q = backlog.size() / 4;
-  std::printf("sent %d clouds: %llu taken, %llu dropped at the hand-over, %llu in the engine's input "
-              "queue, %llu mapped (%llu after the sensor stopped, bound %llu); frames between the "
-              "newest sent and the newest mapped, worst of each quarter: %d %d %d %d\n",
-              kClouds, static_cast<unsigned long long>(c.clouds_received + c.frames_handover_dropped),
-              static_cast<unsigned long long>(c.frames_handover_dropped),
-              static_cast<unsigned long long>(e.frames_dropped),
-              static_cast<unsigned long long>(e.frames_mapped),
-              static_cast<unsigned long long>(e.frames_mapped - mapped_when_the_sensor_stopped),
-              static_cast<unsigned long long>(max_in_flight), worst(0, q), worst(q, 2 * q),
-              worst(2 * q, 3 * q), worst(3 * q, backlog.size()));
-  EXPECT_GT(c.frames_handover_dropped + e.frames_dropped, 0u) << "the engine kept up: no overload tested";
+  std::printf(
+      "sent %d clouds: %llu taken, %llu dropped at the hand-over, %llu in the engine's input "
+      "queue, %llu mapped (%llu after the sensor stopped, bound %llu); frames between the "
+      "newest sent and the newest mapped, worst of each quarter: %d %d %d %d\n",
+      kClouds, static_cast<unsigned long long>(c.clouds_received + c.frames_handover_dropped),
+      static_cast<unsigned long long>(c.frames_handover_dropped),
+      static_cast<unsigned long long>(e.frames_dropped),
+      static_cast<unsigned long long>(e.frames_mapped),
+      static_cast<unsigned long long>(e.frames_mapped - mapped_when_the_sensor_stopped),
+      static_cast<unsigned long long>(max_in_flight), worst(0, q), worst(q, 2 * q),
+      worst(2 * q, 3 * q), worst(3 * q, backlog.size()));
+  EXPECT_GT(c.frames_handover_dropped + e.frames_dropped, 0u)
+      << "the engine kept up: no overload tested";
   EXPECT_LE(e.frames_mapped - mapped_when_the_sensor_stopped, max_in_flight)
       << "a backlog was mapped after the sensor stopped: frames queued up instead of being dropped";
   EXPECT_LE(c.clouds_received + c.frames_handover_dropped, static_cast<std::uint64_t>(kClouds));
@@ -461,24 +469,24 @@ class GroundStation {
   explicit GroundStation(const NodeConfig& config)
       : participant_(createParticipant(localhostConfig(config.dds.domain_id), "fault_ground")) {
     fdds::Subscriber* subscriber = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
-    auto counting = [](std::atomic<int>* n) {
-      return [n](auto&&) { ++*n; };
-    };
-    local_ = std::make_unique<TakeListener<sensor_msgs::PointCloud2_>>(counting(&local_maps), [](auto&) {});
+    auto counting = [](std::atomic<int>* n) { return [n](auto&&) { ++*n; }; };
+    local_ = std::make_unique<TakeListener<sensor_msgs::PointCloud2_>>(counting(&local_maps),
+                                                                       [](auto&) {});
     global_ = std::make_unique<TakeListener<sensor_msgs::PointCloud2_>>(
         [this](sensor_msgs::PointCloud2_&& m) {
           global_points = static_cast<int>(m.width_() * m.height_());
           ++global_maps;
         },
         [](auto&) {});
-    grid_ = std::make_unique<TakeListener<nav_msgs::OccupancyGrid_>>(counting(&grids), [](auto&) {});
+    grid_ =
+        std::make_unique<TakeListener<nav_msgs::OccupancyGrid_>>(counting(&grids), [](auto&) {});
     const TopicNames& t = config.dds.topics;
-    local_reader_ = createReader<sensor_msgs::PointCloud2_PubSubType>(subscriber, "rt/" + t.local_map,
-                                                                      reliableReaderQos(), local_.get());
+    local_reader_ = createReader<sensor_msgs::PointCloud2_PubSubType>(
+        subscriber, "rt/" + t.local_map, reliableReaderQos(), local_.get());
     createReader<sensor_msgs::PointCloud2_PubSubType>(subscriber, "rt/" + t.global_map,
                                                       reliableReaderQos(true), global_.get());
-    createReader<nav_msgs::OccupancyGrid_PubSubType>(subscriber, "rt/" + t.grid, reliableReaderQos(true),
-                                                     grid_.get());
+    createReader<nav_msgs::OccupancyGrid_PubSubType>(subscriber, "rt/" + t.grid,
+                                                     reliableReaderQos(true), grid_.get());
   }
   ~GroundStation() { participant_.reset(); }  // readers before their listeners
 
@@ -527,7 +535,8 @@ TEST(NodeFaults, SubscriberThatLeavesAndReturnsGetsTheLayersAgainAndMappingNever
   ground.reset();  // the ground station leaves (its participant is gone)
   fly(30);         // mapping goes on without it: 8 m further, submaps retire
   ASSERT_GT(node.engineStats().global_voxels, 0u);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // the rate-limited global copy goes out
+  std::this_thread::sleep_for(
+      std::chrono::milliseconds(300));  // the rate-limited global copy goes out
 
   ground = std::make_unique<GroundStation>(config);  // it returns
   // The latched layers arrive with no new frame.
@@ -540,8 +549,8 @@ TEST(NodeFaults, SubscriberThatLeavesAndReturnsGetsTheLayersAgainAndMappingNever
   EXPECT_GT(ground->global_points, 0);
   EXPECT_TRUE(waitFor([&] {
     return ground->global_points == static_cast<int>(node.engineStats().global_voxels);
-  })) << ground->global_points << " global points received, "
-      << node.engineStats().global_voxels << " in the node";
+  })) << ground->global_points
+      << " global points received, " << node.engineStats().global_voxels << " in the node";
   EXPECT_EQ(ground->local_maps, 0) << "the local map is volatile: nothing before a new frame";
   ASSERT_TRUE(ground->matched());
   fly(5);
@@ -558,7 +567,8 @@ TEST(PoseBufferFaults, AStreamThatResumesAfterAPauseIsTakenBackAndABogusStampIsN
   // One bogus stamp far ahead, then the stream goes on: the bogus one is never used.
   EXPECT_EQ(buffer.add(50.0, bodyAt(9.0)), PoseBuffer::AddResult::kFuture);
   ASSERT_EQ(buffer.add(1.04, bodyAt(0.04)), PoseBuffer::AddResult::kAdded);
-  EXPECT_EQ(buffer.add(50.02, bodyAt(9.0)), PoseBuffer::AddResult::kFuture) << "the bogus pose was kept";
+  EXPECT_EQ(buffer.add(50.02, bodyAt(9.0)), PoseBuffer::AddResult::kFuture)
+      << "the bogus pose was kept";
   ASSERT_EQ(buffer.add(1.06, bodyAt(0.06)), PoseBuffer::AddResult::kAdded);
   // A 5 s pause: the first pose after it is held, the second confirms it, both are used.
   EXPECT_EQ(buffer.add(6.06, bodyAt(5.0)), PoseBuffer::AddResult::kFuture);
@@ -566,7 +576,8 @@ TEST(PoseBufferFaults, AStreamThatResumesAfterAPauseIsTakenBackAndABogusStampIsN
   ASSERT_EQ(buffer.add(6.08, bodyAt(5.02)), PoseBuffer::AddResult::kAdded);
   ASSERT_EQ(buffer.lookup(6.07, &T), PoseBuffer::LookupResult::kFound);
   EXPECT_NEAR(T.translation().x(), 5.01, 1e-12);
-  EXPECT_EQ(buffer.lookup(1.05, &T), PoseBuffer::LookupResult::kNoPose) << "nothing spans the pause";
+  EXPECT_EQ(buffer.lookup(1.05, &T), PoseBuffer::LookupResult::kNoPose)
+      << "nothing spans the pause";
   EXPECT_EQ(buffer.oldestStamp(), 6.06);
   EXPECT_EQ(buffer.counters().restarts, 1u);
   EXPECT_EQ(buffer.counters().rejected_future, 3u);

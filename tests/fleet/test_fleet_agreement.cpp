@@ -29,24 +29,25 @@ struct Agreement {
   double precision = 0.0;      ///< merged voxels touching a solid of the room
   double recall = 0.0;         ///< voxels holding a LiDAR return that the merged map holds
   double f1 = 0.0;
-  double single_f1 = 0.0;      ///< the one engine's, against the room
+  double single_f1 = 0.0;  ///< the one engine's, against the room
   std::size_t merged = 0;
   std::size_t single = 0;
-  std::size_t only_merged = 0;  ///< voxels the merged map holds and the one engine does not
-  std::size_t only_single = 0;  ///< and the other way round
+  std::size_t only_merged = 0;    ///< voxels the merged map holds and the one engine does not
+  std::size_t only_single = 0;    ///< and the other way round
   std::size_t bytes[2] = {0, 0};  ///< each vehicle's serialized voxel payloads
 };
 
 /// How the second vehicle takes part.
 enum class SecondVehicle {
-  kSendsOwnEvidence,     ///< takes the first one's submaps as priors, sends its own evidence
-  kSendsWholeMap,        ///< takes them as priors, sends its map as it holds it (no free evidence)
-  kTakesNoPriors,        ///< maps alone (only occupied voxels travel)
+  kSendsOwnEvidence,  ///< takes the first one's submaps as priors, sends its own evidence
+  kSendsWholeMap,     ///< takes them as priors, sends its map as it holds it (no free evidence)
+  kTakesNoPriors,     ///< maps alone (only occupied voxels travel)
 };
 
 /// A vehicle: its engine and its share, as mlmap_node's fleet output runs them.
 struct Vehicle {
-  explicit Vehicle(const MapConfig& config) : engine(config), share(config.local_map.submap_cells()) {}
+  explicit Vehicle(const MapConfig& config)
+      : engine(config), share(config.local_map.submap_cells()) {}
   /// One round of sharing into `fleet` as `name` (through the wire form); every update also
   /// goes to `receiver` as priors when not null. Returns the payload bytes.
   std::size_t shareRound(const std::string& name, bool own_evidence, FleetMap* fleet,
@@ -62,10 +63,11 @@ struct Vehicle {
       const SubmapPayload p = encodeSubmapVoxels(u.records);
       bytes += p.data.size();
       std::vector<VoxelRecord> records;
-      EXPECT_EQ(decodeSubmapVoxels(p.voxel_count, static_cast<std::uint8_t>(p.encoding), p.raw_size,
-                                   p.data.data(), p.data.size(),
-                                   static_cast<std::uint64_t>(engine.config().local_map.submap_cells().prod()),
-                                   &records),
+      EXPECT_EQ(decodeSubmapVoxels(
+                    p.voxel_count, static_cast<std::uint8_t>(p.encoding), p.raw_size, p.data.data(),
+                    p.data.size(),
+                    static_cast<std::uint64_t>(engine.config().local_map.submap_cells().prod()),
+                    &records),
                 SubmapDecodeError::kNone);
       if (receiver != nullptr) receiver->addPrior(u.index, records);
       EXPECT_EQ(fleet->apply(name, u.index, ++sequence, std::move(records)), SubmapApply::kApplied);
@@ -132,11 +134,14 @@ Agreement flyTwoHalves(const MapConfig& config, const std::vector<PointCloudFram
   auto score = [&](const std::set<Key3>& voxels, double* precision, double* recall) {
     std::size_t right = 0;
     for (const auto& [x, y, z] : voxels) {
-      right += test_support::touchesRoomSolid(world, VoxelIndex(x, y, z), r, map_from_simulator_m) ? 1 : 0;
+      right += test_support::touchesRoomSolid(world, VoxelIndex(x, y, z), r, map_from_simulator_m)
+                   ? 1
+                   : 0;
     }
     std::size_t found = 0;
     for (const Key3& k : seen) found += voxels.count(k);
-    *precision = voxels.empty() ? 0.0 : static_cast<double>(right) / static_cast<double>(voxels.size());
+    *precision =
+        voxels.empty() ? 0.0 : static_cast<double>(right) / static_cast<double>(voxels.size());
     *recall = seen.empty() ? 0.0 : static_cast<double>(found) / static_cast<double>(seen.size());
     return *precision + *recall > 0.0 ? 2.0 * *precision * *recall / (*precision + *recall) : 0.0;
   };
@@ -152,12 +157,12 @@ Agreement flyTwoHalves(const MapConfig& config, const std::vector<PointCloudFram
 }
 
 void print(const char* what, double resolution_m, const Agreement& a) {
-  std::printf("%.1f m, %s: IoU vs one engine %.4f (%zu vs %zu voxels, %zu only merged, %zu only "
-              "in the engine), against the room: "
-              "precision %.4f recall %.4f F1 %.4f (one engine's F1 %.4f); bytes %zu + %zu\n",
-              resolution_m, what, a.iou_vs_single, a.merged, a.single, a.only_merged,
-              a.only_single, a.precision, a.recall, a.f1,
-              a.single_f1, a.bytes[0], a.bytes[1]);
+  std::printf(
+      "%.1f m, %s: IoU vs one engine %.4f (%zu vs %zu voxels, %zu only merged, %zu only "
+      "in the engine), against the room: "
+      "precision %.4f recall %.4f F1 %.4f (one engine's F1 %.4f); bytes %zu + %zu\n",
+      resolution_m, what, a.iou_vs_single, a.merged, a.single, a.only_merged, a.only_single,
+      a.precision, a.recall, a.f1, a.single_f1, a.bytes[0], a.bytes[1]);
 }
 
 TEST(FleetAgreement, OwnEvidenceIsTheChangeToPriorsAndFreeEvidenceCancelsTheClaim) {

@@ -29,12 +29,13 @@ struct Reference {
     slot = {seq, records};
   }
   /// world voxel -> (clamped sum, vehicle bits), occupied only.
-  std::map<Key3, std::pair<LogOddsQ, std::uint64_t>> fused(
-      const std::vector<std::string>& order, const Eigen::Vector3i& cells,
-      const LogOddsModel& model) const {
+  std::map<Key3, std::pair<LogOddsQ, std::uint64_t>> fused(const std::vector<std::string>& order,
+                                                           const Eigen::Vector3i& cells,
+                                                           const LogOddsModel& model) const {
     std::map<Key3, std::pair<int, std::uint64_t>> sums;
     for (const auto& [key, value] : latest) {
-      const int bit = static_cast<int>(std::find(order.begin(), order.end(), key.first) - order.begin());
+      const int bit =
+          static_cast<int>(std::find(order.begin(), order.end(), key.first) - order.begin());
       const auto& [mx, my, mz] = key.second;
       for (const VoxelRecord& r : value.second) {
         const int o = static_cast<int>(r.offset);
@@ -47,7 +48,8 @@ struct Reference {
     }
     std::map<Key3, std::pair<LogOddsQ, std::uint64_t>> out;
     for (const auto& [g, s] : sums) {
-      const auto v = static_cast<LogOddsQ>(std::clamp<int>(s.first, model.clampMin(), model.clampMax()));
+      const auto v =
+          static_cast<LogOddsQ>(std::clamp<int>(s.first, model.clampMin(), model.clampMax()));
       if (model.isOccupied(v)) out[g] = {v, s.second};
     }
     return out;
@@ -84,7 +86,8 @@ TEST(FleetMap, FusesLikeTheSlowReferenceOnRandomStreams) {
       for (const auto& [o, l] : voxels) records.push_back({o, l});
       if (std::find(order.begin(), order.end(), names[v]) == order.end()) order.push_back(names[v]);
       reference.apply(names[v], m, sent_seq, records);
-      const SubmapApply applied = map.apply(names[v], m, sent_seq, std::vector<VoxelRecord>(records));
+      const SubmapApply applied =
+          map.apply(names[v], m, sent_seq, std::vector<VoxelRecord>(records));
       EXPECT_NE(applied, SubmapApply::kTooManyVehicles);
     }
     const auto expected = reference.fused(order, cells, map.model());

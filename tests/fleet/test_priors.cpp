@@ -12,7 +12,8 @@ namespace {
 
 /// Share of `a`'s occupied voxels inside `b`'s window that `b`'s snapshot holds occupied, and
 /// how many there are.
-std::pair<double, std::size_t> heldInWindow(const test_support::VoxelValues& a, const MapEngine& b) {
+std::pair<double, std::size_t> heldInWindow(const test_support::VoxelValues& a,
+                                            const MapEngine& b) {
   const std::shared_ptr<const MapSnapshot> snap = b.snapshot();
   std::size_t inside = 0, held = 0;
   for (const auto& [g, l] : a) {
@@ -34,7 +35,8 @@ TEST(FleetPriors, AVehicleEnteringAnAreaMappedOnlyByAnotherHasItsObstaclesBefore
   SubmapShare share(config.local_map.submap_cells());
   MapEngine b(config);
   std::size_t sent = 0;
-  for (SubmapUpdate& u : share.changes(collectGlobalDelta(a.globalMap(), 0), &a.snapshot()->window())) {
+  for (SubmapUpdate& u :
+       share.changes(collectGlobalDelta(a.globalMap(), 0), &a.snapshot()->window())) {
     sent += u.records.size();
     b.addPrior(u.index, std::move(u.records));
   }
@@ -88,9 +90,10 @@ TEST(FleetPriors, AVehicleEnteringAnAreaMappedOnlyByAnotherHasItsObstaclesBefore
     std::printf("after 5 own scans: %zu of %zu prior voxels in the window still unconfirmed\n",
                 still, inside);
   }
-  std::printf("prior voxels: %zu sent, in b's window on entry %.4f of %zu (east), %.4f of %zu "
-              "(north-west)\n",
-              sent, east, east_count, west, west_count);
+  std::printf(
+      "prior voxels: %zu sent, in b's window on entry %.4f of %zu (east), %.4f of %zu "
+      "(north-west)\n",
+      sent, east, east_count, west, west_count);
 }
 
 TEST(FleetPriors, OwnEvidenceWinsAndPriorsForTheWindowWaitUntilItLeaves) {

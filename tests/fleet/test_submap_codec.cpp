@@ -105,7 +105,8 @@ TEST(SubmapCodec, RefusesDecompressionBombsAndFramesWithoutTheirSize) {
   std::vector<std::uint8_t> streamed(ZSTD_compressBound(raw.size()) + 64);
   ZSTD_CCtx* cctx = ZSTD_createCCtx();
   ZSTD_CCtx_setParameter(cctx, ZSTD_c_contentSizeFlag, 0);
-  const std::size_t n = ZSTD_compress2(cctx, streamed.data(), streamed.size(), raw.data(), raw.size());
+  const std::size_t n =
+      ZSTD_compress2(cctx, streamed.data(), streamed.size(), raw.data(), raw.size());
   ZSTD_freeCCtx(cctx);
   ASSERT_FALSE(ZSTD_isError(n));
   streamed.resize(n);

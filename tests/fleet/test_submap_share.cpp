@@ -117,16 +117,16 @@ TEST(SubmapShare, AReceiverOfEveryUpdateHoldsTheVehiclesWholeMapAndAHoverSendsNo
   EXPECT_EQ(receiver.content(), whole);
   EXPECT_GT(whole.size(), 2000u);
   EXPECT_GT(engine.stats().local.submaps_retired, 0u) << "the flight should leave submaps behind";
-  EXPECT_EQ(share.submapsHeld(), engine.globalMap().submapCount() +
-                                     [&] {  // the window's submaps holding occupied voxels
-                                       std::size_t n = 0;
-                                       for (const auto& s : windowSubmaps(
-                                                engine.snapshot()->window(),
-                                                config.local_map.submap_cells())) {
-                                         n += s.second.empty() ? 0 : 1;
-                                       }
-                                       return n;
-                                     }());
+  EXPECT_EQ(
+      share.submapsHeld(),
+      engine.globalMap().submapCount() + [&] {  // the window's submaps holding occupied voxels
+        std::size_t n = 0;
+        for (const auto& s :
+             windowSubmaps(engine.snapshot()->window(), config.local_map.submap_cells())) {
+          n += s.second.empty() ? 0 : 1;
+        }
+        return n;
+      }());
 
   // Hovering at the last pose: once the repeated scans saturated, nothing changes.
   PointCloudFrame hover = frames.back();

@@ -34,8 +34,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   CameraInfo info;
   Image image;
   if (!mlmap::fuzz::deserializeAsNodeDoes<CameraInfoType>(data + 4, n, &info) ||
-      !mlmap::fuzz::deserializeAsNodeDoes<ImageType>(data + 4 + n, size - 4 - n,
-                                                                          &image)) {
+      !mlmap::fuzz::deserializeAsNodeDoes<ImageType>(data + 4 + n, size - 4 - n, &image)) {
     return 0;  // dropped and counted as malformed CDR
   }
   mlmap::DepthFrame frame;

@@ -66,8 +66,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     requireThat(p.allFinite() || p.array().isNaN().all(),
                 "decodePointCloud2: a point neither finite nor all NaN");
   }
-  const PointCloud2 again =
-      mlmap::dds::encodePointCloud2(points_S, nullptr, 0.0, "fuzz");
+  const PointCloud2 again = mlmap::dds::encodePointCloud2(points_S, nullptr, 0.0, "fuzz");
   std::vector<Eigen::Vector3f> decoded_again;
   requireThat(mlmap::dds::decodePointCloud2(again, &decoded_again).ok(),
               "decodePointCloud2 refuses what encodePointCloud2 wrote");

@@ -43,11 +43,11 @@ void decodeOne(const std::uint8_t* data, std::size_t size) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
   if (data[0] % 2 == 0) {
-    decodeOne<mlmap::dds::geometry_msgs::PoseStamped_PubSubType, mlmap::dds::geometry_msgs::PoseStamped_>(
-        data + 1, size - 1);
+    decodeOne<mlmap::dds::geometry_msgs::PoseStamped_PubSubType,
+              mlmap::dds::geometry_msgs::PoseStamped_>(data + 1, size - 1);
   } else {
-    decodeOne<mlmap::dds::nav_msgs::Odometry_PubSubType, mlmap::dds::nav_msgs::Odometry_>(
-        data + 1, size - 1);
+    decodeOne<mlmap::dds::nav_msgs::Odometry_PubSubType, mlmap::dds::nav_msgs::Odometry_>(data + 1,
+                                                                                          size - 1);
   }
   return 0;
 }

@@ -27,7 +27,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   requireThat(voxels > 0 && voxels <= mlmap::dds::kMaxSubmapVoxels, "decodeSubmapMessage: size");
   requireThat(decoded.records.size() == msg.voxel_count_(), "decodeSubmapMessage: voxel count");
   for (std::size_t i = 0; i < decoded.records.size(); ++i) {
-    requireThat(decoded.records[i].offset < voxels, "decodeSubmapMessage: offset beyond the submap");
+    requireThat(decoded.records[i].offset < voxels,
+                "decodeSubmapMessage: offset beyond the submap");
     requireThat(i == 0 || decoded.records[i - 1].offset < decoded.records[i].offset,
                 "decodeSubmapMessage: offsets not ascending");
   }

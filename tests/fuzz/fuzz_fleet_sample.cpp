@@ -44,8 +44,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     pos += 3;
     if (n > size - pos) break;
     ::mlmap_msgs::msg::dds_::Submap_ msg;
-    const bool decoded = mlmap::fuzz::deserializeAsNodeDoes<::mlmap_msgs::msg::dds_::Submap_PubSubType>(
-        data + pos, n, &msg);
+    const bool decoded =
+        mlmap::fuzz::deserializeAsNodeDoes<::mlmap_msgs::msg::dds_::Submap_PubSubType>(data + pos,
+                                                                                       n, &msg);
     pos += n;
     ++taken;
     if (!decoded) {
@@ -63,12 +64,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       requireThat(!r.why.empty(), "FleetIntake: a refusal without a reason");
     }
     const mlmap::fleet::FleetMap& map = intake.map();
-    requireThat(map.memoryBytes() <= trust.fleet_budget_bytes, "FleetIntake: over the fleet's budget");
+    requireThat(map.memoryBytes() <= trust.fleet_budget_bytes,
+                "FleetIntake: over the fleet's budget");
     requireThat(map.vehicles().size() <= mlmap::fleet::FleetMap::kMaxVehicles,
                 "FleetIntake: more vehicles than places");
     std::size_t vehicle_bytes = 0;
     for (const mlmap::fleet::FleetVehicle& v : map.vehicles()) {
-      requireThat(v.memory_bytes <= trust.vehicle_budget_bytes, "FleetIntake: over a vehicle's budget");
+      requireThat(v.memory_bytes <= trust.vehicle_budget_bytes,
+                  "FleetIntake: over a vehicle's budget");
       requireThat(!closed || v.name == "uav1" || v.name == "uav2",
                   "FleetIntake: a closed fleet holds a vehicle not listed");
       requireThat(closed || applied_by_name.count(v.name) > 0,

@@ -1,7 +1,7 @@
 /// @file
-/// Fuzz target: the text files of an RGB-D frame directory (datasets::FrameDirectory): the intrinsics
-/// file (datasets::parseIntrinsicsK) and a pose file (datasets::parsePoseMatrix), both on the same text.
-/// Errors are std::runtime_error. (The depth PNGs are OpenCV's to decode.)
+/// Fuzz target: the text files of an RGB-D frame directory (datasets::FrameDirectory): the
+/// intrinsics file (datasets::parseIntrinsicsK) and a pose file (datasets::parsePoseMatrix), both
+/// on the same text. Errors are std::runtime_error. (The depth PNGs are OpenCV's to decode.)
 
 #include "fuzz_support.h"
 

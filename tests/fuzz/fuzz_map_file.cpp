@@ -46,7 +46,8 @@ std::string withMatchingChecks(std::string b) {
   mlmap::LocalMapConfig local_map;
   mlmap::LogOddsConfig lo;
   local_map.resolution_m = load<double>(b, kResolutionAt);
-  for (int a = 0; a < 3; ++a) local_map.size_cells[a] = load<std::int32_t>(b, kResolutionAt + 8 + 4 * a);
+  for (int a = 0; a < 3; ++a)
+    local_map.size_cells[a] = load<std::int32_t>(b, kResolutionAt + 8 + 4 * a);
   std::size_t at = kResolutionAt + 20;
   for (double* v : {&lo.hit, &lo.miss, &lo.clamp_min, &lo.clamp_max, &lo.occupied_threshold}) {
     *v = load<double>(b, at);
@@ -57,7 +58,8 @@ std::string withMatchingChecks(std::string b) {
   const std::size_t room = b.size() - kHeaderBytes - kTrailerBytes - 4;  // global CRC at least
   if (local_bytes >= 4 && local_bytes <= room) {
     const std::size_t local_crc_at = kHeaderBytes + local_bytes - 4;
-    store<std::uint32_t>(&b, local_crc_at, mlmap::io::crc32(b.data() + kHeaderBytes, local_bytes - 4));
+    store<std::uint32_t>(&b, local_crc_at,
+                         mlmap::io::crc32(b.data() + kHeaderBytes, local_bytes - 4));
     const std::size_t global_start = kHeaderBytes + local_bytes;
     const std::size_t global_crc_at = b.size() - kTrailerBytes - 4;
     store<std::uint32_t>(&b, global_crc_at,
@@ -75,8 +77,10 @@ void decodeOne(const std::string& bytes) {
     return;  // the documented answer to bad input
   }
   // A file the loader accepts already matches its checks: if the offsets above drifted from
-  // src/map_io/map_file.cpp, patching would change it (and the fuzzer would stop passing the header).
-  requireThat(withMatchingChecks(bytes) == bytes, "withMatchingChecks() is out of date with src/map_io/map_file.cpp");
+  // src/map_io/map_file.cpp, patching would change it (and the fuzzer would stop passing the
+  // header).
+  requireThat(withMatchingChecks(bytes) == bytes,
+              "withMatchingChecks() is out of date with src/map_io/map_file.cpp");
   const std::string encoded = mlmap::io::encodeMapFile(state);
   mlmap::MapState again = mlmap::io::decodeMapFile(encoded, "encoded.mlmap");
   // The pose is stored as a quaternion and held as a rotation matrix: matrix -> quaternion ->
@@ -84,7 +88,8 @@ void decodeOne(const std::string& bytes) {
   // everything else bit for bit.
   requireThat(again.T_W_B.isApprox(state.T_W_B, 1e-12), "decode(encode(map)) moved the body pose");
   again.T_W_B = state.T_W_B;
-  requireThat(mlmap::io::encodeMapFile(again) == encoded, "decode(encode(map)) is not the same map");
+  requireThat(mlmap::io::encodeMapFile(again) == encoded,
+              "decode(encode(map)) is not the same map");
   (void)mlmap::io::occupiedVoxels(state);
   try {
     (void)mlmap::io::projectMap(state, mlmap::ProjectedGridConfig{});  // the band around the body

@@ -8,7 +8,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {
-    mlmap::fuzz::checkPointCloudFile(mlmap::datasets::parsePcd(mlmap::fuzz::asString(data, size), "fuzz.pcd"));
+    mlmap::fuzz::checkPointCloudFile(
+        mlmap::datasets::parsePcd(mlmap::fuzz::asString(data, size), "fuzz.pcd"));
   } catch (const std::runtime_error&) {
     // the documented answer to bad input
   }

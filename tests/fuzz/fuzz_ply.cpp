@@ -8,7 +8,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {
-    mlmap::fuzz::checkPointCloudFile(mlmap::datasets::parsePly(mlmap::fuzz::asString(data, size), "fuzz.ply"));
+    mlmap::fuzz::checkPointCloudFile(
+        mlmap::datasets::parsePly(mlmap::fuzz::asString(data, size), "fuzz.ply"));
   } catch (const std::runtime_error&) {
     // the documented answer to bad input
   }

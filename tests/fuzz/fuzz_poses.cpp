@@ -1,9 +1,10 @@
 /// @file
 /// Fuzz target: the trajectory readers of the dataset replay, on the same text: the format
-/// detection + reader of readPoseFile(), both parsers (datasets::parseTumPoses, datasets::parseCsvPoses;
-/// std::runtime_error), the `--extrinsic` parser (datasets::parseTransformXyzQuat;
-/// std::invalid_argument) and the time stamp in a cloud file name (datasets::stampFromFileName, on each
-/// line). Accepted poses must be rigid with strictly increasing stamps.
+/// detection + reader of readPoseFile(), both parsers (datasets::parseTumPoses,
+/// datasets::parseCsvPoses; std::runtime_error), the `--extrinsic` parser
+/// (datasets::parseTransformXyzQuat; std::invalid_argument) and the time stamp in a cloud file name
+/// (datasets::stampFromFileName, on each line). Accepted poses must be rigid with strictly
+/// increasing stamps.
 
 #include "fuzz_support.h"
 

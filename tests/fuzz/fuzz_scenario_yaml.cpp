@@ -1,6 +1,6 @@
 /// @file
-/// Fuzz target: a simulation scenario (world, flight, camera) in YAML (datasets::parseScenarioYaml).
-/// Errors are std::runtime_error.
+/// Fuzz target: a simulation scenario (world, flight, camera) in YAML
+/// (datasets::parseScenarioYaml). Errors are std::runtime_error.
 
 #include "fuzz_support.h"
 

@@ -21,13 +21,13 @@ namespace {
 
 using mlmap::fuzz::requireThat;
 
-const std::array<std::string, 8> kFrames = {"map",   "base_link", "odom",  "base_footprint",
-                                            "f4",    "f5",        "f6",    "camera"};
+const std::array<std::string, 8> kFrames = {"map", "base_link", "odom", "base_footprint",
+                                            "f4",  "f5",        "f6",   "camera"};
 
 mlmap::Transform transformOf(std::uint8_t value) {
   mlmap::Transform T = mlmap::Transform::Identity();
-  T.linear() =
-      Eigen::AngleAxisd(0.1 * value, Eigen::Vector3d(1.0, 0.5, 0.25).normalized()).toRotationMatrix();
+  T.linear() = Eigen::AngleAxisd(0.1 * value, Eigen::Vector3d(1.0, 0.5, 0.25).normalized())
+                   .toRotationMatrix();
   T.translation() = Eigen::Vector3d(value % 7 - 3.0, value % 5 - 2.0, value % 3 - 1.0);
   return T;
 }

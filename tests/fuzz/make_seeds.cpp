@@ -2,7 +2,8 @@
 /// Writes the binary seeds of the fuzz corpus (tests/fuzz/corpus/): CDR samples serialised by the
 /// generated types from real messages, and map files from a small map state. Run once when the
 /// seeds need to change; the output is committed (docs/fuzzing.md):
-///   cmake --build build-test --target mlmap_fuzz_make_seeds && build-test/tests/fuzz/mlmap_fuzz_make_seeds tests/fuzz/corpus
+///   cmake --build build-test --target mlmap_fuzz_make_seeds &&
+///   build-test/tests/fuzz/mlmap_fuzz_make_seeds tests/fuzz/corpus
 
 #include "../support/small_map_state.h"
 #include "mlmap/dds/wire/ros_conversions.h"
@@ -70,15 +71,17 @@ std::string u32le(std::uint32_t v) {
 }
 
 void pointClouds() {
-  const std::vector<Eigen::Vector3f> points = {{1.0f, 2.0f, 3.0f}, {-0.5f, 0.25f, 4.0f},
-                                               {0.0f, 0.0f, 0.1f}, {10.0f, -3.0f, 2.5f}};
-  write("fuzz_cdr_point_cloud2", "xyz_float32.cdr", cdr(encodePointCloud2(points, nullptr, 12.5, "camera")));
+  const std::vector<Eigen::Vector3f> points = {
+      {1.0f, 2.0f, 3.0f}, {-0.5f, 0.25f, 4.0f}, {0.0f, 0.0f, 0.1f}, {10.0f, -3.0f, 2.5f}};
+  write("fuzz_cdr_point_cloud2", "xyz_float32.cdr",
+        cdr(encodePointCloud2(points, nullptr, 12.5, "camera")));
   const std::vector<float> intensity = {0.1f, 0.2f, 0.3f, 0.4f};
   write("fuzz_cdr_point_cloud2", "xyzi_float32_big_endian_cdr.cdr",
         cdr(encodePointCloud2(points, &intensity, 13.0, "lidar"), true));
   std::vector<Eigen::Vector3f> with_nan = points;
   with_nan[1].y() = std::numeric_limits<float>::quiet_NaN();
-  write("fuzz_cdr_point_cloud2", "nan_point.cdr", cdr(encodePointCloud2(with_nan, nullptr, 14.0, "camera")));
+  write("fuzz_cdr_point_cloud2", "nan_point.cdr",
+        cdr(encodePointCloud2(with_nan, nullptr, 14.0, "camera")));
   write("fuzz_cdr_point_cloud2", "empty.cdr", cdr(encodePointCloud2({}, nullptr, 15.0, "camera")));
 
   // Organised 2 x 2, float64 z before x and y, big-endian data, rows padded to 40 bytes.
@@ -102,7 +105,8 @@ void pointClouds() {
   for (std::size_t i = 0; i < 4; ++i) {
     std::uint8_t* p = data.data() + (i / 2) * 56 + (i % 2) * 24;
     auto putBe = [](std::uint8_t* at, const void* value, std::size_t n) {
-      for (std::size_t b = 0; b < n; ++b) at[b] = static_cast<const std::uint8_t*>(value)[n - 1 - b];
+      for (std::size_t b = 0; b < n; ++b)
+        at[b] = static_cast<const std::uint8_t*>(value)[n - 1 - b];
     };
     const double z = points[i].z(), x = points[i].x();
     const float y = points[i].y();
@@ -141,9 +145,11 @@ void depthImages() {
   }
   image.data_(mm);
   const std::string info = cdr(cameraInfo(4, 3));
-  write("fuzz_cdr_depth_image", "16uc1.bin", u32le(static_cast<std::uint32_t>(info.size())) + info + cdr(image));
+  write("fuzz_cdr_depth_image", "16uc1.bin",
+        u32le(static_cast<std::uint32_t>(info.size())) + info + cdr(image));
   image.encoding_("mono16");
-  write("fuzz_cdr_depth_image", "mono16.bin", u32le(static_cast<std::uint32_t>(info.size())) + info + cdr(image));
+  write("fuzz_cdr_depth_image", "mono16.bin",
+        u32le(static_cast<std::uint32_t>(info.size())) + info + cdr(image));
 
   // 32FC1 metres, 3 x 2, rows padded to 16 bytes, big-endian pixels, a NaN.
   image.width_(3);
@@ -153,7 +159,8 @@ void depthImages() {
   image.step_(16);
   std::vector<std::uint8_t> m(32, 0);
   for (std::size_t i = 0; i < 6; ++i) {
-    const float v = i == 4 ? std::numeric_limits<float>::quiet_NaN() : 0.5f + 0.25f * static_cast<float>(i);
+    const float v =
+        i == 4 ? std::numeric_limits<float>::quiet_NaN() : 0.5f + 0.25f * static_cast<float>(i);
     std::uint32_t bits;
     std::memcpy(&bits, &v, 4);
     bits = __builtin_bswap32(bits);
@@ -220,7 +227,8 @@ void fleetSamples() {
                                    fleetRecord(0, sample(empty, "uav1", 9, grid)) +
                                    fleetRecord(2, sample(wall, "uav1", 3, grid));  // restart
   write("fuzz_fleet_sample", "open_two_vehicles_restart.bin", std::string(1, '\0') + two_vehicles);
-  write("fuzz_fleet_sample", "closed_two_vehicles_restart.bin", std::string(1, '\1') + two_vehicles);
+  write("fuzz_fleet_sample", "closed_two_vehicles_restart.bin",
+        std::string(1, '\1') + two_vehicles);
   const std::string attacks =
       fleetRecord(3, sample(empty, "stranger", 1, {0.123, {16, 16, 6}})) +
       fleetRecord(3, sample(empty, "ghost", 1, grid)) +
@@ -244,7 +252,8 @@ void countedSequences() {
   tf.transforms_()[1].transform_().translation_().x_(2.5);
   tf.transforms_()[1].transform_().rotation_().z_(1.0);
   write("fuzz_cdr_tf_message", "two_transforms.bin", std::string(1, '\0') + cdr(tf));
-  write("fuzz_cdr_tf_message", "two_transforms_big_endian.bin", std::string(1, '\2') + cdr(tf, true));
+  write("fuzz_cdr_tf_message", "two_transforms_big_endian.bin",
+        std::string(1, '\2') + cdr(tf, true));
   ::rcl_interfaces::srv::dds_::SetParameters_Request_ request;
   request.parameters_().resize(3);
   request.parameters_()[0].name_("local_map.resolution_m");

@@ -102,9 +102,10 @@ class Qos {
 dds_entity_t createParticipant(int domain_id) {
   const char* uri = std::getenv("CYCLONEDDS_URI");
   if (uri == nullptr || *uri == '\0') {
-    throw std::runtime_error("CYCLONEDDS_URI is not set; set it to a loopback configuration, e.g. "
-                             "file://<mlmap>/config/dds/cyclone_loopback.xml (the peer does not "
-                             "use Cyclone's default multicast discovery on the real network)");
+    throw std::runtime_error(
+        "CYCLONEDDS_URI is not set; set it to a loopback configuration, e.g. "
+        "file://<mlmap>/config/dds/cyclone_loopback.xml (the peer does not "
+        "use Cyclone's default multicast discovery on the real network)");
   }
   return check(dds_create_participant(static_cast<dds_domainid_t>(domain_id), nullptr, nullptr),
                "cannot create a Cyclone DDS participant on domain " + std::to_string(domain_id));
@@ -189,7 +190,9 @@ class RecordingReader {
   /// Writers the reader has matched now.
   [[nodiscard]] std::uint32_t matched() const {
     dds_subscription_matched_status_t status;
-    return dds_get_subscription_matched_status(reader_, &status) == DDS_RETCODE_OK ? status.current_count : 0;
+    return dds_get_subscription_matched_status(reader_, &status) == DDS_RETCODE_OK
+               ? status.current_count
+               : 0;
   }
 
   /// Takes and records every available sample.
@@ -217,7 +220,8 @@ class RecordingReader {
     std::uint8_t header[4] = {};
     if (bytes < sizeof(header)) {
       ++rejected_;
-      spdlog::error("{}: a sample of {} bytes, shorter than its encapsulation header", kind_, bytes);
+      spdlog::error("{}: a sample of {} bytes, shorter than its encapsulation header", kind_,
+                    bytes);
       return;
     }
     ddsi_serdata_to_ser(serdata, 0, sizeof(header), header);
@@ -235,8 +239,9 @@ class RecordingReader {
       return;
     }
     const interop::SampleRecord r = record(msg);
-    std::string path = out_dir_ + "/" +
-                       interop::recordFileName(kind_, msg.header_.stamp_.sec_, msg.header_.stamp_.nanosec_);
+    std::string path =
+        out_dir_ + "/" +
+        interop::recordFileName(kind_, msg.header_.stamp_.sec_, msg.header_.stamp_.nanosec_);
     for (int copy = 1; std::filesystem::exists(path); ++copy) {
       path += ".dup" + std::to_string(copy);  // the same stamp twice: keep both, the check fails
     }
@@ -280,8 +285,9 @@ std::string recordKind(const std::string& kind, const std::string& topic, std::s
 template <typename Msg>
 class RecordingReaders {
  public:
-  RecordingReaders(dds_entity_t participant, const dds_topic_descriptor_t* type, const std::string& kind,
-                   const std::vector<std::string>& topics, const Qos& qos, const std::string& out_dir) {
+  RecordingReaders(dds_entity_t participant, const dds_topic_descriptor_t* type,
+                   const std::string& kind, const std::vector<std::string>& topics, const Qos& qos,
+                   const std::string& out_dir) {
     for (const std::string& topic : topics) {
       readers_.push_back(std::make_unique<RecordingReader<Msg>>(
           participant, type, recordKind(kind, topic, topics.size()), topic, qos, out_dir));
@@ -395,7 +401,8 @@ class OrganisedCloud {
   /// The message for `frame` at `stamp_s`; it points into this object (valid until the next call).
   const sensor_msgs_msg_dds__PointCloud2_& message(const DepthFrame& frame, double stamp_s) {
     const PinholeIntrinsics& k = frame.intrinsics;
-    data_.resize(static_cast<std::size_t>(k.width) * static_cast<std::size_t>(k.height) * kPointBytes);
+    data_.resize(static_cast<std::size_t>(k.width) * static_cast<std::size_t>(k.height) *
+                 kPointBytes);
     const float nan = std::numeric_limits<float>::quiet_NaN();
     std::size_t i = 0;
     for (int v = 0; v < k.height; ++v) {
@@ -470,13 +477,16 @@ int fly(int domain_id, const FlyOptions& o) {
                                    sensor_qos.get(), nullptr),
                  "cannot create a writer on " + topic);
   };
-  const dds_entity_t cloud_writer = createWriter(&sensor_msgs_msg_dds__PointCloud2__desc, o.cloud_topic);
-  const dds_entity_t pose_writer = createWriter(&geometry_msgs_msg_dds__PoseStamped__desc, o.pose_topic);
+  const dds_entity_t cloud_writer =
+      createWriter(&sensor_msgs_msg_dds__PointCloud2__desc, o.cloud_topic);
+  const dds_entity_t pose_writer =
+      createWriter(&geometry_msgs_msg_dds__PoseStamped__desc, o.pose_topic);
 
   const auto wait_start = Clock::now();
   while (!(publicationMatched(cloud_writer) && publicationMatched(pose_writer))) {
     if (g_stop || std::chrono::duration<double>(Clock::now() - wait_start).count() > o.wait_s) {
-      spdlog::error("no subscriber matched {} and {} within {} s", o.cloud_topic, o.pose_topic, o.wait_s);
+      spdlog::error("no subscriber matched {} and {} within {} s", o.cloud_topic, o.pose_topic,
+                    o.wait_s);
       return 1;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -485,10 +495,11 @@ int fly(int domain_id, const FlyOptions& o) {
   // of a writer it does not know yet: give the other side time to finish discovery.
   std::this_thread::sleep_for(std::chrono::duration<double>(o.settle_s));
 
-  const int available = static_cast<int>(std::floor(scenario.trajectory.duration_s() * rate_hz)) + 1;
+  const int available =
+      static_cast<int>(std::floor(scenario.trajectory.duration_s() * rate_hz)) + 1;
   const int frames = o.max_frames > 0 ? std::min(o.max_frames, available) : available;
-  spdlog::info("publishing {} clouds on {} at {} Hz and poses on {} at {} Hz", frames, o.cloud_topic,
-               rate_hz, o.pose_topic, o.pose_rate_hz);
+  spdlog::info("publishing {} clouds on {} at {} Hz and poses on {} at {} Hz", frames,
+               o.cloud_topic, rate_hz, o.pose_topic, o.pose_rate_hz);
   const sim::DepthCamera camera(scenario.camera);
   OrganisedCloud cloud(o.sensor_frame);
   std::string world_frame = o.world_frame;
@@ -501,7 +512,8 @@ int fly(int domain_id, const FlyOptions& o) {
     geometry_msgs_msg_dds__PoseStamped_ pose{};
     pose.header_.stamp_ = rosTime(stamp0_s + t_s);
     pose.header_.frame_id_ = world_frame.data();
-    pose.pose_.position_ = {T_W_B.translation().x(), T_W_B.translation().y(), T_W_B.translation().z()};
+    pose.pose_.position_ = {T_W_B.translation().x(), T_W_B.translation().y(),
+                            T_W_B.translation().z()};
     pose.pose_.orientation_ = {q.x(), q.y(), q.z(), q.w()};
     check(dds_write(pose_writer, &pose), "cannot write a pose");
   };
@@ -555,9 +567,9 @@ struct DiscoverOptions {
 int discover(int domain_id, const DiscoverOptions& o) {
   const Clock::time_point start = Clock::now();
   const dds_entity_t participant = createParticipant(domain_id);
-  const dds_entity_t reader = check(
-      dds_create_reader(participant, DDS_BUILTIN_TOPIC_DCPSPUBLICATION, nullptr, nullptr),
-      "cannot read the DCPSPublication built-in topic");
+  const dds_entity_t reader =
+      check(dds_create_reader(participant, DDS_BUILTIN_TOPIC_DCPSPUBLICATION, nullptr, nullptr),
+            "cannot read the DCPSPublication built-in topic");
   const Clock::time_point deadline = start + std::chrono::duration_cast<Clock::duration>(
                                                  std::chrono::duration<double>(o.timeout_s));
   int rc = 3;
@@ -567,7 +579,8 @@ int discover(int domain_id, const DiscoverOptions& o) {
     const int32_t n = dds_take(reader, samples, infos, kTakeBatch, kTakeBatch);
     for (int32_t i = 0; i < n; ++i) {
       const auto* endpoint = static_cast<const dds_builtintopic_endpoint_t*>(samples[i]);
-      if (infos[i].valid_data && endpoint->topic_name != nullptr && o.topic == endpoint->topic_name) {
+      if (infos[i].valid_data && endpoint->topic_name != nullptr &&
+          o.topic == endpoint->topic_name) {
         rc = 0;
       }
     }
@@ -592,42 +605,55 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0, 232));
 
   ListenOptions listen_options;
-  CLI::App* listen_cmd = app.add_subcommand("listen", "record every PointCloud2 and OccupancyGrid received");
+  CLI::App* listen_cmd =
+      app.add_subcommand("listen", "record every PointCloud2 and OccupancyGrid received");
   listen_cmd->add_option("--out", listen_options.out_dir, "folder for the records")->required();
-  listen_cmd->add_option("--ready-file", listen_options.ready_file,
-                         "created once both readers have matched a writer")->required();
-  listen_cmd->add_option("--cloud-topic", listen_options.cloud_topics,
-                         "DDS topic of the clouds (repeat for more)")
+  listen_cmd
+      ->add_option("--ready-file", listen_options.ready_file,
+                   "created once both readers have matched a writer")
+      ->required();
+  listen_cmd
+      ->add_option("--cloud-topic", listen_options.cloud_topics,
+                   "DDS topic of the clouds (repeat for more)")
       ->capture_default_str();
-  listen_cmd->add_option("--grid-topic", listen_options.grid_topics,
-                         "DDS topic of the grids (repeat for more)")
+  listen_cmd
+      ->add_option("--grid-topic", listen_options.grid_topics,
+                   "DDS topic of the grids (repeat for more)")
       ->capture_default_str();
-  listen_cmd->add_option("--cloud-writers", listen_options.cloud_writers,
-                         "cloud writers to match before signalling ready")->capture_default_str();
-  listen_cmd->add_option("--expect-clouds", listen_options.expect_clouds, "clouds to wait for, per topic");
-  listen_cmd->add_option("--expect-grids", listen_options.expect_grids, "grids to wait for, per topic");
+  listen_cmd
+      ->add_option("--cloud-writers", listen_options.cloud_writers,
+                   "cloud writers to match before signalling ready")
+      ->capture_default_str();
+  listen_cmd->add_option("--expect-clouds", listen_options.expect_clouds,
+                         "clouds to wait for, per topic");
+  listen_cmd->add_option("--expect-grids", listen_options.expect_grids,
+                         "grids to wait for, per topic");
   listen_cmd->add_option("--timeout", listen_options.timeout_s, "give up after this many seconds")
       ->capture_default_str();
-  listen_cmd->add_option("--stay", listen_options.stay_s,
-                         "stay subscribed at least this many seconds (a subscriber that stays, as "
-                         "a ROS 2 node does)")
+  listen_cmd
+      ->add_option("--stay", listen_options.stay_s,
+                   "stay subscribed at least this many seconds (a subscriber that stays, as "
+                   "a ROS 2 node does)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
 
   FlyOptions fly_options;
-  CLI::App* fly_cmd = app.add_subcommand("fly", "fly the built-in scenario, publish clouds and poses");
+  CLI::App* fly_cmd =
+      app.add_subcommand("fly", "fly the built-in scenario, publish clouds and poses");
   fly_cmd->add_option("--cloud-topic", fly_options.cloud_topic, "DDS topic of the clouds")
       ->capture_default_str();
   fly_cmd->add_option("--pose-topic", fly_options.pose_topic, "DDS topic of the poses")
       ->capture_default_str();
-  fly_cmd->add_option("--max-frames", fly_options.max_frames, "stop after this many frames (0: all)")
+  fly_cmd
+      ->add_option("--max-frames", fly_options.max_frames, "stop after this many frames (0: all)")
       ->check(CLI::NonNegativeNumber);
   fly_cmd->add_option("--rate", fly_options.rate_hz, "frames per second (default: the scenario's)")
       ->check(CLI::NonNegativeNumber);
   fly_cmd->add_option("--speed", fly_options.speed, "flight seconds per wall-clock second")
       ->check(CLI::PositiveNumber);
-  fly_cmd->add_option("--wait-for-subscriber", fly_options.wait_s,
-                      "seconds to wait for the node's readers")
+  fly_cmd
+      ->add_option("--wait-for-subscriber", fly_options.wait_s,
+                   "seconds to wait for the node's readers")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   DiscoverOptions discover_options;
@@ -635,7 +661,8 @@ int main(int argc, char** argv) {
       app.add_subcommand("discover", "time until a new participant learns of a writer on a topic");
   discover_cmd->add_option("--topic", discover_options.topic, "DDS topic of the writer")
       ->capture_default_str();
-  discover_cmd->add_option("--timeout", discover_options.timeout_s, "give up after this many seconds")
+  discover_cmd
+      ->add_option("--timeout", discover_options.timeout_s, "give up after this many seconds")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);

@@ -50,7 +50,8 @@ interop::SampleRecord record(const mlmap::dds::sensor_msgs::PointCloud2_& msg) {
   interop::SampleRecord r("sensor_msgs::msg::dds_::PointCloud2_");
   r.add("header.stamp.sec", msg.header_().stamp_().sec_());
   r.addUnsigned("header.stamp.nanosec", msg.header_().stamp_().nanosec_());
-  r.addString("header.frame_id", msg.header_().frame_id_().data(), msg.header_().frame_id_().size());
+  r.addString("header.frame_id", msg.header_().frame_id_().data(),
+              msg.header_().frame_id_().size());
   r.addUnsigned("height", msg.height_());
   r.addUnsigned("width", msg.width_());
   r.addUnsigned("fields.length", msg.fields_().size());
@@ -72,7 +73,8 @@ interop::SampleRecord record(const mlmap::dds::nav_msgs::OccupancyGrid_& msg) {
   interop::SampleRecord r("nav_msgs::msg::dds_::OccupancyGrid_");
   r.add("header.stamp.sec", msg.header_().stamp_().sec_());
   r.addUnsigned("header.stamp.nanosec", msg.header_().stamp_().nanosec_());
-  r.addString("header.frame_id", msg.header_().frame_id_().data(), msg.header_().frame_id_().size());
+  r.addString("header.frame_id", msg.header_().frame_id_().data(),
+              msg.header_().frame_id_().size());
   const mlmap::dds::nav_msgs::MapMetaData_& info = msg.info_();
   r.add("info.map_load_time.sec", info.map_load_time_().sec_());
   r.addUnsigned("info.map_load_time.nanosec", info.map_load_time_().nanosec_());
@@ -108,7 +110,8 @@ class Lcg {
 std::vector<Eigen::Vector3f> randomPoints(std::size_t n, std::uint64_t seed) {
   Lcg lcg(seed);
   std::vector<Eigen::Vector3f> points(n);
-  for (Eigen::Vector3f& p : points) p = {lcg.uniform(-20, 20), lcg.uniform(-20, 20), lcg.uniform(-1, 6)};
+  for (Eigen::Vector3f& p : points)
+    p = {lcg.uniform(-20, 20), lcg.uniform(-20, 20), lcg.uniform(-1, 6)};
   return points;
 }
 
@@ -129,12 +132,13 @@ std::vector<mlmap::dds::sensor_msgs::PointCloud2_> testClouds(std::size_t large_
   std::vector<Eigen::Vector3f> points = randomPoints(1000, 1);
   points[10] = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
   points[11].y() = std::numeric_limits<float>::infinity();
-  clouds.push_back(mlmap::dds::encodePointCloud2(points, nullptr, -1.5, "base_link"));  // negative stamp
+  clouds.push_back(
+      mlmap::dds::encodePointCloud2(points, nullptr, -1.5, "base_link"));  // negative stamp
 
   points = randomPoints(5000, 2);
   std::vector<float> intensity = randomIntensity(points.size(), 3);
   clouds.push_back(mlmap::dds::encodePointCloud2(points, &intensity, 1700000001.123456789,
-                                          "camera_depth_optical_frame/\xc3\xbc"));  // UTF-8
+                                                 "camera_depth_optical_frame/\xc3\xbc"));  // UTF-8
 
   points = randomPoints(large_points, 4);
   intensity = randomIntensity(points.size(), 5);
@@ -233,16 +237,30 @@ std::vector<RawPayloadType::Bytes> malformedClouds() {
   std::vector<RawPayloadType::Bytes> payloads;
   payloads.push_back({0x00, 0x01});
   payloads.push_back(CdrBytes().u32(1700000005).u32(0).u32(0xfffffff0u).octet('m').bytes());
-  payloads.push_back(CdrBytes().u32(1700000006).u32(0).str("map").u32(1).u32(3).u32(0x40000000u).bytes());
-  payloads.push_back(CdrBytes().u32(1700000007).u32(0).str("map").u32(1).u32(3).u32(0).octet(0)
-                         .u32(16).u32(48).u32(1000000).u32(0).u32(0).bytes());
+  payloads.push_back(
+      CdrBytes().u32(1700000006).u32(0).str("map").u32(1).u32(3).u32(0x40000000u).bytes());
+  payloads.push_back(CdrBytes()
+                         .u32(1700000007)
+                         .u32(0)
+                         .str("map")
+                         .u32(1)
+                         .u32(3)
+                         .u32(0)
+                         .octet(0)
+                         .u32(16)
+                         .u32(48)
+                         .u32(1000000)
+                         .u32(0)
+                         .u32(0)
+                         .bytes());
   mlmap::dds::sensor_msgs::PointCloud2_ cloud =
       mlmap::dds::encodePointCloud2(randomPoints(100, 6), nullptr, 1700000008.0, "map");
   mlmap::dds::sensor_msgs::PointCloud2_PubSubType typed;
   eprosima::fastrtps::rtps::SerializedPayload_t payload(typed.getSerializedSizeProvider(&cloud)());
   typed.serialize(&cloud, &payload);
   RawPayloadType::Bytes valid(payload.data, payload.data + payload.length);
-  for (const std::uint8_t encapsulation : {std::uint8_t{0x07}, std::uint8_t{0x00}}) {  // CDR2_LE, CDR_BE
+  for (const std::uint8_t encapsulation :
+       {std::uint8_t{0x07}, std::uint8_t{0x00}}) {  // CDR2_LE, CDR_BE
     payloads.push_back(valid);
     payloads.back()[1] = encapsulation;
   }
@@ -251,14 +269,16 @@ std::vector<RawPayloadType::Bytes> malformedClouds() {
 
 void save(const interop::SampleRecord& r, const std::string& dir, const std::string& kind,
           const mlmap::dds::ros_time::Time_& stamp) {
-  const std::string path = dir + "/" + interop::recordFileName(kind, stamp.sec_(), stamp.nanosec_());
+  const std::string path =
+      dir + "/" + interop::recordFileName(kind, stamp.sec_(), stamp.nanosec_());
   if (!r.writeTo(path)) throw std::runtime_error("cannot write " + path);
 }
 
 void waitAcknowledged(fdds::DataWriter* writer, const char* what) {
   if (writer->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(20, 0)) !=
       eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
-    throw std::runtime_error(std::string("the reader did not acknowledge the ") + what + " within 20 s");
+    throw std::runtime_error(std::string("the reader did not acknowledge the ") + what +
+                             " within 20 s");
   }
 }
 
@@ -278,8 +298,10 @@ int main(int argc, char** argv) {
 
   try {
     std::filesystem::create_directories(out_dir);
-    const mlmap::dds::DdsConfig config;  // ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE, node defaults
-    mlmap::dds::ParticipantPtr participant = mlmap::dds::createParticipant(config, "mlmap_interop_talker");
+    const mlmap::dds::DdsConfig
+        config;  // ROS_DOMAIN_ID, ROS_AUTOMATIC_DISCOVERY_RANGE, node defaults
+    mlmap::dds::ParticipantPtr participant =
+        mlmap::dds::createParticipant(config, "mlmap_interop_talker");
     fdds::Publisher* publisher = participant->create_publisher(fdds::PUBLISHER_QOS_DEFAULT);
     const std::string grid_topic = mlmap::dds::ddsTopicName(config.ns, config.topics.grid);
     const std::string cloud_topic = mlmap::dds::ddsTopicName(config.ns, config.topics.local_map);
@@ -305,8 +327,9 @@ int main(int argc, char** argv) {
     fdds::PublicationMatchedStatus matched;
     grid_writer->get_publication_matched_status(matched);
     if (matched.total_count != 0) {
-      throw std::runtime_error("a grid reader existed before the latched grid was written: "
-                               "the late-joiner check would prove nothing");
+      throw std::runtime_error(
+          "a grid reader existed before the latched grid was written: "
+          "the late-joiner check would prove nothing");
     }
     save(record(latched), out_dir, "grid", latched.header_().stamp_());
     std::ofstream(out_dir + "/latched.done") << "1\n";

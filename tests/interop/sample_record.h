@@ -34,11 +34,14 @@ class SampleRecord {
     std::uint64_t bits = 0;
     std::memcpy(&bits, &value, sizeof(bits));
     char buf[80];
-    std::snprintf(buf, sizeof(buf), "0x%016llx (%.17g)", static_cast<unsigned long long>(bits), value);
+    std::snprintf(buf, sizeof(buf), "0x%016llx (%.17g)", static_cast<unsigned long long>(bits),
+                  value);
     line(name, buf);
   }
   /// A string of `size` bytes (a null `data` with size 0 is the empty string).
-  void addString(const char* name, const char* data, std::size_t size) { addBytes(name, data, size); }
+  void addString(const char* name, const char* data, std::size_t size) {
+    addBytes(name, data, size);
+  }
   /// A byte sequence: its length, a newline, the raw bytes, a newline.
   void addBytes(const char* name, const void* data, std::size_t size) {
     text_ += name;
@@ -69,7 +72,8 @@ class SampleRecord {
 };
 
 /// File name of a record: `<kind>_<sec>_<nanosec>.rec` (the header stamp names the message).
-inline std::string recordFileName(const std::string& kind, std::int32_t sec, std::uint32_t nanosec) {
+inline std::string recordFileName(const std::string& kind, std::int32_t sec,
+                                  std::uint32_t nanosec) {
   return kind + "_" + std::to_string(sec) + "_" + std::to_string(nanosec) + ".rec";
 }
 

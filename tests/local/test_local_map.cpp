@@ -52,8 +52,8 @@ Eigen::Vector3d randomStep(double xy_m, double z_m, std::mt19937& rng) {
 struct FlightShape {
   const char* name;
   LocalMapConfig config;
-  int z_run_max;     // free voxels come in z runs of 1 .. z_run_max voxels
-  double z_step_m;   // the body's random walk along z per frame, at most
+  int z_run_max;    // free voxels come in z runs of 1 .. z_run_max voxels
+  double z_step_m;  // the body's random walk along z per frame, at most
   LogOddsConfig log_odds{};
 };
 
@@ -85,7 +85,8 @@ MeasurementBatch makeBatch(const Eigen::Vector3d& body, const std::vector<VoxelI
   for (const VoxelIndex& h : hits) b.hits.push_back({h, h.cast<double>()});
   for (const VoxelIndex& f : frees) {
     const VoxelIndex r = f - origin;
-    if (b.free.contains(r.x(), r.y(), r.z()) && !b.free.testAndSet(r.x(), r.y(), r.z())) ++b.free_count;
+    if (b.free.contains(r.x(), r.y(), r.z()) && !b.free.testAndSet(r.x(), r.y(), r.z()))
+      ++b.free_count;
   }
   return b;
 }
@@ -146,12 +147,12 @@ void flyAgainstAWholeWorldReference(const FlightShape& shape) {
   std::mt19937 rng(5);
   std::uniform_int_distribution<int> run(1, shape.z_run_max);
   Eigen::Vector3d body(0.5, 0.5, 0.5);
-  std::uint64_t outside = 0;  // measurements outside the window
+  std::uint64_t outside = 0;       // measurements outside the window
   std::uint64_t hits_outside = 0;  // of them, hits
   for (int frame = 0; frame < 400; ++frame) {
     body += randomStep(1.5, shape.z_step_m, rng);
     if (frame == 200) body += Eigen::Vector3d(40.0, 0.0, 0.0);  // a jump: whole-window reset
-    if (frame > 300) body *= 0.9;                            // fly back home
+    if (frame > 300) body *= 0.9;                               // fly back home
     map.recenter(body, &global);
     // Reference: what left the window keeps only its occupied voxels.
     for (auto it = reference.begin(); it != reference.end();) {
@@ -333,7 +334,7 @@ void checkUpdatedWindowCopiesThroughAFlight(const FlightShape& shape) {
   long incremental = 0;  // updates in place (the window had not moved since the buffer's copy)
   const int frames = 300;
   for (int frame = 0; frame < frames; ++frame) {
-    body += randomStep(0.25, 0.075, rng);  // a shift every few frames
+    body += randomStep(0.25, 0.075, rng);                       // a shift every few frames
     if (frame == 150) body += Eigen::Vector3d(30.0, 0.0, 0.0);  // a jump: the window is replaced
     map.recenter(body, &global);
     std::vector<VoxelIndex> hits;
@@ -355,8 +356,8 @@ void checkUpdatedWindowCopiesThroughAFlight(const FlightShape& shape) {
     ASSERT_EQ(copy.change_clock, full.change_clock) << "frame " << frame;
     ASSERT_TRUE(copy.log_odds == full.log_odds) << "frame " << frame;
   }
-  std::printf("%ld columns copied in %ld incremental updates of %d (%d columns a window)\n",
-              copied, incremental, frames, columns);
+  std::printf("%ld columns copied in %ld incremental updates of %d (%d columns a window)\n", copied,
+              incremental, frames, columns);
   EXPECT_GT(map.counters().shifts, 20u);
   EXPECT_GT(incremental, frames / 3);
   EXPECT_LT(copied, incremental * columns / 4) << "an update in place copies the changed columns";
@@ -490,7 +491,8 @@ TEST(LocalMap, ARestoredWindowListsEveryOccupiedVoxelOfTheCopy) {
     for (int x = 0; x < config.size_cells.x(); ++x)
       for (int y = 0; y < config.size_cells.y(); ++y)
         for (int z = 0; z < config.size_cells.z(); ++z) {
-          known += loaded.state(loaded.minIndex() + VoxelIndex(x, y, z)) != Occupancy::kUnknown ? 1 : 0;
+          known +=
+              loaded.state(loaded.minIndex() + VoxelIndex(x, y, z)) != Occupancy::kUnknown ? 1 : 0;
         }
     EXPECT_EQ(known, 0u) << "values survived an empty window";
   }
@@ -507,10 +509,12 @@ TEST(LocalMap, SlidingRoundTripKeepsOccupiedVoxelsWhereTheyWere) {
   std::vector<VoxelIndex> hits = {{1, 2, 0}, {-3, 4, 1}, {5, -5, -2}, {0, 0, 3}};
   for (int i = 0; i < 3; ++i) map.integrate(makeBatch(home, hits, {}));
   // Fly 60 m away in a loop and come back.
-  for (double x = 0.0; x < 60.0; x += 0.5) map.recenter(home + Eigen::Vector3d(x, 0.3 * x, 0.0), &global);
+  for (double x = 0.0; x < 60.0; x += 0.5)
+    map.recenter(home + Eigen::Vector3d(x, 0.3 * x, 0.0), &global);
   for (const VoxelIndex& h : hits) EXPECT_FALSE(map.contains(h));
   EXPECT_EQ(global.voxelCount(), hits.size());
-  for (double x = 60.0; x >= 0.0; x -= 0.5) map.recenter(home + Eigen::Vector3d(x, -0.2 * x, 0.0), &global);
+  for (double x = 60.0; x >= 0.0; x -= 0.5)
+    map.recenter(home + Eigen::Vector3d(x, -0.2 * x, 0.0), &global);
   for (const VoxelIndex& h : hits) {
     double l = 0.0;
     ASSERT_TRUE(map.logOdds(h, &l)) << h.transpose();

@@ -113,8 +113,12 @@ TEST(MapFile, SavedFlightLoadsBackIdenticalVoxelByVoxel) {
   EXPECT_GT(known, 1000u);
   std::map<std::tuple<int, int, int>, double> global_a;
   std::map<std::tuple<int, int, int>, double> global_b;
-  engine.globalMap().forEachVoxel([&](const VoxelIndex& g, double l) { global_a[{g.x(), g.y(), g.z()}] = l; });
-  restored.globalMap().forEachVoxel([&](const VoxelIndex& g, double l) { global_b[{g.x(), g.y(), g.z()}] = l; });
+  engine.globalMap().forEachVoxel([&](const VoxelIndex& g, double l) {
+    global_a[{g.x(), g.y(), g.z()}] = l;
+  });
+  restored.globalMap().forEachVoxel([&](const VoxelIndex& g, double l) {
+    global_b[{g.x(), g.y(), g.z()}] = l;
+  });
   EXPECT_GT(global_a.size(), 100u);
   EXPECT_TRUE(global_a == global_b);
   // And the same file again.
@@ -136,7 +140,8 @@ TEST(MapFile, MappingAfterALoadGivesTheSameMapAsNeverStopping) {
   flyCheap(second_half, 20, 20);
 
   // The same bytes: every voxel, every global record, the window position, last stamp and pose.
-  EXPECT_EQ(io::encodeMapFile(second_half.exportState()), io::encodeMapFile(straight.exportState()));
+  EXPECT_EQ(io::encodeMapFile(second_half.exportState()),
+            io::encodeMapFile(straight.exportState()));
   EXPECT_GT(straight.globalMap().voxelCount(), 100u);
 }
 
@@ -181,7 +186,8 @@ TEST(MapFile, EveryTruncationIsRefusedAsTruncated) {
   EXPECT_NE(refusal("").find("not an mlmap map file"), std::string::npos);
   for (std::size_t cut = 1; cut < bytes.size(); ++cut) {
     const std::string message = refusal(bytes.substr(0, cut));
-    ASSERT_NE(message.find("test.mlmap: truncated"), std::string::npos) << "cut at " << cut << ": " << message;
+    ASSERT_NE(message.find("test.mlmap: truncated"), std::string::npos)
+        << "cut at " << cut << ": " << message;
   }
 }
 
@@ -207,7 +213,8 @@ TEST(MapFile, WrongMagicVersionOrTrailingDataIsRefusedWithItsReason) {
   // newer file is reported as newer, not as corrupted).
   std::string v2 = bytes;
   v2[8] = 2;
-  EXPECT_NE(refusal(v2).find("map file format version 2, this build reads version 1"), std::string::npos)
+  EXPECT_NE(refusal(v2).find("map file format version 2, this build reads version 1"),
+            std::string::npos)
       << refusal(v2);
   EXPECT_NE(refusal(bytes + "x").find("1 bytes after the end of the map"), std::string::npos);
   std::string header = bytes;
@@ -235,8 +242,12 @@ TEST(MapFile, AMapOfAnotherConfigurationIsRefusedNamingTheFields) {
   } catch (const std::runtime_error& e) {
     const std::string m = e.what();
     EXPECT_NE(m.find("a.mlmap: made with a different configuration"), std::string::npos) << m;
-    EXPECT_NE(m.find("local_map.resolution_m is 0.2 in the map, 0.1 in the configuration"), std::string::npos) << m;
-    EXPECT_NE(m.find("log_odds.hit is 0.85 in the map, 0.6 in the configuration"), std::string::npos) << m;
+    EXPECT_NE(m.find("local_map.resolution_m is 0.2 in the map, 0.1 in the configuration"),
+              std::string::npos)
+        << m;
+    EXPECT_NE(m.find("log_odds.hit is 0.85 in the map, 0.6 in the configuration"),
+              std::string::npos)
+        << m;
   }
   EXPECT_NE(io::mapConfigFingerprint(state.local_map, state.log_odds),
             io::mapConfigFingerprint(other.local_map, other.log_odds));
@@ -266,7 +277,8 @@ TEST(MapFile, TheEngineRefusesInconsistentStatesAndKeepsItsMap) {
       (void)io::decodeMapFile(io::encodeMapFile(s), "bad.mlmap");
       ADD_FAILURE() << "the file was accepted: " << expected;
     } catch (const std::runtime_error& e) {
-      EXPECT_NE(std::string(e.what()).find("bad.mlmap: inconsistent map: "), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("bad.mlmap: inconsistent map: "), std::string::npos)
+          << e.what();
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
     }
   };
@@ -289,7 +301,8 @@ TEST(MapFile, TheEngineRefusesInconsistentStatesAndKeepsItsMap) {
   s.global_submaps[1].first = SubmapIndex(-1, 2, 4);  // the window's submaps: (-2..2, 1..5, 3..7)
   refused(s, "lies inside the local window");
   s = smallState();
-  s.global_submaps[1].first = SubmapIndex(GlobalMap::kSubmapIndexLimit, 0, 0);  // would alias -limit
+  s.global_submaps[1].first =
+      SubmapIndex(GlobalMap::kSubmapIndexLimit, 0, 0);  // would alias -limit
   refused(s, "is out of range");
   s = smallState();
   s.global_submaps[0].first = SubmapIndex(-GlobalMap::kSubmapIndexLimit - 1, 0, 0);
@@ -357,7 +370,8 @@ TEST(MapFile, TheNextSaveRemovesTemporaryFilesOfAnInterruptedOne) {
   }
   io::saveMapFile(smallState(), path);
   std::vector<std::string> left;
-  for (const auto& entry : fs::directory_iterator(dir.path)) left.push_back(entry.path().filename());
+  for (const auto& entry : fs::directory_iterator(dir.path))
+    left.push_back(entry.path().filename());
   std::sort(left.begin(), left.end());
   EXPECT_EQ(left, (std::vector<std::string>{"map.mlmap", "map.mlmap.tmp-", "map.mlmap.tmp-toolong1",
                                             "other.mlmap.tmp-a1B2c3"}));
@@ -387,7 +401,8 @@ TEST(MapFile, AFailedSaveLeavesThePreviousFileAndNoTemporaryFile) {
   }
   ::setrlimit(RLIMIT_FSIZE, &old_limit);
   std::signal(SIGXFSZ, old_handler);
-  EXPECT_NE(message.find("cannot write '" + path + "': write failed after"), std::string::npos) << message;
+  EXPECT_NE(message.find("cannot write '" + path + "': write failed after"), std::string::npos)
+      << message;
   expectSameState(io::loadMapFile(path), first);
   for (const auto& entry : fs::directory_iterator(dir.path)) {
     EXPECT_EQ(entry.path().filename(), "map.mlmap") << "left behind: " << entry.path();
@@ -435,7 +450,8 @@ TEST(MapFile, SavingIntoAReadOnlyFolderFailsCleanly) {
   } else {
     fs::permissions(ro, fs::perms::owner_all);
   }
-  EXPECT_NE(message.find("cannot write '" + path + "': cannot create a temporary file"), std::string::npos)
+  EXPECT_NE(message.find("cannot write '" + path + "': cannot create a temporary file"),
+            std::string::npos)
       << message;
   expectSameState(io::loadMapFile(path), smallState());
 }
@@ -443,7 +459,8 @@ TEST(MapFile, SavingIntoAReadOnlyFolderFailsCleanly) {
 // ---- Exports ---------------------------------------------------------------------------------
 
 // Splits "header\n...end_header\n" (PLY) or up to the DATA line (PCD) from the payload.
-std::vector<std::string> headerLines(const std::string& bytes, const std::string& last, std::size_t* payload) {
+std::vector<std::string> headerLines(const std::string& bytes, const std::string& last,
+                                     std::size_t* payload) {
   std::vector<std::string> lines;
   std::size_t pos = 0;
   for (;;) {
@@ -459,7 +476,8 @@ std::vector<std::string> headerLines(const std::string& bytes, const std::string
 
 float floatAt(const std::string& bytes, std::size_t pos) {
   std::uint32_t u = 0;
-  for (int i = 0; i < 4; ++i) u |= static_cast<std::uint32_t>(static_cast<std::uint8_t>(bytes[pos + i])) << (8 * i);
+  for (int i = 0; i < 4; ++i)
+    u |= static_cast<std::uint32_t>(static_cast<std::uint8_t>(bytes[pos + i])) << (8 * i);
   float f = 0.0f;
   std::memcpy(&f, &u, sizeof f);
   return f;
@@ -468,8 +486,12 @@ float floatAt(const std::string& bytes, std::size_t pos) {
 // The engine's occupied voxels with their log-odds, straight from its layers.
 std::map<std::tuple<int, int, int>, double> engineOccupied(const MapEngine& engine) {
   std::map<std::tuple<int, int, int>, double> out;
-  engine.globalMap().forEachVoxel([&](const VoxelIndex& g, double l) { out[{g.x(), g.y(), g.z()}] = l; });
-  engine.localMap().forEachOccupied([&](const VoxelIndex& g, double l) { out[{g.x(), g.y(), g.z()}] = l; });
+  engine.globalMap().forEachVoxel([&](const VoxelIndex& g, double l) {
+    out[{g.x(), g.y(), g.z()}] = l;
+  });
+  engine.localMap().forEachOccupied([&](const VoxelIndex& g, double l) {
+    out[{g.x(), g.y(), g.z()}] = l;
+  });
   return out;
 }
 
@@ -496,8 +518,9 @@ TEST(MapExport, PlyAndPcdHoldEveryOccupiedVoxelCentreAndItsProbability) {
   EXPECT_EQ(h[0], "ply");
   EXPECT_EQ(h[1], "format binary_little_endian 1.0");
   const std::vector<std::string> properties(h.end() - 6, h.end() - 1);
-  EXPECT_EQ(properties, (std::vector<std::string>{"property float x", "property float y", "property float z",
-                                                  "property float log_odds", "property float probability"}));
+  EXPECT_EQ(properties,
+            (std::vector<std::string>{"property float x", "property float y", "property float z",
+                                      "property float log_odds", "property float probability"}));
   EXPECT_EQ(h[h.size() - 7], "element vertex " + std::to_string(expected.size()));
   ASSERT_EQ(ply.size() - payload, expected.size() * 20);
   std::map<std::tuple<int, int, int>, double> seen;
@@ -507,7 +530,8 @@ TEST(MapExport, PlyAndPcdHoldEveryOccupiedVoxelCentreAndItsProbability) {
     const float y = floatAt(ply, p + 4);
     const float z = floatAt(ply, p + 8);
     const auto key = voxelOf(x, y, z, res);
-    const Eigen::Vector3d centre = voxelCenter(VoxelIndex(std::get<0>(key), std::get<1>(key), std::get<2>(key)), res);
+    const Eigen::Vector3d centre =
+        voxelCenter(VoxelIndex(std::get<0>(key), std::get<1>(key), std::get<2>(key)), res);
     EXPECT_FLOAT_EQ(x, static_cast<float>(centre.x()));
     EXPECT_FLOAT_EQ(z, static_cast<float>(centre.z()));
     seen[key] = floatAt(ply, p + 12);
@@ -521,7 +545,9 @@ TEST(MapExport, PlyAndPcdHoldEveryOccupiedVoxelCentreAndItsProbability) {
   const std::string pcd = readAll(dir.file("map.pcd"));
   h = headerLines(pcd, "DATA binary", &payload);
   ASSERT_FALSE(h.empty());
-  auto has = [&h](const std::string& line) { return std::find(h.begin(), h.end(), line) != h.end(); };
+  auto has = [&h](const std::string& line) {
+    return std::find(h.begin(), h.end(), line) != h.end();
+  };
   EXPECT_TRUE(has("VERSION 0.7"));
   EXPECT_TRUE(has("FIELDS x y z intensity"));
   EXPECT_TRUE(has("SIZE 4 4 4 4"));
@@ -566,7 +592,8 @@ std::vector<std::uint8_t> readPgm(const std::string& bytes, int* width, int* hei
   *width = numbers[0];
   *height = numbers[1];
   const std::size_t start = static_cast<std::size_t>(in.tellg());
-  EXPECT_EQ(bytes.size() - start, static_cast<std::size_t>(*width) * static_cast<std::size_t>(*height));
+  EXPECT_EQ(bytes.size() - start,
+            static_cast<std::size_t>(*width) * static_cast<std::size_t>(*height));
   return std::vector<std::uint8_t>(bytes.begin() + static_cast<std::ptrdiff_t>(start), bytes.end());
 }
 

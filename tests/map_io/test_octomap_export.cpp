@@ -48,7 +48,9 @@ TEST(OctomapExport, TheBtFileHoldsTheSameOccupiedAndFreeVoxels) {
 
   std::set<Key> occupied;
   std::set<Key> free;
-  engine.globalMap().forEachVoxel([&](const VoxelIndex& g, double) { occupied.insert({g.x(), g.y(), g.z()}); });
+  engine.globalMap().forEachVoxel([&](const VoxelIndex& g, double) {
+    occupied.insert({g.x(), g.y(), g.z()});
+  });
   const LocalMap& local = engine.localMap();
   for (int x = local.minIndex().x(); x < local.maxIndex().x(); ++x) {
     for (int y = local.minIndex().y(); y < local.maxIndex().y(); ++y) {
@@ -80,7 +82,8 @@ TEST(OctomapExport, TheBtFileHoldsTheSameOccupiedAndFreeVoxels) {
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
     ASSERT_EQ(it.getDepth(), tree.getTreeDepth());
     const octomap::OcTreeKey k = it.getKey();
-    const Key key{static_cast<int>(k[0]) - 32768, static_cast<int>(k[1]) - 32768, static_cast<int>(k[2]) - 32768};
+    const Key key{static_cast<int>(k[0]) - 32768, static_cast<int>(k[1]) - 32768,
+                  static_cast<int>(k[2]) - 32768};
     (tree.isNodeOccupied(*it) ? read_occupied : read_free).insert(key);
   }
   EXPECT_TRUE(read_occupied == occupied) << read_occupied.size() << " vs " << occupied.size();

@@ -23,8 +23,11 @@ std::string referenceLines(const std::vector<VoxelIndex>& sorted) {
 }
 
 TEST(VoxelText, LinesAreWhatSnprintfWritesAndReadBack) {
-  std::vector<VoxelIndex> voxels = {{INT_MIN, INT_MAX, 0}, {-1, 0, 1}, {INT_MAX, INT_MIN, INT_MIN},
-                                    {0, 0, 0}, {-1, 0, 1}};  // a duplicate, dropped
+  std::vector<VoxelIndex> voxels = {{INT_MIN, INT_MAX, 0},
+                                    {-1, 0, 1},
+                                    {INT_MAX, INT_MIN, INT_MIN},
+                                    {0, 0, 0},
+                                    {-1, 0, 1}};  // a duplicate, dropped
   std::mt19937 rng(5);
   std::uniform_int_distribution<int> any(INT_MIN, INT_MAX);
   std::uniform_int_distribution<int> small(-3000, 3000);

@@ -47,7 +47,7 @@ TEST(ClosedLoop, StopsForAPersonCrossingInFrontAndReachesTheGoalWithoutCollision
   EXPECT_TRUE(r.reached);
   EXPECT_EQ(r.collisions, 0);
   EXPECT_GE(r.min_clearance_m, options.vehicle_radius_m);
-  EXPECT_GE(r.blocked_replans, 1u);  // the person crossed the committed segment: planned at once
+  EXPECT_GE(r.blocked_replans, 1u);   // the person crossed the committed segment: planned at once
   EXPECT_GT(r.time_s, alone.time_s);  // and it cost time
 }
 

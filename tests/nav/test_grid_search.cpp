@@ -32,7 +32,8 @@ ProjectedGrid randomGrid(std::mt19937& rng, int width, int height, double occupi
 
 // Blocked by definition: some occupied (or, pessimistically, unknown) cell's centre within the
 // radius of this cell's centre, cells outside the grid being unknown.
-bool bruteBlocked(const ProjectedGrid& g, int margin, int x, int y, double radius_m, UnknownAs unknown) {
+bool bruteBlocked(const ProjectedGrid& g, int margin, int x, int y, double radius_m,
+                  UnknownAs unknown) {
   for (int sy = -margin; sy < g.height + margin; ++sy) {
     for (int sx = -margin; sx < g.width + margin; ++sx) {
       const bool in = sx >= 0 && sy >= 0 && sx < g.width && sy < g.height;
@@ -73,7 +74,8 @@ double bruteShortest(const PlanningGrid& g, const Eigen::Vector2i& s, const Eige
         const int ny = y + dy;
         if (!g.inside(nx, ny)) continue;
         if (g.isBlocked(nx, ny) && !from_blocked) continue;
-        if (dx != 0 && dy != 0 && !from_blocked && (g.isBlocked(nx, y) || g.isBlocked(x, ny))) continue;
+        if (dx != 0 && dy != 0 && !from_blocked && (g.isBlocked(nx, y) || g.isBlocked(x, ny)))
+          continue;
         const double step = (dx != 0 && dy != 0 ? std::sqrt(2.0) : 1.0) * g.resolution_m *
                             (from_blocked ? kEscapeCostFactor : 1.0);
         double& d = dist[static_cast<std::size_t>(ny * g.width + nx)];
@@ -186,8 +188,10 @@ TEST(GridSearch, AStarLeavesAnInflatedZoneByTheShortestWayThenStaysOut) {
       }
     }
     if (blocked.empty() || free.empty()) continue;
-    const Eigen::Vector2i s = blocked[std::uniform_int_distribution<std::size_t>(0, blocked.size() - 1)(rng)];
-    const Eigen::Vector2i t = free[std::uniform_int_distribution<std::size_t>(0, free.size() - 1)(rng)];
+    const Eigen::Vector2i s =
+        blocked[std::uniform_int_distribution<std::size_t>(0, blocked.size() - 1)(rng)];
+    const Eigen::Vector2i t =
+        free[std::uniform_int_distribution<std::size_t>(0, free.size() - 1)(rng)];
     const GridPath path = searchGrid(p, s, t);
     const double reference = bruteShortest(p, s, t);
     ASSERT_EQ(path.found, std::isfinite(reference));
@@ -231,7 +235,8 @@ TEST(GridSearch, NoPathWhenTheGoalIsWalledOffOrOutsideTheGrid) {
   g.width = 10;
   g.height = 6;
   g.cells.assign(60, ProjectedGrid::kFree);
-  for (int y = 0; y < 6; ++y) g.cells[static_cast<std::size_t>(y * 10 + 5)] = ProjectedGrid::kOccupied;
+  for (int y = 0; y < 6; ++y)
+    g.cells[static_cast<std::size_t>(y * 10 + 5)] = ProjectedGrid::kOccupied;
   const PlanningGrid p = inflateGrid(g, 0.0, UnknownAs::kFree);
   EXPECT_FALSE(searchGrid(p, {1, 1}, {8, 1}).found);
   EXPECT_FALSE(searchGrid(p, {1, 1}, {10, 1}).found);

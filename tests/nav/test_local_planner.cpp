@@ -17,8 +17,8 @@ constexpr double kRes = 0.2;
 
 /// A snapshot of a 10 x 6 x 3 m window (x in [-2, 8], y in [-3, 3], z in [0, 3]) whose voxel
 /// states `state` gives, with its 2D grid (band 0.5..1.5 m) and ESDF (unknown as free).
-std::shared_ptr<const MapSnapshot> snapshotOf(const std::function<Occupancy(const VoxelIndex&)>& state,
-                                              std::uint64_t frame) {
+std::shared_ptr<const MapSnapshot> snapshotOf(
+    const std::function<Occupancy(const VoxelIndex&)>& state, std::uint64_t frame) {
   auto window = std::make_shared<LocalWindow>();
   window->min_index = VoxelIndex(-10, -15, 0);
   window->size = Eigen::Vector3i(50, 30, 15);
@@ -53,7 +53,8 @@ std::shared_ptr<const MapSnapshot> snapshotOf(const std::function<Occupancy(cons
                                        Transform::Identity(), frame);
 }
 
-Occupancy freeExcept(const VoxelIndex& g, const std::function<bool(const Eigen::Vector3d&)>& occupied) {
+Occupancy freeExcept(const VoxelIndex& g,
+                     const std::function<bool(const Eigen::Vector3d&)>& occupied) {
   const Eigen::Vector3d c = (g.cast<double>() + Eigen::Vector3d::Constant(0.5)) * kRes;
   return occupied(c) ? Occupancy::kOccupied : Occupancy::kFree;
 }
@@ -67,7 +68,8 @@ double nearestOccupied(const MapSnapshot& map, const Eigen::Vector3d& p) {
       for (int z = 0; z < w.size.z(); ++z) {
         const VoxelIndex g = w.min_index + VoxelIndex(x, y, z);
         if (w.state(g) != Occupancy::kOccupied) continue;
-        best = std::min(best, ((g.cast<double>() + Eigen::Vector3d::Constant(0.5)) * kRes - p).norm());
+        best =
+            std::min(best, ((g.cast<double>() + Eigen::Vector3d::Constant(0.5)) * kRes - p).norm());
       }
     }
   }
@@ -89,7 +91,8 @@ TEST(LocalPlanner, CommitsUpToTheClearanceBeforeAWallAcrossTheRoute) {
     EXPECT_GE(nearestOccupied(*map, p), config.commit_clearance_m - 1e-6);
   }
   // It goes as far as the clearance lets it: to within a sample step of it.
-  EXPECT_GT(plan.committedPoints().back().x(), 2.1 - config.commit_clearance_m - 2 * config.sample_step_m);
+  EXPECT_GT(plan.committedPoints().back().x(),
+            2.1 - config.commit_clearance_m - 2 * config.sample_step_m);
   EXPECT_GT(plan.points_W.size(), plan.committed);  // the rest is planned, not committed
 }
 
@@ -125,7 +128,8 @@ TEST(LocalPlanner, PushesTheRouteAwayFromAPillarBesideIt) {
       1);
   LocalPlannerConfig config;
   config.horizon_m = 4.0;
-  const std::vector<Eigen::Vector3d> straight = routeAhead(kRoute, kRoute.front(), 4.0, config.sample_step_m);
+  const std::vector<Eigen::Vector3d> straight =
+      routeAhead(kRoute, kRoute.front(), 4.0, config.sample_step_m);
   std::vector<Eigen::Vector3d> pushed = straight;
   pushAwayFromObstacles(*map, config, &pushed);
   double min_straight = 1e9;
@@ -136,7 +140,8 @@ TEST(LocalPlanner, PushesTheRouteAwayFromAPillarBesideIt) {
     EXPECT_LE((pushed[i] - straight[i]).norm(), config.max_push_m + 1e-9);
     EXPECT_DOUBLE_EQ(pushed[i].z(), straight[i].z());
   }
-  EXPECT_LT(min_straight, config.commit_clearance_m);  // the straight route would not commit past it
+  EXPECT_LT(min_straight,
+            config.commit_clearance_m);  // the straight route would not commit past it
   EXPECT_GT(min_pushed, min_straight + 0.15);
   const LocalPlan plan = planLocal(*map, config, kRoute, kRoute.front());
   EXPECT_GT(plan.committedPoints().back().x(), 3.0);  // pushed, it commits past the pillar
@@ -144,7 +149,10 @@ TEST(LocalPlanner, PushesTheRouteAwayFromAPillarBesideIt) {
 
 TEST(Navigator, ANewObstacleAcrossTheCommittedSegmentMakesAPlanAtOnceThatStopsBeforeIt) {
   const auto clear = snapshotOf(
-      [](const VoxelIndex& g) { return freeExcept(g, [](const Eigen::Vector3d&) { return false; }); }, 1);
+      [](const VoxelIndex& g) {
+        return freeExcept(g, [](const Eigen::Vector3d&) { return false; });
+      },
+      1);
   const auto person = snapshotOf(
       [](const VoxelIndex& g) {
         return freeExcept(g, [](const Eigen::Vector3d& c) {
@@ -174,7 +182,10 @@ TEST(Navigator, ANewObstacleAcrossTheCommittedSegmentMakesAPlanAtOnceThatStopsBe
 TEST(Navigator, TheLatestFramesPointsBlockTheSegmentBeforeTheMapShowsThem) {
   // The map still has the space free; the frame's points show a person 1.5 m ahead.
   const auto clear = snapshotOf(
-      [](const VoxelIndex& g) { return freeExcept(g, [](const Eigen::Vector3d&) { return false; }); }, 1);
+      [](const VoxelIndex& g) {
+        return freeExcept(g, [](const Eigen::Vector3d&) { return false; });
+      },
+      1);
   NavigatorConfig config;
   Navigator navigator(config);
   const Eigen::Vector3d start(0.0, 0.1, 1.1);

@@ -37,7 +37,8 @@ TEST(PngCodec, EncodesWhatOpencvDecodesForEachType) {
   for (const int type : {CV_8UC1, CV_8UC3, CV_16UC1}) {
     const cv::Mat image = randomImage(37, 53, type, 7u + static_cast<unsigned>(type));
     const std::string bytes = encodePng(image);
-    const cv::Mat encoded(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data()));
+    const cv::Mat encoded(1, static_cast<int>(bytes.size()), CV_8UC1,
+                          const_cast<char*>(bytes.data()));
     const cv::Mat back = cv::imdecode(encoded, cv::IMREAD_UNCHANGED);
     EXPECT_TRUE(sameImage(back, image)) << cv::typeToString(type);
   }
@@ -80,7 +81,8 @@ TEST(PngCodec, RoundTripsItsOwnEncoding) {
 TEST(PngCodec, BadDataGetAClearErrorNotACrash) {
   const cv::Mat image = randomImage(30, 40, CV_16UC1, 9u);
   const std::string good = encodePng(image);
-  const auto expectError = [](const std::string& bytes, const std::string& what, const char* label) {
+  const auto expectError = [](const std::string& bytes, const std::string& what,
+                              const char* label) {
     try {
       (void)decodePng(bytes.data(), bytes.size());
       ADD_FAILURE() << label << ": no error";
@@ -96,7 +98,8 @@ TEST(PngCodec, BadDataGetAClearErrorNotACrash) {
   corrupted[good.size() / 2] = static_cast<char>(corrupted[good.size() / 2] ^ 0x5A);  // CRC fails
   expectError(corrupted, "decodePng", "a flipped byte");
   // A colour type it does not read: RGBA (OpenCV writes 4 channels so).
-  const std::vector<std::uint8_t> rgba = opencvEncode(cv::Mat(4, 4, CV_8UC4, cv::Scalar(1, 2, 3, 4)));
+  const std::vector<std::uint8_t> rgba =
+      opencvEncode(cv::Mat(4, 4, CV_8UC4, cv::Scalar(1, 2, 3, 4)));
   expectError(std::string(rgba.begin(), rgba.end()), "colour type 6", "RGBA");
   EXPECT_THROW((void)encodePng(cv::Mat()), std::runtime_error);
   EXPECT_THROW((void)encodePng(cv::Mat(3, 3, CV_32FC1, cv::Scalar(1.0))), std::runtime_error);

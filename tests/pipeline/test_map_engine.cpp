@@ -39,7 +39,8 @@ PointCloudFrame cloudAt(double t, const Eigen::Vector3d& body) {
 
 TEST(TimingSummary, NearestRankOnTheSortedValuesWhateverTheirOrder) {
   std::vector<double> values(100);
-  for (int i = 0; i < 100; ++i) values[static_cast<std::size_t>(i)] = (i * 37) % 100 + 1;  // 1..100, shuffled
+  for (int i = 0; i < 100; ++i)
+    values[static_cast<std::size_t>(i)] = (i * 37) % 100 + 1;  // 1..100, shuffled
   const TimingSummary s = summarizeTimings(values);
   EXPECT_EQ(s.samples, 100u);
   EXPECT_DOUBLE_EQ(s.median_ms, 51.0);  // rank round(0.5 * 99) = 50 (0-based)
@@ -59,9 +60,10 @@ TEST(MapEngine, NoiseFreeSimulatedFlightReachesF1OfAtLeast095At10cm) {
   const eval::FlightResult flight = eval::flyScenario(scenario, engine, options);
   const eval::Accuracy a =
       eval::scoreOccupancy(engine.occupiedVoxels(), flight.observed_truth, scenario.world, 0.1);
-  std::printf("noise-free flight, %d frames at 0.1 m: %zu mapped, %zu observed true voxels, "
-              "precision %.4f recall %.4f F1 %.4f\n",
-              flight.frames, a.mapped, a.observed_truth, a.precision, a.recall, a.f1);
+  std::printf(
+      "noise-free flight, %d frames at 0.1 m: %zu mapped, %zu observed true voxels, "
+      "precision %.4f recall %.4f F1 %.4f\n",
+      flight.frames, a.mapped, a.observed_truth, a.precision, a.recall, a.f1);
   EXPECT_EQ(flight.frames, 120);
   EXPECT_GT(a.observed_truth, 5000u);
   EXPECT_GE(a.f1, 0.95);
@@ -89,19 +91,21 @@ TEST(MapEngine, MemoryEstimateMatchesTheEngineAccounting) {
     const MemoryUsage used = engine.stats().memory;
     const auto mb = [](std::size_t bytes) { return static_cast<double>(bytes) / 1e6; };
     const double planning_mb = mb(estimate.snapshot_bytes) + mb(estimate.esdf_bytes);
-    std::printf("variant %d: estimate %s; engine: local %.1f MB, planning %.1f MB, awareness %.1f MB\n",
-                variant, describeMemory(estimate).c_str(), mb(used.local_bytes),
-                mb(used.planning_bytes), mb(used.awareness_bytes));
+    std::printf(
+        "variant %d: estimate %s; engine: local %.1f MB, planning %.1f MB, awareness %.1f MB\n",
+        variant, describeMemory(estimate).c_str(), mb(used.local_bytes), mb(used.planning_bytes),
+        mb(used.awareness_bytes));
     EXPECT_NEAR(mb(estimate.local_bytes), mb(used.local_bytes), 0.15 * mb(used.local_bytes));
     EXPECT_NEAR(planning_mb, mb(used.planning_bytes), 0.15 * mb(used.planning_bytes));
-    EXPECT_NEAR(mb(estimate.awareness_bytes), mb(used.awareness_bytes), 0.3 * mb(used.awareness_bytes));
+    EXPECT_NEAR(mb(estimate.awareness_bytes), mb(used.awareness_bytes),
+                0.3 * mb(used.awareness_bytes));
   }
 }
 
 TEST(MapEngine, MovingObstacleLeavesNoTraceWithinTenFramesOfLeaving) {
   // A camera hovering in front of a wall; a person-sized box walks across the view.
   datasets::Scenario scenario;
-  scenario.world.addBox({{6.0, -6.0, -0.2}, {6.3, 6.0, 3.0}});  // wall 6 m ahead
+  scenario.world.addBox({{6.0, -6.0, -0.2}, {6.3, 6.0, 3.0}});   // wall 6 m ahead
   scenario.world.addBox({{-1.0, -6.0, -0.2}, {6.0, 6.0, 0.0}});  // floor
   sim::MovingBox person;
   person.size_m = {0.5, 0.5, 1.8};
@@ -130,7 +134,8 @@ TEST(MapEngine, MovingObstacleLeavesNoTraceWithinTenFramesOfLeaving) {
       if (c.x() > 2.6 && c.x() < 3.4 && c.z() > 0.1 && c.z() < 1.9) ++trace;  // only the person
     }
     if (t < leave_s && trace > 0) ++saw_person_frames;
-    if (t >= leave_s + 1.0 - 1e-9 && trace_after_leaving < 0) trace_after_leaving = static_cast<int>(trace);
+    if (t >= leave_s + 1.0 - 1e-9 && trace_after_leaving < 0)
+      trace_after_leaving = static_cast<int>(trace);
   }
   EXPECT_GT(saw_person_frames, 20) << "the person should have been mapped while in view";
   EXPECT_EQ(trace_after_leaving, 0) << "occupied voxels of the person 10 frames after it left";
@@ -334,7 +339,8 @@ TEST(MapEngine, FullInputQueueDropsTheOldestFrameAndCountsIt) {
   for (int i = 0; i < 40; ++i) {
     PointCloudFrame f = cloudAt(1.0 + i, {0.01 * i, 0, 1});
     // Heavy frames so the awareness thread is busy while we submit.
-    for (int k = 0; k < 30; ++k) f.points_S.insert(f.points_S.end(), f.points_S.begin(), f.points_S.begin() + 441);
+    for (int k = 0; k < 30; ++k)
+      f.points_S.insert(f.points_S.end(), f.points_S.begin(), f.points_S.begin() + 441);
     engine.submit(std::move(f));
   }
   engine.flush();
@@ -367,7 +373,8 @@ TEST(MapEngine, MapsTheSharedRealDepthFrames) {
     ASSERT_TRUE(backProject(f, &points));
     eval::VoxelSet seen;
     for (const Eigen::Vector3f& p : points) {
-      if (p.norm() > c.awareness.min_range_m) seen.insert(voxelIndexOf(f.T_W_B * p.cast<double>(), 0.02));
+      if (p.norm() > c.awareness.min_range_m)
+        seen.insert(voxelIndexOf(f.T_W_B * p.cast<double>(), 0.02));
     }
     for (const VoxelIndex& v : seen) ++frames_with_points[v];
   }
@@ -381,10 +388,11 @@ TEST(MapEngine, MapsTheSharedRealDepthFrames) {
   }
   std::size_t with_points = 0;
   for (const VoxelIndex& v : occupied) with_points += frames_with_points.count(v);
-  std::printf("real frames at 0.02 m: %zu occupied voxels (%zu hold points); %zu of %zu voxels with "
-              "points in >= 25 frames are occupied; awareness %.2f ms, local %.2f ms\n",
-              occupied.size(), with_points, steady_mapped, steady, s.awareness.median_ms,
-              s.local_global.median_ms);
+  std::printf(
+      "real frames at 0.02 m: %zu occupied voxels (%zu hold points); %zu of %zu voxels with "
+      "points in >= 25 frames are occupied; awareness %.2f ms, local %.2f ms\n",
+      occupied.size(), with_points, steady_mapped, steady, s.awareness.median_ms,
+      s.local_global.median_ms);
   EXPECT_GT(steady, 500u);
   // Surfaces seen again and again are in the map; the map holds nothing that was never measured.
   EXPECT_GT(static_cast<double>(steady_mapped) / static_cast<double>(steady), 0.85);
@@ -457,10 +465,11 @@ TEST(MapEngine, IncrementalGridEqualsADirectProjectionAfterEveryFrame) {
     double band_min_m;
     double band_max_m;
   };
-  const Case cases[] = {{"state values, relative band", false, true, false, -0.3, 0.3},
-                        {"probability values, relative band", true, true, false, -0.3, 0.3},
-                        {"state values, absolute band", false, false, true, 0.3, 1.1},
-                        {"probability values, band beyond the window", true, false, true, -2.0, 6.0}};
+  const Case cases[] = {
+      {"state values, relative band", false, true, false, -0.3, 0.3},
+      {"probability values, relative band", true, true, false, -0.3, 0.3},
+      {"state values, absolute band", false, false, true, 0.3, 1.1},
+      {"probability values, band beyond the window", true, false, true, -2.0, 6.0}};
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
     MapConfig config = test::smallWindowConfig();
@@ -669,7 +678,8 @@ TEST(MapEngine, SnapshotQueryGridEqualsAFreshBuildAfterEveryFrame) {
         for (int z = 0; z < n.z(); ++z) {
           // A cell centre and a point between it and its upper neighbours.
           const Eigen::Vector3d c = voxelCenter(field.minIndex() + VoxelIndex(x, y, z), res);
-          for (const Eigen::Vector3d& p : {c, Eigen::Vector3d(c + Eigen::Vector3d(0.3, 0.6, 0.45) * res)}) {
+          for (const Eigen::Vector3d& p :
+               {c, Eigen::Vector3d(c + Eigen::Vector3d(0.3, 0.6, 0.45) * res)}) {
             const EsdfMap::Query a = snap->esdfGrid()->query(p);
             const EsdfMap::Query e = fresh.query(p);
             if ((a.valid != e.valid || a.distance_m != e.distance_m || a.gradient != e.gradient) &&

@@ -50,7 +50,8 @@ std::vector<VoxelIndex> octomapOccupied(const octomap::OcTree& tree) {
     const int n = 1 << (max_depth - it.getDepth());
     const octomap::point3d c = it.getCoordinate();
     const double half = 0.5 * it.getSize() - 0.5 * res;
-    const VoxelIndex lo = voxelIndexOf(Eigen::Vector3d(c.x() - half, c.y() - half, c.z() - half), res);
+    const VoxelIndex lo =
+        voxelIndexOf(Eigen::Vector3d(c.x() - half, c.y() - half, c.z() - half), res);
     for (int x = 0; x < n; ++x) {
       for (int y = 0; y < n; ++y) {
         for (int z = 0; z < n; ++z) out.push_back(lo + VoxelIndex(x, y, z));
@@ -62,8 +63,8 @@ std::vector<VoxelIndex> octomapOccupied(const octomap::OcTree& tree) {
 
 /// The points of `points_S` that mlmap maps (finite, at least `min_range_m` from the sensor) in
 /// W, as insertPointCloud takes them.
-void toWorld(const std::vector<Eigen::Vector3f>& points_S, const Transform& T_W_S, double min_range_m,
-             octomap::Pointcloud* cloud_W) {
+void toWorld(const std::vector<Eigen::Vector3f>& points_S, const Transform& T_W_S,
+             double min_range_m, octomap::Pointcloud* cloud_W) {
   cloud_W->clear();
   for (const Eigen::Vector3f& p : points_S) {
     if (!p.allFinite() || p.norm() < min_range_m) continue;
@@ -78,10 +79,10 @@ octomap::point3d toOctomap(const Eigen::Vector3d& p) {
 }
 
 void printAgreement(const eval::VoxelAgreement& g) {
-  std::printf("mlmap %zu, OctoMap %zu, both %zu: IoU %.3f, precision %.3f, recall %.3f; within one "
-              "cell IoU %.3f, precision %.3f, recall %.3f\n",
-              g.a, g.b, g.intersection, g.iou, g.precision, g.recall, g.iou_1, g.precision_1,
-              g.recall_1);
+  std::printf(
+      "mlmap %zu, OctoMap %zu, both %zu: IoU %.3f, precision %.3f, recall %.3f; within one "
+      "cell IoU %.3f, precision %.3f, recall %.3f\n",
+      g.a, g.b, g.intersection, g.iou, g.precision, g.recall, g.iou_1, g.precision_1, g.recall_1);
 }
 
 /// mlmap's engine for the LiDAR: a window that holds every hit within range (75 x 75 x 7.5 m, as
@@ -126,7 +127,8 @@ eval::VoxelAgreement mapLidarScans(const Eigen::Vector3d& shift_W) {
     EXPECT_EQ(engine.submit(std::move(f)), FrameStatus::kAccepted);
   }
   EXPECT_EQ(engine.stats().hits_lost, 0u);
-  const eval::VoxelAgreement g = eval::compareVoxels(engine.occupiedVoxels(), octomapOccupied(tree));
+  const eval::VoxelAgreement g =
+      eval::compareVoxels(engine.occupiedVoxels(), octomapOccupied(tree));
   printAgreement(g);
   return g;
 }
@@ -167,7 +169,8 @@ TEST(OctomapAgreement, PointsFallInDifferentVoxelsOnlyOnVoxelFaces) {
       const Eigen::Vector3d p_W = f.T_W_B * p.cast<double>();
       const VoxelIndex mlmap_voxel = voxelIndexOf(p_W, kLidarResolution_m);
       const octomap::OcTreeKey key = tree.coordToKey(toOctomap(p_W));
-      const VoxelIndex octomap_voxel = VoxelIndex(key[0], key[1], key[2]) - VoxelIndex::Constant(32768);
+      const VoxelIndex octomap_voxel =
+          VoxelIndex(key[0], key[1], key[2]) - VoxelIndex::Constant(32768);
       if (mlmap_voxel == octomap_voxel) continue;
       ++differing_here;
       for (int a = 0; a < 3; ++a) {
@@ -209,7 +212,8 @@ eval::VoxelAgreement realSenseAgreement(const std::string& dir, double bin_width
     tree.insertPointCloud(cloud_W, toOctomap(T_W_S.translation()), config.awareness.max_range_m);
     EXPECT_EQ(engine.submit(std::move(f)), FrameStatus::kAccepted);
   }
-  const eval::VoxelAgreement g = eval::compareVoxels(engine.occupiedVoxels(), octomapOccupied(tree));
+  const eval::VoxelAgreement g =
+      eval::compareVoxels(engine.occupiedVoxels(), octomapOccupied(tree));
   printAgreement(g);
   return g;
 }

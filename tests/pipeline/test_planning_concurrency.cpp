@@ -24,7 +24,7 @@ TEST(PlanningConcurrency, PlannerThreadsQueryWhileTheMapSlides) {
   config.pipeline.input_queue_capacity = 1000;
   config.esdf.max_rate_hz = 0.0;  // every change: as many ESDF swaps as possible
   config.projected_grid.include_global = true;
-  config.esdf.num_threads = 2;  // the ESDF's own worker threads too
+  config.esdf.num_threads = 2;       // the ESDF's own worker threads too
   config.awareness.num_threads = 2;  // the carving's threads and the awareness map's thread
   MapEngine engine(config);
 
@@ -52,8 +52,10 @@ TEST(PlanningConcurrency, PlannerThreadsQueryWhileTheMapSlides) {
         failures.fetch_add(1);
       }
       for (int i = 0; i < 200; ++i) {
-        const Eigen::Vector3d p = lo + (hi - lo).cwiseProduct(Eigen::Vector3d(next(), next(), next()));
-        const Eigen::Vector3d q = lo + (hi - lo).cwiseProduct(Eigen::Vector3d(next(), next(), next()));
+        const Eigen::Vector3d p =
+            lo + (hi - lo).cwiseProduct(Eigen::Vector3d(next(), next(), next()));
+        const Eigen::Vector3d q =
+            lo + (hi - lo).cwiseProduct(Eigen::Vector3d(next(), next(), next()));
         const Occupancy s = snap->state(p);
         double prob = 0.0;
         if (snap->probability(p, &prob) != (s != Occupancy::kUnknown)) failures.fetch_add(1);

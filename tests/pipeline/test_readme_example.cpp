@@ -28,15 +28,15 @@ struct Result {
 
 Result readmeExample(const std::vector<Eigen::Vector3f>& cloud, const mlmap::Transform& T_W_B) {
   // README:begin
-  mlmap::MapConfig config;                    // defaults: 0.1 m voxels, 10 m range
+  mlmap::MapConfig config;  // defaults: 0.1 m voxels, 10 m range
   mlmap::MapEngine engine(config);
   mlmap::PointCloudFrame frame;
   frame.stamp_s = 0.0;
-  frame.points_S = cloud;                     // std::vector<Eigen::Vector3f>, sensor frame S
-  frame.T_W_B = T_W_B;                        // body pose in the world W (here S = B)
+  frame.points_S = cloud;  // std::vector<Eigen::Vector3f>, sensor frame S
+  frame.T_W_B = T_W_B;     // body pose in the world W (here S = B)
   engine.submit(frame);
-  engine.flush();                             // with pipeline.threaded: wait for the map
-  const auto snapshot = engine.snapshot();    // what planners read, from any thread
+  engine.flush();                                      // with pipeline.threaded: wait for the map
+  const auto snapshot = engine.snapshot();             // what planners read, from any thread
   const auto q = snapshot->distance({1.5, 0.0, 0.0});  // q.distance_m, q.gradient, q.valid
   // README:end
   return {q, snapshot->state({2.05, 0.0, 0.0})};
@@ -49,7 +49,7 @@ TEST(ReadmeExample, MapsACloudAndTheEsdfSeesTheWall) {
   // The wall's voxels span x = 2.0 .. 2.1 m: half a metre away, to within a voxel's edge.
   EXPECT_GE(r.near_wall.distance_m, 0.45);
   EXPECT_LE(r.near_wall.distance_m, 0.65);
-  EXPECT_LT(r.near_wall.gradient.x(), -0.9);         // away from the wall: towards -x
+  EXPECT_LT(r.near_wall.gradient.x(), -0.9);  // away from the wall: towards -x
 }
 
 TEST(ReadmeExample, TheReadmeShowsExactlyThisCode) {
@@ -59,7 +59,8 @@ TEST(ReadmeExample, TheReadmeShowsExactlyThisCode) {
     s << in.rdbuf();
     return s.str();
   };
-  const std::string self = read(std::string(MLMAP_SOURCE_DIR) + "/tests/pipeline/test_readme_example.cpp");
+  const std::string self =
+      read(std::string(MLMAP_SOURCE_DIR) + "/tests/pipeline/test_readme_example.cpp");
   const std::string readme = read(std::string(MLMAP_SOURCE_DIR) + "/README.md");
   ASSERT_FALSE(self.empty());
   ASSERT_FALSE(readme.empty());

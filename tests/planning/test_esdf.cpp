@@ -112,7 +112,8 @@ EsdfConfig config(double max_m, UnknownAs unknown_as, int threads = 1) {
 
 // Random scenes of several densities and sizes (non-cubic; more y rows than one 32-row block of
 // the x pass), negative and positive corners, both unknown policies, three clamps (one never
-// reached), one and two threads, the windowed passes and the envelope code. One map per configuration is reused across the scenes.
+// reached), one and two threads, the windowed passes and the envelope code. One map per
+// configuration is reused across the scenes.
 TEST(Esdf, RandomScenesMatchBruteForce) {
   std::mt19937 rng(11);
   struct Shape {
@@ -158,8 +159,7 @@ TEST(Esdf, RandomScenesMatchBruteForce) {
           what << "policy " << toString(policy) << ", max " << setups[i].max_m << " m, "
                << setups[i].threads << " threads, "
                << (setups[i].envelope_only ? "envelope code" : "windowed passes") << ", size "
-               << shape.size.transpose()
-               << ", occupied " << p_occ << ", unknown " << p_unk;
+               << shape.size.transpose() << ", occupied " << p_occ << ", unknown " << p_unk;
           expectMatches(maps[i], box, reference, what.str());
         }
       }
@@ -188,9 +188,9 @@ TEST(Esdf, StructuredScenesMatchBruteForce) {
   fill(&box, {2, -100, -100}, {3, 100, 100}, Occupancy::kOccupied);
   scenes.push_back({"wall", box});
   box.reset(lo, size, 0.25, Occupancy::kFree);
-  fill(&box, {-9, -6, -4}, {9, 7, -3}, Occupancy::kOccupied);  // floor
-  fill(&box, {-6, -3, -2}, {-2, 1, 3}, Occupancy::kOccupied);   // a solid block on it
-  fill(&box, {3, 2, 0}, {6, 5, 2}, Occupancy::kOccupied);       // a floating block
+  fill(&box, {-9, -6, -4}, {9, 7, -3}, Occupancy::kOccupied);         // floor
+  fill(&box, {-6, -3, -2}, {-2, 1, 3}, Occupancy::kOccupied);         // a solid block on it
+  fill(&box, {3, 2, 0}, {6, 5, 2}, Occupancy::kOccupied);             // a floating block
   fill(&box, {7, -100, -100}, {100, 100, 100}, Occupancy::kUnknown);  // unseen slab
   scenes.push_back({"boxes, floor and unknown slab", box});
   box.reset({5, 5, 5}, {1, 1, 40}, 0.2, Occupancy::kFree);
@@ -307,9 +307,9 @@ TEST(Esdf, LongLinesAndFarClampMatchBruteForce) {
     for (const double max_m : {3.0, 1000.0}) {
       EsdfMap map(config(max_m, policy, 2));
       ASSERT_TRUE(map.compute(box));
-      expectMatches(map, box, bruteForceUnclamped(box, policy),
-                    std::string("long lines, ") + toString(policy) + ", max " +
-                        std::to_string(max_m));
+      expectMatches(
+          map, box, bruteForceUnclamped(box, policy),
+          std::string("long lines, ") + toString(policy) + ", max " + std::to_string(max_m));
     }
   }
 }
@@ -360,10 +360,9 @@ TEST(Esdf, TwoThreadsAreBitIdenticalToOne) {
 // included; beyond that clamp compute() keeps the envelope code.
 TEST(Esdf, WindowedPassesEqualTheEnvelopeCode) {
   std::mt19937 rng(23);
-  const std::vector<Eigen::Vector3i> sizes = {
-      {31, 45, 27}, {1, 40, 30}, {25, 1, 33}, {30, 41, 1}, {2, 3, 90}, {70, 66, 2}};
-  const std::vector<std::pair<double, double>> densities = {{0.002, 0.0}, {0.05, 0.2},
-                                                            {0.4, 0.1}};
+  const std::vector<Eigen::Vector3i> sizes = {{31, 45, 27}, {1, 40, 30}, {25, 1, 33},
+                                              {30, 41, 1},  {2, 3, 90},  {70, 66, 2}};
+  const std::vector<std::pair<double, double>> densities = {{0.002, 0.0}, {0.05, 0.2}, {0.4, 0.1}};
   for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
     // Clamps of 1, 2, 7, 20 and kMaxWindowCapCells voxels at 0.1 m, then one beyond.
     for (const double max_m : {0.1, 0.25, 0.7, 2.0, 4.8, 4.95}) {
@@ -378,14 +377,12 @@ TEST(Esdf, WindowedPassesEqualTheEnvelopeCode) {
           EXPECT_FALSE(envelope.windowedPasses());
           // Beyond 4.8 m the clamp (49 voxels) exceeds the windowed passes' unless the box's
           // diagonal is shorter (that is then the clamp: cap_sq = diagonal^2 + 1).
-          const bool long_diagonal =
-              (size - Eigen::Vector3i::Ones()).squaredNorm() + 1 >= 49 * 49;
+          const bool long_diagonal = (size - Eigen::Vector3i::Ones()).squaredNorm() + 1 >= 49 * 49;
           EXPECT_EQ(windowed.windowedPasses(), max_m < 4.9 || !long_diagonal) << max_m;
           const std::string what = std::string(toString(policy)) + ", max " +
-                                   std::to_string(max_m) + " m, size " +
-                                   std::to_string(size.x()) + "x" + std::to_string(size.y()) +
-                                   "x" + std::to_string(size.z()) + ", occupied " +
-                                   std::to_string(p_occ);
+                                   std::to_string(max_m) + " m, size " + std::to_string(size.x()) +
+                                   "x" + std::to_string(size.y()) + "x" + std::to_string(size.z()) +
+                                   ", occupied " + std::to_string(p_occ);
           ASSERT_EQ(windowed.distances().size(), box.states.size()) << what;
           EXPECT_EQ(std::memcmp(windowed.distances().data(), envelope.distances().data(),
                                 box.states.size() * sizeof(float)),
@@ -992,7 +989,7 @@ TEST(Esdf, OneChangedVoxelTouchesOnlyLinesWithinTheClamp) {
     EXPECT_FALSE(u.full);
     EXPECT_EQ(u.changed_states, 1u);
     EXPECT_EQ(u.rows_swept, 1u);
-    EXPECT_LE(u.y_lines, 11u);       // x within +-5 of the voxel, z = 20
+    EXPECT_LE(u.y_lines, 11u);        // x within +-5 of the voxel, z = 20
     EXPECT_LE(u.z_lines, 11u * 11u);  // x and y within +-5
     EXPECT_GT(u.changed_cells, 100u);
     EsdfMap full(config(0.5, UnknownAs::kOccupied));
@@ -1098,9 +1095,9 @@ std::vector<Eigen::Vector3d> queryPoints(const EsdfMap& map, int count, std::mt1
   }
   std::uniform_int_distribution<int> cell(0, 1 << 20);
   for (int i = 0; i < count / 4; ++i) {
-    const VoxelIndex g = map.minIndex() + VoxelIndex(cell(*rng) % map.size().x(),
-                                                     cell(*rng) % map.size().y(),
-                                                     cell(*rng) % map.size().z());
+    const VoxelIndex g =
+        map.minIndex() + VoxelIndex(cell(*rng) % map.size().x(), cell(*rng) % map.size().y(),
+                                    cell(*rng) % map.size().z());
     points.push_back(voxelCenter(g, map.resolution_m()));
   }
   points.push_back(lo);
@@ -1130,8 +1127,9 @@ void expectQueriesWithinBounds(const EsdfQueryGrid& grid, const EsdfMap& map,
     for (int a = 0; a < 3; ++a) {
       const double u = p[a] / map.resolution_m() - 0.5;
       const bool on_centre_plane = std::abs(u - std::round(u)) < 1e-6;
-      gradient_ok = gradient_ok && (on_centre_plane ||
-                                    std::abs(fast.gradient[a] - exact.gradient[a]) <= gradient_bound);
+      gradient_ok =
+          gradient_ok &&
+          (on_centre_plane || std::abs(fast.gradient[a] - exact.gradient[a]) <= gradient_bound);
     }
     const bool ok = fast.valid == exact.valid &&
                     std::abs(fast.distance_m - exact.distance_m) <= distance_bound && gradient_ok &&
@@ -1156,12 +1154,10 @@ TEST(EsdfQueryGrid, QueriesMatchTheExactQueryWithinTheBound) {
     double res;
     double max_m;
   };
-  const Shape shapes[] = {{{-12, 5, -3}, {29, 17, 11}, 0.1, 0.7},
-                          {{3, -8, 100}, {40, 33, 21}, 0.2, 2.0},
-                          {{0, 0, 0}, {1, 9, 13}, 0.15, 1.0},
-                          {{-5, 2, 7}, {11, 1, 6}, 0.1, 0.5},
-                          {{4, 4, -4}, {7, 8, 1}, 0.25, 50.0},
-                          {{0, 0, 0}, {1, 1, 1}, 0.1, 2.0}};
+  const Shape shapes[] = {
+      {{-12, 5, -3}, {29, 17, 11}, 0.1, 0.7}, {{3, -8, 100}, {40, 33, 21}, 0.2, 2.0},
+      {{0, 0, 0}, {1, 9, 13}, 0.15, 1.0},     {{-5, 2, 7}, {11, 1, 6}, 0.1, 0.5},
+      {{4, 4, -4}, {7, 8, 1}, 0.25, 50.0},    {{0, 0, 0}, {1, 1, 1}, 0.1, 2.0}};
   std::mt19937 rng(77);
   for (const Shape& shape : shapes) {
     for (const UnknownAs policy : {UnknownAs::kOccupied, UnknownAs::kFree}) {
@@ -1173,8 +1169,7 @@ TEST(EsdfQueryGrid, QueriesMatchTheExactQueryWithinTheBound) {
       EXPECT_FALSE(grid.query(map.minCorner_W()).valid);
       grid.build(map);
       EXPECT_FALSE(grid.empty());
-      EXPECT_NEAR(grid.distanceErrorBound_m(), 0.5 * shape.max_m / EsdfQueryGrid::kMaxLevel,
-                  1e-15);
+      EXPECT_NEAR(grid.distanceErrorBound_m(), 0.5 * shape.max_m / EsdfQueryGrid::kMaxLevel, 1e-15);
       std::ostringstream what;
       what << "box " << shape.size.transpose() << ", max " << shape.max_m << " m, "
            << toString(policy);
@@ -1247,9 +1242,8 @@ TEST(EsdfQueryGrid, SyncAfterIncrementalUpdatesEqualsAFreshBuild) {
         for (int y = 0; y < box_size.y(); ++y) {
           for (int z = 0; z < box_size.z(); ++z) {
             for (const int x : {0, box_size.x() - 1}) {
-              const Eigen::Vector3d p =
-                  voxelCenter(box.min_index + VoxelIndex(x, y, z), 0.1) +
-                  Eigen::Vector3d(x == 0 ? -0.04 : 0.04, 0.0, 0.0);
+              const Eigen::Vector3d p = voxelCenter(box.min_index + VoxelIndex(x, y, z), 0.1) +
+                                        Eigen::Vector3d(x == 0 ? -0.04 : 0.04, 0.0, 0.0);
               if (synced.query(p).distance_m != fresh.query(p).distance_m && ++failures <= 5) {
                 ADD_FAILURE() << "step " << step << ": face cell " << x << " " << y << " " << z;
               }

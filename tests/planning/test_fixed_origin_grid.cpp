@@ -14,7 +14,8 @@ namespace {
 using Cell = std::pair<int, int>;
 
 /// A rolling grid of `w` x `h` cells at world cell `origin`, random values (a third unknown).
-ProjectedGrid randomGrid(const Cell& origin, int w, int h, double resolution_m, std::mt19937* random) {
+ProjectedGrid randomGrid(const Cell& origin, int w, int h, double resolution_m,
+                         std::mt19937* random) {
   ProjectedGrid grid;
   grid.resolution_m = resolution_m;
   grid.origin_W = Eigen::Vector2d(origin.first, origin.second) * resolution_m;
@@ -24,21 +25,25 @@ ProjectedGrid randomGrid(const Cell& origin, int w, int h, double resolution_m, 
   std::uniform_int_distribution<int> kind(0, 2);
   for (std::int8_t& c : grid.cells) {
     const int k = kind(*random);
-    c = k == 0 ? ProjectedGrid::kUnknown : (k == 1 ? ProjectedGrid::kFree : ProjectedGrid::kOccupied);
+    c = k == 0 ? ProjectedGrid::kUnknown
+               : (k == 1 ? ProjectedGrid::kFree : ProjectedGrid::kOccupied);
   }
   return grid;
 }
 
 /// The reference: every known cell of every rolling grid, the latest value winning.
-void absorbReference(const ProjectedGrid& rolling, const Cell& origin, std::map<Cell, std::int8_t>* ref) {
+void absorbReference(const ProjectedGrid& rolling, const Cell& origin,
+                     std::map<Cell, std::int8_t>* ref) {
   for (int y = 0; y < rolling.height; ++y) {
     for (int x = 0; x < rolling.width; ++x) {
-      if (rolling.at(x, y) != ProjectedGrid::kUnknown) (*ref)[{origin.first + x, origin.second + y}] = rolling.at(x, y);
+      if (rolling.at(x, y) != ProjectedGrid::kUnknown)
+        (*ref)[{origin.first + x, origin.second + y}] = rolling.at(x, y);
     }
   }
 }
 
-void expectEqualToReference(const FixedOriginGrid& fixed, const std::map<Cell, std::int8_t>& ref, int chunk) {
+void expectEqualToReference(const FixedOriginGrid& fixed, const std::map<Cell, std::int8_t>& ref,
+                            int chunk) {
   const ProjectedGrid& g = fixed.grid();
   const double res = g.resolution_m;
   const int ox = static_cast<int>(std::lround(g.origin_W.x() / res));

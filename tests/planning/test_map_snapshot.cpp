@@ -17,9 +17,9 @@ std::shared_ptr<const LocalWindow> sparseWindow(std::mt19937& rng, double res) {
   std::uniform_int_distribution<int> kind(0, 99);
   for (int i = 0; i < w->size.prod(); ++i) {
     const int k = kind(rng);
-    w->log_odds.push_back(k < 4 ? quantizeLogOdds(2.0)                    // occupied
-                          : k < 12 ? kUnknownLogOdds                      // unknown
-                                   : quantizeLogOdds(-1.0));              // free
+    w->log_odds.push_back(k < 4    ? quantizeLogOdds(2.0)     // occupied
+                          : k < 12 ? kUnknownLogOdds          // unknown
+                                   : quantizeLogOdds(-1.0));  // free
   }
   return w;
 }

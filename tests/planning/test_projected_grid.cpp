@@ -69,7 +69,7 @@ void expectMatchesDirect(const LocalWindow& w, const ProjectedGridConfig& c, dou
     }
   }
   if (!c.probability_values) {
-    EXPECT_GT(unknown, 0);   // the scene exercises every value
+    EXPECT_GT(unknown, 0);  // the scene exercises every value
     EXPECT_GT(occupied, 0);
   }
 }

@@ -54,7 +54,8 @@ using test_support::peerConfig;
 /// way a Fast DDS program without mlmap's options, or a ROS 2 XML profile, would do it).
 DdsConfig xmlProfileConfig(int domain_id, const std::string& enclave) {
   const std::string dir = std::filesystem::absolute(kKeystore).string() + "/enclaves" + enclave;
-  const std::string xml = std::filesystem::temp_directory_path().string() + "/mlmap_secure_profile.xml";
+  const std::string xml =
+      std::filesystem::temp_directory_path().string() + "/mlmap_secure_profile.xml";
   std::ofstream out(xml);
   out << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
          "<dds xmlns=\"http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles\"><profiles>\n"
@@ -69,8 +70,10 @@ DdsConfig xmlProfileConfig(int domain_id, const std::string& enclave) {
   property("dds.sec.access.plugin", "builtin.Access-Permissions");
   property("dds.sec.access.builtin.Access-Permissions.permissions_ca",
            "file://" + dir + "/permissions_ca.cert.pem");
-  property("dds.sec.access.builtin.Access-Permissions.governance", "file://" + dir + "/governance.p7s");
-  property("dds.sec.access.builtin.Access-Permissions.permissions", "file://" + dir + "/permissions.p7s");
+  property("dds.sec.access.builtin.Access-Permissions.governance",
+           "file://" + dir + "/governance.p7s");
+  property("dds.sec.access.builtin.Access-Permissions.permissions",
+           "file://" + dir + "/permissions.p7s");
   property("dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC");
   out << "</properties></propertiesPolicy></rtps></participant>\n</profiles></dds>\n";
   DdsConfig config = peerConfig(domain_id, std::nullopt);
@@ -85,9 +88,14 @@ class Peer {
  public:
   Peer(const DdsConfig& config, const std::string& name, bool writers, bool readers = true)
       : participant_(createParticipant(config, name)),
-        local_listener_([this](sensor_msgs::PointCloud2_&& m) { local_points += m.width_(); ++local_maps; },
-                        [](const std::string&) {}),
-        tf_listener_([this](::tf2_msgs::msg::dds_::TFMessage_&&) { ++tf_static; }, [](const std::string&) {}) {
+        local_listener_(
+            [this](sensor_msgs::PointCloud2_&& m) {
+              local_points += m.width_();
+              ++local_maps;
+            },
+            [](const std::string&) {}),
+        tf_listener_([this](::tf2_msgs::msg::dds_::TFMessage_&&) { ++tf_static; },
+                     [](const std::string&) {}) {
     const TopicNames topics;
     if (readers) {
       fdds::Subscriber* subscriber = participant_->create_subscriber(fdds::SUBSCRIBER_QOS_DEFAULT);
@@ -210,7 +218,8 @@ TEST(SecureGraph, OnlyPermittedPeersReadTheLayersAndOnlyTheSensorFeedsTheNode) {
   NodeCounters c = node.counters();
   EXPECT_EQ(c.clouds_received, 0u) << "a cloud of an unauthorised peer reached the node";
   EXPECT_EQ(c.poses_received, 0u) << "a pose of an unauthorised peer reached the node";
-  EXPECT_EQ(c.publishers_matched, 0u) << "the node's readers matched a writer of an unauthorised peer";
+  EXPECT_EQ(c.publishers_matched, 0u)
+      << "the node's readers matched a writer of an unauthorised peer";
   for (Peer* p : {&nobody, &stranger}) {
     EXPECT_EQ(p->matchedWriters(), 0);
     EXPECT_EQ(p->matchedReaders(), 0);
@@ -231,8 +240,8 @@ TEST(SecureGraph, OnlyPermittedPeersReadTheLayersAndOnlyTheSensorFeedsTheNode) {
   c = node.counters();
   EXPECT_TRUE(mapped) << "local map points: monitor " << monitor.local_points << ", XML monitor "
                       << xml_monitor.local_points << ", viewer " << viewer.local_points
-                      << "; node: " << c.clouds_received << " clouds, " << node.engineStats().frames_mapped
-                      << " frames mapped";
+                      << "; node: " << c.clouds_received << " clouds, "
+                      << node.engineStats().frames_mapped << " frames mapped";
   EXPECT_GT(c.clouds_received, 0u);
   EXPECT_GT(node.engineStats().frames_mapped, 0u);
   for (Peer* p : {&nobody, &stranger}) {
@@ -242,15 +251,14 @@ TEST(SecureGraph, OnlyPermittedPeersReadTheLayersAndOnlyTheSensorFeedsTheNode) {
   node.stop();
 }
 
-
 using mlmap::test::TempDir;
 
 using TriggerClient =
     test_support::RmwFastrtpsStyleClient<::std_srvs::srv::dds_::Trigger_Request_PubSubType,
                                          ::std_srvs::srv::dds_::Trigger_Response_PubSubType>;
-using GetClient =
-    test_support::RmwFastrtpsStyleClient<::rcl_interfaces::srv::dds_::GetParameters_Request_PubSubType,
-                                         ::rcl_interfaces::srv::dds_::GetParameters_Response_PubSubType>;
+using GetClient = test_support::RmwFastrtpsStyleClient<
+    ::rcl_interfaces::srv::dds_::GetParameters_Request_PubSubType,
+    ::rcl_interfaces::srv::dds_::GetParameters_Response_PubSubType>;
 
 // Under DDS Security the services are called as the enclaves' permissions say: the monitor calls
 // save_map and reads parameters, the read-only viewer reads parameters but may not write a
@@ -272,7 +280,8 @@ TEST(SecureGraph, ServicesAreCalledAsTheEnclavesPermissionsSay) {
   ::rcl_interfaces::srv::dds_::GetParameters_Request_ get_request;
   get_request.names_({"local_map.resolution_m"});
 
-  const ParticipantPtr monitor = createParticipant(peerConfig(kDomain, "/ground/monitor"), "monitor");
+  const ParticipantPtr monitor =
+      createParticipant(peerConfig(kDomain, "/ground/monitor"), "monitor");
   TriggerClient save(monitor.get(), save_topics);
   GetClient monitor_get(monitor.get(), get_topics);
   ASSERT_TRUE(waitFor([&] { return save.ready() && monitor_get.ready(); }, kSecureTimeout))

@@ -66,7 +66,8 @@ TEST(SecurityConfigYaml, KeysAreReadAndRoundTripAndAnUnsetEnableStaysUnset) {
 
 TEST(SecurityConfigYaml, BadValuesAreErrorsNamingTheKey) {
   const std::pair<const char*, const char*> cases[] = {
-      {"{strategy: Strict}", "dds.security.strategy: must be empty (ROS_SECURITY_STRATEGY), Enforce or Permissive"},
+      {"{strategy: Strict}",
+       "dds.security.strategy: must be empty (ROS_SECURITY_STRATEGY), Enforce or Permissive"},
       {"{enclave: mlmap/node}", "dds.security.enclave: not a valid enclave name"},
       {"{enclave: /mlmap//node}", "dds.security.enclave: not a valid enclave name"},
       {"{enable: maybe}", "dds.security.enable: cannot read"},
@@ -75,21 +76,23 @@ TEST(SecurityConfigYaml, BadValuesAreErrorsNamingTheKey) {
     const std::string yaml = std::string("dds: {security: ") + c.first + "}\n";
     expectThrowWith([&yaml] { parseNodeConfigYaml(yaml, "node.yaml"); }, {"node.yaml", c.second});
   }
-  EXPECT_NO_THROW(parseNodeConfigYaml("dds: {security: {strategy: permissive, enclave: /}}\n", "n"));
+  EXPECT_NO_THROW(
+      parseNodeConfigYaml("dds: {security: {strategy: permissive, enclave: /}}\n", "n"));
 }
 
 /// The properties rmw_fastrtps sets for an enclave folder, written out by hand.
 std::vector<std::pair<std::string, std::string>> rmwProperties(const std::string& dir) {
   const std::string f = "file://" + dir + "/";
-  return {{"dds.sec.auth.plugin", "builtin.PKI-DH"},
-          {"dds.sec.auth.builtin.PKI-DH.identity_ca", f + "identity_ca.cert.pem"},
-          {"dds.sec.auth.builtin.PKI-DH.identity_certificate", f + "cert.pem"},
-          {"dds.sec.auth.builtin.PKI-DH.private_key", f + "key.pem"},
-          {"dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC"},
-          {"dds.sec.access.plugin", "builtin.Access-Permissions"},
-          {"dds.sec.access.builtin.Access-Permissions.permissions_ca", f + "permissions_ca.cert.pem"},
-          {"dds.sec.access.builtin.Access-Permissions.governance", f + "governance.p7s"},
-          {"dds.sec.access.builtin.Access-Permissions.permissions", f + "permissions.p7s"}};
+  return {
+      {"dds.sec.auth.plugin", "builtin.PKI-DH"},
+      {"dds.sec.auth.builtin.PKI-DH.identity_ca", f + "identity_ca.cert.pem"},
+      {"dds.sec.auth.builtin.PKI-DH.identity_certificate", f + "cert.pem"},
+      {"dds.sec.auth.builtin.PKI-DH.private_key", f + "key.pem"},
+      {"dds.sec.crypto.plugin", "builtin.AES-GCM-GMAC"},
+      {"dds.sec.access.plugin", "builtin.Access-Permissions"},
+      {"dds.sec.access.builtin.Access-Permissions.permissions_ca", f + "permissions_ca.cert.pem"},
+      {"dds.sec.access.builtin.Access-Permissions.governance", f + "governance.p7s"},
+      {"dds.sec.access.builtin.Access-Permissions.permissions", f + "permissions.p7s"}};
 }
 
 TEST(ResolveSecurity, TheRos2VariablesAloneSecureAParticipantAsRmwFastrtps) {
@@ -100,7 +103,8 @@ TEST(ResolveSecurity, TheRos2VariablesAloneSecureAParticipantAsRmwFastrtps) {
   EXPECT_TRUE(s.enabled());
   EXPECT_EQ(s.strategy, SecurityStrategy::kEnforce);
   EXPECT_EQ(s.enclave, "/mlmap/node");
-  const std::string dir = (fs::absolute(kKeystore) / "enclaves/mlmap/node").lexically_normal().string();
+  const std::string dir =
+      (fs::absolute(kKeystore) / "enclaves/mlmap/node").lexically_normal().string();
   EXPECT_EQ(s.enclave_dir, dir);
   EXPECT_EQ(s.properties, rmwProperties(dir));
   EXPECT_EQ(s.warning, "");
@@ -111,8 +115,8 @@ TEST(ResolveSecurity, TheRos2VariablesAloneSecureAParticipantAsRmwFastrtps) {
   dds.discovery_range = "LOCALHOST";
   const ParticipantSetup setup = participantSetup(dds, "secured");
   for (const auto& [name, value] : rmwProperties(dir)) {
-    const std::string* found = eprosima::fastrtps::rtps::PropertyPolicyHelper::find_property(
-        setup.qos.properties(), name);
+    const std::string* found =
+        eprosima::fastrtps::rtps::PropertyPolicyHelper::find_property(setup.qos.properties(), name);
     ASSERT_NE(found, nullptr) << name;
     EXPECT_EQ(*found, value);
   }
@@ -184,8 +188,9 @@ TEST(ResolveSecurity, AMissingFileStopsEnforceNamingItAndPermissiveRunsUnsecured
     config.keystore = keystoreWithout(name);
     config.enclave = "/ground/monitor";
     config.strategy = "Enforce";
-    expectThrowWith<std::invalid_argument>([&] { resolveSecurity(config); },
-                                           {"Enforce", std::string("enclaves/ground/monitor/") + name});
+    expectThrowWith<std::invalid_argument>(
+        [&] { resolveSecurity(config); },
+        {"Enforce", std::string("enclaves/ground/monitor/") + name});
     DdsConfig dds;
     dds.domain_id = 199;
     dds.discovery_range = "LOCALHOST";
@@ -198,7 +203,8 @@ TEST(ResolveSecurity, AMissingFileStopsEnforceNamingItAndPermissiveRunsUnsecured
     EXPECT_FALSE(setup.security.enabled());
     // The missing file's path (the keystore's folder name also holds `name`).
     EXPECT_NE(setup.security.warning.find(std::string("enclaves/ground/monitor/") + name),
-              std::string::npos) << setup.security.warning;
+              std::string::npos)
+        << setup.security.warning;
     EXPECT_NE(setup.security.warning.find("WITHOUT security"), std::string::npos);
     EXPECT_EQ(eprosima::fastrtps::rtps::PropertyPolicyHelper::find_property(setup.qos.properties(),
                                                                             "dds.sec.auth.plugin"),
@@ -209,10 +215,12 @@ TEST(ResolveSecurity, AMissingFileStopsEnforceNamingItAndPermissiveRunsUnsecured
   SecurityConfig config;
   config.enable = true;
   config.strategy = "Enforce";
-  expectThrowWith<std::invalid_argument>([&] { resolveSecurity(config); }, {"ROS_SECURITY_KEYSTORE"});
+  expectThrowWith<std::invalid_argument>([&] { resolveSecurity(config); },
+                                         {"ROS_SECURITY_KEYSTORE"});
   config.keystore = kKeystore;
   config.enclave = "/no/such/enclave";
-  expectThrowWith<std::invalid_argument>([&] { resolveSecurity(config); }, {"enclaves/no/such/enclave"});
+  expectThrowWith<std::invalid_argument>([&] { resolveSecurity(config); },
+                                         {"enclaves/no/such/enclave"});
   config.strategy = "Permissive";
   EXPECT_FALSE(resolveSecurity(config).enabled());
 }

@@ -86,10 +86,10 @@ TEST(Lidar, EveryRayInAClosedRoomReturnsItsWallDistance) {
   const Lidar lidar(model);
   // A rotated, offset sensor.
   Transform T_W_S = Transform::Identity();
-  T_W_S.linear() = (Eigen::AngleAxisd(0.7, Vector3d::UnitZ()) *
-                    Eigen::AngleAxisd(0.2, Vector3d::UnitY()) *
-                    Eigen::AngleAxisd(-0.1, Vector3d::UnitX()))
-                       .toRotationMatrix();
+  T_W_S.linear() =
+      (Eigen::AngleAxisd(0.7, Vector3d::UnitZ()) * Eigen::AngleAxisd(0.2, Vector3d::UnitY()) *
+       Eigen::AngleAxisd(-0.1, Vector3d::UnitX()))
+          .toRotationMatrix();
   T_W_S.translation() = Vector3d(1.0, 0.5, 0.3);
   PointCloudFrame frame;
   frame.T_B_S.translation() = Vector3d(9, 9, 9);  // untouched by render

@@ -23,7 +23,8 @@ TEST(Vehicle, NeverExceedsItsLimitsWhateverTheSetpoints) {
     const VehicleState& after = vehicle.state();
     ASSERT_LE(after.velocity_W.norm(), limits.max_speed_mps + 1e-9);
     ASSERT_LE((after.velocity_W - before.velocity_W).norm(), limits.max_accel_mps2 * dt + 1e-9);
-    ASSERT_LE(std::abs(wrapAngle(after.yaw_rad - before.yaw_rad)), limits.max_yaw_rate_radps * dt + 1e-9);
+    ASSERT_LE(std::abs(wrapAngle(after.yaw_rad - before.yaw_rad)),
+              limits.max_yaw_rate_radps * dt + 1e-9);
     ASSERT_TRUE((after.position_W - before.position_W).isApprox(after.velocity_W * dt));
   }
 }
@@ -43,8 +44,8 @@ TEST(Vehicle, ReachesAPositionSetpointAndTurnsTheShorterWay) {
   EXPECT_GT(yaw_min, 2.9);  // through pi, not through 0
   const Transform T = vehicle.state().T_W_B();
   EXPECT_TRUE(T.translation().isApprox(target, 1e-3));
-  EXPECT_TRUE((T.linear() * Eigen::Vector3d::UnitX()).isApprox(
-      Eigen::Vector3d(std::cos(-3.0), std::sin(-3.0), 0.0)));
+  EXPECT_TRUE((T.linear() * Eigen::Vector3d::UnitX())
+                  .isApprox(Eigen::Vector3d(std::cos(-3.0), std::sin(-3.0), 0.0)));
 }
 
 TEST(Vehicle, WrapAngleMapsIntoMinusPiToPi) {

@@ -282,7 +282,8 @@ TEST(WorldRaycast, CandidatesGiveTheSameHits) {
   RayCandidates candidates;
   int hits = 0;
   for (int bundle = 0; bundle < 60; ++bundle) {
-    const Vector3d o = Vector3d(1.0, 1.0, 0.2) + test::draw3(unit, rng).cwiseProduct(Vector3d(28.0, 18.0, 3.5));
+    const Vector3d o =
+        Vector3d(1.0, 1.0, 0.2) + test::draw3(unit, rng).cwiseProduct(Vector3d(28.0, 18.0, 3.5));
     const double time_s = 16.0 * unit(rng);
     // A random pyramid: an axis with two orthogonal spreads.
     const Vector3d axis = test::draw3(n, rng).cwiseProduct(Vector3d(1.0, 1.0, 0.3)).normalized();

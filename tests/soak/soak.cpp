@@ -59,13 +59,13 @@ constexpr int kDefaultFramesPerLap = 5000;
 constexpr bool kRssMeaningful = true;
 #endif
 
-constexpr double kFramePeriod_s = 0.1;     // a 10 Hz LiDAR
-constexpr double kFieldLength_m = 200.0;   // lawnmower rows along x
-constexpr double kRowSpacing_m = 15.0;     // rows at y = 0, 15, 30, 45
+constexpr double kFramePeriod_s = 0.1;    // a 10 Hz LiDAR
+constexpr double kFieldLength_m = 200.0;  // lawnmower rows along x
+constexpr double kRowSpacing_m = 15.0;    // rows at y = 0, 15, 30, 45
 constexpr int kRows = 4;
 constexpr double kFlightHeight_m = 1.5;
-constexpr int kFlushEvery = 16;            // frames between flushes: nothing is ever dropped
-constexpr double kFaceSlack_m = 1e-4;      // points this close to a voxel face hit both sides
+constexpr int kFlushEvery = 16;        // frames between flushes: nothing is ever dropped
+constexpr double kFaceSlack_m = 1e-4;  // points this close to a voxel face hit both sides
 
 /// Resident set size now [bytes] (/proc/self/statm), 0 when unknown.
 std::size_t currentRssBytes() {
@@ -79,7 +79,8 @@ double mb(std::size_t bytes) { return static_cast<double>(bytes) / 1e6; }
 
 struct VoxelHash {
   std::size_t operator()(const VoxelIndex& v) const {
-    return (static_cast<std::size_t>(v.x()) * 73856093u) ^ (static_cast<std::size_t>(v.y()) * 19349663u) ^
+    return (static_cast<std::size_t>(v.x()) * 73856093u) ^
+           (static_cast<std::size_t>(v.y()) * 19349663u) ^
            (static_cast<std::size_t>(v.z()) * 83492791u);
   }
 };
@@ -87,13 +88,15 @@ struct VoxelHash {
 /// A ground slab and rows of pillars and crates between the flight rows, at least 6 m from them.
 sim::World fieldWorld() {
   sim::World world;
-  world.addBox({Eigen::Vector3d(-30.0, -30.0, -0.5), Eigen::Vector3d(kFieldLength_m + 30.0, 75.0, 0.0)});
+  world.addBox(
+      {Eigen::Vector3d(-30.0, -30.0, -0.5), Eigen::Vector3d(kFieldLength_m + 30.0, 75.0, 0.0)});
   for (int row = -1; row < kRows; ++row) {
     const double y = (row + 0.5) * kRowSpacing_m;
     for (double x = 0.0; x <= kFieldLength_m; x += 10.0) {
       const int k = static_cast<int>(x / 10.0) + 7 * (row + 1);
       if (k % 3 == 0) {
-        world.addBox({Eigen::Vector3d(x - 0.7, y - 0.7, 0.0), Eigen::Vector3d(x + 0.7, y + 0.7, 1.0 + (k % 4))});
+        world.addBox({Eigen::Vector3d(x - 0.7, y - 0.7, 0.0),
+                      Eigen::Vector3d(x + 0.7, y + 0.7, 1.0 + (k % 4))});
       } else {
         world.addCylinder({Eigen::Vector2d(x, y), 0.4 + 0.1 * (k % 3), 0.0, 2.0 + (k % 5)});
       }
@@ -142,8 +145,9 @@ void writeChart(const std::string& path, const std::vector<Sample>& samples, int
   max_mb *= 1.1;
   const int last = samples.empty() ? 1 : std::max(1, samples.back().frame);
   auto px = [&](int frame, double mb) {
-    return cv::Point(left + static_cast<int>((w - left - right) * static_cast<double>(frame) / last),
-                     h - bottom - static_cast<int>((h - top - bottom) * mb / max_mb));
+    return cv::Point(
+        left + static_cast<int>((w - left - right) * static_cast<double>(frame) / last),
+        h - bottom - static_cast<int>((h - top - bottom) * mb / max_mb));
   };
   cv::rectangle(img, px(0, 0.0), px(last, max_mb), cv::Scalar(0, 0, 0));
   for (int f = frames_per_lap; f < last; f += frames_per_lap) {
@@ -151,13 +155,14 @@ void writeChart(const std::string& path, const std::vector<Sample>& samples, int
   }
   for (int k = 0; k <= 4; ++k) {
     const double mb = max_mb * k / 4.0;
-    cv::putText(img, cv::format("%.0f MB", mb), px(0, mb) + cv::Point(-65, 5), cv::FONT_HERSHEY_SIMPLEX,
-                0.4, cv::Scalar(0, 0, 0));
+    cv::putText(img, cv::format("%.0f MB", mb), px(0, mb) + cv::Point(-65, 5),
+                cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0));
   }
-  cv::putText(img, cv::format("frames (0 .. %d; a grey line per lap)", last), cv::Point(left, h - 15),
-              cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0));
-  cv::putText(img, "* with the test's set of hit voxels (lap 1)", cv::Point(w - right + 10, h - bottom),
-              cv::FONT_HERSHEY_SIMPLEX, 0.35, cv::Scalar(0, 0, 0));
+  cv::putText(img, cv::format("frames (0 .. %d; a grey line per lap)", last),
+              cv::Point(left, h - 15), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0));
+  cv::putText(img, "* with the test's set of hit voxels (lap 1)",
+              cv::Point(w - right + 10, h - bottom), cv::FONT_HERSHEY_SIMPLEX, 0.35,
+              cv::Scalar(0, 0, 0));
   struct Series {
     const char* name;
     cv::Scalar bgr;
@@ -167,7 +172,8 @@ void writeChart(const std::string& path, const std::vector<Sample>& samples, int
       {"process RSS *", cv::Scalar(0, 0, 0), [](const Sample& s) { return s.rss; }},
       {"engine total", cv::Scalar(200, 0, 0), [](const Sample& s) { return s.memory.total(); }},
       {"planning", cv::Scalar(0, 150, 0), [](const Sample& s) { return s.memory.planning_bytes; }},
-      {"awareness", cv::Scalar(0, 140, 255), [](const Sample& s) { return s.memory.awareness_bytes; }},
+      {"awareness", cv::Scalar(0, 140, 255),
+       [](const Sample& s) { return s.memory.awareness_bytes; }},
       {"local map", cv::Scalar(200, 0, 200), [](const Sample& s) { return s.memory.local_bytes; }},
       {"global map", cv::Scalar(0, 0, 230), [](const Sample& s) { return s.memory.global_bytes; }},
   };
@@ -177,9 +183,10 @@ void writeChart(const std::string& path, const std::vector<Sample>& samples, int
       cv::line(img, px(samples[i - 1].frame, static_cast<double>(s.bytes(samples[i - 1])) / 1e6),
                px(samples[i].frame, static_cast<double>(s.bytes(samples[i])) / 1e6), s.bgr, 2);
     }
-    cv::line(img, cv::Point(w - right + 15, legend_y), cv::Point(w - right + 40, legend_y), s.bgr, 2);
-    cv::putText(img, s.name, cv::Point(w - right + 45, legend_y + 5), cv::FONT_HERSHEY_SIMPLEX, 0.45,
-                cv::Scalar(0, 0, 0));
+    cv::line(img, cv::Point(w - right + 15, legend_y), cv::Point(w - right + 40, legend_y), s.bgr,
+             2);
+    cv::putText(img, s.name, cv::Point(w - right + 45, legend_y + 5), cv::FONT_HERSHEY_SIMPLEX,
+                0.45, cv::Scalar(0, 0, 0));
     legend_y += 22;
   }
   pictures::writePng(path, img);
@@ -188,8 +195,9 @@ void writeChart(const std::string& path, const std::vector<Sample>& samples, int
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"mlmap_soak: a long simulated LiDAR flight, lap after lap over the same ground, through "
-               "the threaded MapEngine; checks that memory levels off"};
+  CLI::App app{
+      "mlmap_soak: a long simulated LiDAR flight, lap after lap over the same ground, through "
+      "the threaded MapEngine; checks that memory levels off"};
   int laps = 4;
   int frames_per_lap = kDefaultFramesPerLap;
   int beams = 8, azimuth_steps = 120;
@@ -201,10 +209,12 @@ int main(int argc, char** argv) {
                  "LiDAR scans per lap, at 10 Hz (the speed follows); 1500 under AddressSanitizer")
       ->check(CLI::Range(100, 1000000));
   app.add_option("--beams", beams, "LiDAR beams")->check(CLI::Range(1, 128));
-  app.add_option("--azimuth-steps", azimuth_steps, "LiDAR columns over 360 deg")->check(CLI::Range(1, 2048));
+  app.add_option("--azimuth-steps", azimuth_steps, "LiDAR columns over 360 deg")
+      ->check(CLI::Range(1, 2048));
   app.add_option("--png", png_path, "memory over frames (empty: none)");
-  app.add_flag("!--no-rss-check", check_rss,
-               "skip the RSS check (valgrind has its own allocator; skipped under AddressSanitizer)");
+  app.add_flag(
+      "!--no-rss-check", check_rss,
+      "skip the RSS check (valgrind has its own allocator; skipped under AddressSanitizer)");
   CLI11_PARSE(app, argc, argv);
 
   MapConfig config;  // 0.2 m voxels, the paper's 19 x 19 x 7 m window
@@ -223,11 +233,12 @@ int main(int argc, char** argv) {
   const sim::Trajectory path = lapPath(pathLength_m() / lap_duration_s);
   const double res = config.local_map.resolution_m;
 
-  std::printf("soak: %d laps x %d LiDAR scans (%d x %d rays, %.0f m range) over a %.0f m lawnmower path "
-              "at %.2f m/s, %.1f m voxels, window %d x %d x %d, threaded engine\n",
-              laps, frames_per_lap, beams, azimuth_steps, model.max_range_m, path.length_m(),
-              path.speed_mps(), res, config.local_map.size_cells.x(), config.local_map.size_cells.y(),
-              config.local_map.size_cells.z());
+  std::printf(
+      "soak: %d laps x %d LiDAR scans (%d x %d rays, %.0f m range) over a %.0f m lawnmower path "
+      "at %.2f m/s, %.1f m voxels, window %d x %d x %d, threaded engine\n",
+      laps, frames_per_lap, beams, azimuth_steps, model.max_range_m, path.length_m(),
+      path.speed_mps(), res, config.local_map.size_cells.x(), config.local_map.size_cells.y(),
+      config.local_map.size_cells.z());
 
   std::vector<Sample> samples;
   std::vector<LapRow> rows;
@@ -265,7 +276,8 @@ int main(int argc, char** argv) {
             }
           }
         }
-        if (engine.submit(frame) != FrameStatus::kAccepted) fail("frame " + std::to_string(n) + " refused");
+        if (engine.submit(frame) != FrameStatus::kAccepted)
+          fail("frame " + std::to_string(n) + " refused");
         if ((n + 1) % kFlushEvery == 0) engine.flush();
         if ((n + 1) % 200 == 0) {
           engine.flush();
@@ -283,7 +295,8 @@ int main(int argc, char** argv) {
       const EngineStats s = engine.stats();
       LapRow row;
       row.frames = (lap + 1) * frames_per_lap;
-      row.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - lap_start).count();
+      row.seconds =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - lap_start).count();
       row.rss = currentRssBytes();
       row.peak_rss = eval::peakRssBytes();
       row.memory = s.memory;
@@ -294,62 +307,70 @@ int main(int argc, char** argv) {
       row.occupied_voxels = occupied.size();
       const std::unordered_set<VoxelIndex, VoxelHash> distinct(occupied.begin(), occupied.end());
       if (distinct.size() != occupied.size()) {
-        fail("lap " + std::to_string(lap + 1) + ": " + std::to_string(occupied.size() - distinct.size()) +
+        fail("lap " + std::to_string(lap + 1) + ": " +
+             std::to_string(occupied.size() - distinct.size()) +
              " voxels are stored twice (local and global, or twice in the global map)");
       }
       std::size_t never_hit = 0;
       for (const VoxelIndex& v : occupied) never_hit += hit_voxels.count(v) == 0 ? 1 : 0;
-      if (never_hit > 0) fail(std::to_string(never_hit) + " occupied voxels were never hit by a point");
+      if (never_hit > 0)
+        fail(std::to_string(never_hit) + " occupied voxels were never hit by a point");
       rows.push_back(row);
       if (s.frames_mapped != static_cast<std::uint64_t>(row.frames) || s.frames_dropped != 0) {
-        fail("mapped " + std::to_string(s.frames_mapped) + " of " + std::to_string(row.frames) + " frames, " +
-             std::to_string(s.frames_dropped) + " dropped");
+        fail("mapped " + std::to_string(s.frames_mapped) + " of " + std::to_string(row.frames) +
+             " frames, " + std::to_string(s.frames_dropped) + " dropped");
       }
     }
   }  // the engine's threads join and every layer is freed here; LeakSanitizer checks at exit
 
-  std::printf("\n%-5s %7s %8s %9s %9s %10s %9s %10s %11s %10s %12s %9s\n", "lap", "time s", "frames", "RSS MB", "peak MB",
-              "engine MB", "local MB", "global MB", "planning MB", "awareness", "global vox", "submaps");
+  std::printf("\n%-5s %7s %8s %9s %9s %10s %9s %10s %11s %10s %12s %9s\n", "lap", "time s",
+              "frames", "RSS MB", "peak MB", "engine MB", "local MB", "global MB", "planning MB",
+              "awareness", "global vox", "submaps");
   for (std::size_t k = 0; k < rows.size(); ++k) {
     const LapRow& r = rows[k];
-    std::printf("%-5zu %7.1f %8d %9.1f %9.1f %10.2f %9.2f %10.2f %11.2f %10.2f %12zu %9llu\n", k + 1, r.seconds, r.frames,
-                mb(r.rss), mb(r.peak_rss), mb(r.memory.total()), mb(r.memory.local_bytes),
-                mb(r.memory.global_bytes), mb(r.memory.planning_bytes), mb(r.memory.awareness_bytes),
-                r.global_voxels, static_cast<unsigned long long>(r.submaps_retired + r.submaps_restored));
+    std::printf("%-5zu %7.1f %8d %9.1f %9.1f %10.2f %9.2f %10.2f %11.2f %10.2f %12zu %9llu\n",
+                k + 1, r.seconds, r.frames, mb(r.rss), mb(r.peak_rss), mb(r.memory.total()),
+                mb(r.memory.local_bytes), mb(r.memory.global_bytes), mb(r.memory.planning_bytes),
+                mb(r.memory.awareness_bytes), r.global_voxels,
+                static_cast<unsigned long long>(r.submaps_retired + r.submaps_restored));
   }
   const LapRow& first = rows.front();
-  std::printf("distinct voxels hit in lap 1: %zu; occupied at the end: %zu (%zu in the global map, "
-              "%.1f B per global voxel)\n",
-              hit_voxels.size(), rows.back().occupied_voxels, rows.back().global_voxels,
-              rows.back().global_voxels ? static_cast<double>(rows.back().memory.global_bytes) /
-                                              static_cast<double>(rows.back().global_voxels)
-                                        : 0.0);
+  std::printf(
+      "distinct voxels hit in lap 1: %zu; occupied at the end: %zu (%zu in the global map, "
+      "%.1f B per global voxel)\n",
+      hit_voxels.size(), rows.back().occupied_voxels, rows.back().global_voxels,
+      rows.back().global_voxels ? static_cast<double>(rows.back().memory.global_bytes) /
+                                      static_cast<double>(rows.back().global_voxels)
+                                : 0.0);
 
   if (rows.size() >= 2) {
     const LapRow& prev = rows[rows.size() - 2];
     const LapRow& last = rows.back();
     // Revisits: the same ground seen again from the same poses. Voxels on the edge of what the
     // window kept may flip, so a few may come and go, but nothing like a lap's worth.
-    const double added = static_cast<double>(last.global_voxels) - static_cast<double>(prev.global_voxels);
+    const double added =
+        static_cast<double>(last.global_voxels) - static_cast<double>(prev.global_voxels);
     if (added > 0.01 * static_cast<double>(first.global_voxels)) {
-      fail("the last lap added " + std::to_string(added) + " global voxels, more than 1 % of the first lap's " +
+      fail("the last lap added " + std::to_string(added) +
+           " global voxels, more than 1 % of the first lap's " +
            std::to_string(first.global_voxels));
     }
-    const double bytes_per_voxel_first =
-        static_cast<double>(first.memory.global_bytes) / std::max(1.0, static_cast<double>(first.global_voxels));
-    const double bytes_per_voxel_last =
-        static_cast<double>(last.memory.global_bytes) / std::max(1.0, static_cast<double>(last.global_voxels));
+    const double bytes_per_voxel_first = static_cast<double>(first.memory.global_bytes) /
+                                         std::max(1.0, static_cast<double>(first.global_voxels));
+    const double bytes_per_voxel_last = static_cast<double>(last.memory.global_bytes) /
+                                        std::max(1.0, static_cast<double>(last.global_voxels));
     if (bytes_per_voxel_last > 1.05 * bytes_per_voxel_first) {
-      fail("global map bytes per voxel grew from " + std::to_string(bytes_per_voxel_first) + " to " +
-           std::to_string(bytes_per_voxel_last));
+      fail("global map bytes per voxel grew from " + std::to_string(bytes_per_voxel_first) +
+           " to " + std::to_string(bytes_per_voxel_last));
     }
     const double rss_growth = static_cast<double>(last.rss) - static_cast<double>(prev.rss);
-    const double engine_growth =
-        std::max(0.0, static_cast<double>(last.memory.total()) - static_cast<double>(prev.memory.total()));
+    const double engine_growth = std::max(
+        0.0, static_cast<double>(last.memory.total()) - static_cast<double>(prev.memory.total()));
     const double bound = engine_growth + 0.1 * static_cast<double>(last.memory.total());
-    std::printf("last lap: RSS %+.2f MB, engine accounting %+.2f MB; bound %.2f MB%s\n", rss_growth / 1e6,
-                (static_cast<double>(last.memory.total()) - static_cast<double>(prev.memory.total())) / 1e6,
-                bound / 1e6, check_rss ? "" : " (not checked)");
+    std::printf(
+        "last lap: RSS %+.2f MB, engine accounting %+.2f MB; bound %.2f MB%s\n", rss_growth / 1e6,
+        (static_cast<double>(last.memory.total()) - static_cast<double>(prev.memory.total())) / 1e6,
+        bound / 1e6, check_rss ? "" : " (not checked)");
     if (check_rss && rss_growth > bound) {
       fail("RSS grew by " + std::to_string(rss_growth / 1e6) + " MB in the last lap, bound " +
            std::to_string(bound / 1e6) + " MB");

@@ -6,7 +6,8 @@
 
 namespace {
 
-constexpr std::size_t kHeaderBytes = 16;  // the size, kept before each block (keeps 16-byte alignment)
+constexpr std::size_t kHeaderBytes =
+    16;  // the size, kept before each block (keeps 16-byte alignment)
 
 std::atomic<std::size_t> g_live_bytes{0};
 std::atomic<std::size_t> g_peak_bytes{0};
@@ -80,7 +81,9 @@ AllocationScope::AllocationScope(std::size_t cap_bytes) {
 
 AllocationScope::~AllocationScope() { g_cap_bytes = 0; }
 
-std::size_t AllocationScope::peakBytes() const { return g_peak_bytes.load() - g_scope_base_bytes.load(); }
+std::size_t AllocationScope::peakBytes() const {
+  return g_peak_bytes.load() - g_scope_base_bytes.load();
+}
 
 bool AllocationScope::capHit() const { return g_cap_hit.load(); }
 

@@ -18,7 +18,8 @@ template <typename T>
 void putBytes(std::string* out, T v, bool big_endian = false) {
   unsigned char b[sizeof(T)];
   std::memcpy(b, &v, sizeof(T));
-  for (std::size_t i = 0; i < sizeof(T); ++i) out->push_back(static_cast<char>(b[big_endian ? sizeof(T) - 1 - i : i]));
+  for (std::size_t i = 0; i < sizeof(T); ++i)
+    out->push_back(static_cast<char>(b[big_endian ? sizeof(T) - 1 - i : i]));
 }
 
 inline std::string fmt(double v) {
@@ -44,7 +45,8 @@ inline std::string lzfCompress(const std::string& in) {
   std::vector<long> last(1 << 16, -1);
   auto key = [&](std::size_t at) {
     return (static_cast<unsigned char>(in[at]) << 8 ^ static_cast<unsigned char>(in[at + 1]) << 4 ^
-            static_cast<unsigned char>(in[at + 2])) & 0xffff;
+            static_cast<unsigned char>(in[at + 2])) &
+           0xffff;
   };
   auto matchLength = [&](std::size_t i, std::size_t d) {
     std::size_t len = 0;
@@ -58,7 +60,8 @@ inline std::string lzfCompress(const std::string& in) {
     for (std::size_t d = 1; d <= std::min<std::size_t>(i, 16); ++d) distances.push_back(d);
     if (i + 2 < in.size()) {
       const long at = last[static_cast<std::size_t>(key(i))];
-      if (at >= 0 && i - static_cast<std::size_t>(at) <= 8192) distances.push_back(i - static_cast<std::size_t>(at));
+      if (at >= 0 && i - static_cast<std::size_t>(at) <= 8192)
+        distances.push_back(i - static_cast<std::size_t>(at));
       last[static_cast<std::size_t>(key(i))] = static_cast<long>(i);
     }
     for (std::size_t d : distances) {
@@ -94,8 +97,9 @@ enum class PcdData { kAscii, kBinary, kBinaryCompressed };
 /// Options of the PCD writer.
 struct PcdOptions {
   PcdData data = PcdData::kAscii;
-  bool f8 = false;           ///< x y z as F8 instead of F4
-  bool extra_fields = true;  ///< intensity (F4) before x, a COUNT 3 U1 field, a U2 and an I8 after z
+  bool f8 = false;  ///< x y z as F8 instead of F4
+  bool extra_fields =
+      true;  ///< intensity (F4) before x, a COUNT 3 U1 field, a U2 and an I8 after z
   std::uint32_t height = 1;  ///< organised when > 1 (the point count must divide)
   std::string viewpoint = "0 0 0 1 0 0 0";
 };
@@ -180,7 +184,8 @@ enum class PlyFormat { kAscii, kBinaryLittleEndian, kBinaryBigEndian };
 
 /// A PLY file of `points`: a `material` element with a list before the vertices, vertices with
 /// extra properties (nx, red, a list) and x y z as float or double, and faces (lists) after.
-inline std::string makePly(const std::vector<Eigen::Vector3d>& points, PlyFormat format, bool doubles) {
+inline std::string makePly(const std::vector<Eigen::Vector3d>& points, PlyFormat format,
+                           bool doubles) {
   const bool ascii = format == PlyFormat::kAscii;
   const bool be = format == PlyFormat::kBinaryBigEndian;
   const char* t = doubles ? "double" : "float";

@@ -13,9 +13,7 @@ namespace mlmap::test {
 
 using Key = std::tuple<int, int, int>;
 inline Key key(const VoxelIndex& v) { return {v.x(), v.y(), v.z()}; }
-inline VoxelIndex index(const Key& k) {
-  return {std::get<0>(k), std::get<1>(k), std::get<2>(k)};
-}
+inline VoxelIndex index(const Key& k) { return {std::get<0>(k), std::get<1>(k), std::get<2>(k)}; }
 
 /// Voxels a segment passes through for at least `min_fraction * resolution` of its length: cut
 /// it at every grid plane it crosses and take the voxel of each piece's midpoint. A voxel the

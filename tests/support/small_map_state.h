@@ -20,7 +20,8 @@ inline MapState smallMapState() {
   // Runs of unknown and observed voxels of every length from 0 to 4, values across the bounds.
   s.window.log_odds.assign(1000, kUnknownLogOdds);
   for (int i = 0; i < 1000; ++i) {
-    if (i % 9 >= 4 || i % 5 == 0) s.window.log_odds[i] = static_cast<LogOddsQ>(-2000 + (i * 37) % 5501);
+    if (i % 9 >= 4 || i % 5 == 0)
+      s.window.log_odds[i] = static_cast<LogOddsQ>(-2000 + (i * 37) % 5501);
   }
   s.global_submaps.push_back({SubmapIndex(-9, 0, 1), {{0, 850}, {5, 1700}}});
   s.global_submaps.push_back({SubmapIndex(3, 4, 5), {{7, 3500}}});

@@ -60,7 +60,9 @@ class AwarenessMap {
   /// World position of a cell centre.
   [[nodiscard]] Eigen::Vector3d cellCenter(const AwarenessCell& cell) const;
   /// One measured world point per occupied cell (hits of this frame and carried obstacles).
-  [[nodiscard]] const std::vector<Eigen::Vector3d>& occupiedPoints() const { return occupied_points_; }
+  [[nodiscard]] const std::vector<Eigen::Vector3d>& occupiedPoints() const {
+    return occupied_points_;
+  }
   /// Call after the hits and rays: clears the rays' cones (a hit of the frame is never cleared),
   /// then gathers occupiedPoints() for output and for the next frame's transfer.
   void endFrame();
@@ -76,8 +78,8 @@ class AwarenessMap {
   // Cell flags.
   static constexpr std::uint8_t kFreeBit = 1;
   static constexpr std::uint8_t kOccupiedBit = 2;
-  static constexpr std::uint8_t kHitBit = 4;      // hit in this frame: cannot be cleared
-  static constexpr std::uint8_t kWalkedBit = 8;   // cone to this cell already cast this frame
+  static constexpr std::uint8_t kHitBit = 4;     // hit in this frame: cannot be cleared
+  static constexpr std::uint8_t kWalkedBit = 8;  // cone to this cell already cast this frame
 
   [[nodiscard]] std::size_t linear(int rho, int phi, int z) const {
     return (static_cast<std::size_t>(phi) * static_cast<std::size_t>(config_.rho_cells) +
@@ -103,8 +105,8 @@ class AwarenessMap {
     std::size_t cell;
     Eigen::Vector3d p_W;
   };
-  std::vector<Carried> carried_;   // obstacles of earlier frames, re-indexed
-  std::vector<Carried> hits_;      // hit cells of this frame
+  std::vector<Carried> carried_;  // obstacles of earlier frames, re-indexed
+  std::vector<Carried> hits_;     // hit cells of this frame
   std::vector<AwarenessCell> hit_cells_;
   /// A 2D cone of this frame, cleared by sweepCones(): slopes z / rho to the end cell's corners,
   /// and the z range it covers in its own end column.
@@ -117,7 +119,7 @@ class AwarenessMap {
     double end_hi = 0.0;
   };
   std::vector<Cone> cones_;
-  std::vector<std::pair<double, double>> merged_;        // disjoint slope intervals, sorted
+  std::vector<std::pair<double, double>> merged_;  // disjoint slope intervals, sorted
   std::vector<std::pair<double, double>> merge_scratch_;
   std::vector<Eigen::Vector3d> occupied_points_;
 };

@@ -17,10 +17,10 @@ namespace mlmap {
 
 /// What happened to the points of frames (summed over frames by the engine).
 struct PointCounters {
-  std::uint64_t points_in = 0;           ///< points received
-  std::uint64_t rejected_non_finite = 0; ///< NaN / Inf coordinates
-  std::uint64_t rejected_too_close = 0;  ///< closer than awareness.min_range_m (incl. zero range)
-  std::uint64_t beyond_max_range = 0;    ///< cut at max_range_m: clear their ray, are no hit
+  std::uint64_t points_in = 0;            ///< points received
+  std::uint64_t rejected_non_finite = 0;  ///< NaN / Inf coordinates
+  std::uint64_t rejected_too_close = 0;   ///< closer than awareness.min_range_m (incl. zero range)
+  std::uint64_t beyond_max_range = 0;     ///< cut at max_range_m: clear their ray, are no hit
   /// Within range but farther from the sensor than the local map can hold (3 submaps beyond the
   /// body's): they mark the awareness map and clear their ray, and their voxels get a hit in the
   /// global map (MeasurementBatch::far_hits).
@@ -28,9 +28,9 @@ struct PointCounters {
   /// Of them, the points within the local map's horizontal reach but above or below it (a
   /// LiDAR's upper and lower beams): a taller local_map.size_cells z holds them.
   std::uint64_t hits_above_or_below_local_map = 0;
-  std::uint64_t sampled_out = 0;         ///< left out by sample_count
-  std::uint64_t hit_voxels = 0;          ///< occupied measurements (unique voxels)
-  std::uint64_t free_voxels = 0;         ///< free measurements (unique voxels)
+  std::uint64_t sampled_out = 0;  ///< left out by sample_count
+  std::uint64_t hit_voxels = 0;   ///< occupied measurements (unique voxels)
+  std::uint64_t free_voxels = 0;  ///< free measurements (unique voxels)
 
   PointCounters& operator+=(const PointCounters& o);
 };
@@ -62,10 +62,10 @@ class AwarenessStage {
   /// depth image, read in blocks into structure-of-arrays form.
   struct Source {
     std::size_t count = 0;
-    const Eigen::Vector3f* points = nullptr;   // cloud
-    const std::uint32_t* indices = nullptr;    // sub-sampled cloud: the chosen points
-    const DepthFrame* depth = nullptr;         // or a depth image
-    const std::vector<float>* ray_x = nullptr; // (u - cx) / fx per column
+    const Eigen::Vector3f* points = nullptr;    // cloud
+    const std::uint32_t* indices = nullptr;     // sub-sampled cloud: the chosen points
+    const DepthFrame* depth = nullptr;          // or a depth image
+    const std::vector<float>* ray_x = nullptr;  // (u - cx) / fx per column
     float inv_fy = 0.0f;
     float cy = 0.0f;
     /// Points first .. first + len - 1, less the depth pixels without data: returns how many it
@@ -80,7 +80,7 @@ class AwarenessStage {
   /// hold) and the sensor pose.
   struct FrameGeometry {
     Transform T_W_S = Transform::Identity();
-    VoxelIndex box_origin = VoxelIndex::Zero();  ///< world voxel index of the box's corner
+    VoxelIndex box_origin = VoxelIndex::Zero();      ///< world voxel index of the box's corner
     Eigen::Vector3i dims = Eigen::Vector3i::Zero();  ///< box size [voxels]
     Eigen::Vector3d origin_vox = Eigen::Vector3d::Zero();  ///< the sensor, box voxel units
   };
@@ -96,19 +96,19 @@ class AwarenessStage {
   /// A voxel where rays end in this frame: the box of its points and the first point.
   struct End {
     Eigen::Vector3i voxel = Eigen::Vector3i::Zero();  // box-relative
-    VoxelSpaceBox points{};       // bounding box of the frame's points in it (voxel units)
+    VoxelSpaceBox points{};  // bounding box of the frame's points in it (voxel units)
     Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  // first point
-    bool cut = false;             // rays cut at max_range_m (free end) rather than hits
-    std::uint32_t bin = 0;        // direction: its bin on the finest level (index in bins_[0])
-    double near = 0.0;            // distance from the sensor to `points` (voxel units)
+    bool cut = false;       // rays cut at max_range_m (free end) rather than hits
+    std::uint32_t bin = 0;  // direction: its bin on the finest level (index in bins_[0])
+    double near = 0.0;      // distance from the sensor to `points` (voxel units)
   };
   /// Rays bundled by direction (a cube-map bin of one level): the shared part of their cones.
   struct Bin {
-    std::uint32_t index = 0;      // on its level: (face n + iu) n + iv with n bins per face side
-    std::uint32_t parent = 0;     // its parent's index in the next level's bins_
-    double near = 0.0;            // nearest member distance (voxel units)
-    double reach = 0.0;           // distance this bin's cone covers: min(near, level reach)
-    VoxelSpaceBox box{};          // hull of the members' boxes scaled to `reach`
+    std::uint32_t index = 0;   // on its level: (face n + iu) n + iv with n bins per face side
+    std::uint32_t parent = 0;  // its parent's index in the next level's bins_
+    double near = 0.0;         // nearest member distance (voxel units)
+    double reach = 0.0;        // distance this bin's cone covers: min(near, level reach)
+    VoxelSpaceBox box{};       // hull of the members' boxes scaled to `reach`
   };
   /// Where a bin of a level is in this frame's bins_ of that level (valid when stamped).
   struct BinSlot {
@@ -138,9 +138,9 @@ class AwarenessStage {
   MapConfig config_;
   AwarenessMap map_;
   Eigen::Vector3i box_dims_ = Eigen::Vector3i::Zero();  // scratch box of the current frame
-  std::vector<End> ends_;           // inside the scratch box, one per voxel
-  std::vector<End> outside_;        // beyond the box (the local map cannot hold them), per point
-  std::vector<Cone> cones_;         // this frame's cones, bins first (coarse to fine), then ends
+  std::vector<End> ends_;                               // inside the scratch box, one per voxel
+  std::vector<End> outside_;           // beyond the box (the local map cannot hold them), per point
+  std::vector<Cone> cones_;            // this frame's cones, bins first (coarse to fine), then ends
   std::vector<double> range_scratch_;  // the cones' work per box x, for splitting it over threads
   // Open-addressing table: linear box index (+ cut flag) -> index in ends_, valid when stamped.
   struct Slot {

@@ -26,12 +26,12 @@ constexpr std::uint32_t kPointNonFiniteKey = 0xFFFFFFFFu;   ///< NaN or infinite
 
 /// One frame's constants for the kernel.
 struct PointKernel {
-  std::array<double, 9> m{};           ///< R_W_S / resolution, row-major
-  std::array<double, 3> o{};           ///< sensor origin in world voxel units
-  std::array<double, 3> box_origin{};  ///< scratch box origin (world voxel index)
-  std::array<std::uint32_t, 3> dims{}; ///< scratch box size in voxels (each below 2^31)
-  double min_range2 = 0.0;             ///< squared minimum range [m^2]
-  double max_range = 0.0;              ///< maximum range [m]
+  std::array<double, 9> m{};            ///< R_W_S / resolution, row-major
+  std::array<double, 3> o{};            ///< sensor origin in world voxel units
+  std::array<double, 3> box_origin{};   ///< scratch box origin (world voxel index)
+  std::array<std::uint32_t, 3> dims{};  ///< scratch box size in voxels (each below 2^31)
+  double min_range2 = 0.0;              ///< squared minimum range [m^2]
+  double max_range = 0.0;               ///< maximum range [m]
 };
 
 /// Which implementation classifyPoints() runs.

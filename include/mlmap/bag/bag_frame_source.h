@@ -71,8 +71,8 @@ class BagFrameSource : public datasets::FrameSource {
   BagFrameSource(std::shared_ptr<const BagReader> bag, const BagFrameSourceOptions& options);
 
   [[nodiscard]] std::size_t size() const override { return frames_.size(); }
-  [[nodiscard]] datasets::SourceFrame read(std::size_t i,
-                                     datasets::SourceFrameInfo* info = nullptr) const override;
+  [[nodiscard]] datasets::SourceFrame read(
+      std::size_t i, datasets::SourceFrameInfo* info = nullptr) const override;
   [[nodiscard]] std::string describe() const override;
 
   /// The inputs used (after autoSelect()).

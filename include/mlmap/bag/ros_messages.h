@@ -28,7 +28,8 @@ inline constexpr const char* kOdometryType = "nav_msgs/msg/Odometry";
 inline constexpr const char* kTfMessageType = "tf2_msgs/msg/TFMessage";
 
 /// Decodes CDR `bytes` (encapsulation header first) into `msg`, once they passed the type's CDR
-/// layout check (mlmap/dds/wire/cdr_check.h: no sequence declares more elements than its bytes hold).
+/// layout check (mlmap/dds/wire/cdr_check.h: no sequence declares more elements than its bytes
+/// hold).
 /// @throws std::runtime_error "`what`: malformed CDR (N bytes)", with the layout check's reason
 /// when it refused them, when the check or the generated type rejects them.
 void decodeCdr(const std::vector<std::uint8_t>& bytes, const std::string& what,

@@ -75,7 +75,8 @@ class TfTree {
   std::string world_frame_;
   std::string body_frame_;
   std::map<std::string, StaticEdge> static_edges_;  ///< /tf_static: child -> its edge
-  std::map<std::string, std::set<std::string>> static_children_;  ///< /tf_static: parent -> children
+  std::map<std::string, std::set<std::string>>
+      static_children_;                             ///< /tf_static: parent -> children
   std::map<std::string, std::string> parent_of_;    ///< /tf: child -> parent, every frame seen
   std::set<std::string> ancestors_;                 ///< the body and the /tf frames above it
   std::map<std::string, StampedTransform> latest_;  ///< child -> its latest /tf transform

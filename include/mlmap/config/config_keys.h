@@ -196,7 +196,8 @@ class DefaultText {
       }
     }
     std::string lower;
-    for (const char c : text) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    for (const char c : text)
+      lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     for (const char* word : {"true", "false", "yes", "no", "on", "off", "y", "n", "null"}) {
       if (lower == word) return false;
     }
@@ -242,7 +243,8 @@ class CommentedYamlWriter {
     bool first = true;
     while (std::getline(lines, part)) {
       if (first) {
-        out += out.size() + 2 <= kCommentColumn ? std::string(kCommentColumn - out.size(), ' ') : "  ";
+        out +=
+            out.size() + 2 <= kCommentColumn ? std::string(kCommentColumn - out.size(), ' ') : "  ";
         out += "# " + part;
         first = false;
       } else {
@@ -264,15 +266,14 @@ class MarkdownKeyTable {
   explicit MarkdownKeyTable(std::string path = "") : path_(std::move(path)) {}
 
   /// The header row and its separator.
-  static std::string header() {
-    return "| key | default | unit | meaning |\n|---|---|---|---|\n";
-  }
+  static std::string header() { return "| key | default | unit | meaning |\n|---|---|---|---|\n"; }
   /// Writes the key's row.
   template <class T>
   void key(const char* name, const T& field, const char* unit, const char* doc) {
     const std::string value = DefaultText::of(field);
-    rows_ += "| `" + childPath(path_, name) + "` | " + (value.empty() ? "(empty)" : "`" + value + "`") +
-             " | " + unit + " | " + cell(doc) + " |\n";
+    rows_ += "| `" + childPath(path_, name) + "` | " +
+             (value.empty() ? "(empty)" : "`" + value + "`") + " | " + unit + " | " + cell(doc) +
+             " |\n";
   }
   /// Writes the section's row, then the rows of its keys.
   template <class S>

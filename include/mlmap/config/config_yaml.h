@@ -22,7 +22,8 @@ MapConfig parseConfigYaml(const std::string& text, const std::string& source_nam
                           const std::vector<std::string>& skipped_sections = {});
 /// Loads a YAML file (see parseConfigYaml()). Throws std::runtime_error (file name included) on
 /// any problem.
-MapConfig loadConfigYaml(const std::string& path, const std::vector<std::string>& skipped_sections = {});
+MapConfig loadConfigYaml(const std::string& path,
+                         const std::vector<std::string>& skipped_sections = {});
 /// Reads the engine sections (awareness, log_odds, local_map, sensor, pipeline, projected_grid,
 /// esdf) of a document's top-level mapping `top` into `config`, without validating. Problems go
 /// to top.errors(). Other top-level keys are left to `top`, which reports the ones nobody read
@@ -34,11 +35,15 @@ std::string toYaml(const MapConfig& config);
 
 /// The prose at the top of config/mlmap.yaml.
 inline constexpr const char* kEngineDefaultsHeader =
-    "# mlmap engine configuration. Every key is optional: a missing key takes the default shown here\n"
-    "# (the paper's performance configuration). Unknown keys and bad values stop the program with a\n"
-    "# message naming the key. Print the effective configuration with `mlmap_demo --print-config`.\n"
+    "# mlmap engine configuration. Every key is optional: a missing key takes the default shown "
+    "here\n"
+    "# (the paper's performance configuration). Unknown keys and bad values stop the program with "
+    "a\n"
+    "# message naming the key. Print the effective configuration with `mlmap_demo "
+    "--print-config`.\n"
     "# Generated from the key lists in include/mlmap/core/config.h by\n"
-    "# `build/mlmap_config_tool --write` (a test fails when this file differs): edit those instead.\n";
+    "# `build/mlmap_config_tool --write` (a test fails when this file differs): edit those "
+    "instead.\n";
 /// The text of config/mlmap.yaml: kEngineDefaultsHeader, then every engine key with its default,
 /// unit and meaning, from the key lists (MapConfig::visit()).
 std::string engineDefaultsYaml();

@@ -43,7 +43,8 @@ class Section {
       // A list, a mapping or null as a key (`[a, b]: 1`, `~: 1`) names no field;
       // as<std::string>() would throw out of this destructor.
       if (!kv.first.IsScalar()) {
-        errors_->push_back((path_.empty() ? "(top level)" : path_) + ": a key must be plain text, not " +
+        errors_->push_back((path_.empty() ? "(top level)" : path_) +
+                           ": a key must be plain text, not " +
                            (kv.first.IsSequence() ? "a list"
                             : kv.first.IsMap()    ? "a mapping"
                                                   : "null"));
@@ -75,8 +76,8 @@ class Section {
     try {
       *value = node_[key].template as<T>();
     } catch (const YAML::Exception&) {
-      errors_->push_back(path_ + "." + key + ": cannot read '" + YAML::Dump(node_[key]) +
-                         "' as " + typeName(value));
+      errors_->push_back(path_ + "." + key + ": cannot read '" + YAML::Dump(node_[key]) + "' as " +
+                         typeName(value));
     }
   }
   /// Reads `key` as a list of exactly value->size() numbers into a fixed-size Eigen vector.
@@ -164,7 +165,8 @@ class YamlEventSink : public YAML::EventHandler {
   void OnDocumentEnd() override {}
   void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
   void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
-  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t, const std::string&) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                const std::string&) override {}
   void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
                        YAML::EmitterStyle::value) override {}
   void OnSequenceEnd() override {}
@@ -189,7 +191,8 @@ inline YAML::Node parseYamlDocument(const std::string& text, const std::string& 
   try {
     root = YAML::Load(text);
     if (hasSecondYamlDocument(text)) {
-      throw std::runtime_error(source_name + ": more than one YAML document (separated by "
+      throw std::runtime_error(source_name +
+                               ": more than one YAML document (separated by "
                                "'---'); a configuration is one document: merge them or remove "
                                "the extra ones");
     }
@@ -200,7 +203,8 @@ inline YAML::Node parseYamlDocument(const std::string& text, const std::string& 
   constexpr int kMaxDepth = 32;
   long node_budget = 100000;  // configurations have a few hundred nodes
   findDuplicateKeys(root, "", kMaxDepth, &node_budget, &errors);
-  if (node_budget < 0) errors.push_back("more than 100000 YAML nodes: too large for a configuration");
+  if (node_budget < 0)
+    errors.push_back("more than 100000 YAML nodes: too large for a configuration");
   if (!errors.empty()) {
     std::string m = source_name + ": not a valid configuration:";
     for (const std::string& e : errors) m += "\n  " + e;

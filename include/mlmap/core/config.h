@@ -320,9 +320,9 @@ struct MapConfig {
 /// allocated: the engine's own accounting (EngineStats::memory) once mapping runs, within about
 /// 15 % (tests/pipeline compares them). The global map is not in it: it grows with what is seen.
 struct MemoryEstimate {
-  std::size_t local_bytes = 0;      ///< the local map's window: 2 bytes of log-odds per voxel
-  std::size_t snapshot_bytes = 0;   ///< two window copies for planners (one read, one filled)
-  std::size_t esdf_bytes = 0;       ///< the ESDF and its published copies (0 when esdf.enabled is off)
+  std::size_t local_bytes = 0;     ///< the local map's window: 2 bytes of log-odds per voxel
+  std::size_t snapshot_bytes = 0;  ///< two window copies for planners (one read, one filled)
+  std::size_t esdf_bytes = 0;  ///< the ESDF and its published copies (0 when esdf.enabled is off)
   /// The cylindrical grid and the free-space scratch box (a frame's point buffers add about
   /// 12 bytes per point: 3.7 MB for a 640 x 480 depth image).
   std::size_t awareness_bytes = 0;

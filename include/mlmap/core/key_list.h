@@ -15,7 +15,8 @@
 
 namespace mlmap {
 
-/// Walks the keys of config struct `config` (const or not) with `visitor`: C::visit(config, visitor).
+/// Walks the keys of config struct `config` (const or not) with `visitor`: C::visit(config,
+/// visitor).
 template <class C, class V>
 void visitConfig(C& config, V& visitor) {
   std::remove_const_t<C>::visit(config, visitor);

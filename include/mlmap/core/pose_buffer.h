@@ -23,8 +23,8 @@ namespace mlmap {
 
 /// Settings of a PoseBuffer.
 struct PoseBufferConfig {
-  double tolerance_s = 0.05;   ///< a frame needs a pose at most this far from its stamp
-  double horizon_s = 2.0;      ///< poses older than the newest minus this are dropped
+  double tolerance_s = 0.05;  ///< a frame needs a pose at most this far from its stamp
+  double horizon_s = 2.0;     ///< poses older than the newest minus this are dropped
   /// A pose this far ahead of the newest one is held, not added: a single bogus stamp. When
   /// the next pose confirms it (newer, and at most this far after it), the stream has resumed
   /// after a pause: the buffer restarts from the two.

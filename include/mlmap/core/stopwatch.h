@@ -16,7 +16,9 @@ inline double msBetween(SteadyClock::time_point start, SteadyClock::time_point e
 }
 
 /// Milliseconds from `start` to now [ms].
-inline double msSince(SteadyClock::time_point start) { return msBetween(start, SteadyClock::now()); }
+inline double msSince(SteadyClock::time_point start) {
+  return msBetween(start, SteadyClock::now());
+}
 
 /// Seconds from `start` to `end` [s].
 inline double secondsBetween(SteadyClock::time_point start, SteadyClock::time_point end) {

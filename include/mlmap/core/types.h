@@ -2,10 +2,10 @@
 /// @file
 /// Basic types shared by every mlmap layer.
 ///
-/// Frames (see docs/architecture.md, "Frames and units"): W is the world (gravity-aligned, fixed), B the body
-/// (vehicle, FLU), S the sensor (for cameras the optical frame: x right, y down, z forward).
-/// `T_A_B` maps points expressed in frame B into frame A (p_A = T_A_B * p_B). All lengths are
-/// metres, angles radians unless a name says `_deg`, times seconds.
+/// Frames (see docs/architecture.md, "Frames and units"): W is the world (gravity-aligned, fixed),
+/// B the body (vehicle, FLU), S the sensor (for cameras the optical frame: x right, y down, z
+/// forward). `T_A_B` maps points expressed in frame B into frame A (p_A = T_A_B * p_B). All lengths
+/// are metres, angles radians unless a name says `_deg`, times seconds.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -112,7 +112,8 @@ struct PointCloudFrame {
 bool makePose(const Eigen::Vector3d& t, const Eigen::Quaterniond& q, Transform* T,
               double tolerance = 1e-3);
 
-/// True when `T` is finite and its linear part is a rotation (orthonormal, det +1) within `tolerance`.
+/// True when `T` is finite and its linear part is a rotation (orthonormal, det +1) within
+/// `tolerance`.
 bool isValidPose(const Transform& T, double tolerance = 1e-4);
 
 /// Largest |coordinate| [m] of a body position the engine maps at, live or loaded from a file:

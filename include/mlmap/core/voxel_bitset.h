@@ -25,7 +25,8 @@ class VoxelBitset {
     if (dims == dims_ && bits_.size() == words && rows_.valid(dims)) {
       for (int i = rows_.x_begin; i < rows_.x_end; ++i) {
         std::uint64_t* first = bits_.data() + rowWord(i, rows_.y_begin);
-        std::fill(first, first + static_cast<std::size_t>(rows_.y_end - rows_.y_begin) * words_per_row_,
+        std::fill(first,
+                  first + static_cast<std::size_t>(rows_.y_end - rows_.y_begin) * words_per_row_,
                   std::uint64_t{0});
       }
     } else {

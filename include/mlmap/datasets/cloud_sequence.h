@@ -43,7 +43,7 @@ const char* toString(CloudPairing pairing);
 
 /// Settings of a CloudSequence.
 struct CloudSequenceOptions {
-  Transform T_P_C = Transform::Identity();        ///< extrinsic: cloud frame C in pose frame P
+  Transform T_P_C = Transform::Identity();          ///< extrinsic: cloud frame C in pose frame P
   double pose_tolerance_s = kCloudPoseTolerance_s;  ///< by time: farthest pose used, > 0
 };
 

@@ -92,7 +92,8 @@ struct SimulatedTiming {
 /// Rendering is deterministic: the same frame twice is the same image.
 class SimulatedFlightSource : public FrameSource {
  public:
-  SimulatedFlightSource(Scenario scenario, const Transform& T_B_S, const SimulatedTiming& timing = {});
+  SimulatedFlightSource(Scenario scenario, const Transform& T_B_S,
+                        const SimulatedTiming& timing = {});
   [[nodiscard]] std::size_t size() const override { return count_; }
   [[nodiscard]] SourceFrame read(std::size_t i, SourceFrameInfo* info = nullptr) const override;
   [[nodiscard]] std::string describe() const override;

@@ -27,13 +27,13 @@ namespace mlmap::datasets {
 
 /// What a point-cloud file held.
 struct PointCloudFile {
-  std::vector<Eigen::Vector3f> points_C;  ///< finite points in the cloud's frame C, file order
-  std::size_t points_in_file = 0;         ///< points (vertices) the file declares
-  std::size_t non_finite_dropped = 0;     ///< of those, dropped for a NaN / Inf coordinate
-  std::uint32_t width = 0;                ///< PCD WIDTH (PLY: the vertex count)
-  std::uint32_t height = 1;               ///< PCD HEIGHT: > 1 for an organised cloud (PLY: 1)
+  std::vector<Eigen::Vector3f> points_C;    ///< finite points in the cloud's frame C, file order
+  std::size_t points_in_file = 0;           ///< points (vertices) the file declares
+  std::size_t non_finite_dropped = 0;       ///< of those, dropped for a NaN / Inf coordinate
+  std::uint32_t width = 0;                  ///< PCD WIDTH (PLY: the vertex count)
+  std::uint32_t height = 1;                 ///< PCD HEIGHT: > 1 for an organised cloud (PLY: 1)
   Transform T_C_V = Transform::Identity();  ///< PCD VIEWPOINT: sensor pose in C (PLY: identity)
-  std::string encoding;                   ///< e.g. "pcd ascii", "ply binary_big_endian"
+  std::string encoding;                     ///< e.g. "pcd ascii", "ply binary_big_endian"
 };
 
 /// Parses PCD content. `source_name` (the path) starts every error message.

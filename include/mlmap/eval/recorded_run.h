@@ -55,9 +55,9 @@ class FrameTimer {
 
 /// What stats.json says of the source besides the frames.
 struct RunInfo {
-  std::string source;       ///< the input, as given
-  std::string kind;         ///< "frames", "clouds", "bag" or "simulator"
-  std::string pairing;      ///< how frames found their poses
+  std::string source;   ///< the input, as given
+  std::string kind;     ///< "frames", "clouds", "bag" or "simulator"
+  std::string pairing;  ///< how frames found their poses
   std::size_t clouds_without_pose = 0;
   std::size_t points_in_files = 0;
 };

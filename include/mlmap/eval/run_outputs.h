@@ -28,7 +28,8 @@ class ProgressBar {
 /// The kind of data a run maps; it picks the engine defaults of runConfig().
 enum class DataKind {
   kSimulator,       ///< the simulated depth camera (camera mounted as `sensor:` says)
-  kFrameDirectory,  ///< RGB-D frames whose poses are the camera's (mlmap/datasets/frame_directory.h)
+  kFrameDirectory,  ///< RGB-D frames whose poses are the camera's
+                    ///< (mlmap/datasets/frame_directory.h)
   kPointClouds,     ///< point-cloud files with poses (mlmap/datasets/cloud_sequence.h)
 };
 
@@ -40,7 +41,8 @@ void setResolution(MapConfig* config, double resolution_m);
 /// simulator and clouds, 0.02 m frames). Frames: the camera is the body (sensor: identity). Not
 /// validated.
 /// @throws std::runtime_error when the config file is malformed.
-[[nodiscard]] MapConfig runConfig(const std::string& config_path, DataKind kind, double resolution_m);
+[[nodiscard]] MapConfig runConfig(const std::string& config_path, DataKind kind,
+                                  double resolution_m);
 
 /// A simulated flight with its scoring against ground truth.
 struct ScoredFlight {
@@ -62,14 +64,15 @@ struct MapOutputs {
   /// True when the world is an optical camera frame (z forward, y down; frame directories):
   /// pictures then show it turned to that camera's FLU frame, so "top" looks down.
   bool optical_world = false;
-  const ScoredFlight* scored = nullptr;       ///< simulator runs: accuracy picture and figures
+  const ScoredFlight* scored = nullptr;  ///< simulator runs: accuracy picture and figures
 };
 
 /// Writes map_top.png, map_side.png (and accuracy_top.png with `scored`) and report.json to
 /// `outputs.out_dir`; returns the names written.
 /// @throws std::runtime_error naming the file that cannot be written.
 std::vector<std::string> writeMapOutputs(const MapOutputs& outputs, const EngineStats& stats,
-                                         const std::vector<VoxelIndex>& occupied, double resolution_m);
+                                         const std::vector<VoxelIndex>& occupied,
+                                         double resolution_m);
 
 /// Refuses a --save-map target whose folder does not exist, or that is an existing mlmap map
 /// while `overwrite` (--overwrite) is false: before a run rather than after it.

@@ -28,19 +28,19 @@ using VoxelSet = std::unordered_set<VoxelIndex, VoxelHash>;
 /// overlaps a static solid; recall asks for those that received a measured point. A mapped voxel
 /// is right when it touches a solid (a surface lying on its face is an acceptable answer).
 struct Accuracy {
-  std::size_t mapped = 0;           ///< occupied voxels in the map
-  std::size_t observed_truth = 0;   ///< truly occupied voxels that received a measured point
-  std::size_t true_positives = 0;   ///< mapped voxels that touch a static solid
-  std::size_t recalled = 0;         ///< observed true voxels that are mapped occupied
-  double precision = 0.0;           ///< true_positives / mapped
-  double recall = 0.0;              ///< recalled / observed_truth
+  std::size_t mapped = 0;          ///< occupied voxels in the map
+  std::size_t observed_truth = 0;  ///< truly occupied voxels that received a measured point
+  std::size_t true_positives = 0;  ///< mapped voxels that touch a static solid
+  std::size_t recalled = 0;        ///< observed true voxels that are mapped occupied
+  double precision = 0.0;          ///< true_positives / mapped
+  double recall = 0.0;             ///< recalled / observed_truth
   double f1 = 0.0;
 };
 
 /// How to fly.
 struct FlightOptions {
   int max_frames = std::numeric_limits<int>::max();  ///< stop after this many frames
-  double start_time_s = 0.0;                          ///< first frame time on the trajectory
+  double start_time_s = 0.0;                         ///< first frame time on the trajectory
   /// Called after each frame with (frames done, frames planned).
   std::function<void(int, int)> progress;
   /// Called just before each frame is submitted (after rendering), with its index in the

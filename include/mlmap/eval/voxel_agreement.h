@@ -25,10 +25,10 @@ struct VoxelAgreement {
   std::size_t b = 0;             ///< |B|
   std::size_t intersection = 0;  ///< |A ∩ B|
   double iou = 0.0;
-  double precision = 0.0;        ///< of A against B
-  double recall = 0.0;           ///< of A against B
-  std::size_t matched_a_1 = 0;   ///< voxels of A with a voxel of B within one cell
-  std::size_t matched_b_1 = 0;   ///< voxels of B with a voxel of A within one cell
+  double precision = 0.0;       ///< of A against B
+  double recall = 0.0;          ///< of A against B
+  std::size_t matched_a_1 = 0;  ///< voxels of A with a voxel of B within one cell
+  std::size_t matched_b_1 = 0;  ///< voxels of B with a voxel of A within one cell
   double iou_1 = 0.0;
   double precision_1 = 0.0;
   double recall_1 = 0.0;

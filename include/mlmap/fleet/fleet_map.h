@@ -44,14 +44,14 @@ std::uint32_t vehicleColourRgb(int index);
 /// What the merger knows of one vehicle.
 struct FleetVehicle {
   std::string name;
-  std::uint64_t samples = 0;          ///< submap samples received (applied or not)
-  std::uint64_t bytes = 0;            ///< their payload bytes
-  std::uint64_t samples_applied = 0;  ///< samples that changed its contribution
-  std::uint64_t samples_outdated = 0; ///< older than (or as old as) the content held: ignored
-  std::uint64_t submaps = 0;          ///< submaps where it holds occupied voxels
-  std::uint64_t voxels = 0;           ///< voxels it contributes evidence for
-  std::uint64_t memory_bytes = 0;     ///< bytes its contributions hold
-  std::uint64_t restarts = 0;         ///< times its samples came from a new source (epoch)
+  std::uint64_t samples = 0;           ///< submap samples received (applied or not)
+  std::uint64_t bytes = 0;             ///< their payload bytes
+  std::uint64_t samples_applied = 0;   ///< samples that changed its contribution
+  std::uint64_t samples_outdated = 0;  ///< older than (or as old as) the content held: ignored
+  std::uint64_t submaps = 0;           ///< submaps where it holds occupied voxels
+  std::uint64_t voxels = 0;            ///< voxels it contributes evidence for
+  std::uint64_t memory_bytes = 0;      ///< bytes its contributions hold
+  std::uint64_t restarts = 0;          ///< times its samples came from a new source (epoch)
   double last_seen_s = -std::numeric_limits<double>::infinity();  ///< caller's clock [s]
 };
 
@@ -126,7 +126,8 @@ class FleetMap {
 
   /// The fused occupied voxels as the global map keeps them: submaps by ascending index (x, then
   /// y, then z), each with its voxels by ascending offset; submaps with none left out.
-  [[nodiscard]] std::vector<std::pair<SubmapIndex, std::vector<VoxelRecord>>> occupiedSubmaps() const;
+  [[nodiscard]] std::vector<std::pair<SubmapIndex, std::vector<VoxelRecord>>> occupiedSubmaps()
+      const;
 
   /// The 2D grid of the occupied voxels whose centres lie in [band_min_z_m, band_max_z_m]:
   /// 100 where one is, -1 (unknown) elsewhere (free space does not travel), over the occupied

@@ -33,12 +33,12 @@ struct SubmapPayload {
 /// Why a payload was refused.
 enum class SubmapDecodeError {
   kNone,
-  kUnknownEncoding,    ///< encoding other than kRaw / kZstd
-  kTooManyVoxels,      ///< voxel_count beyond the submap's voxels
-  kSizeMismatch,       ///< raw_size impossible for voxel_count, or kRaw data of another size
-  kBadCompression,     ///< not one zstd frame whose content size is raw_size
-  kBadOffsets,         ///< a varint too long, an offset not ascending or beyond the submap
-  kTrailingBytes,      ///< bytes left after the last value
+  kUnknownEncoding,  ///< encoding other than kRaw / kZstd
+  kTooManyVoxels,    ///< voxel_count beyond the submap's voxels
+  kSizeMismatch,     ///< raw_size impossible for voxel_count, or kRaw data of another size
+  kBadCompression,   ///< not one zstd frame whose content size is raw_size
+  kBadOffsets,       ///< a varint too long, an offset not ascending or beyond the submap
+  kTrailingBytes,    ///< bytes left after the last value
 };
 const char* toString(SubmapDecodeError error);
 

@@ -68,7 +68,8 @@ inline constexpr int kMaxAbsWindowVoxelIndex = 1 << 30;
 /// size or value count that differs, a first voxel off the submap grid or beyond
 /// kMaxAbsWindowVoxelIndex, a value outside the clamping bounds.
 [[nodiscard]] std::string windowProblem(const LocalWindow& window, const Eigen::Vector3i& size,
-                                        const Eigen::Vector3i& submap_cells, const LogOddsModel& model);
+                                        const Eigen::Vector3i& submap_cells,
+                                        const LogOddsModel& model);
 
 /// Dense sliding voxel window. Not thread-safe: owned by the local-global stage.
 class LocalMap {
@@ -129,7 +130,8 @@ class LocalMap {
     const auto z0 = static_cast<std::size_t>(floorMod(min_index_.z(), size_.z()));
     const auto sy0 = static_cast<std::size_t>(floorMod(min_index_.y(), size_.y()));
     for (int x = 0; x < size_.x(); ++x) {
-      const std::size_t row = static_cast<std::size_t>(floorMod(min_index_.x() + x, size_.x())) * ny;
+      const std::size_t row =
+          static_cast<std::size_t>(floorMod(min_index_.x() + x, size_.x())) * ny;
       // Window y 0, 1, ... are torus y sy0 .. ny - 1, then 0 .. sy0 - 1.
       auto listColumn = [&](std::size_t torus_column, int y) {
         const std::size_t column = torus_column * nz;
@@ -141,9 +143,8 @@ class LocalMap {
           if (++sz == nz) sz = 0;
         }
       };
-      forEachMarkedColumn(row + sy0, row + ny, [&](std::size_t c) {
-        listColumn(c, static_cast<int>(c - row - sy0));
-      });
+      forEachMarkedColumn(row + sy0, row + ny,
+                          [&](std::size_t c) { listColumn(c, static_cast<int>(c - row - sy0)); });
       forEachMarkedColumn(row, row + sy0, [&](std::size_t c) {
         listColumn(c, static_cast<int>(c - row + ny - sy0));
       });
@@ -178,7 +179,8 @@ class LocalMap {
   /// is not.
   [[nodiscard]] std::size_t markedColumns() const {
     std::size_t n = 0;
-    for (const std::uint64_t word : may_hold_occupied_) n += static_cast<std::size_t>(__builtin_popcountll(word));
+    for (const std::uint64_t word : may_hold_occupied_)
+      n += static_cast<std::size_t>(__builtin_popcountll(word));
     return n;
   }
   /// Bytes held by the voxel storage (2 bytes per voxel) and the change stamps of its columns.
@@ -195,7 +197,8 @@ class LocalMap {
     return r < 0 ? r + n : r;
   }
   [[nodiscard]] std::size_t slot(const VoxelIndex& g) const {
-    return (static_cast<std::size_t>(floorMod(g.x(), size_.x())) * static_cast<std::size_t>(size_.y()) +
+    return (static_cast<std::size_t>(floorMod(g.x(), size_.x())) *
+                static_cast<std::size_t>(size_.y()) +
             static_cast<std::size_t>(floorMod(g.y(), size_.y()))) *
                static_cast<std::size_t>(size_.z()) +
            static_cast<std::size_t>(floorMod(g.z(), size_.z()));
@@ -264,7 +267,7 @@ class LocalMap {
   LogOddsModel model_;
   Eigen::Vector3i size_;
   Eigen::Vector3i submap_;
-  std::size_t cell_count_;  // size_cells.x * y * z
+  std::size_t cell_count_;                        // size_cells.x * y * z
   std::unique_ptr<LogOddsQ[], FreeCells> cells_;  // stored values, see flipUnknown()
   bool placed_ = false;
   SubmapIndex center_ = SubmapIndex::Zero();
@@ -274,11 +277,12 @@ class LocalMap {
   std::uint64_t change_clock_ = 0;
   std::vector<std::uint64_t> submap_changed_at_;        // per torus submap slot, see submapSlot()
   std::vector<std::uint64_t> submap_state_changed_at_;  // the same for state changes
-  std::vector<std::uint64_t> column_changed_at_;  // per torus column x, y: last value change
-  std::vector<std::uint8_t> submap_of_torus_x_;   // torus x -> submap slot x (no division per hit)
-  std::vector<std::uint8_t> submap_of_torus_y_;   // torus y -> submap slot y
-  std::vector<std::uint8_t> submap_of_torus_z_;   // torus z -> submap slot z (no division per voxel)
-  std::vector<std::uint64_t> may_hold_occupied_;  // a bit per torus column, see markMayHoldOccupied()
+  std::vector<std::uint64_t> column_changed_at_;        // per torus column x, y: last value change
+  std::vector<std::uint8_t> submap_of_torus_x_;  // torus x -> submap slot x (no division per hit)
+  std::vector<std::uint8_t> submap_of_torus_y_;  // torus y -> submap slot y
+  std::vector<std::uint8_t> submap_of_torus_z_;  // torus z -> submap slot z (no division per voxel)
+  std::vector<std::uint64_t>
+      may_hold_occupied_;  // a bit per torus column, see markMayHoldOccupied()
 };
 
 }  // namespace mlmap

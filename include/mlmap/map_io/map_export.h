@@ -51,8 +51,10 @@ inline constexpr std::size_t kMaxExportGridCells = std::size_t{1} << 28;
 [[nodiscard]] std::string encodeGridYaml(const ProjectedGrid& grid, const std::string& image_name);
 
 /// Writes the occupied voxels as PLY / PCD. Throws std::runtime_error naming the path.
-void writePly(const std::vector<OccupiedVoxel>& voxels, double resolution_m, const std::string& path);
-void writePcd(const std::vector<OccupiedVoxel>& voxels, double resolution_m, const std::string& path);
+void writePly(const std::vector<OccupiedVoxel>& voxels, double resolution_m,
+              const std::string& path);
+void writePcd(const std::vector<OccupiedVoxel>& voxels, double resolution_m,
+              const std::string& path);
 /// Writes `base`.pgm and `base`.yaml (the YAML names the image by its file name, as map_saver
 /// does). Throws std::runtime_error naming the path.
 void writeGridMap(const ProjectedGrid& grid, const std::string& base);

@@ -7,10 +7,13 @@
 ///
 /// | bytes | content |
 /// |---|---|
-/// | 208 | header: magic `MLMAPMAP`, format version, header size, file size, config fingerprint, the fingerprinted fields (resolution, window size, log-odds model), last stamp and body pose, frames mapped, window position, section sizes, CRC-32 of the header |
-/// | 8 per run + 2 per observed voxel + 4 | local window in box order (x-major, z fastest) as runs: uint32 count of unknown voxels, uint32 count of observed voxels, their int16 log-odds in units of 0.001; CRC-32 |
-/// | 16 per submap + 6 per voxel + 4 | global map: per submap its index (3 x int32), voxel count, then (uint32 offset, int16 log-odds) per voxel; CRC-32 |
-/// | 8 | trailer `MLMAPEND` |
+/// | 208 | header: magic `MLMAPMAP`, format version, header size, file size, config fingerprint,
+/// the fingerprinted fields (resolution, window size, log-odds model), last stamp and body pose,
+/// frames mapped, window position, section sizes, CRC-32 of the header | | 8 per run + 2 per
+/// observed voxel + 4 | local window in box order (x-major, z fastest) as runs: uint32 count of
+/// unknown voxels, uint32 count of observed voxels, their int16 log-odds in units of 0.001; CRC-32
+/// | | 16 per submap + 6 per voxel + 4 | global map: per submap its index (3 x int32), voxel count,
+/// then (uint32 offset, int16 log-odds) per voxel; CRC-32 | | 8 | trailer `MLMAPEND` |
 ///
 /// A file is refused, with a message naming it and what is wrong, when it is not an mlmap map
 /// (magic), has another format version, is shorter or longer than its header says, fails a

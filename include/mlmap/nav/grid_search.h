@@ -29,7 +29,9 @@ struct PlanningGrid {
   std::vector<std::uint8_t> blocked;  ///< 1: the vehicle's centre may not be there; 0: it may
 
   /// True when cell (x, y) lies in the grid.
-  [[nodiscard]] bool inside(int x, int y) const { return x >= 0 && y >= 0 && x < width && y < height; }
+  [[nodiscard]] bool inside(int x, int y) const {
+    return x >= 0 && y >= 0 && x < width && y < height;
+  }
   /// True when cell (x, y), which must lie inside, is blocked.
   [[nodiscard]] bool isBlocked(int x, int y) const {
     return blocked[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
@@ -46,14 +48,15 @@ struct PlanningGrid {
 /// radius would touch what the grid marks. A cell counts as occupied when its value is above
 /// `occupied_threshold` (50: nav_msgs' convention for 0..100 values). The result has the layout
 /// of `grid` grown by `margin_cells` on every side (the margin is unknown space).
-[[nodiscard]] PlanningGrid inflateGrid(const ProjectedGrid& grid, double radius_m, UnknownAs unknown,
-                                       int margin_cells = 0, int occupied_threshold = 50);
+[[nodiscard]] PlanningGrid inflateGrid(const ProjectedGrid& grid, double radius_m,
+                                       UnknownAs unknown, int margin_cells = 0,
+                                       int occupied_threshold = 50);
 
 /// A path of grid cells and its length.
 struct GridPath {
-  bool found = false;                 ///< false when the goal cannot be reached
+  bool found = false;                  ///< false when the goal cannot be reached
   std::vector<Eigen::Vector2i> cells;  ///< start to goal, both included; empty when not found
-  double length_m = 0.0;              ///< sum of the steps' costs (see searchGrid())
+  double length_m = 0.0;               ///< sum of the steps' costs (see searchGrid())
 };
 
 /// Cost factor of a step that leaves a blocked cell (see searchGrid()).

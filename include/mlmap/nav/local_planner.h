@@ -22,11 +22,11 @@ namespace mlmap::nav {
 
 /// Parameters of the local planner.
 struct LocalPlannerConfig {
-  double horizon_m = 3.0;          ///< how much of the route ahead is planned [m]
-  double sample_step_m = 0.1;      ///< spacing of the planned points [m]
-  double push_clearance_m = 0.8;   ///< points nearer than this to an obstacle are pushed [m]
-  double max_push_m = 0.4;         ///< farthest a point moves from the route [m]
-  int push_iterations = 6;         ///< gradient steps per point
+  double horizon_m = 3.0;           ///< how much of the route ahead is planned [m]
+  double sample_step_m = 0.1;       ///< spacing of the planned points [m]
+  double push_clearance_m = 0.8;    ///< points nearer than this to an obstacle are pushed [m]
+  double max_push_m = 0.4;          ///< farthest a point moves from the route [m]
+  int push_iterations = 6;          ///< gradient steps per point
   double commit_clearance_m = 0.5;  ///< ESDF distance every committed point keeps [m]
   /// Radius around the vehicle whose voxels the first committed segment does not check [m]: the
   /// vehicle's own voxel, which a forward camera may not have seen.

@@ -19,13 +19,13 @@ namespace mlmap::nav {
 
 /// How to fly.
 struct NavFlightOptions {
-  MapConfig map;                 ///< the engine (navMapConfig() by default)
-  NavigatorConfig planner;       ///< the reference planner
-  sim::VehicleLimits vehicle;    ///< the vehicle model
-  sim::DepthCameraModel camera;  ///< the camera (a 160 x 120 D435-like one by default)
-  double camera_rate_hz = 10.0;  ///< frames per simulated second
-  double control_dt_s = 0.02;    ///< vehicle and setpoint step [s]
-  double timeout_s = 150.0;      ///< a flight not at its goal by then failed [s]
+  MapConfig map;                  ///< the engine (navMapConfig() by default)
+  NavigatorConfig planner;        ///< the reference planner
+  sim::VehicleLimits vehicle;     ///< the vehicle model
+  sim::DepthCameraModel camera;   ///< the camera (a 160 x 120 D435-like one by default)
+  double camera_rate_hz = 10.0;   ///< frames per simulated second
+  double control_dt_s = 0.02;     ///< vehicle and setpoint step [s]
+  double timeout_s = 150.0;       ///< a flight not at its goal by then failed [s]
   double vehicle_radius_m = 0.3;  ///< a ground-truth clearance below this is a collision [m]
   /// Filled in by the constructor: navMapConfig(0.2), the small camera.
   NavFlightOptions();
@@ -38,15 +38,15 @@ struct NavFlightOptions {
 
 /// What a flight did.
 struct NavFlightResult {
-  std::string name;            ///< the world's
-  bool reached = false;        ///< at the goal before the timeout
-  int collisions = 0;          ///< times the ground-truth clearance fell below the vehicle radius
+  std::string name;              ///< the world's
+  bool reached = false;          ///< at the goal before the timeout
+  int collisions = 0;            ///< times the ground-truth clearance fell below the vehicle radius
   double min_clearance_m = 0.0;  ///< smallest ground-truth clearance along the flight [m]
   double path_length_m = 0.0;    ///< length flown [m]
   double shortest_path_m = 0.0;  ///< ground-truth shortest route (same inflation) [m]; 0: none
   double time_s = 0.0;           ///< simulated time to the goal (or to the timeout) [s]
-  std::uint64_t frames = 0;           ///< frames mapped
-  std::uint64_t plans = 0;            ///< plans made
+  std::uint64_t frames = 0;      ///< frames mapped
+  std::uint64_t plans = 0;       ///< plans made
   std::uint64_t blocked_replans = 0;  ///< plans made at once because a frame blocked the segment
   std::uint64_t route_failures = 0;   ///< global searches without a route
   /// Wall time from a frame's submission to the end of the plan made from its snapshot [ms].
@@ -57,8 +57,8 @@ struct NavFlightResult {
   double cpu_global_s = 0.0;
   double cpu_local_s = 0.0;
   double cpu_control_s = 0.0;
-  std::vector<Eigen::Vector3d> trajectory_W;     ///< vehicle positions, one per control step
-  std::vector<Eigen::Vector3d> replan_points_W;  ///< where a frame blocked the committed segment
+  std::vector<Eigen::Vector3d> trajectory_W;      ///< vehicle positions, one per control step
+  std::vector<Eigen::Vector3d> replan_points_W;   ///< where a frame blocked the committed segment
   std::vector<Eigen::Vector2d> shortest_route_W;  ///< the ground-truth shortest route
   ProjectedGrid grid;                             ///< the planner's accumulated grid at the end
 };
@@ -66,12 +66,13 @@ struct NavFlightResult {
 /// What the planner gets of a frame beside the map (Navigator::setRecentObstacles()): its
 /// measured points `points_S` (sensor frame, non-finite ones skipped) within 5 m of the sensor
 /// and 0.6 m of the flight height `height_m`, in W, one per cell of `cell_m`.
-[[nodiscard]] std::vector<Eigen::Vector3d> recentObstacles(const std::vector<Eigen::Vector3f>& points_S,
-                                                           const Transform& T_W_S, double height_m,
-                                                           double cell_m);
+[[nodiscard]] std::vector<Eigen::Vector3d> recentObstacles(
+    const std::vector<Eigen::Vector3f>& points_S, const Transform& T_W_S, double height_m,
+    double cell_m);
 
 /// Flies `world` from its start to its goal. Deterministic for given world and options (apart
 /// from the timings).
-[[nodiscard]] NavFlightResult flyToGoal(const NavWorld& world, const NavFlightOptions& options = {});
+[[nodiscard]] NavFlightResult flyToGoal(const NavWorld& world,
+                                        const NavFlightOptions& options = {});
 
 }  // namespace mlmap::nav

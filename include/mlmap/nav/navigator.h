@@ -51,7 +51,7 @@ struct NavigatorConfig {
   /// occupied in the map, a way round) may open a route [m], [s].
   double stuck_move_m = 0.3;
   double stuck_s = 3.0;
-  LocalPlannerConfig local;        ///< the local planner
+  LocalPlannerConfig local;  ///< the local planner
 };
 
 /// What the vehicle is asked to do: be at position_W moving at velocity_W, heading yaw_rad.
@@ -123,11 +123,13 @@ class Navigator {
   void planRoute(const Eigen::Vector3d& p_W);
   /// The nearest recent obstacle in open known-free space (see evade_radius_m) within
   /// `radius_m` of p_W, or nullptr.
-  [[nodiscard]] const Eigen::Vector3d* nearestMoved(const MapSnapshot& map, const Eigen::Vector3d& p_W,
+  [[nodiscard]] const Eigen::Vector3d* nearestMoved(const MapSnapshot& map,
+                                                    const Eigen::Vector3d& p_W,
                                                     double radius_m) const;
   /// The velocity away from the nearest moved obstacle within evade_radius_m (zero when there is
   /// none, or when the step away is not into known-free space with clearance).
-  [[nodiscard]] Eigen::Vector3d evadeVelocity(const MapSnapshot& map, const Eigen::Vector3d& p_W) const;
+  [[nodiscard]] Eigen::Vector3d evadeVelocity(const MapSnapshot& map,
+                                              const Eigen::Vector3d& p_W) const;
 
   NavigatorConfig config_;
   bool has_goal_ = false;
@@ -144,7 +146,7 @@ class Navigator {
   bool cautious_ = false;
   bool looking_round_ = false;
   Eigen::Vector3d anchor_W_ = Eigen::Vector3d::Constant(1e300);  ///< where it last moved from
-  double anchor_time_s_ = 0.0;                                     ///< and when
+  double anchor_time_s_ = 0.0;                                   ///< and when
   std::uint64_t plans_ = 0;
   std::uint64_t blocked_replans_ = 0;
   std::uint64_t route_failures_ = 0;

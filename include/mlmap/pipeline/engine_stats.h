@@ -58,12 +58,12 @@ struct EngineStats {
   std::uint64_t rejected_bad_image = 0;  ///< FrameStatus::kBadImage
   PointCounters points;                  ///< the awareness stage's points
   LocalMapCounters local;                ///< the local map's counters
-  TimingSummary awareness;     ///< points -> awareness map + measurements
-  TimingSummary local_global;  ///< re-centring + log-odds updates
-  TimingSummary total;         ///< both stages of one frame
-  MemoryUsage memory;              ///< bytes by layer
-  std::size_t global_voxels = 0;   ///< occupied voxels in the global map
-  std::size_t global_submaps = 0;  ///< submaps in the global map
+  TimingSummary awareness;               ///< points -> awareness map + measurements
+  TimingSummary local_global;            ///< re-centring + log-odds updates
+  TimingSummary total;                   ///< both stages of one frame
+  MemoryUsage memory;                    ///< bytes by layer
+  std::size_t global_voxels = 0;         ///< occupied voxels in the global map
+  std::size_t global_submaps = 0;        ///< submaps in the global map
   /// Hit voxel updates beyond the local window (its hits_outside_window and the points'
   /// hits_beyond_local_map, one per voxel and frame) applied to the global map instead.
   std::uint64_t hits_to_global = 0;
@@ -73,7 +73,7 @@ struct EngineStats {
   /// waiting because they lie in the local window.
   std::uint64_t prior_voxels_added = 0;
   std::size_t prior_submaps_waiting = 0;
-  PlanningStats planning;      ///< snapshots, 2D grid and ESDF (not part of `total`)
+  PlanningStats planning;  ///< snapshots, 2D grid and ESDF (not part of `total`)
 };
 
 /// The last `capacity` samples of a stage's time [ms], oldest overwritten first.
@@ -104,8 +104,8 @@ class EngineStatsRecorder {
  public:
   /// The recorded state, handed to update()'s function under the lock.
   struct Record {
-    EngineStats stats;         ///< counters and memory (the timing summaries left empty)
-    StampOrder stamps;         ///< the order frames are admitted in
+    EngineStats stats;          ///< counters and memory (the timing summaries left empty)
+    StampOrder stamps;          ///< the order frames are admitted in
     TimingWindow awareness_ms;  ///< the awareness stage's time per frame
     TimingWindow local_ms;      ///< the local-global stage's
     TimingWindow total_ms;      ///< both stages' of one frame

@@ -31,12 +31,12 @@ namespace mlmap {
 
 /// Why a frame was not mapped.
 enum class FrameStatus {
-  kAccepted,         ///< mapped (synchronous) or queued (threaded)
-  kInvalidPose,      ///< T_W_B or T_B_S not finite or not a rotation, or absurdly far away
-  kOutOfOrder,       ///< stamp not newer than the last accepted frame, or not finite
-  kEmpty,            ///< no points / no valid pixels
-  kBadImage,         ///< depth image size disagrees with its intrinsics
-  kStopped,          ///< engine shutting down
+  kAccepted,     ///< mapped (synchronous) or queued (threaded)
+  kInvalidPose,  ///< T_W_B or T_B_S not finite or not a rotation, or absurdly far away
+  kOutOfOrder,   ///< stamp not newer than the last accepted frame, or not finite
+  kEmpty,        ///< no points / no valid pixels
+  kBadImage,     ///< depth image size disagrees with its intrinsics
+  kStopped,      ///< engine shutting down
 };
 /// The status's name, for logs.
 const char* toString(FrameStatus status);
@@ -115,14 +115,15 @@ class MapEngine {
   void restoreState(const MapState& state);
   /// Takes another vehicle's occupied voxels of submap `m` (ascending offsets inside the submap,
   /// with their log-odds, as GlobalMap holds them; e.g. from the fleet's mlmap_msgs/Submap; the
-  /// records below occupancy, another vehicle's free evidence, are left out) as prior knowledge: before the next frame the local-global stage adds each of them that the
-  /// map does not hold (GlobalMap::addPrior(): the vehicle's own evidence wins), so when the
-  /// vehicle enters that submap its window is restored with them before its own sensor sees
-  /// them; its measurements then update them as any voxel. A prior's log-odds is kept below
-  /// clamp_max (at most clamp_max - 0.001), so the first own hit changes it and priors() no
-  /// longer marks it. A submap of the local window waits
-  /// until it leaves the window (the vehicle observes it itself meanwhile); a later prior of the
-  /// same submap is merged with a waiting one (the higher log-odds per voxel). Any thread.
+  /// records below occupancy, another vehicle's free evidence, are left out) as prior knowledge:
+  /// before the next frame the local-global stage adds each of them that the map does not hold
+  /// (GlobalMap::addPrior(): the vehicle's own evidence wins), so when the vehicle enters that
+  /// submap its window is restored with them before its own sensor sees them; its measurements then
+  /// update them as any voxel. A prior's log-odds is kept below clamp_max (at most clamp_max -
+  /// 0.001), so the first own hit changes it and priors() no longer marks it. A submap of the local
+  /// window waits until it leaves the window (the vehicle observes it itself meanwhile); a later
+  /// prior of the same submap is merged with a waiting one (the higher log-odds per voxel). Any
+  /// thread.
   void addPrior(const SubmapIndex& m, std::vector<VoxelRecord> records);
   /// The voxels added as priors since the map was last emptied (clear(), restoreState()); see
   /// PriorVoxels: never null, safe from any thread.
@@ -156,11 +157,11 @@ class MapEngine {
   LogOddsModel log_odds_model_;
   std::vector<VoxelIndex> beyond_window_;  // a frame's hits outside the window (scratch)
   PlanningLayers planning_;
-  std::uint64_t frames_integrated_ = 0;  // local-global stage only (written under layers_mutex_)
-  std::uint64_t hits_to_global_ = 0;     // EngineStats::hits_to_global (same stage)
-  std::uint64_t hits_lost_ = 0;          // EngineStats::hits_lost (same stage)
-  std::uint64_t prior_voxels_added_ = 0; // EngineStats::prior_voxels_added (same stage)
-  std::size_t priors_waiting_ = 0;       // EngineStats::prior_submaps_waiting (same stage)
+  std::uint64_t frames_integrated_ = 0;   // local-global stage only (written under layers_mutex_)
+  std::uint64_t hits_to_global_ = 0;      // EngineStats::hits_to_global (same stage)
+  std::uint64_t hits_lost_ = 0;           // EngineStats::hits_lost (same stage)
+  std::uint64_t prior_voxels_added_ = 0;  // EngineStats::prior_voxels_added (same stage)
+  std::size_t priors_waiting_ = 0;        // EngineStats::prior_submaps_waiting (same stage)
 
   // Priors handed over by addPrior() (any thread) and those added (published like a snapshot).
   PriorStore priors_;

@@ -159,14 +159,14 @@ class EsdfMap {
 
   /// What the last compute() or update() did.
   struct UpdateStats {
-    bool full = true;                   ///< the whole field was computed (compute(), or update()
-                                        ///< without a kept box of the same size and resolution)
-    bool shifted = false;               ///< the kept box was shifted to the new one's place
-    std::size_t changed_states = 0;     ///< voxels whose state differed from the kept box
-    std::size_t rows_swept = 0;         ///< y rows swept again by the x pass
-    std::size_t y_lines = 0;            ///< y lines transformed again
-    std::size_t z_lines = 0;            ///< z lines transformed again
-    std::size_t changed_cells = 0;      ///< cells whose value or unknown bit changed
+    bool full = true;                ///< the whole field was computed (compute(), or update()
+                                     ///< without a kept box of the same size and resolution)
+    bool shifted = false;            ///< the kept box was shifted to the new one's place
+    std::size_t changed_states = 0;  ///< voxels whose state differed from the kept box
+    std::size_t rows_swept = 0;      ///< y rows swept again by the x pass
+    std::size_t y_lines = 0;         ///< y lines transformed again
+    std::size_t z_lines = 0;         ///< z lines transformed again
+    std::size_t changed_cells = 0;   ///< cells whose value or unknown bit changed
   };
 
   /// Brings the field to `box`, exactly as compute(box) would, doing only the work the changes
@@ -313,11 +313,9 @@ class EsdfMap {
   void transformSlabEnvelope(int x, const float* table, Scratch* scratch);
   /// Transforms the part [begin, end) of one y line (pass1_ at (x, z)) as a line of its own,
   /// into `line` (end - begin values).
-  void transformYLine(int x, int z, int begin, int end, std::int32_t* line,
-                      Scratch* scratch) const;
+  void transformYLine(int x, int z, int begin, int end, std::int32_t* line, Scratch* scratch) const;
   /// The same for the part [begin, end) of one z line (pass2_ at (x, y)).
-  void transformZLine(int x, int y, int begin, int end, std::int32_t* line,
-                      Scratch* scratch) const;
+  void transformZLine(int x, int y, int begin, int end, std::int32_t* line, Scratch* scratch) const;
   /// Signed squared voxel distance (or +-inf_) -> clamped signed metres (table when there).
   [[nodiscard]] float metres(std::int32_t value) const {
     return metres_table_.empty() ? slowMetres(value) : metres_table_[value + inf_];
@@ -377,10 +375,10 @@ class EsdfMap {
   EsdfConfig config_;
   EsdfField field_;  ///< the field and its geometry
 
-  std::int32_t cap_sq_ = 0;  ///< squared voxel distances above this clamp to max_distance_m
-  std::int32_t inf_ = 1;     ///< cap_sq_ + 1: "farther than the cap" in the work buffer
-  std::int32_t cap_d_ = 0;   ///< largest d with d * d <= cap_sq_
-  bool narrow_keys_ = true;  ///< the envelope arithmetic of every line fits 32 bits
+  std::int32_t cap_sq_ = 0;     ///< squared voxel distances above this clamp to max_distance_m
+  std::int32_t inf_ = 1;        ///< cap_sq_ + 1: "farther than the cap" in the work buffer
+  std::int32_t cap_d_ = 0;      ///< largest d with d * d <= cap_sq_
+  bool narrow_keys_ = true;     ///< the envelope arithmetic of every line fits 32 bits
   bool envelope_only_ = false;  ///< see setEnvelopeOnly()
   bool window_kernel_ = false;  ///< compute() runs the windowed y and z passes
   /// Pass 1's result: +d (non-obstacle) / -d (obstacle) along x, in voxels, or +-inf_.
@@ -401,9 +399,7 @@ class EsdfMap {
   std::vector<Scratch> scratch_;          ///< one per thread
 };
 
-inline EsdfMap::Query EsdfMap::query(const Eigen::Vector3d& p_W) const {
-  return field_.query(p_W);
-}
+inline EsdfMap::Query EsdfMap::query(const Eigen::Vector3d& p_W) const { return field_.query(p_W); }
 
 inline void EsdfMap::queryBatch(const Eigen::Vector3d* points_W, std::size_t count,
                                 Query* out) const {

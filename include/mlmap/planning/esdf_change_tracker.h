@@ -71,7 +71,8 @@ void shiftBox(std::vector<T>* values, const Eigen::Vector3i& size, const VoxelIn
       std::fill(dst, dst + nz, unseen);
       return;
     }
-    std::memmove(dst + z_lo, dst + z_lo + offset, static_cast<std::size_t>(z_hi - z_lo) * sizeof(T));
+    std::memmove(dst + z_lo, dst + z_lo + offset,
+                 static_cast<std::size_t>(z_hi - z_lo) * sizeof(T));
     std::fill(dst, dst + z_lo, unseen);
     std::fill(dst + z_hi, dst + nz, unseen);
   };

@@ -26,8 +26,7 @@ struct Trilinear {
 /// z first, then y, then x, with the derivatives of the same lines (the one arithmetic of
 /// EsdfMap::query() and EsdfQueryGrid::query()).
 inline Trilinear trilinear(double c000, double c001, double c010, double c011, double c100,
-                           double c101, double c110, double c111, double tx, double ty,
-                           double tz) {
+                           double c101, double c110, double c111, double tx, double ty, double tz) {
   const double dz00 = c001 - c000;
   const double dz01 = c011 - c010;
   const double dz10 = c101 - c100;
@@ -161,9 +160,9 @@ class EsdfField {
   Eigen::Vector3i size_ = Eigen::Vector3i::Zero();
   double resolution_m_ = 1.0;
   double inv_resolution_ = 1.0;  ///< 1 / resolution_m_ [1/m]
-  std::ptrdiff_t step_x_ = 0;  ///< query stencil: offset of the +1 neighbour in x (0 if nx = 1)
-  std::ptrdiff_t step_y_ = 0;  ///< ... in y
-  std::ptrdiff_t step_z_ = 0;  ///< ... in z
+  std::ptrdiff_t step_x_ = 0;    ///< query stencil: offset of the +1 neighbour in x (0 if nx = 1)
+  std::ptrdiff_t step_y_ = 0;    ///< ... in y
+  std::ptrdiff_t step_z_ = 0;    ///< ... in z
   std::vector<float> values_m_;  ///< clamped signed distance per voxel [m]
   /// One bit per voxel, set where the box voxel was unknown; each x slab starts on a new
   /// 64-bit word (slab_bits_ apart) so that threads never share a word.

@@ -89,8 +89,8 @@ class EsdfQueryGrid {
   double origin_[3] = {0.0, 0.0, 0.0};  ///< min_index - 0.5 per axis: grid -> padded coordinates
   double limit_[3] = {0.0, 0.0, 0.0};   ///< n + 0.5 per axis: padded coordinates in the box below
   double max_distance_m_ = 0.0;
-  double step_m_ = 0.0;      ///< metres per level
-  double inv_step_ = 0.0;    ///< levels per metre
+  double step_m_ = 0.0;          ///< metres per level
+  double inv_step_ = 0.0;        ///< levels per metre
   std::ptrdiff_t stride_x_ = 0;  ///< padded (ny + 2) * (nz + 2)
   std::ptrdiff_t stride_y_ = 0;  ///< padded nz + 2
   /// (nx + 2) x (ny + 2) x (nz + 2) values q * 2 + unknown, x-major, z fastest; padded cell
@@ -118,14 +118,14 @@ inline EsdfMap::Query EsdfQueryGrid::query(const Eigen::Vector3d& p_W) const {
   const double tz = sz - iz;
   const std::int16_t* c = cells_.data() + ix * stride_x_ + iy * stride_y_ + iz;
   // The point's own voxel is the corner at or above it: the upper one when t >= 0.5.
-  const std::ptrdiff_t own = (tx >= 0.5 ? stride_x_ : 0) + (ty >= 0.5 ? stride_y_ : 0) +
-                             (tz >= 0.5 ? 1 : 0);
+  const std::ptrdiff_t own =
+      (tx >= 0.5 ? stride_x_ : 0) + (ty >= 0.5 ? stride_y_ : 0) + (tz >= 0.5 ? 1 : 0);
   q.valid = (c[own] & 1) == 0;
   // Interpolation in levels (exact integer differences), scaled to metres at the end.
-  const Trilinear t = trilinear(c[0] >> 1, c[1] >> 1, c[stride_y_] >> 1, c[stride_y_ + 1] >> 1,
-                                c[stride_x_] >> 1, c[stride_x_ + 1] >> 1,
-                                c[stride_x_ + stride_y_] >> 1, c[stride_x_ + stride_y_ + 1] >> 1,
-                                tx, ty, tz);
+  const Trilinear t =
+      trilinear(c[0] >> 1, c[1] >> 1, c[stride_y_] >> 1, c[stride_y_ + 1] >> 1, c[stride_x_] >> 1,
+                c[stride_x_ + 1] >> 1, c[stride_x_ + stride_y_] >> 1,
+                c[stride_x_ + stride_y_ + 1] >> 1, tx, ty, tz);
   const double gradient_scale = step_m_ * inv_resolution_;
   q.distance_m = t.value * step_m_;
   q.gradient.x() = t.d_dtx * gradient_scale;
@@ -157,8 +157,7 @@ inline void EsdfQueryGrid::prefetch(const Eigen::Vector3d& p_W) const {
 inline void EsdfQueryGrid::queryBatch(const Eigen::Vector3d* points_W, std::size_t count,
                                       EsdfMap::Query* out) const {
   prefetchedQueries(
-      points_W, count, kPrefetchAhead, out,
-      [this](const Eigen::Vector3d& p_W) { prefetch(p_W); },
+      points_W, count, kPrefetchAhead, out, [this](const Eigen::Vector3d& p_W) { prefetch(p_W); },
       [this](const Eigen::Vector3d& p_W) { return query(p_W); });
 }
 

@@ -24,8 +24,8 @@
 /// GCC, the build chosen at load time for the CPU (function multiversioning); elsewhere, the
 /// baseline build only, and under AddressSanitizer or ThreadSanitizer (their runtimes are not
 /// ready when the ifunc resolvers run at load time: the TSan build crashed before main).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_ADDRESS__) && \
-    !defined(__SANITIZE_THREAD__)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && \
+    !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
 #define MLMAP_ESDF_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
 #else
 #define MLMAP_ESDF_CLONES
@@ -63,14 +63,14 @@ constexpr int kGroupLanes = 16;
 
 /// Reusable buffers of one thread (grown on demand, never shrunk).
 struct WindowBuffers {
-  std::vector<std::int16_t> magnitude;  ///< M of a slab or row, padded by cap_d on each side
-  std::vector<std::int16_t> best;       ///< running minimum per voxel
-  std::vector<std::int16_t> near_free;  ///< y pass: last / next non-obstacle y per z
+  std::vector<std::int16_t> magnitude;      ///< M of a slab or row, padded by cap_d on each side
+  std::vector<std::int16_t> best;           ///< running minimum per voxel
+  std::vector<std::int16_t> near_free;      ///< y pass: last / next non-obstacle y per z
   std::vector<std::int16_t> near_obstacle;  ///< y pass: last / next obstacle y per z
   std::vector<std::int32_t> finite_before;  ///< per block of M: blocks before it holding a value
-  std::vector<std::int16_t> lines;       ///< lines gathered by the caller of transformLines()
-  std::vector<std::int16_t> transposed;  ///< y pass: the slab's lines being transformed
-  std::vector<std::int16_t> signed_sq;   ///< the slab z-major: y pass's result, then z pass's
+  std::vector<std::int16_t> lines;          ///< lines gathered by the caller of transformLines()
+  std::vector<std::int16_t> transposed;     ///< y pass: the slab's lines being transformed
+  std::vector<std::int16_t> signed_sq;      ///< the slab z-major: y pass's result, then z pass's
 };
 
 /// dst[c * dst_stride + r] = src[r * src_stride + c] for r < rows, c < cols: a transposition of

@@ -29,25 +29,25 @@ namespace mlmap {
 
 /// Costs and counts of the planning layers. Times in ms per update.
 struct PlanningStats {
-  std::uint64_t snapshots = 0;           ///< snapshots published
-  std::uint64_t grid_updates = 0;        ///< 2D grid changed (rebuilt or updated in part)
-  std::uint64_t grid_rebuilds = 0;       ///< of those, rebuilt whole (window or band moved)
-  std::uint64_t esdf_updates = 0;        ///< ESDF updated (incrementally or whole)
-  std::uint64_t esdf_full = 0;           ///< of those, computed whole (first, load, many
-                                         ///< changes, a box moved along z; see
-                                         ///< EsdfMap::update())
-  std::uint64_t esdf_unchanged = 0;      ///< skipped: no state change in the box, box still
-  std::uint64_t esdf_rate_limited = 0;   ///< skipped: sooner than 1 / esdf.max_rate_hz
-  std::uint64_t esdf_superseded = 0;     ///< planning thread busy: a newer frame took its place
-  double last_snapshot_ms = 0.0;         ///< copying the window and publishing
+  std::uint64_t snapshots = 0;          ///< snapshots published
+  std::uint64_t grid_updates = 0;       ///< 2D grid changed (rebuilt or updated in part)
+  std::uint64_t grid_rebuilds = 0;      ///< of those, rebuilt whole (window or band moved)
+  std::uint64_t esdf_updates = 0;       ///< ESDF updated (incrementally or whole)
+  std::uint64_t esdf_full = 0;          ///< of those, computed whole (first, load, many
+                                        ///< changes, a box moved along z; see
+                                        ///< EsdfMap::update())
+  std::uint64_t esdf_unchanged = 0;     ///< skipped: no state change in the box, box still
+  std::uint64_t esdf_rate_limited = 0;  ///< skipped: sooner than 1 / esdf.max_rate_hz
+  std::uint64_t esdf_superseded = 0;    ///< planning thread busy: a newer frame took its place
+  double last_snapshot_ms = 0.0;        ///< copying the window and publishing
   double last_grid_ms = 0.0;
   double last_esdf_ms = 0.0;
   double max_snapshot_ms = 0.0;
   double max_grid_ms = 0.0;
   double max_esdf_ms = 0.0;
-  std::uint64_t esdf_frame = 0;          ///< frame the published ESDF was computed from
-  std::size_t snapshot_bytes = 0;        ///< window copies and grids, pooled
-  std::size_t esdf_bytes = 0;            ///< fields and work buffers, pooled
+  std::uint64_t esdf_frame = 0;    ///< frame the published ESDF was computed from
+  std::size_t snapshot_bytes = 0;  ///< window copies and grids, pooled
+  std::size_t esdf_bytes = 0;      ///< fields and work buffers, pooled
 };
 
 /// See the file comment.
@@ -108,8 +108,8 @@ class PlanningLayers {
   void recordUpdate(double snapshot_ms, double grid_ms, double esdf_ms, std::uint64_t frame,
                     const EsdfDecision& decision, bool superseded);
   void publish(std::shared_ptr<const LocalWindow> window, std::shared_ptr<const ProjectedGrid> grid,
-               PublishedEsdf esdf, bool keep_esdf, std::uint64_t frame,
-               double stamp_s, const Transform& T_W_B);
+               PublishedEsdf esdf, bool keep_esdf, std::uint64_t frame, double stamp_s,
+               const Transform& T_W_B);
   void planningLoop();
   [[nodiscard]] VoxelIndex esdfBoxMin(const LocalWindow& window, const Eigen::Vector3d& body_W,
                                       Eigen::Vector3i* size) const;
@@ -151,8 +151,8 @@ class PlanningLayers {
     std::shared_ptr<EsdfMap> map;
     std::shared_ptr<EsdfLease> lease = std::make_shared<EsdfLease>();
     std::shared_ptr<EsdfQueryGrid> query_grid;  // map's query copy (esdf.query_grid)
-    std::vector<std::uint32_t> pending;  // cells esdf_ changed since map was filled
-    bool stale = true;                   // map must be copied whole
+    std::vector<std::uint32_t> pending;         // cells esdf_ changed since map was filled
+    bool stale = true;                          // map must be copied whole
   };
   /// The published copy of esdf_ after an update (reusing a copy no snapshot holds), with its
   /// query copy brought up to date by the same cells.

@@ -31,7 +31,7 @@ struct ProjectedGrid {
   double resolution_m = 0.2;                           ///< cell edge [m]
   int width = 0;                                       ///< cells along x
   int height = 0;                                      ///< cells along y
-  double band_min_z_m = 0.0;  ///< the band used, absolute heights in W [m]
+  double band_min_z_m = 0.0;                           ///< the band used, absolute heights in W [m]
   double band_max_z_m = 0.0;
   std::vector<std::int8_t> cells;  ///< width * height values, row-major in y
 

@@ -22,7 +22,8 @@ static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs l
 
 /// Ends the process as `signo`'s default action does; only async-signal-safe calls.
 [[noreturn]] void exitBySignal(int signo) {
-  static const char kMessage[] = "stop signal during start-up: exiting at once (nothing to save yet)\n";
+  static const char kMessage[] =
+      "stop signal during start-up: exiting at once (nothing to save yet)\n";
   (void)!::write(STDERR_FILENO, kMessage, sizeof kMessage - 1);
   // The default action, with the signal unblocked (it is blocked while its handler runs), ends
   // the process as killed by it.
@@ -64,7 +65,8 @@ ExitAtOnceOnStop::ExitAtOnceOnStop() {
 
 ExitAtOnceOnStop::~ExitAtOnceOnStop() { g_exit_at_once.store(false); }
 
-void runUntilStopped(double duration_s, double report_every_s, const std::function<void()>& report) {
+void runUntilStopped(double duration_s, double report_every_s,
+                     const std::function<void()>& report) {
   using Clock = std::chrono::steady_clock;
   const auto seconds = [](Clock::time_point from, Clock::time_point to) {
     return std::chrono::duration<double>(to - from).count();

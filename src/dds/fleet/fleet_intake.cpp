@@ -190,9 +190,9 @@ SubmapIntake FleetIntake::take(const ::mlmap_msgs::msg::dds_::Submap_& msg,
   const std::uint64_t sequence = msg.sequence_();
   if (map_.apply(name, m, sequence, std::move(decoded.records), s.epoch) ==
       fleet::SubmapApply::kOutdated) {
-    return refuse(SubmapRefusal::kOutdated,
-                  "from '" + name + "': sequence " + std::to_string(sequence) +
-                      " is not newer than the content held");
+    return refuse(SubmapRefusal::kOutdated, "from '" + name + "': sequence " +
+                                                std::to_string(sequence) +
+                                                " is not newer than the content held");
   }
   s.highest_sequence = std::max(s.highest_sequence, sequence);
   out.applied = true;

@@ -175,10 +175,10 @@ struct FleetMerger::Impl {
     SubmapWriterId writer{};
     const auto& handle = info.publication_handle.value;  // the writer's GUID, 16 octets
     for (std::size_t i = 0; i < writer.size(); ++i) writer[i] = handle[static_cast<unsigned>(i)];
-    const auto wall_us = static_cast<std::uint64_t>(
-        std::chrono::duration_cast<std::chrono::microseconds>(
-            std::chrono::system_clock::now().time_since_epoch())
-            .count());
+    const auto wall_us =
+        static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
+                                       std::chrono::system_clock::now().time_since_epoch())
+                                       .count());
     std::lock_guard<std::mutex> lock(mutex);
     ++samples_received;
     const SubmapIntake r = intake.take(msg, topic_vehicle, writer, now_s(), wall_us);
@@ -370,9 +370,9 @@ std::string FleetMerger::statusLine() const {
   }
   m << "; " << s.publishers_matched << " submap writers matched";
   if (s.topics_ignored > 0) m << " (" << s.topics_ignored << " vehicle topics ignored)";
-  m << "; merged " << s.merged_voxels
-    << " voxels in " << s.submaps << " submaps, " << static_cast<double>(s.memory_bytes) / 1e6
-    << " MB; " << s.samples_rejected << " samples refused";
+  m << "; merged " << s.merged_voxels << " voxels in " << s.submaps << " submaps, "
+    << static_cast<double>(s.memory_bytes) / 1e6 << " MB; " << s.samples_rejected
+    << " samples refused";
   const char* separator = " (";
   for (std::size_t r = 0; r < kSubmapRefusals; ++r) {
     if (s.refused[r] == 0) continue;

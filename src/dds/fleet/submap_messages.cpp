@@ -15,9 +15,9 @@ namespace mlmap::dds {
 namespace fdds = eprosima::fastdds::dds;
 
 ::mlmap_msgs::msg::dds_::Submap_ toSubmapMessage(const fleet::SubmapUpdate& update,
-                                               const SubmapGeometry& geometry,
-                                               const std::string& vehicle, std::uint64_t sequence,
-                                               double stamp_s, const std::string& frame_id) {
+                                                 const SubmapGeometry& geometry,
+                                                 const std::string& vehicle, std::uint64_t sequence,
+                                                 double stamp_s, const std::string& frame_id) {
   ::mlmap_msgs::msg::dds_::Submap_ msg;
   msg.header_().stamp_(toRosTime(stamp_s));
   msg.header_().frame_id_(frame_id);
@@ -72,9 +72,9 @@ std::string decodeSubmapMessage(const ::mlmap_msgs::msg::dds_::Submap_& msg, Dec
   std::string problem = submapHeaderProblem(msg);
   if (!problem.empty()) return problem;
   const std::uint64_t voxels = std::uint64_t{msg.size_x_()} * msg.size_y_() * msg.size_z_();
-  const fleet::SubmapDecodeError error = fleet::decodeSubmapVoxels(
-      msg.voxel_count_(), msg.encoding_(), msg.raw_size_(), msg.data_().data(), msg.data_().size(),
-      voxels, &out->records);
+  const fleet::SubmapDecodeError error =
+      fleet::decodeSubmapVoxels(msg.voxel_count_(), msg.encoding_(), msg.raw_size_(),
+                                msg.data_().data(), msg.data_().size(), voxels, &out->records);
   if (error != fleet::SubmapDecodeError::kNone) {
     return std::string("payload refused: ") + fleet::toString(error);
   }
@@ -83,9 +83,9 @@ std::string decodeSubmapMessage(const ::mlmap_msgs::msg::dds_::Submap_& msg, Dec
   out->sequence = msg.sequence_();
   out->stamp_s = toSeconds(msg.header_().stamp_());
   out->geometry.resolution_m = msg.resolution_();
-  out->geometry.cells = Eigen::Vector3i(static_cast<int>(msg.size_x_()),
-                                        static_cast<int>(msg.size_y_()),
-                                        static_cast<int>(msg.size_z_()));
+  out->geometry.cells =
+      Eigen::Vector3i(static_cast<int>(msg.size_x_()), static_cast<int>(msg.size_y_()),
+                      static_cast<int>(msg.size_z_()));
   return "";
 }
 
@@ -151,10 +151,9 @@ SubmapWriter::SubmapWriter(fdds::Publisher* publisher, const std::string& topic,
       vehicle_(std::move(vehicle)),
       geometry_(geometry),
       frame_id_(std::move(frame_id)),
-      sequence_(static_cast<std::uint64_t>(
-          std::chrono::duration_cast<std::chrono::microseconds>(
-              std::chrono::system_clock::now().time_since_epoch())
-              .count())) {}
+      sequence_(static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
+                                               std::chrono::system_clock::now().time_since_epoch())
+                                               .count())) {}
 
 std::size_t SubmapWriter::write(const std::vector<fleet::SubmapUpdate>& updates, double stamp_s) {
   std::size_t bytes = 0;

@@ -40,7 +40,8 @@ SubmapReaders::SubmapReaders(SubmapReadersConfig config, Sink sink,
       on_matched_(std::move(on_matched)),
       on_error_(std::move(on_error)) {
   for (const std::string& vehicle : config_.vehicles) {
-    if (vehicleOfSubmapTopic(vehicleSubmapTopic(vehicle, config_.topic), config_.topic) != vehicle) {
+    if (vehicleOfSubmapTopic(vehicleSubmapTopic(vehicle, config_.topic), config_.topic) !=
+        vehicle) {
       throw std::invalid_argument("'" + vehicle +
                                   "' is not a vehicle name: a ROS name of letters, digits, '_' and "
                                   "inner '/', at most 256 bytes");

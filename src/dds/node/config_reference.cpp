@@ -20,7 +20,8 @@ std::string withKeyReference(const std::string& document, const std::string& ref
   const std::size_t e = b == std::string::npos ? b : document.find(end, b);
   if (e == std::string::npos) {
     throw std::runtime_error(std::string("the key reference markers are missing: a line '") +
-                             kReferenceBegin + "' followed later by a line '" + kReferenceEnd + "'");
+                             kReferenceBegin + "' followed later by a line '" + kReferenceEnd +
+                             "'");
   }
   return document.substr(0, b + begin.size()) + reference + document.substr(e);
 }

@@ -82,9 +82,9 @@ bool FramePairer::extrinsicFor(const std::string& frame_id, double stamp_s, Tran
     }
     return true;
   }
-  const TfBuffer::Lookup found =
-      tf_ == nullptr ? TfBuffer::Lookup::kUnknownFrame
-                     : tf_->lookup(frames_.body, frame_id, stamp_s, T_B_S);
+  const TfBuffer::Lookup found = tf_ == nullptr
+                                     ? TfBuffer::Lookup::kUnknownFrame
+                                     : tf_->lookup(frames_.body, frame_id, stamp_s, T_B_S);
   if (found == TfBuffer::Lookup::kFound) return true;
   counters_.add(&NodeCounters::frames_unresolved_frame_id);
   log_.limited(LogLevel::kWarning, kReasonFrameId,
@@ -207,7 +207,8 @@ void FramePairer::place(Frame&& frame) {
 }
 
 void FramePairer::expireWaiting() {
-  while (!waiting_.empty() && secondsBetween(waiting_.front().since, SteadyClock::now()) > kPoseWait_s) {
+  while (!waiting_.empty() &&
+         secondsBetween(waiting_.front().since, SteadyClock::now()) > kPoseWait_s) {
     noPose(stampOf(waiting_.front().frame));
     waiting_.pop_front();
   }

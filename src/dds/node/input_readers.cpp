@@ -36,8 +36,7 @@ void InputReaders::add(const std::string& name) {
   eprosima::fastdds::dds::DataReaderQos qos = sensorReaderQos();
   if (!dds_.data_sharing) qos.data_sharing().off();
   readers_.add<PubSubType>(
-      dds_topic, qos,
-      [this](typename PubSubType::type&& msg) { handOver(Input(std::move(msg))); },
+      dds_topic, qos, [this](typename PubSubType::type&& msg) { handOver(Input(std::move(msg))); },
       // This reader's own count, so that the total follows current_count exactly.
       [this, dds_topic, mine = std::int64_t{0}](int now) mutable {
         const std::int64_t change = now - mine;

@@ -10,8 +10,8 @@ RateGate::RateGate(double rate_hz)
     : period_s_(rate_hz > 0 ? 1.0 / rate_hz : 0.0), enabled_(rate_hz > 0) {}
 
 bool RateGate::due() const {
-  return enabled_ && (last_ == Clock::time_point::min() ||
-                      secondsBetween(last_, Clock::now()) >= period_s_);
+  return enabled_ &&
+         (last_ == Clock::time_point::min() || secondsBetween(last_, Clock::now()) >= period_s_);
 }
 
 void RateGate::mark() { last_ = Clock::now(); }
@@ -85,11 +85,9 @@ void LayerMailbox::close() {
 LayerMailbox::News LayerMailbox::take(std::chrono::milliseconds poll) {
   News news;
   std::unique_lock<std::mutex> lock(mutex_);
-  cv_.wait_for(lock, poll,
-               [this] {
-                 return closed_ || snapshot_fresh_ || awareness_.fresh || global_.fresh ||
-                        fleet_.fresh;
-               });
+  cv_.wait_for(lock, poll, [this] {
+    return closed_ || snapshot_fresh_ || awareness_.fresh || global_.fresh || fleet_.fresh;
+  });
   news.last = closed_;
   snapshot_fresh_ = false;
   if (awareness_.fresh) std::swap(news.awareness, awareness_);

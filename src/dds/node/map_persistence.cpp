@@ -45,7 +45,8 @@ bool MapPersistence::loadIfAsked() {
     << msSince(start) << " ms: " << io::occupiedVoxels(state).size() << " occupied voxels ("
     << state.globalVoxelCount() << " in the global map), " << state.frames_mapped
     << " frames mapped before";
-  if (state.has_last_stamp) m << ", last stamp " << std::setprecision(3) << state.last_stamp_s << " s";
+  if (state.has_last_stamp)
+    m << ", last stamp " << std::setprecision(3) << state.last_stamp_s << " s";
   log_.always(LogLevel::kInfo, m.str());
   return true;
 }

@@ -33,7 +33,6 @@
 
 namespace mlmap::dds {
 
-
 /// The node's name in the ROS 2 graph (`ros2 node list`), and its participant's name.
 constexpr const char* kNodeName = "mlmap_node";
 
@@ -55,7 +54,7 @@ struct MappingNode::Impl {
   ParticipantPtr participant;
   std::unique_ptr<DiscoveryInfoPublisher> graph;
   std::unique_ptr<DiscoveryPacing> pacing;  ///< new peers learn of the endpoints at once
-  std::unique_ptr<node::TfListener> tf;  ///< rt/tf and rt/tf_static, when the config needs them
+  std::unique_ptr<node::TfListener> tf;     ///< rt/tf and rt/tf_static, when the config needs them
   std::unique_ptr<node::Outputs> outputs;
   node::InputQueue queue;
   std::unique_ptr<node::InputReaders> readers;
@@ -130,7 +129,8 @@ struct MappingNode::Impl {
                                             node::Outputs::ownEdges(config.dds), counters, log);
     outputs = std::make_unique<node::Outputs>(publisher, config.dds, T_B_S, tf.get(), *engine,
                                               mailbox, counters, log, started);
-    pairer = std::make_unique<node::FramePairer>(config.dds, T_B_S, tf.get(), *engine, counters, log);
+    pairer =
+        std::make_unique<node::FramePairer>(config.dds, T_B_S, tf.get(), *engine, counters, log);
     readers = std::make_unique<node::InputReaders>(subscriber, config.dds, queue, counters, log);
     services = std::make_unique<node::NodeServices>(publisher, subscriber, node_namespace,
                                                     kNodeName, effective, *engine, *persistence,
@@ -159,7 +159,9 @@ struct MappingNode::Impl {
                                     describeMemory(estimate));
     const long pages = ::sysconf(_SC_PHYS_PAGES);
     const long page_bytes = ::sysconf(_SC_PAGE_SIZE);
-    const double physical = pages > 0 && page_bytes > 0 ? static_cast<double>(pages) * static_cast<double>(page_bytes) : 0.0;
+    const double physical = pages > 0 && page_bytes > 0
+                                ? static_cast<double>(pages) * static_cast<double>(page_bytes)
+                                : 0.0;
     if (physical > 0.0 && static_cast<double>(estimate.total()) > 0.8 * physical) {
       log.always(LogLevel::kWarning,
                  "the configured layers need more than 80 % of this machine's " +
@@ -192,10 +194,9 @@ struct MappingNode::Impl {
   void warnAboutMissingInputs(bool loaded) {
     const TopicNames& t = config.dds.topics;
     if (t.cloud.empty() && t.depth_image.empty()) {
-      log.always(LogLevel::kWarning,
-                 std::string("no sensor topic is configured (dds.topics.cloud, "
-                             "dds.topics.depth_image): the node maps nothing") +
-                     (loaded ? " and publishes the loaded map only" : ""));
+      log.always(LogLevel::kWarning, std::string("no sensor topic is configured (dds.topics.cloud, "
+                                                 "dds.topics.depth_image): the node maps nothing") +
+                                         (loaded ? " and publishes the loaded map only" : ""));
     } else if (t.pose.empty() && t.odometry.empty()) {
       log.always(LogLevel::kWarning,
                  "no pose topic is configured (dds.topics.pose, dds.topics.odometry): every "
@@ -227,9 +228,9 @@ struct MappingNode::Impl {
   }
 
   /// dds.fleet.publish: hands the global map's changes, the window and the priors of the same
-  /// frame to the fleet output (at fleet.rate_hz, or now with `force`). On the local-global thread, or on any
-  /// thread with `force` while the engine is idle. Nothing before the first snapshot, nor while
-  /// the engine's latest snapshot is not the one of `map`'s frame (the planning thread's).
+  /// frame to the fleet output (at fleet.rate_hz, or now with `force`). On the local-global thread,
+  /// or on any thread with `force` while the engine is idle. Nothing before the first snapshot, nor
+  /// while the engine's latest snapshot is not the one of `map`'s frame (the planning thread's).
   void shareWithFleet(const GlobalMap& map, bool force) {
     std::shared_ptr<const MapSnapshot> snap = engine ? engine->snapshot() : nullptr;
     if (!snap || snap->frame() == 0) return;

@@ -31,7 +31,8 @@ void MapFileOptions::validate(std::vector<std::string>* errors) const {
       errors->push_back(key(save_path) + ": folder '" + dir.string() + "' does not exist (got '" +
                         save_path + "')");
     } else if (!p.has_filename() || std::filesystem::is_directory(p, ec)) {
-      errors->push_back(key(save_path) + ": is a folder, not a file name (got '" + save_path + "')");
+      errors->push_back(key(save_path) + ": is a folder, not a file name (got '" + save_path +
+                        "')");
     }
   }
   if (!load_path.empty() && !load_missing_ok && !std::filesystem::exists(load_path)) {

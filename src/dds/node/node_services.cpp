@@ -56,8 +56,7 @@ NodeServices::NodeServices(eprosima::fastdds::dds::Publisher* publisher,
   // rclpy's parameter client (`ros2 param`) waits for this one too before any call.
   host_.add<rcl::SetParametersAtomically_Request_PubSubType,
             rcl::SetParametersAtomically_Response_PubSubType>(
-      topics("set_parameters_atomically"),
-      [this](const rcl::SetParametersAtomically_Request_& r) {
+      topics("set_parameters_atomically"), [this](const rcl::SetParametersAtomically_Request_& r) {
         return parameters_.setAtomically(r);
       });
 }

@@ -1,7 +1,8 @@
 #pragma once
 /// @file
-/// mlmap_node's ROS 2 services (rmw_fastrtps_cpp's framing, mlmap/dds/node/ros_services.h): `~/save_map`
-/// and `~/clear_map` (std_srvs/srv/Trigger) and the read-only parameter services of rcl_interfaces
+/// mlmap_node's ROS 2 services (rmw_fastrtps_cpp's framing, mlmap/dds/node/ros_services.h):
+/// `~/save_map` and `~/clear_map` (std_srvs/srv/Trigger) and the read-only parameter services of
+/// rcl_interfaces
 /// (`~/list_parameters`, `~/get_parameters`, `~/describe_parameters`, `~/get_parameter_types`,
 /// `~/set_parameters`, `~/set_parameters_atomically`) over the node's effective configuration.
 

@@ -127,8 +127,8 @@ class TfOutput : public OutputOperation {
     counters_.add(&NodeCounters::tf_odom_missing);
     std::ostringstream m;
     m << "no " << frames_.world << " -> " << frames_.odom << " for the pose stamped " << std::fixed
-      << stamp_s << ": the robot's " << frames_.odom << " -> " << frames_.body << " on /tf: "
-      << toString(why);
+      << stamp_s << ": the robot's " << frames_.odom << " -> " << frames_.body
+      << " on /tf: " << toString(why);
     log_.limited(LogLevel::kWarning, kReasonTfMissing, m.str());
   }
 
@@ -227,7 +227,8 @@ class MapGridOutput : public OutputOperation {
         log_.limited(LogLevel::kWarning, kReasonMapGrid,
                      "map grid: it reached its limit of " +
                          std::to_string(FixedOriginGrid::kDefaultMaxCells) + " cells; " +
-                         std::to_string(map_.cellsDropped()) + " known cells beyond it are not in it");
+                         std::to_string(map_.cellsDropped()) +
+                         " known cells beyond it are not in it");
       }
     }
     if (map_.changes() == sent_changes_ || !(round.last || gate_.due())) return;
@@ -297,9 +298,8 @@ class FleetOutput : public OutputOperation {
     const FleetCopy& copy = round.news.fleet;
     if (!copy.fresh) return;
     fleet::GlobalMapDelta delta = copy.delta;
-    const std::vector<fleet::SubmapUpdate> updates =
-        share_.changes(std::move(delta), copy.snap ? &copy.snap->window() : nullptr,
-                       copy.priors.get());
+    const std::vector<fleet::SubmapUpdate> updates = share_.changes(
+        std::move(delta), copy.snap ? &copy.snap->window() : nullptr, copy.priors.get());
     if (updates.empty()) return;
     const std::uint64_t failures = writer_->failures();
     const std::size_t bytes = writer_->write(updates, copy.snap ? copy.snap->stamp_s() : 0.0);
@@ -474,8 +474,8 @@ Outputs::Outputs(fdds::Publisher* publisher, const DdsConfig& dds, const Transfo
   const CountedWriter status =
       writer(mlmap_msgs::Status_PubSubType(), n.status, r.status_hz, reliableWriterQos(10));
   has_global_ = static_cast<bool>(global);
-  writers_ = {global.get(),    grid.get(),      map_grid.get(), local.get(), status.get(),
-              tf.get(),        tf_static.get(), awareness.get(), block.get(), slice.get()};
+  writers_ = {global.get(), grid.get(),      map_grid.get(),  local.get(), status.get(),
+              tf.get(),     tf_static.get(), awareness.get(), block.get(), slice.get()};
 
   operations_.push_back(std::make_unique<LayerCopyOutput>(awareness, &LayerMailbox::News::awareness,
                                                           dds.world_frame));
@@ -490,8 +490,7 @@ Outputs::Outputs(fdds::Publisher* publisher, const DdsConfig& dds, const Transfo
   if (dds.fleet.publish) {
     const LocalMapConfig& lm = engine.config().local_map;
     auto fleet = std::make_unique<FleetOutput>(
-        std::make_unique<SubmapWriter>(publisher, dds.fleet.topic,
-                                       resolveFleetVehicle(dds),
+        std::make_unique<SubmapWriter>(publisher, dds.fleet.topic, resolveFleetVehicle(dds),
                                        SubmapGeometry{lm.resolution_m, lm.submap_cells()},
                                        dds.world_frame),
         lm.submap_cells(), counters, log);

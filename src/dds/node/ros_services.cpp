@@ -83,7 +83,8 @@ bool ServiceHost::ReplyWriter::isMatched(const rtps::GUID_t& reader) {
 }
 
 ServiceHost::ServiceHost(fdds::Publisher* publisher, fdds::Subscriber* subscriber,
-                         std::function<void(const std::string&)> on_problem, const ServiceLimits& limits)
+                         std::function<void(const std::string&)> on_problem,
+                         const ServiceLimits& limits)
     : publisher_(publisher),
       subscriber_(subscriber),
       on_problem_(std::move(on_problem)),
@@ -197,7 +198,8 @@ void ServiceHost::countMalformed(const std::string& topic, const std::string& re
     ++counters_.requests_malformed;
   }
   if (on_problem_) {
-    on_problem_("cannot decode a request on " + topic + " (malformed CDR: " + reason + "): dropped");
+    on_problem_("cannot decode a request on " + topic + " (malformed CDR: " + reason +
+                "): dropped");
   }
 }
 
@@ -216,12 +218,13 @@ void ServiceHost::sendReply(ReplyWriter& out, WriteReply write, const RequestId&
   {
     std::lock_guard<std::mutex> lock(mutex_);
     const auto client = id.request_writer.guidPrefix;
-    const auto of_client = static_cast<std::size_t>(
-        std::count_if(waiting_replies_.begin(), waiting_replies_.end(),
-                      [&](const WaitingReply& r) { return r.id.request_writer.guidPrefix == client; }));
+    const auto of_client = static_cast<std::size_t>(std::count_if(
+        waiting_replies_.begin(), waiting_replies_.end(),
+        [&](const WaitingReply& r) { return r.id.request_writer.guidPrefix == client; }));
     if (waiting_replies_.size() < limits_.waiting_replies &&
         of_client < limits_.waiting_replies_per_client) {
-      waiting_replies_.push_back({&out, id, std::move(write), std::chrono::steady_clock::now() + timeout});
+      waiting_replies_.push_back(
+          {&out, id, std::move(write), std::chrono::steady_clock::now() + timeout});
       return;
     }
     ++counters_.replies_unmatched;

@@ -56,7 +56,8 @@ void TfBuffer::setDynamic(const std::string& parent, const std::string& child, d
   }
 }
 
-TfBuffer::Lookup TfBuffer::edgeAt(const Edge& edge, double stamp_s, Transform* T_parent_child) const {
+TfBuffer::Lookup TfBuffer::edgeAt(const Edge& edge, double stamp_s,
+                                  Transform* T_parent_child) const {
   if (edge.is_static) {
     *T_parent_child = edge.T_static;
     return Lookup::kFound;
@@ -97,7 +98,8 @@ TfBuffer::Lookup TfBuffer::lookup(const std::string& target, const std::string& 
       worst = at;
       break;
     }
-    up_from_source.emplace_back(found->second.parent, T_parent_child * up_from_source.back().second);
+    up_from_source.emplace_back(found->second.parent,
+                                T_parent_child * up_from_source.back().second);
   }
   // Up from the target to the first frame on that list.
   std::string frame = target;

@@ -14,7 +14,9 @@ namespace {
 constexpr double kMinTfHorizon_s = 10.0;
 }  // namespace
 
-bool TfListener::listensToTf(const DdsConfig& dds) { return resolveTfMode(dds) == TfMode::kMapOdom; }
+bool TfListener::listensToTf(const DdsConfig& dds) {
+  return resolveTfMode(dds) == TfMode::kMapOdom;
+}
 
 bool TfListener::listensToTfStatic(const DdsConfig& dds) {
   // map_odom: odom -> body may pass through static edges (base_footprint -> base_link).

@@ -35,14 +35,17 @@ eprosima::fastdds::dds::DataWriter* createDataSharingCloudWriter(
     throw std::runtime_error("cannot register DDS type " + type.get_type_name() +
                              " (is another PointCloud2 type registered in this participant?)");
   }
-  fdds::Topic* topic = participant->create_topic(dds_topic, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
+  fdds::Topic* topic =
+      participant->create_topic(dds_topic, type.get_type_name(), fdds::TOPIC_QOS_DEFAULT);
   if (topic == nullptr) throw std::runtime_error("cannot create topic " + dds_topic);
-  qos.data_sharing().automatic(std::vector<std::uint16_t>{dataSharingDomainId()});  // with mlmap's readers only
+  qos.data_sharing().automatic(
+      std::vector<std::uint16_t>{dataSharingDomainId()});  // with mlmap's readers only
   // Data-sharing needs preallocated history slots (the shared pool).
   qos.endpoint().history_memory_policy = eprosima::fastrtps::rtps::PREALLOCATED_MEMORY_MODE;
   fdds::DataWriter* writer =
       publisher->create_datawriter(topic, withRosTypeHash(qos, type.get_type_name()));
-  if (writer == nullptr) throw std::runtime_error("cannot create a data-sharing writer on " + dds_topic);
+  if (writer == nullptr)
+    throw std::runtime_error("cannot create a data-sharing writer on " + dds_topic);
   return writer;
 }
 

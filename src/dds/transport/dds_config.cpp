@@ -14,7 +14,8 @@
 namespace mlmap::dds {
 namespace {
 
-constexpr int kMaxDomainId = 232;  // ROS 2's limit: higher ids overflow the RTPS port range on Linux
+constexpr int kMaxDomainId =
+    232;  // ROS 2's limit: higher ids overflow the RTPS port range on Linux
 
 std::string upper(std::string text) {
   for (char& c : text) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
@@ -26,7 +27,6 @@ std::string number(double value) {
   out << value;
   return out.str();
 }
-
 
 /// "dds.<path>" of `field`, a member (or nested member) of `dds`, from the key list.
 template <class T>
@@ -47,7 +47,8 @@ void checkPositive(const std::string& key, double value, std::vector<std::string
   }
 }
 
-void checkFrame(const std::string& key, const std::string& frame, std::vector<std::string>* errors) {
+void checkFrame(const std::string& key, const std::string& frame,
+                std::vector<std::string>* errors) {
   if (frame.empty()) {
     errors->push_back(key + ": must not be empty");
   } else if (frame[0] == '/') {
@@ -102,7 +103,8 @@ std::string enclaveProblem(const std::string& enclave) {
 
 /// The value of environment variable `name`, "" when unset.
 std::string environment(const char* name) {
-  const char* value = std::getenv(name);  // NOLINT(concurrency-mt-unsafe): nothing here sets the environment
+  const char* value =
+      std::getenv(name);  // NOLINT(concurrency-mt-unsafe): nothing here sets the environment
   return value == nullptr ? std::string() : std::string(value);
 }
 
@@ -153,8 +155,8 @@ void SecurityConfig::validate(std::vector<std::string>* errors) const {
   if (!enclave.empty()) {
     const std::string problem = enclaveProblem(enclave);
     if (!problem.empty()) {
-      errors->push_back(securityKey(&SecurityConfig::enclave) + ": not a valid enclave name: " +
-                        problem + " (got '" + enclave + "')");
+      errors->push_back(securityKey(&SecurityConfig::enclave) +
+                        ": not a valid enclave name: " + problem + " (got '" + enclave + "')");
     }
   }
   if (keystore.find_first_of("\n\r") != std::string::npos) {
@@ -174,8 +176,9 @@ SecuritySetup resolveSecurity(const SecurityConfig& config) {
   if (!config.strategy.empty()) {
     parseStrategy(config.strategy, &setup.strategy);
   } else {
-    setup.strategy = environment("ROS_SECURITY_STRATEGY") == "Enforce" ? SecurityStrategy::kEnforce
-                                                                        : SecurityStrategy::kPermissive;
+    setup.strategy = environment("ROS_SECURITY_STRATEGY") == "Enforce"
+                         ? SecurityStrategy::kEnforce
+                         : SecurityStrategy::kPermissive;
   }
   setup.enclave = config.enclave;
   if (setup.enclave.empty()) {
@@ -212,13 +215,15 @@ SecuritySetup resolveSecurity(const SecurityConfig& config) {
   dir = dir.lexically_normal();
   setup.enclave_dir = dir.string();
   if (!fs::is_directory(dir, ec)) {
-    return unusable("enclave '" + setup.enclave + "' has no folder " + setup.enclave_dir +
-                    " in keystore " + setup.keystore +
-                    " (make it with `ros2 security create_enclave` or tools/make_test_keystore.sh)");
+    return unusable(
+        "enclave '" + setup.enclave + "' has no folder " + setup.enclave_dir + " in keystore " +
+        setup.keystore +
+        " (make it with `ros2 security create_enclave` or tools/make_test_keystore.sh)");
   }
   std::string missing;
   for (const char* name : kSecurityFileNames) {
-    if (!fs::is_regular_file(dir / name, ec)) missing += (missing.empty() ? "" : ", ") + (dir / name).string();
+    if (!fs::is_regular_file(dir / name, ec))
+      missing += (missing.empty() ? "" : ", ") + (dir / name).string();
   }
   if (!missing.empty()) {
     return unusable("enclave '" + setup.enclave + "' is missing " + missing);
@@ -322,8 +327,8 @@ std::vector<std::string> DdsConfig::validate() const {
   TfMode mode{};
   const bool mode_ok = tf_mode == "auto" || parseTfMode(tf_mode, &mode);
   if (!mode_ok) {
-    errors.push_back(key(tf_mode) + ": must be auto, none, map_odom or world_body (got " +
-                     tf_mode + ")");
+    errors.push_back(key(tf_mode) + ": must be auto, none, map_odom or world_body (got " + tf_mode +
+                     ")");
   }
   if (sensor_extrinsic != "config" && sensor_extrinsic != "tf_static") {
     errors.push_back(key(sensor_extrinsic) + ": must be config or tf_static (got " +
@@ -489,7 +494,8 @@ DiscoveryRange resolveDiscoveryRange(const DdsConfig& config) {
   if (env.empty()) return DiscoveryRange::kSubnet;  // rcl's default when nothing sets it
   if (!parseDiscoveryRange(env, &range)) {
     throw std::invalid_argument(std::string("ROS_AUTOMATIC_DISCOVERY_RANGE must be LOCALHOST, "
-                                            "SUBNET, OFF or SYSTEM_DEFAULT (got '") + env + "')");
+                                            "SUBNET, OFF or SYSTEM_DEFAULT (got '") +
+                                env + "')");
   }
   return range;
 }
@@ -514,8 +520,8 @@ std::vector<std::string> parseStaticPeers(const std::string& text, const std::st
                                   peer.substr(0, 40) + "...')");
     }
     if (std::any_of(peer.begin(), peer.end(), is_space)) {
-      throw std::invalid_argument(source + ": static peers are separated by ';', not spaces (got '" +
-                                  peer + "')");
+      throw std::invalid_argument(
+          source + ": static peers are separated by ';', not spaces (got '" + peer + "')");
     }
     if (peers.size() == kMaxStaticPeers) {
       throw std::invalid_argument(source + ": more than " + std::to_string(kMaxStaticPeers) +

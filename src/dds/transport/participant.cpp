@@ -39,7 +39,8 @@ using TransportPtr = std::shared_ptr<TransportDescriptorInterface>;
 using eprosima::fastrtps::types::ReturnCode_t;
 
 constexpr const char* kLoopbackAddress = "127.0.0.1";
-constexpr std::uint32_t kHeartbeatPeriod_ns = 100'000'000;  // reliable writers: 0.1 s (Fast DDS: 3 s)
+constexpr std::uint32_t kHeartbeatPeriod_ns =
+    100'000'000;  // reliable writers: 0.1 s (Fast DDS: 3 s)
 
 /// UDPv4 127.0.0.1 with port 0: Fast DDS fills in the well-known ports of the domain (for an
 /// initial peer: one per participant index up to maxInitialPeersRange).
@@ -64,10 +65,10 @@ fdds::DomainParticipantQos baseQos(const DdsConfig& config) {
     factory->get_default_participant_qos(qos);
   } else if (factory->get_participant_qos_from_profile(config.participant_profile, qos) !=
              ReturnCode_t::RETCODE_OK) {
-    throw std::runtime_error("dds.participant_profile: no participant profile '" +
-                             config.participant_profile + "' in the loaded XML profiles" +
-                             (config.profiles_file.empty() ? std::string()
-                                                           : " (" + config.profiles_file + ")"));
+    throw std::runtime_error(
+        "dds.participant_profile: no participant profile '" + config.participant_profile +
+        "' in the loaded XML profiles" +
+        (config.profiles_file.empty() ? std::string() : " (" + config.profiles_file + ")"));
   }
   return qos;
 }
@@ -104,10 +105,12 @@ frtps::Locator_t staticPeerLocator(const std::string& host, const std::string& s
 /// profile's own transports kept and a UDPv4 transport added (maxInitialPeersRange 32, plus SHM
 /// with `shared_memory`); 127.0.0.1 added to the initial peers. mlmap's one difference: without
 /// static peers, the announced locators are this host's own addresses (localhostAddresses()).
-void applyLocalhostRange(bool shared_memory, bool has_static_peers, fdds::DomainParticipantQos* qos) {
+void applyLocalhostRange(bool shared_memory, bool has_static_peers,
+                         fdds::DomainParticipantQos* qos) {
   fdds::TransportConfigQos& transport = qos->transport();
   transport.use_builtin_transports = false;
-  if (shared_memory) transport.user_transports.push_back(std::make_shared<SharedMemTransportDescriptor>());
+  if (shared_memory)
+    transport.user_transports.push_back(std::make_shared<SharedMemTransportDescriptor>());
   auto udp = std::make_shared<UDPv4TransportDescriptor>();
   udp->maxInitialPeersRange = kLocalhostMaxInitialPeersRange;
   transport.user_transports.push_back(udp);
@@ -159,7 +162,7 @@ std::string withSharedMemoryOnlyIfAsked(bool shared_memory, const std::string& p
     transport.user_transports.insert(transport.user_transports.begin(), builtinUdp(transport));
     if (shared_memory) {
       transport.user_transports.insert(transport.user_transports.begin(),
-                                        std::make_shared<SharedMemTransportDescriptor>());
+                                       std::make_shared<SharedMemTransportDescriptor>());
     }
     transport.use_builtin_transports = false;
   }
@@ -168,16 +171,19 @@ std::string withSharedMemoryOnlyIfAsked(bool shared_memory, const std::string& p
   const auto is_shm = [](const TransportPtr& t) {
     return std::dynamic_pointer_cast<SharedMemTransportDescriptor>(t) != nullptr;
   };
-  const std::size_t removed = static_cast<std::size_t>(std::count_if(listed.begin(), listed.end(), is_shm));
+  const std::size_t removed =
+      static_cast<std::size_t>(std::count_if(listed.begin(), listed.end(), is_shm));
   if (removed == 0) return "";
   listed.erase(std::remove_if(listed.begin(), listed.end(), is_shm), listed.end());
   if (listed.empty()) {
     throw std::runtime_error(
-        profile + ": its only transport is shared memory, which dds.shared_memory "
+        profile +
+        ": its only transport is shared memory, which dds.shared_memory "
         "(false) leaves out: add a UDP transport to the profile, or set dds.shared_memory: true "
         "when every Fast DDS peer on this host is version 2.9");
   }
-  return profile + ": its shared-memory transport is left out (dds.shared_memory is false: a "
+  return profile +
+         ": its shared-memory transport is left out (dds.shared_memory is false: a "
          "peer of another Fast DDS version on this host could crash this process through it); "
          "its other transports are used";
 }
@@ -301,10 +307,12 @@ std::int32_t freeParticipantIndex(int domain_id, const frtps::PortParameters& po
 bool takesAParticipantIndex(const fdds::DomainParticipantQos& qos) {
   const fdds::WireProtocolConfigQos& wire = qos.wire_protocol();
   if (wire.participant_id >= 0) return false;
-  if (wire.builtin.discovery_config.discoveryProtocol != frtps::DiscoveryProtocol_t::SIMPLE) return false;
+  if (wire.builtin.discovery_config.discoveryProtocol != frtps::DiscoveryProtocol_t::SIMPLE)
+    return false;
   return std::any_of(qos.transport().user_transports.begin(), qos.transport().user_transports.end(),
                      [](const TransportPtr& t) {
-                       return std::dynamic_pointer_cast<UDPv4TransportDescriptor>(unguarded(t)) != nullptr;
+                       return std::dynamic_pointer_cast<UDPv4TransportDescriptor>(unguarded(t)) !=
+                              nullptr;
                      });
 }
 
@@ -389,8 +397,10 @@ ParticipantSetup participantSetup(const DdsConfig& config, const std::string& na
 
   // As rmw_fastrtps: discovery data of participants with many endpoints can exceed the
   // preallocated 5000 bytes.
-  qos.wire_protocol().builtin.readerHistoryMemoryPolicy = frtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
-  qos.wire_protocol().builtin.writerHistoryMemoryPolicy = frtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  qos.wire_protocol().builtin.readerHistoryMemoryPolicy =
+      frtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
+  qos.wire_protocol().builtin.writerHistoryMemoryPolicy =
+      frtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
   if (qos.user_data().data_vec().empty()) {
     const std::string enclave = "enclave=" + setup.security.enclave + ";";
     qos.user_data().data_vec(std::vector<frtps::octet>(enclave.begin(), enclave.end()));
@@ -403,20 +413,22 @@ ParticipantPtr createParticipant(const DdsConfig& config, const std::string& nam
                                  fdds::DomainParticipantListener* listener) {
   const ParticipantSetup setup = participantSetup(config, name);
   // As rmw: a Permissive fallback is said, not silent.
-  if (!setup.security.warning.empty()) std::cerr << "[mlmap dds] warning: " << setup.security.warning << "\n";
-  for (const std::string& warning : setup.warnings) std::cerr << "[mlmap dds] warning: " << warning << "\n";
+  if (!setup.security.warning.empty())
+    std::cerr << "[mlmap dds] warning: " << setup.security.warning << "\n";
+  for (const std::string& warning : setup.warnings)
+    std::cerr << "[mlmap dds] warning: " << warning << "\n";
   // The index is chosen and taken under one lock, so that two threads of this process never
   // choose the same one.
   static std::mutex creating;
   std::unique_lock<std::mutex> lock(creating);
   fdds::DomainParticipantQos qos = setup.qos;
   if (takesAParticipantIndex(qos)) {
-    qos.wire_protocol().participant_id = freeParticipantIndex(setup.domain_id, qos.wire_protocol().port);
+    qos.wire_protocol().participant_id =
+        freeParticipantIndex(setup.domain_id, qos.wire_protocol().port);
   }
   fdds::DomainParticipant* participant =
       fdds::DomainParticipantFactory::get_instance()->create_participant(
-          static_cast<fdds::DomainId_t>(setup.domain_id), qos, listener,
-          fdds::StatusMask::none());
+          static_cast<fdds::DomainId_t>(setup.domain_id), qos, listener, fdds::StatusMask::none());
   lock.unlock();
   if (participant == nullptr) {
     std::string security;
@@ -449,7 +461,8 @@ fdds::DataReaderQos sensorReaderQos(int depth) {
   qos.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
   qos.history().depth = depth;
   qos.endpoint().history_memory_policy = kHistoryMemory;
-  qos.data_sharing().automatic(std::vector<std::uint16_t>{dataSharingDomainId()});  // with mlmap's writers only
+  qos.data_sharing().automatic(
+      std::vector<std::uint16_t>{dataSharingDomainId()});  // with mlmap's writers only
   return qos;
 }
 
@@ -457,7 +470,8 @@ fdds::DataWriterQos reliableWriterQos(int depth) {
   checkDepth(depth);
   fdds::DataWriterQos qos = fdds::DATAWRITER_QOS_DEFAULT;
   qos.reliability().kind = fdds::RELIABLE_RELIABILITY_QOS;
-  qos.durability().kind = fdds::VOLATILE_DURABILITY_QOS;  // Fast DDS's writer default is TRANSIENT_LOCAL
+  qos.durability().kind =
+      fdds::VOLATILE_DURABILITY_QOS;  // Fast DDS's writer default is TRANSIENT_LOCAL
   qos.history().kind = fdds::KEEP_LAST_HISTORY_QOS;
   qos.history().depth = depth;
   qos.publish_mode().kind = fdds::SYNCHRONOUS_PUBLISH_MODE;
@@ -469,7 +483,8 @@ fdds::DataWriterQos reliableWriterQos(int depth) {
   // period is 3 s, so a map layer lost once on a loaded machine stayed missing for seconds, or
   // for good when the node stopped first. Fast DDS sends periodic heartbeats only while a sample
   // is unacknowledged, so the short period costs little when nothing is lost.
-  qos.reliable_writer_qos().times.heartbeatPeriod = eprosima::fastrtps::Duration_t(0, kHeartbeatPeriod_ns);
+  qos.reliable_writer_qos().times.heartbeatPeriod =
+      eprosima::fastrtps::Duration_t(0, kHeartbeatPeriod_ns);
   return qos;
 }
 

@@ -97,7 +97,7 @@ class UdpSendGuardTransport final : public rtps::ChainingTransport {
   }
 
   std::mutex mutex_;
-  std::set<frtps::Locator_t> opened_;          ///< every destination the UDP transport has taken
+  std::set<frtps::Locator_t> opened_;           ///< every destination the UDP transport has taken
   std::vector<frtps::Locator_t> destinations_;  ///< of the datagram being sent (reused)
 };
 

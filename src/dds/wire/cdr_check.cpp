@@ -24,7 +24,8 @@ class Walker {
   bool walkStruct(const CdrStructLayout& layout) {
     // A struct of numbers only, aligned to its largest: its size is known (walked member by
     // member when its bytes are missing, to name where).
-    if (layout.fixed_bytes > 0 && pos_ % layout.fixed_align == 0 && layout.fixed_bytes <= remaining()) {
+    if (layout.fixed_bytes > 0 && pos_ % layout.fixed_align == 0 &&
+        layout.fixed_bytes <= remaining()) {
       pos_ += layout.fixed_bytes;
       return true;
     }
@@ -43,7 +44,9 @@ class Walker {
 
   /// The failing member's path and what is wrong there, e.g. "`transforms[2].header.frame_id`:
   /// string of 9 bytes, 3 bytes remain".
-  [[nodiscard]] std::string describe() const { return path_.empty() ? error_ : "`" + path_ + "`: " + error_; }
+  [[nodiscard]] std::string describe() const {
+    return path_.empty() ? error_ : "`" + path_ + "`: " + error_;
+  }
 
  private:
   [[nodiscard]] std::size_t remaining() const { return size_ - pos_; }
@@ -53,7 +56,9 @@ class Walker {
     return false;
   }
 
-  bool truncated() { return fail("truncated at byte " + std::to_string(pos_ + kEncapsulationBytes)); }
+  bool truncated() {
+    return fail("truncated at byte " + std::to_string(pos_ + kEncapsulationBytes));
+  }
 
   /// Prepends member `name` to the failing path.
   void prefix(const std::string& name) {
@@ -62,7 +67,8 @@ class Walker {
 
   /// Prepends element `index` to the failing path.
   void prefixIndex(std::uint64_t index) {
-    path_ = "[" + std::to_string(index) + "]" + (path_.empty() || path_.front() == '[' ? "" : ".") + path_;
+    path_ = "[" + std::to_string(index) + "]" + (path_.empty() || path_.front() == '[' ? "" : ".") +
+            path_;
   }
 
   bool align(std::size_t bytes) {
@@ -198,7 +204,8 @@ bool hostIsLittleEndian() {
 
 }  // namespace
 
-CdrCheck checkCdrPayload(const CdrStructLayout& layout, const std::uint8_t* data, std::size_t size_bytes) {
+CdrCheck checkCdrPayload(const CdrStructLayout& layout, const std::uint8_t* data,
+                         std::size_t size_bytes) {
   CdrCheck check;
   if (size_bytes < kEncapsulationBytes) {
     check.error = "payload of " + std::to_string(size_bytes) + " bytes has no encapsulation header";
@@ -207,11 +214,13 @@ CdrCheck checkCdrPayload(const CdrStructLayout& layout, const std::uint8_t* data
   // Fast CDR 1.0 (DDS_CDR): a zero byte, then the kind: bit 0 little endian, bit 1 a parameter
   // list (read as plain CDR by the generated code all the same); then two option bytes.
   if (data[0] != 0 || (data[1] & ~0x3U) != 0) {
-    check.error = "unknown encapsulation " + std::to_string(data[0]) + " " + std::to_string(data[1]);
+    check.error =
+        "unknown encapsulation " + std::to_string(data[0]) + " " + std::to_string(data[1]);
     return check;
   }
   const bool little = (data[1] & 0x1U) != 0;
-  Walker walker(data + kEncapsulationBytes, size_bytes - kEncapsulationBytes, little != hostIsLittleEndian());
+  Walker walker(data + kEncapsulationBytes, size_bytes - kEncapsulationBytes,
+                little != hostIsLittleEndian());
   if (!walker.walkStruct(layout)) {
     check.error = layout.dds_type + std::string(" ") + walker.describe();
     return check;

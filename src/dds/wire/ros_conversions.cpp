@@ -463,8 +463,8 @@ DecodeStatus decodeTransform(const geometry_msgs::TransformStamped_& msg, double
   const std::string& parent = msg.header_().frame_id_();
   const std::string& child = msg.child_frame_id_();
   if (parent.empty() || child.empty() || parent == child) {
-    return fail(DecodeError::kBadPose, "transform '" + parent + "' -> '" + child +
-                                           "': frames must be set and differ");
+    return fail(DecodeError::kBadPose,
+                "transform '" + parent + "' -> '" + child + "': frames must be set and differ");
   }
   geometry_msgs::Pose_ pose;
   const auto& t = msg.transform_().translation_();

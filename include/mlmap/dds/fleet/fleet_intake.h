@@ -42,16 +42,16 @@ namespace mlmap::dds {
 
 /// Why a Submap sample was refused or dropped.
 enum class SubmapRefusal : std::uint8_t {
-  kMalformed = 0,   ///< failed to deserialise, a bad header or payload (decodeSubmapMessage())
-  kWrongGrid,       ///< another voxel edge or submap size than the configured grid
-  kUnknownVehicle,  ///< a name not in the configured list
-  kEmptyNewVehicle, ///< open domain: an empty sample from a name that holds nothing
-  kFleetFull,       ///< open domain: a new name while kMaxVehicles vehicles hold places
-  kSequenceAhead,   ///< a sequence number too far ahead (FleetIntake::kMaxSequenceLead)
-  kVehicleBudget,   ///< it would take its vehicle over vehicle_budget_bytes
-  kFleetBudget,     ///< it would take the merged map over fleet_budget_bytes
-  kOutdated,        ///< not newer than the content held from the same writer: ignored
-  kNotItsTopic,     ///< a vehicle name other than the one of the topic it came on
+  kMalformed = 0,    ///< failed to deserialise, a bad header or payload (decodeSubmapMessage())
+  kWrongGrid,        ///< another voxel edge or submap size than the configured grid
+  kUnknownVehicle,   ///< a name not in the configured list
+  kEmptyNewVehicle,  ///< open domain: an empty sample from a name that holds nothing
+  kFleetFull,        ///< open domain: a new name while kMaxVehicles vehicles hold places
+  kSequenceAhead,    ///< a sequence number too far ahead (FleetIntake::kMaxSequenceLead)
+  kVehicleBudget,    ///< it would take its vehicle over vehicle_budget_bytes
+  kFleetBudget,      ///< it would take the merged map over fleet_budget_bytes
+  kOutdated,         ///< not newer than the content held from the same writer: ignored
+  kNotItsTopic,      ///< a vehicle name other than the one of the topic it came on
 };
 /// Number of SubmapRefusal values.
 inline constexpr std::size_t kSubmapRefusals = 10;
@@ -85,9 +85,9 @@ struct FleetTrustConfig {
 
 /// What FleetIntake::take() did with a sample.
 struct SubmapIntake {
-  bool applied = false;                             ///< it changed the vehicle's contribution
+  bool applied = false;                               ///< it changed the vehicle's contribution
   SubmapRefusal refusal = SubmapRefusal::kMalformed;  ///< why not, when !applied
-  std::string why;                                  ///< the refusal in words ("" when applied)
+  std::string why;                                    ///< the refusal in words ("" when applied)
   bool joined = false;     ///< its vehicle was registered by it (open domain)
   bool restarted = false;  ///< it came from another writer than its vehicle's last one
 };

@@ -30,17 +30,17 @@ namespace mlmap::dds {
 
 /// What mlmap_fleet does.
 struct FleetMergerConfig {
-  DdsConfig dds;                                ///< domain, discovery, world_frame, ns of outputs
+  DdsConfig dds;  ///< domain, discovery, world_frame, ns of outputs
   /// Input: vehicle V's submaps on /V/<submaps_topic> (vehicleSubmapTopic()).
   std::string submaps_topic = "mlmap/submaps";
   std::string cloud_topic = "mlmap/fleet/occupied";  ///< output PointCloud2 (under dds.ns)
   std::string grid_topic = "mlmap/fleet/grid";       ///< output OccupancyGrid (under dds.ns)
   std::string status_topic = "mlmap/fleet/status";   ///< output FleetStatus (under dds.ns)
-  double publish_hz = 1.0;     ///< outputs at most this often (when changed), status always
-  double stale_after_s = 10.0; ///< a vehicle silent this long is stale (its voxels kept)
-  double grid_min_z_m = 0.2;   ///< the grid's band of voxel centre heights [m]
+  double publish_hz = 1.0;      ///< outputs at most this often (when changed), status always
+  double stale_after_s = 10.0;  ///< a vehicle silent this long is stale (its voxels kept)
+  double grid_min_z_m = 0.2;    ///< the grid's band of voxel centre heights [m]
   double grid_max_z_m = 2.0;
-  LogOddsConfig log_odds;      ///< clamping bounds and threshold of the fused log-odds
+  LogOddsConfig log_odds;  ///< clamping bounds and threshold of the fused log-odds
   /// The grid, the known vehicles and the memory budgets (docs/fleet.md#trust).
   FleetTrustConfig trust;
 };

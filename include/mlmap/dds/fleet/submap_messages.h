@@ -32,16 +32,16 @@ inline constexpr std::int32_t kMaxSubmapInstancesReader = 1 << 20;
 
 /// The grid a vehicle's submaps lie on.
 struct SubmapGeometry {
-  double resolution_m = 0.0;                              ///< voxel edge
-  Eigen::Vector3i cells = Eigen::Vector3i::Zero();        ///< voxels per submap and axis
+  double resolution_m = 0.0;                        ///< voxel edge
+  Eigen::Vector3i cells = Eigen::Vector3i::Zero();  ///< voxels per submap and axis
 };
 
 /// The sample of `update`: its voxels encoded (fleet::encodeSubmapVoxels), keyed by `vehicle`
 /// and the submap index, `sequence` and the map state's `stamp_s` in the header.
 ::mlmap_msgs::msg::dds_::Submap_ toSubmapMessage(const fleet::SubmapUpdate& update,
-                                               const SubmapGeometry& geometry,
-                                               const std::string& vehicle, std::uint64_t sequence,
-                                               double stamp_s, const std::string& frame_id);
+                                                 const SubmapGeometry& geometry,
+                                                 const std::string& vehicle, std::uint64_t sequence,
+                                                 double stamp_s, const std::string& frame_id);
 
 /// Bytes of `msg` as a serialized sample: its CDR and the 4-byte encapsulation header (RTPS
 /// headers not included).
@@ -77,8 +77,8 @@ std::string vehicleSubmapTopic(const std::string& vehicle, const std::string& to
 /// name that is not a valid ROS name or is longer than kMaxVehicleNameBytes.
 std::string vehicleOfSubmapTopic(const std::string& dds_topic, const std::string& topic);
 
-/// The writer's QoS on a vehicle's submap topic: RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 1 per instance
-/// (the latest state of each submap for late joiners), up to kMaxSubmapInstancesWriter.
+/// The writer's QoS on a vehicle's submap topic: RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 1 per
+/// instance (the latest state of each submap for late joiners), up to kMaxSubmapInstancesWriter.
 eprosima::fastdds::dds::DataWriterQos submapWriterQos();
 /// The matching reader's: RELIABLE, TRANSIENT_LOCAL (late joiners get the writers' history),
 /// KEEP_LAST 1 per instance, up to kMaxSubmapInstancesReader.

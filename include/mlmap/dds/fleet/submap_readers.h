@@ -48,9 +48,9 @@ struct SubmapReadersConfig {
 class SubmapReaders {
  public:
   /// A sample and the vehicle whose topic it came on (Fast DDS's listener thread).
-  using Sink = std::function<void(const std::string& topic_vehicle,
-                                  ::mlmap_msgs::msg::dds_::Submap_&& msg,
-                                  const eprosima::fastdds::dds::SampleInfo& info)>;
+  using Sink =
+      std::function<void(const std::string& topic_vehicle, ::mlmap_msgs::msg::dds_::Submap_&& msg,
+                         const eprosima::fastdds::dds::SampleInfo& info)>;
 
   /// `on_error`: a sample that failed to deserialise, with why; `on_matched`: the number of
   /// writers matched over all readers, each time it changes. Throws std::invalid_argument for a
@@ -92,10 +92,10 @@ class SubmapReaders {
 
   mutable std::mutex mutex_;  // guards the members below
   std::condition_variable wake_;
-  std::set<std::string> known_;         // read or queued
-  std::vector<std::string> pending_;    // discovered, reader not created yet
-  std::vector<std::string> read_;       // readers created, in order
-  std::vector<int> matched_;            // per reader
+  std::set<std::string> known_;       // read or queued
+  std::vector<std::string> pending_;  // discovered, reader not created yet
+  std::vector<std::string> read_;     // readers created, in order
+  std::vector<int> matched_;          // per reader
   std::uint64_t ignored_ = 0;
   bool stopping_ = false;
   std::thread thread_;

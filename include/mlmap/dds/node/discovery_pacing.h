@@ -76,7 +76,8 @@ class DiscoveryPacing : public eprosima::fastdds::dds::DomainParticipantListener
   std::condition_variable wake_;
   bool asked_ = false;  ///< a peer of another vendor appeared since the last announcement
   bool stopping_ = false;
-  std::uint64_t announcements_ = 0;  ///< made so far: the USER_DATA counter (peers close together share one)
+  std::uint64_t announcements_ =
+      0;                ///< made so far: the USER_DATA counter (peers close together share one)
   std::thread thread_;  ///< last: started when everything above exists
 };
 

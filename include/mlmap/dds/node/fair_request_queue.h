@@ -40,10 +40,9 @@ class FairRequestQueue {
     if (mine >= max_per_client_) return Pushed::kRefused;
     Pushed pushed = Pushed::kQueued;
     if (size_ >= max_total_) {
-      const auto busiest =
-          std::max_element(fifos_.begin(), fifos_.end(), [](const auto& a, const auto& b) {
-            return a.second.size() < b.second.size();
-          });
+      const auto busiest = std::max_element(
+          fifos_.begin(), fifos_.end(),
+          [](const auto& a, const auto& b) { return a.second.size() < b.second.size(); });
       if (busiest == fifos_.end() || busiest->second.size() < mine + 2) return Pushed::kRefused;
       busiest->second.pop_back();  // at least 2 held: never empty after
       --size_;

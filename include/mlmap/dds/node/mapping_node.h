@@ -29,7 +29,8 @@ namespace mlmap::dds {
 class MappingNode {
  public:
   /// Creates the participant, the engine, the readers and writers, publishes rt/tf_static (with
-  /// dds.publish_sensor_tf) and starts the threads. Throws std::invalid_argument (bad config) or std::runtime_error (DDS).
+  /// dds.publish_sensor_tf) and starts the threads. Throws std::invalid_argument (bad config) or
+  /// std::runtime_error (DDS).
   explicit MappingNode(const NodeConfig& config, const LogSink& log = {});
   ~MappingNode();
   MappingNode(const MappingNode&) = delete;

@@ -55,8 +55,8 @@ struct MapFileOptions {
 
 /// Everything mlmap_node reads from its file.
 struct NodeConfig {
-  mlmap::MapConfig map;  ///< the engine (same keys as config/mlmap.yaml)
-  DdsConfig dds;         ///< the `dds:` section
+  mlmap::MapConfig map;     ///< the engine (same keys as config/mlmap.yaml)
+  DdsConfig dds;            ///< the `dds:` section
   MapFileOptions map_file;  ///< the `map_file:` section
 
   /// Every top-level section: the engine's (MapConfig::visit()) then the node's own.
@@ -95,11 +95,14 @@ PoseBufferConfig poseBufferConfig(const DdsConfig& dds);
 /// The prose at the top of config/mlmap_node.yaml.
 inline constexpr const char* kNodeDefaultsHeader =
     "# mlmap_node configuration: the engine sections of config/mlmap.yaml plus the `dds:` and\n"
-    "# `map_file:` sections below. Every key is optional: a missing key takes the default shown here.\n"
+    "# `map_file:` sections below. Every key is optional: a missing key takes the default shown "
+    "here.\n"
     "# Unknown keys and bad values stop the node with a message naming the key.\n"
     "#\n"
-    "# Engine sections (awareness, log_odds, local_map, sensor, pipeline, projected_grid, esdf): same\n"
-    "# keys and defaults as config/mlmap.yaml; copy the ones you change into this file (both files\n"
+    "# Engine sections (awareness, log_odds, local_map, sensor, pipeline, projected_grid, esdf): "
+    "same\n"
+    "# keys and defaults as config/mlmap.yaml; copy the ones you change into this file (both "
+    "files\n"
     "# concatenated are a valid node configuration).\n"
     "# Generated from the key lists in include/mlmap/dds/ by `build/mlmap_config_tool --write`\n"
     "# (a test fails when this file differs): edit those instead.\n";

@@ -10,22 +10,22 @@ namespace mlmap::dds {
 
 /// What the node counted so far (the engine's own counters are in EngineStats).
 struct NodeCounters {
-  std::uint64_t clouds_received = 0;      ///< PointCloud2 samples taken
-  std::uint64_t images_received = 0;      ///< depth Image samples taken
-  std::uint64_t poses_received = 0;       ///< PoseStamped / Odometry samples taken
-  std::uint64_t inputs_malformed = 0;     ///< cloud / image / camera info / pose that failed to decode
+  std::uint64_t clouds_received = 0;   ///< PointCloud2 samples taken
+  std::uint64_t images_received = 0;   ///< depth Image samples taken
+  std::uint64_t poses_received = 0;    ///< PoseStamped / Odometry samples taken
+  std::uint64_t inputs_malformed = 0;  ///< cloud / image / camera info / pose that failed to decode
   std::uint64_t images_without_info = 0;  ///< depth image before any valid CameraInfo
   std::uint64_t frames_without_pose = 0;  ///< no pose within the tolerance (or none came in time)
   std::uint64_t frames_future = 0;        ///< stamp more than max_future_s after the newest pose
   std::uint64_t frames_across_pose_jump = 0;  ///< between two poses of a jump: not interpolated
   std::uint64_t frames_handover_dropped = 0;  ///< hand-over queue full: oldest frame dropped
-  std::uint64_t poses_rejected = 0;       ///< out of order, far future, or invalid (PoseBuffer)
-  std::uint64_t frames_submitted = 0;     ///< frames given to the engine
-  std::uint64_t frames_engine_rejected = 0;  ///< refused by the engine (see EngineStats)
-  std::uint64_t messages_published = 0;   ///< all outputs together
-  std::uint64_t map_saves = 0;            ///< map files written (map_file.save_path)
-  std::uint64_t map_saves_failed = 0;     ///< saves that failed (the previous file is kept)
-  bool last_map_save_failed = false;      ///< the latest save failed (after stop(): the final one)
+  std::uint64_t poses_rejected = 0;           ///< out of order, far future, or invalid (PoseBuffer)
+  std::uint64_t frames_submitted = 0;         ///< frames given to the engine
+  std::uint64_t frames_engine_rejected = 0;   ///< refused by the engine (see EngineStats)
+  std::uint64_t messages_published = 0;       ///< all outputs together
+  std::uint64_t map_saves = 0;                ///< map files written (map_file.save_path)
+  std::uint64_t map_saves_failed = 0;         ///< saves that failed (the previous file is kept)
+  bool last_map_save_failed = false;  ///< the latest save failed (after stop(): the final one)
   /// Publishers the input readers match now, all input topics together (a level, not a count
   /// of events). Each change is logged: a sensor or odometry source that never matches shows.
   std::uint64_t publishers_matched = 0;

@@ -105,10 +105,10 @@ struct ServiceCounters {
 
 /// The bounds of a ServiceHost: what a client that floods the services can hold.
 struct ServiceLimits {
-  std::size_t queued_requests = 64;             ///< requests waiting for the thread, in all
-  std::size_t queued_requests_per_client = 8;   ///< ... of one client (participant)
-  std::size_t waiting_replies = 64;             ///< replies waiting for their reader to match
-  std::size_t waiting_replies_per_client = 8;   ///< ... of one client
+  std::size_t queued_requests = 64;            ///< requests waiting for the thread, in all
+  std::size_t queued_requests_per_client = 8;  ///< ... of one client (participant)
+  std::size_t waiting_replies = 64;            ///< replies waiting for their reader to match
+  std::size_t waiting_replies_per_client = 8;  ///< ... of one client
 };
 
 /// Serves ROS 2 services of one node on a participant: per service a request reader and a reply

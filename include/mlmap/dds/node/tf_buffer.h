@@ -36,10 +36,12 @@ class TfBuffer {
   /// `horizon_s`: how far behind an edge's newest sample its history reaches [s].
   /// `tolerance_s`: how far beyond its first or last sample a stamp may be and still use that
   /// sample [s] (a stamp between two samples is interpolated).
-  TfBuffer(double horizon_s, double tolerance_s) : horizon_s_(horizon_s), tolerance_s_(tolerance_s) {}
+  TfBuffer(double horizon_s, double tolerance_s)
+      : horizon_s_(horizon_s), tolerance_s_(tolerance_s) {}
 
   /// Sets the static edge parent -> child: T_parent_child, valid at every time.
-  void setStatic(const std::string& parent, const std::string& child, const Transform& T_parent_child);
+  void setStatic(const std::string& parent, const std::string& child,
+                 const Transform& T_parent_child);
   /// Adds a sample of the dynamic edge parent -> child at `stamp_s` (in any order; a sample at
   /// the stamp of an earlier one replaces it). Samples older than the edge's newest minus the
   /// horizon are dropped.

@@ -52,7 +52,8 @@ struct TopicNames {
   template <class Self, class V>
   static void visit(Self& c, V& v) {
     v.key("cloud", c.cloud, "",
-          "in: sensor_msgs/PointCloud2 in the sensor frame (BEST_EFFORT reader: matches any publisher)");
+          "in: sensor_msgs/PointCloud2 in the sensor frame (BEST_EFFORT reader: matches any "
+          "publisher)");
     v.key("pose", c.pose, "", "in: geometry_msgs/PoseStamped, T_W_B");
     v.key("odometry", c.odometry, "", "in: nav_msgs/Odometry, alternative to pose");
     v.key("depth_image", c.depth_image, "",
@@ -67,7 +68,8 @@ struct TopicNames {
           "out: OccupancyGrid with a fixed origin that grows in 64-cell chunks as the vehicle\n"
           "explores (every rolling grid's known cells, the latest winning): a static map for\n"
           "a global costmap (nav2's static layer, docs/planners.md)");
-    v.key("esdf_slice", c.esdf_slice, "", "out: PointCloud2 with `intensity` = signed distance [m]");
+    v.key("esdf_slice", c.esdf_slice, "",
+          "out: PointCloud2 with `intensity` = signed distance [m]");
     v.key("esdf_block", c.esdf_block, "", "out: mlmap_msgs/VoxelBlock");
     v.key("status", c.status, "", "out: mlmap_msgs/Status");
   }
@@ -104,11 +106,11 @@ struct PublishRates {
 /// own), RELIABLE, TRANSIENT_LOCAL, KEEP_LAST 1 per submap, at most `rate_hz` times a second.
 /// Keys: visit().
 struct FleetShareConfig {
-  bool publish = false;                ///< key publish
-  bool subscribe = false;              ///< key subscribe
-  std::string vehicle;                 ///< key vehicle ("": the namespace, resolveFleetVehicle())
-  double rate_hz = 1.0;                ///< key rate_hz
-  std::string topic = "mlmap/submaps"; ///< key topic
+  bool publish = false;                 ///< key publish
+  bool subscribe = false;               ///< key subscribe
+  std::string vehicle;                  ///< key vehicle ("": the namespace, resolveFleetVehicle())
+  double rate_hz = 1.0;                 ///< key rate_hz
+  std::string topic = "mlmap/submaps";  ///< key topic
 
   /// The keys of `dds.fleet`: visitor.key(name, field, unit, doc) for each.
   template <class Self, class V>
@@ -154,8 +156,10 @@ struct SecurityConfig {
   /// The keys of `dds.security`: visitor.key(name, field, unit, doc) for each.
   template <class Self, class V>
   static void visit(Self& c, V& v) {
-    v.key("enable", c.enable, "", "true / false; empty: ROS_SECURITY_ENABLE (\"true\" enables), else off");
-    v.key("keystore", c.keystore, "", "keystore root (holds enclaves/); \"\": ROS_SECURITY_KEYSTORE");
+    v.key("enable", c.enable, "",
+          "true / false; empty: ROS_SECURITY_ENABLE (\"true\" enables), else off");
+    v.key("keystore", c.keystore, "",
+          "keystore root (holds enclaves/); \"\": ROS_SECURITY_KEYSTORE");
     v.key("enclave", c.enclave, "",
           "this node's enclave, e.g. /mlmap/node; \"\": ROS_SECURITY_ENCLAVE_OVERRIDE, else \"/\"");
     v.key("strategy", c.strategy, "",
@@ -171,15 +175,16 @@ struct SecurityConfig {
 
 /// The six files of an enclave, looked up in `<keystore>/enclaves/<enclave>/` as rmw does.
 inline constexpr const char* kSecurityFileNames[] = {
-    "identity_ca.cert.pem", "cert.pem", "key.pem", "permissions_ca.cert.pem", "governance.p7s",
-    "permissions.p7s"};
+    "identity_ca.cert.pem",    "cert.pem",       "key.pem",
+    "permissions_ca.cert.pem", "governance.p7s", "permissions.p7s"};
 
 /// Security as resolved from a SecurityConfig and the environment (resolveSecurity()).
 struct SecuritySetup {
-  bool requested = false;   ///< enable (or ROS_SECURITY_ENABLE) asked for security
+  bool requested = false;  ///< enable (or ROS_SECURITY_ENABLE) asked for security
   SecurityStrategy strategy = SecurityStrategy::kPermissive;
-  std::string keystore;     ///< as resolved ("" when none)
-  std::string enclave = "/";  ///< as resolved; also the participant's user data "enclave=<enclave>;"
+  std::string keystore;  ///< as resolved ("" when none)
+  std::string enclave =
+      "/";                  ///< as resolved; also the participant's user data "enclave=<enclave>;"
   std::string enclave_dir;  ///< <keystore>/enclaves<enclave> (absolute)
   /// The participant properties rmw_fastrtps sets (dds.sec.*, `file://` URIs); empty when not
   /// enabled.
@@ -210,7 +215,8 @@ const char* toString(TfMode mode);
 /// Where the sensor's mounting T_B_S of each cloud or image comes from (key `sensor_extrinsic`).
 enum class ExtrinsicSource {
   kConfig,    ///< sensor.* of the config; a message in another frame than sensor_frame is counted
-  kTfStatic,  ///< /tf_static (robot_state_publisher, a camera driver): body -> the message's frame_id
+  kTfStatic,  ///< /tf_static (robot_state_publisher, a camera driver): body -> the message's
+              ///< frame_id
 };
 
 /// The frame names the node uses, the prefix applied (resolveFrames()).
@@ -226,13 +232,13 @@ struct DdsConfig {
   /// Its top-level section in the node's YAML file (NodeConfig::visitNodeSections()).
   static constexpr const char* kSection = "dds";
 
-  int domain_id = -1;                          ///< key domain_id
-  std::string ns;                              ///< key ns
-  std::string discovery_range;                 ///< key discovery_range
-  std::string static_peers;                    ///< key static_peers ("a;b", as ROS_STATIC_PEERS)
-  std::string profiles_file;                   ///< key profiles_file (its is_default_profile unused)
-  std::string participant_profile;             ///< key participant_profile
-  bool large_data = true;                      ///< key large_data
+  int domain_id = -1;               ///< key domain_id
+  std::string ns;                   ///< key ns
+  std::string discovery_range;      ///< key discovery_range
+  std::string static_peers;         ///< key static_peers ("a;b", as ROS_STATIC_PEERS)
+  std::string profiles_file;        ///< key profiles_file (its is_default_profile unused)
+  std::string participant_profile;  ///< key participant_profile
+  bool large_data = true;           ///< key large_data
   /// Key shared_memory. Off: UDP only towards every participant, so that no other process on
   /// the host can crash this one; mlmap's own clouds still go by data-sharing (see
   /// createParticipant()).
@@ -248,11 +254,11 @@ struct DdsConfig {
   std::string tf_mode = "auto";                             ///< key tf_mode (resolveTfMode())
   bool publish_sensor_tf = false;                           ///< key publish_sensor_tf
   std::string sensor_extrinsic = "config";                  ///< key sensor_extrinsic
-  TopicNames topics;                           ///< section topics
-  PublishRates rates;                          ///< section rates
-  double pose_tolerance_s = 0.05;              ///< key pose_tolerance_s
-  double pose_buffer_s = 2.0;                  ///< key pose_buffer_s
-  double max_future_s = 1.0;                   ///< key max_future_s
+  TopicNames topics;                                        ///< section topics
+  PublishRates rates;                                       ///< section rates
+  double pose_tolerance_s = 0.05;                           ///< key pose_tolerance_s
+  double pose_buffer_s = 2.0;                               ///< key pose_buffer_s
+  double max_future_s = 1.0;                                ///< key max_future_s
   double max_pose_speed_mps = 50.0;            ///< key max_pose_speed_mps (far above a multirotor)
   double max_pose_rotation_rate_dps = 1800.0;  ///< key max_pose_rotation_rate_dps
   double esdf_slice_height_m = 0.0;            ///< key esdf_slice_height_m
@@ -314,10 +320,12 @@ struct DdsConfig {
           "config: T_B_S from sensor.* (a message in another frame is\n"
           "counted and warned about); tf_static: body -> each message's\n"
           "frame_id, from /tf_static");
-    v.section("topics", c.topics, "ROS topic names relative to ns; \"\" disables that input or output");
+    v.section("topics", c.topics,
+              "ROS topic names relative to ns; \"\" disables that input or output");
     v.section("rates", c.rates,
               "outputs are published at most this often, and only when changed; 0 disables");
-    v.key("pose_tolerance_s", c.pose_tolerance_s, "s", "a cloud needs a pose within this of its stamp");
+    v.key("pose_tolerance_s", c.pose_tolerance_s, "s",
+          "a cloud needs a pose within this of its stamp");
     v.key("pose_buffer_s", c.pose_buffer_s, "s", "poses kept for that pairing");
     v.key("max_future_s", c.max_future_s, "s",
           "stamps farther than this ahead of the newest pose are rejected");

@@ -57,7 +57,8 @@ class CheckedType : public PubSubType {
   /// be checked).
   CheckedType() : layout_(cdrLayoutOf(this->getName())) {
     if (layout_ == nullptr) {
-      throw std::runtime_error(std::string("DDS type ") + this->getName() + " has no CDR layout in idl/");
+      throw std::runtime_error(std::string("DDS type ") + this->getName() +
+                               " has no CDR layout in idl/");
     }
   }
 
@@ -71,7 +72,8 @@ class CheckedType : public PubSubType {
     bool ok = false;
     try {
       ok = PubSubType::deserialize(payload, data);
-      if (!ok) detail::deserializeError() = std::string(layout_->dds_type) + ": refused by Fast CDR";
+      if (!ok)
+        detail::deserializeError() = std::string(layout_->dds_type) + ": refused by Fast CDR";
     } catch (const std::exception& e) {
       detail::deserializeError() = std::string(layout_->dds_type) + ": " + e.what();
     }
@@ -107,12 +109,14 @@ std::string registerType(eprosima::fastdds::dds::DomainParticipant* participant)
 
 /// The participant's topic `dds_topic` of type `PubSubType`, created on first use.
 template <typename PubSubType>
-eprosima::fastdds::dds::Topic* findOrCreateTopic(eprosima::fastdds::dds::DomainParticipant* participant,
-                                                 const std::string& dds_topic) {
+eprosima::fastdds::dds::Topic* findOrCreateTopic(
+    eprosima::fastdds::dds::DomainParticipant* participant, const std::string& dds_topic) {
   const std::string type = registerType<PubSubType>(participant);
-  if (eprosima::fastdds::dds::TopicDescription* d = participant->lookup_topicdescription(dds_topic)) {
+  if (eprosima::fastdds::dds::TopicDescription* d =
+          participant->lookup_topicdescription(dds_topic)) {
     if (d->get_type_name() != type) {
-      throw std::runtime_error("topic " + dds_topic + " already exists with type " + d->get_type_name());
+      throw std::runtime_error("topic " + dds_topic + " already exists with type " +
+                               d->get_type_name());
     }
     return static_cast<eprosima::fastdds::dds::Topic*>(d);
   }
@@ -139,11 +143,12 @@ Qos withRosTypeHash(Qos qos, const std::string& dds_type_name) {
 /// given, with the type's ROS 2 type hash in its USER_DATA (withRosTypeHash). Throws
 /// std::runtime_error on failure.
 template <typename PubSubType>
-eprosima::fastdds::dds::DataWriter* createWriter(eprosima::fastdds::dds::Publisher* publisher,
-                                                 const std::string& dds_topic,
-                                                 const eprosima::fastdds::dds::DataWriterQos& qos,
-                                                 eprosima::fastdds::dds::DataWriterListener* listener = nullptr) {
-  auto* participant = const_cast<eprosima::fastdds::dds::DomainParticipant*>(publisher->get_participant());
+eprosima::fastdds::dds::DataWriter* createWriter(
+    eprosima::fastdds::dds::Publisher* publisher, const std::string& dds_topic,
+    const eprosima::fastdds::dds::DataWriterQos& qos,
+    eprosima::fastdds::dds::DataWriterListener* listener = nullptr) {
+  auto* participant =
+      const_cast<eprosima::fastdds::dds::DomainParticipant*>(publisher->get_participant());
   eprosima::fastdds::dds::Topic* topic = findOrCreateTopic<PubSubType>(participant, dds_topic);
   eprosima::fastdds::dds::DataWriter* writer =
       publisher->create_datawriter(topic, withRosTypeHash(qos, topic->get_type_name()), listener);
@@ -170,9 +175,12 @@ class TakeListener : public eprosima::fastdds::dds::DataReaderListener {
   TakeListener(std::function<void(Msg&&, const eprosima::fastdds::dds::SampleInfo&)> sink,
                std::function<void(const std::string&)> on_error,
                std::function<void(int)> on_matched = {})
-      : sink_(std::move(sink)), on_error_(std::move(on_error)), on_matched_(std::move(on_matched)) {}
-  void on_subscription_matched(eprosima::fastdds::dds::DataReader*,
-                               const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
+      : sink_(std::move(sink)),
+        on_error_(std::move(on_error)),
+        on_matched_(std::move(on_matched)) {}
+  void on_subscription_matched(
+      eprosima::fastdds::dds::DataReader*,
+      const eprosima::fastdds::dds::SubscriptionMatchedStatus& status) override {
     if (on_matched_) on_matched_(status.current_count);
   }
   void on_data_available(eprosima::fastdds::dds::DataReader* reader) override {
@@ -203,11 +211,12 @@ class TakeListener : public eprosima::fastdds::dds::DataReaderListener {
 /// the reader), with the type's ROS 2 type hash in its USER_DATA (withRosTypeHash). Throws
 /// std::runtime_error on failure.
 template <typename PubSubType>
-eprosima::fastdds::dds::DataReader* createReader(eprosima::fastdds::dds::Subscriber* subscriber,
-                                                 const std::string& dds_topic,
-                                                 const eprosima::fastdds::dds::DataReaderQos& qos,
-                                                 eprosima::fastdds::dds::DataReaderListener* listener) {
-  auto* participant = const_cast<eprosima::fastdds::dds::DomainParticipant*>(subscriber->get_participant());
+eprosima::fastdds::dds::DataReader* createReader(
+    eprosima::fastdds::dds::Subscriber* subscriber, const std::string& dds_topic,
+    const eprosima::fastdds::dds::DataReaderQos& qos,
+    eprosima::fastdds::dds::DataReaderListener* listener) {
+  auto* participant =
+      const_cast<eprosima::fastdds::dds::DomainParticipant*>(subscriber->get_participant());
   eprosima::fastdds::dds::Topic* topic = findOrCreateTopic<PubSubType>(participant, dds_topic);
   eprosima::fastdds::dds::DataReader* reader =
       subscriber->create_datareader(topic, withRosTypeHash(qos, topic->get_type_name()), listener);
@@ -234,8 +243,8 @@ class TakeReaders {
                                           const eprosima::fastdds::dds::DataReaderQos& qos,
                                           std::function<void(typename PubSubType::type&&)> sink,
                                           std::function<void(int)> on_matched = {}) {
-    auto listener = std::make_unique<TakeListener<typename PubSubType::type>>(std::move(sink), on_error_,
-                                                                              std::move(on_matched));
+    auto listener = std::make_unique<TakeListener<typename PubSubType::type>>(
+        std::move(sink), on_error_, std::move(on_matched));
     eprosima::fastdds::dds::DataReader* reader =
         createReader<PubSubType>(subscriber_, dds_topic, qos, listener.get());
     listeners_.push_back(std::move(listener));

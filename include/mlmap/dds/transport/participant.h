@@ -22,7 +22,8 @@ namespace mlmap::dds {
 struct ParticipantDeleter {
   void operator()(eprosima::fastdds::dds::DomainParticipant* participant) const;
 };
-using ParticipantPtr = std::unique_ptr<eprosima::fastdds::dds::DomainParticipant, ParticipantDeleter>;
+using ParticipantPtr =
+    std::unique_ptr<eprosima::fastdds::dds::DomainParticipant, ParticipantDeleter>;
 
 /// Creates the participant named `name` on the resolved domain (resolveDomainId) with the
 /// resolved discovery range (resolveDiscoveryRange), as rmw_fastrtps does for a ROS 2 node.
@@ -97,15 +98,16 @@ using ParticipantPtr = std::unique_ptr<eprosima::fastdds::dds::DomainParticipant
 ///
 /// Throws std::runtime_error with the reason when the profiles file, the profile or the
 /// environment is invalid, or Fast DDS refuses to create the participant.
-ParticipantPtr createParticipant(const DdsConfig& config, const std::string& name,
-                                 eprosima::fastdds::dds::DomainParticipantListener* listener = nullptr);
+ParticipantPtr createParticipant(
+    const DdsConfig& config, const std::string& name,
+    eprosima::fastdds::dds::DomainParticipantListener* listener = nullptr);
 
 /// What createParticipant() creates, without creating it (for logs, `--print-config` and tests).
 struct ParticipantSetup {
   int domain_id = 0;
   DiscoveryRange discovery_range = DiscoveryRange::kSystemDefault;  ///< as resolved
   std::vector<std::string> static_peers;  ///< as resolved (resolveStaticPeers)
-  SecuritySetup security;  ///< as resolved (its properties are in qos when enabled)
+  SecuritySetup security;                 ///< as resolved (its properties are in qos when enabled)
   eprosima::fastdds::dds::DomainParticipantQos qos;
   /// What createParticipant() prints as warnings (a profile's transport left out, static peers
   /// ignored by the discovery range).

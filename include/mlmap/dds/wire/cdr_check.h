@@ -75,7 +75,8 @@ struct CdrCheck {
 /// first: CDR or PL_CDR, big or little endian, as Fast CDR accepts them), against `layout`. ok
 /// when Fast CDR's generated code can read the sample with no allocation beyond what its bytes
 /// back; bytes after the value are allowed (writers pad). Allocates nothing unless it fails.
-CdrCheck checkCdrPayload(const CdrStructLayout& layout, const std::uint8_t* data, std::size_t size_bytes);
+CdrCheck checkCdrPayload(const CdrStructLayout& layout, const std::uint8_t* data,
+                         std::size_t size_bytes);
 
 /// The layout of the idl/ struct whose DDS type name is `dds_type` (e.g.
 /// "tf2_msgs::msg::dds_::TFMessage_"), nullptr when idl/ has no such struct.

@@ -84,8 +84,8 @@ DecodeStatus decodePointCloud2(const sensor_msgs::PointCloud2_& msg, const std::
 /// unless a point is not finite. Throws std::invalid_argument when `intensity` has not one value
 /// per point, std::length_error beyond 2^32 / point_step points.
 sensor_msgs::PointCloud2_ encodePointCloud2(const std::vector<Eigen::Vector3f>& points,
-                                            const std::vector<float>* intensity,
-                                            double stamp_s, const std::string& frame_id);
+                                            const std::vector<float>* intensity, double stamp_s,
+                                            const std::string& frame_id);
 
 /// Fills a DepthFrame's image and intrinsics (not its poses or stamp) from a depth Image
 /// (16UC1 in millimetres or 32FC1 in metres; step >= width * bytes per pixel; either endianness)
@@ -93,8 +93,8 @@ sensor_msgs::PointCloud2_ encodePointCloud2(const std::vector<Eigen::Vector3f>& 
 /// finite; skew and distortion are ignored). "mono16" is read as 16UC1. data.size() may exceed
 /// step * height. The image is copied tightly packed in host byte order. On error `frame` is
 /// left untouched.
-DecodeStatus decodeDepthImage(const sensor_msgs::Image_& image, const sensor_msgs::CameraInfo_& info,
-                              DepthFrame* frame);
+DecodeStatus decodeDepthImage(const sensor_msgs::Image_& image,
+                              const sensor_msgs::CameraInfo_& info, DepthFrame* frame);
 
 /// Stamp and T_W_B of a PoseStamped (or an Odometry's pose; its twist is ignored): kBadStamp when
 /// nanosec >= 1e9, kBadPose unless makePose() accepts it (finite, quaternion norm within 1e-3 of
@@ -128,7 +128,8 @@ nav_msgs::OccupancyGrid_ toOccupancyGrid(const ProjectedGrid& grid, double z_m, 
 /// the ESDF's maximum, NaN where unknown), in the box order of mlmap (x-major, z fastest);
 /// version 1, origin the box's lower corner, max_value = config().max_distance_m. An empty ESDF
 /// gives sizes 0 and no values.
-mlmap_msgs::VoxelBlock_ toVoxelBlock(const EsdfMap& esdf, double stamp_s, const std::string& frame_id);
+mlmap_msgs::VoxelBlock_ toVoxelBlock(const EsdfMap& esdf, double stamp_s,
+                                     const std::string& frame_id);
 
 /// A horizontal slice of the ESDF at height z_m as a PointCloud2 of the voxel centres with an
 /// `intensity` field holding the distance [m]; unknown voxels are left out. The slice is the z
