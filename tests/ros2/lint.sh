@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
-# Lints the ROS 2 ground-station files that cannot run on these machines (no ROS 2, no Docker
-# engine): Python with flake8 (99 columns, as ament_flake8) and pydocstyle (pep257, as
-# ament_pep257), shell scripts with bash -n and shellcheck. Dockerfiles, compose.yaml, the
-# manifests and the RViz config are checked by test_ground_station_files.py and the bridge's tests.
+# Lints the project's Python (the ROS 2 ground-station files, which cannot run on these machines:
+# no ROS 2, no Docker engine; the benchmarks; the docs check) with flake8 (99 columns, as
+# ament_flake8) and pydocstyle (pep257, as ament_pep257), and shell scripts with bash -n and
+# shellcheck. Dockerfiles, compose.yaml, the manifests and the RViz config are checked by
+# test_ground_station_files.py and the bridge's tests.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
-python_dirs=(tools/ros2 tests/ros2 tests/benchmarks)
+python_dirs=(tools/ros2 tests/ros2 tests/benchmarks tests/docs)
 shell_scripts=(docker/run_integration_test.sh docker/ground_entrypoint.sh docker/runtime_packages.sh
                tests/ros2/lint.sh)
 # The project's other scripts: warnings and errors (quoting, word splitting), not style.
