@@ -27,18 +27,21 @@ struct Result {
 };
 
 Result readmeExample(const std::vector<Eigen::Vector3f>& cloud, const mlmap::Transform& T_W_B) {
+  // The README aligns the comments in one column.
+  // clang-format off
   // README:begin
-  mlmap::MapConfig config;  // defaults: 0.1 m voxels, 10 m range
+  mlmap::MapConfig config;                    // defaults: 0.1 m voxels, 10 m range
   mlmap::MapEngine engine(config);
   mlmap::PointCloudFrame frame;
   frame.stamp_s = 0.0;
-  frame.points_S = cloud;  // std::vector<Eigen::Vector3f>, sensor frame S
-  frame.T_W_B = T_W_B;     // body pose in the world W (here S = B)
+  frame.points_S = cloud;                     // std::vector<Eigen::Vector3f>, sensor frame S
+  frame.T_W_B = T_W_B;                        // body pose in the world W (here S = B)
   engine.submit(frame);
-  engine.flush();                                      // with pipeline.threaded: wait for the map
-  const auto snapshot = engine.snapshot();             // what planners read, from any thread
+  engine.flush();                             // with pipeline.threaded: wait for the map
+  const auto snapshot = engine.snapshot();    // what planners read, from any thread
   const auto q = snapshot->distance({1.5, 0.0, 0.0});  // q.distance_m, q.gradient, q.valid
   // README:end
+  // clang-format on
   return {q, snapshot->state({2.05, 0.0, 0.0})};
 }
 
