@@ -31,8 +31,10 @@ class TakeReaders;
 
 /// What arrived on one topic.
 struct TopicLog {
-  std::uint64_t messages = 0;        ///< samples taken
-  std::uint64_t bytes = 0;           ///< payload bytes (cloud data, grid cells, 4 per ESDF value)
+  std::uint64_t messages = 0;  ///< samples taken
+  /// Data bytes: a cloud's data, a grid's cells, 4 per ESDF block value, the status's size in
+  /// memory, 0 for tf.
+  std::uint64_t bytes = 0;
   std::size_t last_points = 0;       ///< points / cells / voxels / transforms of the last sample
   SteadyClock::time_point first_at;  ///< arrival of the first sample
   SteadyClock::time_point last_at;   ///< arrival of the last sample
