@@ -144,11 +144,10 @@ Score scoreAgainstScenario(const Options& o, const ReceivedLayers& rx, double re
   for (const auto* list : {&rx.local_W, &rx.global_W}) {
     for (const Eigen::Vector3f& p : *list) voxels.insert(voxelIndexOf(p.cast<double>(), res));
   }
-  std::size_t right = 0;
-  for (const VoxelIndex& v : voxels) right += eval::touchesSolid(scenario.world, v, res) ? 1 : 0;
-  score.voxels = voxels.size();
-  score.precision =
-      score.voxels > 0 ? static_cast<double>(right) / static_cast<double>(score.voxels) : 0.0;
+  const eval::Accuracy accuracy =
+      eval::scoreOccupancy({voxels.begin(), voxels.end()}, {}, scenario.world, res);
+  score.voxels = accuracy.mapped;
+  score.precision = accuracy.precision;
   spdlog::info(
       "received occupied voxels (local + global): {}, precision against the scenario: {:.3f}",
       score.voxels, score.precision);
