@@ -2,7 +2,7 @@
 # Lints the project's Python (the ROS 2 ground-station files, which cannot run on these machines:
 # no ROS 2, no Docker engine; the benchmarks; the docs check) with flake8 (99 columns, as
 # ament_flake8) and pydocstyle (pep257, as ament_pep257), and shell scripts with bash -n and
-# shellcheck. Dockerfiles, compose.yaml, the manifests and the RViz config are checked by
+# with ShellCheck. Dockerfiles, compose.yaml, the manifests and the RViz config are checked by
 # test_ground_station_files.py and the bridge's tests.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
