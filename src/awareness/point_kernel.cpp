@@ -1,5 +1,6 @@
 #include "mlmap/awareness/point_kernel.h"
 
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -85,6 +86,28 @@ bool allWithinRange(const float* xs, const float* ys, const float* zs, std::size
     beyond |= x * x + y * y + z * z <= max_range2 ? 0 : 1;
   }
   return beyond == 0;
+}
+
+inline bool depthMmHasData(std::uint16_t r) {  // neither 0 nor 0xFFFF, in one comparison
+  return static_cast<std::uint16_t>(r - 1u) < 0xFFFEu;
+}
+
+// Every pixel converted and written at the next free place, which advances only past a pixel
+// with data: no branch on the data (a RealSense's pixels with data alternate with holes one or
+// two at a time, where a branch mispredicts about every other pixel).
+std::size_t packDepthPixelsMmPortable(const std::uint16_t* __restrict raw,
+                                      const float* __restrict ray_x, float ray_y, std::size_t count,
+                                      float* __restrict xs, float* __restrict ys,
+                                      float* __restrict zs) {
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    const float z = static_cast<float>(raw[k]) * 0.001f;
+    xs[n] = ray_x[k] * z;
+    ys[n] = ray_y * z;
+    zs[n] = z;
+    n += depthMmHasData(raw[k]) ? 1 : 0;
+  }
+  return n;
 }
 
 void classifyPointsPortable(const PointKernel& k, const float* xs, const float* ys, const float* zs,
@@ -205,6 +228,55 @@ __attribute__((target("avx2"))) void classifyPointsAvx2(const PointKernel& k, co
   }
   classifyPointsImpl<true>(k, xs + i, ys + i, zs + i, n - i, keys + i, coords + 4 * i);
 }
+
+// For each 8-bit mask of lanes with data, the indices of those lanes in order (then zeros), one
+// byte each: the permutation that packs them to the front of a vector.
+struct PackTable {
+  std::array<std::uint64_t, 256> lanes{};
+  PackTable() {
+    for (unsigned mask = 0; mask < 256; ++mask) {
+      std::uint64_t v = 0;
+      int next = 0;
+      for (unsigned lane = 0; lane < 8; ++lane) {
+        if ((mask >> lane) & 1u) v |= static_cast<std::uint64_t>(lane) << (8 * next++);
+      }
+      lanes[mask] = v;
+    }
+  }
+};
+const PackTable kPackTable;
+
+// packDepthPixelsMmPortable, eight pixels at a time: each converted as the portable form does
+// (an exact int -> float conversion, then the same IEEE products), its lanes with data moved to
+// the front by one permutation and all eight stored at the next free place.
+__attribute__((target("avx2,popcnt"))) std::size_t packDepthPixelsMmAvx2(
+    const std::uint16_t* raw, const float* ray_x, float ray_y, std::size_t count, float* xs,
+    float* ys, float* zs) {
+  const __m256 milli = _mm256_set1_ps(0.001f);
+  const __m256 ry = _mm256_set1_ps(ray_y);
+  const __m128i zero = _mm_setzero_si128();
+  const __m128i ones = _mm_set1_epi16(-1);
+  std::size_t n = 0;
+  std::size_t k = 0;
+  for (; k + 8 <= count; k += 8) {
+    const __m128i r = _mm_loadu_si128(reinterpret_cast<const __m128i*>(raw + k));
+    const __m128i no_data = _mm_or_si128(_mm_cmpeq_epi16(r, zero), _mm_cmpeq_epi16(r, ones));
+    const unsigned mask =
+        ~static_cast<unsigned>(_mm_movemask_epi8(_mm_packs_epi16(no_data, zero))) & 0xFFu;
+    if (mask == 0) continue;
+    const __m256 z = _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_cvtepu16_epi32(r)), milli);
+    const __m256 x = _mm256_mul_ps(_mm256_loadu_ps(ray_x + k), z);
+    const __m256 y = _mm256_mul_ps(ry, z);
+    const __m256i perm =
+        _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<long long>(kPackTable.lanes[mask])));
+    _mm256_storeu_ps(xs + n, _mm256_permutevar8x32_ps(x, perm));
+    _mm256_storeu_ps(ys + n, _mm256_permutevar8x32_ps(y, perm));
+    _mm256_storeu_ps(zs + n, _mm256_permutevar8x32_ps(z, perm));
+    n += static_cast<std::size_t>(__builtin_popcount(mask));
+  }
+  return n +
+         packDepthPixelsMmPortable(raw + k, ray_x + k, ray_y, count - k, xs + n, ys + n, zs + n);
+}
 #undef MLMAP_AVX2
 #endif
 
@@ -236,6 +308,23 @@ void classifyPoints(const PointKernel& kernel, const float* xs, const float* ys,
                     std::size_t n, std::uint32_t* keys, float* coords) {
   classifyPoints(kernel, xs, ys, zs, n, keys, coords,
                  kAvx2Supported ? PointKernelIsa::kAvx2 : PointKernelIsa::kPortable);
+}
+
+std::size_t packDepthPixelsMm(const std::uint16_t* raw, const float* ray_x, float ray_y,
+                              std::size_t count, float* xs, float* ys, float* zs,
+                              PointKernelIsa isa) {
+#ifdef MLMAP_HAVE_AVX2_KERNEL
+  if (isa == PointKernelIsa::kAvx2) {
+    return packDepthPixelsMmAvx2(raw, ray_x, ray_y, count, xs, ys, zs);
+  }
+#endif
+  return packDepthPixelsMmPortable(raw, ray_x, ray_y, count, xs, ys, zs);
+}
+
+std::size_t packDepthPixelsMm(const std::uint16_t* raw, const float* ray_x, float ray_y,
+                              std::size_t count, float* xs, float* ys, float* zs) {
+  return packDepthPixelsMm(raw, ray_x, ray_y, count, xs, ys, zs,
+                           kAvx2Supported ? PointKernelIsa::kAvx2 : PointKernelIsa::kPortable);
 }
 
 }  // namespace mlmap

@@ -217,5 +217,63 @@ TEST(PointKernel, EveryImplementationMatchesTheReferenceBitForBit) {
       pointKernelAvx2Supported() ? "checked" : "not run (this CPU has no AVX2)");
 }
 
+// Every implementation packs a row of millimetre depth pixels as the branchy reference does: the
+// pixels with data (neither 0 nor 0xFFFF) in order, each z = raw * 0.001f, x = ray_x z,
+// y = ray_y z, bit for bit; rows of every length (the AVX2 form's 8-pixel groups and its tail),
+// dense, sparse (a RealSense's alternation), empty and random patterns, nothing written at or
+// beyond the row's length.
+TEST(PointKernel, DepthPixelPackingMatchesTheReferenceBitForBit) {
+  std::vector<PointKernelIsa> isas = {PointKernelIsa::kPortable};
+  if (pointKernelAvx2Supported()) isas.push_back(PointKernelIsa::kAvx2);
+  std::mt19937 rng(7);
+  std::size_t with_data = 0;
+  std::size_t without = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const std::size_t count = static_cast<std::size_t>(trial % 67) + (trial % 4 == 0 ? 640 : 0);
+    std::vector<std::uint16_t> raw(count);
+    std::vector<float> ray_x(count);
+    const int pattern = trial % 5;
+    for (std::size_t k = 0; k < count; ++k) {
+      std::uint16_t r = static_cast<std::uint16_t>(1 + rng() % 65534);  // data
+      const unsigned pick = rng() % 8;
+      if (pattern == 1) r = 0;                                    // empty
+      if (pattern == 2 && k % 3 != 0) r = pick < 4 ? 0 : 0xFFFF;  // sparse
+      if (pattern == 3 && pick < 3) r = pick == 0 ? 0xFFFF : 0;   // random holes
+      if (pattern == 4 && pick < 1) r = pick == 0 ? 0 : 0xFFFF;   // mostly data
+      raw[k] = r;
+      ray_x[k] = std::uniform_real_distribution<float>(-0.8f, 0.8f)(rng);
+    }
+    const float ray_y = std::uniform_real_distribution<float>(-0.6f, 0.6f)(rng);
+    std::vector<float> want_x, want_y, want_z;
+    for (std::size_t k = 0; k < count; ++k) {
+      if (raw[k] == 0 || raw[k] == 0xFFFF) {
+        ++without;
+        continue;
+      }
+      ++with_data;
+      const float z = static_cast<float>(raw[k]) * 0.001f;
+      want_x.push_back(ray_x[k] * z);
+      want_y.push_back(ray_y * z);
+      want_z.push_back(z);
+    }
+    for (const PointKernelIsa isa : isas) {
+      const char* name = isa == PointKernelIsa::kAvx2 ? "AVX2" : "portable";
+      // One guard value past the row: nothing may be written there.
+      std::vector<float> xs(count + 1, -9.0f), ys(count + 1, -9.0f), zs(count + 1, -9.0f);
+      const std::size_t n = packDepthPixelsMm(raw.data(), ray_x.data(), ray_y, count, xs.data(),
+                                              ys.data(), zs.data(), isa);
+      ASSERT_EQ(n, want_z.size()) << name << ", trial " << trial;
+      EXPECT_EQ(std::memcmp(xs.data(), want_x.data(), n * sizeof(float)), 0) << name << trial;
+      EXPECT_EQ(std::memcmp(ys.data(), want_y.data(), n * sizeof(float)), 0) << name << trial;
+      EXPECT_EQ(std::memcmp(zs.data(), want_z.data(), n * sizeof(float)), 0) << name << trial;
+      EXPECT_EQ(xs[count], -9.0f) << name << ", trial " << trial;
+      EXPECT_EQ(ys[count], -9.0f) << name << ", trial " << trial;
+      EXPECT_EQ(zs[count], -9.0f) << name << ", trial " << trial;
+    }
+  }
+  EXPECT_GT(with_data, 10000u);
+  EXPECT_GT(without, 10000u);
+}
+
 }  // namespace
 }  // namespace mlmap

@@ -57,4 +57,18 @@ void classifyPoints(const PointKernel& kernel, const float* xs, const float* ys,
 void classifyPoints(const PointKernel& kernel, const float* xs, const float* ys, const float* zs,
                     std::size_t n, std::uint32_t* keys, float* coords);
 
+/// The pixels with data among `count` consecutive pixels of one row of a depth image in
+/// millimetres (data: neither 0 nor 0xFFFF), as sensor-frame points packed in pixel order:
+/// z = raw * 0.001f [m], x = ray_x[k] z, y = ray_y z (backProject()'s float arithmetic).
+/// Writes xs, ys, zs below index `count` only (also past the returned count); returns how many
+/// pixels had data. `isa` must be supported (kAvx2 only when pointKernelAvx2Supported()): the
+/// AVX2 form packs eight pixels at a time through a permutation table, the same bits.
+std::size_t packDepthPixelsMm(const std::uint16_t* raw, const float* ray_x, float ray_y,
+                              std::size_t count, float* xs, float* ys, float* zs,
+                              PointKernelIsa isa);
+
+/// The same with the fastest implementation this CPU runs.
+std::size_t packDepthPixelsMm(const std::uint16_t* raw, const float* ray_x, float ray_y,
+                              std::size_t count, float* xs, float* ys, float* zs);
+
 }  // namespace mlmap
