@@ -36,8 +36,12 @@ struct Case {
   MapConfig config;
 };
 
+/// awareness.num_threads of every case (--awareness-threads).
+int g_awareness_threads = 1;
+
 MapConfig at(double res, const Eigen::Vector3i& cells) {
   MapConfig c;
+  c.awareness.num_threads = g_awareness_threads;
   c.local_map.resolution_m = res;
   c.local_map.size_cells = cells;
   return c;
@@ -218,6 +222,11 @@ int main(int argc, char** argv) {
   app.add_option("--real", real_dir, "RGB-D frame folder ('' to skip)")->capture_default_str();
   app.add_option("--json", json_path, "also write the figures as JSON");
   app.add_option("--only", only, "run only the cases whose name contains this text (e.g. '0.1 m')");
+  app.add_option("--awareness-threads", g_awareness_threads,
+                 "awareness.num_threads of every case: threads carving a frame (the caller's "
+                 "included); with 2 or more the thread CPU time printed is the caller's only")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
   int lidar_scans = 60;
   app.add_option("--lidar-scans", lidar_scans,
                  "consecutive 10 Hz scans of the simulated 360-degree LiDAR (128 x 640 rays, 30 m) "
