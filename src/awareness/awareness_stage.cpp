@@ -1,6 +1,7 @@
 #include "mlmap/awareness/awareness_stage.h"
 
 #include "mlmap/awareness/point_kernel.h"
+#include "task_threads.h"
 
 #include <algorithm>
 #include <array>
@@ -8,7 +9,6 @@
 #include <cstring>
 #include <limits>
 #include <numeric>
-#include <thread>
 
 // countBits() gets a popcnt clone next to the portable one, picked at load time (GCC ifunc).
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
@@ -182,8 +182,11 @@ PointCounters& PointCounters::operator+=(const PointCounters& o) {
 AwarenessStage::AwarenessStage(const MapConfig& config)
     : config_(config),
       map_(config.awareness),
-      table_(1u << 15),
+      parts_(static_cast<std::size_t>(std::max(1, config.awareness.num_threads))),
       rng_(config.awareness.sample_seed) {
+  if (config.awareness.num_threads > 1) {
+    threads_ = std::make_unique<TaskThreads>(config.awareness.num_threads);
+  }
   int n = config.awareness.binsPerFaceSide(config.local_map.resolution_m);
   bins_per_face_side_ = n;
   for (; n >= 1; n /= 2) {
@@ -192,29 +195,34 @@ AwarenessStage::AwarenessStage(const MapConfig& config)
   }
 }
 
-std::uint32_t AwarenessStage::findOrAddEnd(std::uint32_t full_key) {
-  if (2 * (ends_.size() + 1) > table_.size()) {
+AwarenessStage::~AwarenessStage() = default;
+
+std::uint32_t AwarenessStage::findOrAddEnd(PointPart* part, std::uint32_t full_key) const {
+  std::vector<Slot>& table = part->table;
+  std::vector<End>& ends = part->ends;
+  const std::uint32_t stamp = part->stamp;
+  if (2 * (ends.size() + 1) > table.size()) {
     // Grow and re-insert this frame's ends.
-    std::vector<Slot> bigger(table_.size() * 2);
+    std::vector<Slot> bigger(table.size() * 2);
     const std::uint32_t mask = static_cast<std::uint32_t>(bigger.size() - 1);
-    for (std::uint32_t e = 0; e < ends_.size(); ++e) {
-      const Eigen::Vector3i& v = ends_[e].voxel;  // only ends inside the box are in ends_ here
+    for (std::uint32_t e = 0; e < ends.size(); ++e) {
+      const Eigen::Vector3i& v = ends[e].voxel;  // only ends inside the box are in ends here
       const std::uint32_t k =
           static_cast<std::uint32_t>(
               (static_cast<std::size_t>(v.x()) * box_dims_.y() + v.y()) * box_dims_.z() + v.z()) |
-          (ends_[e].cut ? kPointCutFlag : 0u);
+          (ends[e].cut ? kPointCutFlag : 0u);
       std::uint32_t h = hashKey(k) & mask;
-      while (bigger[h].stamp == stamp_) h = (h + 1) & mask;
-      bigger[h] = {stamp_, k, e};
+      while (bigger[h].stamp == stamp) h = (h + 1) & mask;
+      bigger[h] = {stamp, k, e};
     }
-    table_.swap(bigger);
+    table.swap(bigger);
   }
-  const std::uint32_t mask = static_cast<std::uint32_t>(table_.size() - 1);
+  const std::uint32_t mask = static_cast<std::uint32_t>(table.size() - 1);
   std::uint32_t h = hashKey(full_key) & mask;
   for (;;) {
-    Slot& slot = table_[h];
-    if (slot.stamp != stamp_) {
-      slot = {stamp_, full_key, static_cast<std::uint32_t>(ends_.size())};
+    Slot& slot = table[h];
+    if (slot.stamp != stamp) {
+      slot = {stamp, full_key, static_cast<std::uint32_t>(ends.size())};
       // Decoded here, once per end voxel rather than once per run of points (three divisions).
       const std::uint32_t voxel = full_key & ~kPointCutFlag;
       const std::uint32_t dim_y = static_cast<std::uint32_t>(box_dims_.y());
@@ -226,7 +234,7 @@ std::uint32_t AwarenessStage::findOrAddEnd(std::uint32_t full_key) {
       e.cut = (full_key & kPointCutFlag) != 0;
       e.points.min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
       e.points.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
-      ends_.push_back(e);
+      ends.push_back(e);
       return slot.end;
     }
     if (slot.key == full_key) return slot.end;
@@ -380,20 +388,22 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
   }
   // From here on ends_ holds every end, those beyond the box last (the hits are listed already).
   ends_.insert(ends_.end(), outside_.begin(), outside_.end());
-  if (config_.awareness.num_threads > 1) {
-    // The awareness map and the free set share no state (carve() writes only the direction
-    // fields of ends_, the map reads their points): the map is updated on a thread of its own
+  if (threads_ != nullptr) {
+    // The awareness map and the cones share no state (listCones() writes only the direction
+    // fields of ends_, the map reads their points): the map is updated on a kept thread
     // meanwhile, the same map either way.
-    std::thread awareness_map([this, body_W = T_W_B.translation()] { updateAwarenessMap(body_W); });
-    struct JoinAtScopeEnd {  // also when carve() throws: a joinable thread must not be destroyed
-      std::thread& thread;
-      ~JoinAtScopeEnd() { thread.join(); }
-    } join_it{awareness_map};
-    carve(g.origin_vox, batch);
+    threads_->run(2, [&](int job) {
+      if (job == 0) {
+        listCones(g.origin_vox);
+      } else {
+        updateAwarenessMap(T_W_B.translation());
+      }
+    });
   } else {
     updateAwarenessMap(T_W_B.translation());
-    carve(g.origin_vox, batch);
+    listCones(g.origin_vox);
   }
+  carveCones(g.origin_vox, batch);
   counters->hit_voxels = batch->hits.size();
   counters->free_voxels = batch->free_count;
 }
@@ -428,9 +438,9 @@ AwarenessStage::FrameGeometry AwarenessStage::beginFrame(double stamp_s, const T
   batch->sensor_origin_W = o_W;
   batch->resolution_m = res;
   ends_.clear();
+  outside_.clear();
   // cppcheck-suppress knownConditionTrueFalse ; it does wrap after 2^32 frames
   if (++stamp_ == 0) {  // wrapped: forget every slot
-    std::fill(table_.begin(), table_.end(), Slot{});
     for (std::vector<BinSlot>& slots : slots_) std::fill(slots.begin(), slots.end(), BinSlot{});
     stamp_ = 1;
   }
@@ -439,14 +449,71 @@ AwarenessStage::FrameGeometry AwarenessStage::beginFrame(double stamp_s, const T
 
 void AwarenessStage::collectEnds(const Source& source, const FrameGeometry& g,
                                  PointCounters* counters) {
+  // Parts of whole blocks, at least two blocks each.
+  const std::size_t blocks = (source.count + kPointBlock - 1) / kPointBlock;
+  const std::size_t threads = threads_ != nullptr ? parts_.size() : 1;
+  const std::size_t parts = std::max<std::size_t>(1, std::min(threads, blocks / 2));
+  const std::size_t per_part = (blocks + parts - 1) / parts * kPointBlock;
+  auto collect = [&](int t) {
+    const std::size_t first = static_cast<std::size_t>(t) * per_part;
+    collectPart(source, g, std::min(first, source.count), std::min(first + per_part, source.count),
+                &parts_[static_cast<std::size_t>(t)]);
+  };
+  if (parts > 1) {
+    threads_->run(static_cast<int>(parts), collect);
+  } else {
+    collect(0);
+  }
+  // The later parts into the first, in order: an end met first in part t comes after those of
+  // the parts before, as one pass over the points would list it; its first point is the first
+  // part's that has it, and its box the hull of the parts' boxes (min and max: exact).
+  PointPart& merged = parts_[0];
+  for (std::size_t t = 1; t < parts; ++t) {
+    PointPart& part = parts_[t];
+    for (const End& e : part.ends) {
+      const std::size_t before = merged.ends.size();
+      const std::uint32_t key =
+          static_cast<std::uint32_t>(
+              (static_cast<std::size_t>(e.voxel.x()) * box_dims_.y() + e.voxel.y()) *
+                  box_dims_.z() +
+              e.voxel.z()) |
+          (e.cut ? kPointCutFlag : 0u);
+      End& into = merged.ends[findOrAddEnd(&merged, key)];
+      if (merged.ends.size() > before) {
+        into = e;
+      } else {
+        into.points.min = into.points.min.cwiseMin(e.points.min);
+        into.points.max = into.points.max.cwiseMax(e.points.max);
+      }
+    }
+    merged.outside.insert(merged.outside.end(), part.outside.begin(), part.outside.end());
+    merged.counters += part.counters;
+  }
+  *counters += merged.counters;
+  ends_.swap(merged.ends);
+  outside_.swap(merged.outside);
+}
+
+void AwarenessStage::collectPart(const Source& source, const FrameGeometry& g, std::size_t first,
+                                 std::size_t end, PointPart* part) const {
   const AwarenessConfig& ac = config_.awareness;
   const double res = config_.local_map.resolution_m;
   const Transform& T_W_S = g.T_W_S;
   const Eigen::Vector3d o_W = T_W_S.translation();
   const VoxelIndex& box_origin = g.box_origin;
   const Eigen::Vector3i& dims = g.dims;
-  PointCounters& c = *counters;
-  const std::size_t count = source.count;
+  part->counters = PointCounters{};
+  part->ends.clear();
+  part->outside.clear();
+  // cppcheck-suppress knownConditionTrueFalse ; it does wrap after 2^32 frames
+  if (++part->stamp == 0) {  // wrapped: forget every slot
+    std::fill(part->table.begin(), part->table.end(), Slot{});
+    part->stamp = 1;
+  }
+  PointCounters& c = part->counters;
+  std::vector<End>& ends = part->ends;
+  std::vector<Slot>& table = part->table;
+  const std::uint32_t stamp = part->stamp;
 
   // Points in world voxel units, w = o / res + (R / res) p: the voxel is floor(w). Pass 1 turns
   // every point into a key (box voxel, or why it is not one) and its box coordinates, without
@@ -502,7 +569,7 @@ void AwarenessStage::collectEnds(const Source& source, const FrameGeometry& g,
     last->points.max = last->points.max.cwiseMax(run_max.head<3>().matrix());
   };
   // The world point of a block's point, from its sensor-frame coordinates in the block.
-  float* xs = block_xyz_.data();
+  float* xs = part->block_xyz.data();
   float* ys = xs + kPointBlock;
   float* zs = ys + kPointBlock;
   auto worldPoint = [&](std::size_t i) {
@@ -510,14 +577,13 @@ void AwarenessStage::collectEnds(const Source& source, const FrameGeometry& g,
     toVoxelUnits(Eigen::Vector3f(xs[i], ys[i], zs[i]), w);
     return Eigen::Vector3d(w[0] * res, w[1] * res, w[2] * res);
   };
-  outside_.clear();
-  const std::uint32_t* keys = keys_.data();
-  const std::array<float, 4>* coords = box_coords_.data();
-  for (std::size_t first = 0; first < count; first += kPointBlock) {
-    const std::size_t len = std::min(kPointBlock, count - first);
-    const std::size_t n = source.fill(first, len, xs, ys, zs);
+  const std::uint32_t* keys = part->keys.data();
+  const std::array<float, 4>* coords = part->box_coords.data();
+  for (std::size_t block = first; block < end; block += kPointBlock) {
+    const std::size_t len = std::min(kPointBlock, end - block);
+    const std::size_t n = source.fill(block, len, xs, ys, zs);
     c.rejected_non_finite += len - n;  // depth pixels without data
-    classifyPoints(kernel, xs, ys, zs, n, keys_.data(), box_coords_[0].data());
+    classifyPoints(kernel, xs, ys, zs, n, part->keys.data(), part->box_coords[0].data());
     std::size_t i = 0;
     while (i < n) {
       if (keys[i] == last_key) {
@@ -557,17 +623,17 @@ void AwarenessStage::collectEnds(const Source& source, const FrameGeometry& g,
           const bool beside = v[0] >= 0.0f && v[0] < static_cast<float>(box_dims_.x()) &&
                               v[1] >= 0.0f && v[1] < static_cast<float>(box_dims_.y());
           c.hits_above_or_below_local_map += !e.cut && beside ? 1 : 0;
-          outside_.push_back(e);
+          part->outside.push_back(e);
         }
         continue;
       }
       mergeRun();  // a new run: the last one into its voxel's entry
       // The table's first probe, inline: most runs continue a voxel of an earlier row. The slot
       // of the point a few ahead is fetched meanwhile (a new voxel's slot is anywhere).
-      const std::uint32_t mask = static_cast<std::uint32_t>(table_.size() - 1);
-      if (at + kProbeAhead < n) __builtin_prefetch(&table_[hashKey(keys[at + kProbeAhead]) & mask]);
-      const Slot& slot = table_[hashKey(key) & mask];
-      last = &ends_[slot.stamp == stamp_ && slot.key == key ? slot.end : findOrAddEnd(key)];
+      const std::uint32_t mask = static_cast<std::uint32_t>(table.size() - 1);
+      if (at + kProbeAhead < n) __builtin_prefetch(&table[hashKey(keys[at + kProbeAhead]) & mask]);
+      const Slot& slot = table[hashKey(key) & mask];
+      last = &ends[slot.stamp == stamp && slot.key == key ? slot.end : findOrAddEnd(part, key)];
       last_key = key;
       last_cut = key >> 31;                                                         // kPointCutFlag
       if (last->points.min.x() > last->points.max.x()) last->p_W = worldPoint(at);  // first point
@@ -590,7 +656,7 @@ void AwarenessStage::updateAwarenessMap(const Eigen::Vector3d& body_W) {
   map_.endFrame();
 }
 
-void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
+void AwarenessStage::listCones(const Eigen::Vector3d& o) {
   // Bin index on level L with n = 2^lg bins per face side: (face n + iu) n + iv.
   const int n0 = bins_per_face_side_;
   int lg0 = 0;
@@ -714,7 +780,6 @@ void AwarenessStage::carve(const Eigen::Vector3d& o, MeasurementBatch* batch) {
     if (s_min >= 1.0 && !e.cut) continue;
     cones_.push_back({e.points, s_min});
   }
-  carveCones(o, batch);
 }
 
 void AwarenessStage::carveRange(const Eigen::Vector3d& o, int x_begin, int x_end,
@@ -747,7 +812,7 @@ void AwarenessStage::carveRange(const Eigen::Vector3d& o, int x_begin, int x_end
 }
 
 void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batch) {
-  const int threads = std::max(1, config_.awareness.num_threads);
+  const int threads = threads_ != nullptr ? threads_->size() : 1;
   const int dim_x = batch->free.dims().x();
   // Only these rows get bits: the count here, the local map's reading and the next frame's
   // clearing look only there (a 360-degree scan in a room marks a small part of its box).
@@ -761,16 +826,10 @@ void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batc
   // each marking its part).
   const std::vector<int> borders = xRangesOfEqualWork(o, cones_, dim_x, threads, &range_scratch_);
   std::vector<std::size_t> counts(static_cast<std::size_t>(threads), 0);
-  std::vector<std::thread> workers;
-  workers.reserve(static_cast<std::size_t>(threads) - 1);
-  for (int t = 1; t < threads; ++t) {
-    workers.emplace_back([&, t] {
-      const auto ut = static_cast<std::size_t>(t);
-      carveRange(o, borders[ut], borders[ut + 1], batch, &counts[ut]);
-    });
-  }
-  carveRange(o, borders[0], borders[1], batch, &counts[0]);
-  for (std::thread& w : workers) w.join();
+  threads_->run(threads, [&](int t) {
+    const auto ut = static_cast<std::size_t>(t);
+    carveRange(o, borders[ut], borders[ut + 1], batch, &counts[ut]);
+  });
   batch->free_count = std::accumulate(counts.begin(), counts.end(), std::size_t{0});
 }
 
@@ -779,12 +838,17 @@ std::size_t AwarenessStage::memoryBytes() const {
   for (std::size_t l = 0; l < slots_.size(); ++l) {
     bins += slots_[l].capacity() * sizeof(BinSlot) + bins_[l].capacity() * sizeof(Bin);
   }
+  for (const PointPart& p : parts_) {
+    bins += p.table.capacity() * sizeof(Slot) +
+            (p.ends.capacity() + p.outside.capacity()) * sizeof(End) +
+            p.keys.capacity() * sizeof(std::uint32_t) +
+            p.box_coords.capacity() * sizeof(p.box_coords[0]) +
+            p.block_xyz.capacity() * sizeof(float);
+  }
   return bins + map_.memoryBytes() + ends_.capacity() * sizeof(End) +
          outside_.capacity() * sizeof(End) + cones_.capacity() * sizeof(Cone) +
-         range_scratch_.capacity() * sizeof(double) + table_.capacity() * sizeof(Slot) +
-         sample_indices_.capacity() * sizeof(std::uint32_t) +
-         keys_.capacity() * sizeof(std::uint32_t) +
-         box_coords_.capacity() * sizeof(box_coords_[0]) + block_xyz_.capacity() * sizeof(float);
+         range_scratch_.capacity() * sizeof(double) +
+         sample_indices_.capacity() * sizeof(std::uint32_t);
 }
 
 }  // namespace mlmap

@@ -134,6 +134,13 @@ TEST(AwarenessStage, ThreadsCarveTheSameFreeSetBitForBit) {
       if (frame_index == 1) {
         for (Eigen::Vector3f& p : frame.points_S) p.x() = std::abs(p.x());  // one side only
       }
+      if (frame_index == 2) {
+        // Each end voxel in the first and the last part of the points (the point loop splits
+        // them by thread): its first point from the first, its box from both.
+        const std::vector<Eigen::Vector3f> first(frame.points_S.begin(),
+                                                 frame.points_S.begin() + 3000);
+        for (const Eigen::Vector3f& p : first) frame.points_S.push_back(p * 1.0001f);
+      }
       frame.T_W_B.translation().x() += 0.37 * frame_index;
       MeasurementBatch a;
       MeasurementBatch b;
@@ -153,9 +160,19 @@ TEST(AwarenessStage, ThreadsCarveTheSameFreeSetBitForBit) {
       EXPECT_EQ(a.free_count, a.free.count());
       EXPECT_GT(a.free_count, 10000u);
       ASSERT_EQ(a.hits.size(), b.hits.size());
-      for (std::size_t i = 0; i < a.hits.size(); ++i) EXPECT_EQ(a.hits[i].index, b.hits[i].index);
+      for (std::size_t i = 0; i < a.hits.size(); ++i) {
+        EXPECT_EQ(a.hits[i].index, b.hits[i].index);
+        EXPECT_EQ(a.hits[i].p_W, b.hits[i].p_W);  // the voxel's first point
+      }
+      EXPECT_EQ(a.far_hits, b.far_hits);
       EXPECT_EQ(ca.free_voxels, cb.free_voxels);
       EXPECT_EQ(ca.hit_voxels, cb.hit_voxels);
+      EXPECT_EQ(ca.points_in, cb.points_in);
+      EXPECT_EQ(ca.beyond_max_range, cb.beyond_max_range);
+      EXPECT_EQ(ca.rejected_too_close, cb.rejected_too_close);
+      EXPECT_EQ(ca.rejected_non_finite, cb.rejected_non_finite);
+      EXPECT_EQ(ca.hits_beyond_local_map, cb.hits_beyond_local_map);
+      EXPECT_GT(ca.beyond_max_range, 0u);
       // The awareness map, updated on a thread of its own meanwhile, is the same too.
       EXPECT_EQ(reference.map().occupiedPoints(), threaded.map().occupiedPoints());
       for (const Occupancy s : {Occupancy::kOccupied, Occupancy::kFree}) {
@@ -301,6 +318,23 @@ TEST(AwarenessStage, DepthImageMatchesItsBackProjectedCloud) {
       PointCounters cb;
       ASSERT_TRUE(from_depth.process(depth, &a, &ca));
       from_cloud.process(cloud, &b, &cb);
+      // Threads split the pixels into parts of whole blocks, across rows: the same batch.
+      for (const int threads : {2, 3}) {
+        MapConfig threaded_config = config;
+        threaded_config.awareness.num_threads = threads;
+        AwarenessStage threaded(threaded_config);
+        MeasurementBatch t;
+        PointCounters ct;
+        ASSERT_TRUE(threaded.process(depth, &t, &ct));
+        EXPECT_EQ(ct.rejected_non_finite, ca.rejected_non_finite);
+        EXPECT_EQ(ct.beyond_max_range, ca.beyond_max_range);
+        ASSERT_EQ(t.hits.size(), a.hits.size());
+        for (std::size_t i = 0; i < a.hits.size(); ++i) {
+          EXPECT_TRUE(t.hits[i].index == a.hits[i].index);
+          EXPECT_EQ(t.hits[i].p_W, a.hits[i].p_W);
+        }
+        EXPECT_EQ(t.free_count, a.free_count);
+      }
       EXPECT_EQ(ca.points_in, n);
       EXPECT_EQ(ca.points_in, cb.points_in + skipped);
       EXPECT_EQ(ca.rejected_non_finite, cb.rejected_non_finite + skipped);

@@ -10,10 +10,13 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <random>
 #include <vector>
 
 namespace mlmap {
+
+class TaskThreads;
 
 /// What happened to the points of frames (summed over frames by the engine).
 struct PointCounters {
@@ -41,8 +44,12 @@ class AwarenessStage {
   /// Points are classified in blocks of this many (structure of arrays, vectorised).
   static constexpr std::size_t kPointBlock = 1024;
 
-  /// `config` must be valid (MapConfig::validate() empty).
+  /// `config` must be valid (MapConfig::validate() empty). With awareness.num_threads > 1 it
+  /// starts that many - 1 threads, kept until it is destroyed.
   explicit AwarenessStage(const MapConfig& config);
+  ~AwarenessStage();
+  AwarenessStage(const AwarenessStage&) = delete;
+  AwarenessStage& operator=(const AwarenessStage&) = delete;
 
   /// Processes a frame whose poses were validated. Fills `batch` (reusing its memory) and adds
   /// to `counters`.
@@ -88,7 +95,9 @@ class AwarenessStage {
   FrameGeometry beginFrame(double stamp_s, const Transform& T_W_B, const Transform& T_B_S,
                            MeasurementBatch* batch);
   /// Turns every point into its end voxel (ends_, one per box voxel) or an end beyond the box
-  /// (outside_, per point), counting the points rejected or cut at the maximum range.
+  /// (outside_, per point), counting the points rejected or cut at the maximum range. With
+  /// threads the points are split into consecutive parts, each grouped by a thread of its own
+  /// (collectPart()), and the parts merged in order: the same ends in the same order.
   void collectEnds(const Source& source, const FrameGeometry& g, PointCounters* counters);
   /// The awareness map of this frame: carried obstacles, hits, then the 2D rho-z ray walks, from
   /// ends_ (which holds outside_ too by then). Reads only the ends' points and `cut`.
@@ -115,19 +124,41 @@ class AwarenessStage {
     std::uint32_t stamp = 0;
     std::uint32_t bin = 0;
   };
-  /// The entry of a box key (voxel index | kCutFlag), added when new.
-  std::uint32_t findOrAddEnd(std::uint32_t key);
-  /// The frame's free space: lists the cones of the direction bins and of the ends (ends_, which
-  /// holds outside_ too by then), carves them (carveCones()) and sets batch->free_count. Writes
-  /// only the direction fields (bin, near) of ends_.
-  void carve(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch);
+  /// Open-addressing table: linear box index (+ cut flag) -> index in ends, valid when stamped.
+  struct Slot {
+    std::uint32_t stamp = 0;
+    std::uint32_t key = 0;
+    std::uint32_t end = 0;
+  };
+  /// One thread's part of the point loop: the end voxels of its points in the order first met,
+  /// the ends beyond the box, its counters and scratch space.
+  struct PointPart {
+    std::vector<Slot> table = std::vector<Slot>(1u << 15);
+    std::uint32_t stamp = 0;  // this frame's, in table
+    std::vector<End> ends;
+    std::vector<End> outside;
+    PointCounters counters;
+    // Per point of a block: box voxel key (or why it has none), box-relative coordinates and 0.
+    std::vector<std::uint32_t> keys = std::vector<std::uint32_t>(kPointBlock);
+    std::vector<std::array<float, 4>> box_coords = std::vector<std::array<float, 4>>(kPointBlock);
+    std::vector<float> block_xyz = std::vector<float>(3 * kPointBlock);  // one block, x | y | z
+  };
+  /// Points first .. end - 1 of the frame into `part` (collectEnds() on one part).
+  void collectPart(const Source& source, const FrameGeometry& g, std::size_t first, std::size_t end,
+                   PointPart* part) const;
+  /// The entry in part->ends of a box key (voxel index | kCutFlag), added when new.
+  std::uint32_t findOrAddEnd(PointPart* part, std::uint32_t key) const;
+  /// Lists the frame's cones: those of the direction bins and of the ends (ends_, which holds
+  /// outside_ too by then), into cones_. Writes only the direction fields (bin, near) of ends_.
+  void listCones(const Eigen::Vector3d& origin_vox);
   /// A cone to carve: the part s in [s_min, 1] of the cone from the sensor to `box`.
   struct Cone {
     VoxelSpaceBox box{};
     double s_min = 0.0;
   };
-  /// Carves cones_ into batch->free, clears the hits and counts the free voxels: on the calling
-  /// thread, or split by box x over awareness.num_threads threads (the same bits either way).
+  /// Carves cones_ into batch->free, clears the hits and counts the free voxels (sets
+  /// batch->free_count): on the calling thread, or split by box x over awareness.num_threads
+  /// threads (the same bits either way).
   void carveCones(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch);
   /// The part of carveCones() with box x in [x_begin, x_end): marks the cones' voxels there,
   /// clears the hits there and counts the free voxels there into `free_count`. Writes only the
@@ -142,14 +173,9 @@ class AwarenessStage {
   std::vector<End> outside_;           // beyond the box (the local map cannot hold them), per point
   std::vector<Cone> cones_;            // this frame's cones, bins first (coarse to fine), then ends
   std::vector<double> range_scratch_;  // the cones' work per box x, for splitting it over threads
-  // Open-addressing table: linear box index (+ cut flag) -> index in ends_, valid when stamped.
-  struct Slot {
-    std::uint32_t stamp = 0;
-    std::uint32_t key = 0;
-    std::uint32_t end = 0;
-  };
-  std::vector<Slot> table_;
-  std::uint32_t stamp_ = 0;
+  std::vector<PointPart> parts_;       // one per thread; ends_ and outside_ merge them
+  std::unique_ptr<TaskThreads> threads_;  // with awareness.num_threads > 1
+  std::uint32_t stamp_ = 0;               // this frame's, in slots_
   // Level 0: bins about two voxels wide at the maximum range; level L: 2^L times wider, covering
   // the distances where they are still about two voxels wide. Per level, a slot for every bin
   // and this frame's bins with members, densely in the order they were met: the passes over the
@@ -161,10 +187,6 @@ class AwarenessStage {
   std::vector<std::uint32_t> sample_indices_;
   std::vector<float> ray_x_;                   // depth images: (u - cx) / fx per column
   std::vector<Eigen::Vector3f> depth_points_;  // depth images with sub-sampling: the cloud
-  // Per point of a block: box voxel key (or why it has none), box-relative coordinates and 0.
-  std::vector<std::uint32_t> keys_ = std::vector<std::uint32_t>(kPointBlock);
-  std::vector<std::array<float, 4>> box_coords_ = std::vector<std::array<float, 4>>(kPointBlock);
-  std::vector<float> block_xyz_ = std::vector<float>(3 * kPointBlock);  // one block, x | y | z
   std::mt19937 rng_;
 };
 
