@@ -514,6 +514,8 @@ void AwarenessStage::collectPart(const Source& source, const FrameGeometry& g, s
   std::vector<End>& ends = part->ends;
   std::vector<Slot>& table = part->table;
   const std::uint32_t stamp = part->stamp;
+  RecentEnd* recent = part->recent.data();
+  std::fill(part->recent.begin(), part->recent.end(), RecentEnd{kNoRunKey, 0});
 
   // Points in world voxel units, w = o / res + (R / res) p: the voxel is floor(w). Pass 1 turns
   // every point into a key (box voxel, or why it is not one) and its box coordinates, without
@@ -630,10 +632,16 @@ void AwarenessStage::collectPart(const Source& source, const FrameGeometry& g, s
       mergeRun();  // a new run: the last one into its voxel's entry
       // The table's first probe, inline: most runs continue a voxel of an earlier row. The slot
       // of the point a few ahead is fetched meanwhile (a new voxel's slot is anywhere).
+      // First the recent ends (L1-resident), then the table.
       const std::uint32_t mask = static_cast<std::uint32_t>(table.size() - 1);
       if (at + kProbeAhead < n) __builtin_prefetch(&table[hashKey(keys[at + kProbeAhead]) & mask]);
-      const Slot& slot = table[hashKey(key) & mask];
-      last = &ends[slot.stamp == stamp && slot.key == key ? slot.end : findOrAddEnd(part, key)];
+      const std::uint32_t h = hashKey(key);
+      RecentEnd& r = recent[h & (kRecentEnds - 1)];
+      if (r.key != key) {
+        const Slot& slot = table[h & mask];
+        r = {key, slot.stamp == stamp && slot.key == key ? slot.end : findOrAddEnd(part, key)};
+      }
+      last = &ends[r.end];
       last_key = key;
       last_cut = key >> 31;                                                         // kPointCutFlag
       if (last->points.min.x() > last->points.max.x()) last->p_W = worldPoint(at);  // first point

@@ -130,9 +130,19 @@ class AwarenessStage {
     std::uint32_t key = 0;
     std::uint32_t end = 0;
   };
+  /// An end of this frame met lately: its key and index in the part's ends.
+  struct RecentEnd {
+    std::uint32_t key = 0;
+    std::uint32_t end = 0;
+  };
+  /// Size of the direct-mapped cache of recent ends (8 kB: in L1, where the table is not).
+  static constexpr std::size_t kRecentEnds = 1024;
   /// One thread's part of the point loop: the end voxels of its points in the order first met,
   /// the ends beyond the box, its counters and scratch space.
   struct PointPart {
+    /// Recent ends by their key's hash: most runs of points continue an end voxel of the image
+    /// rows just before, found here without the table's cache miss.
+    std::array<RecentEnd, kRecentEnds> recent{};
     std::vector<Slot> table = std::vector<Slot>(1u << 15);
     std::uint32_t stamp = 0;  // this frame's, in table
     std::vector<End> ends;
