@@ -468,22 +468,47 @@ void AwarenessStage::collectEnds(const Source& source, const FrameGeometry& g,
   // the parts before, as one pass over the points would list it; its first point is the first
   // part's that has it, and its box the hull of the parts' boxes (min and max: exact).
   PointPart& merged = parts_[0];
+  const auto keyOf = [&](const End& e) {  // as the point loop keys a box voxel
+    return static_cast<std::uint32_t>(
+               (static_cast<std::size_t>(e.voxel.x()) * box_dims_.y() + e.voxel.y()) *
+                   box_dims_.z() +
+               e.voxel.z()) |
+           (e.cut ? kPointCutFlag : 0u);
+  };
+  const auto mergeInto = [](End* into, const End& e) {
+    into->points.min = into->points.min.cwiseMin(e.points.min);
+    into->points.max = into->points.max.cwiseMax(e.points.max);
+  };
   for (std::size_t t = 1; t < parts; ++t) {
     PointPart& part = parts_[t];
-    for (const End& e : part.ends) {
-      const std::size_t before = merged.ends.size();
-      const std::uint32_t key =
-          static_cast<std::uint32_t>(
-              (static_cast<std::size_t>(e.voxel.x()) * box_dims_.y() + e.voxel.y()) *
-                  box_dims_.z() +
-              e.voxel.z()) |
-          (e.cut ? kPointCutFlag : 0u);
-      End& into = merged.ends[findOrAddEnd(&merged, key)];
-      if (merged.ends.size() > before) {
-        into = e;
-      } else {
-        into.points.min = into.points.min.cwiseMin(e.points.min);
-        into.points.max = into.points.max.cwiseMax(e.points.max);
+    const std::vector<End>& ends = part.ends;
+    if (t + 1 < parts) {
+      for (const End& e : ends) {
+        const std::size_t before = merged.ends.size();
+        End& into = merged.ends[findOrAddEnd(&merged, keyOf(e))];
+        if (merged.ends.size() > before) {
+          into = e;
+        } else {
+          mergeInto(&into, e);
+        }
+      }
+    } else {
+      // The last part: no later part looks its ends up, so the table only answers (its slots
+      // fetched a few ends ahead: a LiDAR's ends are nearly all new, all over the table).
+      const std::vector<Slot>& table = merged.table;
+      const std::uint32_t mask = static_cast<std::uint32_t>(table.size() - 1);
+      for (std::size_t i = 0; i < ends.size(); ++i) {
+        if (i + kProbeAhead < ends.size())
+          __builtin_prefetch(&table[hashKey(keyOf(ends[i + kProbeAhead])) & mask]);
+        const End& e = ends[i];
+        const std::uint32_t key = keyOf(e);
+        std::uint32_t h = hashKey(key) & mask;
+        while (table[h].stamp == merged.stamp && table[h].key != key) h = (h + 1) & mask;
+        if (table[h].stamp == merged.stamp) {
+          mergeInto(&merged.ends[table[h].end], e);
+        } else {
+          merged.ends.push_back(e);
+        }
       }
     }
     merged.outside.insert(merged.outside.end(), part.outside.begin(), part.outside.end());
