@@ -1,5 +1,7 @@
 #include "task_threads.h"
 
+#include <algorithm>
+
 namespace mlmap {
 
 TaskThreads::TaskThreads(int threads) {
@@ -18,14 +20,16 @@ TaskThreads::~TaskThreads() {
 void TaskThreads::run(int n, const std::function<void(int)>& job) {
   const int kept = std::min(n, size()) - 1;
   if (kept > 0) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    job_ = &job;
-    jobs_ = n;
-    pending_ = static_cast<int>(threads_.size());
-    error_ = nullptr;
-    ++generation_;
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      job_ = &job;
+      jobs_ = n;
+      pending_ = static_cast<int>(threads_.size());
+      error_ = nullptr;
+      ++generation_;
+    }
+    go_.notify_all();
   }
-  if (kept > 0) go_.notify_all();
   std::exception_ptr own;
   if (n > 0) {
     try {

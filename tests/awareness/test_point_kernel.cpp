@@ -239,7 +239,7 @@ TEST(PointKernel, DepthPixelPackingMatchesTheReferenceBitForBit) {
       if (pattern == 1) r = 0;                                    // empty
       if (pattern == 2 && k % 3 != 0) r = pick < 4 ? 0 : 0xFFFF;  // sparse
       if (pattern == 3 && pick < 3) r = pick == 0 ? 0xFFFF : 0;   // random holes
-      if (pattern == 4 && pick < 1) r = pick == 0 ? 0 : 0xFFFF;   // mostly data
+      if (pattern == 4 && pick < 2) r = pick == 0 ? 0 : 0xFFFF;   // mostly data
       raw[k] = r;
       ray_x[k] = std::uniform_real_distribution<float>(-0.8f, 0.8f)(rng);
     }
