@@ -872,7 +872,7 @@ std::size_t AwarenessStage::memoryBytes() const {
     bins += slots_[l].capacity() * sizeof(BinSlot) + bins_[l].capacity() * sizeof(Bin);
   }
   for (const PointPart& p : parts_) {
-    bins += p.table.capacity() * sizeof(Slot) +
+    bins += sizeof(p.recent) + p.table.capacity() * sizeof(Slot) +
             (p.ends.capacity() + p.outside.capacity()) * sizeof(End) +
             p.keys.capacity() * sizeof(std::uint32_t) +
             p.box_coords.capacity() * sizeof(p.box_coords[0]) +
