@@ -1,7 +1,13 @@
 # Generates C++ for the IDL files under idl/ with fastddsgen at build time (nothing generated is
-# committed: the output is tied to the Fast DDS / Fast CDR version found) and builds it as a library.
+# committed: the output is tied to the Fast DDS / Fast CDR version found) and builds it as two
+# libraries.
 #
-#   mlmap_idl_library(<target> IDL_ROOT <dir> [PACKAGES <pkg>...])
+#   mlmap_idl_library(<target> CDR_TARGET <cdr_target> IDL_ROOT <dir>)
+#
+# <cdr_target> holds the types and their CDR (de)serialisation (<Name>_.cxx) and links Fast CDR
+# only: what decodes recorded bytes (the bag reader) needs no more, and loading Fast DDS costs a
+# process about 7 MB resident. <target> adds the PubSubTypes (<Name>_PubSubTypes.cxx, the
+# types as Fast DDS topics) and links Fast DDS.
 #
 # Each <dir>/<pkg>/msg/<Name>_.idl yields <build>/idl_gen/<pkg>/msg/<Name>_{.h,.cxx,PubSubTypes.h,
 # PubSubTypes.cxx}, and each service <dir>/<pkg>/srv/<Name>_.idl (its <Name>_Request_ and
@@ -19,12 +25,13 @@ find_program(FASTDDSGEN_EXECUTABLE fastddsgen REQUIRED)  # found already by Mlma
 set(MLMAP_RUN_FASTDDSGEN "${CMAKE_CURRENT_LIST_DIR}/RunFastddsgen.cmake")
 
 function(mlmap_idl_library target)
-  cmake_parse_arguments(ARG "" "IDL_ROOT" "" ${ARGN})
+  cmake_parse_arguments(ARG "" "IDL_ROOT;CDR_TARGET" "" ${ARGN})
   get_filename_component(root "${ARG_IDL_ROOT}" ABSOLUTE)
   file(GLOB idl_files CONFIGURE_DEPENDS "${root}/*/msg/*_.idl" "${root}/*/srv/*_.idl")
   set(gen_dir "${CMAKE_CURRENT_BINARY_DIR}/idl_gen")
   set(outputs "")
-  set(sources "")
+  set(cdr_sources "")
+  set(dds_sources "")
   set(seen "")
   foreach(idl IN LISTS idl_files)
     get_filename_component(name "${idl}" NAME_WE)
@@ -39,8 +46,10 @@ function(mlmap_idl_library target)
     foreach(suffix .h .cxx PubSubTypes.h PubSubTypes.cxx)
       set(out "${gen_dir}/${pkg}/${kind}/${name}${suffix}")
       list(APPEND outputs "${out}")
-      if(suffix MATCHES "cxx$")
-        list(APPEND sources "${out}")
+      if(suffix STREQUAL ".cxx")
+        list(APPEND cdr_sources "${out}")
+      elseif(suffix STREQUAL "PubSubTypes.cxx")
+        list(APPEND dds_sources "${out}")
       endif()
     endforeach()
   endforeach()
@@ -53,9 +62,15 @@ function(mlmap_idl_library target)
     DEPENDS ${idl_files} "${MLMAP_RUN_FASTDDSGEN}"
     COMMENT "Generating Fast DDS types from ${root} with fastddsgen"
     VERBATIM)
-  add_library(${target} ${sources})
-  target_include_directories(${target} SYSTEM PUBLIC "${gen_dir}")
-  target_link_libraries(${target} PUBLIC fastcdr fastrtps)
-  target_compile_features(${target} PUBLIC cxx_std_17)
+  # The types' headers include Fast DDS's header-only fixed_size_string.hpp: its include
+  # directory, not its library.
+  add_library(${ARG_CDR_TARGET} ${cdr_sources})
+  target_include_directories(${ARG_CDR_TARGET} SYSTEM PUBLIC "${gen_dir}"
+                             $<TARGET_PROPERTY:fastrtps,INTERFACE_INCLUDE_DIRECTORIES>)
+  target_link_libraries(${ARG_CDR_TARGET} PUBLIC fastcdr)
+  target_compile_features(${ARG_CDR_TARGET} PUBLIC cxx_std_17)
+  set_target_properties(${ARG_CDR_TARGET} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+  add_library(${target} ${dds_sources})
+  target_link_libraries(${target} PUBLIC ${ARG_CDR_TARGET} fastrtps)
   set_target_properties(${target} PROPERTIES POSITION_INDEPENDENT_CODE ON)
 endfunction()

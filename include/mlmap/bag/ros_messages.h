@@ -1,12 +1,13 @@
 #pragma once
 /// @file
-/// ROS 2 messages of a bag decoded with mlmap's own IDL types (mlmap_dds_wire): the CDR bytes are
-/// handed to the generated type's deserialize() as mlmap_node's DDS reader hands a sample, and
-/// PointCloud2 goes through CloudSamplePubSubType, the node's in-place decoder. A bag message
-/// and a live topic therefore decode the same.
+/// ROS 2 messages of a bag decoded with mlmap's own IDL types (mlmap_dds_cdr): the CDR bytes are
+/// checked and deserialised by the generated types with Fast CDR, as the generated PubSubTypes
+/// of mlmap_node's DDS readers do it, and PointCloud2 goes through decodeCloudSampleCdr(), the
+/// node's in-place decoder. A bag message and a live topic therefore decode the same; the bag
+/// reader links Fast CDR, not Fast DDS.
 
 #include "mlmap/core/types.h"
-#include "mlmap/dds/wire/cloud_sample.h"
+#include "mlmap/dds/wire/cloud_cdr.h"
 #include "mlmap/dds/wire/ros_conversions.h"
 
 #include "tf2_msgs/msg/TFMessage_.h"
@@ -46,7 +47,7 @@ void decodeCdr(const std::vector<std::uint8_t>& bytes, const std::string& what,
 /// The same for a TFMessage.
 void decodeCdr(const std::vector<std::uint8_t>& bytes, const std::string& what,
                tf2_msgs::TFMessage_* msg);
-/// A PointCloud2 through the node's CloudSamplePubSubType: header and layout in `sample`, x, y,
+/// A PointCloud2 through the node's decodeCloudSampleCdr(): header and layout in `sample`, x, y,
 /// z in sample->points_S, the layout check's outcome in sample->status.
 void decodeCdr(const std::vector<std::uint8_t>& bytes, const std::string& what,
                dds::CloudSample* sample);
