@@ -431,11 +431,36 @@ void writeGrid(const std::string& base, const MapEngine& engine) {
   io::writeGridMap(*snapshot->gridPtr(), base);
 }
 
+/// The run's phases in seconds (stats.json's `phases_s`): from main() to the first frame's
+/// submit() (start-up: options, configuration, engine, source, the first frame's reading), the
+/// frames (first submit() to the last one's return), and from there to `outputs_end` (flush,
+/// every output but stats.json). Without a frame, all of it is start-up.
+eval::Json phasesJson(const eval::RecordedRun& run, SteadyClock::time_point main_start,
+                      SteadyClock::time_point outputs_end) {
+  const SteadyClock::time_point none{};
+  if (run.firstFrameStart() == none) {
+    return {
+        {"startup", secondsBetween(main_start, outputs_end)}, {"mapping", 0.0}, {"outputs", 0.0}};
+  }
+  return {{"startup", secondsBetween(main_start, run.firstFrameStart())},
+          {"mapping", secondsBetween(run.firstFrameStart(), run.lastFrameEnd())},
+          {"outputs", secondsBetween(run.lastFrameEnd(), outputs_end)}};
+}
+
+/// Prints the run's phases (phasesJson()) and the time stats.json took to write.
+void printPhases(const eval::Json& phases, double stats_json_s) {
+  std::printf(
+      "  phases [s]           start-up %.3f (main() to the first frame), mapping %.3f, "
+      "outputs %.3f (+ stats.json %.3f)\n",
+      phases["startup"].get<double>(), phases["mapping"].get<double>(),
+      phases["outputs"].get<double>(), stats_json_s);
+}
+
 /// Writes the outputs, the map first (--save-map; the voxel list, while the pictures are drawn),
 /// then the 2D grid, the pictures with report.json and stats.json, and prints the summary.
 /// Returns the exit status: 0, or 3 when no frame was mapped. @throws std::runtime_error naming
 /// the file it cannot write; the files written before it are complete.
-int finish(const Options& o, eval::RecordedRun* run) {
+int finish(const Options& o, eval::RecordedRun* run, SteadyClock::time_point main_start) {
   run->engine().flush();
   run->outputs().source = run->info().source;
   const double res = run->resolution_m();
@@ -456,10 +481,14 @@ int finish(const Options& o, eval::RecordedRun* run) {
     throw;
   }
   voxels.get();
-  eval::writeJsonFile(o.stats_out, eval::runStatsJson(*run, occupied.size()),
-                      /*expanded_levels=*/2);
+  const SteadyClock::time_point stats_start = SteadyClock::now();
+  eval::Json stats = eval::runStatsJson(*run, occupied.size());
+  stats["phases_s"] = phasesJson(*run, main_start, stats_start);
+  eval::writeJsonFile(o.stats_out, stats, /*expanded_levels=*/2);
+  const double stats_json_s = secondsBetween(stats_start, SteadyClock::now());
   eval::printSummary(s, res, run->scored() != nullptr ? &run->scored()->accuracy : nullptr);
   printReplaySummary(o, *run, written, occupied.size());
+  printPhases(stats["phases_s"], stats_json_s);
   return s.frames_mapped > 0 ? 0 : 3;
 }
 
@@ -485,9 +514,23 @@ void checkOutputs(const Options& o) {
   }
 }
 
+/// Logs the local window the engine uses (after --max-range and --config), how far from the body
+/// it maps every hit with its free space, and the maximum range.
+void logWindow(const MapConfig& config) {
+  const Eigen::Vector3i& cells = config.local_map.size_cells;
+  const double res = config.local_map.resolution_m;
+  spdlog::info(
+      "local window {} x {} x {} voxels ({:.1f} x {:.1f} x {:.1f} m): a hit within {:.1f} m "
+      "horizontally of the body and within the window's height is mapped with its free space, "
+      "others are counted (hits_beyond_local_map); max range {} m",
+      cells.x(), cells.y(), cells.z(), cells.x() * res, cells.y() * res, cells.z() * res,
+      config.local_map.horizontalReach_m(), config.awareness.max_range_m);
+}
+
 /// Checks the configuration, maps the source and writes the outputs. Returns the exit status:
-/// 0, 2 for a bad configuration or --extrinsic, 3 when no frame was mapped.
-int replaySource(const Options& o) {
+/// 0, 2 for a bad configuration or --extrinsic, 3 when no frame was mapped. `main_start`: when
+/// main() was entered, for stats.json's phases.
+int replaySource(const Options& o, SteadyClock::time_point main_start) {
   const eval::DataKind kind = dataKind(o);
   MapConfig config = eval::runConfig(o.config_path, kind, o.resolution_m);
   const std::optional<datasets::CloudSequenceOptions> cloud_options = cloudOptions(o);
@@ -500,6 +543,7 @@ int replaySource(const Options& o) {
     eval::checkSaveMapTarget(o.save_map_path, o.overwrite);  // before the run
 
   eval::RecordedRun run(config, o.out_dir, logEngineMessage);
+  logWindow(run.engine().config());
   if (kind == eval::DataKind::kFrameDirectory) {
     mapFrameDirectory(o, &run);
 #if MLMAP_HAVE_BAG
@@ -511,16 +555,16 @@ int replaySource(const Options& o) {
   } else {
     flySimulator(o, &run);
   }
-  return finish(o, &run);
+  return finish(o, &run, main_start);
 }
 
 /// Runs the replay the options describe; returns the exit status (1: an error, logged).
-int run(Options o) {
+int run(Options o, SteadyClock::time_point main_start) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("mlmap"));  // stdout carries the results
   if (o.voxels_out.empty()) o.voxels_out = o.out_dir + "/occupied_voxels.txt";
   if (o.stats_out.empty()) o.stats_out = o.out_dir + "/stats.json";
   try {
-    return replaySource(o);
+    return replaySource(o, main_start);
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 1;
@@ -530,11 +574,12 @@ int run(Options o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const mlmap::SteadyClock::time_point main_start = mlmap::SteadyClock::now();
   CLI::App app{kAbout};
   Options options;
   addSourceOptions(app, options);
   addEngineOptions(app, options);
   addOutputOptions(app, options);
   CLI11_PARSE(app, argc, argv);
-  return run(std::move(options));
+  return run(std::move(options), main_start);
 }

@@ -64,9 +64,15 @@ void RecordedRun::submitFrame(Frame frame, FrameRecord record) {
   outputs_.trajectory_W.push_back(frame.T_W_B.translation());
   record.stamp_s = frame.stamp_s;
   timer_.begin();
+  noteFrameStart(timer_.start());
   record.status = engine_.submit(std::move(frame));
   (void)timer_.end(engine_, &record);
+  noteFrameEnd();
   records_.push_back(std::move(record));
+}
+
+void RecordedRun::noteFrameStart(SteadyClock::time_point start) {
+  if (first_frame_start_ == SteadyClock::time_point{}) first_frame_start_ = start;
 }
 
 void RecordedRun::submit(PointCloudFrame frame, FrameRecord record) {
@@ -90,10 +96,12 @@ void RecordedRun::flyRecorded(const datasets::Scenario& scenario, int max_frames
     record.points = static_cast<std::size_t>(scenario.camera.intrinsics.width) *
                     static_cast<std::size_t>(scenario.camera.intrinsics.height);
     timer_.begin();
+    noteFrameStart(timer_.start());
   };
   options.progress = [&](int done, int total) {
     // Called right after submit(): the frame's status is the engine's last counters'.
     record.status = timer_.end(engine_, &record) ? FrameStatus::kAccepted : FrameStatus::kEmpty;
+    noteFrameEnd();
     record.stamp_s = frameTime(scenario, done - 1);
     records_.push_back(record);
     bar.update(done, total);

@@ -55,6 +55,13 @@ long jsonInt(const std::string& json, const std::string& key) {
   return std::strtol(json.c_str() + at + key.size() + 4, nullptr, 10);
 }
 
+/// The number of `"key": X` in a JSON text (first occurrence), or NaN.
+double jsonDouble(const std::string& json, const std::string& key) {
+  const std::size_t at = json.find("\"" + key + "\": ");
+  if (at == std::string::npos) return std::numeric_limits<double>::quiet_NaN();
+  return std::strtod(json.c_str() + at + key.size() + 4, nullptr);
+}
+
 /// "x y z qx qy qz qw" of `T`, and the pose the same seven numbers make (what a reader builds).
 std::string xyzQuat(const Transform& T, Transform* as_read) {
   const Eigen::Quaterniond q(T.linear());
@@ -147,6 +154,13 @@ TEST(Replay, SimulatedCloudsWithTumPosesMapLikeTheEngineDirectly) {
   EXPECT_NE(stats.find("\"pairing\": \"by time"), std::string::npos);
   EXPECT_NE(stats.find("\"local_global_ms\": "), std::string::npos);
   EXPECT_GT(jsonInt(stats, "peak_rss"), 0);
+  // The phases: start-up, the frames, the outputs; each took time, none more than the test's run.
+  ASSERT_NE(stats.find("\"phases_s\": {"), std::string::npos) << stats;
+  for (const char* phase : {"startup", "mapping", "outputs"}) {
+    const double seconds = jsonDouble(stats.substr(stats.find("\"phases_s\": {")), phase);
+    EXPECT_GT(seconds, 0.0) << phase;
+    EXPECT_LT(seconds, 300.0) << phase;
+  }
   for (const char* f : {"map_top.png", "map_side.png", "report.json"}) {
     EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
   }
@@ -242,6 +256,10 @@ TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
             std::string::npos)
       << log;
   EXPECT_NE(log.find("their free space was not mapped"), std::string::npos) << log;
+  EXPECT_NE(log.find("local window 190 x 190 x 70 voxels (19.0 x 19.0 x 7.0 m): a hit within 7.6 "
+                     "m horizontally of the body"),
+            std::string::npos)
+      << log;  // the window used, as fixed.yaml gives it
   EXPECT_EQ(jsonInt(readText(dir + "/out/report.json"), "hits_beyond_local_map"), 21 * 11);
 
   // --max-range 20: the window grows to hold the range, and every hit is mapped, with the body
@@ -265,6 +283,11 @@ TEST(Replay, HitsOutsideTheLocalWindowAreCountedAndSaid) {
   EXPECT_NE(readText(dir + "/sized.log").find("the local window grows from 190 x 190 to 500 x 500"),
             std::string::npos)
       << readText(dir + "/sized.log");
+  EXPECT_NE(readText(dir + "/sized.log")
+                .find("local window 500 x 500 x 70 voxels (50.0 x 50.0 x 7.0 m): a hit within "
+                      "20.0 m horizontally of the body"),
+            std::string::npos)
+      << readText(dir + "/sized.log");  // the window used, as the growth said
 }
 
 // A LiDAR's upper beams: hits within the window's horizontal reach but above it are counted

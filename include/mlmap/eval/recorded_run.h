@@ -45,6 +45,8 @@ class FrameTimer {
   bool end(const MapEngine& engine, FrameRecord* r);
   /// The largest engine accounting seen after a frame [bytes].
   [[nodiscard]] std::size_t peakEngineBytes() const { return peak_engine_bytes_; }
+  /// When the last begin() was called.
+  [[nodiscard]] SteadyClock::time_point start() const { return start_; }
 
  private:
   SteadyClock::time_point start_, awareness_done_, mapped_done_;
@@ -92,6 +94,10 @@ class RecordedRun {
   [[nodiscard]] const LogSink& log() const { return log_; }
   /// The simulator's flight and its accuracy (flyRecorded()); nullptr for recorded data.
   [[nodiscard]] const ScoredFlight* scored() const { return outputs_.scored; }
+  /// When the first frame's submit() began (steady clock; the clock's epoch before any frame).
+  [[nodiscard]] SteadyClock::time_point firstFrameStart() const { return first_frame_start_; }
+  /// When the last frame's submit() returned (steady clock; the clock's epoch before any frame).
+  [[nodiscard]] SteadyClock::time_point lastFrameEnd() const { return last_frame_end_; }
 
   /// Flies `scenario` (at most `max_frames` frames, 0: all), recording each frame, and scores
   /// the map against the simulator's ground truth.
@@ -100,6 +106,9 @@ class RecordedRun {
  private:
   template <typename Frame>
   void submitFrame(Frame frame, FrameRecord record);
+  /// Notes the start and end of a frame's submit() for firstFrameStart() and lastFrameEnd().
+  void noteFrameStart(SteadyClock::time_point start);
+  void noteFrameEnd() { last_frame_end_ = SteadyClock::now(); }
 
   LogSink log_;
   FrameTimer timer_;  // before the engine: the engine holds its observers
@@ -108,6 +117,8 @@ class RecordedRun {
   RunInfo info_;
   MapOutputs outputs_;
   ScoredFlight scored_;
+  SteadyClock::time_point first_frame_start_{};
+  SteadyClock::time_point last_frame_end_{};
 };
 
 /// Maps the first `count` frames of `source` into `run` in order, recording each, with a
