@@ -431,36 +431,42 @@ void writeGrid(const std::string& base, const MapEngine& engine) {
   io::writeGridMap(*snapshot->gridPtr(), base);
 }
 
-/// The run's phases in seconds (stats.json's `phases_s`): from main() to the first frame's
-/// submit() (start-up: options, configuration, engine, source, the first frame's reading), the
-/// frames (first submit() to the last one's return), and from there to `outputs_end` (flush,
-/// every output but stats.json). Without a frame, all of it is start-up.
-eval::Json phasesJson(const eval::RecordedRun& run, SteadyClock::time_point main_start,
-                      SteadyClock::time_point outputs_end) {
-  const SteadyClock::time_point none{};
-  if (run.firstFrameStart() == none) {
-    return {
-        {"startup", secondsBetween(main_start, outputs_end)}, {"mapping", 0.0}, {"outputs", 0.0}};
-  }
-  return {{"startup", secondsBetween(main_start, run.firstFrameStart())},
-          {"mapping", secondsBetween(run.firstFrameStart(), run.lastFrameEnd())},
-          {"outputs", secondsBetween(run.lastFrameEnd(), outputs_end)}};
+/// The run's phases (stats.json's `phases_s` in wall seconds, `phases_cpu_s` in seconds of the
+/// process's CPU, every thread): from main() to the first frame's submit() (start-up: options,
+/// configuration, engine, source, the first frame's reading), the frames (first submit() to the
+/// last one's return), and from there to `outputs_end` (flush, every output but stats.json).
+/// Without a frame, all of it is start-up.
+eval::Json phasesJson(const eval::RecordedRun& run, const eval::RunMark& main_start,
+                      const eval::RunMark& outputs_end, bool cpu) {
+  const bool frames = run.firstFrameStart().set();
+  const eval::RunMark& first = frames ? run.firstFrameStart() : outputs_end;
+  const eval::RunMark& last = frames ? run.lastFrameEnd() : outputs_end;
+  const auto span = [cpu](const eval::RunMark& a, const eval::RunMark& b) {
+    return cpu ? b.process_cpu_s - a.process_cpu_s : secondsBetween(a.wall, b.wall);
+  };
+  eval::Json phases = {{"startup", span(main_start, first)},
+                       {"mapping", span(first, last)},
+                       {"outputs", span(last, outputs_end)}};
+  if (cpu) phases["before_main"] = main_start.process_cpu_s;  // loading the program, libraries
+  return phases;
 }
 
 /// Prints the run's phases (phasesJson()) and the time stats.json took to write.
-void printPhases(const eval::Json& phases, double stats_json_s) {
+void printPhases(const eval::Json& wall, const eval::Json& cpu, double stats_json_s) {
   std::printf(
       "  phases [s]           start-up %.3f (main() to the first frame), mapping %.3f, "
-      "outputs %.3f (+ stats.json %.3f)\n",
-      phases["startup"].get<double>(), phases["mapping"].get<double>(),
-      phases["outputs"].get<double>(), stats_json_s);
+      "outputs %.3f (+ stats.json %.3f)\n"
+      "  phases, CPU [s]      before main() %.3f, start-up %.3f, mapping %.3f, outputs %.3f\n",
+      wall["startup"].get<double>(), wall["mapping"].get<double>(), wall["outputs"].get<double>(),
+      stats_json_s, cpu["before_main"].get<double>(), cpu["startup"].get<double>(),
+      cpu["mapping"].get<double>(), cpu["outputs"].get<double>());
 }
 
 /// Writes the outputs, the map first (--save-map; the voxel list, while the pictures are drawn),
 /// then the 2D grid, the pictures with report.json and stats.json, and prints the summary.
 /// Returns the exit status: 0, or 3 when no frame was mapped. @throws std::runtime_error naming
 /// the file it cannot write; the files written before it are complete.
-int finish(const Options& o, eval::RecordedRun* run, SteadyClock::time_point main_start) {
+int finish(const Options& o, eval::RecordedRun* run, const eval::RunMark& main_start) {
   run->engine().flush();
   run->outputs().source = run->info().source;
   const double res = run->resolution_m();
@@ -481,14 +487,15 @@ int finish(const Options& o, eval::RecordedRun* run, SteadyClock::time_point mai
     throw;
   }
   voxels.get();
-  const SteadyClock::time_point stats_start = SteadyClock::now();
+  const eval::RunMark stats_start = eval::RunMark::now();
   eval::Json stats = eval::runStatsJson(*run, occupied.size());
-  stats["phases_s"] = phasesJson(*run, main_start, stats_start);
+  stats["phases_s"] = phasesJson(*run, main_start, stats_start, /*cpu=*/false);
+  stats["phases_cpu_s"] = phasesJson(*run, main_start, stats_start, /*cpu=*/true);
   eval::writeJsonFile(o.stats_out, stats, /*expanded_levels=*/2);
-  const double stats_json_s = secondsBetween(stats_start, SteadyClock::now());
+  const double stats_json_s = secondsBetween(stats_start.wall, SteadyClock::now());
   eval::printSummary(s, res, run->scored() != nullptr ? &run->scored()->accuracy : nullptr);
   printReplaySummary(o, *run, written, occupied.size());
-  printPhases(stats["phases_s"], stats_json_s);
+  printPhases(stats["phases_s"], stats["phases_cpu_s"], stats_json_s);
   return s.frames_mapped > 0 ? 0 : 3;
 }
 
@@ -530,7 +537,7 @@ void logWindow(const MapConfig& config) {
 /// Checks the configuration, maps the source and writes the outputs. Returns the exit status:
 /// 0, 2 for a bad configuration or --extrinsic, 3 when no frame was mapped. `main_start`: when
 /// main() was entered, for stats.json's phases.
-int replaySource(const Options& o, SteadyClock::time_point main_start) {
+int replaySource(const Options& o, const eval::RunMark& main_start) {
   const eval::DataKind kind = dataKind(o);
   MapConfig config = eval::runConfig(o.config_path, kind, o.resolution_m);
   const std::optional<datasets::CloudSequenceOptions> cloud_options = cloudOptions(o);
@@ -559,7 +566,7 @@ int replaySource(const Options& o, SteadyClock::time_point main_start) {
 }
 
 /// Runs the replay the options describe; returns the exit status (1: an error, logged).
-int run(Options o, SteadyClock::time_point main_start) {
+int run(Options o, const eval::RunMark& main_start) {
   spdlog::set_default_logger(spdlog::stderr_color_mt("mlmap"));  // stdout carries the results
   if (o.voxels_out.empty()) o.voxels_out = o.out_dir + "/occupied_voxels.txt";
   if (o.stats_out.empty()) o.stats_out = o.out_dir + "/stats.json";
@@ -574,7 +581,7 @@ int run(Options o, SteadyClock::time_point main_start) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const mlmap::SteadyClock::time_point main_start = mlmap::SteadyClock::now();
+  const mlmap::eval::RunMark main_start = mlmap::eval::RunMark::now();
   CLI::App app{kAbout};
   Options options;
   addSourceOptions(app, options);

@@ -2,6 +2,8 @@
 
 #include "mlmap/datasets/frame_prefetcher.h"
 
+#include <time.h>
+
 #include <algorithm>
 #include <cstdio>
 #include <utility>
@@ -10,6 +12,12 @@
 namespace mlmap::eval {
 
 using Clock = SteadyClock;
+
+RunMark RunMark::now() {
+  timespec cpu{};
+  ::clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &cpu);
+  return {Clock::now(), static_cast<double>(cpu.tv_sec) + 1e-9 * static_cast<double>(cpu.tv_nsec)};
+}
 
 EngineObservers FrameTimer::observers() {
   EngineObservers o;
@@ -63,16 +71,16 @@ template <typename Frame>
 void RecordedRun::submitFrame(Frame frame, FrameRecord record) {
   outputs_.trajectory_W.push_back(frame.T_W_B.translation());
   record.stamp_s = frame.stamp_s;
+  noteFrameStart();
   timer_.begin();
-  noteFrameStart(timer_.start());
   record.status = engine_.submit(std::move(frame));
   (void)timer_.end(engine_, &record);
   noteFrameEnd();
   records_.push_back(std::move(record));
 }
 
-void RecordedRun::noteFrameStart(SteadyClock::time_point start) {
-  if (first_frame_start_ == SteadyClock::time_point{}) first_frame_start_ = start;
+void RecordedRun::noteFrameStart() {
+  if (!first_frame_start_.set()) first_frame_start_ = RunMark::now();
 }
 
 void RecordedRun::submit(PointCloudFrame frame, FrameRecord record) {
@@ -95,8 +103,8 @@ void RecordedRun::flyRecorded(const datasets::Scenario& scenario, int max_frames
     record.read_ms = msSince(frame_start);
     record.points = static_cast<std::size_t>(scenario.camera.intrinsics.width) *
                     static_cast<std::size_t>(scenario.camera.intrinsics.height);
+    noteFrameStart();
     timer_.begin();
-    noteFrameStart(timer_.start());
   };
   options.progress = [&](int done, int total) {
     // Called right after submit(): the frame's status is the engine's last counters'.

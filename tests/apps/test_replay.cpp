@@ -161,6 +161,13 @@ TEST(Replay, SimulatedCloudsWithTumPosesMapLikeTheEngineDirectly) {
     EXPECT_GT(seconds, 0.0) << phase;
     EXPECT_LT(seconds, 300.0) << phase;
   }
+  ASSERT_NE(stats.find("\"phases_cpu_s\": {"), std::string::npos) << stats;
+  const std::string cpu = stats.substr(stats.find("\"phases_cpu_s\": {"));
+  for (const char* phase : {"before_main", "startup", "mapping", "outputs"}) {
+    EXPECT_GE(jsonDouble(cpu, phase), 0.0) << phase;  // CPU time may round to 0 on a short phase
+    EXPECT_LT(jsonDouble(cpu, phase), 300.0) << phase;
+  }
+  EXPECT_GT(jsonDouble(cpu, "before_main") + jsonDouble(cpu, "mapping"), 0.0);
   for (const char* f : {"map_top.png", "map_side.png", "report.json"}) {
     EXPECT_TRUE(fs::exists(out + "/" + f)) << f;
   }

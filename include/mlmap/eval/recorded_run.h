@@ -45,14 +45,23 @@ class FrameTimer {
   bool end(const MapEngine& engine, FrameRecord* r);
   /// The largest engine accounting seen after a frame [bytes].
   [[nodiscard]] std::size_t peakEngineBytes() const { return peak_engine_bytes_; }
-  /// When the last begin() was called.
-  [[nodiscard]] SteadyClock::time_point start() const { return start_; }
 
  private:
   SteadyClock::time_point start_, awareness_done_, mapped_done_;
   PlanningStats last_;
   std::uint64_t frames_mapped_ = 0;
   std::size_t peak_engine_bytes_ = 0;
+};
+
+/// A moment of a run: the steady clock and the CPU time the process (every thread) has used so
+/// far, from its start: at main()'s entry that is the loading of the program and its libraries.
+struct RunMark {
+  SteadyClock::time_point wall{};  ///< the steady clock; its epoch when not set
+  double process_cpu_s = 0.0;      ///< CLOCK_PROCESS_CPUTIME_ID [s]
+  /// This moment.
+  [[nodiscard]] static RunMark now();
+  /// Whether the mark was taken.
+  [[nodiscard]] bool set() const { return wall != SteadyClock::time_point{}; }
 };
 
 /// What stats.json says of the source besides the frames.
@@ -94,10 +103,10 @@ class RecordedRun {
   [[nodiscard]] const LogSink& log() const { return log_; }
   /// The simulator's flight and its accuracy (flyRecorded()); nullptr for recorded data.
   [[nodiscard]] const ScoredFlight* scored() const { return outputs_.scored; }
-  /// When the first frame's submit() began (steady clock; the clock's epoch before any frame).
-  [[nodiscard]] SteadyClock::time_point firstFrameStart() const { return first_frame_start_; }
-  /// When the last frame's submit() returned (steady clock; the clock's epoch before any frame).
-  [[nodiscard]] SteadyClock::time_point lastFrameEnd() const { return last_frame_end_; }
+  /// When the first frame's submit() began (not set() before any frame).
+  [[nodiscard]] const RunMark& firstFrameStart() const { return first_frame_start_; }
+  /// When the last frame's submit() returned (not set() before any frame).
+  [[nodiscard]] const RunMark& lastFrameEnd() const { return last_frame_end_; }
 
   /// Flies `scenario` (at most `max_frames` frames, 0: all), recording each frame, and scores
   /// the map against the simulator's ground truth.
@@ -107,8 +116,8 @@ class RecordedRun {
   template <typename Frame>
   void submitFrame(Frame frame, FrameRecord record);
   /// Notes the start and end of a frame's submit() for firstFrameStart() and lastFrameEnd().
-  void noteFrameStart(SteadyClock::time_point start);
-  void noteFrameEnd() { last_frame_end_ = SteadyClock::now(); }
+  void noteFrameStart();
+  void noteFrameEnd() { last_frame_end_ = RunMark::now(); }
 
   LogSink log_;
   FrameTimer timer_;  // before the engine: the engine holds its observers
@@ -117,8 +126,8 @@ class RecordedRun {
   RunInfo info_;
   MapOutputs outputs_;
   ScoredFlight scored_;
-  SteadyClock::time_point first_frame_start_{};
-  SteadyClock::time_point last_frame_end_{};
+  RunMark first_frame_start_;
+  RunMark last_frame_end_;
 };
 
 /// Maps the first `count` frames of `source` into `run` in order, recording each, with a
