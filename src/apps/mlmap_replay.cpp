@@ -463,7 +463,8 @@ void printPhases(const eval::Json& wall, const eval::Json& cpu, double stats_jso
 }
 
 /// Writes the outputs, the map first (--save-map; the voxel list, while the pictures are drawn),
-/// then the 2D grid, the pictures with report.json and stats.json, and prints the summary.
+/// then the 2D grid, the pictures with report.json and stats.json, and prints the summary. The
+/// engine is released once the outputs that read it are written.
 /// Returns the exit status: 0, or 3 when no frame was mapped. @throws std::runtime_error naming
 /// the file it cannot write; the files written before it are complete.
 int finish(const Options& o, eval::RecordedRun* run, const eval::RunMark& main_start) {
@@ -479,6 +480,7 @@ int finish(const Options& o, eval::RecordedRun* run, const eval::RunMark& main_s
     io::writeVoxelText(o.voxels_out, occupied, res);
   });
   if (!o.grid_out.empty()) writeGrid(o.grid_out, run->engine());
+  run->releaseEngine();  // what follows reads `occupied` and `s`: the map's memory is freed first
   std::vector<std::string> written;
   try {
     written = eval::writeMapOutputs(run->outputs(), s, occupied, res);

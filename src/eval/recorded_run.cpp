@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <stdexcept>
 #include <utility>
 #include <variant>
 
@@ -63,8 +64,28 @@ TimingSummary summarizeFrames(const std::vector<FrameRecord>& frames, double Fra
 }
 
 RecordedRun::RecordedRun(const MapConfig& config, const std::string& out_dir, LogSink log)
-    : log_(std::move(log)), engine_(config, log_, timer_.observers()) {
+    : log_(std::move(log)),
+      engine_(std::make_unique<MapEngine>(config, log_, timer_.observers())),
+      config_(engine_->config()) {
   outputs_.out_dir = out_dir;
+}
+
+MapEngine& RecordedRun::engine() {
+  if (!engine_) throw std::logic_error("RecordedRun: the engine was released");
+  return *engine_;
+}
+
+const MapEngine& RecordedRun::engine() const {
+  if (!engine_) throw std::logic_error("RecordedRun: the engine was released");
+  return *engine_;
+}
+
+EngineStats RecordedRun::stats() const { return engine_ ? engine_->stats() : final_stats_; }
+
+void RecordedRun::releaseEngine() {
+  if (!engine_) return;
+  final_stats_ = engine_->stats();
+  engine_.reset();
 }
 
 template <typename Frame>
@@ -73,8 +94,8 @@ void RecordedRun::submitFrame(Frame frame, FrameRecord record) {
   record.stamp_s = frame.stamp_s;
   noteFrameStart();
   timer_.begin();
-  record.status = engine_.submit(std::move(frame));
-  (void)timer_.end(engine_, &record);
+  record.status = engine().submit(std::move(frame));
+  (void)timer_.end(engine(), &record);
   noteFrameEnd();
   records_.push_back(std::move(record));
 }
@@ -108,14 +129,14 @@ void RecordedRun::flyRecorded(const datasets::Scenario& scenario, int max_frames
   };
   options.progress = [&](int done, int total) {
     // Called right after submit(): the frame's status is the engine's last counters'.
-    record.status = timer_.end(engine_, &record) ? FrameStatus::kAccepted : FrameStatus::kEmpty;
+    record.status = timer_.end(engine(), &record) ? FrameStatus::kAccepted : FrameStatus::kEmpty;
     noteFrameEnd();
     record.stamp_s = frameTime(scenario, done - 1);
     records_.push_back(record);
     bar.update(done, total);
     frame_start = Clock::now();
   };
-  scored_ = flyAndScore(scenario, engine_, options);
+  scored_ = flyAndScore(scenario, engine(), options);
   outputs_.trajectory_W = scored_.flight.trajectory_W;
   outputs_.scored = &scored_;
 }
@@ -202,8 +223,8 @@ Json frameJson(const FrameRecord& f) {
 }  // namespace
 
 Json runStatsJson(const RecordedRun& run, std::size_t occupied_voxels) {
-  const MapConfig& config = run.engine().config();
-  const EngineStats s = run.engine().stats();
+  const MapConfig& config = run.config();
+  const EngineStats s = run.stats();
   Json stats;
   stats["source"] = run.info().source;
   stats["kind"] = run.info().kind;
@@ -225,7 +246,7 @@ void printRunSummary(const RecordedRun& run, bool reader_thread) {
   const TimingSummary planning = summarizeFrames(records, &FrameRecord::planning_ms);
   const TimingSummary whole = summarizeFrames(records, &FrameRecord::engine_ms);
   std::printf("  replay per frame [ms] median   p99\n");
-  if (run.engine().config().pipeline.planning_layers) {
+  if (run.config().pipeline.planning_layers) {
     std::printf("    planning layers    %7.2f %7.2f   (snapshot, 2D grid)\n", planning.median_ms,
                 planning.p99_ms);
   } else {
@@ -238,7 +259,7 @@ void printRunSummary(const RecordedRun& run, bool reader_thread) {
     const TimingSummary wait = summarizeFrames(records, &FrameRecord::read_wait_ms);
     std::printf("    waiting for it     %7.2f %7.2f\n", wait.median_ms, wait.p99_ms);
   }
-  printHitsOutsideWindow(run.engine().stats(), run.log());
+  printHitsOutsideWindow(run.stats(), run.log());
   std::printf("  peak memory          %.1f MB resident (process), %.1f MB engine accounting\n",
               static_cast<double>(peakRssBytes()) / 1e6,
               static_cast<double>(run.timer().peakEngineBytes()) / 1e6);

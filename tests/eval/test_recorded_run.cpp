@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -57,6 +59,30 @@ TEST(RecordedRun, RecordsEveryFrameAndItsStatsAreTheEngines) {
   EXPECT_EQ(stats["frames"][2]["name"], "c");
   EXPECT_EQ(stats["timing_ms"]["engine"]["frames"], 1u);  // timings over the accepted frames
   EXPECT_FALSE(warnings.empty());
+}
+
+TEST(RecordedRun, ReleasingTheEngineKeepsWhatStatsJsonSays) {
+  MapConfig config;
+  config.local_map.resolution_m = 0.1;
+  RecordedRun run(config, "unused", [](LogLevel, const std::string&) {});
+  run.submit(wallFrame(1.0), FrameRecord{});
+  run.submit(wallFrame(1.1), FrameRecord{});
+  const std::size_t occupied = run.engine().occupiedVoxels().size();
+  ASSERT_GT(occupied, 0u);
+  Json before = runStatsJson(run, occupied);
+  const std::uint64_t points_in = run.engine().stats().points.points_in;
+  run.releaseEngine();
+  EXPECT_THROW((void)run.engine(), std::logic_error);
+  EXPECT_EQ(run.stats().points.points_in, points_in);
+  EXPECT_EQ(run.stats().frames_mapped, 2u);
+  EXPECT_DOUBLE_EQ(run.resolution_m(), 0.1);
+  EXPECT_DOUBLE_EQ(run.config().local_map.resolution_m, 0.1);
+  Json after = runStatsJson(run, occupied);
+  before["memory_bytes"].erase("peak_rss");  // the process's, which may grow in between
+  after["memory_bytes"].erase("peak_rss");
+  EXPECT_EQ(after, before);
+  run.releaseEngine();  // a second release changes nothing
+  EXPECT_EQ(run.stats().frames_mapped, 2u);
 }
 
 }  // namespace

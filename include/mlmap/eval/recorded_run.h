@@ -12,6 +12,7 @@
 #include "mlmap/pipeline/map_engine.h"
 
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -88,9 +89,20 @@ class RecordedRun {
   /// The same for a depth image.
   void submit(DepthFrame frame, FrameRecord record);
 
-  [[nodiscard]] double resolution_m() const { return engine_.config().local_map.resolution_m; }
-  [[nodiscard]] MapEngine& engine() { return engine_; }
-  [[nodiscard]] const MapEngine& engine() const { return engine_; }
+  [[nodiscard]] double resolution_m() const { return config_.local_map.resolution_m; }
+  /// The engine. @throws std::logic_error after releaseEngine().
+  [[nodiscard]] MapEngine& engine();
+  /// The engine. @throws std::logic_error after releaseEngine().
+  [[nodiscard]] const MapEngine& engine() const;
+  /// The engine's configuration (kept by releaseEngine()).
+  [[nodiscard]] const MapConfig& config() const { return config_; }
+  /// The engine's statistics; after releaseEngine(), the last ones it gave.
+  [[nodiscard]] EngineStats stats() const;
+  /// Frees the engine and its map, keeping its configuration and final statistics (config(),
+  /// stats(), what stats.json and printRunSummary() read): call it once the outputs that read
+  /// the map itself are written, so that the pictures and files written after it do not add
+  /// their memory to the map's at the process's peak.
+  void releaseEngine();
   [[nodiscard]] FrameTimer& timer() { return timer_; }
   [[nodiscard]] const FrameTimer& timer() const { return timer_; }
   [[nodiscard]] std::vector<FrameRecord>& records() { return records_; }
@@ -121,7 +133,9 @@ class RecordedRun {
 
   LogSink log_;
   FrameTimer timer_;  // before the engine: the engine holds its observers
-  MapEngine engine_;
+  std::unique_ptr<MapEngine> engine_;
+  MapConfig config_;         // the engine's
+  EngineStats final_stats_;  // the engine's last, once released
   std::vector<FrameRecord> records_;
   RunInfo info_;
   MapOutputs outputs_;
