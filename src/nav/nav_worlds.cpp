@@ -195,6 +195,76 @@ NavWorld roomsWorld(std::uint32_t seed, int rooms) {
   }
 }
 
+NavWorld buildingFloorWorld(std::uint32_t seed) {
+  const Eigen::Vector2d size(40.0, 16.0);
+  const double room_x = 10.0;
+  const double corridor_lo = 6.4;  // the corridor's south wall [m]
+  const double corridor_hi = 9.6;  // its north wall [m]
+  const double half_t = 0.5 * kWallThickness_m;
+  for (int attempt = 0;; ++attempt) {
+    std::mt19937 rng(seed * 7919u + static_cast<std::uint32_t>(attempt));
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    NavWorld w;
+    w.name = "building_s" + std::to_string(seed);
+    w.min_xy_W = Eigen::Vector2d::Zero();
+    w.max_xy_W = size;
+    addFloorAndWalls(&w.world, w.min_xy_W, w.max_xy_W);
+    // The walls between rooms, on both sides of the corridor.
+    for (int k = 1; k < 4; ++k) {
+      const double x = room_x * k;
+      w.world.addBox({Eigen::Vector3d(x - half_t, 0.0, 0.0),
+                      Eigen::Vector3d(x + half_t, corridor_lo, kWallHeight_m)});
+      w.world.addBox({Eigen::Vector3d(x - half_t, corridor_hi, 0.0),
+                      Eigen::Vector3d(x + half_t, size.y(), kWallHeight_m)});
+    }
+    // The corridor's walls, one 2 m door into each room at a random place.
+    std::vector<Eigen::Vector2d> doors;
+    for (const double y : {corridor_lo, corridor_hi}) {
+      double wall_from = 0.0;
+      for (int k = 0; k < 4; ++k) {
+        const double door_lo = room_x * k + 1.0 + unit(rng) * (room_x - 4.0);
+        w.world.addBox({Eigen::Vector3d(wall_from, y - half_t, 0.0),
+                        Eigen::Vector3d(door_lo, y + half_t, kWallHeight_m)});
+        wall_from = door_lo + 2.0;
+        doors.emplace_back(door_lo + 1.0, y);
+      }
+      w.world.addBox({Eigen::Vector3d(wall_from, y - half_t, 0.0),
+                      Eigen::Vector3d(size.x(), y + half_t, kWallHeight_m)});
+    }
+    // Start in a south room, goal in a north room at the other end of the corridor.
+    const int start_room = static_cast<int>(unit(rng) * 4.0) % 4;
+    const int goal_room = (start_room < 2 ? 2 : 0) + static_cast<int>(unit(rng) * 2.0) % 2;
+    w.start_W = {room_x * start_room + 2.0 + unit(rng) * (room_x - 4.0),
+                 1.5 + unit(rng) * (corridor_lo - 3.0), kFlightHeight_m};
+    w.goal_W = {room_x * goal_room + 2.0 + unit(rng) * (room_x - 4.0),
+                size.y() - 1.5 - unit(rng) * (size.y() - corridor_hi - 3.0), kFlightHeight_m};
+    w.start_yaw_rad = headingTo(w.start_W, w.goal_W);
+    // Furniture: two boxes a room, away from the walls, the doors, start and goal.
+    for (int k = 0; k < 8; ++k) {
+      const double x0 = room_x * (k % 4);
+      const double y0 = k < 4 ? 0.0 : corridor_hi;
+      const double depth = k < 4 ? corridor_lo : size.y() - corridor_hi;
+      int added = 0;
+      for (int tries = 0; tries < 200 && added < 2; ++tries) {
+        const Eigen::Vector2d half(0.3 + 0.4 * unit(rng), 0.3 + 0.4 * unit(rng));
+        const Eigen::Vector2d c(x0 + 1.6 + half.x() + unit(rng) * (room_x - 3.2 - 2 * half.x()),
+                                y0 + 1.6 + half.y() + unit(rng) * (depth - 3.2 - 2 * half.y()));
+        const double reach = half.norm();
+        bool ok = true;
+        for (const Eigen::Vector2d& d : doors) ok = ok && (d - c).norm() - reach > 2.0;
+        for (const Eigen::Vector3d& q : {w.start_W, w.goal_W})
+          ok = ok && (q.head<2>() - c).norm() - reach > 1.2;
+        if (!ok) continue;
+        const double height = 0.8 + 1.4 * unit(rng);
+        w.world.addBox({Eigen::Vector3d(c.x() - half.x(), c.y() - half.y(), 0.0),
+                        Eigen::Vector3d(c.x() + half.x(), c.y() + half.y(), height)});
+        ++added;
+      }
+    }
+    if (isFair(w) || attempt >= kMaxAttempts) return w;
+  }
+}
+
 NavWorld paperRoomWorld(std::uint32_t seed) {
   const sim::World room = sim::World::defaultRoom();
   std::mt19937 rng(static_cast<std::mt19937::result_type>(seed * 15485863u));
@@ -267,7 +337,7 @@ std::vector<NavWorld> benchmarkWorlds(int count, std::uint32_t seed, double infl
         w = roomsWorld(s, 2 + (i / 5) % 2);
         break;
       default:
-        w = paperRoomWorld(s);
+        w = (i / 5) % 2 == 0 ? paperRoomWorld(s) : buildingFloorWorld(s);
         break;
     }
     if (i % 3 == 2) addCrossingPerson(&w, shortestRoute(w, inflation_m, 0.1), speed_mps, 3.0);

@@ -10,8 +10,13 @@ namespace mlmap::nav {
 namespace {
 
 std::vector<NavWorld> someWorlds() {
-  return {forestWorld(1, 0.03, {16.0, 10.0}), forestWorld(2, 0.09, {24.0, 12.0}), roomsWorld(3, 2),
-          roomsWorld(4, 3), paperRoomWorld(5)};
+  return {forestWorld(1, 0.03, {16.0, 10.0}),
+          forestWorld(2, 0.09, {24.0, 12.0}),
+          roomsWorld(3, 2),
+          roomsWorld(4, 3),
+          paperRoomWorld(5),
+          buildingFloorWorld(6),
+          buildingFloorWorld(7)};
 }
 
 TEST(NavWorlds, EachHasARouteWithClearanceAndAGoalTheStartCannotSee) {

@@ -1,10 +1,10 @@
 #pragma once
 /// @file
 /// Seeded unknown worlds to fly the reference planner in: forests of cylinders at several
-/// densities, rooms joined by doors, and the paper's 30 x 20 m room, each walled, with a floor,
-/// a start, and a goal the start cannot see; in some a person (a moving box) crosses the route.
-/// Also the ground truth a flight is scored against: the shortest route and the clearance.
-/// World frame W (z up), metres, seconds.
+/// densities, rooms joined by doors, the paper's 30 x 20 m room and a building floor, each walled,
+/// with a floor, a start, and a goal the start cannot see; in some a person (a moving box) crosses
+/// the route. Also the ground truth a flight is scored against: the shortest route and the
+/// clearance. World frame W (z up), metres, seconds.
 
 #include "mlmap/sim/world.h"
 
@@ -52,6 +52,13 @@ struct NavWorld {
 /// for furniture; start in the first room, goal in the last.
 [[nodiscard]] NavWorld roomsWorld(std::uint32_t seed, int rooms);
 
+/// One floor of the building walk (config/worlds/building.yaml's plan): 40 x 16 m, a 3.2 m
+/// corridor along x (y 6.4-9.6) with four 10 x 6.4 m rooms on either side, each room's 2 m door
+/// into the corridor at a random place (the walk's 1.2 m doors are narrower than the vehicle's
+/// inflated width), two pieces of furniture a room; start in a south room, goal in a north room
+/// at the other end of the corridor.
+[[nodiscard]] NavWorld buildingFloorWorld(std::uint32_t seed);
+
 /// The paper's 30 x 20 m room (sim::World::defaultRoom()'s static solids, its person left out),
 /// flown at 1.5 m from near (4, 4.5) in its south-west to near (25, 15.5) in its north-east,
 /// behind the interior wall at x = 10 (through one of its doors, and the one at y = 10 or round).
@@ -63,9 +70,9 @@ struct NavWorld {
 void addCrossingPerson(NavWorld* world, const std::vector<Eigen::Vector2d>& route_W,
                        double speed_mps, double lead_m = 4.0);
 
-/// The benchmark's `count` worlds from `seed`: forests at three densities, rooms (2 or 3) and the
-/// paper room in turn, a person in every third crossing the shortest route (planned with
-/// inflation_m) 3 m ahead of a vehicle flying it at `speed_mps` on average.
+/// The benchmark's `count` worlds from `seed`: forests at three densities, rooms (2 or 3), and the
+/// paper room or a building floor, in turn, a person in every third crossing the shortest route
+/// (planned with inflation_m) 3 m ahead of a vehicle flying it at `speed_mps` on average.
 [[nodiscard]] std::vector<NavWorld> benchmarkWorlds(int count, std::uint32_t seed,
                                                     double inflation_m, double speed_mps);
 
