@@ -106,6 +106,14 @@ TEST(TypeHashes, EqualJazzysForEveryStandardType) {
   }
 }
 
+// nav_msgs/Path (the reference planner's plan over DDS) is not in that file: its hash is the one
+// published ROS 2 type tables carry for Jazzy (e.g. the typings rosbags generates), and it is
+// built from Header and PoseStamped, whose hashes the test above checks against Jazzy's own.
+TEST(TypeHashes, PathEqualsThePublishedOne) {
+  EXPECT_EQ(rosTypeHash("nav_msgs::msg::dds_::Path_"),
+            "RIHS01_1957a5bb3cee5da65c4e52e52b65a93df227efce4c20f8458b36e73066ca334b");
+}
+
 TEST(TypeHashes, EqualJazzysForServicesAndTheirRequestsAndResponses) {
   for (const auto& [type, hash] : kJazzyServiceHashes) {
     EXPECT_EQ(rosTypeHash(type), hash) << type;
