@@ -1,0 +1,91 @@
+#pragma once
+/// @file
+/// The reference planner (mlmap_nav's Navigator) as a DDS peer of mlmap_node, the way a ROS 2
+/// planner runs: it reads the node's 2D grid (nav_msgs/OccupancyGrid, `topics.grid`) and ESDF
+/// (mlmap_msgs/VoxelBlock, `topics.esdf_block`), the vehicle's pose (geometry_msgs/PoseStamped,
+/// `topics.pose`, the one the node maps with) and a goal (geometry_msgs/PoseStamped, RViz2's
+/// `/goal_pose`), and publishes its route (nav_msgs/Path) and a setpoint for every pose
+/// (geometry_msgs/PoseStamped, see toSetpointPose()).
+///
+/// Each ESDF block (with the latest grid) becomes a MapSnapshot (plan_messages.h) and is planned
+/// on at once from the latest pose; every pose also updates the plan (periodic and blocked
+/// replans, as in the one-process flight) and gets a setpoint. The Path carries the stamp of the
+/// map state it was planned on (the last mapped frame's stamp), so wall clock - stamp at its
+/// publication is the map-to-plan latency, which the peer records.
+///
+/// Threads: Fast DDS's listener threads only hand the samples over; one thread of the peer's
+/// decodes, plans and publishes. Malformed messages are counted and logged (rate-limited), never
+/// planned on. QoS as ROS 2 publishers and subscribers of these topics use by default (RELIABLE,
+/// VOLATILE, KEEP_LAST 10; the grid TRANSIENT_LOCAL as the node latches it; the pose best-effort
+/// as the node reads it). Frames: W is the node's world frame, metres, seconds.
+
+#include "mlmap/dds/transport/dds_config.h"
+#include "mlmap/nav/navigator.h"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace mlmap::dds {
+
+/// What the peer reads and writes, and how it plans.
+struct PlannerPeerConfig {
+  DdsConfig dds;  ///< participant, namespace, frames: the node's dds section
+  std::string grid_topic = "mlmap/grid";          ///< in: the node's rolling grid (topics.grid)
+  std::string esdf_topic = "mlmap/esdf/block";    ///< in: the node's ESDF (topics.esdf_block)
+  std::string pose_topic = "pose";                ///< in: the vehicle's pose (topics.pose)
+  std::string goal_topic = "goal_pose";           ///< in: the goal (RViz2's default)
+  std::string path_topic = "mlmap/plan";          ///< out: nav_msgs/Path, the route
+  std::string setpoint_topic = "mlmap/setpoint";  ///< out: PoseStamped setpoints
+  nav::NavigatorConfig planner;                   ///< the reference planner
+  /// How the node's ESDF counts unknown voxels (its esdf.unknown_as): the field is computed again
+  /// the same way (the navigation setting: free).
+  UnknownAs esdf_unknown_as = UnknownAs::kFree;
+  /// Gain of the vehicle's position controller [1/s]: setpoints carry the velocity as a lead of
+  /// velocity / gain (toSetpointPose()).
+  double position_gain_per_s = 1.5;
+  std::optional<Eigen::Vector3d> goal_W;  ///< a goal from the start (else wait for goal_topic)
+};
+
+/// What the peer did.
+struct PlannerPeerStats {
+  std::uint64_t maps = 0;       ///< ESDF blocks planned on
+  std::uint64_t grids = 0;      ///< grids received
+  std::uint64_t poses = 0;      ///< poses received
+  std::uint64_t goals = 0;      ///< goals taken
+  std::uint64_t paths = 0;      ///< Paths published
+  std::uint64_t setpoints = 0;  ///< setpoints published
+  std::uint64_t rejected = 0;   ///< malformed messages (not planned on)
+  std::string last_rejection;   ///< why the last one was rejected
+  bool reached = false;         ///< the last pose was at the goal
+  /// Per planned ESDF block: wall clock at the Path's publication - the map state's stamp [ms].
+  std::vector<double> map_to_plan_ms;
+  /// Per planned ESDF block: wall clock at its arrival - the map state's stamp [ms].
+  std::vector<double> map_arrival_ms;
+};
+
+/// The planner peer; runs from construction to destruction.
+class PlannerPeer {
+ public:
+  /// Joins the DDS graph (participant "mlmap_planner_peer"), creates the readers and writers and
+  /// starts planning. Throws std::runtime_error when an entity cannot be created,
+  /// std::invalid_argument for a bad configuration.
+  explicit PlannerPeer(const PlannerPeerConfig& config);
+  /// Stops the thread and leaves the graph.
+  ~PlannerPeer();
+  PlannerPeer(const PlannerPeer&) = delete;
+  PlannerPeer& operator=(const PlannerPeer&) = delete;
+
+  /// A copy of the statistics so far (thread-safe).
+  [[nodiscard]] PlannerPeerStats stats() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace mlmap::dds
