@@ -9,6 +9,9 @@
 // x wall time), poses included, so faster flights stay consistent. --prerender renders and
 // encodes every frame before streaming, so a slow simulator cannot delay the frames.
 //
+// --closed-loop flies the simulated vehicle through a planner's setpoints instead, in a world of
+// nav_worlds (mlmap_dds_sim's flyClosedLoop(); docs/planners.md, "Over DDS").
+//
 // Clouds are offered with data-sharing unless dds.data_sharing is false: a same-host mlmap_node
 // then reads them in this process's shared memory (see createDataSharingCloudWriter()). Exit
 // status 1 when a frame could not be written.
@@ -24,6 +27,8 @@
 #include "mlmap/datasets/frame_directory.h"
 #include "mlmap/datasets/frame_source.h"
 #include "mlmap/datasets/world_yaml.h"
+#include "mlmap/dds/sim/closed_loop_vehicle.h"
+#include "mlmap/dds/sim/sensor_messages.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
 #include "nav_msgs/msg/Odometry_PubSubTypes.h"
@@ -65,6 +70,14 @@ struct Options {
   int max_frames = 0;              ///< --max-frames (0: all)
   bool prerender = false;          ///< --prerender: render and encode every frame first
   apps::SecurityOptions security;  ///< --keystore, --enclave, --security-strategy
+  /// --closed-loop: fly a planner's setpoints in this world (forest, rooms, paper; "": stream)
+  std::string closed_loop;
+  unsigned world_seed = 21;                       ///< --world-seed
+  double forest_density = 0.08;                   ///< --forest-density [trees / m^2]
+  std::vector<double> forest_size_m{14.0, 8.0};   ///< --forest-size [m]
+  double timeout_s = 60.0;                        ///< --timeout: closed-loop flight time limit [s]
+  std::string setpoint_topic = "mlmap/setpoint";  ///< --setpoint-topic
+  std::string goal_topic = "goal_pose";           ///< --goal-topic ("": none)
 };
 
 /// Adds every option of mlmap_sensor_publisher to `app`.
@@ -98,88 +111,20 @@ void addOptions(CLI::App& app, Options& o) {
                "render and encode every frame before streaming (benchmarks: the simulator cannot "
                "hold the rate; memory = frames x message size, 4.8 MB per 640x480 cloud)");
   o.security.add(app);
-}
-
-/// An organised cloud (width x height) of float32 x, y, z, intensity (16 bytes per point, as a
-/// depth camera driver publishes it); pixels without a return are NaN (is_dense false).
-mlmap::dds::sensor_msgs::PointCloud2_ organisedCloud(const DepthFrame& frame, double stamp_s,
-                                                     const std::string& frame_id) {
-  mlmap::dds::sensor_msgs::PointCloud2_ msg;
-  msg.header_().stamp_(mlmap::dds::toRosTime(stamp_s));
-  msg.header_().frame_id_(frame_id);
-  const PinholeIntrinsics& k = frame.intrinsics;
-  msg.width_(static_cast<std::uint32_t>(k.width));
-  msg.height_(static_cast<std::uint32_t>(k.height));
-  const char* names[] = {"x", "y", "z", "intensity"};
-  for (std::uint32_t i = 0; i < 4; ++i) {
-    mlmap::dds::sensor_msgs::PointField_ f;
-    f.name_(names[i]);
-    f.offset_(4 * i);
-    f.datatype_(7);  // FLOAT32
-    f.count_(1);
-    msg.fields_().push_back(f);
-  }
-  msg.is_bigendian_(false);
-  msg.point_step_(16);
-  msg.row_step_(16u * msg.width_());
-  msg.is_dense_(false);
-  std::vector<std::uint8_t>& data = msg.data_();
-  data.resize(static_cast<std::size_t>(msg.row_step_()) * msg.height_());
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  std::size_t i = 0;
-  for (int v = 0; v < k.height; ++v) {
-    for (int u = 0; u < k.width; ++u, ++i) {
-      const double z = frame.encoding == DepthEncoding::kFloat32Metres ? frame.depth_m[i]
-                                                                       : frame.depth_mm[i] * 1e-3;
-      float p[4] = {nan, nan, nan, nan};
-      if (std::isfinite(z) && z > 0.0 &&
-          !(frame.encoding == DepthEncoding::kUint16Millimetres && frame.depth_mm[i] == 65535)) {
-        p[0] = static_cast<float>((u - k.cx) * z / k.fx);
-        p[1] = static_cast<float>((v - k.cy) * z / k.fy);
-        p[2] = static_cast<float>(z);
-        p[3] = static_cast<float>(z);
-      }
-      std::memcpy(data.data() + 16 * i, p, sizeof(p));
-    }
-  }
-  return msg;
-}
-
-/// The depth image of `frame` (16UC1 millimetres or 32FC1 metres, as it was captured).
-mlmap::dds::sensor_msgs::Image_ depthImage(const DepthFrame& frame, double stamp_s,
-                                           const std::string& frame_id) {
-  mlmap::dds::sensor_msgs::Image_ msg;
-  msg.header_().stamp_(mlmap::dds::toRosTime(stamp_s));
-  msg.header_().frame_id_(frame_id);
-  msg.width_(static_cast<std::uint32_t>(frame.intrinsics.width));
-  msg.height_(static_cast<std::uint32_t>(frame.intrinsics.height));
-  msg.is_bigendian_(0);
-  const bool mm = frame.encoding == DepthEncoding::kUint16Millimetres;
-  msg.encoding_(mm ? "16UC1" : "32FC1");
-  msg.step_(msg.width_() * (mm ? 2u : 4u));
-  const std::size_t bytes = static_cast<std::size_t>(msg.step_()) * msg.height_();
-  msg.data_().resize(bytes);
-  std::memcpy(msg.data_().data(),
-              mm ? static_cast<const void*>(frame.depth_mm.data())
-                 : static_cast<const void*>(frame.depth_m.data()),
-              bytes);
-  return msg;
-}
-
-/// The CameraInfo of a pinhole camera without distortion.
-mlmap::dds::sensor_msgs::CameraInfo_ cameraInfo(const PinholeIntrinsics& k, double stamp_s,
-                                                const std::string& frame_id) {
-  mlmap::dds::sensor_msgs::CameraInfo_ msg;
-  msg.header_().stamp_(mlmap::dds::toRosTime(stamp_s));
-  msg.header_().frame_id_(frame_id);
-  msg.width_(static_cast<std::uint32_t>(k.width));
-  msg.height_(static_cast<std::uint32_t>(k.height));
-  msg.distortion_model_("plumb_bob");
-  msg.d_(std::vector<double>(5, 0.0));
-  msg.k_({k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1});
-  msg.r_({1, 0, 0, 0, 1, 0, 0, 0, 1});
-  msg.p_({k.fx, 0, k.cx, 0, 0, k.fy, k.cy, 0, 0, 0, 1, 0});
-  return msg;
+  app.add_option("--closed-loop", o.closed_loop,
+                 "fly the simulated vehicle through a planner's setpoints in this world of "
+                 "nav_worlds (forest, rooms or paper) instead of streaming a scenario")
+      ->check(CLI::IsMember({"forest", "rooms", "paper"}));
+  app.add_option("--world-seed", o.world_seed, "seed of the --closed-loop world");
+  app.add_option("--forest-density", o.forest_density, "trees per m^2 of a forest world")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--forest-size", o.forest_size_m, "x and y extent of a forest world [m]")
+      ->expected(2);
+  app.add_option("--timeout", o.timeout_s, "closed loop: seconds to reach the goal")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--setpoint-topic", o.setpoint_topic, "closed loop: the planner's setpoints");
+  app.add_option("--goal-topic", o.goal_topic,
+                 "closed loop: where the world's goal is published once a second (\"\": not)");
 }
 
 /// One frame ready to send: its sensor message(s), stamped at send time (setStamp()).
@@ -222,10 +167,10 @@ struct SensorFeed {
     prepared.T_W_B = frame.T_W_B;
     if (simulator != nullptr) prepared.flight_s = simulator->frameTime(static_cast<std::size_t>(i));
     if (depth_mode) {
-      prepared.info = cameraInfo(frame.intrinsics, 0.0, sensor_frame);
-      prepared.image = depthImage(frame, 0.0, sensor_frame);
+      prepared.info = mlmap::dds::cameraInfo(frame.intrinsics, 0.0, sensor_frame);
+      prepared.image = mlmap::dds::depthImage(frame, 0.0, sensor_frame);
     } else {
-      prepared.cloud = organisedCloud(frame, 0.0, sensor_frame);
+      prepared.cloud = mlmap::dds::organisedCloud(frame, 0.0, sensor_frame);
     }
     return prepared;
   }
@@ -557,6 +502,47 @@ int finish(const StreamStats& s, bool prerender) {
   return s.failed > 0 ? 1 : 0;
 }
 
+/// The --closed-loop world.
+nav::NavWorld closedLoopWorld(const Options& o) {
+  if (o.closed_loop == "rooms") return nav::roomsWorld(o.world_seed, 2);
+  if (o.closed_loop == "paper") return nav::paperRoomWorld(o.world_seed);
+  return nav::forestWorld(o.world_seed, o.forest_density,
+                          Eigen::Vector2d(o.forest_size_m[0], o.forest_size_m[1]));
+}
+
+/// Flies the closed loop; returns the exit status (0: the goal reached without collision).
+int runClosedLoop(const Options& o, const mlmap::dds::NodeConfig& config) {
+  mlmap::dds::ClosedLoopOptions loop;
+  loop.dds = config.dds;
+  loop.cloud_topic = config.dds.topics.cloud;
+  loop.pose_topic = config.dds.topics.pose;
+  if (loop.cloud_topic.empty() || loop.pose_topic.empty()) {
+    throw std::runtime_error("--closed-loop needs dds.topics.cloud and dds.topics.pose");
+  }
+  loop.setpoint_topic = o.setpoint_topic;
+  loop.goal_topic = o.goal_topic;
+  loop.T_B_S = config.map.sensor.T_B_S();
+  loop.flight.timeout_s = o.timeout_s;
+  if (o.rate_hz > 0) loop.flight.camera_rate_hz = o.rate_hz;
+  loop.wait_s = o.wait_s;
+  const nav::NavWorld world = closedLoopWorld(o);
+  spdlog::info("closed loop in {}: from ({:.1f}, {:.1f}) to ({:.1f}, {:.1f}), setpoints on {}",
+               world.name, world.start_W.x(), world.start_W.y(), world.goal_W.x(), world.goal_W.y(),
+               o.setpoint_topic);
+  const mlmap::dds::ClosedLoopResult r =
+      mlmap::dds::flyClosedLoop(world, loop, [] { return apps::stopRequested(); });
+  if (!r.matched) {
+    spdlog::error("no mapping node or planner found within {} s", o.wait_s);
+    return 1;
+  }
+  spdlog::info(
+      "closed loop: reached {}, collisions {}, min clearance {:.2f} m, time {:.1f} s, path "
+      "{:.1f} m, frames {}, setpoints {} ({} rejected), late steps {}",
+      r.reached ? 1 : 0, r.collisions, r.min_clearance_m, r.time_s, r.path_length_m, r.frames,
+      r.setpoints, r.rejected_setpoints, r.late_steps);
+  return r.reached && r.collisions == 0 ? 0 : 1;
+}
+
 /// Opens the source, waits for the subscribers and publishes; returns the exit status (1: an
 /// error, logged, or a frame that could not be written).
 int run(const Options& o) {
@@ -564,6 +550,7 @@ int run(const Options& o) {
   try {
     mlmap::dds::NodeConfig config = mlmap::dds::nodeConfigOrDefaults(o.config_path);
     o.security.apply(&config.dds.security);
+    if (!o.closed_loop.empty()) return runClosedLoop(o, config);
     const SensorFeed source = openSource(o, config);
     const Writers writers = createWriters(config.dds, source, config.map.sensor.T_B_S());
     const int subscribers = waitForSubscribers(writers, o.wait_s);
