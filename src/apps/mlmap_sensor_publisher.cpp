@@ -27,6 +27,7 @@
 #include "mlmap/datasets/frame_directory.h"
 #include "mlmap/datasets/frame_source.h"
 #include "mlmap/datasets/world_yaml.h"
+#include "mlmap/pipeline/engine_stats.h"
 #include "mlmap/dds/sim/closed_loop_vehicle.h"
 #include "mlmap/dds/sim/sensor_messages.h"
 
@@ -540,6 +541,11 @@ int runClosedLoop(const Options& o, const mlmap::dds::NodeConfig& config) {
       "{:.1f} m, frames {}, setpoints {} ({} rejected), late steps {}",
       r.reached ? 1 : 0, r.collisions, r.min_clearance_m, r.time_s, r.path_length_m, r.frames,
       r.setpoints, r.rejected_setpoints, r.late_steps);
+  if (!r.capture_to_write_ms.empty()) {
+    const TimingSummary w = summarizeTimings(r.capture_to_write_ms);
+    spdlog::info("a frame's capture stamp to its write: median {:.2f} ms, p99 {:.2f} ms",
+                 w.median_ms, w.p99_ms);
+  }
   return r.reached && r.collisions == 0 ? 0 : 1;
 }
 

@@ -171,6 +171,7 @@ ClosedLoopResult flyClosedLoop(const nav::NavWorld& world, const ClosedLoopOptio
       camera.render(world.world, state.T_W_B() * options.T_B_S, t, &frame);
       sensor_msgs::PointCloud2_ cloud = organisedCloud(frame, stamp_s, frames.sensor);
       if (e.cloud->write(&cloud)) ++result.frames;
+      result.capture_to_write_ms.push_back(1e3 * (wallClockNow_s() - stamp_s));
     }
     {
       const std::lock_guard<std::mutex> lock(mailbox.mutex);

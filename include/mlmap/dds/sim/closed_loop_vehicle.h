@@ -54,6 +54,9 @@ struct ClosedLoopResult {
   std::uint64_t rejected_setpoints = 0;  ///< malformed setpoints (not flown)
   int late_steps = 0;                    ///< control steps that started more than one step late
   std::vector<Eigen::Vector3d> trajectory_W;  ///< one position per control step
+  /// Per frame: wall clock from its capture stamp to the return of the cloud's write (the
+  /// simulated driver's share of any latency measured from the stamp: rendering, encoding) [ms].
+  std::vector<double> capture_to_write_ms;
 };
 
 /// Flies `world` from its start until the goal is reached, the timeout passes or `stop` returns
