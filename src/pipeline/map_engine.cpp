@@ -46,7 +46,10 @@ MapEngine::MapEngine(const MapConfig& config, LogSink log, EngineObservers obser
       local_(config_.local_map, config_.log_odds),
       global_(config_.local_map.submap_cells(), config_.local_map.resolution_m),
       log_odds_model_(config_.log_odds),
-      planning_(config_, config_.pipeline.threaded && config_.pipeline.planning_layers),
+      planning_(config_, config_.pipeline.threaded && config_.pipeline.planning_layers,
+                [this](std::uint64_t frame, double stamp_s) {
+                  if (observers_.esdf) observers_.esdf(frame, stamp_s);
+                }),
       priors_(log_odds_model_) {
   if (config_.pipeline.threaded) {
     stages_ = std::make_unique<StageThreads>(

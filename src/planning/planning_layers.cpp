@@ -15,12 +15,14 @@ using Clock = SteadyClock;
 
 }  // namespace
 
-PlanningLayers::PlanningLayers(const MapConfig& config, bool own_thread)
+PlanningLayers::PlanningLayers(const MapConfig& config, bool own_thread,
+                               std::function<void(std::uint64_t, double)> esdf_published)
     : config_(config),
       own_thread_(own_thread && config.esdf.enabled),
       snapshot_(std::make_shared<const MapSnapshot>(nullptr, nullptr, nullptr, 0, 0.0,
                                                     Transform::Identity())),
-      esdf_(config.esdf) {
+      esdf_(config.esdf),
+      esdf_published_(std::move(esdf_published)) {
   if (own_thread_) thread_ = std::thread([this] { planningLoop(); });
 }
 
@@ -423,16 +425,21 @@ void PlanningLayers::planningLoop() {
     const Clock::time_point start = Clock::now();
     PublishedEsdf esdf = computeEsdf(job);
     const double ms = msSince(start);
+    std::uint64_t published_frame = 0;
+    double published_stamp_s = 0.0;
     {
       // The newest window and grid with the new field.
       std::shared_ptr<const MapSnapshot> old;
       std::lock_guard<std::mutex> lock(snapshot_mutex_);
       const MapSnapshot& s = *snapshot_;
+      published_frame = s.frame();
+      published_stamp_s = s.stamp_s();
       old = std::exchange(
           snapshot_, std::make_shared<const MapSnapshot>(
                          s.windowPtr(), s.gridPtr(), std::move(esdf.map), s.frame(), s.stamp_s(),
                          s.T_W_B(), job.frame, std::move(esdf.query_grid)));
     }
+    if (esdf_published_) esdf_published_(published_frame, published_stamp_s);
     {
       std::lock_guard<std::mutex> lock(stats_mutex_);
       ++stats_.esdf_updates;

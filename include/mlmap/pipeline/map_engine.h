@@ -56,9 +56,13 @@ struct EngineObservers {
   /// After the snapshot of every mapped frame is published (local-global thread, before
   /// `global`): from then on snapshot() returns it or a newer one. `frame` is its
   /// MapSnapshot::frame(). Lets a publisher wake as soon as there is something new instead of
-  /// polling. (A snapshot the planning thread republishes with a new ESDF is not announced.)
+  /// polling (a snapshot the planning thread republishes with a new ESDF: `esdf`).
   /// Never called when pipeline.planning_layers is false: no snapshot is made.
   std::function<void(std::uint64_t frame, double stamp_s)> snapshot;
+  /// After the planning thread (pipeline.threaded) republished the latest snapshot with a new
+  /// ESDF (planning thread); `frame` and `stamp_s` are that snapshot's. Without it a publisher
+  /// woken by `snapshot` finds the ESDF only when it looks again.
+  std::function<void(std::uint64_t frame, double stamp_s)> esdf;
 };
 
 /// Owns the three layers. Submit frames from one thread; read the layers after flush().

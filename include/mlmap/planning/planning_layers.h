@@ -20,6 +20,7 @@
 
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <thread>
@@ -53,7 +54,11 @@ struct PlanningStats {
 /// See the file comment.
 class PlanningLayers {
  public:
-  PlanningLayers(const MapConfig& config, bool own_thread);
+  /// `esdf_published`, when given, is called on the planning thread each time it has published
+  /// a snapshot with a new ESDF (`frame`, `stamp_s`: that snapshot's), so that a reader can
+  /// wake then instead of polling.
+  PlanningLayers(const MapConfig& config, bool own_thread,
+                 std::function<void(std::uint64_t frame, double stamp_s)> esdf_published = {});
   ~PlanningLayers();
   PlanningLayers(const PlanningLayers&) = delete;
   PlanningLayers& operator=(const PlanningLayers&) = delete;
@@ -174,6 +179,7 @@ class PlanningLayers {
   bool busy_ = false;
   bool stopping_ = false;
   EsdfJob job_;
+  std::function<void(std::uint64_t frame, double stamp_s)> esdf_published_;
   std::thread thread_;
 };
 

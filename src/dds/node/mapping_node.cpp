@@ -219,6 +219,9 @@ struct MappingNode::Impl {
       last_snapshot_frame = frame;
       mailbox.announceSnapshot();
     };
+    // The ESDF, made on the planning thread after the snapshot, goes out as soon as it is made
+    // (not at the publishing thread's next poll, up to 20 ms later).
+    observers.esdf = [this](std::uint64_t, double) { mailbox.announceSnapshot(); };
     return std::make_unique<MapEngine>(
         map_config,
         [this](LogLevel level, const std::string& m) {
