@@ -102,5 +102,39 @@ TEST(PlanningConcurrency, PlannerThreadsQueryWhileTheMapSlides) {
   ASSERT_NE(last->esdf(), nullptr);
 }
 
+// The esdf observer announces every ESDF the planning thread publishes, after the snapshot holding
+// it is published: the snapshot read in the call already has a field at least that new.
+TEST(PlanningConcurrency, EsdfObserverAnnouncesEachPublishedField) {
+  MapConfig config = test::smallWindowConfig();
+  config.pipeline.threaded = true;
+  config.pipeline.input_queue_capacity = 1000;
+  config.esdf.max_rate_hz = 0.0;
+  std::atomic<int> calls{0};
+  std::atomic<int> failures{0};
+  std::atomic<std::uint64_t> last_frame{0};
+  MapEngine* engine_seen = nullptr;
+  std::atomic<bool> ready{false};
+  EngineObservers observers;
+  observers.esdf = [&](std::uint64_t frame, double) {
+    calls.fetch_add(1);
+    if (frame < last_frame.load()) failures.fetch_add(1);  // announced in order
+    last_frame.store(frame);
+    if (ready.load()) {
+      const std::shared_ptr<const MapSnapshot> snap = engine_seen->snapshot();
+      if (snap->esdf() == nullptr || snap->frame() < frame) failures.fetch_add(1);
+    }
+  };
+  MapEngine engine(config, {}, observers);
+  engine_seen = &engine;
+  ready.store(true);
+  test::flyCheap(engine, 0, 12);
+  engine.flush();
+  EXPECT_GE(calls.load(), 1);
+  EXPECT_EQ(failures.load(), 0);
+  const PlanningStats planning = engine.stats().planning;
+  EXPECT_EQ(static_cast<std::uint64_t>(calls.load()), planning.esdf_updates);  // every one
+  EXPECT_GE(last_frame.load(), planning.esdf_frame);                           // the last one too
+}
+
 }  // namespace
 }  // namespace mlmap
