@@ -82,7 +82,7 @@ TEST(PlanMessages, MalformedEsdfBlocksAreRejected) {
   const mlmap_msgs::VoxelBlock_ good = toVoxelBlock(field, 1.0, "map");
   OccupancyBox out = randomBox(8);
   const OccupancyBox before = out;
-  auto expect_rejected = [&](mlmap_msgs::VoxelBlock_ m, DecodeError error) {
+  auto expect_rejected = [&](const mlmap_msgs::VoxelBlock_& m, DecodeError error) {
     const DecodeStatus s = decodeEsdfBlock(m, &out);
     EXPECT_EQ(s.error, error) << s.detail;
     EXPECT_FALSE(s.detail.empty());
