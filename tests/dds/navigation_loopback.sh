@@ -4,8 +4,9 @@
 # -> mlmap_planner_peer (the reference planner on the node's grid and ESDF) -> setpoints -> the
 # vehicle. A small forest (the one the one-process closed-loop test flies) at 0.2 m.
 #   navigation_loopback.sh <bin dir> <out dir> <domain id>
-# Passes when the vehicle reaches the goal without touching anything (ground truth) and the
-# planner planned on the node's maps (its map-to-plan line).
+# Passes when the vehicle reaches the goal without touching anything (ground truth), and the
+# planner planned on the node's maps (its map-to-plan line), rejected no message and saw the
+# vehicle at the goal.
 set -uo pipefail
 bin=$1 out=$2
 export ROS_DOMAIN_ID=$3
@@ -44,4 +45,6 @@ grep -q "closed loop: reached 1, collisions 0," "$out/publisher.log" ||
 [ $pub_rc -eq 0 ] || { echo "FAIL: the sensor publisher failed"; exit 1; }
 grep -q "map-to-plan (over DDS) median" "$out/planner.log" ||
   { echo "FAIL: the planner planned on no map of the node"; exit 1; }
+grep -q "0 rejected, reached 1" "$out/planner.log" ||
+  { echo "FAIL: the planner rejected a message or never saw the vehicle at the goal"; exit 1; }
 echo "PASS"

@@ -152,11 +152,14 @@ ClosedLoopResult flyClosedLoop(const nav::NavWorld& world, const ClosedLoopOptio
     if (Clock::now() - due > std::chrono::duration<double>(f.control_dt_s)) ++result.late_steps;
     const sim::VehicleState& state = vehicle.state();
     result.time_s = t;
+    const double stamp_s = wall0_s + t;
     if ((state.position_W - world.goal_W).head<2>().norm() <= f.planner.goal_tolerance_m) {
       result.reached = true;
+      // The pose at the goal, so that the planner sees it reached too.
+      geometry_msgs::PoseStamped_ pose = toPoseStamped(state.T_W_B(), stamp_s, frames.world);
+      e.pose->write(&pose);
       break;
     }
-    const double stamp_s = wall0_s + t;
     if (e.goal != nullptr && t >= next_goal_s) {
       next_goal_s += 1.0;
       geometry_msgs::PoseStamped_ goal = goalPose(world.goal_W, stamp_s, frames.world);
