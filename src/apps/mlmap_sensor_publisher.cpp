@@ -98,8 +98,8 @@ void addOptions(CLI::App& app, Options& o) {
   o.security.add(app);
   app.add_option("--closed-loop", o.closed_loop,
                  "fly the simulated vehicle through a planner's setpoints in this world of "
-                 "nav_worlds (forest, rooms or paper) instead of streaming a scenario")
-      ->check(CLI::IsMember({"forest", "rooms", "paper"}));
+                 "nav_worlds (forest, rooms, paper or building) instead of streaming a scenario")
+      ->check(CLI::IsMember({"forest", "rooms", "paper", "building"}));
   app.add_option("--world-seed", o.world_seed, "seed of the --closed-loop world");
   app.add_option("--forest-density", o.forest_density, "trees per m^2 of a forest world")
       ->check(CLI::PositiveNumber);
@@ -203,6 +203,7 @@ int finish(const StreamStats& s, bool prerender) {
 nav::NavWorld closedLoopWorld(const Options& o) {
   if (o.closed_loop == "rooms") return nav::roomsWorld(o.world_seed, 2);
   if (o.closed_loop == "paper") return nav::paperRoomWorld(o.world_seed);
+  if (o.closed_loop == "building") return nav::buildingFloorWorld(o.world_seed);
   return nav::forestWorld(o.world_seed, o.forest_density,
                           Eigen::Vector2d(o.forest_size_m[0], o.forest_size_m[1]));
 }
