@@ -50,6 +50,7 @@ PlanningGrid inflateGrid(const ProjectedGrid& grid, double radius_m, UnknownAs u
   out.width = grid.width + 2 * margin_cells;
   out.height = grid.height + 2 * margin_cells;
   out.blocked.assign(static_cast<std::size_t>(out.width) * static_cast<std::size_t>(out.height), 0);
+  out.solid.assign(out.blocked.size(), 0);
   // The disc of cell offsets whose centres lie within radius_m of a cell's centre.
   const double r_cells = std::max(radius_m, 0.0) / grid.resolution_m;
   const int reach = static_cast<int>(std::floor(r_cells + 1e-9));
@@ -70,6 +71,7 @@ PlanningGrid inflateGrid(const ProjectedGrid& grid, double radius_m, UnknownAs u
       const bool unknown_cell = value < 0;  // -1, and any negative value
       const bool occupied_cell = value > occupied_threshold;
       if (!(unknown_cell ? unknown_blocks : occupied_cell)) continue;
+      out.solid[indexOf(out, x, y)] = 1;
       for (const Eigen::Vector2i& d : disc) {
         const int nx = x + d.x();
         const int ny = y + d.y();
@@ -113,7 +115,9 @@ GridPath searchGrid(const PlanningGrid& grid, const Eigen::Vector2i& start,
       const int ny = y + kDy[k];
       if (!grid.inside(nx, ny)) continue;
       if (!from_blocked && grid.isBlocked(nx, ny)) continue;
+      if (grid.isSolid(nx, ny)) continue;
       const bool diagonal = k >= 4;
+      if (diagonal && (grid.isSolid(nx, y) || grid.isSolid(x, ny))) continue;
       if (diagonal && !from_blocked && (grid.isBlocked(nx, y) || grid.isBlocked(x, ny))) continue;
       const double step = (diagonal ? kSqrt2 : 1.0) * (from_blocked ? kEscapeCostFactor : 1.0);
       const std::size_t ni = indexOf(grid, nx, ny);

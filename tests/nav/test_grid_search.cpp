@@ -76,6 +76,8 @@ double bruteShortest(const PlanningGrid& g, const Eigen::Vector2i& s, const Eige
         if (g.isBlocked(nx, ny) && !from_blocked) continue;
         if (dx != 0 && dy != 0 && !from_blocked && (g.isBlocked(nx, y) || g.isBlocked(x, ny)))
           continue;
+        if (g.isSolid(nx, ny)) continue;  // never into an obstacle's own cell, even escaping
+        if (dx != 0 && dy != 0 && (g.isSolid(nx, y) || g.isSolid(x, ny))) continue;
         const double step = (dx != 0 && dy != 0 ? std::sqrt(2.0) : 1.0) * g.resolution_m *
                             (from_blocked ? kEscapeCostFactor : 1.0);
         double& d = dist[static_cast<std::size_t>(ny * g.width + nx)];
@@ -197,15 +199,51 @@ TEST(GridSearch, AStarLeavesAnInflatedZoneByTheShortestWayThenStaysOut) {
     ASSERT_EQ(path.found, std::isfinite(reference));
     if (!path.found) continue;
     EXPECT_NEAR(path.length_m, reference, 1e-9);
-    // Once out of the inflated zone, the path never enters it again.
+    // Once out of the inflated zone, the path never enters it again; it never enters an
+    // occupied cell (the start excepted), nor cuts the corner of one.
     bool out = false;
-    for (const Eigen::Vector2i& c : path.cells) {
+    for (std::size_t i = 0; i < path.cells.size(); ++i) {
+      const Eigen::Vector2i& c = path.cells[i];
       if (!p.isBlocked(c.x(), c.y())) out = true;
       if (out) {
         ASSERT_FALSE(p.isBlocked(c.x(), c.y())) << "trial " << trial;
       }
+      if (i == 0) continue;
+      ASSERT_NE(g.at(c.x(), c.y()), ProjectedGrid::kOccupied) << "trial " << trial;
+      const Eigen::Vector2i& b = path.cells[i - 1];
+      if (b.x() == c.x() || b.y() == c.y()) continue;
+      ASSERT_NE(g.at(c.x(), b.y()), ProjectedGrid::kOccupied) << "trial " << trial;
+      ASSERT_NE(g.at(b.x(), c.y()), ProjectedGrid::kOccupied) << "trial " << trial;
     }
   }
+}
+
+TEST(GridSearch, AnEscapeFromBesideAWallGoesRoundByTheDoorNotThroughTheWall) {
+  // A room's east wall (one cell thick, x = 20) with a door at its north end; the start is in
+  // the inflated zone beside the wall, the goal just behind it. Through the wall: 1.4 m of
+  // escape steps (5.6 m at 4x); round by the door: about 12 m. building_s20 hovered at the wall
+  // for 150 s on such a route, which the local planner could never commit to.
+  ProjectedGrid g;
+  g.resolution_m = 0.2;
+  g.width = 40;
+  g.height = 40;
+  g.cells.assign(1600, ProjectedGrid::kFree);
+  for (int y = 0; y < 30; ++y)
+    g.cells[static_cast<std::size_t>(y * 40 + 20)] = ProjectedGrid::kOccupied;
+  const PlanningGrid p = inflateGrid(g, 0.6, UnknownAs::kFree);
+  const Eigen::Vector2i start(18, 10);  // 0.4 m from the wall's cell
+  const Eigen::Vector2i goal(24, 10);
+  ASSERT_TRUE(p.isBlocked(start.x(), start.y()));
+  const GridPath path = searchGrid(p, start, goal);
+  ASSERT_TRUE(path.found);
+  for (const Eigen::Vector2i& c : path.cells)
+    ASSERT_NE(g.at(c.x(), c.y()), ProjectedGrid::kOccupied);
+  EXPECT_GT(path.length_m, 8.0);
+  EXPECT_NEAR(path.length_m, bruteShortest(p, start, goal), 1e-9);
+  // Without the door the goal cannot be reached (before: through the wall).
+  for (int y = 30; y < 40; ++y)
+    g.cells[static_cast<std::size_t>(y * 40 + 20)] = ProjectedGrid::kOccupied;
+  EXPECT_FALSE(searchGrid(inflateGrid(g, 0.6, UnknownAs::kFree), start, goal).found);
 }
 
 TEST(GridSearch, LineFreeAgreesWithDenseSampling) {

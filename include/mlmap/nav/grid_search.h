@@ -27,6 +27,9 @@ struct PlanningGrid {
   int width = 0;                                       ///< cells along x
   int height = 0;                                      ///< cells along y
   std::vector<std::uint8_t> blocked;  ///< 1: the vehicle's centre may not be there; 0: it may
+  /// 1: the grid marks the cell itself as an obstacle (see inflateGrid()); no step enters it, not
+  /// even one escaping an inflated zone, so that an escape never crosses a wall. Empty: none.
+  std::vector<std::uint8_t> solid;
 
   /// True when cell (x, y) lies in the grid.
   [[nodiscard]] bool inside(int x, int y) const {
@@ -37,6 +40,11 @@ struct PlanningGrid {
     return blocked[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
                    static_cast<std::size_t>(x)] != 0;
   }
+  /// True when cell (x, y), which must lie inside, is solid (false when `solid` is empty).
+  [[nodiscard]] bool isSolid(int x, int y) const {
+    return !solid.empty() && solid[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+                                   static_cast<std::size_t>(x)] != 0;
+  }
   /// The cell holding the world point p_W (may lie outside the grid).
   [[nodiscard]] Eigen::Vector2i cellOf(const Eigen::Vector2d& p_W) const;
   /// Centre of cell (x, y) in W [m].
@@ -45,9 +53,10 @@ struct PlanningGrid {
 
 /// The cells of `grid` whose centre lies within `radius_m` of the centre of an occupied cell (and
 /// of an unknown one when `unknown` is UnknownAs::kOccupied): where the centre of a disc of that
-/// radius would touch what the grid marks. A cell counts as occupied when its value is above
-/// `occupied_threshold` (50: nav_msgs' convention for 0..100 values). The result has the layout
-/// of `grid` grown by `margin_cells` on every side (the margin is unknown space).
+/// radius would touch what the grid marks; `solid` holds the marked cells themselves. A cell counts
+/// as occupied when its value is above `occupied_threshold` (50: nav_msgs' convention for 0..100
+/// values). The result has the layout of `grid` grown by `margin_cells` on every side (the margin
+/// is unknown space).
 [[nodiscard]] PlanningGrid inflateGrid(const ProjectedGrid& grid, double radius_m,
                                        UnknownAs unknown, int margin_cells = 0,
                                        int occupied_threshold = 50);
@@ -67,9 +76,13 @@ inline constexpr double kEscapeCostFactor = 4.0;
 /// Steps: to the 8 neighbours, costing resolution_m (straight) or sqrt(2) resolution_m
 /// (diagonal). A step may not enter a blocked cell, unless it leaves a blocked cell (the start
 /// may lie in an inflated zone, e.g. after a gust: the path then escapes it); such a step costs
-/// kEscapeCostFactor times as much, so the path leaves the zone by the shortest way. A diagonal
-/// step from a free cell may not cut the corner of a blocked cell (both cells it passes by must
-/// be free). Not found when start or goal lies outside the grid, or the goal is unreachable.
+/// kEscapeCostFactor times as much, so the path leaves the zone by the shortest way. No step
+/// enters a solid cell nor cuts the corner of one, escaping or not: an escape from the zone
+/// beside a wall never crosses the wall (a start stuck to the wall with the goal behind it would
+/// otherwise go through: 1 m of escape steps is cheaper than the way round by a door). A
+/// diagonal step from a free cell may not cut the corner of a blocked cell (both cells it passes
+/// by must be free). Not found when start or goal lies outside the grid, or the goal is
+/// unreachable.
 [[nodiscard]] GridPath searchGrid(const PlanningGrid& grid, const Eigen::Vector2i& start,
                                   const Eigen::Vector2i& goal);
 
