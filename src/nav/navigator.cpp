@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <ctime>
+#include <limits>
 
 namespace mlmap::nav {
 
@@ -64,11 +65,72 @@ bool Navigator::reached(const Eigen::Vector3d& p_W) const {
   return has_goal_ && (p_W.head<2>() - goal_W_.head<2>()).norm() <= config_.goal_tolerance_m;
 }
 
-void Navigator::planRoute(const Eigen::Vector3d& p_W) {
+void Navigator::followGridLayout() {
+  const ProjectedGrid& g = accumulated_.grid();
+  if (g.width == layout_.width && g.height == layout_.height && g.origin_W == layout_.origin_W)
+    return;
+  constexpr float kNever = -std::numeric_limits<float>::infinity();
+  const std::size_t n = static_cast<std::size_t>(g.width) * static_cast<std::size_t>(g.height);
+  std::vector<float> free_s(n, kNever);
+  std::vector<float> hit_s(n, kNever);
+  if (layout_.width > 0) {
+    const int ox =
+        static_cast<int>(std::lround((layout_.origin_W.x() - g.origin_W.x()) / g.resolution_m));
+    const int oy =
+        static_cast<int>(std::lround((layout_.origin_W.y() - g.origin_W.y()) / g.resolution_m));
+    for (int y = 0; y < layout_.height; ++y) {
+      for (int x = 0; x < layout_.width; ++x) {
+        const int nx = x + ox;
+        const int ny = y + oy;
+        if (nx < 0 || ny < 0 || nx >= g.width || ny >= g.height) continue;
+        const std::size_t from = static_cast<std::size_t>(y) * layout_.width + x;
+        const std::size_t to = static_cast<std::size_t>(ny) * g.width + nx;
+        free_s[to] = last_free_s_[from];
+        hit_s[to] = last_hit_s_[from];
+      }
+    }
+  }
+  last_free_s_ = std::move(free_s);
+  last_hit_s_ = std::move(hit_s);
+  layout_.origin_W = g.origin_W;
+  layout_.resolution_m = g.resolution_m;
+  layout_.width = g.width;
+  layout_.height = g.height;
+}
+
+std::ptrdiff_t Navigator::cellIndex(const Eigen::Vector2d& p_W) const {
+  if (layout_.width == 0) return -1;
+  const Eigen::Vector2d u = (p_W - layout_.origin_W) / layout_.resolution_m;
+  const int x = static_cast<int>(std::floor(u.x()));
+  const int y = static_cast<int>(std::floor(u.y()));
+  if (x < 0 || y < 0 || x >= layout_.width || y >= layout_.height) return -1;
+  return static_cast<std::ptrdiff_t>(y) * layout_.width + x;
+}
+
+void Navigator::planRoute(const Eigen::Vector3d& p_W, double time_s) {
   const ProjectedGrid& accumulated = accumulated_.grid();
-  const ProjectedGrid canvas =
+  ProjectedGrid canvas =
       coverPoints(accumulated, {p_W.head<2>(), goal_W_.head<2>()}, config_.planning_margin_m,
                   accumulated.width > 0 ? accumulated.resolution_m : 0.2);
+  if (config_.stale_obstacle_s > 0.0 && accumulated.width > 0) {
+    // Occupied cells that were free before and that no frame has hit lately: unknown.
+    const int ox = static_cast<int>(
+        std::lround((accumulated.origin_W.x() - canvas.origin_W.x()) / canvas.resolution_m));
+    const int oy = static_cast<int>(
+        std::lround((accumulated.origin_W.y() - canvas.origin_W.y()) / canvas.resolution_m));
+    const auto stale = static_cast<float>(time_s - config_.stale_obstacle_s);
+    for (int y = 0; y < accumulated.height; ++y) {
+      for (int x = 0; x < accumulated.width; ++x) {
+        if (accumulated.at(x, y) <= 50) continue;
+        const std::size_t i = static_cast<std::size_t>(y) * accumulated.width + x;
+        if (last_free_s_[i] <= stale && last_hit_s_[i] <= stale &&
+            last_free_s_[i] > -std::numeric_limits<float>::infinity()) {
+          canvas.cells[static_cast<std::size_t>(y + oy) * canvas.width + (x + ox)] =
+              ProjectedGrid::kUnknown;
+        }
+      }
+    }
+  }
   const PlanningGrid grid = inflateGrid(canvas, config_.inflation_m, UnknownAs::kFree);
   const GridPath path =
       searchGrid(grid, grid.cellOf(p_W.head<2>()), grid.cellOf(goal_W_.head<2>()));
@@ -92,11 +154,32 @@ void Navigator::setRecentObstacles(std::vector<Eigen::Vector3d> points_W) {
 PlanReason Navigator::update(const MapSnapshot& map, const Eigen::Vector3d& p_W, double time_s) {
   if (!has_goal_) return PlanReason::kNone;
   const double cpu0 = threadCpu_s();
+  const bool recent_obstacles_new_now = recent_obstacles_new_;
   const bool new_map = map.frame() != last_frame_ || recent_obstacles_new_;
   recent_obstacles_new_ = false;
   PlanReason reason = PlanReason::kNone;
   if (new_map) {
-    if (map.frame() != last_frame_) accumulated_.absorb(map.grid());
+    if (map.frame() != last_frame_) {
+      accumulated_.absorb(map.grid());
+      followGridLayout();
+      const ProjectedGrid& rolling = map.grid();
+      for (int y = 0; y < rolling.height; ++y) {
+        for (int x = 0; x < rolling.width; ++x) {
+          const int v = rolling.at(x, y);
+          if (v < 0 || v > 50) continue;
+          const std::ptrdiff_t i = cellIndex(
+              rolling.origin_W +
+              (Eigen::Vector2d(x, y) + Eigen::Vector2d::Constant(0.5)) * rolling.resolution_m);
+          if (i >= 0) last_free_s_[static_cast<std::size_t>(i)] = static_cast<float>(time_s);
+        }
+      }
+    }
+    if (recent_obstacles_new_now) {
+      for (const Eigen::Vector3d& q : recent_obstacles_W_) {
+        const std::ptrdiff_t i = cellIndex(q.head<2>());
+        if (i >= 0) last_hit_s_[static_cast<std::size_t>(i)] = static_cast<float>(time_s);
+      }
+    }
     last_frame_ = map.frame();
     // The rest of the committed segment, from the vehicle on, under the new map.
     const std::vector<Eigen::Vector3d> committed = plan_.committedPoints();
@@ -113,7 +196,7 @@ PlanReason Navigator::update(const MapSnapshot& map, const Eigen::Vector3d& p_W,
     reason = PlanReason::kPeriodic;
   }
   if (reason == PlanReason::kNone) return reason;
-  planRoute(p_W);
+  planRoute(p_W, time_s);
   const double cpu1 = threadCpu_s();
   plan_ = planLocal(map, config_.local, route_W_, p_W, &recent_obstacles_W_);
   evade_W_ = evadeVelocity(map, p_W);

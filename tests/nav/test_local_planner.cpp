@@ -227,6 +227,61 @@ TEST(Navigator, TheLatestFramesPointsBlockTheSegmentBeforeTheMapShowsThem) {
   EXPECT_FALSE(navigator.cautious());
 }
 
+TEST(Navigator, ARouteTriesAgainWhereSomethingMovedInThatNoFrameHasHitLately) {
+  // A wall across the whole window at x = 3 m: in the first snapshot already (static), or only
+  // from the second on, where the first saw free space (a person's trail left in the map).
+  const auto wall = [](std::uint64_t frame) {
+    return snapshotOf(
+        [](const VoxelIndex& g) {
+          return freeExcept(g,
+                            [](const Eigen::Vector3d& c) { return std::abs(c.x() - 3.1) < 0.1; });
+        },
+        frame);
+  };
+  const auto clear = snapshotOf(
+      [](const VoxelIndex& g) {
+        return freeExcept(g, [](const Eigen::Vector3d&) { return false; });
+      },
+      1);
+  const Eigen::Vector3d start(0.0, 0.1, 1.1);
+  const auto straight = [](const Navigator& n) {
+    for (const Eigen::Vector3d& p : n.route_W()) {
+      if (std::abs(p.y() - 0.1) > 0.5) return false;
+    }
+    return !n.route_W().empty();
+  };
+  NavigatorConfig config;
+  Navigator moved(config);
+  moved.setGoal({6.0, 0.1, 1.1});
+  moved.update(*clear, start, 0.0);
+  EXPECT_TRUE(straight(moved));
+  moved.update(*wall(2), start, 0.1);
+  EXPECT_FALSE(straight(moved));  // round the wall, outside the window (unknown: free)
+  // The frame's points hit the wall: it is there; not tried again while they do.
+  std::vector<Eigen::Vector3d> hits;
+  for (double y = -1.0; y <= 1.0; y += 0.2) hits.emplace_back(3.05, y + 0.05, 1.1);
+  moved.setRecentObstacles(hits);
+  moved.update(*wall(3), start, 1.5);
+  EXPECT_FALSE(straight(moved));
+  moved.setRecentObstacles({});
+  moved.update(*wall(4), start, 1.5 + 0.9 * config.stale_obstacle_s);
+  EXPECT_FALSE(straight(moved));
+  // No hit for stale_obstacle_s: the route tries the wall again; the committed segment still
+  // stops before it (the map shows it occupied).
+  moved.update(*wall(5), start, 1.5 + 1.1 * config.stale_obstacle_s);
+  EXPECT_TRUE(straight(moved));
+  ASSERT_GT(moved.localPlan().committed, 1u);
+  for (const Eigen::Vector3d& p : moved.localPlan().committedPoints()) {
+    EXPECT_GE(nearestOccupied(*wall(5), p), config.local.commit_clearance_m - 1e-6);
+  }
+  // A wall the map never knew free stays for the route.
+  Navigator fixed(config);
+  fixed.setGoal({6.0, 0.1, 1.1});
+  fixed.update(*wall(1), start, 0.0);
+  fixed.update(*wall(2), start, 10.0);
+  EXPECT_FALSE(straight(fixed));
+}
+
 TEST(Navigator, TheSetpointsStopTheVehicleBeforeTheEndOfTheCommittedSegment) {
   const auto wall = snapshotOf(
       [](const VoxelIndex& g) {

@@ -51,6 +51,13 @@ struct NavigatorConfig {
   /// occupied in the map, a way round) may open a route [m], [s].
   double stuck_move_m = 0.3;
   double stuck_s = 3.0;
+  /// An occupied cell of the accumulated grid that it knew free before (something moved in: a
+  /// walking person's trail, which the map keeps until the camera looks there again) and that no
+  /// frame's point (setRecentObstacles()) has hit for this long counts as unknown for the route:
+  /// the route may cross it, the committed segment never enters it until the map sees it free,
+  /// and the vehicle stopped before it faces it, so that the camera sees whether it was left [s].
+  /// 0: such cells stay occupied for the route.
+  double stale_obstacle_s = 2.0;
   LocalPlannerConfig local;  ///< the local planner
 };
 
@@ -120,7 +127,11 @@ class Navigator {
   [[nodiscard]] double lastLocalCpu_ms() const { return last_local_cpu_ms_; }
 
  private:
-  void planRoute(const Eigen::Vector3d& p_W);
+  void planRoute(const Eigen::Vector3d& p_W, double time_s);
+  /// Keeps last_free_s_ and last_hit_s_ on the accumulated grid's layout after it grew.
+  void followGridLayout();
+  /// Index of the accumulated grid's cell holding p_W, or -1 outside.
+  [[nodiscard]] std::ptrdiff_t cellIndex(const Eigen::Vector2d& p_W) const;
   /// The nearest recent obstacle in open known-free space (see evade_radius_m) within
   /// `radius_m` of p_W, or nullptr.
   [[nodiscard]] const Eigen::Vector3d* nearestMoved(const MapSnapshot& map,
@@ -135,6 +146,11 @@ class Navigator {
   bool has_goal_ = false;
   Eigen::Vector3d goal_W_ = Eigen::Vector3d::Zero();
   FixedOriginGrid accumulated_;
+  /// Per cell of the accumulated grid: when a snapshot last knew it free, and when a frame's
+  /// point last fell in it (-infinity: never) [s]; laid out as layout_.
+  std::vector<float> last_free_s_;
+  std::vector<float> last_hit_s_;
+  ProjectedGrid layout_;  ///< origin and size of the two above (cells unused)
   std::uint64_t last_frame_ = 0;
   std::vector<Eigen::Vector3d> recent_obstacles_W_;
   bool recent_obstacles_new_ = false;
