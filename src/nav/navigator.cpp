@@ -73,6 +73,7 @@ void Navigator::followGridLayout() {
   const std::size_t n = static_cast<std::size_t>(g.width) * static_cast<std::size_t>(g.height);
   std::vector<float> free_s(n, kNever);
   std::vector<float> hit_s(n, kNever);
+  std::vector<std::uint16_t> hits(n, 0);
   if (layout_.width > 0) {
     const int ox =
         static_cast<int>(std::lround((layout_.origin_W.x() - g.origin_W.x()) / g.resolution_m));
@@ -87,11 +88,13 @@ void Navigator::followGridLayout() {
         const std::size_t to = static_cast<std::size_t>(ny) * g.width + nx;
         free_s[to] = last_free_s_[from];
         hit_s[to] = last_hit_s_[from];
+        hits[to] = hits_since_free_[from];
       }
     }
   }
   last_free_s_ = std::move(free_s);
   last_hit_s_ = std::move(hit_s);
+  hits_since_free_ = std::move(hits);
   layout_.origin_W = g.origin_W;
   layout_.resolution_m = g.resolution_m;
   layout_.width = g.width;
@@ -124,6 +127,7 @@ void Navigator::planRoute(const Eigen::Vector3d& p_W, double time_s) {
         if (accumulated.at(x, y) <= 50) continue;
         const std::size_t i = static_cast<std::size_t>(y) * accumulated.width + x;
         if (last_free_s_[i] <= stale && last_hit_s_[i] <= stale &&
+            hits_since_free_[i] <= config_.stale_max_hits &&
             last_free_s_[i] > -std::numeric_limits<float>::infinity()) {
           canvas.cells[static_cast<std::size_t>(y + oy) * canvas.width + (x + ox)] =
               ProjectedGrid::kUnknown;
@@ -170,14 +174,20 @@ PlanReason Navigator::update(const MapSnapshot& map, const Eigen::Vector3d& p_W,
           const std::ptrdiff_t i = cellIndex(
               rolling.origin_W +
               (Eigen::Vector2d(x, y) + Eigen::Vector2d::Constant(0.5)) * rolling.resolution_m);
-          if (i >= 0) last_free_s_[static_cast<std::size_t>(i)] = static_cast<float>(time_s);
+          if (i < 0) continue;
+          last_free_s_[static_cast<std::size_t>(i)] = static_cast<float>(time_s);
+          hits_since_free_[static_cast<std::size_t>(i)] = 0;
         }
       }
     }
     if (recent_obstacles_new_now) {
       for (const Eigen::Vector3d& q : recent_obstacles_W_) {
         const std::ptrdiff_t i = cellIndex(q.head<2>());
-        if (i >= 0) last_hit_s_[static_cast<std::size_t>(i)] = static_cast<float>(time_s);
+        if (i < 0) continue;
+        const auto k = static_cast<std::size_t>(i);
+        if (last_hit_s_[k] != static_cast<float>(time_s) && hits_since_free_[k] < 0xffff)
+          ++hits_since_free_[k];  // once a frame
+        last_hit_s_[k] = static_cast<float>(time_s);
       }
     }
     last_frame_ = map.frame();

@@ -274,6 +274,16 @@ TEST(Navigator, ARouteTriesAgainWhereSomethingMovedInThatNoFrameHasHitLately) {
   for (const Eigen::Vector3d& p : moved.localPlan().committedPoints()) {
     EXPECT_GE(nearestOccupied(*wall(5), p), config.local.commit_clearance_m - 1e-6);
   }
+  // Hit by more frames than a passing person would be: it stayed, and stays for the route.
+  double t = 1.5 + 1.1 * config.stale_obstacle_s;
+  for (int k = 0; k <= config.stale_max_hits; ++k) {
+    t += 0.1;
+    moved.setRecentObstacles(hits);
+    moved.update(*wall(6 + static_cast<std::uint64_t>(k)), start, t);
+  }
+  moved.setRecentObstacles({});
+  moved.update(*wall(100), start, t + 2.0 * config.stale_obstacle_s);
+  EXPECT_FALSE(straight(moved));
   // A wall the map never knew free stays for the route.
   Navigator fixed(config);
   fixed.setGoal({6.0, 0.1, 1.1});

@@ -56,8 +56,12 @@ struct NavigatorConfig {
   /// frame's point (setRecentObstacles()) has hit for this long counts as unknown for the route:
   /// the route may cross it, the committed segment never enters it until the map sees it free,
   /// and the vehicle stopped before it faces it, so that the camera sees whether it was left [s].
-  /// 0: such cells stay occupied for the route.
+  /// 0: such cells stay occupied for the route. A cell hit by more than stale_max_hits frames
+  /// since the map last knew it free is not stale: something that stayed in view (a wall whose
+  /// edge cell the map once saw free), not a person passing by, who covers a cell for a few
+  /// frames; otherwise the route would turn to it and away from it again and again.
   double stale_obstacle_s = 2.0;
+  int stale_max_hits = 15;
   LocalPlannerConfig local;  ///< the local planner
 };
 
@@ -150,7 +154,8 @@ class Navigator {
   /// point last fell in it (-infinity: never) [s]; laid out as layout_.
   std::vector<float> last_free_s_;
   std::vector<float> last_hit_s_;
-  ProjectedGrid layout_;  ///< origin and size of the two above (cells unused)
+  std::vector<std::uint16_t> hits_since_free_;  ///< frames that hit the cell since it was free
+  ProjectedGrid layout_;  ///< origin and size of the three above (cells unused)
   std::uint64_t last_frame_ = 0;
   std::vector<Eigen::Vector3d> recent_obstacles_W_;
   bool recent_obstacles_new_ = false;
