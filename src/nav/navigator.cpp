@@ -112,32 +112,41 @@ std::ptrdiff_t Navigator::cellIndex(const Eigen::Vector2d& p_W) const {
 
 void Navigator::planRoute(const Eigen::Vector3d& p_W, double time_s) {
   const ProjectedGrid& accumulated = accumulated_.grid();
-  ProjectedGrid canvas =
-      coverPoints(accumulated, {p_W.head<2>(), goal_W_.head<2>()}, config_.planning_margin_m,
-                  accumulated.width > 0 ? accumulated.resolution_m : 0.2);
-  if (config_.stale_obstacle_s > 0.0 && accumulated.width > 0) {
-    // Occupied cells that were free before and that no frame has hit lately: unknown.
-    const int ox = static_cast<int>(
-        std::lround((accumulated.origin_W.x() - canvas.origin_W.x()) / canvas.resolution_m));
-    const int oy = static_cast<int>(
-        std::lround((accumulated.origin_W.y() - canvas.origin_W.y()) / canvas.resolution_m));
-    const auto stale = static_cast<float>(time_s - config_.stale_obstacle_s);
-    for (int y = 0; y < accumulated.height; ++y) {
-      for (int x = 0; x < accumulated.width; ++x) {
-        if (accumulated.at(x, y) <= 50) continue;
-        const std::size_t i = static_cast<std::size_t>(y) * accumulated.width + x;
-        if (last_free_s_[i] <= stale && last_hit_s_[i] <= stale &&
-            hits_since_free_[i] <= config_.stale_max_hits &&
-            last_free_s_[i] > -std::numeric_limits<float>::infinity()) {
-          canvas.cells[static_cast<std::size_t>(y + oy) * canvas.width + (x + ox)] =
-              ProjectedGrid::kUnknown;
+  // `never_free_too`: also the occupied cells the map never knew free (seen only from afar).
+  const auto search = [&](bool never_free_too, PlanningGrid* grid) {
+    ProjectedGrid canvas =
+        coverPoints(accumulated, {p_W.head<2>(), goal_W_.head<2>()}, config_.planning_margin_m,
+                    accumulated.width > 0 ? accumulated.resolution_m : 0.2);
+    if (config_.stale_obstacle_s > 0.0 && accumulated.width > 0) {
+      // Occupied cells that were free before and that no frame has hit lately: unknown.
+      const int ox = static_cast<int>(
+          std::lround((accumulated.origin_W.x() - canvas.origin_W.x()) / canvas.resolution_m));
+      const int oy = static_cast<int>(
+          std::lround((accumulated.origin_W.y() - canvas.origin_W.y()) / canvas.resolution_m));
+      const auto stale = static_cast<float>(time_s - config_.stale_obstacle_s);
+      for (int y = 0; y < accumulated.height; ++y) {
+        for (int x = 0; x < accumulated.width; ++x) {
+          if (accumulated.at(x, y) <= 50) continue;
+          const std::size_t i = static_cast<std::size_t>(y) * accumulated.width + x;
+          if (last_free_s_[i] <= stale && last_hit_s_[i] <= stale &&
+              hits_since_free_[i] <= config_.stale_max_hits &&
+              (never_free_too || last_free_s_[i] > -std::numeric_limits<float>::infinity())) {
+            canvas.cells[static_cast<std::size_t>(y + oy) * canvas.width + (x + ox)] =
+                ProjectedGrid::kUnknown;
+          }
         }
       }
     }
+    *grid = inflateGrid(canvas, config_.inflation_m, UnknownAs::kFree);
+    return searchGrid(*grid, grid->cellOf(p_W.head<2>()), grid->cellOf(goal_W_.head<2>()));
+  };
+  PlanningGrid grid;
+  GridPath path = search(false, &grid);
+  if (!path.found && config_.stale_obstacle_s > 0.0) {
+    // No route: also the occupied cells that no frame has hit from near (a person's trail first
+    // seen from afar, where the map had not seen free space yet); the vehicle goes to look.
+    path = search(true, &grid);
   }
-  const PlanningGrid grid = inflateGrid(canvas, config_.inflation_m, UnknownAs::kFree);
-  const GridPath path =
-      searchGrid(grid, grid.cellOf(p_W.head<2>()), grid.cellOf(goal_W_.head<2>()));
   if (!path.found) {
     ++route_failures_;
     return;

@@ -53,6 +53,18 @@ TEST(ClosedLoop, RetriesACorridorWhereAPersonsTrailWasLeftOccupiedInTheMap) {
   expectReachedWithoutCollision(world, 60.0);
 }
 
+TEST(ClosedLoop, LooksAgainAtATrailFirstSeenFromAfarWhenThereIsNoRoute) {
+  // building_s130_person of the benchmark from seed 101: the person's trail across the corridor
+  // was first seen from more than 5 m (no frame's point near, and the map had not seen the
+  // corridor free there): no route at all once the rooms were seen; the vehicle hovered in a
+  // room for 110 s. Without a route, such cells are unknown too, and the vehicle goes to look.
+  const NavFlightOptions defaults;
+  NavWorld world = buildingFloorWorld(130);
+  addCrossingPerson(&world, shortestRoute(world, defaults.planner.inflation_m, 0.1),
+                    0.95 * defaults.planner.max_speed_mps, 3.0);
+  expectReachedWithoutCollision(world, 100.0);
+}
+
 TEST(ClosedLoop, StopsForAPersonCrossingInFrontAndReachesTheGoalWithoutCollision) {
   // The person crosses the path the vehicle flies without them, halfway, timed to step onto it
   // when the vehicle is 3 m away: in view, across the committed segment.

@@ -59,7 +59,9 @@ struct NavigatorConfig {
   /// 0: such cells stay occupied for the route. A cell hit by more than stale_max_hits frames
   /// since the map last knew it free is not stale: something that stayed in view (a wall whose
   /// edge cell the map once saw free), not a person passing by, who covers a cell for a few
-  /// frames; otherwise the route would turn to it and away from it again and again.
+  /// frames; otherwise the route would turn to it and away from it again and again. When there
+  /// is no route, the search is made again with the occupied cells the map never knew free
+  /// under the same rules (a trail first seen from afar, before the map saw free space there).
   double stale_obstacle_s = 2.0;
   int stale_max_hits = 15;
   LocalPlannerConfig local;  ///< the local planner
@@ -122,7 +124,7 @@ class Navigator {
   /// True while the vehicle turns on the spot to look round (see stuck_s).
   [[nodiscard]] bool lookingRound() const { return looking_round_; }
   /// Plans made, those made at once because a snapshot blocked the committed segment, and
-  /// global searches that found no route (the previous route is kept).
+  /// global plans that found no route, the second search included (the previous route is kept).
   [[nodiscard]] std::uint64_t plans() const { return plans_; }
   [[nodiscard]] std::uint64_t blockedReplans() const { return blocked_replans_; }
   [[nodiscard]] std::uint64_t routeFailures() const { return route_failures_; }
