@@ -235,70 +235,22 @@ std::optional<datasets::CloudSequenceOptions> cloudOptions(const Options& o) {
   return cloud_options;
 }
 
-/// The planning layers on only for the outputs that need them: the 2D grid for --grid-out; the
-/// ESDF for none. They change no voxel of the map.
-void planningForOutputs(const Options& o, MapConfig* config) {
-  config->pipeline.planning_layers = !o.grid_out.empty();
-  config->projected_grid.enabled = !o.grid_out.empty();
-  config->esdf.enabled = false;
-}
-
-/// Widens the local window horizontally so that every hit within `range_m` of the body lies in
-/// it wherever the body is in its centre submap (2.5 x the range across), logged. A window
-/// already that wide is kept; so is one whose widening the configuration's limits refuse (the
-/// window's 2e8 voxels, the awareness scratch box): the hits beyond it then go to the global map
-/// as hits only, counted and said.
-void sizeWindowForRange(double range_m, MapConfig* config) {
-  LocalMapConfig& local_map = config->local_map;
-  const int needed = local_map.horizontalCellsForRange(range_m);
-  const Eigen::Vector3i before = local_map.size_cells;
-  const double reach_before_m = local_map.horizontalReach_m();
-  for (int a = 0; a < 2; ++a) local_map.size_cells[a] = std::max(local_map.size_cells[a], needed);
-  if (local_map.size_cells == before) return;
-  if (!config->validate().empty()) {
-    spdlog::warn(
-        "--max-range {} m: a local window of {} x {} voxels would hold it, more than the "
-        "configuration's limits allow; hits farther than {:.1f} m go to the global map as "
-        "hits only (their free space is not mapped)",
-        range_m, needed, needed, reach_before_m);
-    local_map.size_cells = before;
-    return;
-  }
-  spdlog::info(
-      "--max-range {} m: the local window grows from {} x {} to {} x {} voxels ({:.1f} x "
-      "{:.1f} m) so that every hit in range is mapped",
-      range_m, before.x(), before.y(), local_map.size_cells.x(), local_map.size_cells.y(),
-      local_map.size_cells.x() * local_map.resolution_m,
-      local_map.size_cells.y() * local_map.resolution_m);
-}
-
-/// --max-range applied (the awareness grid and the local window grow to reach it), the engine made
-/// synchronous and the planning layers limited to what the outputs need. The replay's awareness
-/// threads without --awareness-threads or --config: an offline run has the machine to itself, so
-/// two where there are two cores (the map is the same with any count; more than two gain little
-/// beside the reader thread), else one.
+/// The replay's awareness threads without --awareness-threads or --config: an offline run has
+/// the machine to itself, so two where there are two cores (the map is the same with any count;
+/// more than two gain little beside the reader thread), else one.
 int defaultAwarenessThreads() { return std::thread::hardware_concurrency() >= 2 ? 2 : 1; }
 
+/// The engine configuration adapted to the options (eval::adaptReplayConfig()), its notes logged.
 void adjustConfig(const Options& o, MapConfig* config) {
-  if (o.max_range_m > 0.0) {
-    config->awareness.max_range_m = o.max_range_m;
-    if (config->awareness.radius_m() < o.max_range_m) {
-      config->awareness.rho_cells =
-          static_cast<int>(std::ceil(o.max_range_m / config->awareness.rho_cell_m));
-    }
-    sizeWindowForRange(o.max_range_m, config);
-  }
-  if (o.awareness_threads > 0) {
-    config->awareness.num_threads = o.awareness_threads;
-  } else if (o.config_path.empty()) {
-    config->awareness.num_threads = defaultAwarenessThreads();
-  }
-  if (config->pipeline.threaded) {
-    spdlog::warn(
-        "pipeline.threaded: the replay runs synchronously (every frame is mapped, in order)");
-    config->pipeline.threaded = false;
-  }
-  planningForOutputs(o, config);
+  eval::ReplayEngineOptions replay;
+  replay.max_range_m = o.max_range_m;
+  replay.awareness_threads = o.awareness_threads;
+  replay.config_file = !o.config_path.empty();
+  replay.default_awareness_threads = defaultAwarenessThreads();
+  replay.grid_out = !o.grid_out.empty();
+  const eval::ConfigNotes notes = eval::adaptReplayConfig(replay, config);
+  for (const std::string& line : notes.info) spdlog::info("{}", line);
+  for (const std::string& line : notes.warnings) spdlog::warn("{}", line);
 }
 
 /// False (the problems logged) when `config` is invalid.

@@ -101,6 +101,64 @@ void setResolution(MapConfig* c, double resolution_m) {
   c->local_map.size_cells = {cells(19.0), cells(19.0), cells(7.0)};
 }
 
+namespace {
+
+/// Widens the local window horizontally for `range_m` (adaptReplayConfig()); notes what it did.
+void sizeWindowForRange(double range_m, MapConfig* config, ConfigNotes* notes) {
+  LocalMapConfig& local_map = config->local_map;
+  const int needed = local_map.horizontalCellsForRange(range_m);
+  const Eigen::Vector3i before = local_map.size_cells;
+  const double reach_before_m = local_map.horizontalReach_m();
+  for (int a = 0; a < 2; ++a) local_map.size_cells[a] = std::max(local_map.size_cells[a], needed);
+  if (local_map.size_cells == before) return;
+  char line[400];
+  if (!config->validate().empty()) {
+    std::snprintf(line, sizeof(line),
+                  "--max-range %g m: a local window of %d x %d voxels would hold it, more than the "
+                  "configuration's limits allow; hits farther than %.1f m go to the global map as "
+                  "hits only (their free space is not mapped)",
+                  range_m, needed, needed, reach_before_m);
+    notes->warnings.emplace_back(line);
+    local_map.size_cells = before;
+    return;
+  }
+  std::snprintf(line, sizeof(line),
+                "--max-range %g m: the local window grows from %d x %d to %d x %d voxels (%.1f x "
+                "%.1f m) so that every hit in range is mapped",
+                range_m, before.x(), before.y(), local_map.size_cells.x(), local_map.size_cells.y(),
+                local_map.size_cells.x() * local_map.resolution_m,
+                local_map.size_cells.y() * local_map.resolution_m);
+  notes->info.emplace_back(line);
+}
+
+}  // namespace
+
+ConfigNotes adaptReplayConfig(const ReplayEngineOptions& options, MapConfig* config) {
+  ConfigNotes notes;
+  if (options.max_range_m > 0.0) {
+    config->awareness.max_range_m = options.max_range_m;
+    if (config->awareness.radius_m() < options.max_range_m) {
+      config->awareness.rho_cells =
+          static_cast<int>(std::ceil(options.max_range_m / config->awareness.rho_cell_m));
+    }
+    sizeWindowForRange(options.max_range_m, config, &notes);
+  }
+  if (options.awareness_threads > 0) {
+    config->awareness.num_threads = options.awareness_threads;
+  } else if (!options.config_file) {
+    config->awareness.num_threads = options.default_awareness_threads;
+  }
+  if (config->pipeline.threaded) {
+    notes.warnings.emplace_back(
+        "pipeline.threaded: the replay runs synchronously (every frame is mapped, in order)");
+    config->pipeline.threaded = false;
+  }
+  config->pipeline.planning_layers = options.grid_out;
+  config->projected_grid.enabled = options.grid_out;
+  config->esdf.enabled = false;
+  return notes;
+}
+
 MapConfig runConfig(const std::string& config_path, DataKind kind, double resolution_m) {
   // mlmap_node's files work too: their dds and map_file sections do not concern the engine.
   MapConfig config = config_path.empty()

@@ -44,6 +44,35 @@ void setResolution(MapConfig* config, double resolution_m);
 [[nodiscard]] MapConfig runConfig(const std::string& config_path, DataKind kind,
                                   double resolution_m);
 
+/// How an offline replay adapts the engine configuration to its data and outputs
+/// (adaptReplayConfig()).
+struct ReplayEngineOptions {
+  /// > 0: the farthest measurement to map [m]; the awareness grid and the local window grow to
+  /// reach it.
+  double max_range_m = 0.0;
+  /// > 0: that many awareness threads; 0: the configuration's when a file gave it, else
+  /// `default_awareness_threads`.
+  int awareness_threads = 0;
+  bool config_file = false;           ///< the configuration came from a file
+  int default_awareness_threads = 1;  ///< an offline run's default (the caller's cores)
+  bool grid_out = false;              ///< the final 2D grid is written (planning layers for it)
+};
+
+/// What adaptReplayConfig() did that a user should read: `info` lines and `warnings`.
+struct ConfigNotes {
+  std::vector<std::string> info;      ///< changes made as asked
+  std::vector<std::string> warnings;  ///< changes refused or forced
+};
+
+/// Adapts `config` for an offline replay: the range applied (the awareness grid's radius grows to
+/// it; the local window grows horizontally to 2.5 x the range across, so that every hit in range
+/// lies in it wherever the body is in its centre submap, unless the configuration's limits refuse
+/// that window: then it is kept, and hits beyond it go to the global map as hits only), the
+/// awareness threads, the engine made synchronous (every frame mapped, in order) and the planning
+/// layers limited to what the outputs need (the 2D grid for `grid_out`; no ESDF). None of it
+/// changes a voxel of the map but the range's. Not validated afterwards.
+[[nodiscard]] ConfigNotes adaptReplayConfig(const ReplayEngineOptions& options, MapConfig* config);
+
 /// A simulated flight with its scoring against ground truth.
 struct ScoredFlight {
   FlightResult flight;
