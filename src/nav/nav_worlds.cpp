@@ -42,6 +42,32 @@ double headingTo(const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
   return std::atan2(to.y() - from.y(), to.x() - from.x());
 }
 
+/// Adds two pieces of furniture (boxes 0.6-1.4 m across, 0.8-2.2 m tall) to the room whose
+/// lower corner is `corner_W` and size `size_m`, kept 1.6 m from its walls, 2 m from `doors` and
+/// 1.2 m from the world's start and goal (200 tries at most).
+void addFurniture(NavWorld* w, const std::vector<Eigen::Vector2d>& doors,
+                  const Eigen::Vector2d& corner_W, const Eigen::Vector2d& size_m,
+                  std::mt19937* rng) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int added = 0;
+  for (int tries = 0; tries < 200 && added < 2; ++tries) {
+    const Eigen::Vector2d half(0.3 + 0.4 * unit(*rng), 0.3 + 0.4 * unit(*rng));
+    const Eigen::Vector2d c(
+        corner_W.x() + 1.6 + half.x() + unit(*rng) * (size_m.x() - 3.2 - 2 * half.x()),
+        corner_W.y() + 1.6 + half.y() + unit(*rng) * (size_m.y() - 3.2 - 2 * half.y()));
+    const double reach = half.norm();
+    bool ok = true;
+    for (const Eigen::Vector2d& d : doors) ok = ok && (d - c).norm() - reach > 2.0;
+    for (const Eigen::Vector3d& q : {w->start_W, w->goal_W})
+      ok = ok && (q.head<2>() - c).norm() - reach > 1.2;
+    if (!ok) continue;
+    const double height = 0.8 + 1.4 * unit(*rng);
+    w->world.addBox({Eigen::Vector3d(c.x() - half.x(), c.y() - half.y(), 0.0),
+                     Eigen::Vector3d(c.x() + half.x(), c.y() + half.y(), height)});
+    ++added;
+  }
+}
+
 }  // namespace
 
 double clearance(const sim::World& world, const Eigen::Vector3d& p_W, double time_s) {
@@ -173,23 +199,7 @@ NavWorld roomsWorld(std::uint32_t seed, int rooms) {
     w.start_yaw_rad = headingTo(w.start_W, w.goal_W);
     // Furniture: two boxes a room, away from the walls, the doors, start and goal.
     for (int k = 0; k < rooms; ++k) {
-      int added = 0;
-      for (int tries = 0; tries < 200 && added < 2; ++tries) {
-        const Eigen::Vector2d half(0.3 + 0.4 * unit(rng), 0.3 + 0.4 * unit(rng));
-        const Eigen::Vector2d c(
-            room_x * k + 1.6 + half.x() + unit(rng) * (room_x - 3.2 - 2 * half.x()),
-            1.6 + half.y() + unit(rng) * (room_y - 3.2 - 2 * half.y()));
-        const double reach = half.norm();
-        bool ok = true;
-        for (const Eigen::Vector2d& d : doors) ok = ok && (d - c).norm() - reach > 2.0;
-        for (const Eigen::Vector3d& q : {w.start_W, w.goal_W})
-          ok = ok && (q.head<2>() - c).norm() - reach > 1.2;
-        if (!ok) continue;
-        const double height = 0.8 + 1.4 * unit(rng);
-        w.world.addBox({Eigen::Vector3d(c.x() - half.x(), c.y() - half.y(), 0.0),
-                        Eigen::Vector3d(c.x() + half.x(), c.y() + half.y(), height)});
-        ++added;
-      }
+      addFurniture(&w, doors, {room_x * k, 0.0}, {room_x, room_y}, &rng);
     }
     if (isFair(w) || attempt >= kMaxAttempts) return w;
   }
@@ -241,25 +251,9 @@ NavWorld buildingFloorWorld(std::uint32_t seed) {
     w.start_yaw_rad = headingTo(w.start_W, w.goal_W);
     // Furniture: two boxes a room, away from the walls, the doors, start and goal.
     for (int k = 0; k < 8; ++k) {
-      const double x0 = room_x * (k % 4);
       const double y0 = k < 4 ? 0.0 : corridor_hi;
       const double depth = k < 4 ? corridor_lo : size.y() - corridor_hi;
-      int added = 0;
-      for (int tries = 0; tries < 200 && added < 2; ++tries) {
-        const Eigen::Vector2d half(0.3 + 0.4 * unit(rng), 0.3 + 0.4 * unit(rng));
-        const Eigen::Vector2d c(x0 + 1.6 + half.x() + unit(rng) * (room_x - 3.2 - 2 * half.x()),
-                                y0 + 1.6 + half.y() + unit(rng) * (depth - 3.2 - 2 * half.y()));
-        const double reach = half.norm();
-        bool ok = true;
-        for (const Eigen::Vector2d& d : doors) ok = ok && (d - c).norm() - reach > 2.0;
-        for (const Eigen::Vector3d& q : {w.start_W, w.goal_W})
-          ok = ok && (q.head<2>() - c).norm() - reach > 1.2;
-        if (!ok) continue;
-        const double height = 0.8 + 1.4 * unit(rng);
-        w.world.addBox({Eigen::Vector3d(c.x() - half.x(), c.y() - half.y(), 0.0),
-                        Eigen::Vector3d(c.x() + half.x(), c.y() + half.y(), height)});
-        ++added;
-      }
+      addFurniture(&w, doors, {room_x * (k % 4), y0}, {room_x, depth}, &rng);
     }
     if (isFair(w) || attempt >= kMaxAttempts) return w;
   }

@@ -24,6 +24,16 @@ void expectReachedWithoutCollision(const NavWorld& world, double timeout_s = 60.
   EXPECT_EQ(r.map_to_plan_ms.size(), r.frames);
 }
 
+/// A building floor of the benchmark with its person: crossing the shortest route halfway, 3 m
+/// ahead of a vehicle flying it at 0.95 x its top speed (as benchmarkWorlds() adds them).
+NavWorld buildingWithPerson(std::uint32_t seed) {
+  const NavFlightOptions defaults;
+  NavWorld world = buildingFloorWorld(seed);
+  addCrossingPerson(&world, shortestRoute(world, defaults.planner.inflation_m, 0.1),
+                    0.95 * defaults.planner.max_speed_mps, 3.0);
+  return world;
+}
+
 TEST(ClosedLoop, ReachesTheGoalThroughAForestWithoutCollision) {
   expectReachedWithoutCollision(forestWorld(21, 0.08, {14.0, 8.0}));
 }
@@ -46,11 +56,7 @@ TEST(ClosedLoop, RetriesACorridorWhereAPersonsTrailWasLeftOccupiedInTheMap) {
   // round through the rooms (unknown space is free for the route), never did: no route at all
   // once the rooms were seen, 150 s of wandering. Cells that were free before and no frame has
   // hit lately are unknown for the route, which tries the corridor again.
-  const NavFlightOptions defaults;
-  NavWorld world = buildingFloorWorld(30);
-  addCrossingPerson(&world, shortestRoute(world, defaults.planner.inflation_m, 0.1),
-                    0.95 * defaults.planner.max_speed_mps, 3.0);
-  expectReachedWithoutCollision(world, 60.0);
+  expectReachedWithoutCollision(buildingWithPerson(30), 60.0);
 }
 
 TEST(ClosedLoop, LooksAgainAtATrailFirstSeenFromAfarWhenThereIsNoRoute) {
@@ -58,11 +64,7 @@ TEST(ClosedLoop, LooksAgainAtATrailFirstSeenFromAfarWhenThereIsNoRoute) {
   // was first seen from more than 5 m (no frame's point near, and the map had not seen the
   // corridor free there): no route at all once the rooms were seen; the vehicle hovered in a
   // room for 110 s. Without a route, such cells are unknown too, and the vehicle goes to look.
-  const NavFlightOptions defaults;
-  NavWorld world = buildingFloorWorld(130);
-  addCrossingPerson(&world, shortestRoute(world, defaults.planner.inflation_m, 0.1),
-                    0.95 * defaults.planner.max_speed_mps, 3.0);
-  expectReachedWithoutCollision(world, 100.0);
+  expectReachedWithoutCollision(buildingWithPerson(130), 100.0);
 }
 
 TEST(ClosedLoop, StopsForAPersonCrossingInFrontAndReachesTheGoalWithoutCollision) {
