@@ -69,10 +69,10 @@ void Navigator::followGridLayout() {
   const ProjectedGrid& g = accumulated_.grid();
   if (g.width == layout_.width && g.height == layout_.height && g.origin_W == layout_.origin_W)
     return;
-  constexpr float kNever = -std::numeric_limits<float>::infinity();
+  constexpr double kNever = -std::numeric_limits<double>::infinity();
   const std::size_t n = static_cast<std::size_t>(g.width) * static_cast<std::size_t>(g.height);
-  std::vector<float> free_s(n, kNever);
-  std::vector<float> hit_s(n, kNever);
+  std::vector<double> free_s(n, kNever);
+  std::vector<double> hit_s(n, kNever);
   std::vector<std::uint16_t> hits(n, 0);
   if (layout_.width > 0) {
     const int ox =
@@ -123,14 +123,14 @@ void Navigator::planRoute(const Eigen::Vector3d& p_W, double time_s) {
           std::lround((accumulated.origin_W.x() - canvas.origin_W.x()) / canvas.resolution_m));
       const int oy = static_cast<int>(
           std::lround((accumulated.origin_W.y() - canvas.origin_W.y()) / canvas.resolution_m));
-      const auto stale = static_cast<float>(time_s - config_.stale_obstacle_s);
+      const auto stale = time_s - config_.stale_obstacle_s;
       for (int y = 0; y < accumulated.height; ++y) {
         for (int x = 0; x < accumulated.width; ++x) {
           if (accumulated.at(x, y) <= 50) continue;
           const std::size_t i = static_cast<std::size_t>(y) * accumulated.width + x;
           if (last_free_s_[i] <= stale && last_hit_s_[i] <= stale &&
               hits_since_free_[i] <= config_.stale_max_hits &&
-              (never_free_too || last_free_s_[i] > -std::numeric_limits<float>::infinity())) {
+              (never_free_too || last_free_s_[i] > -std::numeric_limits<double>::infinity())) {
             canvas.cells[static_cast<std::size_t>(y + oy) * canvas.width + (x + ox)] =
                 ProjectedGrid::kUnknown;
           }
@@ -184,7 +184,7 @@ PlanReason Navigator::update(const MapSnapshot& map, const Eigen::Vector3d& p_W,
               rolling.origin_W +
               (Eigen::Vector2d(x, y) + Eigen::Vector2d::Constant(0.5)) * rolling.resolution_m);
           if (i < 0) continue;
-          last_free_s_[static_cast<std::size_t>(i)] = static_cast<float>(time_s);
+          last_free_s_[static_cast<std::size_t>(i)] = time_s;
           hits_since_free_[static_cast<std::size_t>(i)] = 0;
         }
       }
@@ -194,9 +194,9 @@ PlanReason Navigator::update(const MapSnapshot& map, const Eigen::Vector3d& p_W,
         const std::ptrdiff_t i = cellIndex(q.head<2>());
         if (i < 0) continue;
         const auto k = static_cast<std::size_t>(i);
-        if (last_hit_s_[k] != static_cast<float>(time_s) && hits_since_free_[k] < 0xffff)
+        if (last_hit_s_[k] != time_s && hits_since_free_[k] < 0xffff)
           ++hits_since_free_[k];  // once a frame
-        last_hit_s_[k] = static_cast<float>(time_s);
+        last_hit_s_[k] = time_s;
       }
     }
     last_frame_ = map.frame();

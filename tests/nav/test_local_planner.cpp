@@ -250,46 +250,51 @@ TEST(Navigator, ARouteTriesAgainWhereSomethingMovedInThatNoFrameHasHitLately) {
     }
     return !n.route_W().empty();
   };
-  NavigatorConfig config;
-  Navigator moved(config);
-  moved.setGoal({6.0, 0.1, 1.1});
-  moved.update(*clear, start, 0.0);
-  EXPECT_TRUE(straight(moved));
-  moved.update(*wall(2), start, 0.1);
-  EXPECT_FALSE(straight(moved));  // round the wall, outside the window (unknown: free)
-  // The frame's points hit the wall: it is there; not tried again while they do.
-  std::vector<Eigen::Vector3d> hits;
-  for (double y = -1.0; y <= 1.0; y += 0.2) hits.emplace_back(3.05, y + 0.05, 1.1);
-  moved.setRecentObstacles(hits);
-  moved.update(*wall(3), start, 1.5);
-  EXPECT_FALSE(straight(moved));
-  moved.setRecentObstacles({});
-  moved.update(*wall(4), start, 1.5 + 0.9 * config.stale_obstacle_s);
-  EXPECT_FALSE(straight(moved));
-  // No hit for stale_obstacle_s: the route tries the wall again; the committed segment still
-  // stops before it (the map shows it occupied).
-  moved.update(*wall(5), start, 1.5 + 1.1 * config.stale_obstacle_s);
-  EXPECT_TRUE(straight(moved));
-  ASSERT_GT(moved.localPlan().committed, 1u);
-  for (const Eigen::Vector3d& p : moved.localPlan().committedPoints()) {
-    EXPECT_GE(nearestOccupied(*wall(5), p), config.local.commit_clearance_m - 1e-6);
-  }
-  // Hit by more frames than a passing person would be: it stayed, and stays for the route.
-  double t = 1.5 + 1.1 * config.stale_obstacle_s;
-  for (int k = 0; k <= config.stale_max_hits; ++k) {
-    t += 0.1;
+  // From zero (the simulator) and from a ROS epoch stamp (over DDS: 1.8e9 s, where a float
+  // would round the times to 128 s).
+  for (const double t0 : {0.0, 1.8e9}) {
+    SCOPED_TRACE(t0);
+    NavigatorConfig config;
+    Navigator moved(config);
+    moved.setGoal({6.0, 0.1, 1.1});
+    moved.update(*clear, start, t0);
+    EXPECT_TRUE(straight(moved));
+    moved.update(*wall(2), start, t0 + 0.1);
+    EXPECT_FALSE(straight(moved));  // round the wall, outside the window (unknown: free)
+    // The frame's points hit the wall: it is there; not tried again while they do.
+    std::vector<Eigen::Vector3d> hits;
+    for (double y = -1.0; y <= 1.0; y += 0.2) hits.emplace_back(3.05, y + 0.05, 1.1);
     moved.setRecentObstacles(hits);
-    moved.update(*wall(6 + static_cast<std::uint64_t>(k)), start, t);
+    moved.update(*wall(3), start, t0 + 1.5);
+    EXPECT_FALSE(straight(moved));
+    moved.setRecentObstacles({});
+    moved.update(*wall(4), start, t0 + 1.5 + 0.9 * config.stale_obstacle_s);
+    EXPECT_FALSE(straight(moved));
+    // No hit for stale_obstacle_s: the route tries the wall again; the committed segment still
+    // stops before it (the map shows it occupied).
+    moved.update(*wall(5), start, t0 + 1.5 + 1.1 * config.stale_obstacle_s);
+    EXPECT_TRUE(straight(moved));
+    ASSERT_GT(moved.localPlan().committed, 1u);
+    for (const Eigen::Vector3d& p : moved.localPlan().committedPoints()) {
+      EXPECT_GE(nearestOccupied(*wall(5), p), config.local.commit_clearance_m - 1e-6);
+    }
+    // Hit by more frames than a passing person would be: it stayed, and stays for the route.
+    double t = t0 + 1.5 + 1.1 * config.stale_obstacle_s;
+    for (int k = 0; k <= config.stale_max_hits; ++k) {
+      t += 0.1;
+      moved.setRecentObstacles(hits);
+      moved.update(*wall(6 + static_cast<std::uint64_t>(k)), start, t);
+    }
+    moved.setRecentObstacles({});
+    moved.update(*wall(100), start, t + 2.0 * config.stale_obstacle_s);
+    EXPECT_FALSE(straight(moved));
+    // A wall the map never knew free stays for the route.
+    Navigator fixed(config);
+    fixed.setGoal({6.0, 0.1, 1.1});
+    fixed.update(*wall(1), start, t0);
+    fixed.update(*wall(2), start, t0 + 10.0);
+    EXPECT_FALSE(straight(fixed));
   }
-  moved.setRecentObstacles({});
-  moved.update(*wall(100), start, t + 2.0 * config.stale_obstacle_s);
-  EXPECT_FALSE(straight(moved));
-  // A wall the map never knew free stays for the route.
-  Navigator fixed(config);
-  fixed.setGoal({6.0, 0.1, 1.1});
-  fixed.update(*wall(1), start, 0.0);
-  fixed.update(*wall(2), start, 10.0);
-  EXPECT_FALSE(straight(fixed));
 }
 
 TEST(Navigator, TheSetpointsStopTheVehicleBeforeTheEndOfTheCommittedSegment) {

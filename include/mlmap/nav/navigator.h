@@ -153,9 +153,10 @@ class Navigator {
   Eigen::Vector3d goal_W_ = Eigen::Vector3d::Zero();
   FixedOriginGrid accumulated_;
   /// Per cell of the accumulated grid: when a snapshot last knew it free, and when a frame's
-  /// point last fell in it (-infinity: never) [s]; laid out as layout_.
-  std::vector<float> last_free_s_;
-  std::vector<float> last_hit_s_;
+  /// point last fell in it (-infinity: never) [s]; double, since a stamp over DDS is a ROS
+  /// epoch time (1.8e9 s), which a float holds only to 128 s; laid out as layout_.
+  std::vector<double> last_free_s_;
+  std::vector<double> last_hit_s_;
   std::vector<std::uint16_t> hits_since_free_;  ///< frames that hit the cell since it was free
   ProjectedGrid layout_;  ///< origin and size of the three above (cells unused)
   std::uint64_t last_frame_ = 0;
