@@ -7,6 +7,7 @@
 #include "mlmap/core/config.h"
 #include "mlmap/nav/nav_worlds.h"
 #include "mlmap/nav/navigator.h"
+#include "mlmap/nav/recent_obstacles.h"
 #include "mlmap/sim/depth_camera.h"
 #include "mlmap/sim/vehicle.h"
 
@@ -62,13 +63,6 @@ struct NavFlightResult {
   std::vector<Eigen::Vector2d> shortest_route_W;  ///< the ground-truth shortest route
   ProjectedGrid grid;                             ///< the planner's accumulated grid at the end
 };
-
-/// What the planner gets of a frame beside the map (Navigator::setRecentObstacles()): its
-/// measured points `points_S` (sensor frame, non-finite ones skipped) within 5 m of the sensor
-/// and 0.6 m of the flight height `height_m`, in W, one per cell of `cell_m`.
-[[nodiscard]] std::vector<Eigen::Vector3d> recentObstacles(
-    const std::vector<Eigen::Vector3f>& points_S, const Transform& T_W_S, double height_m,
-    double cell_m);
 
 /// Flies `world` from its start to its goal. Deterministic for given world and options (apart
 /// from the timings).
