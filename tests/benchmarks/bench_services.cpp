@@ -12,7 +12,7 @@
 
 #include "mlmap/dds/node/mapping_node.h"
 #include "mlmap/dds/transport/participant.h"
-#include "mlmap/dds/node/ros_graph.h"
+#include "mlmap/dds/graph/ros_graph.h"
 #include "mlmap/dds/node/ros_services.h"
 #include "mlmap/pipeline/map_engine.h"
 

@@ -8,7 +8,7 @@
 #include "mlmap/dds/node/fair_request_queue.h"
 #include "mlmap/dds/node/mapping_node.h"
 #include "mlmap/dds/transport/participant.h"
-#include "mlmap/dds/node/ros_graph.h"
+#include "mlmap/dds/graph/ros_graph.h"
 #include "mlmap/dds/node/ros_services.h"
 #include "mlmap/dds/wire/type_hash.h"
 #include "mlmap/map_io/map_export.h"

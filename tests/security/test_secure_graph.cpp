@@ -12,7 +12,7 @@
 #include "mlmap/dds/node/mapping_node.h"
 #include "mlmap/dds/transport/participant.h"
 #include "mlmap/dds/wire/ros_conversions.h"
-#include "mlmap/dds/node/ros_graph.h"
+#include "mlmap/dds/graph/ros_graph.h"
 #include "mlmap/dds/node/ros_services.h"
 
 #include "dds_test_support.h"

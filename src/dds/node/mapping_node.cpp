@@ -13,7 +13,7 @@
 
 #include "mlmap/dds/node/discovery_pacing.h"
 #include "mlmap/dds/transport/entities.h"
-#include "mlmap/dds/node/ros_graph.h"
+#include "mlmap/dds/graph/ros_graph.h"
 #include "mlmap/dds/fleet/submap_messages.h"
 #include "mlmap/dds/fleet/submap_readers.h"
 

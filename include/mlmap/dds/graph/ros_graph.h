@@ -5,6 +5,8 @@
 /// GID and, per node, its name, namespace and the GIDs of its readers and writers; `ros2 node
 /// list`, `ros2 node info`, `ros2 topic info -v` and rqt_graph are built from it), and the node's
 /// log lines on `/rosout` (rcl_interfaces/msg/Log, with rcl's QoS).
+/// Library mlmap_dds_graph (transport and message types only): mlmap_node and mlmap_planner_peer
+/// use it.
 
 #include "mlmap/pipeline/rate_limited_log.h"
 

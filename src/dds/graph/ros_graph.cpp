@@ -1,4 +1,4 @@
-#include "mlmap/dds/node/ros_graph.h"
+#include "mlmap/dds/graph/ros_graph.h"
 
 #include "mlmap/dds/transport/dds_config.h"
 #include "mlmap/dds/transport/entities.h"
