@@ -58,6 +58,8 @@ struct Options {
   /// --closed-loop: fly a planner's setpoints in this world (forest, rooms, paper; "": stream)
   std::string closed_loop;
   unsigned world_seed = 21;                       ///< --world-seed
+  bool person = false;                            ///< --person
+  double person_lead_m = 3.0;                     ///< --person-lead [m]
   double forest_density = 0.08;                   ///< --forest-density [trees / m^2]
   std::vector<double> forest_size_m{14.0, 8.0};   ///< --forest-size [m]
   double timeout_s = 60.0;                        ///< --timeout: closed-loop flight time limit [s]
@@ -101,6 +103,13 @@ void addOptions(CLI::App& app, Options& o) {
                  "nav_worlds (forest, rooms, paper or building) instead of streaming a scenario")
       ->check(CLI::IsMember({"forest", "rooms", "paper", "building"}));
   app.add_option("--world-seed", o.world_seed, "seed of the --closed-loop world");
+  app.add_flag("--person", o.person,
+               "closed loop: a person crosses the world's shortest route halfway, timed to pass "
+               "it 3 m ahead of a vehicle flying it from the start at 0.95 x the planner's top "
+               "speed (as the navigation benchmark's; --person-lead changes the 3 m)");
+  app.add_option("--person-lead", o.person_lead_m,
+                 "--person: how far ahead of that vehicle the person passes the route [m]; "
+                 "negative: after it passed, for a vehicle that starts late");
   app.add_option("--forest-density", o.forest_density, "trees per m^2 of a forest world")
       ->check(CLI::PositiveNumber);
   app.add_option("--forest-size", o.forest_size_m, "x and y extent of a forest world [m]")
@@ -201,11 +210,23 @@ int finish(const StreamStats& s, bool prerender) {
 
 /// The --closed-loop world.
 nav::NavWorld closedLoopWorld(const Options& o) {
-  if (o.closed_loop == "rooms") return nav::roomsWorld(o.world_seed, 2);
-  if (o.closed_loop == "paper") return nav::paperRoomWorld(o.world_seed);
-  if (o.closed_loop == "building") return nav::buildingFloorWorld(o.world_seed);
-  return nav::forestWorld(o.world_seed, o.forest_density,
-                          Eigen::Vector2d(o.forest_size_m[0], o.forest_size_m[1]));
+  nav::NavWorld world;
+  if (o.closed_loop == "rooms") {
+    world = nav::roomsWorld(o.world_seed, 2);
+  } else if (o.closed_loop == "paper") {
+    world = nav::paperRoomWorld(o.world_seed);
+  } else if (o.closed_loop == "building") {
+    world = nav::buildingFloorWorld(o.world_seed);
+  } else {
+    world = nav::forestWorld(o.world_seed, o.forest_density,
+                             Eigen::Vector2d(o.forest_size_m[0], o.forest_size_m[1]));
+  }
+  if (o.person) {
+    const nav::NavigatorConfig planner;
+    nav::addCrossingPerson(&world, nav::shortestRoute(world, planner.inflation_m, 0.1),
+                           0.95 * planner.max_speed_mps, o.person_lead_m);
+  }
+  return world;
 }
 
 /// Flies the closed loop; returns the exit status (0: the goal reached without collision).
