@@ -5,6 +5,11 @@
 // "Over DDS"). A program of its own rather than a mode of mlmap_navigate: onboard it links the
 // planner and DDS only, no simulator, no OpenCV, as mlmap_node.
 //
+// With --cloud-topic it also reads the sensor's clouds the node maps (usually the node's
+// dds.topics.cloud), whose points near the flight height the planner avoids before the map has
+// them (a person crossing). In the ROS 2 graph it is the node --node-name (mlmap_planner), its
+// log lines on /rosout.
+//
 // At the end it prints the map-to-plan latency (a frame's stamp to the Path planned on the map
 // state it ended: median and p99). Exit status 1 on an error, or with --exit-when-reached when
 // the goal was not reached.
@@ -35,9 +40,11 @@ struct Options {
   std::string goal_topic = "goal_pose";
   std::string path_topic = "mlmap/plan";
   std::string setpoint_topic = "mlmap/setpoint";
-  double duration_s = 0.0;         ///< --duration (0: until stopped)
-  double report_every_s = 5.0;     ///< --report-every
-  bool exit_when_reached = false;  ///< --exit-when-reached
+  std::string cloud_topic;                  ///< --cloud-topic ("": off)
+  std::string node_name = "mlmap_planner";  ///< --node-name
+  double duration_s = 0.0;                  ///< --duration (0: until stopped)
+  double report_every_s = 5.0;              ///< --report-every
+  bool exit_when_reached = false;           ///< --exit-when-reached
   std::string latency_out;         ///< --latency-out: map-to-plan samples, one per line [ms]
   apps::SecurityOptions security;  ///< --keystore, --enclave, --security-strategy
 };
@@ -51,6 +58,11 @@ void addOptions(CLI::App& app, Options& o) {
   app.add_option("--goal-topic", o.goal_topic, "geometry_msgs/PoseStamped goals (RViz2's)");
   app.add_option("--path-topic", o.path_topic, "nav_msgs/Path out: the route");
   app.add_option("--setpoint-topic", o.setpoint_topic, "geometry_msgs/PoseStamped setpoints out");
+  app.add_option("--cloud-topic", o.cloud_topic,
+                 "sensor_msgs/PointCloud2 in: the sensor's clouds the node maps (its "
+                 "dds.topics.cloud); the latest frame's points are the planner's recent obstacles "
+                 "(default: off)");
+  app.add_option("--node-name", o.node_name, "its ROS 2 node name (ros2 node list, /rosout)");
   app.add_option("--duration", o.duration_s, "seconds to run (0: until SIGINT / SIGTERM)")
       ->check(CLI::NonNegativeNumber);
   app.add_option("--report-every", o.report_every_s, "seconds between progress lines (0: none)")
@@ -77,6 +89,26 @@ dds::PlannerPeerConfig peerConfig(const Options& o, const dds::NodeConfig& node)
   c.path_topic = o.path_topic;
   c.setpoint_topic = o.setpoint_topic;
   c.esdf_unknown_as = node.map.esdf.unknown_as;
+  c.cloud_topic = o.cloud_topic;
+  if (!c.cloud_topic.empty() &&
+      dds::resolveExtrinsicSource(node.dds) != dds::ExtrinsicSource::kConfig) {
+    throw std::runtime_error(
+        "--cloud-topic places the clouds with the configured mounting (sensor.*): the node's "
+        "dds.sensor_extrinsic must be config");
+  }
+  c.T_B_S = node.map.sensor.T_B_S();
+  c.pose_buffer = dds::poseBufferConfig(node.dds);
+  c.recent_cell_m = node.map.local_map.resolution_m;
+  c.node_name = o.node_name;
+  c.log = [](LogLevel level, const std::string& line) {
+    if (level == LogLevel::kInfo) {
+      spdlog::info("{}", line);
+    } else if (level == LogLevel::kWarning) {
+      spdlog::warn("{}", line);
+    } else {
+      spdlog::error("{}", line);
+    }
+  };
   if (o.goal.size() == 3) c.goal_W = Eigen::Vector3d(o.goal[0], o.goal[1], o.goal[2]);
   return c;
 }
@@ -87,6 +119,12 @@ void finalReport(const dds::PlannerPeerStats& s) {
       "done: {} maps planned on, {} grids, {} poses, {} goals, {} paths, {} setpoints, {} "
       "rejected, reached {}",
       s.maps, s.grids, s.poses, s.goals, s.paths, s.setpoints, s.rejected, s.reached ? 1 : 0);
+  if (s.clouds > 0) {
+    spdlog::info(
+        "clouds: {} received, {} gave their points to the planner ({} recent obstacles in all), "
+        "{} without a pose",
+        s.clouds, s.recent_obstacle_frames, s.recent_obstacles, s.clouds_without_pose);
+  }
   if (!s.last_rejection.empty()) spdlog::warn("last rejected message: {}", s.last_rejection);
   if (s.map_to_plan_ms.empty()) return;
   const TimingSummary plan = summarizeTimings(s.map_to_plan_ms);
@@ -104,9 +142,9 @@ int run(const Options& o) {
     o.security.apply(&node.dds.security);
     const dds::PlannerPeerConfig config = peerConfig(o, node);
     dds::PlannerPeer peer(config);
-    spdlog::info("planning on {} and {}, path on {}, setpoints on {}, goals from {}",
-                 config.grid_topic, config.esdf_topic, config.path_topic, config.setpoint_topic,
-                 config.goal_W ? "--goal" : config.goal_topic);
+    spdlog::info("path on {}, setpoints on {}, goals from {}; node {}", config.path_topic,
+                 config.setpoint_topic, config.goal_W ? "--goal" : config.goal_topic,
+                 config.node_name);
     const auto start = std::chrono::steady_clock::now();
     auto last_report = start;
     bool reached = false;

@@ -1,8 +1,11 @@
 #include "mlmap/dds/nav/planner_peer.h"
 
+#include "mlmap/dds/graph/ros_graph.h"
 #include "mlmap/dds/nav/plan_messages.h"
 #include "mlmap/dds/transport/entities.h"
 #include "mlmap/dds/transport/participant.h"
+#include "mlmap/dds/wire/cloud_sample.h"
+#include "mlmap/nav/recent_obstacles.h"
 
 #include "geometry_msgs/msg/PoseStamped_PubSubTypes.h"
 #include "mlmap_msgs/msg/VoxelBlock_PubSubTypes.h"
@@ -14,6 +17,7 @@
 #include <fastdds/dds/publisher/Publisher.hpp>
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -24,14 +28,37 @@ namespace mlmap::dds {
 
 namespace fdds = eprosima::fastdds::dds;
 
-/// The samples handed over by the listener threads (the latest of each kind).
+namespace {
+
+/// Poses kept between two passes of the planning thread (the oldest dropped beyond it): far more
+/// than arrive in one pass at any pose rate.
+constexpr std::size_t kMaxInboxPoses = 256;
+/// Wall time a cloud may wait for the pose at its stamp (as the node's FramePairer) [s].
+constexpr double kCloudPoseWait_s = 0.5;
+/// A rejection is logged at most this often (the others counted) [s].
+constexpr double kRejectionLogInterval_s = 1.0;
+
+/// True for a valid ROS 2 node name: letters, digits, '_', not starting with a digit.
+bool isRosNodeName(const std::string& name) {
+  if (name.empty() || std::isdigit(static_cast<unsigned char>(name.front())) != 0) return false;
+  for (const char c : name) {
+    if (std::isalnum(static_cast<unsigned char>(c)) == 0 && c != '_') return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+/// The samples handed over by the listener threads (the latest of each kind; every pose).
 struct PeerInbox {
   std::optional<nav_msgs::OccupancyGrid_> grid;
   std::optional<mlmap_msgs::VoxelBlock_> block;
-  double block_arrival_s = 0.0;  ///< wall clock at the block's arrival
-  std::optional<geometry_msgs::PoseStamped_> pose;
+  double block_arrival_s = 0.0;                    ///< wall clock at the block's arrival
+  std::vector<geometry_msgs::PoseStamped_> poses;  ///< in arrival order
   std::optional<geometry_msgs::PoseStamped_> goal;
-  std::uint64_t malformed = 0;  ///< samples Fast CDR could not read
+  std::optional<CloudSample> cloud;
+  double cloud_arrival_s = 0.0;  ///< wall clock at the cloud's arrival
+  std::uint64_t malformed = 0;   ///< samples Fast CDR could not read
   std::string malformed_detail;
 };
 
@@ -39,10 +66,25 @@ struct PlannerPeer::Impl {
   explicit Impl(const PlannerPeerConfig& c) : config(c), navigator(c.planner) {}
 
   void start();
+  /// Creates the readers of the inputs.
+  void addReaders(fdds::Subscriber* subscriber);
   void run();
-  /// One pass over what arrived: grid, goal, ESDF block (planned on at once), pose.
+  /// One pass over what arrived: grid, goal, poses, ESDF block (planned on at once), cloud
+  /// (planned on at once), the latest pose's plan and setpoint.
   void step(PeerInbox in);
+  /// Takes the poses into the pose buffer; the latest valid one is the vehicle's. True when
+  /// one was.
+  bool takePoses(const std::vector<geometry_msgs::PoseStamped_>& poses);
+  /// Checks a new cloud; it waits for its pose in waiting_cloud.
+  void takeCloud(CloudSample&& cloud, double arrival_s);
+  /// Gives the waiting cloud's points to the Navigator and plans when its pose is known, drops
+  /// it when it will have none.
+  void placeWaitingCloud();
   void reject(const std::string& what, const DecodeStatus& status);
+  /// Counts a rejected message and logs it (at most every kRejectionLogInterval_s).
+  void reject(const std::string& line);
+  /// A log line to config.log and /rosout.
+  void log(LogLevel level, const std::string& message);
   /// Plans from the latest pose when there is one; publishes the route when it planned.
   /// Returns true when it planned.
   bool plan(double now_stamp_s);
@@ -53,6 +95,8 @@ struct PlannerPeer::Impl {
   std::string world_frame;
   // Declared before the participant: it is deleted (with the readers) first.
   std::unique_ptr<TakeReaders> readers;
+  std::unique_ptr<DiscoveryInfoPublisher> graph;
+  std::unique_ptr<RosoutWriter> rosout;
   ParticipantPtr participant;
   fdds::DataWriter* path_writer = nullptr;
   fdds::DataWriter* setpoint_writer = nullptr;
@@ -73,6 +117,12 @@ struct PlannerPeer::Impl {
   double yaw_rad = 0.0;
   double pose_stamp_s = 0.0;
   std::optional<Eigen::Vector3d> goal_W;
+  PoseBuffer poses{PoseBufferConfig{}};
+  std::optional<CloudSample> waiting_cloud;  ///< a cloud waiting for the pose at its stamp
+  double waiting_since_s = 0.0;              ///< wall clock at its arrival
+  double last_rejection_log_s = -1e300;
+  std::uint64_t rejections_unlogged = 0;
+  bool was_reached = false;  ///< the vehicle was at the goal at the last plan()
 
   mutable std::mutex stats_mutex;
   PlannerPeerStats stats;
@@ -83,6 +133,14 @@ void PlannerPeer::Impl::start() {
   if (!(config.position_gain_per_s > 0.0) || !std::isfinite(config.position_gain_per_s)) {
     throw std::invalid_argument("planner peer: position_gain_per_s must be finite and positive");
   }
+  if (!isRosNodeName(config.node_name)) {
+    throw std::invalid_argument("planner peer: node_name '" + config.node_name +
+                                "' is not a ROS 2 node name (letters, digits, _)");
+  }
+  if (!(config.recent_cell_m > 0.0) || !std::isfinite(config.recent_cell_m)) {
+    throw std::invalid_argument("planner peer: recent_cell_m must be finite and positive");
+  }
+  poses = PoseBuffer(config.pose_buffer);  // throws std::invalid_argument for a bad one
   world_frame = resolveFrames(config.dds).world;
   map = std::make_shared<const MapSnapshot>(std::make_shared<const LocalWindow>(),
                                             std::make_shared<const ProjectedGrid>(), nullptr, 0,
@@ -102,6 +160,22 @@ void PlannerPeer::Impl::start() {
       publisher, ddsTopicName(ns, config.path_topic), reliableWriterQos());
   setpoint_writer = createWriter<geometry_msgs::PoseStamped_PubSubType>(
       publisher, ddsTopicName(ns, config.setpoint_topic), reliableWriterQos());
+  addReaders(subscriber);
+  const std::string node_namespace = rosNodeNamespace(ns);
+  rosout =
+      std::make_unique<RosoutWriter>(publisher, rosLoggerName(node_namespace, config.node_name));
+  graph =
+      std::make_unique<DiscoveryInfoPublisher>(participant.get(), config.node_name, node_namespace);
+  graph->announce({publisher}, {subscriber});
+  log(LogLevel::kInfo,
+      "planning on " + config.grid_topic + " and " + config.esdf_topic +
+          (config.cloud_topic.empty() ? ", no sensor topic: recent obstacles only from the map"
+                                      : ", the latest frame's points from " + config.cloud_topic));
+  thread = std::thread([this] { run(); });
+}
+
+void PlannerPeer::Impl::addReaders(fdds::Subscriber* subscriber) {
+  const std::string& ns = config.dds.ns;
   readers = std::make_unique<TakeReaders>(subscriber, [this](const std::string& what) {
     const std::lock_guard<std::mutex> lock(inbox_mutex);
     ++inbox.malformed;
@@ -130,17 +204,32 @@ void PlannerPeer::Impl::start() {
                                                       in.block_arrival_s = arrival_s;
                                                     });
                                                   });
-  readers->add<geometry_msgs::PoseStamped_PubSubType>(
-      ddsTopicName(ns, config.pose_topic), sensorReaderQos(5),
-      [hand_over](geometry_msgs::PoseStamped_&& m) {
-        hand_over([&m](PeerInbox& in) { in.pose = std::move(m); });
-      });
+  readers->add<geometry_msgs::PoseStamped_PubSubType>(ddsTopicName(ns, config.pose_topic),
+                                                      sensorReaderQos(5),
+                                                      [hand_over](geometry_msgs::PoseStamped_&& m) {
+                                                        hand_over([&m](PeerInbox& in) {
+                                                          if (in.poses.size() >= kMaxInboxPoses)
+                                                            in.poses.erase(in.poses.begin());
+                                                          in.poses.push_back(std::move(m));
+                                                        });
+                                                      });
   readers->add<geometry_msgs::PoseStamped_PubSubType>(
       ddsTopicName(ns, config.goal_topic), reliableReaderQos(false, 10),
       [hand_over](geometry_msgs::PoseStamped_&& m) {
         hand_over([&m](PeerInbox& in) { in.goal = std::move(m); });
       });
-  thread = std::thread([this] { run(); });
+  if (!config.cloud_topic.empty()) {
+    fdds::DataReaderQos qos = sensorReaderQos();  // as the node reads the sensor
+    if (!config.dds.data_sharing) qos.data_sharing().off();
+    readers->add<CloudSamplePubSubType>(ddsTopicName(ns, config.cloud_topic), qos,
+                                        [hand_over](CloudSample&& m) {
+                                          const double arrival_s = wallClockNow_s();
+                                          hand_over([&m, arrival_s](PeerInbox& in) {
+                                            in.cloud = std::move(m);
+                                            in.cloud_arrival_s = arrival_s;
+                                          });
+                                        });
+  }
 }
 
 void PlannerPeer::Impl::run() {
@@ -158,10 +247,106 @@ void PlannerPeer::Impl::run() {
   }
 }
 
+void PlannerPeer::Impl::log(LogLevel level, const std::string& message) {
+  if (config.log) config.log(level, message);
+  if (rosout) rosout->write(level, message);
+}
+
 void PlannerPeer::Impl::reject(const std::string& what, const DecodeStatus& status) {
-  const std::lock_guard<std::mutex> lock(stats_mutex);
-  ++stats.rejected;
-  stats.last_rejection = what + ": " + toString(status.error) + " (" + status.detail + ")";
+  reject(what + ": " + toString(status.error) + " (" + status.detail + ")");
+}
+
+void PlannerPeer::Impl::reject(const std::string& line) {
+  {
+    const std::lock_guard<std::mutex> lock(stats_mutex);
+    ++stats.rejected;
+    stats.last_rejection = line;
+  }
+  const double now_s = wallClockNow_s();
+  if (now_s - last_rejection_log_s < kRejectionLogInterval_s) {
+    ++rejections_unlogged;
+    return;
+  }
+  last_rejection_log_s = now_s;
+  log(LogLevel::kWarning,
+      "rejected a malformed " + line +
+          (rejections_unlogged > 0
+               ? " (and " + std::to_string(rejections_unlogged) + " more since the last such line)"
+               : ""));
+  rejections_unlogged = 0;
+}
+
+bool PlannerPeer::Impl::takePoses(const std::vector<geometry_msgs::PoseStamped_>& msgs) {
+  bool taken = false;
+  for (const geometry_msgs::PoseStamped_& msg : msgs) {
+    double stamp_s = 0.0;
+    Transform T_W_B = Transform::Identity();
+    const DecodeStatus s = decodePose(msg, &stamp_s, &T_W_B);
+    if (!s.ok()) {
+      reject("pose", s);
+      continue;
+    }
+    {
+      const std::lock_guard<std::mutex> lock(stats_mutex);
+      ++stats.poses;
+    }
+    // Refused ones (out of order, a jump ahead) are still the vehicle's latest word on where it
+    // is; they only place no cloud.
+    (void)poses.add(stamp_s, T_W_B);
+    taken = true;
+    pose_stamp_s = stamp_s;
+    have_pose = true;
+    p_W = T_W_B.translation();
+    const Eigen::Vector3d x_W = T_W_B.linear().col(0);
+    yaw_rad = std::atan2(x_W.y(), x_W.x());
+  }
+  return taken;
+}
+
+void PlannerPeer::Impl::takeCloud(CloudSample&& cloud, double arrival_s) {
+  {
+    const std::lock_guard<std::mutex> lock(stats_mutex);
+    ++stats.clouds;
+  }
+  if (cloud.header_().stamp_().nanosec_() >= 1000000000u) {
+    return reject("PointCloud2", DecodeStatus{DecodeError::kBadStamp, "nanosec >= 1e9"});
+  }
+  if (!cloud.status.ok()) return reject("PointCloud2", cloud.status);  // decoded when taken
+  if (waiting_cloud) {
+    const std::lock_guard<std::mutex> lock(stats_mutex);
+    ++stats.clouds_without_pose;  // superseded while it waited
+  }
+  waiting_cloud = std::move(cloud);
+  waiting_since_s = arrival_s;
+}
+
+void PlannerPeer::Impl::placeWaitingCloud() {
+  if (!waiting_cloud) return;
+  const double stamp_s = toSeconds(waiting_cloud->header_().stamp_());
+  Transform T_W_B = Transform::Identity();
+  const PoseBuffer::LookupResult found = poses.lookup(stamp_s, &T_W_B);
+  if (found == PoseBuffer::LookupResult::kPending &&
+      wallClockNow_s() - waiting_since_s < kCloudPoseWait_s) {
+    return;  // its pose may still come
+  }
+  std::optional<CloudSample> cloud = std::move(waiting_cloud);
+  waiting_cloud.reset();
+  if (found != PoseBuffer::LookupResult::kFound) {
+    const std::lock_guard<std::mutex> lock(stats_mutex);
+    ++stats.clouds_without_pose;
+    return;
+  }
+  if (!goal_W) return;  // no flight height yet: nothing to plan
+  std::vector<Eigen::Vector3d> points_W = nav::recentObstacles(
+      cloud->points_S, T_W_B * config.T_B_S, goal_W->z(), config.recent_cell_m);
+  const std::size_t count = points_W.size();
+  navigator.setRecentObstacles(std::move(points_W));
+  {
+    const std::lock_guard<std::mutex> lock(stats_mutex);
+    ++stats.recent_obstacle_frames;
+    stats.recent_obstacles += count;
+  }
+  plan(stamp_s);  // at the frame's time, as the one-process flight
 }
 
 void PlannerPeer::Impl::step(PeerInbox in) {
@@ -185,25 +370,14 @@ void PlannerPeer::Impl::step(PeerInbox in) {
     } else if (!goal_W || (*goal_W - T_W_G.translation()).norm() > 1e-3) {
       goal_W = T_W_G.translation();
       navigator.setGoal(*goal_W);
+      log(LogLevel::kInfo, "new goal (" + std::to_string(goal_W->x()) + ", " +
+                               std::to_string(goal_W->y()) + ", " + std::to_string(goal_W->z()) +
+                               ")");
       const std::lock_guard<std::mutex> lock(stats_mutex);
       ++stats.goals;
     }
   }
-  if (in.pose) {
-    Transform T_W_B = Transform::Identity();
-    const DecodeStatus s = decodePose(*in.pose, &pose_stamp_s, &T_W_B);
-    if (s.ok()) {
-      have_pose = true;
-      p_W = T_W_B.translation();
-      const Eigen::Vector3d x_W = T_W_B.linear().col(0);
-      yaw_rad = std::atan2(x_W.y(), x_W.x());
-      const std::lock_guard<std::mutex> lock(stats_mutex);
-      ++stats.poses;
-    } else {
-      reject("pose", s);
-      in.pose.reset();
-    }
-  }
+  const bool new_pose = takePoses(in.poses);
   if (in.block) {
     double max_distance_m = 0.0;
     const DecodeStatus s = decodeEsdfBlock(*in.block, &box, &max_distance_m);
@@ -224,7 +398,9 @@ void PlannerPeer::Impl::step(PeerInbox in) {
       }
     }
   }
-  if (in.pose) {
+  if (in.cloud) takeCloud(std::move(*in.cloud), in.cloud_arrival_s);
+  placeWaitingCloud();
+  if (new_pose) {
     plan(pose_stamp_s);
     publishSetpoint(pose_stamp_s);
   }
@@ -234,6 +410,8 @@ bool PlannerPeer::Impl::plan(double now_stamp_s) {
   if (!have_pose || !goal_W) return false;
   const nav::PlanReason reason = navigator.update(*map, p_W, now_stamp_s);
   const bool reached = navigator.reached(p_W);
+  if (reached && !was_reached) log(LogLevel::kInfo, "the vehicle is at the goal");
+  was_reached = reached;
   if (reason == nav::PlanReason::kNone) {
     const std::lock_guard<std::mutex> lock(stats_mutex);
     stats.reached = reached;

@@ -13,14 +13,27 @@
 /// map state it was planned on (the last mapped frame's stamp), so wall clock - stamp at its
 /// publication is the map-to-plan latency, which the peer records.
 ///
+/// With `cloud_topic` set it also reads the sensor's clouds the node maps (sensor_msgs/
+/// PointCloud2): each frame is placed with the pose at its stamp (a PoseBuffer of the pose
+/// topic, as the node pairs them; the mounting T_B_S from the configuration), and its measured
+/// points near the flight height become the Navigator's recent obstacles
+/// (nav::recentObstacles()), planned on at once at the frame's stamp: as in the one-process
+/// flight, a person crossing in front is seen before the map's occupancy has them, and a stale
+/// obstacle's cell that a frame hits again stays an obstacle.
+///
+/// In the ROS 2 graph it is the node `node_name` (ros_discovery_info lists its readers and
+/// writers; `ros2 node list` shows it) and its log lines go to /rosout (mlmap_dds_graph).
+///
 /// Threads: Fast DDS's listener threads only hand the samples over; one thread of the peer's
 /// decodes, plans and publishes. Malformed messages are counted and logged (rate-limited), never
 /// planned on. QoS as ROS 2 publishers and subscribers of these topics use by default (RELIABLE,
 /// VOLATILE, KEEP_LAST 10; the grid TRANSIENT_LOCAL as the node latches it; the pose best-effort
 /// as the node reads it). Frames: W is the node's world frame, metres, seconds.
 
+#include "mlmap/core/pose_buffer.h"
 #include "mlmap/dds/transport/dds_config.h"
 #include "mlmap/nav/navigator.h"
+#include "mlmap/pipeline/rate_limited_log.h"
 
 #include <Eigen/Core>
 
@@ -49,6 +62,18 @@ struct PlannerPeerConfig {
   /// velocity / gain (toSetpointPose()).
   double position_gain_per_s = 1.5;
   std::optional<Eigen::Vector3d> goal_W;  ///< a goal from the start (else wait for goal_topic)
+  /// in: the sensor's clouds the node maps (its topics.cloud; sensor_msgs/PointCloud2 in the
+  /// sensor frame, BEST_EFFORT as the node reads them); "": off, the Navigator gets no frame's
+  /// points (it then sees a moving obstacle only once the map has it).
+  std::string cloud_topic;
+  Transform T_B_S = Transform::Identity();  ///< the sensor's mounting (the node's sensor.*)
+  /// Pairing a cloud's stamp with the poses of pose_topic (the node's: poseBufferConfig()).
+  PoseBufferConfig pose_buffer;
+  /// One recent obstacle per cell of this size (the node's local_map.resolution_m) [m].
+  double recent_cell_m = 0.1;
+  std::string node_name = "mlmap_planner";  ///< its ROS 2 node name (ros_discovery_info, /rosout)
+  /// Receives its log lines (they also go to /rosout); called from its threads. Default: none.
+  LogSink log;
 };
 
 /// What the peer did.
@@ -60,8 +85,15 @@ struct PlannerPeerStats {
   std::uint64_t paths = 0;      ///< Paths published
   std::uint64_t setpoints = 0;  ///< setpoints published
   std::uint64_t rejected = 0;   ///< malformed messages (not planned on)
-  std::string last_rejection;   ///< why the last one was rejected
-  bool reached = false;         ///< the last pose was at the goal
+  std::uint64_t clouds = 0;     ///< clouds received (cloud_topic)
+  /// Clouds whose points went to the Navigator as its recent obstacles.
+  std::uint64_t recent_obstacle_frames = 0;
+  std::uint64_t recent_obstacles = 0;  ///< points those frames gave it, in all
+  /// Clouds not used: no pose within the tolerance of their stamp, still none 0.5 s after they
+  /// arrived, or a newer cloud arrived while they waited for it.
+  std::uint64_t clouds_without_pose = 0;
+  std::string last_rejection;  ///< why the last one was rejected
+  bool reached = false;        ///< the last pose was at the goal
   /// Per planned ESDF block: wall clock at the Path's publication - the map state's stamp [ms].
   std::vector<double> map_to_plan_ms;
   /// Per planned ESDF block: wall clock at its arrival - the map state's stamp [ms].
@@ -71,9 +103,9 @@ struct PlannerPeerStats {
 /// The planner peer; runs from construction to destruction.
 class PlannerPeer {
  public:
-  /// Joins the DDS graph (participant "mlmap_planner_peer"), creates the readers and writers and
-  /// starts planning. Throws std::runtime_error when an entity cannot be created,
-  /// std::invalid_argument for a bad configuration.
+  /// Joins the DDS graph (participant "mlmap_planner_peer"), creates the readers and writers,
+  /// announces them as the ROS 2 node `node_name` and starts planning. Throws std::runtime_error
+  /// when an entity cannot be created, std::invalid_argument for a bad configuration.
   explicit PlannerPeer(const PlannerPeerConfig& config);
   /// Stops the thread and leaves the graph.
   ~PlannerPeer();
