@@ -5,10 +5,10 @@
 // "Over DDS"). A program of its own rather than a mode of mlmap_navigate: onboard it links the
 // planner and DDS only, no simulator, no OpenCV, as mlmap_node.
 //
-// With --cloud-topic it also reads the sensor's clouds the node maps (usually the node's
-// dds.topics.cloud), whose points near the flight height the planner avoids before the map has
-// them (a person crossing). In the ROS 2 graph it is the node --node-name (mlmap_planner), its
-// log lines on /rosout.
+// With --cloud-topic (or --depth-image-topic and --camera-info-topic) it also reads the sensor's
+// frames the node maps (usually the node's dds.topics.cloud), whose points near the flight height
+// the planner avoids before the map has them (a person crossing). In the ROS 2 graph it is the node
+// --node-name (mlmap_planner), its log lines on /rosout.
 //
 // At the end it prints the map-to-plan latency (a frame's stamp to the Path planned on the map
 // state it ended: median and p99). Exit status 1 on an error, or with --exit-when-reached when
@@ -41,6 +41,8 @@ struct Options {
   std::string path_topic = "mlmap/plan";
   std::string setpoint_topic = "mlmap/setpoint";
   std::string cloud_topic;                  ///< --cloud-topic ("": off)
+  std::string depth_image_topic;            ///< --depth-image-topic ("": off)
+  std::string camera_info_topic;            ///< --camera-info-topic
   std::string node_name = "mlmap_planner";  ///< --node-name
   double duration_s = 0.0;                  ///< --duration (0: until stopped)
   double report_every_s = 5.0;              ///< --report-every
@@ -62,6 +64,12 @@ void addOptions(CLI::App& app, Options& o) {
                  "sensor_msgs/PointCloud2 in: the sensor's clouds the node maps (its "
                  "dds.topics.cloud); the latest frame's points are the planner's recent obstacles "
                  "(default: off)");
+  app.add_option("--depth-image-topic", o.depth_image_topic,
+                 "sensor_msgs/Image in (16UC1 or 32FC1), as --cloud-topic for a node fed depth "
+                 "images (its dds.topics.depth_image); needs --camera-info-topic");
+  app.add_option(
+      "--camera-info-topic", o.camera_info_topic,
+      "sensor_msgs/CameraInfo in: the depth images' (the node's dds.topics.camera_info)");
   app.add_option("--node-name", o.node_name, "its ROS 2 node name (ros2 node list, /rosout)");
   app.add_option("--duration", o.duration_s, "seconds to run (0: until SIGINT / SIGTERM)")
       ->check(CLI::NonNegativeNumber);
@@ -90,10 +98,13 @@ dds::PlannerPeerConfig peerConfig(const Options& o, const dds::NodeConfig& node)
   c.setpoint_topic = o.setpoint_topic;
   c.esdf_unknown_as = node.map.esdf.unknown_as;
   c.cloud_topic = o.cloud_topic;
-  if (!c.cloud_topic.empty() &&
+  c.depth_image_topic = o.depth_image_topic;
+  c.camera_info_topic = o.camera_info_topic;
+  if ((!c.cloud_topic.empty() || !c.depth_image_topic.empty()) &&
       dds::resolveExtrinsicSource(node.dds) != dds::ExtrinsicSource::kConfig) {
     throw std::runtime_error(
-        "--cloud-topic places the clouds with the configured mounting (sensor.*): the node's "
+        "--cloud-topic and --depth-image-topic place the frames with the configured mounting "
+        "(sensor.*): the node's "
         "dds.sensor_extrinsic must be config");
   }
   c.T_B_S = node.map.sensor.T_B_S();
@@ -119,11 +130,12 @@ void finalReport(const dds::PlannerPeerStats& s) {
       "done: {} maps planned on, {} grids, {} poses, {} goals, {} paths, {} setpoints, {} "
       "rejected, reached {}",
       s.maps, s.grids, s.poses, s.goals, s.paths, s.setpoints, s.rejected, s.reached ? 1 : 0);
-  if (s.clouds > 0) {
+  if (s.clouds + s.depth_images > 0) {
     spdlog::info(
-        "clouds: {} received, {} gave their points to the planner ({} recent obstacles in all), "
-        "{} without a pose",
-        s.clouds, s.recent_obstacle_frames, s.recent_obstacles, s.clouds_without_pose);
+        "sensor frames: {} clouds and {} depth images received, {} gave their points to the "
+        "planner ({} recent obstacles in all), {} without a pose",
+        s.clouds, s.depth_images, s.recent_obstacle_frames, s.recent_obstacles,
+        s.frames_without_pose);
   }
   if (!s.last_rejection.empty()) spdlog::warn("last rejected message: {}", s.last_rejection);
   if (s.map_to_plan_ms.empty()) return;

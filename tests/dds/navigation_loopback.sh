@@ -61,7 +61,8 @@ grep -q "map-to-plan (over DDS) median" "$out/planner.log" ||
 grep -q "0 rejected, reached 1" "$out/planner.log" ||
   { echo "FAIL: the planner rejected a message or never saw the vehicle at the goal"; exit 1; }
 if [ "$mode" = person ]; then
-  grep -Eq "clouds: [0-9]+ received, [1-9][0-9]* gave their points" "$out/planner.log" ||
+  grep -Eq "sensor frames: [0-9]+ clouds and 0 depth images received, [1-9][0-9]* gave their points" \
+    "$out/planner.log" ||
     { echo "FAIL: no cloud's points reached the planner"; exit 1; }
 fi
 echo "PASS"

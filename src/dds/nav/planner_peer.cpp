@@ -11,6 +11,8 @@
 #include "mlmap_msgs/msg/VoxelBlock_PubSubTypes.h"
 #include "nav_msgs/msg/OccupancyGrid_PubSubTypes.h"
 #include "nav_msgs/msg/Path_PubSubTypes.h"
+#include "sensor_msgs/msg/CameraInfo_PubSubTypes.h"
+#include "sensor_msgs/msg/Image_PubSubTypes.h"
 
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -33,8 +35,8 @@ namespace {
 /// Poses kept between two passes of the planning thread (the oldest dropped beyond it): far more
 /// than arrive in one pass at any pose rate.
 constexpr std::size_t kMaxInboxPoses = 256;
-/// Wall time a cloud may wait for the pose at its stamp (as the node's FramePairer) [s].
-constexpr double kCloudPoseWait_s = 0.5;
+/// Wall time a sensor frame may wait for the pose at its stamp (as the node's FramePairer) [s].
+constexpr double kFramePoseWait_s = 0.5;
 /// A rejection is logged at most this often (the others counted) [s].
 constexpr double kRejectionLogInterval_s = 1.0;
 
@@ -49,6 +51,13 @@ bool isRosNodeName(const std::string& name) {
 
 }  // namespace
 
+/// A sensor frame's points waiting for the pose at its stamp.
+struct WaitingFrame {
+  double stamp_s = 0.0;
+  std::vector<Eigen::Vector3f> points_S;  ///< in the sensor frame
+  double since_s = 0.0;                   ///< wall clock at its arrival
+};
+
 /// The samples handed over by the listener threads (the latest of each kind; every pose).
 struct PeerInbox {
   std::optional<nav_msgs::OccupancyGrid_> grid;
@@ -57,8 +66,11 @@ struct PeerInbox {
   std::vector<geometry_msgs::PoseStamped_> poses;  ///< in arrival order
   std::optional<geometry_msgs::PoseStamped_> goal;
   std::optional<CloudSample> cloud;
-  double cloud_arrival_s = 0.0;  ///< wall clock at the cloud's arrival
-  std::uint64_t malformed = 0;   ///< samples Fast CDR could not read
+  double cloud_arrival_s = 0.0;              ///< wall clock at the cloud's arrival
+  std::optional<sensor_msgs::Image_> image;  ///< a depth image
+  double image_arrival_s = 0.0;              ///< wall clock at its arrival
+  std::optional<sensor_msgs::CameraInfo_> camera_info;
+  std::uint64_t malformed = 0;  ///< samples Fast CDR could not read
   std::string malformed_detail;
 };
 
@@ -69,17 +81,22 @@ struct PlannerPeer::Impl {
   /// Creates the readers of the inputs.
   void addReaders(fdds::Subscriber* subscriber);
   void run();
-  /// One pass over what arrived: grid, goal, poses, ESDF block (planned on at once), cloud
-  /// (planned on at once), the latest pose's plan and setpoint.
+  /// One pass over what arrived: grid, goal, poses, ESDF block (planned on at once), cloud or
+  /// depth image (planned on at once), the latest pose's plan and setpoint.
   void step(PeerInbox in);
   /// Takes the poses into the pose buffer; the latest valid one is the vehicle's. True when
   /// one was.
   bool takePoses(const std::vector<geometry_msgs::PoseStamped_>& poses);
-  /// Checks a new cloud; it waits for its pose in waiting_cloud.
+  /// Checks a new cloud; its points wait for their pose in waiting_frame.
   void takeCloud(CloudSample&& cloud, double arrival_s);
-  /// Gives the waiting cloud's points to the Navigator and plans when its pose is known, drops
+  /// Checks and back-projects a new depth image (with the latest CameraInfo); its points wait
+  /// for their pose in waiting_frame.
+  void takeImage(const sensor_msgs::Image_& image, double arrival_s);
+  /// Makes `frame` the one waiting for its pose (one that still waited is dropped, counted).
+  void wait(WaitingFrame&& frame);
+  /// Gives the waiting frame's points to the Navigator and plans when its pose is known, drops
   /// it when it will have none.
-  void placeWaitingCloud();
+  void placeWaitingFrame();
   void reject(const std::string& what, const DecodeStatus& status);
   /// Counts a rejected message and logs it (at most every kRejectionLogInterval_s).
   void reject(const std::string& line);
@@ -118,8 +135,8 @@ struct PlannerPeer::Impl {
   double pose_stamp_s = 0.0;
   std::optional<Eigen::Vector3d> goal_W;
   PoseBuffer poses{PoseBufferConfig{}};
-  std::optional<CloudSample> waiting_cloud;  ///< a cloud waiting for the pose at its stamp
-  double waiting_since_s = 0.0;              ///< wall clock at its arrival
+  std::optional<WaitingFrame> waiting_frame;  ///< a frame waiting for the pose at its stamp
+  std::optional<sensor_msgs::CameraInfo_> camera_info;  ///< the latest, for the depth images
   double last_rejection_log_s = -1e300;
   std::uint64_t rejections_unlogged = 0;
   bool was_reached = false;  ///< the vehicle was at the goal at the last plan()
@@ -136,6 +153,10 @@ void PlannerPeer::Impl::start() {
   if (!isRosNodeName(config.node_name)) {
     throw std::invalid_argument("planner peer: node_name '" + config.node_name +
                                 "' is not a ROS 2 node name (letters, digits, _)");
+  }
+  if (config.depth_image_topic.empty() != config.camera_info_topic.empty()) {
+    throw std::invalid_argument(
+        "planner peer: depth_image_topic and camera_info_topic go together (both or neither)");
   }
   if (!(config.recent_cell_m > 0.0) || !std::isfinite(config.recent_cell_m)) {
     throw std::invalid_argument("planner peer: recent_cell_m must be finite and positive");
@@ -169,8 +190,10 @@ void PlannerPeer::Impl::start() {
   graph->announce({publisher}, {subscriber});
   log(LogLevel::kInfo,
       "planning on " + config.grid_topic + " and " + config.esdf_topic +
-          (config.cloud_topic.empty() ? ", no sensor topic: recent obstacles only from the map"
-                                      : ", the latest frame's points from " + config.cloud_topic));
+          (config.cloud_topic.empty() && config.depth_image_topic.empty()
+               ? ", no sensor topic: recent obstacles only from the map"
+               : ", the latest frame's points from " +
+                     (config.cloud_topic.empty() ? config.depth_image_topic : config.cloud_topic)));
   thread = std::thread([this] { run(); });
 }
 
@@ -229,6 +252,22 @@ void PlannerPeer::Impl::addReaders(fdds::Subscriber* subscriber) {
                                             in.cloud_arrival_s = arrival_s;
                                           });
                                         });
+  }
+  if (!config.depth_image_topic.empty()) {
+    fdds::DataReaderQos qos = sensorReaderQos();
+    if (!config.dds.data_sharing) qos.data_sharing().off();
+    readers->add<sensor_msgs::Image_PubSubType>(ddsTopicName(ns, config.depth_image_topic), qos,
+                                                [hand_over](sensor_msgs::Image_&& m) {
+                                                  const double arrival_s = wallClockNow_s();
+                                                  hand_over([&m, arrival_s](PeerInbox& in) {
+                                                    in.image = std::move(m);
+                                                    in.image_arrival_s = arrival_s;
+                                                  });
+                                                });
+    readers->add<sensor_msgs::CameraInfo_PubSubType>(
+        ddsTopicName(ns, config.camera_info_topic), qos, [hand_over](sensor_msgs::CameraInfo_&& m) {
+          hand_over([&m](PeerInbox& in) { in.camera_info = std::move(m); });
+        });
   }
 }
 
@@ -312,33 +351,52 @@ void PlannerPeer::Impl::takeCloud(CloudSample&& cloud, double arrival_s) {
     return reject("PointCloud2", DecodeStatus{DecodeError::kBadStamp, "nanosec >= 1e9"});
   }
   if (!cloud.status.ok()) return reject("PointCloud2", cloud.status);  // decoded when taken
-  if (waiting_cloud) {
-    const std::lock_guard<std::mutex> lock(stats_mutex);
-    ++stats.clouds_without_pose;  // superseded while it waited
-  }
-  waiting_cloud = std::move(cloud);
-  waiting_since_s = arrival_s;
+  wait(WaitingFrame{toSeconds(cloud.header_().stamp_()), std::move(cloud.points_S), arrival_s});
 }
 
-void PlannerPeer::Impl::placeWaitingCloud() {
-  if (!waiting_cloud) return;
-  const double stamp_s = toSeconds(waiting_cloud->header_().stamp_());
+void PlannerPeer::Impl::takeImage(const sensor_msgs::Image_& image, double arrival_s) {
+  {
+    const std::lock_guard<std::mutex> lock(stats_mutex);
+    ++stats.depth_images;
+  }
+  if (image.header_().stamp_().nanosec_() >= 1000000000u) {
+    return reject("depth Image", DecodeStatus{DecodeError::kBadStamp, "nanosec >= 1e9"});
+  }
+  if (!camera_info) return reject("depth Image: before any CameraInfo");
+  DepthFrame frame;
+  const DecodeStatus s = decodeDepthImage(image, *camera_info, &frame);
+  if (!s.ok()) return reject("depth Image", s);
+  WaitingFrame waiting{toSeconds(image.header_().stamp_()), {}, arrival_s};
+  backProject(frame, &waiting.points_S);  // the sizes agree: decodeDepthImage() checked them
+  wait(std::move(waiting));
+}
+
+void PlannerPeer::Impl::wait(WaitingFrame&& frame) {
+  if (waiting_frame) {
+    const std::lock_guard<std::mutex> lock(stats_mutex);
+    ++stats.frames_without_pose;  // superseded while it waited
+  }
+  waiting_frame = std::move(frame);
+}
+
+void PlannerPeer::Impl::placeWaitingFrame() {
+  if (!waiting_frame) return;
   Transform T_W_B = Transform::Identity();
-  const PoseBuffer::LookupResult found = poses.lookup(stamp_s, &T_W_B);
+  const PoseBuffer::LookupResult found = poses.lookup(waiting_frame->stamp_s, &T_W_B);
   if (found == PoseBuffer::LookupResult::kPending &&
-      wallClockNow_s() - waiting_since_s < kCloudPoseWait_s) {
+      wallClockNow_s() - waiting_frame->since_s < kFramePoseWait_s) {
     return;  // its pose may still come
   }
-  std::optional<CloudSample> cloud = std::move(waiting_cloud);
-  waiting_cloud.reset();
+  const WaitingFrame frame = std::move(*waiting_frame);
+  waiting_frame.reset();
   if (found != PoseBuffer::LookupResult::kFound) {
     const std::lock_guard<std::mutex> lock(stats_mutex);
-    ++stats.clouds_without_pose;
+    ++stats.frames_without_pose;
     return;
   }
   if (!goal_W) return;  // no flight height yet: nothing to plan
-  std::vector<Eigen::Vector3d> points_W = nav::recentObstacles(
-      cloud->points_S, T_W_B * config.T_B_S, goal_W->z(), config.recent_cell_m);
+  std::vector<Eigen::Vector3d> points_W =
+      nav::recentObstacles(frame.points_S, T_W_B * config.T_B_S, goal_W->z(), config.recent_cell_m);
   const std::size_t count = points_W.size();
   navigator.setRecentObstacles(std::move(points_W));
   {
@@ -346,7 +404,7 @@ void PlannerPeer::Impl::placeWaitingCloud() {
     ++stats.recent_obstacle_frames;
     stats.recent_obstacles += count;
   }
-  plan(stamp_s);  // at the frame's time, as the one-process flight
+  plan(frame.stamp_s);  // at the frame's time, as the one-process flight
 }
 
 void PlannerPeer::Impl::step(PeerInbox in) {
@@ -398,8 +456,10 @@ void PlannerPeer::Impl::step(PeerInbox in) {
       }
     }
   }
+  if (in.camera_info) camera_info = std::move(in.camera_info);  // checked with each image
   if (in.cloud) takeCloud(std::move(*in.cloud), in.cloud_arrival_s);
-  placeWaitingCloud();
+  if (in.image) takeImage(*in.image, in.image_arrival_s);
+  placeWaitingFrame();
   if (new_pose) {
     plan(pose_stamp_s);
     publishSetpoint(pose_stamp_s);

@@ -13,13 +13,13 @@
 /// map state it was planned on (the last mapped frame's stamp), so wall clock - stamp at its
 /// publication is the map-to-plan latency, which the peer records.
 ///
-/// With `cloud_topic` set it also reads the sensor's clouds the node maps (sensor_msgs/
-/// PointCloud2): each frame is placed with the pose at its stamp (a PoseBuffer of the pose
-/// topic, as the node pairs them; the mounting T_B_S from the configuration), and its measured
-/// points near the flight height become the Navigator's recent obstacles
-/// (nav::recentObstacles()), planned on at once at the frame's stamp: as in the one-process
-/// flight, a person crossing in front is seen before the map's occupancy has them, and a stale
-/// obstacle's cell that a frame hits again stays an obstacle.
+/// With `cloud_topic` (or `depth_image_topic`) set it also reads the sensor's clouds (depth
+/// images) the node maps (sensor_msgs/PointCloud2, sensor_msgs/Image): each frame is placed with
+/// the pose at its stamp (a PoseBuffer of the pose topic, as the node pairs them; the mounting
+/// T_B_S from the configuration), and its measured points near the flight height become the
+/// Navigator's recent obstacles (nav::recentObstacles()), planned on at once at the frame's stamp:
+/// as in the one-process flight, a person crossing in front is seen before the map's occupancy has
+/// them, and a stale obstacle's cell that a frame hits again stays an obstacle.
 ///
 /// In the ROS 2 graph it is the node `node_name` (ros_discovery_info lists its readers and
 /// writers; `ros2 node list` shows it) and its log lines go to /rosout (mlmap_dds_graph).
@@ -66,6 +66,11 @@ struct PlannerPeerConfig {
   /// sensor frame, BEST_EFFORT as the node reads them); "": off, the Navigator gets no frame's
   /// points (it then sees a moving obstacle only once the map has it).
   std::string cloud_topic;
+  /// in: the sensor's depth images the node maps (its topics.depth_image; sensor_msgs/Image
+  /// 16UC1 or 32FC1, back-projected with the latest CameraInfo of camera_info_topic), as
+  /// cloud_topic; "": off. Both or neither.
+  std::string depth_image_topic;
+  std::string camera_info_topic;            ///< in: sensor_msgs/CameraInfo of the depth images
   Transform T_B_S = Transform::Identity();  ///< the sensor's mounting (the node's sensor.*)
   /// Pairing a cloud's stamp with the poses of pose_topic (the node's: poseBufferConfig()).
   PoseBufferConfig pose_buffer;
@@ -78,20 +83,23 @@ struct PlannerPeerConfig {
 
 /// What the peer did.
 struct PlannerPeerStats {
-  std::uint64_t maps = 0;       ///< ESDF blocks planned on
-  std::uint64_t grids = 0;      ///< grids received
-  std::uint64_t poses = 0;      ///< poses received
-  std::uint64_t goals = 0;      ///< goals taken
-  std::uint64_t paths = 0;      ///< Paths published
-  std::uint64_t setpoints = 0;  ///< setpoints published
-  std::uint64_t rejected = 0;   ///< malformed messages (not planned on)
-  std::uint64_t clouds = 0;     ///< clouds received (cloud_topic)
-  /// Clouds whose points went to the Navigator as its recent obstacles.
+  std::uint64_t maps = 0;          ///< ESDF blocks planned on
+  std::uint64_t grids = 0;         ///< grids received
+  std::uint64_t poses = 0;         ///< poses received
+  std::uint64_t goals = 0;         ///< goals taken
+  std::uint64_t paths = 0;         ///< Paths published
+  std::uint64_t setpoints = 0;     ///< setpoints published
+  std::uint64_t rejected = 0;      ///< malformed messages (not planned on)
+  std::uint64_t clouds = 0;        ///< clouds received (cloud_topic)
+  std::uint64_t depth_images = 0;  ///< depth images received (depth_image_topic)
+  /// Sensor frames (clouds, depth images) whose points went to the Navigator as its recent
+  /// obstacles.
   std::uint64_t recent_obstacle_frames = 0;
   std::uint64_t recent_obstacles = 0;  ///< points those frames gave it, in all
-  /// Clouds not used: no pose within the tolerance of their stamp, still none 0.5 s after they
-  /// arrived, or a newer cloud arrived while they waited for it.
-  std::uint64_t clouds_without_pose = 0;
+  /// Sensor frames not used: no pose within the tolerance of their stamp, still none 0.5 s after
+  /// they arrived, or a newer frame arrived while they waited for it. (A frame that does not
+  /// decode, or a depth image before any CameraInfo, is rejected.)
+  std::uint64_t frames_without_pose = 0;
   std::string last_rejection;  ///< why the last one was rejected
   bool reached = false;        ///< the last pose was at the goal
   /// Per planned ESDF block: wall clock at the Path's publication - the map state's stamp [ms].
