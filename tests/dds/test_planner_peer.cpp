@@ -3,7 +3,7 @@
 // frames are counted;
 // and it is a node of the ROS 2 graph: ros_discovery_info lists it with exactly its endpoints,
 // its log lines reach /rosout. Each test talks to the peer from a participant of its own over
-// loopback; domains 224 and 226.
+// loopback; domains 229 and 226.
 
 #include "mlmap/dds/graph/ros_graph.h"
 #include "mlmap/dds/nav/planner_peer.h"
@@ -93,7 +93,7 @@ struct Robot {
 // not decode is rejected and counted, one without a pose at its stamp counted and not used. A
 // depth image gives its points the same way once a CameraInfo came (before, it is rejected).
 TEST(PlannerPeer, TheLatestFramesPointsReachThePlannerAndBadFramesAreCounted) {
-  constexpr int kDomain = 224;
+  constexpr int kDomain = 229;
   PlannerPeer peer(peerConfig(kDomain));
   Robot robot(kDomain);
   ASSERT_TRUE(waitFor([&] {
