@@ -32,16 +32,36 @@ std::vector<std::vector<std::size_t>> groupPoints(const std::vector<Eigen::Vecto
 MovingObstacleTracker::MovingObstacleTracker(const MovingObstacleConfig& config)
     : config_(config) {}
 
-void MovingObstacleTracker::update(const std::vector<Eigen::Vector3d>& moved_points_W,
-                                   double time_s) {
+void MovingObstacleTracker::update(const std::vector<Eigen::Vector3d>& points_W,
+                                   const std::vector<bool>& moved, double time_s) {
   std::vector<bool> continued(obstacles_.size(), false);
-  for (const std::vector<std::size_t>& group : groupPoints(moved_points_W, config_.link_m)) {
+  std::vector<Eigen::Vector3d> moved_W;
+  std::vector<Eigen::Vector3d> stayed_W;
+  for (std::size_t i = 0; i < points_W.size(); ++i)
+    (i < moved.size() && moved[i] ? moved_W : stayed_W).push_back(points_W[i]);
+  const double attach2 = config_.attach_m * config_.attach_m;
+  for (const std::vector<std::size_t>& group : groupPoints(moved_W, config_.link_m)) {
+    if (static_cast<int>(group.size()) < config_.min_points) continue;
+    // The points of what did not move that touch the group: many for the sliver of a tree's or
+    // a wall's edge in cells once seen free, none or a few for a person, also beside a tree.
+    std::size_t touching = 0;
+    for (const Eigen::Vector3d& q : stayed_W) {
+      for (const std::size_t i : group) {
+        if ((moved_W[i].head<2>() - q.head<2>()).squaredNorm() < attach2) {
+          ++touching;
+          break;
+        }
+      }
+    }
+    if (static_cast<double>(group.size()) <
+        config_.min_moved_share * static_cast<double>(group.size() + touching))
+      continue;
     Eigen::Vector2d center = Eigen::Vector2d::Zero();
-    for (const std::size_t i : group) center += moved_points_W[i].head<2>();
+    for (const std::size_t i : group) center += moved_W[i].head<2>();
     center /= static_cast<double>(group.size());
     double reach = 0.0;
     for (const std::size_t i : group)
-      reach = std::max(reach, (moved_points_W[i].head<2>() - center).norm());
+      reach = std::max(reach, (moved_W[i].head<2>() - center).norm());
     if (reach > config_.max_radius_m) continue;  // a wall's edge, not a person
     // The obstacle predicted nearest, not yet continued by another group of this frame.
     std::size_t best = obstacles_.size();
@@ -62,7 +82,7 @@ void MovingObstacleTracker::update(const std::vector<Eigen::Vector3d>& moved_poi
     o.center_W = center;
     o.seen_s = time_s;
     o.points_W.clear();
-    for (const std::size_t i : group) o.points_W.push_back(moved_points_W[i]);
+    for (const std::size_t i : group) o.points_W.push_back(moved_W[i]);
     o.history.emplace_back(time_s, center);
     while (o.history.size() > 1 && time_s - o.history.front().first > config_.velocity_window_s)
       o.history.pop_front();

@@ -51,7 +51,7 @@ ProjectedGrid coverPoints(const ProjectedGrid& grid, const std::vector<Eigen::Ve
   return out;
 }
 
-Navigator::Navigator(const NavigatorConfig& config) : config_(config) {}
+Navigator::Navigator(const NavigatorConfig& config) : config_(config), tracker_(config.moving) {}
 
 void Navigator::setGoal(const Eigen::Vector3d& goal_W) {
   goal_W_ = goal_W;
@@ -198,14 +198,27 @@ PlanReason Navigator::update(const MapSnapshot& map, const Eigen::Vector3d& p_W,
           ++hits_since_free_[k];  // once a frame
         last_hit_s_[k] = time_s;
       }
+      if (config_.follow_moving) {
+        last_frame_time_s_ = time_s;
+        std::vector<bool> moved;
+        moved.reserve(recent_obstacles_W_.size());
+        for (const Eigen::Vector3d& q : recent_obstacles_W_)
+          moved.push_back(standsWhereSomethingMoved(map, p_W, q));
+        tracker_.update(recent_obstacles_W_, moved, time_s);
+      }
     }
     last_frame_ = map.frame();
+    avoid_W_ = recent_obstacles_W_;
+    if (config_.follow_moving) {
+      const std::vector<Eigen::Vector3d> ahead = tracker_.predictedPoints(time_s);
+      avoid_W_.insert(avoid_W_.end(), ahead.begin(), ahead.end());
+    }
     // The rest of the committed segment, from the vehicle on, under the new map.
     const std::vector<Eigen::Vector3d> committed = plan_.committedPoints();
     if (committed.size() > 1) {
       std::vector<Eigen::Vector3d> rest =
           routeAhead(committed, p_W, polylineLength(committed), config_.local.sample_step_m);
-      if (committablePrefix(map, config_.local, rest, &recent_obstacles_W_) < rest.size()) {
+      if (committablePrefix(map, config_.local, rest, &avoid_W_) < rest.size()) {
         reason = PlanReason::kBlocked;
         ++blocked_replans_;
       }
@@ -217,9 +230,12 @@ PlanReason Navigator::update(const MapSnapshot& map, const Eigen::Vector3d& p_W,
   if (reason == PlanReason::kNone) return reason;
   planRoute(p_W, time_s);
   const double cpu1 = threadCpu_s();
-  plan_ = planLocal(map, config_.local, route_W_, p_W, &recent_obstacles_W_);
-  evade_W_ = evadeVelocity(map, p_W);
-  cautious_ = nearestMoved(map, p_W, config_.caution_radius_m) != nullptr;
+  plan_ = planLocal(map, config_.local, route_W_, p_W, &avoid_W_);
+  evade_W_ = evadeVelocity(map, p_W, time_s);
+  cautious_ =
+      nearestMoved(map, p_W, config_.caution_radius_m) != nullptr ||
+      (config_.follow_moving &&
+       tracker_.nearestMoving(p_W, time_s, config_.caution_radius_m, 0.0, nullptr) != nullptr);
   if ((p_W - anchor_W_).norm() >= config_.stuck_move_m) {
     anchor_W_ = p_W;
     anchor_time_s_ = time_s;
@@ -256,23 +272,60 @@ const Eigen::Vector3d* Navigator::nearestMoved(const MapSnapshot& map, const Eig
   return nearest;
 }
 
-Eigen::Vector3d Navigator::evadeVelocity(const MapSnapshot& map, const Eigen::Vector3d& p_W) const {
-  const Eigen::Vector3d* nearest = nearestMoved(map, p_W, config_.evade_radius_m);
-  if (nearest == nullptr) return Eigen::Vector3d::Zero();
-  Eigen::Vector3d away = p_W - *nearest;
+bool Navigator::standsWhereSomethingMoved(const MapSnapshot& map, const Eigen::Vector3d& p_W,
+                                          const Eigen::Vector3d& q_W) const {
+  const EsdfMap::Query at = map.distance(q_W);
+  if (map.state(q_W) == Occupancy::kFree && at.valid &&
+      at.distance_m >= 2.0 * map.window().resolution_m) {
+    return true;  // in open space the map knows free
+  }
+  // The cell behind the measured surface, 0.75 cell further from the vehicle: a surface point on
+  // or near a cell's border (a wall along a cell row) lies in the mixed or free cell before it.
+  Eigen::Vector2d ray = q_W.head<2>() - p_W.head<2>();
+  if (ray.norm() < 1e-6) return false;
+  ray *= 0.75 * layout_.resolution_m / ray.norm();
+  const std::ptrdiff_t i = cellIndex(q_W.head<2>() + ray);
+  if (i < 0) return false;
+  const auto k = static_cast<std::size_t>(i);
+  return last_free_s_[k] >= last_frame_time_s_ - config_.moved_free_within_s &&
+         hits_since_free_[k] <= config_.stale_max_hits;
+}
+
+Eigen::Vector3d Navigator::evadeVelocity(const MapSnapshot& map, const Eigen::Vector3d& p_W,
+                                         double time_s) {
+  evade_from_W_.setZero();
+  const Eigen::Vector3d* moved = nearestMoved(map, p_W, config_.evade_radius_m);
+  Eigen::Vector3d from = moved != nullptr ? *moved : Eigen::Vector3d::Zero();
+  double gap = moved != nullptr ? (*moved - p_W).norm() : config_.evade_radius_m;
+  Eigen::Vector3d ahead_W;
+  if (config_.follow_moving &&
+      tracker_.nearestMoving(p_W, time_s, gap, config_.evade_lookahead_s, &ahead_W) != nullptr) {
+    from = ahead_W;
+    gap = (ahead_W - p_W).norm();
+    moved = &from;
+  }
+  if (moved == nullptr) return Eigen::Vector3d::Zero();
+  Eigen::Vector3d away = p_W - from;
   away.z() = 0.0;
   if (away.norm() < 1e-6) return Eigen::Vector3d::Zero();
   away.normalize();
-  const Eigen::Vector3d to = p_W + away * config_.local.own_radius_m * 2.0;
-  const EsdfMap::Query q = map.distance(to);
-  if (!map.isSegmentFree(p_W + away * config_.local.own_radius_m, to, UnknownAs::kOccupied) ||
-      !q.valid || q.distance_m < config_.local.commit_clearance_m) {
-    return Eigen::Vector3d::Zero();
-  }
-  const double gap = (*nearest - p_W).norm();
+  evade_from_W_ = from;
   const double urgency =
       std::min(1.0, 2.0 * (config_.evade_radius_m - gap) / config_.evade_radius_m);
-  return away * (config_.max_speed_mps * urgency);
+  // Straight away, else turned by 45 then 90 degrees either way: the first step into known-free
+  // space with clearance.
+  constexpr double kTurns_rad[] = {0.0, 0.785398163, -0.785398163, 1.570796327, -1.570796327};
+  for (const double turn : kTurns_rad) {
+    const Eigen::Vector3d dir(std::cos(turn) * away.x() - std::sin(turn) * away.y(),
+                              std::sin(turn) * away.x() + std::cos(turn) * away.y(), 0.0);
+    const Eigen::Vector3d to = p_W + dir * config_.local.own_radius_m * 2.0;
+    const EsdfMap::Query q = map.distance(to);
+    if (map.isSegmentFree(p_W + dir * config_.local.own_radius_m, to, UnknownAs::kOccupied) &&
+        q.valid && q.distance_m >= config_.local.commit_clearance_m) {
+      return dir * (config_.max_speed_mps * urgency);
+    }
+  }
+  return Eigen::Vector3d::Zero();
 }
 
 Setpoint Navigator::setpoint(const Eigen::Vector3d& p_W, double yaw_rad) const {
@@ -280,7 +333,10 @@ Setpoint Navigator::setpoint(const Eigen::Vector3d& p_W, double yaw_rad) const {
   sp.position_W = p_W;
   sp.yaw_rad = yaw_rad;
   if (evading()) {
+    // Backing away, it faces what it backs away from, so that the camera keeps seeing it.
     sp.velocity_W = evade_W_;
+    const Eigen::Vector3d look = evade_from_W_ - p_W;
+    if (look.head<2>().norm() > 1e-3) sp.yaw_rad = std::atan2(look.y(), look.x());
     return sp;
   }
   const std::vector<Eigen::Vector3d> committed = plan_.committedPoints();

@@ -24,15 +24,17 @@ void expectReachedWithoutCollision(const NavWorld& world, double timeout_s = 60.
   EXPECT_EQ(r.map_to_plan_ms.size(), r.frames);
 }
 
-/// A building floor of the benchmark with its person: crossing the shortest route halfway, 3 m
-/// ahead of a vehicle flying it at 0.95 x its top speed (as benchmarkWorlds() adds them).
-NavWorld buildingWithPerson(std::uint32_t seed) {
+/// `world` with the benchmark's person: crossing the shortest route halfway, 3 m ahead of a
+/// vehicle flying it at 0.95 x its top speed (as benchmarkWorlds() adds them).
+NavWorld withPerson(NavWorld world) {
   const NavFlightOptions defaults;
-  NavWorld world = buildingFloorWorld(seed);
   addCrossingPerson(&world, shortestRoute(world, defaults.planner.inflation_m, 0.1),
                     0.95 * defaults.planner.max_speed_mps, 3.0);
   return world;
 }
+
+/// A building floor of the benchmark with its person.
+NavWorld buildingWithPerson(std::uint32_t seed) { return withPerson(buildingFloorWorld(seed)); }
 
 TEST(ClosedLoop, ReachesTheGoalThroughAForestWithoutCollision) {
   expectReachedWithoutCollision(forestWorld(21, 0.08, {14.0, 8.0}));
@@ -67,6 +69,20 @@ TEST(ClosedLoop, LooksAgainAtATrailFirstSeenFromAfarWhenThereIsNoRoute) {
   expectReachedWithoutCollision(buildingWithPerson(130), 100.0);
 }
 
+TEST(ClosedLoop, GivesWayToAPersonWalkingTowardsItsPathFromTheSide) {
+  // forest_24x12_d0.06_s106_person and rooms3_s109_person of the benchmark from seed 101: the
+  // person, in view for 2 s, walks towards the vehicle's path from ahead and to its side, on a
+  // collision course; the map took them in within a second (no longer "something that moved"),
+  // the committed segment kept clear of where they were, not of where they went, and they left
+  // the 80 degree view before they met: clearance 0.00 and 0.28 m. Followed and predicted, the
+  // person is given way to.
+  expectReachedWithoutCollision(withPerson(forestWorld(106, 0.06, {24.0, 12.0})));
+  expectReachedWithoutCollision(withPerson(roomsWorld(109, 3)));
+  // forest_24x12_d0.09_s63_person of the benchmark: the person walks past a tree towards the
+  // vehicle; their points and the tree's touch, and they are followed all the same.
+  expectReachedWithoutCollision(withPerson(forestWorld(63, 0.09, {24.0, 12.0})));
+}
+
 TEST(ClosedLoop, StopsForAPersonCrossingInFrontAndReachesTheGoalWithoutCollision) {
   // The person crosses the path the vehicle flies without them, halfway, timed to step onto it
   // when the vehicle is 3 m away: in view, across the committed segment.
@@ -82,8 +98,7 @@ TEST(ClosedLoop, StopsForAPersonCrossingInFrontAndReachesTheGoalWithoutCollision
   EXPECT_TRUE(r.reached);
   EXPECT_EQ(r.collisions, 0);
   EXPECT_GE(r.min_clearance_m, options.vehicle_radius_m);
-  EXPECT_GE(r.blocked_replans, 1u);   // the person crossed the committed segment: planned at once
-  EXPECT_GT(r.time_s, alone.time_s);  // and it cost time
+  EXPECT_GT(r.time_s, alone.time_s);  // it gave way, which cost time
 }
 
 }  // namespace

@@ -12,11 +12,11 @@
 namespace mlmap::nav {
 namespace {
 
-/// The points a frame sees of a 0.5 x 0.5 m person centred at c_W: a face of 3 x 2 points.
+/// The points a frame sees of a 0.5 x 0.5 m person centred at c_W: a face of 3 x 3 points.
 std::vector<Eigen::Vector3d> personPoints(const Eigen::Vector2d& c_W) {
   std::vector<Eigen::Vector3d> out;
   for (int i = -1; i <= 1; ++i) {
-    for (int k = 0; k < 2; ++k) out.emplace_back(c_W.x() - 0.25, c_W.y() + 0.2 * i, 0.8 + 0.2 * k);
+    for (int k = 0; k < 3; ++k) out.emplace_back(c_W.x() - 0.25, c_W.y() + 0.2 * i, 0.8 + 0.2 * k);
   }
   return out;
 }
@@ -64,7 +64,7 @@ TEST(MovingObstacles, MeasuresAWalkingPersonAndPredictsThemUnseen) {
   // Seen for 1 s, 10 frames, walking +y at 1 m/s from (3, -2).
   for (int k = 0; k <= 10; ++k) {
     const double t = 0.1 * k;
-    tracker.update(personPoints(Eigen::Vector2d(3.0, -2.0) + v * t), t);
+    tracker.update(personPoints(Eigen::Vector2d(3.0, -2.0) + v * t), std::vector<bool>(9, true), t);
   }
   ASSERT_EQ(tracker.obstacles().size(), 1u);
   const MovingObstacle& o = tracker.obstacles().front();
@@ -72,7 +72,7 @@ TEST(MovingObstacles, MeasuresAWalkingPersonAndPredictsThemUnseen) {
   EXPECT_NEAR(o.velocity_W.y(), 1.0, 1e-9);
   EXPECT_TRUE(o.moving(config));
   // Then unseen (frames without them) for 1 s: still followed, where they walked to.
-  for (int k = 11; k <= 20; ++k) tracker.update({}, 0.1 * k);
+  for (int k = 11; k <= 20; ++k) tracker.update({}, {}, 0.1 * k);
   ASSERT_EQ(tracker.obstacles().size(), 1u);
   EXPECT_NEAR(tracker.obstacles().front().centerAt(2.0).y(), 0.0, 1e-9);
   // The predicted points cover where they will be over the horizon, not behind them.
@@ -92,20 +92,33 @@ TEST(MovingObstacles, MeasuresAWalkingPersonAndPredictsThemUnseen) {
   ASSERT_NE(tracker.nearestMoving(vehicle, 2.0, 1.0, 1.0, &nearest), nullptr);
   EXPECT_NEAR((nearest - vehicle).norm(), 0.8, 1e-9);
   // Unseen for longer than keep_s: dropped.
-  tracker.update({}, 1.0 + config.keep_s + 0.1);
+  tracker.update({}, {}, 1.0 + config.keep_s + 0.1);
   EXPECT_TRUE(tracker.obstacles().empty());
 }
 
-TEST(MovingObstacles, LeavesOutWhatStandsAndWhatIsTooWideForAPerson) {
+TEST(MovingObstacles, LeavesOutWhatStandsWhatIsTooWideOrTooSmallAndWhatMostlyDidNotMove) {
   MovingObstacleConfig config;
   MovingObstacleTracker tracker(config);
   std::vector<Eigen::Vector3d> wall;
   for (int i = 0; i < 20; ++i) wall.emplace_back(5.0, -2.0 + 0.2 * i, 1.0);
   for (int k = 0; k <= 10; ++k) {
+    const double t = 0.1 * k;
     std::vector<Eigen::Vector3d> frame = personPoints({2.0, 0.0});  // standing
-    // A wall's edge seen moving along with the view: one long group, not followed.
-    for (const Eigen::Vector3d& p : wall) frame.emplace_back(p.x(), p.y() + 0.1 * k, p.z());
-    tracker.update(frame, 0.1 * k);
+    // A wall's edge seen moving along with the view: one long group.
+    for (const Eigen::Vector3d& p : wall) frame.emplace_back(p.x(), p.y() + t, p.z());
+    std::vector<bool> moved(frame.size(), true);
+    // A tree's trunk, 20 points sliding with the view, only the 8 of its edge where the map knew
+    // free: the rest touches them.
+    for (int i = 0; i < 20; ++i) {
+      frame.emplace_back(2.0 + 0.1 * (i % 5), 4.0 + t, 0.8 + 0.2 * (i / 5));
+      moved.push_back(i % 5 < 2);
+    }
+    // A few points (a mixed cell's) sliding with the view: too few.
+    for (int i = 0; i < 4; ++i) {
+      frame.emplace_back(-2.0 + 0.1 * i, 2.0 + t, 1.0);
+      moved.push_back(true);
+    }
+    tracker.update(frame, moved, t);
   }
   ASSERT_EQ(tracker.obstacles().size(), 1u);
   EXPECT_FALSE(tracker.obstacles().front().moving(config));
@@ -121,7 +134,7 @@ TEST(MovingObstacles, FollowsTwoPeopleApartWithoutSwappingThem) {
     std::vector<Eigen::Vector3d> frame = personPoints({1.0, -2.0 + t});
     const std::vector<Eigen::Vector3d> other = personPoints({4.0, 2.0 - t});
     frame.insert(frame.end(), other.begin(), other.end());
-    tracker.update(frame, t);
+    tracker.update(frame, std::vector<bool>(frame.size(), true), t);
   }
   ASSERT_EQ(tracker.obstacles().size(), 2u);
   for (const MovingObstacle& o : tracker.obstacles()) {

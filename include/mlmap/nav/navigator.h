@@ -17,6 +17,7 @@
 
 #include "mlmap/nav/grid_search.h"
 #include "mlmap/nav/local_planner.h"
+#include "mlmap/nav/moving_obstacles.h"
 #include "mlmap/planning/fixed_origin_grid.h"
 #include "mlmap/planning/map_snapshot.h"
 
@@ -64,7 +65,20 @@ struct NavigatorConfig {
   /// under the same rules (a trail first seen from afar, before the map saw free space there).
   double stale_obstacle_s = 2.0;
   int stale_max_hits = 15;
-  LocalPlannerConfig local;  ///< the local planner
+  /// Follow what moved (moving_obstacles.h): a frame's point stands where something moved when
+  /// it lies in open space the map knows free (as for evade_radius_m) or when the cell of the
+  /// accumulated grid 0.75 cell behind it (seen from the vehicle) was known free within
+  /// moved_free_within_s and at most stale_max_hits frames have hit it since (the map takes a
+  /// walking person in within a second, and they stay a person). The
+  /// committed segment then keeps local.commit_clearance_m from where the moving ones will be
+  /// over moving.horizon_s too, the vehicle is cautious near them and backs away from where
+  /// they will be within evade_lookahead_s, also once they left the camera's view. false: only
+  /// the latest frame's points count.
+  bool follow_moving = true;
+  double evade_lookahead_s = 0.5;    ///< [s]
+  double moved_free_within_s = 1.5;  ///< see follow_moving [s]
+  MovingObstacleConfig moving;       ///< the tracker
+  LocalPlannerConfig local;          ///< the local planner
 };
 
 /// What the vehicle is asked to do: be at position_W moving at velocity_W, heading yaw_rad.
@@ -117,6 +131,8 @@ class Navigator {
   [[nodiscard]] const LocalPlan& localPlan() const { return plan_; }
   /// The accumulated 2D grid the route is planned on.
   [[nodiscard]] const ProjectedGrid& grid() const { return accumulated_.grid(); }
+  /// The obstacles followed (follow_moving).
+  [[nodiscard]] const MovingObstacleTracker& movingObstacles() const { return tracker_; }
   /// True when the last update() found a recent obstacle within evade_radius_m.
   [[nodiscard]] bool evading() const { return evade_W_.squaredNorm() > 0.0; }
   /// True when the last update() found one within caution_radius_m.
@@ -143,10 +159,16 @@ class Navigator {
   [[nodiscard]] const Eigen::Vector3d* nearestMoved(const MapSnapshot& map,
                                                     const Eigen::Vector3d& p_W,
                                                     double radius_m) const;
-  /// The velocity away from the nearest moved obstacle within evade_radius_m (zero when there is
-  /// none, or when the step away is not into known-free space with clearance).
-  [[nodiscard]] Eigen::Vector3d evadeVelocity(const MapSnapshot& map,
-                                              const Eigen::Vector3d& p_W) const;
+  /// True when the frame's point q_W, seen from a vehicle at p_W, stands where something moved
+  /// (see follow_moving).
+  [[nodiscard]] bool standsWhereSomethingMoved(const MapSnapshot& map, const Eigen::Vector3d& p_W,
+                                               const Eigen::Vector3d& q_W) const;
+  /// The velocity away from the nearest moved obstacle within evade_radius_m, the followed ones
+  /// where they will be within evade_lookahead_s included (zero when there is none, or when no
+  /// step away, straight or turned by up to 90 degrees, is into known-free space with
+  /// clearance); sets evade_from_W_.
+  [[nodiscard]] Eigen::Vector3d evadeVelocity(const MapSnapshot& map, const Eigen::Vector3d& p_W,
+                                              double time_s);
 
   NavigatorConfig config_;
   bool has_goal_ = false;
@@ -161,6 +183,12 @@ class Navigator {
   ProjectedGrid layout_;  ///< origin and size of the three above (cells unused)
   std::uint64_t last_frame_ = 0;
   std::vector<Eigen::Vector3d> recent_obstacles_W_;
+  /// recent_obstacles_W_ and where the followed moving obstacles will be: what the committed
+  /// segment keeps clear of.
+  std::vector<Eigen::Vector3d> avoid_W_;
+  MovingObstacleTracker tracker_;
+  double last_frame_time_s_ = 0.0;  ///< when the latest frame's points were set [s]
+  Eigen::Vector3d evade_from_W_ = Eigen::Vector3d::Zero();  ///< what the vehicle backs away from
   bool recent_obstacles_new_ = false;
   bool planned_once_ = false;
   double last_plan_time_s_ = 0.0;
