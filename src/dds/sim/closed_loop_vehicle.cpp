@@ -155,9 +155,16 @@ ClosedLoopResult flyClosedLoop(const nav::NavWorld& world, const ClosedLoopOptio
     const double stamp_s = wall0_s + t;
     if ((state.position_W - world.goal_W).head<2>().norm() <= f.planner.goal_tolerance_m) {
       result.reached = true;
-      // The pose at the goal, so that the planner sees it reached too.
-      geometry_msgs::PoseStamped_ pose = toPoseStamped(state.T_W_B(), stamp_s, frames.world);
-      e.pose->write(&pose);
+      // Hovers at the goal for a moment, its pose sent every step, so that the planner sees it
+      // reached too (the pose is best-effort: one sample alone can be lost, or outrun by this
+      // participant leaving the graph).
+      constexpr double kHoldAtGoal_s = 0.5;
+      for (double hold_s = 0.0; hold_s < kHoldAtGoal_s && !stop(); hold_s += f.control_dt_s) {
+        geometry_msgs::PoseStamped_ pose =
+            toPoseStamped(state.T_W_B(), wallClockNow_s(), frames.world);
+        e.pose->write(&pose);
+        std::this_thread::sleep_for(std::chrono::duration<double>(f.control_dt_s));
+      }
       break;
     }
     if (e.goal != nullptr && t >= next_goal_s) {
