@@ -4,7 +4,8 @@
 # loopback, and this prints per world whether the goal was reached and with how many collisions,
 # and over all worlds the map-to-plan latency (a frame's capture stamp to the publication of the
 # nav_msgs/Path planned on the map state that frame ended: median, p99, max, by nearest rank as
-# every mlmap figure) and the part of it before the ESDF reached the planner. Figures, not a test.
+# every mlmap figure) and the part of it before the ESDF reached the planner. The planner reads the
+# camera's clouds too (--cloud-topic), as the person test does. Figures, not a test.
 #
 #   tools/bench_nav_dds.sh [--build DIR] [--out DIR] [--resolution M] [--worlds "LIST"]
 #                          [--domain ID]
@@ -47,7 +48,7 @@ for world in $worlds; do
   "$build/mlmap_node" --config "$cfg" --report-every 0 > "$log.node.log" 2>&1 &
   node=$!
   "$build/mlmap_planner_peer" --config "$cfg" --report-every 0 --latency-out "$log.latency_ms.txt" \
-    > "$log.planner.log" 2>&1 &
+    --cloud-topic cloud > "$log.planner.log" 2>&1 &
   planner=$!
   "$build/mlmap_sensor_publisher" --config "$cfg" --closed-loop "$kind" --world-seed "$seed" \
     --timeout 90 --wait-for-subscriber 20 > "$log.publisher.log" 2>&1
