@@ -31,6 +31,13 @@ inline void markRuns(std::uint64_t* row, std::size_t stride, int rows, int z0, i
   }
   const std::uint64_t mask = (kAllBits << (z0 & 63)) & (kAllBits >> (63 - (z1 & 63)));
   row += w0;
+  if (rows <= 2) {
+    // One or two rows (nearly every slab of a thin cone): the first and the last, the same row
+    // twice when there is one (an OR is idempotent), so no loop whose count the CPU mispredicts.
+    row[0] |= mask;
+    row[static_cast<std::size_t>(rows - 1) * stride] |= mask;
+    return;
+  }
   for (int r = 0; r < rows; ++r, row += stride) *row |= mask;
 }
 
