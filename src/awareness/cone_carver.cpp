@@ -6,6 +6,10 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define MLMAP_HAVE_AVX2_SLABS 1
+#include <immintrin.h>
+#endif
 
 namespace mlmap {
 namespace {
@@ -126,13 +130,109 @@ inline bool unclampedSlab(const Walk& w, int i) {
   return s_lo_free >= w.s0 && s_hi_free <= 1.0;
 }
 
+#ifdef MLMAP_HAVE_AVX2_SLABS
+#define MLMAP_AVX2 __attribute__((target("avx2"), always_inline)) inline
+
+// Lane k of v in all four lanes.
+MLMAP_AVX2 __m256d lane4(V2 v, int k) { return _mm256_set1_pd(v[k]); }
+
+// Four slabs' `first` of the scalar loop: vmax(at0 + vi * slope, floor) truncated, where
+// vmax(x, y) is maxpd with the operands swapped.
+MLMAP_AVX2 __m128i firstOf4(__m256d vi, __m256d at0, __m256d slope, __m256d floor) {
+  return _mm256_cvttpd_epi32(_mm256_max_pd(floor, _mm256_add_pd(at0, _mm256_mul_pd(vi, slope))));
+}
+
+// Four slabs' `last` of the scalar loop: vmax(vmin(at0 + vi * slope, limit), -1) + 1,
+// truncated, less one.
+MLMAP_AVX2 __m128i lastOf4(__m256d vi, __m256d at0, __m256d slope, __m256d limit) {
+  const __m256d x = _mm256_min_pd(limit, _mm256_add_pd(at0, _mm256_mul_pd(vi, slope)));
+  const __m256d up = _mm256_add_pd(_mm256_max_pd(_mm256_set1_pd(-1.0), x), _mm256_set1_pd(1.0));
+  return _mm_sub_epi32(_mm256_cvttpd_epi32(up), _mm_set1_epi32(1));
+}
+
+// Unclamped slabs i_begin.. of a cone along x (A = 0) or y (A = 1), four at a time in AVX2;
+// returns the first slab it left (fewer than four remain). Each lane computes a bound as the
+// scalar loop does (the same product and sum: no fused multiply-add, "avx2" only; the same
+// truncation), so the slabs are the same rectangles. Their z masks are made four at a time too,
+// and a rectangle of one or two rows within one word of z (nearly all) is marked by two ORs
+// with no branch; any other goes to markSlab().
+template <int A>
+__attribute__((target("avx2"))) int walkRunAvx2(const Walk& w, V2 first_floor, int i_begin,
+                                                int i_end, std::uint64_t* words,
+                                                std::size_t stride_x, std::size_t stride_y) {
+  static_assert(A == 0 || A == 1, "along z a slab marks one bit per row");
+  const __m256d first_at0_b = lane4(w.first_at0, 0), first_at0_c = lane4(w.first_at0, 1);
+  const __m256d first_slope_b = lane4(w.first_slope, 0), first_slope_c = lane4(w.first_slope, 1);
+  const __m256d first_floor_b = lane4(first_floor, 0), first_floor_c = lane4(first_floor, 1);
+  const __m256d last_at0_b = lane4(w.last_at0, 0), last_at0_c = lane4(w.last_at0, 1);
+  const __m256d last_slope_b = lane4(w.last_slope, 0), last_slope_c = lane4(w.last_slope, 1);
+  const __m256d last_limit_b = lane4(w.last_limit, 0), last_limit_c = lane4(w.last_limit, 1);
+  const __m256d four = _mm256_set1_pd(4.0);
+  const __m128i one_i = _mm_set1_epi32(1);
+  const __m128i low6 = _mm_set1_epi32(63);
+  const __m256i all = _mm256_set1_epi64x(-1);
+  // Rows along `row_stride` (y for A = 0, x for A = 1), bits along z; slab i's plane at i * plane.
+  const std::size_t row_stride = A == 0 ? stride_y : stride_x;
+  const std::size_t plane = A == 0 ? stride_x : stride_y;
+  alignas(16) std::int32_t b0[4], c0[4], b1[4], c1[4];
+  alignas(32) std::uint64_t masks[4];
+  const double d0 = static_cast<double>(i_begin);
+  __m256d vi = _mm256_setr_pd(d0, d0 + 1.0, d0 + 2.0, d0 + 3.0);
+  int i = i_begin;
+  for (; i + 3 <= i_end; i += 4, vi = _mm256_add_pd(vi, four)) {
+    const __m128i j0 = firstOf4(vi, first_at0_b, first_slope_b, first_floor_b);
+    const __m128i k0 = firstOf4(vi, first_at0_c, first_slope_c, first_floor_c);
+    const __m128i j1 = lastOf4(vi, last_at0_b, last_slope_b, last_limit_b);
+    const __m128i k1 = lastOf4(vi, last_at0_c, last_slope_c, last_limit_c);
+    const __m128i r0 = A == 0 ? j0 : k0;  // rows
+    const __m128i r1 = A == 0 ? j1 : k1;
+    const __m128i z0 = A == 0 ? k0 : j0;  // bits
+    const __m128i z1 = A == 0 ? k1 : j1;
+    // Empty: r0 > r1 or z0 > z1. Simple: at most two rows, one word of z.
+    const __m128i empty = _mm_or_si128(_mm_cmpgt_epi32(r0, r1), _mm_cmpgt_epi32(z0, z1));
+    const __m128i simple =
+        _mm_andnot_si128(_mm_cmpgt_epi32(_mm_sub_epi32(r1, r0), one_i),
+                         _mm_cmpeq_epi32(_mm_srai_epi32(z0, 6), _mm_srai_epi32(z1, 6)));
+    const __m256i from = _mm256_cvtepi32_epi64(_mm_and_si128(z0, low6));
+    const __m256i to = _mm256_cvtepi32_epi64(_mm_sub_epi32(low6, _mm_and_si128(z1, low6)));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(masks),
+                       _mm256_and_si256(_mm256_sllv_epi64(all, from), _mm256_srlv_epi64(all, to)));
+    _mm_store_si128(reinterpret_cast<__m128i*>(b0), j0);
+    _mm_store_si128(reinterpret_cast<__m128i*>(c0), k0);
+    _mm_store_si128(reinterpret_cast<__m128i*>(b1), j1);
+    _mm_store_si128(reinterpret_cast<__m128i*>(c1), k1);
+    const int empty_bits = _mm_movemask_ps(_mm_castsi128_ps(empty));
+    const int simple_bits = _mm_movemask_ps(_mm_castsi128_ps(simple)) & ~empty_bits;
+    if (simple_bits == 0xF) {
+      for (int l = 0; l < 4; ++l) {
+        const int row0 = A == 0 ? b0[l] : c0[l];
+        const int rows = (A == 0 ? b1[l] : c1[l]) - row0;  // 0 or 1
+        const int word = (A == 0 ? c0[l] : b0[l]) >> 6;
+        std::uint64_t* p = words + static_cast<std::size_t>(i + l) * plane +
+                           static_cast<std::size_t>(row0) * row_stride +
+                           static_cast<std::size_t>(word);
+        p[0] |= masks[l];
+        p[static_cast<std::size_t>(rows) * row_stride] |= masks[l];
+      }
+      continue;
+    }
+    for (int l = 0; l < 4; ++l) {
+      if ((empty_bits >> l) & 1) continue;
+      markSlab<A>(i + l, I2{b0[l], c0[l]}, I2{b1[l], c1[l]}, words, stride_x, stride_y);
+    }
+  }
+  return i;
+}
+#undef MLMAP_AVX2
+#endif
+
 // Marks slabs i_begin..i_end (inside the box along A). Templated on A so that each slab's
 // rectangle maps to whole z runs (or, along z, to one bit per row) with no per-voxel index math.
 // The run of unclamped slabs is found from its two ends (the clamped slabs are the first and
 // last few) and walked without the clamp test.
 template <int A, bool kClipX>
 void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std::size_t stride_x,
-               std::size_t stride_y) {
+               std::size_t stride_y, bool avx2) {
   const V2 eps = {kEdgeEpsilon, kEdgeEpsilon};
   const V2 one = {1.0, 1.0};
   const V2 first_floor = kClipX ? w.limit_lo : V2{0.0, 0.0};  // the first voxels marked
@@ -154,7 +254,15 @@ void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std:
   while (run_begin <= i_end && !unclampedSlab(w, run_begin)) clampedSlab(run_begin++);
   int run_end = i_end;
   while (run_end >= run_begin && !unclampedSlab(w, run_end)) --run_end;
-  for (int i = run_begin; i <= run_end; ++i) {
+  int i_scalar = run_begin;
+#ifdef MLMAP_HAVE_AVX2_SLABS
+  if constexpr (A != 2) {
+    if (avx2)
+      i_scalar = walkRunAvx2<A>(w, first_floor, run_begin, run_end, words, stride_x, stride_y);
+  }
+#endif
+  static_cast<void>(avx2);
+  for (int i = i_scalar; i <= run_end; ++i) {
     // Unclamped: the bounds are affine in i. Truncation is floor here: `first` is clamped to
     // the first voxel marked (>= 0) first, `last` to >= -1 and shifted by one.
     const V2 vi = {static_cast<double>(i), static_cast<double>(i)};
@@ -170,7 +278,7 @@ void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std:
 // box's), the hot path, where the limits fold into constants.
 template <bool kClipX>
 std::size_t carveConeIn(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
-                        int x_begin, int x_end, VoxelBitset* free) {
+                        int x_begin, int x_end, VoxelBitset* free, bool avx2) {
   const Eigen::Vector3i& dims = free->dims();
   if constexpr (kClipX) {
     x_begin = std::max(x_begin, 0);
@@ -252,22 +360,38 @@ std::size_t carveConeIn(const Eigen::Vector3d& origin, const VoxelSpaceBox& box,
   const std::size_t slabs = static_cast<std::size_t>(std::abs(i_far - i_first)) + 1;
   const int i_begin = std::max(std::min(i_first, i_far), first_marked[a]);
   const int i_end = std::min(std::max(i_first, i_far), end_marked[a] - 1);
-  if (a == 0) walkSlabs<0, kClipX>(w, i_begin, i_end, words, stride_x, stride_y);
-  if (a == 1) walkSlabs<1, kClipX>(w, i_begin, i_end, words, stride_x, stride_y);
-  if (a == 2) walkSlabs<2, kClipX>(w, i_begin, i_end, words, stride_x, stride_y);
+  if (a == 0) walkSlabs<0, kClipX>(w, i_begin, i_end, words, stride_x, stride_y, avx2);
+  if (a == 1) walkSlabs<1, kClipX>(w, i_begin, i_end, words, stride_x, stride_y, avx2);
+  if (a == 2) walkSlabs<2, kClipX>(w, i_begin, i_end, words, stride_x, stride_y, avx2);
   return slabs;
 }
 
+const bool kAvx2Supported = [] {
+#ifdef MLMAP_HAVE_AVX2_SLABS
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2") != 0;
+#else
+  return false;
+#endif
+}();
+
 }  // namespace
+
+bool coneCarverAvx2Supported() { return kAvx2Supported; }
 
 std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
                       VoxelBitset* free) {
-  return carveConeIn<false>(origin, box, s_min, 0, 0, free);
+  return carveConeIn<false>(origin, box, s_min, 0, 0, free, kAvx2Supported);
+}
+
+std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
+                      VoxelBitset* free, ConeCarverIsa isa) {
+  return carveConeIn<false>(origin, box, s_min, 0, 0, free, isa == ConeCarverIsa::kAvx2);
 }
 
 std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
                       int x_begin, int x_end, VoxelBitset* free) {
-  return carveConeIn<true>(origin, box, s_min, x_begin, x_end, free);
+  return carveConeIn<true>(origin, box, s_min, x_begin, x_end, free, kAvx2Supported);
 }
 
 std::size_t carveCone(const Eigen::Vector3d& origin, const Eigen::Vector3i& end,

@@ -126,6 +126,44 @@ TEST(ConeCarver, CarvesLittleMoreThanTheRays) {
   EXPECT_LT(worst_distance, 2.5);
 }
 
+// The AVX2 slab walk against the portable one, word for word, on cones of every direction and
+// length: thin ones (one or two rows a slab, the AVX2 walk's own marking), wider ones and z runs
+// across a word boundary (the box is 150 voxels high: three words a row), which it hands to the
+// portable marking, clamped parts from s_min, and cones reaching out of the box.
+TEST(ConeCarver, Avx2SlabWalkMarksThePortableOnesBitForBit) {
+  if (!coneCarverAvx2Supported()) GTEST_SKIP() << "no AVX2 on this CPU or build";
+  const Eigen::Vector3i dims(48, 40, 150);
+  std::mt19937 rng(44);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  VoxelBitset portable;
+  VoxelBitset avx2;
+  std::size_t marked = 0;
+  for (int trial = 0; trial < 4000; ++trial) {
+    Eigen::Vector3d origin;
+    Eigen::Vector3d corner;
+    for (int k = 0; k < 3; ++k) {
+      origin[k] = -8.0 + unit(rng) * (dims[k] + 16.0);
+      corner[k] = -8.0 + unit(rng) * (dims[k] + 16.0);
+    }
+    const double size = trial % 4 == 0 ? 8.0 : 1.5;  // mostly thin cones, as a scan's
+    const Eigen::Vector3f lo = corner.cast<float>();
+    const Eigen::Vector3f hi =
+        lo + (size * Eigen::Vector3d(unit(rng), unit(rng), unit(rng))).cast<float>();
+    const double s_min = trial % 3 == 0 ? 0.0 : unit(rng);
+    portable.reset(VoxelIndex::Zero(), dims);
+    avx2.reset(VoxelIndex::Zero(), dims);
+    const std::size_t slabs =
+        carveCone(origin, {lo, hi}, s_min, &portable, ConeCarverIsa::kPortable);
+    ASSERT_EQ(carveCone(origin, {lo, hi}, s_min, &avx2, ConeCarverIsa::kAvx2), slabs);
+    const std::size_t words = static_cast<std::size_t>(dims.x()) * dims.y() * avx2.wordsPerRow();
+    for (std::size_t w = 0; w < words; ++w) {
+      ASSERT_EQ(avx2.data()[w], portable.data()[w]) << "trial " << trial << ", word " << w;
+    }
+    marked += portable.count();
+  }
+  EXPECT_GT(marked, 100000u);
+}
+
 // The reference: the float nearest to x, one step toward -infinity when that lies above x.
 float referenceFloatBelow(double x) {
   const float f = static_cast<float>(x);

@@ -46,6 +46,16 @@ inline float floatBelow(double x) {
 std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
                       VoxelBitset* free);
 
+/// Which implementation walks a cone's slabs: the same bits either way.
+enum class ConeCarverIsa { kPortable, kAvx2 };
+
+/// Whether this build and CPU run the AVX2 slab walk (carveCone() then uses it).
+bool coneCarverAvx2Supported();
+
+/// carveCone() with the slab walk `isa` (kAvx2 only when coneCarverAvx2Supported()).
+std::size_t carveCone(const Eigen::Vector3d& origin, const VoxelSpaceBox& box, double s_min,
+                      VoxelBitset* free, ConeCarverIsa isa);
+
 /// The same, marking only the voxels with box x in [x_begin, x_end): exactly the voxels of the
 /// whole cone in that range, so that threads owning disjoint x ranges of `free` together mark
 /// what one call marks.
