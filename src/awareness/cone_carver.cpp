@@ -174,8 +174,12 @@ __attribute__((target("avx2"))) int walkRunAvx2(const Walk& w, V2 first_floor, i
   // Rows along `row_stride` (y for A = 0, x for A = 1), bits along z; slab i's plane at i * plane.
   const std::size_t row_stride = A == 0 ? stride_y : stride_x;
   const std::size_t plane = A == 0 ? stride_x : stride_y;
-  alignas(16) std::int32_t b0[4], c0[4], b1[4], c1[4];
+  if ((plane | row_stride) >> 32 != 0) return i_begin;  // a box too big for 32-bit factors
+  const __m256i plane4 = _mm256_set1_epi64x(static_cast<long long>(plane));
+  const __m256i row_stride4 = _mm256_set1_epi64x(static_cast<long long>(row_stride));
   alignas(32) std::uint64_t masks[4];
+  alignas(32) std::uint64_t first_words[4];
+  alignas(32) std::uint64_t last_words[4];
   const double d0 = static_cast<double>(i_begin);
   __m256d vi = _mm256_setr_pd(d0, d0 + 1.0, d0 + 2.0, d0 + 3.0);
   int i = i_begin;
@@ -197,25 +201,32 @@ __attribute__((target("avx2"))) int walkRunAvx2(const Walk& w, V2 first_floor, i
     const __m256i to = _mm256_cvtepi32_epi64(_mm_sub_epi32(low6, _mm_and_si128(z1, low6)));
     _mm256_store_si256(reinterpret_cast<__m256i*>(masks),
                        _mm256_and_si256(_mm256_sllv_epi64(all, from), _mm256_srlv_epi64(all, to)));
+    const int empty_bits = _mm_movemask_ps(_mm_castsi128_ps(empty));
+    const int simple_bits = _mm_movemask_ps(_mm_castsi128_ps(simple)) & ~empty_bits;
+    if (simple_bits == 0xF) {
+      // Each slab's word in its first row, slab * plane + r0 * row_stride + z0 / 64, and in its
+      // last, r1 - r0 (0 or 1) rows on: all four in 64 bits (the factors are non-negative and
+      // below 2^32 here, as mul_epu32 takes them).
+      const __m128i slab = _mm_add_epi32(_mm_set1_epi32(i), _mm_setr_epi32(0, 1, 2, 3));
+      const __m256i first_word = _mm256_add_epi64(
+          _mm256_add_epi64(_mm256_mul_epu32(_mm256_cvtepi32_epi64(slab), plane4),
+                           _mm256_mul_epu32(_mm256_cvtepi32_epi64(r0), row_stride4)),
+          _mm256_cvtepi32_epi64(_mm_srai_epi32(z0, 6)));
+      const __m256i last_word = _mm256_add_epi64(
+          first_word, _mm256_mul_epu32(_mm256_cvtepi32_epi64(_mm_sub_epi32(r1, r0)), row_stride4));
+      _mm256_store_si256(reinterpret_cast<__m256i*>(first_words), first_word);
+      _mm256_store_si256(reinterpret_cast<__m256i*>(last_words), last_word);
+      for (int l = 0; l < 4; ++l) {
+        words[first_words[l]] |= masks[l];
+        words[last_words[l]] |= masks[l];
+      }
+      continue;
+    }
+    alignas(16) std::int32_t b0[4], c0[4], b1[4], c1[4];
     _mm_store_si128(reinterpret_cast<__m128i*>(b0), j0);
     _mm_store_si128(reinterpret_cast<__m128i*>(c0), k0);
     _mm_store_si128(reinterpret_cast<__m128i*>(b1), j1);
     _mm_store_si128(reinterpret_cast<__m128i*>(c1), k1);
-    const int empty_bits = _mm_movemask_ps(_mm_castsi128_ps(empty));
-    const int simple_bits = _mm_movemask_ps(_mm_castsi128_ps(simple)) & ~empty_bits;
-    if (simple_bits == 0xF) {
-      for (int l = 0; l < 4; ++l) {
-        const int row0 = A == 0 ? b0[l] : c0[l];
-        const int rows = (A == 0 ? b1[l] : c1[l]) - row0;  // 0 or 1
-        const int word = (A == 0 ? c0[l] : b0[l]) >> 6;
-        std::uint64_t* p = words + static_cast<std::size_t>(i + l) * plane +
-                           static_cast<std::size_t>(row0) * row_stride +
-                           static_cast<std::size_t>(word);
-        p[0] |= masks[l];
-        p[static_cast<std::size_t>(rows) * row_stride] |= masks[l];
-      }
-      continue;
-    }
     for (int l = 0; l < 4; ++l) {
       if ((empty_bits >> l) & 1) continue;
       markSlab<A>(i + l, I2{b0[l], c0[l]}, I2{b1[l], c1[l]}, words, stride_x, stride_y);
