@@ -9,6 +9,7 @@
 #include <cstring>
 #include <limits>
 #include <numeric>
+#include <stdexcept>
 
 // countBits() gets a popcnt clone next to the portable one, picked at load time (GCC ifunc).
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && \
@@ -306,6 +307,42 @@ std::size_t AwarenessStage::Source::fill(std::size_t first, std::size_t len, flo
 
 void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* batch,
                              PointCounters* counters) {
+  processCloud(frame, batch, counters, /*split=*/false);
+}
+
+bool AwarenessStage::process(const DepthFrame& frame, MeasurementBatch* batch,
+                             PointCounters* counters) {
+  return processDepth(frame, batch, counters, /*split=*/false);
+}
+
+void AwarenessStage::collect(const PointCloudFrame& frame, MeasurementBatch* batch,
+                             PointCounters* counters) {
+  processCloud(frame, batch, counters, /*split=*/true);
+}
+
+bool AwarenessStage::collect(const DepthFrame& frame, MeasurementBatch* batch,
+                             PointCounters* counters) {
+  return processDepth(frame, batch, counters, /*split=*/true);
+}
+
+void AwarenessStage::carve(MeasurementBatch* batch, PointCounters* counters) {
+  std::unique_ptr<CollectedFrame> frame;
+  {
+    std::lock_guard<std::mutex> lock(collected_mutex_);
+    if (collected_.empty()) throw std::logic_error("AwarenessStage::carve() without a collect()");
+    frame = std::move(collected_.front());
+    collected_.pop_front();
+  }
+  batch->free.reset(frame->box_origin, frame->dims);
+  listCones(frame->origin_vox, frame->ends);
+  carveCones(frame->origin_vox, batch, /*use_threads=*/false);
+  counters->free_voxels += batch->free_count;
+  std::lock_guard<std::mutex> lock(collected_mutex_);
+  spare_.push_back(std::move(frame));
+}
+
+void AwarenessStage::processCloud(const PointCloudFrame& frame, MeasurementBatch* batch,
+                                  PointCounters* counters, bool split) {
   const AwarenessConfig& ac = config_.awareness;
   Source source;
   source.points = frame.points_S.data();
@@ -324,12 +361,12 @@ void AwarenessStage::process(const PointCloudFrame& frame, MeasurementBatch* bat
     c.sampled_out = n - source.count;
     source.indices = sample_indices_.data();
   }
-  processSource(source, frame.stamp_s, frame.T_W_B, frame.T_B_S, batch, &c);
+  processSource(source, frame.stamp_s, frame.T_W_B, frame.T_B_S, batch, &c, split);
   *counters += c;
 }
 
-bool AwarenessStage::process(const DepthFrame& frame, MeasurementBatch* batch,
-                             PointCounters* counters) {
+bool AwarenessStage::processDepth(const DepthFrame& frame, MeasurementBatch* batch,
+                                  PointCounters* counters, bool split) {
   const PinholeIntrinsics& K = frame.intrinsics;
   const std::size_t n = static_cast<std::size_t>(std::max(K.width, 0)) *
                         static_cast<std::size_t>(std::max(K.height, 0));
@@ -347,7 +384,7 @@ bool AwarenessStage::process(const DepthFrame& frame, MeasurementBatch* batch,
     cloud.points_S.swap(depth_points_);
     std::size_t skipped = 0;
     backProject(frame, &cloud.points_S, &skipped);
-    process(cloud, batch, counters);
+    processCloud(cloud, batch, counters, split);
     counters->points_in += skipped;
     counters->rejected_non_finite += skipped;  // pixels without a measurement
     depth_points_.swap(cloud.points_S);
@@ -369,15 +406,18 @@ bool AwarenessStage::process(const DepthFrame& frame, MeasurementBatch* batch,
   source.cy = static_cast<float>(K.cy);
   PointCounters c;
   c.points_in = n;
-  processSource(source, frame.stamp_s, frame.T_W_B, frame.T_B_S, batch, &c);
+  processSource(source, frame.stamp_s, frame.T_W_B, frame.T_B_S, batch, &c, split);
   *counters += c;
   return true;
 }
 
 void AwarenessStage::processSource(const Source& source, double stamp_s, const Transform& T_W_B,
                                    const Transform& T_B_S, MeasurementBatch* batch,
-                                   PointCounters* counters) {
+                                   PointCounters* counters, bool split) {
   const FrameGeometry g = beginFrame(stamp_s, T_W_B, T_B_S, batch);
+  // The free set is cleared by the half that carves it: split, that is carve()'s thread, whose
+  // cache the cleared rows are then in.
+  if (!split) batch->free.reset(g.box_origin, g.dims);
   collectEnds(source, g, counters);
   for (const End& e : outside_) {
     if (!e.cut) batch->far_hits.push_back(voxelIndexOf(e.p_W, config_.local_map.resolution_m));
@@ -388,23 +428,42 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
   }
   // From here on ends_ holds every end, those beyond the box last (the hits are listed already).
   ends_.insert(ends_.end(), outside_.begin(), outside_.end());
+  counters->hit_voxels = batch->hits.size();
+  if (split) {
+    // The second half waits for carve() (maybe on another thread) with the frame's ends; ends_
+    // takes a spare one's memory.
+    updateAwarenessMap(T_W_B.translation());
+    std::lock_guard<std::mutex> lock(collected_mutex_);
+    std::unique_ptr<CollectedFrame> frame;
+    if (spare_.empty()) {
+      frame = std::make_unique<CollectedFrame>();
+    } else {
+      frame = std::move(spare_.back());
+      spare_.pop_back();
+    }
+    frame->ends.swap(ends_);
+    frame->origin_vox = g.origin_vox;
+    frame->box_origin = g.box_origin;
+    frame->dims = g.dims;
+    collected_.push_back(std::move(frame));
+    return;
+  }
   if (threads_ != nullptr) {
     // The awareness map and the cones share no state (listCones() writes only the direction
     // fields of ends_, the map reads their points): the map is updated on a kept thread
     // meanwhile, the same map either way.
     threads_->run(2, [&](int job) {
       if (job == 0) {
-        listCones(g.origin_vox);
+        listCones(g.origin_vox, ends_);
       } else {
         updateAwarenessMap(T_W_B.translation());
       }
     });
   } else {
     updateAwarenessMap(T_W_B.translation());
-    listCones(g.origin_vox);
+    listCones(g.origin_vox, ends_);
   }
-  carveCones(g.origin_vox, batch);
-  counters->hit_voxels = batch->hits.size();
+  carveCones(g.origin_vox, batch, /*use_threads=*/true);
   counters->free_voxels = batch->free_count;
 }
 
@@ -430,7 +489,6 @@ AwarenessStage::FrameGeometry AwarenessStage::beginFrame(double stamp_s, const T
   g.dims = 2 * half + Eigen::Vector3i::Ones();
   g.origin_vox = o_W * (1.0 / res) - g.box_origin.cast<double>();  // as collectEnds() scales
   box_dims_ = g.dims;
-  batch->free.reset(g.box_origin, g.dims);
   batch->hits.clear();
   batch->far_hits.clear();
   batch->stamp_s = stamp_s;
@@ -439,11 +497,6 @@ AwarenessStage::FrameGeometry AwarenessStage::beginFrame(double stamp_s, const T
   batch->resolution_m = res;
   ends_.clear();
   outside_.clear();
-  // cppcheck-suppress knownConditionTrueFalse ; it does wrap after 2^32 frames
-  if (++stamp_ == 0) {  // wrapped: forget every slot
-    for (std::vector<BinSlot>& slots : slots_) std::fill(slots.begin(), slots.end(), BinSlot{});
-    stamp_ = 1;
-  }
   return g;
 }
 
@@ -689,7 +742,12 @@ void AwarenessStage::updateAwarenessMap(const Eigen::Vector3d& body_W) {
   map_.endFrame();
 }
 
-void AwarenessStage::listCones(const Eigen::Vector3d& o) {
+void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends) {
+  // cppcheck-suppress knownConditionTrueFalse ; it does wrap after 2^32 frames
+  if (++stamp_ == 0) {  // wrapped: forget every slot
+    for (std::vector<BinSlot>& slots : slots_) std::fill(slots.begin(), slots.end(), BinSlot{});
+    stamp_ = 1;
+  }
   // Bin index on level L with n = 2^lg bins per face side: (face n + iu) n + iv.
   const int n0 = bins_per_face_side_;
   int lg0 = 0;
@@ -728,7 +786,7 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o) {
   // First every end's bin on the finest level (in e.bin for now), then the bins' entries: the
   // slots of the ends a few ahead are fetched meanwhile (a LiDAR's rays mostly have a finest
   // bin of their own, all over the 3 MB of slots).
-  for (End& e : ends_) {
+  for (End& e : ends) {
     const Eigen::Vector3d d = 0.5 * (e.points.min + e.points.max).cast<double>() - o;
     const Eigen::Vector3d m = d.cwiseAbs();
     int axis = 0;
@@ -744,10 +802,10 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o) {
     e.bin = static_cast<std::uint32_t>((face * n0 + iu) * n0 + iv);
   }
   constexpr std::size_t kPrefetchAhead = 16;
-  for (std::size_t i = 0; i < ends_.size(); ++i) {
-    if (i + kPrefetchAhead < ends_.size())
-      __builtin_prefetch(&slots_[0][ends_[i + kPrefetchAhead].bin]);
-    End& e = ends_[i];
+  for (std::size_t i = 0; i < ends.size(); ++i) {
+    if (i + kPrefetchAhead < ends.size())
+      __builtin_prefetch(&slots_[0][ends[i + kPrefetchAhead].bin]);
+    End& e = ends[i];
     e.bin = findOrAddBin(0, e.bin, e.near);
   }
   // Nearest member of the coarser bins, from their children; then every bin's reach. Reach never
@@ -771,7 +829,7 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o) {
   // and the bin continues from there to reach / near, so the chain leaves no gap.
   std::vector<Bin>& finest = bins_[0];
   const Eigen::Vector3f of = o.cast<float>();
-  for (const End& e : ends_) {
+  for (const End& e : ends) {
     if (!(e.near > 0.0)) continue;
     Bin& bin = finest[e.bin];
     const float lambda = static_cast<float>(bin.reach / e.near);
@@ -808,7 +866,7 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o) {
   // but its point box, which lies in its own voxel, so a hit there needs no carving (it wins
   // anyway). Only the float rounding of the box can put a face of it on the next voxel's
   // boundary, and the walk then marked that voxel, which the ray does not reach.
-  for (const End& e : ends_) {
+  for (const End& e : ends) {
     const double s_min = e.near > 0.0 ? finest[e.bin].reach / e.near : 0.0;
     if (s_min >= 1.0 && !e.cut) continue;
     cones_.push_back({e.points, s_min});
@@ -844,8 +902,10 @@ void AwarenessStage::carveRange(const Eigen::Vector3d& o, int x_begin, int x_end
   *free_count = countBits(free, x_begin, x_end, free.markedRows());
 }
 
-void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batch) {
-  const int threads = threads_ != nullptr ? threads_->size() : 1;
+void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batch,
+                                bool use_threads) {
+  const int threads = use_threads && threads_ != nullptr ? threads_->size() : 1;
+  carve_bytes_.store(carveBytes(), std::memory_order_relaxed);
   const int dim_x = batch->free.dims().x();
   // Only these rows get bits: the count here, the local map's reading and the next frame's
   // clearing look only there (a 360-degree scan in a room marks a small part of its box).
@@ -866,10 +926,22 @@ void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batc
   batch->free_count = std::accumulate(counts.begin(), counts.end(), std::size_t{0});
 }
 
-std::size_t AwarenessStage::memoryBytes() const {
+std::size_t AwarenessStage::carveBytes() const {
   std::size_t bins = 0;
   for (std::size_t l = 0; l < slots_.size(); ++l) {
     bins += slots_[l].capacity() * sizeof(BinSlot) + bins_[l].capacity() * sizeof(Bin);
+  }
+  return bins + cones_.capacity() * sizeof(Cone) + range_scratch_.capacity() * sizeof(double);
+}
+
+std::size_t AwarenessStage::memoryBytes() const {
+  std::size_t bins = carve_bytes_.load(std::memory_order_relaxed);
+  {
+    std::lock_guard<std::mutex> lock(collected_mutex_);
+    for (const std::unique_ptr<CollectedFrame>& f : collected_)
+      bins += f->ends.capacity() * sizeof(End);
+    for (const std::unique_ptr<CollectedFrame>& f : spare_)
+      bins += f->ends.capacity() * sizeof(End);
   }
   for (const PointPart& p : parts_) {
     bins += sizeof(p.recent) + p.table.capacity() * sizeof(Slot) +
@@ -879,9 +951,7 @@ std::size_t AwarenessStage::memoryBytes() const {
             p.block_xyz.capacity() * sizeof(float);
   }
   return bins + map_.memoryBytes() + ends_.capacity() * sizeof(End) +
-         outside_.capacity() * sizeof(End) + cones_.capacity() * sizeof(Cone) +
-         range_scratch_.capacity() * sizeof(double) +
-         sample_indices_.capacity() * sizeof(std::uint32_t);
+         outside_.capacity() * sizeof(End) + sample_indices_.capacity() * sizeof(std::uint32_t);
 }
 
 }  // namespace mlmap

@@ -55,7 +55,10 @@ MapEngine::MapEngine(const MapConfig& config, LogSink log, EngineObservers obser
     stages_ = std::make_unique<StageThreads>(
         config_.pipeline.input_queue_capacity, config_.pipeline.batch_queue_capacity,
         [this](Input& input, MeasurementBatch* batch) { awarenessStep(input, batch); },
-        [this](const MeasurementBatch& batch) { localStep(batch); });
+        [this](MeasurementBatch& batch) {
+          carveStep(&batch);
+          localStep(batch);
+        });
   }
 }
 
@@ -159,10 +162,19 @@ FrameStatus MapEngine::enqueue(Input input) {
 void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
   const Clock::time_point start = Clock::now();
   PointCounters counters;
+  // Threaded: only the first half here; the carving runs on the local-global thread, beside the
+  // next frame's first half (carveStep()).
+  const bool split = config_.pipeline.threaded;
   if (auto* points = std::get_if<PointCloudFrame>(&input)) {
-    awareness_.process(*points, batch, &counters);
+    if (split) {
+      awareness_.collect(*points, batch, &counters);
+    } else {
+      awareness_.process(*points, batch, &counters);
+    }
+  } else if (split) {
+    awareness_.collect(std::get<DepthFrame>(input), batch, &counters);  // checked in submit()
   } else {
-    awareness_.process(std::get<DepthFrame>(input), batch, &counters);  // checked in submit()
+    awareness_.process(std::get<DepthFrame>(input), batch, &counters);
   }
   batch->awareness_ms = msSince(start);
   if (observers_.awareness) observers_.awareness(awareness_.map(), batch->stamp_s, batch->T_W_B);
@@ -171,6 +183,17 @@ void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
   stats_.update([&](EngineStatsRecorder::Record& r) {
     r.stats.points += counters;
     r.stats.memory.awareness_bytes = bytes;
+    if (!split) r.awareness_ms.add(batch->awareness_ms);  // threaded: with the carving's
+  });
+}
+
+void MapEngine::carveStep(MeasurementBatch* batch) {
+  const Clock::time_point start = Clock::now();
+  PointCounters counters;
+  awareness_.carve(batch, &counters);
+  batch->awareness_ms += msSince(start);
+  stats_.update([&](EngineStatsRecorder::Record& r) {
+    r.stats.points += counters;
     r.awareness_ms.add(batch->awareness_ms);
   });
 }

@@ -9,8 +9,11 @@
 #include "mlmap/core/config.h"
 
 #include <array>
+#include <atomic>
 #include <cstdint>
+#include <deque>
 #include <memory>
+#include <mutex>
 #include <random>
 #include <vector>
 
@@ -59,9 +62,25 @@ class AwarenessStage {
   /// touching nothing, when the image size or intrinsics are inconsistent.
   bool process(const DepthFrame& frame, MeasurementBatch* batch, PointCounters* counters);
 
+  /// The first half of process(), for a pipeline that runs the halves on two threads: the
+  /// frame's points into end voxels, the hits (batch->hits, batch->far_hits) and the awareness
+  /// map (batch->free is left to carve()); the frame's ends wait for carve(). Each collect()
+  /// must be followed by one carve() of the same batch, in the same order; a collect() may run
+  /// while carve() of an earlier frame runs on another thread (each half on one thread at a
+  /// time). Adds to `counters` all but free_voxels.
+  void collect(const PointCloudFrame& frame, MeasurementBatch* batch, PointCounters* counters);
+  /// The same for a depth image (returns false, touching nothing, where process() does).
+  bool collect(const DepthFrame& frame, MeasurementBatch* batch, PointCounters* counters);
+  /// The second half of process(): the cones of the oldest frame collected and not yet carved,
+  /// carved into its batch's free set (sets batch->free_count and adds free_voxels to
+  /// `counters`), on the calling thread only (the kept threads serve collect()). The batch then
+  /// holds what process() would have filled it with, bit for bit.
+  void carve(MeasurementBatch* batch, PointCounters* counters);
+
   /// The awareness map after the last frame.
   [[nodiscard]] const AwarenessMap& map() const { return map_; }
-  /// Bytes held by the stage (awareness grid and per-frame scratch).
+  /// Bytes held by the stage (awareness grid and per-frame scratch). May be called by
+  /// collect()'s thread while carve() runs (the second half's part as of its last frame).
   [[nodiscard]] std::size_t memoryBytes() const;
 
  private:
@@ -80,9 +99,16 @@ class AwarenessStage {
     std::size_t fill(std::size_t first, std::size_t len, float* xs, float* ys, float* zs) const;
   };
   /// One frame: the scratch box, its points grouped into end voxels, the hits, the awareness
-  /// map, the free space.
+  /// map, the free space (process()), or only its first half (collect(): `split`).
   void processSource(const Source& source, double stamp_s, const Transform& T_W_B,
-                     const Transform& T_B_S, MeasurementBatch* batch, PointCounters* counters);
+                     const Transform& T_B_S, MeasurementBatch* batch, PointCounters* counters,
+                     bool split);
+  /// The depth image as a Source (process() and collect()); false when it is inconsistent.
+  bool processDepth(const DepthFrame& frame, MeasurementBatch* batch, PointCounters* counters,
+                    bool split);
+  /// The cloud as a Source (process() and collect()).
+  void processCloud(const PointCloudFrame& frame, MeasurementBatch* batch, PointCounters* counters,
+                    bool split);
   /// A frame's scratch box around the sensor (everything within range that the local map can
   /// hold) and the sensor pose.
   struct FrameGeometry {
@@ -91,7 +117,7 @@ class AwarenessStage {
     Eigen::Vector3i dims = Eigen::Vector3i::Zero();  ///< box size [voxels]
     Eigen::Vector3d origin_vox = Eigen::Vector3d::Zero();  ///< the sensor, box voxel units
   };
-  /// Sizes the scratch box and resets the batch and the per-frame tables.
+  /// Sizes the scratch box and resets the batch (but its free set) and the per-frame tables.
   FrameGeometry beginFrame(double stamp_s, const Transform& T_W_B, const Transform& T_B_S,
                            MeasurementBatch* batch);
   /// Turns every point into its end voxel (ends_, one per box voxel) or an end beyond the box
@@ -158,9 +184,9 @@ class AwarenessStage {
                    PointPart* part) const;
   /// The entry in part->ends of a box key (voxel index | kCutFlag), added when new.
   std::uint32_t findOrAddEnd(PointPart* part, std::uint32_t key) const;
-  /// Lists the frame's cones: those of the direction bins and of the ends (ends_, which holds
-  /// outside_ too by then), into cones_. Writes only the direction fields (bin, near) of ends_.
-  void listCones(const Eigen::Vector3d& origin_vox);
+  /// Lists the frame's cones: those of the direction bins and of the ends (`ends`: ends_ with
+  /// outside_ appended), into cones_. Writes only the direction fields (bin, near) of `ends`.
+  void listCones(const Eigen::Vector3d& origin_vox, std::vector<End>& ends);
   /// A cone to carve: the part s in [s_min, 1] of the cone from the sensor to `box`.
   struct Cone {
     VoxelSpaceBox box{};
@@ -169,7 +195,9 @@ class AwarenessStage {
   /// Carves cones_ into batch->free, clears the hits and counts the free voxels (sets
   /// batch->free_count): on the calling thread, or split by box x over awareness.num_threads
   /// threads (the same bits either way).
-  void carveCones(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch);
+  void carveCones(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch, bool use_threads);
+  /// The bytes of the second half's scratch (bins, cones), for memoryBytes().
+  [[nodiscard]] std::size_t carveBytes() const;
   /// The part of carveCones() with box x in [x_begin, x_end): marks the cones' voxels there,
   /// clears the hits there and counts the free voxels there into `free_count`. Writes only the
   /// bitset's rows of that range.
@@ -180,12 +208,27 @@ class AwarenessStage {
   AwarenessMap map_;
   Eigen::Vector3i box_dims_ = Eigen::Vector3i::Zero();  // scratch box of the current frame
   std::vector<End> ends_;                               // inside the scratch box, one per voxel
-  std::vector<End> outside_;           // beyond the box (the local map cannot hold them), per point
+  std::vector<End> outside_;  // beyond the box (the local map cannot hold them), per point
+  // The second half's (listCones(), carveCones()): with collect() and carve(), carve()'s thread's.
   std::vector<Cone> cones_;            // this frame's cones, bins first (coarse to fine), then ends
   std::vector<double> range_scratch_;  // the cones' work per box x, for splitting it over threads
   std::vector<PointPart> parts_;       // one per thread; ends_ and outside_ merge them
   std::unique_ptr<TaskThreads> threads_;  // with awareness.num_threads > 1
-  std::uint32_t stamp_ = 0;               // this frame's, in slots_
+  /// A frame between collect() and carve(): its ends (ends_ and outside_), its sensor and the
+  /// box of its free set (which carve() clears).
+  struct CollectedFrame {
+    std::vector<End> ends;
+    Eigen::Vector3d origin_vox = Eigen::Vector3d::Zero();
+    VoxelIndex box_origin = VoxelIndex::Zero();
+    Eigen::Vector3i dims = Eigen::Vector3i::Zero();
+  };
+  mutable std::mutex collected_mutex_;  // guards the two below (collect() and carve() share them)
+  std::deque<std::unique_ptr<CollectedFrame>> collected_;  // waiting for carve(), oldest first
+  std::vector<std::unique_ptr<CollectedFrame>> spare_;     // their memory, for reuse
+  std::atomic<std::size_t> carve_bytes_{0};                // carveBytes() as of the last carving
+  // The second half's state from here on (listCones(), carveCones()): with collect() and
+  // carve(), on carve()'s thread only.
+  std::uint32_t stamp_ = 0;  // this frame's, in slots_
   // Level 0: bins about two voxels wide at the maximum range; level L: 2^L times wider, covering
   // the distances where they are still about two voxels wide. Per level, a slot for every bin
   // and this frame's bins with members, densely in the order they were met: the passes over the

@@ -147,7 +147,12 @@ class MapEngine {
   using Input = EngineInput;
   FrameStatus admit(double stamp_s, const Transform& T_W_B, const Transform& T_B_S);
   void process(Input& input, MeasurementBatch* batch);
+  /// The awareness stage of a frame: all of it (synchronous), or its first half (threaded:
+  /// AwarenessStage::collect(), the carving is left to carveStep() on the local-global thread).
   void awarenessStep(Input& input, MeasurementBatch* batch);
+  /// Threaded: the awareness stage's second half (AwarenessStage::carve()), on the local-global
+  /// thread before localStep(): the two threads then carry about equal shares of a frame.
+  void carveStep(MeasurementBatch* batch);
   void localStep(const MeasurementBatch& batch);
   void applyPriors();
   FrameStatus enqueue(Input input);

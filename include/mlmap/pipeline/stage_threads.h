@@ -32,8 +32,8 @@ class StageThreads {
  public:
   /// The awareness stage of one frame: fills the batch (awareness thread).
   using AwarenessStep = std::function<void(EngineInput& input, MeasurementBatch* batch)>;
-  /// The local-global stage of one batch (local-global thread).
-  using LocalStep = std::function<void(const MeasurementBatch& batch)>;
+  /// The local-global stage of one batch (local-global thread); it may finish the batch first.
+  using LocalStep = std::function<void(MeasurementBatch& batch)>;
   /// What push() did.
   enum class Queued {
     kQueued,         ///< the frame waits for the awareness thread

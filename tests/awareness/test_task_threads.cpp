@@ -1,0 +1,168 @@
+// The awareness stage's threads (also run under ThreadSanitizer by tools/test.sh): TaskThreads
+// runs every job of a run() exactly once, whoever claims it, and hands exceptions back; the
+// stage's two halves (collect(), carve()) on two threads at once fill the batches process()
+// fills.
+#include "../../src/awareness/task_threads.h"
+#include "mlmap/awareness/awareness_stage.h"
+
+#include "../support/random_draws.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <atomic>
+#include <random>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+namespace mlmap {
+namespace {
+
+// Points all around the sensor, some beyond the range (6 m).
+PointCloudFrame randomCloud(std::mt19937& rng, int n, double max_r) {
+  PointCloudFrame f;
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_real_distribution<double> r(0.2, max_r);
+  for (int i = 0; i < n; ++i) {
+    Eigen::Vector3d d = test::draw3(u, rng);
+    if (d.norm() < 1e-3) continue;
+    f.points_S.push_back((d.normalized() * r(rng)).cast<float>());
+  }
+  f.T_W_B.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  f.T_B_S = SensorConfig{}.T_B_S();
+  return f;
+}
+
+MapConfig testConfig(double resolution) {
+  MapConfig c;
+  c.local_map.resolution_m = resolution;
+  c.awareness.max_range_m = 6.0;
+  c.awareness.rho_cells = 70;
+  return c;
+}
+
+TEST(TaskThreads, RunsEveryJobExactlyOnceBeforeReturning) {
+  for (int threads : {1, 2, 3}) {
+    TaskThreads pool(threads);
+    EXPECT_EQ(pool.size(), threads);
+    for (int round = 0; round < 300; ++round) {
+      const int n = round % 9;  // 0 .. 8 jobs: fewer, as many and more than threads
+      std::vector<std::atomic<int>> calls(static_cast<std::size_t>(n));
+      pool.run(n, [&](int i) { calls[static_cast<std::size_t>(i)].fetch_add(1); });
+      for (int i = 0; i < n; ++i) {
+        ASSERT_EQ(calls[static_cast<std::size_t>(i)].load(), 1)
+            << threads << " threads, " << n << " jobs, job " << i;
+      }
+    }
+  }
+}
+
+TEST(TaskThreads, JobZeroRunsOnTheCaller) {
+  TaskThreads pool(2);
+  for (int round = 0; round < 50; ++round) {
+    std::thread::id first;
+    pool.run(2, [&](int i) {
+      if (i == 0) first = std::this_thread::get_id();
+    });
+    ASSERT_EQ(first, std::this_thread::get_id());
+  }
+}
+
+TEST(TaskThreads, AJobMayWaitForALaterOneWhileAnotherThreadIsFree) {
+  // Job 1 waits until job 2 has run. Whichever thread holds job 1, the other one claims job 2:
+  // no job is tied to a thread, so this never hangs.
+  TaskThreads pool(2);
+  for (int round = 0; round < 100; ++round) {
+    std::atomic<bool> second_done{false};
+    pool.run(3, [&](int i) {
+      if (i == 1) {
+        while (!second_done.load()) std::this_thread::yield();
+      } else if (i == 2) {
+        second_done.store(true);
+      }
+    });
+    ASSERT_TRUE(second_done.load());
+  }
+}
+
+TEST(TaskThreads, RethrowsAJobsExceptionAfterAllReturned) {
+  TaskThreads pool(2);
+  for (int thrower : {0, 1, 2}) {
+    std::atomic<int> ran{0};
+    EXPECT_THROW(pool.run(3,
+                          [&](int i) {
+                            ran.fetch_add(1);
+                            if (i == thrower) throw std::runtime_error("job failed");
+                          }),
+                 std::runtime_error);
+    EXPECT_EQ(ran.load(), 3);
+    std::atomic<int> after{0};
+    pool.run(2, [&](int) { after.fetch_add(1); });  // still works
+    EXPECT_EQ(after.load(), 2);
+  }
+}
+
+// collect() and carve() as the threaded engine runs them: frame k's carving on one thread
+// while frame k + 1 is collected on another, in a ring of batches. Each batch is then what
+// process() makes of its frame, bit for bit, and so is the awareness map.
+TEST(AwarenessStage, HalvesOnTwoThreadsCarveWhatProcessCarves) {
+  for (const int threads : {1, 2}) {
+    MapConfig config = testConfig(0.1);
+    AwarenessStage reference(config);
+    config.awareness.num_threads = threads;
+    AwarenessStage split(config);
+    std::mt19937 rng(90 + static_cast<std::uint32_t>(threads));
+    std::vector<PointCloudFrame> frames;
+    for (int k = 0; k < 6; ++k) {
+      frames.push_back(randomCloud(rng, 4000 + 1000 * k, 8.0));  // each frame its own ends
+      frames.back().T_W_B.translation() = Eigen::Vector3d(0.37 * k, -0.21 * k, 0.05 * k);
+      frames.back().stamp_s = 0.1 * (k + 1);
+    }
+    std::array<MeasurementBatch, 3> ring;
+    std::array<PointCounters, 3> counters;
+    split.collect(frames[0], &ring[0], &counters[0]);
+    for (std::size_t k = 0; k < frames.size(); ++k) {
+      MeasurementBatch& b = ring[k % 3];
+      std::thread carver([&] { split.carve(&b, &counters[k % 3]); });
+      if (k + 1 < frames.size()) {
+        counters[(k + 1) % 3] = PointCounters{};
+        split.collect(frames[k + 1], &ring[(k + 1) % 3], &counters[(k + 1) % 3]);
+      }
+      carver.join();
+      MeasurementBatch a;
+      PointCounters ca;
+      reference.process(frames[k], &a, &ca);
+      const PointCounters& cb = counters[k % 3];
+      ASSERT_EQ(a.free.origin(), b.free.origin());
+      ASSERT_EQ(a.free.dims(), b.free.dims());
+      const std::size_t words = static_cast<std::size_t>(a.free.dims().x()) *
+                                static_cast<std::size_t>(a.free.dims().y()) * a.free.wordsPerRow();
+      std::size_t differing = 0;
+      for (std::size_t w = 0; w < words; ++w)
+        differing += a.free.data()[w] != b.free.data()[w] ? 1 : 0;
+      EXPECT_EQ(differing, 0u) << threads << " threads, frame " << k;
+      EXPECT_EQ(a.free_count, b.free_count);
+      EXPECT_GT(a.free_count, 10000u);
+      EXPECT_EQ(a.stamp_s, b.stamp_s);
+      ASSERT_EQ(a.hits.size(), b.hits.size());
+      for (std::size_t i = 0; i < a.hits.size(); ++i) {
+        EXPECT_EQ(a.hits[i].index, b.hits[i].index);
+        EXPECT_EQ(a.hits[i].p_W, b.hits[i].p_W);
+      }
+      EXPECT_EQ(a.far_hits, b.far_hits);
+      EXPECT_EQ(ca.free_voxels, cb.free_voxels);
+      EXPECT_EQ(ca.hit_voxels, cb.hit_voxels);
+      EXPECT_EQ(ca.points_in, cb.points_in);
+      EXPECT_EQ(ca.beyond_max_range, cb.beyond_max_range);
+      // The map is one frame ahead in `split` (frame k + 1 collected): compare it after the last.
+      if (k + 1 == frames.size()) {
+        EXPECT_EQ(reference.map().occupiedPoints(), split.map().occupiedPoints());
+        EXPECT_EQ(reference.map().count(Occupancy::kFree), split.map().count(Occupancy::kFree));
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace mlmap
