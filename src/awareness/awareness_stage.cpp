@@ -335,7 +335,10 @@ void AwarenessStage::carve(MeasurementBatch* batch, PointCounters* counters) {
   }
   batch->free.reset(frame->box_origin, frame->dims);
   listCones(frame->origin_vox, frame->ends);
-  carveCones(frame->origin_vox, batch, /*use_threads=*/false);
+  // With kept threads, the carving is split over them as in process(): a kept thread that the
+  // other half's point loop does not hold (it waits for a core meanwhile, or finds the carving's
+  // ranges claimed) helps here; otherwise this thread carves every range itself.
+  carveCones(frame->origin_vox, batch);
   counters->free_voxels += batch->free_count;
   std::lock_guard<std::mutex> lock(collected_mutex_);
   spare_.push_back(std::move(frame));
@@ -463,7 +466,7 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
     updateAwarenessMap(T_W_B.translation());
     listCones(g.origin_vox, ends_);
   }
-  carveCones(g.origin_vox, batch, /*use_threads=*/true);
+  carveCones(g.origin_vox, batch);
   counters->free_voxels = batch->free_count;
 }
 
@@ -902,9 +905,8 @@ void AwarenessStage::carveRange(const Eigen::Vector3d& o, int x_begin, int x_end
   *free_count = countBits(free, x_begin, x_end, free.markedRows());
 }
 
-void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batch,
-                                bool use_threads) {
-  const int threads = use_threads && threads_ != nullptr ? threads_->size() : 1;
+void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batch) {
+  const int threads = threads_ != nullptr ? threads_->size() : 1;
   carve_bytes_.store(carveBytes(), std::memory_order_relaxed);
   const int dim_x = batch->free.dims().x();
   // Only these rows get bits: the count here, the local map's reading and the next frame's

@@ -38,18 +38,22 @@ void TaskThreads::runClaimed(const std::function<void(int)>& job, int index) {
 
 void TaskThreads::run(int n, const std::function<void(int)>& job) {
   if (n <= 0) return;
-  if (threads_.empty() || n == 1) {  // nothing to hand over: no lock, no signal
+  bool alone = threads_.empty() || n == 1;  // nothing to hand over: no signal
+  if (!alone) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    alone = jobs_ != 0;  // another caller's run() holds the kept threads: do it all here
+    if (!alone) {
+      job_ = &job;
+      jobs_ = n;
+      next_ = 1;  // job 0 is the caller's
+      finished_ = 0;
+      error_ = nullptr;
+      ++generation_;
+    }
+  }
+  if (alone) {
     for (int i = 0; i < n; ++i) job(i);
     return;
-  }
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    job_ = &job;
-    jobs_ = n;
-    next_ = 1;  // job 0 is the caller's
-    finished_ = 0;
-    error_ = nullptr;
-    ++generation_;
   }
   if (n == 2) {
     go_.notify_one();

@@ -16,7 +16,8 @@ namespace mlmap {
 
 /// `threads` - 1 kept threads and the caller. run(n, job) calls job(0) .. job(n - 1), each once,
 /// on whichever of the caller and the kept threads claims it first, and returns when every call
-/// has returned. Used by one thread at a time (the stage's owner).
+/// has returned. run() may be called by two threads at once (the threaded engine's two halves of
+/// the awareness stage): the kept threads serve the first caller, the other runs its jobs itself.
 ///
 /// The caller claims jobs too, and takes every job not yet claimed when it is done with its own:
 /// a kept thread that is slow to wake (it waits for a core, e.g. while the engine's local thread
@@ -35,8 +36,9 @@ class TaskThreads {
 
   /// Calls job(0) .. job(n - 1) (any n >= 0), each exactly once, job(0) first on the calling
   /// thread and the others on whichever thread claims them first (in increasing order); returns
-  /// once all have returned. An exception of a job is rethrown here (the first one caught, after
-  /// all returned).
+  /// once all have returned. While another caller's run() is under way, all on the calling
+  /// thread, in order. An exception of a job is rethrown here (the first one caught, after all
+  /// returned).
   void run(int n, const std::function<void(int)>& job);
 
  private:
@@ -50,7 +52,7 @@ class TaskThreads {
   std::condition_variable go_;
   std::condition_variable done_;
   const std::function<void(int)>* job_ = nullptr;  // the current jobs, while run() waits
-  int jobs_ = 0;                                   // jobs of the current run()
+  int jobs_ = 0;                                   // jobs of the current run() (0: none)
   int next_ = 0;                                   // the next job to claim
   int finished_ = 0;                               // jobs of the current run() that returned
   std::uint64_t generation_ = 0;                   // counts run() calls: a kept thread's signal

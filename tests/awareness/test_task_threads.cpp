@@ -86,6 +86,32 @@ TEST(TaskThreads, AJobMayWaitForALaterOneWhileAnotherThreadIsFree) {
   }
 }
 
+TEST(TaskThreads, ACallWhileAnotherRunsDoesItsJobsItself) {
+  // The threaded engine's two halves of the awareness stage share the kept threads: a run()
+  // called while another one holds them runs its jobs on its caller, and both get every job
+  // done once.
+  TaskThreads pool(2);
+  for (int round = 0; round < 50; ++round) {
+    std::atomic<bool> second_done{false};
+    std::vector<std::atomic<int>> first(2);
+    std::vector<std::atomic<int>> second(3);
+    std::thread other;
+    pool.run(2, [&](int i) {
+      if (i == 0) {  // the first run() is under way: a second caller now
+        other = std::thread([&] {
+          pool.run(3, [&](int j) { second[static_cast<std::size_t>(j)].fetch_add(1); });
+          second_done.store(true);
+        });
+        while (!second_done.load()) std::this_thread::yield();
+      }
+      first[static_cast<std::size_t>(i)].fetch_add(1);
+    });
+    other.join();
+    for (const std::atomic<int>& c : first) ASSERT_EQ(c.load(), 1) << "round " << round;
+    for (const std::atomic<int>& c : second) ASSERT_EQ(c.load(), 1) << "round " << round;
+  }
+}
+
 TEST(TaskThreads, RethrowsAJobsExceptionAfterAllReturned) {
   TaskThreads pool(2);
   for (int thrower : {0, 1, 2}) {
@@ -104,7 +130,8 @@ TEST(TaskThreads, RethrowsAJobsExceptionAfterAllReturned) {
 }
 
 // collect() and carve() as the threaded engine runs them: frame k's carving on one thread
-// while frame k + 1 is collected on another, in a ring of batches. Each batch is then what
+// while frame k + 1 is collected on another, in a ring of batches (with two threads both halves
+// ask the one kept thread for help). Each batch is then what
 // process() makes of its frame, bit for bit, and so is the awareness map.
 TEST(AwarenessStage, HalvesOnTwoThreadsCarveWhatProcessCarves) {
   for (const int threads : {1, 2}) {

@@ -73,8 +73,9 @@ class AwarenessStage {
   bool collect(const DepthFrame& frame, MeasurementBatch* batch, PointCounters* counters);
   /// The second half of process(): the cones of the oldest frame collected and not yet carved,
   /// carved into its batch's free set (sets batch->free_count and adds free_voxels to
-  /// `counters`), on the calling thread only (the kept threads serve collect()). The batch then
-  /// holds what process() would have filled it with, bit for bit.
+  /// `counters`), split over the kept threads as process() splits it when no collect() holds
+  /// them (TaskThreads::run()). The batch then holds what process() would have filled it with,
+  /// bit for bit.
   void carve(MeasurementBatch* batch, PointCounters* counters);
 
   /// The awareness map after the last frame.
@@ -195,7 +196,7 @@ class AwarenessStage {
   /// Carves cones_ into batch->free, clears the hits and counts the free voxels (sets
   /// batch->free_count): on the calling thread, or split by box x over awareness.num_threads
   /// threads (the same bits either way).
-  void carveCones(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch, bool use_threads);
+  void carveCones(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch);
   /// The bytes of the second half's scratch (bins, cones), for memoryBytes().
   [[nodiscard]] std::size_t carveBytes() const;
   /// The part of carveCones() with box x in [x_begin, x_end): marks the cones' voxels there,
