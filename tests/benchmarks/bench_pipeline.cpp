@@ -38,10 +38,24 @@ struct Case {
 
 /// awareness.num_threads of every case (--awareness-threads).
 int g_awareness_threads = 1;
+/// pipeline.threaded of every case (--threaded): the stages on threads of their own, the frames
+/// queued without a drop and the throughput timed (the whole stream's wall time / frames).
+bool g_threaded = false;
+/// pipeline.planning_layers of the simulated cases (--no-planning: off).
+bool g_planning_layers = true;
+/// Synchronous: every frame of a pass copied before the pass, as --threaded queues them
+/// (--copy-ahead), not each just before its submit() (which leaves the image in the cache).
+bool g_copy_ahead = false;
+/// pipeline.batch_queue_capacity of every case (--batch-queue).
+int g_batch_queue = 2;
 
 MapConfig at(double res, const Eigen::Vector3i& cells) {
   MapConfig c;
   c.awareness.num_threads = g_awareness_threads;
+  c.pipeline.threaded = g_threaded;
+  c.pipeline.input_queue_capacity = 1000;  // --threaded: every frame queued, none dropped
+  c.pipeline.batch_queue_capacity = g_batch_queue;
+  c.pipeline.planning_layers = g_planning_layers;
   c.local_map.resolution_m = res;
   c.local_map.size_cells = cells;
   return c;
@@ -52,6 +66,9 @@ struct Row {
   double points;
   EngineStats stats;
   std::vector<double> snapshot_ms, grid_ms, esdf_ms;  // planning layers, per update
+  /// Wall time of the stream: from the first submit() to the last frame mapped (threaded), or
+  /// the submit() times summed (synchronous).
+  double stream_ms = 0.0;
 };
 
 double quantile(std::vector<double> v, double q) {
@@ -68,11 +85,28 @@ Row run(const Case& c, const std::vector<FrameT>& frames, int repeats) {
   double stamp = 0.0;
   Row row;
   PlanningStats last;
+  auto prepared = [&](FrameT f) {
+    f.stamp_s = (stamp += 0.1);
+    if constexpr (std::is_same_v<FrameT, DepthFrame>) f.T_B_S = c.config.sensor.T_B_S();
+    return f;
+  };
   for (int r = 0; r < repeats; ++r) {
-    for (FrameT f : frames) {
-      f.stamp_s = (stamp += 0.1);
-      if constexpr (std::is_same_v<FrameT, DepthFrame>) f.T_B_S = c.config.sensor.T_B_S();
+    if (c.config.pipeline.threaded || g_copy_ahead) {
+      // Every frame queued at once (copied before, untimed), none dropped: the stream's wall
+      // time is what the two threads sustain (synchronous: the same frames, one after another).
+      std::vector<FrameT> copies;
+      for (const FrameT& f : frames) copies.push_back(prepared(f));
+      const SteadyClock::time_point start = SteadyClock::now();
+      for (FrameT& f : copies) engine.submit(std::move(f));
+      engine.flush();
+      row.stream_ms += msSince(start);
+      continue;
+    }
+    for (const FrameT& frame : frames) {
+      FrameT f = prepared(frame);  // copied untimed: submit() takes the frame
+      const SteadyClock::time_point start = SteadyClock::now();
       engine.submit(std::move(f));
+      row.stream_ms += msSince(start);
       const PlanningStats p = engine.stats().planning;
       if (p.snapshots > last.snapshots) row.snapshot_ms.push_back(p.last_snapshot_ms);
       if (p.grid_updates > last.grid_updates) row.grid_ms.push_back(p.last_grid_ms);
@@ -156,13 +190,37 @@ int runFiles(const FilesOptions& o) {
   c.sensor.translation_B_m.setZero();  // the frames carry their own sensor pose
   c.sensor.rotation_rpy_deg.setZero();
   c.pipeline.planning_layers = false;  // mapping only, as a peer library maps
-  std::vector<double> wall_ms, cpu_ms;
+  std::vector<double> wall_ms, cpu_ms, stream_ms;
   double points = 0.0;
   std::size_t occupied = 0;
   for (int pass = 0; pass < o.passes; ++pass) {
     MapEngine engine(c);
-    for (const datasets::SourceFrame& frame : frames) {
-      datasets::SourceFrame f = frame;  // copied untimed: submit() takes the frame
+    double stream_wall = 0.0;  // synchronous: the frames' wall times summed
+    if (c.pipeline.threaded) {
+      // Every frame queued at once (none dropped): the stream's wall time is the throughput of
+      // the two stages running side by side.
+      std::vector<datasets::SourceFrame> copies = frames;  // copied untimed
+      const SteadyClock::time_point t0 = SteadyClock::now();
+      for (datasets::SourceFrame& f : copies) {
+        const FrameStatus status =
+            std::visit([&](auto& x) { return engine.submit(std::move(x)); }, f);
+        if (status != FrameStatus::kAccepted) {
+          std::fprintf(stderr, "mlmap_bench: a frame was rejected (%s)\n", toString(status));
+          return 1;
+        }
+      }
+      engine.flush();
+      stream_ms.push_back(msSince(t0) / static_cast<double>(frames.size()));
+      if (engine.stats().frames_dropped != 0) {
+        std::fprintf(stderr, "mlmap_bench: frames were dropped\n");
+        return 1;
+      }
+    }
+    // Copied untimed (submit() takes the frame): just before it, or all before the pass.
+    std::vector<datasets::SourceFrame> ahead;
+    if (g_copy_ahead && !c.pipeline.threaded) ahead = frames;
+    for (std::size_t i = 0; !c.pipeline.threaded && i < frames.size(); ++i) {
+      datasets::SourceFrame f = ahead.empty() ? frames[i] : std::move(ahead[i]);
       const double cpu0 = threadCpuMs();
       const SteadyClock::time_point t0 = SteadyClock::now();
       const FrameStatus status =
@@ -173,7 +231,9 @@ int runFiles(const FilesOptions& o) {
         std::fprintf(stderr, "mlmap_bench: a frame was rejected (%s)\n", toString(status));
         return 1;
       }
+      stream_wall += wall_ms.back();
     }
+    if (!c.pipeline.threaded) stream_ms.push_back(stream_wall / static_cast<double>(frames.size()));
     const EngineStats s = engine.stats();
     points = static_cast<double>(s.points.points_in - s.points.rejected_non_finite) /
              static_cast<double>(std::max<std::uint64_t>(s.frames_mapped, 1));
@@ -193,6 +253,11 @@ int runFiles(const FilesOptions& o) {
       "submit() per frame [ms]: wall median %.3f p99 %.3f; thread CPU median %.3f p99 %.3f\n",
       quantile(wall_ms, 0.5), quantile(wall_ms, 0.99), quantile(cpu_ms, 0.5),
       quantile(cpu_ms, 0.99));
+  std::printf(
+      "stream (%s) [ms]: wall per frame, a pass's wall time / frames: median %.3f "
+      "min %.3f max %.3f over %d passes\n",
+      c.pipeline.threaded ? "pipeline.threaded, every frame queued" : "synchronous",
+      quantile(stream_ms, 0.5), quantile(stream_ms, 0.0), quantile(stream_ms, 1.0), o.passes);
   return 0;
 }
 
@@ -227,6 +292,17 @@ int main(int argc, char** argv) {
                  "included); with 2 or more the thread CPU time printed is the caller's only")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
+  app.add_flag("--threaded", g_threaded,
+               "pipeline.threaded: the awareness and local-global stages on threads of their own; "
+               "every frame is queued (none dropped) and the stream's wall time per frame printed "
+               "(with --files: no per-frame figures)");
+  app.add_option("--batch-queue", g_batch_queue,
+                 "pipeline.batch_queue_capacity: --threaded, batches the first thread may be ahead")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  bool no_planning = false;
+  app.add_flag("--no-planning", no_planning,
+               "pipeline.planning_layers off (the mapping alone, as --files maps)");
   int lidar_scans = 60;
   app.add_option("--lidar-scans", lidar_scans,
                  "consecutive 10 Hz scans of the simulated 360-degree LiDAR (128 x 640 rays, 30 m) "
@@ -263,7 +339,11 @@ int main(int argc, char** argv) {
                  "--files: write the first pass's occupied voxels here (as mlmap_replay's "
                  "occupied_voxels.txt)")
       ->needs(files_option);
+  app.add_flag("--copy-ahead", g_copy_ahead,
+               "synchronous: copy a pass's frames before it, as --threaded queues them (not each "
+               "just before its submit(), which leaves the image in the cache)");
   CLI11_PARSE(app, argc, argv);
+  g_planning_layers = !no_planning;
   if (!files.dir.empty()) {
     try {
       return runFiles(files);
@@ -353,6 +433,15 @@ int main(int argc, char** argv) {
                 quantile(r.snapshot_ms, 0.5), quantile(r.snapshot_ms, 0.99),
                 quantile(r.grid_ms, 0.5), quantile(r.grid_ms, 0.99), quantile(r.esdf_ms, 0.5),
                 quantile(r.esdf_ms, 0.99), r.esdf_ms.size());
+  }
+  std::printf("\nwhole stream, wall time per frame (%s):\n",
+              g_threaded ? "pipeline.threaded: every frame queued, from the first submit() to the "
+                           "last frame mapped"
+                         : "synchronous: the submit() times summed");
+  for (const Row& r : rows) {
+    std::printf(
+        "%-34s %7.3f ms per frame\n", r.name.c_str(),
+        r.stream_ms / static_cast<double>(std::max<std::uint64_t>(r.stats.frames_mapped, 1)));
   }
   std::printf("peak resident memory of the benchmark process: %.0f MB\n",
               static_cast<double>(eval::peakRssBytes()) / (1024.0 * 1024.0));
