@@ -86,7 +86,7 @@ struct PlannerPeer::Impl {
   void step(PeerInbox in);
   /// Takes the poses into the pose buffer; the latest valid one is the vehicle's. True when
   /// one was.
-  bool takePoses(const std::vector<geometry_msgs::PoseStamped_>& poses);
+  bool takePoses(const std::vector<geometry_msgs::PoseStamped_>& msgs);
   /// Checks a new cloud; its points wait for their pose in waiting_frame.
   void takeCloud(CloudSample&& cloud, double arrival_s);
   /// Checks and back-projects a new depth image (with the latest CameraInfo); its points wait
