@@ -162,4 +162,26 @@ inline std::set<Gid> gidsOf(const std::vector<rmw::Gid_>& gids) {
   return out;
 }
 
+/// The latest ros_discovery_info sample of `infos`, once it lists one node whose writers (but the
+/// ros_discovery_info writer) and readers are exactly the endpoints `log` discovered, else the
+/// latest at waitFor()'s deadline (nullopt: none arrived). `*agreed` says which: discovery and
+/// the announcements arrive in any order.
+inline std::optional<rmw::ParticipantEntitiesInfo_> agreeingDiscoveryInfo(
+    Received<rmw::ParticipantEntitiesInfo_>& infos, EndpointLog& log, bool* agreed) {
+  auto latest = [&]() -> std::optional<rmw::ParticipantEntitiesInfo_> {
+    const std::vector<rmw::ParticipantEntitiesInfo_> all = infos.all();
+    if (all.empty()) return std::nullopt;
+    return all.back();
+  };
+  *agreed = waitFor([&] {
+    const std::optional<rmw::ParticipantEntitiesInfo_> info = latest();
+    if (!info || info->node_entities_info_seq_().size() != 1) return false;
+    const rmw::NodeEntitiesInfo_& n = info->node_entities_info_seq_()[0];
+    return !n.reader_gid_seq_().empty() &&
+           gidsOf(n.writer_gid_seq_()) == gidsOf(log.endpoints(true), "ros_discovery_info") &&
+           gidsOf(n.reader_gid_seq_()) == gidsOf(log.endpoints(false), "");
+  });
+  return latest();
+}
+
 }  // namespace mlmap::dds::test_support

@@ -188,22 +188,9 @@ TEST(PlannerPeer, IsANodeOfTheRosGraphWithExactlyItsEndpoints) {
   config.node_name = "planner_a";
   PlannerPeer peer(config);
 
-  auto latest = [&]() -> std::optional<rmw::ParticipantEntitiesInfo_> {
-    const std::vector<rmw::ParticipantEntitiesInfo_> all = infos.all();
-    if (all.empty()) return std::nullopt;
-    return all.back();
-  };
-  // Discovery and the announcement arrive in any order: wait until they agree.
-  const bool agreed = waitFor([&] {
-    const std::optional<rmw::ParticipantEntitiesInfo_> info = latest();
-    if (!info || info->node_entities_info_seq_().size() != 1) return false;
-    const rmw::NodeEntitiesInfo_& n = info->node_entities_info_seq_()[0];
-    return !n.reader_gid_seq_().empty() &&
-           gidsOf(n.writer_gid_seq_()) ==
-               gidsOf(observer.log.endpoints(true), "ros_discovery_info") &&
-           gidsOf(n.reader_gid_seq_()) == gidsOf(observer.log.endpoints(false), "");
-  });
-  const std::optional<rmw::ParticipantEntitiesInfo_> info = latest();
+  bool agreed = false;
+  const std::optional<rmw::ParticipantEntitiesInfo_> info =
+      agreeingDiscoveryInfo(infos, observer.log, &agreed);
   ASSERT_TRUE(info) << "no ros_discovery_info sample arrived";
   ASSERT_TRUE(observer.log.participant()) << "the peer's participant was not discovered";
   EXPECT_TRUE(agreed) << "ros_discovery_info never listed exactly the discovered endpoints";
