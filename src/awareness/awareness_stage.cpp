@@ -33,7 +33,8 @@ constexpr std::uint32_t kNoRunKey = kPointOutsideCutKey - 1;
 // twice, for 1.09-1.11x over-carving instead of 1.08x (three voxels wide exceed the 1.15x bound).
 // The finest level has AwarenessConfig::binsPerFaceSide() bins per cube face side (at most
 // 6 x 256^2 bins; slots 4 MB with all levels).
-constexpr std::size_t kProbeAhead = 16;  // points between a table slot's prefetch and its probe
+constexpr std::size_t kProbeAhead = 16;  // ends between a table slot's prefetch and its probe
+constexpr std::size_t kRunsAhead = 4;    // runs between a table slot's prefetch and its probe
 
 std::uint32_t hashKey(std::uint32_t key) {
   key ^= key >> 16;
@@ -42,6 +43,13 @@ std::uint32_t hashKey(std::uint32_t key) {
   key *= 0x846ca68bu;
   key ^= key >> 16;
   return key;
+}
+
+// A key's entry in the recent ends: a multiplicative hash (three instructions; the table's
+// hashKey() runs only when the recent ends miss, about one run in nine on depth images).
+constexpr int kRecentEndsBits = 10;  // AwarenessStage::kRecentEnds == 1 << 10 (asserted there)
+inline std::uint32_t recentIndex(std::uint32_t key) {
+  return (key * 0x9e3779b1u) >> (32 - kRecentEndsBits);
 }
 
 // VoxelBitset::count() with the popcnt instruction where the CPU has it: the portable build
@@ -595,6 +603,7 @@ void AwarenessStage::collectPart(const Source& source, const FrameGeometry& g, s
   std::vector<End>& ends = part->ends;
   std::vector<Slot>& table = part->table;
   const std::uint32_t stamp = part->stamp;
+  static_assert(kRecentEnds == std::size_t{1} << kRecentEndsBits, "recentIndex() sizes");
   RecentEnd* recent = part->recent.data();
   std::fill(part->recent.begin(), part->recent.end(), RecentEnd{kNoRunKey, 0});
 
@@ -637,20 +646,14 @@ void AwarenessStage::collectPart(const Source& source, const FrameGeometry& g, s
   kernel.dims = {dim_x, dim_y, dim_z};
   kernel.min_range2 = min_range2;
   kernel.max_range = max_range;
-  // Pass 2 groups the runs of equal keys into end voxels. The current run of points in one voxel
-  // (depth images give runs along a row) keeps its box in registers and merges it into the
-  // voxel's entry when the run ends. Both passes go block by block, so a block's keys and
-  // coordinates are still in the cache when pass 2 reads them.
+  // Pass 2 takes the block's runs of equal keys (depth images give runs along a row) with their
+  // point boxes and merges each into its voxel's entry; the voxel is looked up only when a run's
+  // key differs from the last box key (a run after points outside the box can continue it).
+  // Both passes go block by block, so a block's keys and coordinates are still in the cache when
+  // pass 2 reads them.
   std::uint32_t last_key = kNoRunKey;
   End* last = nullptr;
-  std::uint64_t last_cut = 0;  // 1 when the current run's rays are cut at the maximum range
-  Eigen::Array4f run_min = Eigen::Array4f::Zero();
-  Eigen::Array4f run_max = Eigen::Array4f::Zero();
-  auto mergeRun = [&]() {
-    if (last == nullptr) return;
-    last->points.min = last->points.min.cwiseMin(run_min.head<3>().matrix());
-    last->points.max = last->points.max.cwiseMax(run_max.head<3>().matrix());
-  };
+  std::uint64_t last_cut = 0;  // 1 when the last end's rays are cut at the maximum range
   // The world point of a block's point, from its sensor-frame coordinates in the block.
   float* xs = part->block_xyz.data();
   float* ys = xs + kPointBlock;
@@ -660,77 +663,75 @@ void AwarenessStage::collectPart(const Source& source, const FrameGeometry& g, s
     toVoxelUnits(Eigen::Vector3f(xs[i], ys[i], zs[i]), w);
     return Eigen::Vector3d(w[0] * res, w[1] * res, w[2] * res);
   };
+  // Points outside the box, one by one.
+  auto addOutside = [&](std::uint32_t key, std::size_t at) {
+    const Eigen::Array4f v = Eigen::Array4f::Map(part->box_coords[at].data());
+    if (key == kPointNonFiniteKey) {
+      ++c.rejected_non_finite;
+    } else if (key == kPointTooCloseKey) {
+      ++c.rejected_too_close;
+    } else {
+      // Beyond what the local map can hold; the awareness map and the carving still use it.
+      End e;
+      e.voxel = Eigen::Vector3i::Constant(-1);
+      e.points = {v.head<3>().matrix(), v.head<3>().matrix()};
+      e.p_W = worldPoint(at);
+      e.cut = key == kPointOutsideCutKey;
+      c.beyond_max_range += e.cut ? 1 : 0;
+      c.hits_beyond_local_map += e.cut ? 0 : 1;
+      // Box-relative voxel coordinates: inside horizontally, so outside in z.
+      const bool beside = v[0] >= 0.0f && v[0] < static_cast<float>(box_dims_.x()) &&
+                          v[1] >= 0.0f && v[1] < static_cast<float>(box_dims_.y());
+      c.hits_above_or_below_local_map += !e.cut && beside ? 1 : 0;
+      part->outside.push_back(e);
+    }
+  };
   const std::uint32_t* keys = part->keys.data();
-  const std::array<float, 4>* coords = part->box_coords.data();
+  PointRuns& runs = part->runs;
   for (std::size_t block = first; block < end; block += kPointBlock) {
     const std::size_t len = std::min(kPointBlock, end - block);
     const std::size_t n = source.fill(block, len, xs, ys, zs);
     c.rejected_non_finite += len - n;  // depth pixels without data
+    if (n == 0) continue;
     classifyPoints(kernel, xs, ys, zs, n, part->keys.data(), part->box_coords[0].data());
-    std::size_t i = 0;
-    while (i < n) {
-      if (keys[i] == last_key) {
-        // The run goes on (most points): only its box grows, in registers.
-        Eigen::Array4f lo = run_min;
-        Eigen::Array4f hi = run_max;
-        const std::size_t run_first = i;
-        do {
-          const Eigen::Array4f v = Eigen::Array4f::Map(coords[i].data());
-          lo = lo.min(v);
-          hi = hi.max(v);
-          ++i;
-        } while (i < n && keys[i] == last_key);
-        run_min = lo;
-        run_max = hi;
-        c.beyond_max_range += last_cut * (i - run_first);
-        continue;
-      }
-      const std::size_t at = i++;
+    groupPointRuns(keys, part->box_coords[0].data(), n, &runs);
+    const std::uint32_t* run_first = runs.first.data();
+    const float* run_box = runs.box.data();
+    const std::uint32_t mask = static_cast<std::uint32_t>(table.size() - 1);
+    for (std::size_t r = 0; r < runs.count; ++r) {
+      const std::size_t at = run_first[r];
       const std::uint32_t key = keys[at];
-      const Eigen::Array4f v = Eigen::Array4f::Map(coords[at].data());
+      const std::size_t points = run_first[r + 1] - at;
       if (key >= kPointOutsideCutKey) {
-        if (key == kPointNonFiniteKey) {
-          ++c.rejected_non_finite;
-        } else if (key == kPointTooCloseKey) {
-          ++c.rejected_too_close;
-        } else {
-          // Beyond what the local map can hold; the awareness map and the carving still use it.
-          End e;
-          e.voxel = Eigen::Vector3i::Constant(-1);
-          e.points = {v.head<3>().matrix(), v.head<3>().matrix()};
-          e.p_W = worldPoint(at);
-          e.cut = key == kPointOutsideCutKey;
-          c.beyond_max_range += e.cut ? 1 : 0;
-          c.hits_beyond_local_map += e.cut ? 0 : 1;
-          // Box-relative voxel coordinates: inside horizontally, so outside in z.
-          const bool beside = v[0] >= 0.0f && v[0] < static_cast<float>(box_dims_.x()) &&
-                              v[1] >= 0.0f && v[1] < static_cast<float>(box_dims_.y());
-          c.hits_above_or_below_local_map += !e.cut && beside ? 1 : 0;
-          part->outside.push_back(e);
-        }
+        for (std::size_t i = at; i < at + points; ++i) addOutside(key, i);
         continue;
       }
-      mergeRun();  // a new run: the last one into its voxel's entry
-      // The table's first probe, inline: most runs continue a voxel of an earlier row. The slot
-      // of the point a few ahead is fetched meanwhile (a new voxel's slot is anywhere).
-      // First the recent ends (L1-resident), then the table.
-      const std::uint32_t mask = static_cast<std::uint32_t>(table.size() - 1);
-      if (at + kProbeAhead < n) __builtin_prefetch(&table[hashKey(keys[at + kProbeAhead]) & mask]);
-      const std::uint32_t h = hashKey(key);
-      RecentEnd& r = recent[h & (kRecentEnds - 1)];
-      if (r.key != key) {
-        const Slot& slot = table[h & mask];
-        r = {key, slot.stamp == stamp && slot.key == key ? slot.end : findOrAddEnd(part, key)};
+      if (key != last_key) {
+        // A new end voxel or one met before: first the recent ends (L1-resident), then the
+        // table. The slot of the run a few ahead is fetched meanwhile when it will be needed
+        // (a new voxel's slot is anywhere).
+        if (r + kRunsAhead < runs.count) {
+          const std::uint32_t ahead = keys[run_first[r + kRunsAhead]];
+          if (recent[recentIndex(ahead)].key != ahead)
+            __builtin_prefetch(&table[hashKey(ahead) & mask]);
+        }
+        RecentEnd& entry = recent[recentIndex(key)];
+        if (entry.key != key) {
+          const Slot& slot = table[hashKey(key) & mask];
+          entry = {key,
+                   slot.stamp == stamp && slot.key == key ? slot.end : findOrAddEnd(part, key)};
+        }
+        last = &ends[entry.end];
+        last_key = key;
+        last_cut = key >> 31;  // kPointCutFlag
+        if (last->points.min.x() > last->points.max.x()) last->p_W = worldPoint(at);  // first point
       }
-      last = &ends[r.end];
-      last_key = key;
-      last_cut = key >> 31;                                                         // kPointCutFlag
-      if (last->points.min.x() > last->points.max.x()) last->p_W = worldPoint(at);  // first point
-      run_min = run_max = v;
-      c.beyond_max_range += last_cut;
+      const float* box = run_box + 8 * r;
+      last->points.min = last->points.min.cwiseMin(Eigen::Vector3f(box[0], box[1], box[2]));
+      last->points.max = last->points.max.cwiseMax(Eigen::Vector3f(box[4], box[5], box[6]));
+      c.beyond_max_range += last_cut * points;
     }
   }
-  mergeRun();
 }
 
 void AwarenessStage::updateAwarenessMap(const Eigen::Vector3d& body_W) {
@@ -950,7 +951,8 @@ std::size_t AwarenessStage::memoryBytes() const {
             (p.ends.capacity() + p.outside.capacity()) * sizeof(End) +
             p.keys.capacity() * sizeof(std::uint32_t) +
             p.box_coords.capacity() * sizeof(p.box_coords[0]) +
-            p.block_xyz.capacity() * sizeof(float);
+            p.block_xyz.capacity() * sizeof(float) +
+            p.runs.first.capacity() * sizeof(std::uint32_t) + p.runs.box.capacity() * sizeof(float);
   }
   return bins + map_.memoryBytes() + ends_.capacity() * sizeof(End) +
          outside_.capacity() * sizeof(End) + sample_indices_.capacity() * sizeof(std::uint32_t);

@@ -1,5 +1,6 @@
 #include "mlmap/awareness/point_kernel.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -117,6 +118,32 @@ void classifyPointsPortable(const PointKernel& k, const float* xs, const float* 
   } else {
     classifyPointsImpl<true>(k, xs, ys, zs, n, keys, coords);
   }
+}
+
+// One run's box: the first point's coordinates, then the minimum and maximum of each with the
+// others' (std::min and std::max, one point at a time).
+void groupPointRunsPortable(const std::uint32_t* keys, const float* coords, std::size_t n,
+                            PointRuns* runs) {
+  std::uint32_t* first = runs->first.data();
+  float* box = runs->box.data();
+  std::size_t count = 0;
+  std::size_t i = 0;
+  while (i < n) {
+    const std::uint32_t key = keys[i];
+    first[count] = static_cast<std::uint32_t>(i);
+    float* lo = box + 8 * count;
+    float* hi = lo + 4;
+    for (int k = 0; k < 4; ++k) lo[k] = hi[k] = coords[4 * i + k];
+    for (++i; i < n && keys[i] == key; ++i) {
+      for (int k = 0; k < 4; ++k) {
+        lo[k] = std::min(lo[k], coords[4 * i + k]);
+        hi[k] = std::max(hi[k], coords[4 * i + k]);
+      }
+    }
+    ++count;
+  }
+  first[count] = static_cast<std::uint32_t>(n);
+  runs->count = count;
 }
 
 #ifdef MLMAP_HAVE_AVX2_KERNEL
@@ -277,6 +304,85 @@ __attribute__((target("avx2,popcnt"))) std::size_t packDepthPixelsMmAvx2(
   return n +
          packDepthPixelsMmPortable(raw + k, ray_x + k, ray_y, count - k, xs + n, ys + n, zs + n);
 }
+
+// groupPointRunsPortable in two passes. The run starts: eight keys at a time compared with the
+// keys one before, the lanes that differ packed to the front through the permutation table and
+// all eight stored at the next free place. The boxes: eight points a step (a run's first point
+// stands in for the lanes past its end), so that a run of up to eight points takes one step with
+// no branch per point; a block of mostly one-point runs goes a point a step instead. The minima and
+// maxima are exact, so the order does not change them.
+__attribute__((target("avx2,popcnt"))) void groupPointRunsAvx2(const std::uint32_t* keys,
+                                                               const float* coords, std::size_t n,
+                                                               PointRuns* runs) {
+  std::uint32_t* first = runs->first.data();
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < n; i += 8) {
+    const __m256i k = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(keys + i));
+    // The keys one before; for the first group, lane 0 compares with itself and starts a run.
+    const __m256i before =
+        i == 0 ? _mm256_permutevar8x32_epi32(k, _mm256_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6))
+               : _mm256_loadu_si256(reinterpret_cast<const __m256i*>(keys + i - 1));
+    unsigned mask = ~static_cast<unsigned>(
+                        _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(k, before)))) &
+                    0xFFu;
+    if (i == 0) mask |= 1u;
+    if (n - i < 8) mask &= (1u << (n - i)) - 1u;
+    const __m256i lanes =
+        _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<long long>(kPackTable.lanes[mask])));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(first + count),
+                        _mm256_add_epi32(lanes, _mm256_set1_epi32(static_cast<int>(i))));
+    count += static_cast<std::size_t>(__builtin_popcount(mask));
+  }
+  first[count] = static_cast<std::uint32_t>(n);
+  runs->count = count;
+  // Lanes 0-3 of a register hold one point, lanes 4-7 the next: point j of a step is valid when
+  // j is below the points left in the run.
+  const __m256i point01 = _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1);
+  const __m256i point23 = _mm256_setr_epi32(2, 2, 2, 2, 3, 3, 3, 3);
+  const __m256i point45 = _mm256_setr_epi32(4, 4, 4, 4, 5, 5, 5, 5);
+  const __m256i point67 = _mm256_setr_epi32(6, 6, 6, 6, 7, 7, 7, 7);
+  float* box = runs->box.data();
+  if (2 * count > n) {
+    // Mostly runs of one point (a LiDAR's scan): a point a step, with nothing to blend.
+    for (std::size_t r = 0; r < count; ++r) {
+      const float* c = coords + 4 * static_cast<std::size_t>(first[r]);
+      __m128 lo = _mm_loadu_ps(c);
+      __m128 hi = lo;
+      for (std::uint32_t p = first[r] + 1; p < first[r + 1]; ++p) {
+        c += 4;
+        lo = _mm_min_ps(lo, _mm_loadu_ps(c));
+        hi = _mm_max_ps(hi, _mm_loadu_ps(c));
+      }
+      _mm_storeu_ps(box + 8 * r, lo);
+      _mm_storeu_ps(box + 8 * r + 4, hi);
+    }
+    return;
+  }
+  for (std::size_t r = 0; r < count; ++r) {
+    const std::uint32_t end = first[r + 1];
+    const float* c = coords + 4 * static_cast<std::size_t>(first[r]);
+    const __m256 f = _mm256_broadcast_ps(reinterpret_cast<const __m128*>(c));
+    __m256 lo = f;
+    __m256 hi = f;
+    for (std::uint32_t p = first[r]; p < end; p += 8, c += 32) {
+      const __m256i left = _mm256_set1_epi32(static_cast<int>(end - p));
+      const __m256 a0 = _mm256_blendv_ps(f, _mm256_loadu_ps(c),
+                                         _mm256_castsi256_ps(_mm256_cmpgt_epi32(left, point01)));
+      const __m256 a1 = _mm256_blendv_ps(f, _mm256_loadu_ps(c + 8),
+                                         _mm256_castsi256_ps(_mm256_cmpgt_epi32(left, point23)));
+      const __m256 a2 = _mm256_blendv_ps(f, _mm256_loadu_ps(c + 16),
+                                         _mm256_castsi256_ps(_mm256_cmpgt_epi32(left, point45)));
+      const __m256 a3 = _mm256_blendv_ps(f, _mm256_loadu_ps(c + 24),
+                                         _mm256_castsi256_ps(_mm256_cmpgt_epi32(left, point67)));
+      lo = _mm256_min_ps(lo, _mm256_min_ps(_mm256_min_ps(a0, a1), _mm256_min_ps(a2, a3)));
+      hi = _mm256_max_ps(hi, _mm256_max_ps(_mm256_max_ps(a0, a1), _mm256_max_ps(a2, a3)));
+    }
+    _mm_storeu_ps(box + 8 * r,
+                  _mm_min_ps(_mm256_castps256_ps128(lo), _mm256_extractf128_ps(lo, 1)));
+    _mm_storeu_ps(box + 8 * r + 4,
+                  _mm_max_ps(_mm256_castps256_ps128(hi), _mm256_extractf128_ps(hi, 1)));
+  }
+}
 #undef MLMAP_AVX2
 #endif
 
@@ -307,6 +413,23 @@ void classifyPoints(const PointKernel& kernel, const float* xs, const float* ys,
 void classifyPoints(const PointKernel& kernel, const float* xs, const float* ys, const float* zs,
                     std::size_t n, std::uint32_t* keys, float* coords) {
   classifyPoints(kernel, xs, ys, zs, n, keys, coords,
+                 kAvx2Supported ? PointKernelIsa::kAvx2 : PointKernelIsa::kPortable);
+}
+
+void groupPointRuns(const std::uint32_t* keys, const float* coords, std::size_t n, PointRuns* runs,
+                    PointKernelIsa isa) {
+#ifdef MLMAP_HAVE_AVX2_KERNEL
+  if (isa == PointKernelIsa::kAvx2) {
+    groupPointRunsAvx2(keys, coords, n, runs);
+    return;
+  }
+#endif
+  groupPointRunsPortable(keys, coords, n, runs);
+}
+
+void groupPointRuns(const std::uint32_t* keys, const float* coords, std::size_t n,
+                    PointRuns* runs) {
+  groupPointRuns(keys, coords, n, runs,
                  kAvx2Supported ? PointKernelIsa::kAvx2 : PointKernelIsa::kPortable);
 }
 

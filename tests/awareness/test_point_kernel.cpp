@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -277,6 +278,90 @@ TEST(PointKernel, DepthPixelPackingMatchesTheReferenceBitForBit) {
   }
   EXPECT_GT(with_data, 10000u);
   EXPECT_GT(without, 10000u);
+}
+
+// Every implementation splits a block into the runs of equal keys and boxes them as a slow
+// reference does (a run starts at point 0 and wherever the key changes; min and max of each
+// coordinate over the run, compared as floats), bit for bit: blocks of every length (the AVX2
+// form's 8-key groups and its tail), runs of one point (a LiDAR's scan, the AVX2 form's
+// point-a-step path) and of 1-40 points (its 8-point steps, one or several a run), the same key
+// again after a different one, the keys outside the box, and stale values in the padding.
+TEST(PointKernel, RunGroupingMatchesTheReferenceBitForBit) {
+  std::vector<PointKernelIsa> isas = {PointKernelIsa::kPortable};
+  if (pointKernelAvx2Supported()) isas.push_back(PointKernelIsa::kAvx2);
+  constexpr std::size_t kMaxPoints = 1024;
+  std::mt19937 rng(11);
+  std::size_t runs_checked = 0;
+  std::size_t long_runs = 0;  // more than eight points
+  std::size_t single_runs = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    const std::size_t n = 1 + static_cast<std::size_t>(trial % 70) +
+                          (trial % 3 == 0 ? kMaxPoints - 71 : 0);  // 1-70 or 954-1023 points
+    const int max_run = trial % 4 == 0 ? 1 : trial % 4 == 1 ? 3 : 40;
+    const std::uint32_t specials[4] = {kPointOutsideCutKey, kPointOutsideHitKey, kPointTooCloseKey,
+                                       kPointNonFiniteKey};
+    // Padding with values a run must never take in.
+    std::vector<std::uint32_t> keys(n + PointRuns::kPadding, 0xDEADBEEFu);
+    std::vector<float> coords(4 * (n + PointRuns::kPadding), -1e30f);
+    std::uint32_t key = 0;
+    for (std::size_t i = 0; i < n;) {
+      const int pick = std::uniform_int_distribution<int>(0, 9)(rng);
+      // A new key, one of a few (so a key comes back after others), or outside the box.
+      key = pick < 6   ? std::uniform_int_distribution<std::uint32_t>(0, 1u << 30)(rng)
+            : pick < 9 ? static_cast<std::uint32_t>(pick)
+                       : specials[std::uniform_int_distribution<int>(0, 3)(rng)];
+      const std::size_t len = std::min<std::size_t>(
+          n - i, static_cast<std::size_t>(std::uniform_int_distribution<int>(1, max_run)(rng)));
+      for (std::size_t j = 0; j < len; ++j, ++i) {
+        keys[i] = key;
+        for (int a = 0; a < 3; ++a) {
+          coords[4 * i + a] = std::uniform_real_distribution<float>(-300.0f, 300.0f)(rng);
+        }
+        coords[4 * i + 3] = 0.0f;
+      }
+    }
+    // The reference: runs as maximal stretches of one key, boxes by comparison.
+    std::vector<std::uint32_t> want_first;
+    std::vector<float> want_box;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (i == 0 || keys[i] != keys[i - 1]) {
+        want_first.push_back(static_cast<std::uint32_t>(i));
+        for (int h = 0; h < 2; ++h) {
+          for (int a = 0; a < 4; ++a) want_box.push_back(coords[4 * i + a]);
+        }
+      }
+      float* box = &want_box[want_box.size() - 8];
+      for (int a = 0; a < 4; ++a) {
+        if (coords[4 * i + a] < box[a]) box[a] = coords[4 * i + a];
+        if (coords[4 * i + a] > box[4 + a]) box[4 + a] = coords[4 * i + a];
+      }
+    }
+    want_first.push_back(static_cast<std::uint32_t>(n));
+    for (std::size_t r = 0; r + 1 < want_first.size(); ++r) {
+      const std::uint32_t len = want_first[r + 1] - want_first[r];
+      long_runs += len > 8 ? 1 : 0;
+      single_runs += len == 1 ? 1 : 0;
+    }
+    for (const PointKernelIsa isa : isas) {
+      const char* name = isa == PointKernelIsa::kAvx2 ? "AVX2" : "portable";
+      PointRuns runs(kMaxPoints);
+      groupPointRuns(keys.data(), coords.data(), n, &runs, isa);
+      ASSERT_EQ(runs.count + 1, want_first.size()) << name << ", trial " << trial;
+      EXPECT_EQ(std::memcmp(runs.first.data(), want_first.data(),
+                            want_first.size() * sizeof(std::uint32_t)),
+                0)
+          << name << ", trial " << trial;
+      EXPECT_EQ(std::memcmp(runs.box.data(), want_box.data(), want_box.size() * sizeof(float)), 0)
+          << name << ", trial " << trial;
+      if (HasFailure()) return;
+      runs_checked += runs.count;
+    }
+  }
+  EXPECT_GT(long_runs, 1000u);
+  EXPECT_GT(single_runs, 10000u);
+  std::printf("%zu runs checked (%zu of one point, %zu of more than eight); AVX2 form %s\n",
+              runs_checked, single_runs, long_runs,
+              pointKernelAvx2Supported() ? "checked" : "not run (this CPU has no AVX2)");
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 
 #include "mlmap/awareness/awareness_map.h"
 #include "mlmap/awareness/cone_carver.h"
+#include "mlmap/awareness/point_kernel.h"
 #include "mlmap/core/measurement_batch.h"
 #include "mlmap/core/config.h"
 
@@ -175,10 +176,13 @@ class AwarenessStage {
     std::vector<End> ends;
     std::vector<End> outside;
     PointCounters counters;
-    // Per point of a block: box voxel key (or why it has none), box-relative coordinates and 0.
-    std::vector<std::uint32_t> keys = std::vector<std::uint32_t>(kPointBlock);
-    std::vector<std::array<float, 4>> box_coords = std::vector<std::array<float, 4>>(kPointBlock);
+    // Per point of a block: box voxel key (or why it has none), box-relative coordinates and 0
+    // (padded as groupPointRuns() reads them); the block's runs of equal keys.
+    std::vector<std::uint32_t> keys = std::vector<std::uint32_t>(kPointBlock + PointRuns::kPadding);
+    std::vector<std::array<float, 4>> box_coords =
+        std::vector<std::array<float, 4>>(kPointBlock + PointRuns::kPadding);
     std::vector<float> block_xyz = std::vector<float>(3 * kPointBlock);  // one block, x | y | z
+    PointRuns runs{kPointBlock};
   };
   /// Points first .. end - 1 of the frame into `part` (collectEnds() on one part).
   void collectPart(const Source& source, const FrameGeometry& g, std::size_t first, std::size_t end,

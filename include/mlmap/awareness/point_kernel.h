@@ -13,6 +13,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace mlmap {
 
@@ -56,6 +57,36 @@ void classifyPoints(const PointKernel& kernel, const float* xs, const float* ys,
 /// The same with the fastest implementation this CPU runs.
 void classifyPoints(const PointKernel& kernel, const float* xs, const float* ys, const float* zs,
                     std::size_t n, std::uint32_t* keys, float* coords);
+
+/// A block's runs of equal keys (pass 2 of the point loop): consecutive points in one voxel,
+/// which depth images give along a row. Run r covers points first[r] .. first[r + 1] - 1; its
+/// points' coordinates span box[8 r .. 8 r + 3] (minimum of each of the four floats) to
+/// box[8 r + 4 .. 8 r + 7] (maximum). A run starts at point 0 and wherever a key differs from
+/// the one before.
+struct PointRuns {
+  /// Extra entries a block's keys and coordinates (four floats a point) must have after the
+  /// last point, readable (their values do not matter): the AVX2 form reads whole groups.
+  static constexpr std::size_t kPadding = 8;
+  std::vector<std::uint32_t> first;  ///< one more than the runs (first[count] = n), + padding
+  std::vector<float> box;            ///< eight floats a run
+  std::size_t count = 0;             ///< runs of the last groupPointRuns()
+
+  /// Room for blocks of up to `max_points` points.
+  explicit PointRuns(std::size_t max_points)
+      : first(max_points + 1 + kPadding), box(8 * max_points) {}
+};
+
+/// Splits points 0 .. n - 1 (n >= 1, at most the size `runs` was made for) into runs of equal
+/// keys[i], with each run's box of coords[4 i .. 4 i + 3]. keys and coords must be readable
+/// PointRuns::kPadding points past n. The minima and maxima are exact (the same floats in any
+/// order, for finite values). `isa` must be supported (kAvx2 only when
+/// pointKernelAvx2Supported()): the AVX2 form finds run starts eight keys at a time and takes
+/// a run's box over eight points a step, without a branch per point.
+void groupPointRuns(const std::uint32_t* keys, const float* coords, std::size_t n, PointRuns* runs,
+                    PointKernelIsa isa);
+
+/// The same with the fastest implementation this CPU runs.
+void groupPointRuns(const std::uint32_t* keys, const float* coords, std::size_t n, PointRuns* runs);
 
 /// The pixels with data among `count` consecutive pixels of one row of a depth image in
 /// millimetres (data: neither 0 nor 0xFFFF), as sensor-frame points packed in pixel order:
