@@ -149,12 +149,6 @@ void groupPointRunsPortable(const std::uint32_t* keys, const float* coords, std:
 #ifdef MLMAP_HAVE_AVX2_KERNEL
 #define MLMAP_AVX2 __attribute__((target("avx2"), always_inline)) inline
 
-// 64-bit lane masks to 32-bit lane masks.
-MLMAP_AVX2 __m128i lanes32(__m256d mask) {
-  const __m256i even_first = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
-  return _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(_mm256_castpd_si256(mask), even_first));
-}
-
 // 0 <= f < d per lane (false for NaN).
 MLMAP_AVX2 __m256d within(__m256d f, __m256d d) {
   return _mm256_and_pd(_mm256_cmp_pd(f, _mm256_setzero_pd(), _CMP_GE_OQ),
@@ -200,10 +194,14 @@ __attribute__((target("avx2"))) void classifyPointsAvx2(const PointKernel& k, co
   const __m256d dd0 = _mm256_set1_pd(static_cast<double>(k.dims[0]));
   const __m256d dd1 = _mm256_set1_pd(static_cast<double>(k.dims[1]));
   const __m256d dd2 = _mm256_set1_pd(static_cast<double>(k.dims[2]));
-  const __m128i cut_flag = _mm_set1_epi32(static_cast<int>(kPointCutFlag));
-  const __m128i outside_hit = _mm_set1_epi32(static_cast<int>(kPointOutsideHitKey));
-  const __m128i too_close_key = _mm_set1_epi32(static_cast<int>(kPointTooCloseKey));
-  const __m128i non_finite_key = _mm_set1_epi32(static_cast<int>(kPointNonFiniteKey));
+  // The keys as the signed integers of their bits (see below).
+  static_assert(kPointCutFlag == 0x80000000u && kPointOutsideHitKey == 0xFFFFFFFDu &&
+                    kPointTooCloseKey == 0xFFFFFFFEu && kPointNonFiniteKey == 0xFFFFFFFFu,
+                "the signed forms below");
+  const __m256d cut_flag = _mm256_set1_pd(2147483648.0);
+  const __m256d outside_hit = _mm256_set1_pd(-3.0);  // and -4, kPointOutsideCutKey, when cut
+  const __m256d too_close_key = _mm256_set1_pd(-2.0);
+  const __m256d non_finite_key = _mm256_set1_pd(-1.0);
   std::size_t i = 0;
   for (; i + 4 <= n; i += 4) {
     __m256d x = _mm256_cvtps_pd(_mm_loadu_ps(xs + i));
@@ -224,34 +222,33 @@ __attribute__((target("avx2"))) void classifyPointsAvx2(const PointKernel& k, co
     const __m256d b1 = boxUnits(o1, m3, m4, m5, bo1, x, y, z);
     const __m256d b2 = boxUnits(o2, m6, m7, m8, bo2, x, y, z);
     // The voxel in doubles: whole numbers, exact (an inside voxel's index is below 2^31), and
-    // the same integers as the portable kernel's; one conversion instead of three, no 32-bit
-    // multiplies. A lane outside the box (or NaN) fails a comparison and gets another key.
+    // the same integers as the portable kernel's. The key too is chosen in doubles and converted
+    // once, as a signed 32-bit integer whose bits are the key: a cut voxel's key (index | 2^31)
+    // is index - 2^31, the four keys outside the box are -4 .. -1. A lane outside the box (or
+    // NaN) fails a comparison and gets another key before the conversion.
     const __m256d f0 = _mm256_floor_pd(b0);
     const __m256d f1 = _mm256_floor_pd(b1);
     const __m256d f2 = _mm256_floor_pd(b2);
-    const __m256d inside_d =
+    const __m256d inside =
         _mm256_and_pd(_mm256_and_pd(within(f0, dd0), within(f1, dd1)), within(f2, dd2));
-    const __m128i inside = lanes32(inside_d);
-    const __m128i cut32 = lanes32(cut);
-    const __m256d voxel_d =
+    const __m256d voxel =
         _mm256_add_pd(_mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(f0, dd1), f1), dd2), f2);
-    const __m128i voxel =
-        _mm_or_si128(_mm256_cvttpd_epi32(voxel_d), _mm_and_si128(cut32, cut_flag));
-    const __m128i outside = _mm_add_epi32(outside_hit, cut32);  // the all-ones mask is -1
-    __m128i key = _mm_blendv_epi8(outside, voxel, inside);
-    key = _mm_blendv_epi8(key, too_close_key, lanes32(_mm256_cmp_pd(r2, min_range2, _CMP_LE_OQ)));
-    key = _mm_blendv_epi8(non_finite_key, key, lanes32(finite));
-    _mm_storeu_si128(reinterpret_cast<__m128i*>(keys + i), key);
-    // Rounded to nearest, as static_cast<float>; then four (x, y, z, 0) rows.
-    __m128 c0 = _mm256_cvtpd_ps(b0);
-    __m128 c1 = _mm256_cvtpd_ps(b1);
-    __m128 c2 = _mm256_cvtpd_ps(b2);
-    __m128 c3 = _mm_setzero_ps();
-    _MM_TRANSPOSE4_PS(c0, c1, c2, c3);
-    _mm_storeu_ps(coords + 4 * i, c0);
-    _mm_storeu_ps(coords + 4 * i + 4, c1);
-    _mm_storeu_ps(coords + 4 * i + 8, c2);
-    _mm_storeu_ps(coords + 4 * i + 12, c3);
+    __m256d key = _mm256_blendv_pd(_mm256_sub_pd(outside_hit, _mm256_and_pd(cut, one)),
+                                   _mm256_sub_pd(voxel, _mm256_and_pd(cut, cut_flag)), inside);
+    key = _mm256_blendv_pd(key, too_close_key, _mm256_cmp_pd(r2, min_range2, _CMP_LE_OQ));
+    key = _mm256_blendv_pd(non_finite_key, key, finite);
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(keys + i), _mm256_cvttpd_epi32(key));
+    // Rounded to nearest, as static_cast<float>; then four (x, y, z, 0) rows: (x | z) and
+    // (y | 0) interleaved give (x0 y0 x1 y1 | z0 0 z1 0), whose 64-bit lanes in the order
+    // 0 2 1 3 are points 0 and 1.
+    const __m256 xz =
+        _mm256_insertf128_ps(_mm256_castps128_ps256(_mm256_cvtpd_ps(b0)), _mm256_cvtpd_ps(b2), 1);
+    const __m256 y0 = _mm256_zextps128_ps256(_mm256_cvtpd_ps(b1));
+    const __m256d p01 = _mm256_castps_pd(_mm256_unpacklo_ps(xz, y0));
+    const __m256d p23 = _mm256_castps_pd(_mm256_unpackhi_ps(xz, y0));
+    _mm256_storeu_pd(reinterpret_cast<double*>(coords + 4 * i), _mm256_permute4x64_pd(p01, 0xD8));
+    _mm256_storeu_pd(reinterpret_cast<double*>(coords + 4 * i + 8),
+                     _mm256_permute4x64_pd(p23, 0xD8));
   }
   classifyPointsImpl<true>(k, xs + i, ys + i, zs + i, n - i, keys + i, coords + 4 * i);
 }
