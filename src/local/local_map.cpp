@@ -149,6 +149,7 @@ LocalMap::LocalMap(const LocalMapConfig& config, const LogOddsConfig& log_odds)
                              LocalMapConfig::kSubmapsPerAxis * LocalMapConfig::kSubmapsPerAxis,
                          0),
       submap_state_changed_at_(submap_changed_at_.size(), 0),
+      submap_written_(submap_changed_at_.size(), 0),
       column_changed_at_(static_cast<std::size_t>(size_.x()) * static_cast<std::size_t>(size_.y()),
                          0),
       submap_of_torus_x_(static_cast<std::size_t>(size_.x())),
@@ -201,6 +202,10 @@ void LocalMap::retireSubmap(const SubmapIndex& m, GlobalMap* global) {
   const int n = LocalMapConfig::kSubmapsPerAxis;
   const Eigen::Vector3i t0(floorMod(m.x(), n) * submap_.x(), floorMod(m.y(), n) * submap_.y(),
                            floorMod(m.z(), n) * submap_.z());
+  const std::size_t submap_slot = submapSlot(m);
+  // Nothing written since the slot was last cleared: every cell is unknown already, none is read
+  // (only the column marks below are looked at).
+  const bool written = submap_written_[submap_slot] != 0;
   std::uint32_t offset = 0;
   // The submap's part of a column is a short run (15 voxels at 0.1 m) one column (150 bytes)
   // after the last: fetched a few columns ahead, as the hardware does not for such strides.
@@ -213,8 +218,8 @@ void LocalMap::retireSubmap(const SubmapIndex& m, GlobalMap* global) {
                        static_cast<std::size_t>(t0.y() + y)) *
                           nz +
                       static_cast<std::size_t>(t0.z());
-      if (y + kAhead < submap_.y()) __builtin_prefetch(row + kAhead * nz, 1);
-      for (int z = 0; z < submap_.z(); ++z, ++offset) {
+      if (written && y + kAhead < submap_.y()) __builtin_prefetch(row + kAhead * nz, 1);
+      for (int z = 0; written && z < submap_.z(); ++z, ++offset) {
         if (row[z] == 0)
           continue;  // unknown already: never written, so a page never touched stays so
         const LogOddsQ v = flipUnknown(row[z]);
@@ -230,8 +235,9 @@ void LocalMap::retireSubmap(const SubmapIndex& m, GlobalMap* global) {
       }
     }
   }
+  submap_written_[submap_slot] = 0;
   global->store(m, std::vector<VoxelRecord>(scratch_.begin(), scratch_.end()));
-  stampSubmap(submapSlot(m), ++change_clock_);
+  stampSubmap(submap_slot, ++change_clock_);
   ++counters_.submaps_retired;
 }
 
@@ -259,6 +265,7 @@ void LocalMap::stampAllSubmaps() {
 void LocalMap::restoreSubmap(const SubmapIndex& m, GlobalMap* global) {
   stampSubmap(submapSlot(m), ++change_clock_);  // entered the window, restored or not
   if (!global->take(m, &scratch_)) return;
+  if (!scratch_.empty()) submap_written_[submapSlot(m)] = 1;
   const int n = LocalMapConfig::kSubmapsPerAxis;
   const Eigen::Vector3i t0(floorMod(m.x(), n) * submap_.x(), floorMod(m.y(), n) * submap_.y(),
                            floorMod(m.z(), n) * submap_.z());
@@ -360,6 +367,7 @@ void LocalMap::restoreWindow(const LocalWindow& window) {
   if (window.size.prod() == 0) {
     std::fill(cells_.get(), cells_.get() + cell_count_, LogOddsQ{0});  // unknown, stored
     std::fill(may_hold_occupied_.begin(), may_hold_occupied_.end(), 0);
+    std::fill(submap_written_.begin(), submap_written_.end(), 0);
     placed_ = false;
     center_ = SubmapIndex::Zero();
     min_index_ = VoxelIndex::Zero();
@@ -380,8 +388,9 @@ void LocalMap::restoreWindow(const LocalWindow& window) {
       }
     }
   }
-  // Any column may hold an occupied voxel now.
+  // Any column may hold an occupied voxel now, any submap a known voxel.
   std::fill(may_hold_occupied_.begin(), may_hold_occupied_.end(), ~std::uint64_t{0});
+  std::fill(submap_written_.begin(), submap_written_.end(), 1);
   stampAllSubmaps();
 }
 
@@ -577,6 +586,10 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
       }
       if (column_changed) column_changed_at_[torus_column] = now;
     }
+  }
+  // A cell leaves unknown only by a change, which stamps its submap with `now`.
+  for (std::size_t m = 0; m < submap_written_.size(); ++m) {
+    if (submap_changed_at_[m] == now) submap_written_[m] = 1;
   }
   counters_.outside_window += batch.free_count > applied ? batch.free_count - applied : 0;
   counters_.misses_applied += applied;

@@ -277,9 +277,14 @@ class LocalMap {
   std::uint64_t change_clock_ = 0;
   std::vector<std::uint64_t> submap_changed_at_;        // per torus submap slot, see submapSlot()
   std::vector<std::uint64_t> submap_state_changed_at_;  // the same for state changes
-  std::vector<std::uint64_t> column_changed_at_;        // per torus column x, y: last value change
-  std::vector<std::uint8_t> submap_of_torus_x_;  // torus x -> submap slot x (no division per hit)
-  std::vector<std::uint8_t> submap_of_torus_y_;  // torus y -> submap slot y
+  // Per torus submap slot: 1 when a cell of it may be other than unknown (written by a change
+  // since the slot was last cleared), 0 when all its cells are unknown: retiring such a slot
+  // reads none of its cells (a fresh window's pages are never touched; reading them would map
+  // them).
+  std::vector<std::uint8_t> submap_written_;
+  std::vector<std::uint64_t> column_changed_at_;  // per torus column x, y: last value change
+  std::vector<std::uint8_t> submap_of_torus_x_;   // torus x -> submap slot x (no division per hit)
+  std::vector<std::uint8_t> submap_of_torus_y_;   // torus y -> submap slot y
   std::vector<std::uint8_t> submap_of_torus_z_;  // torus z -> submap slot z (no division per voxel)
   std::vector<std::uint64_t>
       may_hold_occupied_;  // a bit per torus column, see markMayHoldOccupied()
