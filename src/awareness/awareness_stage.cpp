@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -35,6 +36,9 @@ constexpr std::uint32_t kNoRunKey = kPointOutsideCutKey - 1;
 // 6 x 256^2 bins; slots 4 MB with all levels).
 constexpr std::size_t kProbeAhead = 16;  // ends between a table slot's prefetch and its probe
 constexpr std::size_t kRunsAhead = 4;    // runs between a table slot's prefetch and its probe
+// Longest that collect() waits for carve() to finish the awareness maps left to it before it
+// leaves its own frame's there too.
+constexpr int kMapWaitMs = 100;
 
 std::uint32_t hashKey(std::uint32_t key) {
   key ^= key >> 16;
@@ -196,6 +200,7 @@ AwarenessStage::AwarenessStage(const MapConfig& config)
   if (config.awareness.num_threads > 1) {
     threads_ = std::make_unique<TaskThreads>(config.awareness.num_threads);
   }
+  map_bytes_.store(map_.memoryBytes(), std::memory_order_relaxed);
   int n = config.awareness.binsPerFaceSide(config.local_map.resolution_m);
   bins_per_face_side_ = n;
   for (; n >= 1; n /= 2) {
@@ -333,7 +338,8 @@ bool AwarenessStage::collect(const DepthFrame& frame, MeasurementBatch* batch,
   return processDepth(frame, batch, counters, /*split=*/true);
 }
 
-void AwarenessStage::carve(MeasurementBatch* batch, PointCounters* counters) {
+double AwarenessStage::carve(MeasurementBatch* batch, PointCounters* counters,
+                             const std::function<void(const AwarenessMap&)>& on_map) {
   std::unique_ptr<CollectedFrame> frame;
   {
     std::lock_guard<std::mutex> lock(collected_mutex_);
@@ -342,14 +348,33 @@ void AwarenessStage::carve(MeasurementBatch* batch, PointCounters* counters) {
     collected_.pop_front();
   }
   batch->free.reset(frame->box_origin, frame->dims);
-  listCones(frame->origin_vox, frame->ends);
+  // The awareness map, where collect() left it here: beside the listing of the cones on a kept
+  // thread, as in process(), when the other half does not hold them.
+  double map_ms = 0.0;
+  if (!frame->map_in_carve) {
+    listCones(frame->origin_vox, frame->ends);
+  } else if (threads_ != nullptr) {
+    threads_->run(2, [&](int job) {
+      if (job == 0) {
+        listCones(frame->origin_vox, frame->ends);
+      } else {
+        map_ms = updateAwarenessMap(frame->body_W, frame->ends);
+      }
+    });
+  } else {
+    map_ms = updateAwarenessMap(frame->body_W, frame->ends);
+    listCones(frame->origin_vox, frame->ends);
+  }
   // With kept threads, the carving is split over them as in process(): a kept thread that the
   // other half's point loop does not hold (it waits for a core meanwhile, or finds the carving's
   // ranges claimed) helps here; otherwise this thread carves every range itself.
   carveCones(frame->origin_vox, batch);
   counters->free_voxels += batch->free_count;
+  if (frame->map_in_carve && on_map) on_map(map_);
   std::lock_guard<std::mutex> lock(collected_mutex_);
+  if (frame->map_in_carve && --maps_in_carve_ == 0) maps_carved_.notify_all();  // collect() may
   spare_.push_back(std::move(frame));
+  return map_ms;
 }
 
 void AwarenessStage::processCloud(const PointCloudFrame& frame, MeasurementBatch* batch,
@@ -441,9 +466,21 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
   ends_.insert(ends_.end(), outside_.begin(), outside_.end());
   counters->hit_voxels = batch->hits.size();
   if (split) {
+    // The awareness map here, once the earlier frames' maps that wait for carve() are done (a
+    // bounded wait: carve() may never come, e.g. the engine stopping), or in carve().
+    bool map_in_carve = map_in_carve_;
+    {
+      std::unique_lock<std::mutex> lock(collected_mutex_);
+      if (!map_in_carve) {
+        map_in_carve = !maps_carved_.wait_for(lock, std::chrono::milliseconds(kMapWaitMs),
+                                              [&] { return maps_in_carve_ == 0; });
+      }
+      if (map_in_carve) ++maps_in_carve_;
+    }
+    collect_map_ms_ = -1.0;
+    if (!map_in_carve) collect_map_ms_ = updateAwarenessMap(T_W_B.translation(), ends_);
     // The second half waits for carve() (maybe on another thread) with the frame's ends; ends_
     // takes a spare one's memory.
-    updateAwarenessMap(T_W_B.translation());
     std::lock_guard<std::mutex> lock(collected_mutex_);
     std::unique_ptr<CollectedFrame> frame;
     if (spare_.empty()) {
@@ -453,6 +490,8 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
       spare_.pop_back();
     }
     frame->ends.swap(ends_);
+    frame->body_W = T_W_B.translation();
+    frame->map_in_carve = map_in_carve;
     frame->origin_vox = g.origin_vox;
     frame->box_origin = g.box_origin;
     frame->dims = g.dims;
@@ -467,11 +506,11 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
       if (job == 0) {
         listCones(g.origin_vox, ends_);
       } else {
-        updateAwarenessMap(T_W_B.translation());
+        updateAwarenessMap(T_W_B.translation(), ends_);
       }
     });
   } else {
-    updateAwarenessMap(T_W_B.translation());
+    updateAwarenessMap(T_W_B.translation(), ends_);
     listCones(g.origin_vox, ends_);
   }
   carveCones(g.origin_vox, batch);
@@ -734,16 +773,21 @@ void AwarenessStage::collectPart(const Source& source, const FrameGeometry& g, s
   }
 }
 
-void AwarenessStage::updateAwarenessMap(const Eigen::Vector3d& body_W) {
+double AwarenessStage::updateAwarenessMap(const Eigen::Vector3d& body_W,
+                                          const std::vector<End>& ends) {
+  const auto start = std::chrono::steady_clock::now();
   map_.beginFrame(body_W);
-  for (const End& e : ends_) {
+  for (const End& e : ends) {
     if (!e.cut) map_.markHit(e.p_W);
   }
   map_.castRaysToHits();
-  for (const End& e : ends_) {
+  for (const End& e : ends) {
     if (e.cut) map_.castRay(e.p_W, /*end_is_free=*/true);
   }
   map_.endFrame();
+  map_bytes_.store(map_.memoryBytes(), std::memory_order_relaxed);
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+      .count();
 }
 
 void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends) {
@@ -954,7 +998,7 @@ std::size_t AwarenessStage::memoryBytes() const {
             p.block_xyz.capacity() * sizeof(float) +
             p.runs.first.capacity() * sizeof(std::uint32_t) + p.runs.box.capacity() * sizeof(float);
   }
-  return bins + map_.memoryBytes() + ends_.capacity() * sizeof(End) +
+  return bins + map_bytes_.load(std::memory_order_relaxed) + ends_.capacity() * sizeof(End) +
          outside_.capacity() * sizeof(End) + sample_indices_.capacity() * sizeof(std::uint32_t);
 }
 

@@ -13,6 +13,12 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// A running average of the awareness map's milliseconds per frame (the last 4 frames or so), -1
+// before the first.
+double mapAverage(double average_ms, double frame_ms) {
+  return average_ms < 0.0 ? frame_ms : average_ms + (frame_ms - average_ms) / 4.0;
+}
+
 const MapConfig& validated(const MapConfig& config) {
   throwIfInvalid(config.validate(), "mlmap configuration");
   return config;
@@ -38,6 +44,11 @@ const char* toString(FrameStatus status) {
   return "invalid";
 }
 
+double MapEngine::RecentMinimum::add(double frame_ms) {
+  ms[count++ % ms.size()] = frame_ms;
+  return *std::min_element(ms.begin(), ms.begin() + std::min(count, ms.size()));
+}
+
 MapEngine::MapEngine(const MapConfig& config, LogSink log, EngineObservers observers)
     : config_(validated(config)),
       log_(std::move(log), 8),
@@ -56,8 +67,17 @@ MapEngine::MapEngine(const MapConfig& config, LogSink log, EngineObservers obser
         config_.pipeline.input_queue_capacity, config_.pipeline.batch_queue_capacity,
         [this](Input& input, MeasurementBatch* batch) { awarenessStep(input, batch); },
         [this](MeasurementBatch& batch) {
-          carveStep(&batch);
+          const Clock::time_point start = Clock::now();
+          std::swap(batch.free, carve_free_);  // lent for the carving and the local map
+          const double map_ms = carveStep(&batch);
           localStep(batch);
+          std::swap(batch.free, carve_free_);
+          const double ms = msSince(start) - map_ms;
+          local_half_ms_.store(local_recent_.add(ms), std::memory_order_relaxed);
+          if (map_ms > 0.0) {
+            map_half_ms_.store(mapAverage(map_half_ms_.load(std::memory_order_relaxed), map_ms),
+                               std::memory_order_relaxed);
+          }
         });
   }
 }
@@ -163,8 +183,22 @@ void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
   const Clock::time_point start = Clock::now();
   PointCounters counters;
   // Threaded: only the first half here; the carving runs on the local-global thread, beside the
-  // next frame's first half (carveStep()).
+  // next frame's first half (carveStep()). The awareness map goes to the half that is shorter
+  // without it (the point loop is the longer half of a depth frame at a fine resolution, the
+  // carving of a LiDAR scan).
   const bool split = config_.pipeline.threaded;
+  if (split) {
+    // With a margin of a quarter of the map's time, so that the place does not flip with every
+    // frame (moving the map back to this half waits for the other to finish the maps it holds).
+    const double local_ms = local_half_ms_.load(std::memory_order_relaxed);
+    const double margin_ms = 0.25 * std::max(map_half_ms_.load(std::memory_order_relaxed), 0.0);
+    if (!map_in_carve_ && local_ms >= 0.0 && local_ms < awareness_half_ms_ - margin_ms) {
+      map_in_carve_ = true;
+    } else if (map_in_carve_ && local_ms > awareness_half_ms_ + margin_ms) {
+      map_in_carve_ = false;
+    }
+    awareness_.placeAwarenessMap(map_in_carve_);
+  }
   if (auto* points = std::get_if<PointCloudFrame>(&input)) {
     if (split) {
       awareness_.collect(*points, batch, &counters);
@@ -177,9 +211,22 @@ void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
     awareness_.process(std::get<DepthFrame>(input), batch, &counters);
   }
   batch->awareness_ms = msSince(start);
-  if (observers_.awareness) observers_.awareness(awareness_.map(), batch->stamp_s, batch->T_W_B);
-  const std::size_t bytes = awareness_.memoryBytes() + batch->free.memoryBytes() +
-                            batch->hits.capacity() * sizeof(HitMeasurement);
+  if (split) {
+    const double map_ms = awareness_.lastCollectMapMs();
+    awareness_half_ms_ = awareness_recent_.add(batch->awareness_ms - map_ms);
+    if (awareness_.lastCollectUpdatedMap()) {
+      map_half_ms_.store(mapAverage(map_half_ms_.load(std::memory_order_relaxed), map_ms),
+                         std::memory_order_relaxed);
+    }
+  }
+  // Threaded, where carve() updates the awareness map, it calls the observer.
+  if ((!split || awareness_.lastCollectUpdatedMap()) && observers_.awareness) {
+    observers_.awareness(awareness_.map(), batch->stamp_s, batch->T_W_B);
+  }
+  const std::size_t free_bytes =
+      split ? carve_free_bytes_.load(std::memory_order_relaxed) : batch->free.memoryBytes();
+  const std::size_t bytes =
+      awareness_.memoryBytes() + free_bytes + batch->hits.capacity() * sizeof(HitMeasurement);
   stats_.update([&](EngineStatsRecorder::Record& r) {
     r.stats.points += counters;
     r.stats.memory.awareness_bytes = bytes;
@@ -187,15 +234,19 @@ void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
   });
 }
 
-void MapEngine::carveStep(MeasurementBatch* batch) {
+double MapEngine::carveStep(MeasurementBatch* batch) {
   const Clock::time_point start = Clock::now();
   PointCounters counters;
-  awareness_.carve(batch, &counters);
+  const double map_ms = awareness_.carve(batch, &counters, [&](const AwarenessMap& map) {
+    if (observers_.awareness) observers_.awareness(map, batch->stamp_s, batch->T_W_B);
+  });
   batch->awareness_ms += msSince(start);
+  carve_free_bytes_.store(batch->free.memoryBytes(), std::memory_order_relaxed);
   stats_.update([&](EngineStatsRecorder::Record& r) {
     r.stats.points += counters;
     r.awareness_ms.add(batch->awareness_ms);
   });
+  return map_ms;
 }
 
 std::shared_ptr<const PriorVoxels> MapEngine::priors() const { return priors_.published(); }

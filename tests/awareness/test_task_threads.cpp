@@ -131,10 +131,20 @@ TEST(TaskThreads, RethrowsAJobsExceptionAfterAllReturned) {
 
 // collect() and carve() as the threaded engine runs them: frame k's carving on one thread
 // while frame k + 1 is collected on another, in a ring of batches (with two threads both halves
-// ask the one kept thread for help). Each batch is then what
-// process() makes of its frame, bit for bit, and so is the awareness map.
+// ask the one kept thread for help), the awareness map updated by collect(), by carve(), or by
+// either in turn (a frame whose map goes back to collect() waits for the carving of the one
+// before, or, past the wait's bound, leaves it to carve() too). Each batch is then what process()
+// makes of its frame, bit for bit, and so is the awareness map; carve() hands the map to its
+// observer exactly for the frames whose map collect() left to it.
 TEST(AwarenessStage, HalvesOnTwoThreadsCarveWhatProcessCarves) {
-  for (const int threads : {1, 2}) {
+  enum class Place { kCollect, kCarve, kAlternate };
+  for (const auto& [threads, place] :
+       {std::pair{1, Place::kCollect}, std::pair{2, Place::kCollect}, std::pair{1, Place::kCarve},
+        std::pair{2, Place::kCarve}, std::pair{1, Place::kAlternate},
+        std::pair{2, Place::kAlternate}}) {
+    const auto inCarve = [place = place](std::size_t k) {
+      return place == Place::kCarve || (place == Place::kAlternate && k % 3 != 0);
+    };
     MapConfig config = testConfig(0.1);
     AwarenessStage reference(config);
     config.awareness.num_threads = threads;
@@ -148,15 +158,31 @@ TEST(AwarenessStage, HalvesOnTwoThreadsCarveWhatProcessCarves) {
     }
     std::array<MeasurementBatch, 3> ring;
     std::array<PointCounters, 3> counters;
+    std::vector<bool> map_in_carve(frames.size(), false);  // what collect() did
+    split.placeAwarenessMap(inCarve(0));
     split.collect(frames[0], &ring[0], &counters[0]);
+    map_in_carve[0] = !split.lastCollectUpdatedMap();
+    EXPECT_EQ(map_in_carve[0], inCarve(0));  // nothing to wait for
     for (std::size_t k = 0; k < frames.size(); ++k) {
       MeasurementBatch& b = ring[k % 3];
-      std::thread carver([&] { split.carve(&b, &counters[k % 3]); });
+      int maps_observed = 0;
+      double map_ms = -1.0;
+      std::thread carver([&] {
+        map_ms = split.carve(&b, &counters[k % 3], [&](const AwarenessMap&) { ++maps_observed; });
+      });
       if (k + 1 < frames.size()) {
         counters[(k + 1) % 3] = PointCounters{};
+        split.placeAwarenessMap(inCarve(k + 1));
         split.collect(frames[k + 1], &ring[(k + 1) % 3], &counters[(k + 1) % 3]);
+        map_in_carve[k + 1] = !split.lastCollectUpdatedMap();
+        // Left to carve() when asked; the other way, only while an earlier frame's map waited.
+        if (inCarve(k + 1) || !map_in_carve[k]) {
+          EXPECT_EQ(map_in_carve[k + 1], inCarve(k + 1));
+        }
       }
       carver.join();
+      EXPECT_EQ(maps_observed, map_in_carve[k] ? 1 : 0) << "frame " << k;
+      EXPECT_EQ(map_ms > 0.0, map_in_carve[k]) << "frame " << k;
       MeasurementBatch a;
       PointCounters ca;
       reference.process(frames[k], &a, &ca);
@@ -182,8 +208,9 @@ TEST(AwarenessStage, HalvesOnTwoThreadsCarveWhatProcessCarves) {
       EXPECT_EQ(ca.hit_voxels, cb.hit_voxels);
       EXPECT_EQ(ca.points_in, cb.points_in);
       EXPECT_EQ(ca.beyond_max_range, cb.beyond_max_range);
-      // The map is one frame ahead in `split` (frame k + 1 collected): compare it after the last.
-      if (k + 1 == frames.size()) {
+      // The map is one frame ahead in `split` where collect() updated it for frame k + 1:
+      // compare it where it is frame k's, and after the last.
+      if (k + 1 == frames.size() || map_in_carve[k + 1]) {
         EXPECT_EQ(reference.map().occupiedPoints(), split.map().occupiedPoints());
         EXPECT_EQ(reference.map().count(Occupancy::kFree), split.map().count(Occupancy::kFree));
       }

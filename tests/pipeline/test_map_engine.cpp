@@ -12,6 +12,7 @@
 #include <cmath>
 #include <unordered_map>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
 
 namespace mlmap {
@@ -209,8 +210,9 @@ TEST(MapEngine, InvalidConfigurationIsAClearError) {
 
 // Threaded, the carving of a frame runs on the local-global thread beside the next frame's point
 // loop (AwarenessStage::collect() / carve()); with awareness.num_threads 2 the point loop is
-// split as well. The window's log-odds, the global map and the counters are those of the
-// synchronous engine, bit for bit.
+// split as well. The awareness map goes to whichever thread is less busy (either half may update
+// it). The window's log-odds, the global map, the awareness map and the counters are those of the
+// synchronous engine, bit for bit, and the awareness observer sees every frame once, in order.
 TEST(MapEngine, ThreadedModeBuildsTheSameMapAsTheSynchronousMode) {
   const datasets::Scenario scenario = datasets::defaultScenario();
   MapConfig sync_config = configAt(0.2);
@@ -224,9 +226,28 @@ TEST(MapEngine, ThreadedModeBuildsTheSameMapAsTheSynchronousMode) {
     threaded_config.pipeline.threaded = true;
     threaded_config.pipeline.input_queue_capacity = 1000;  // nothing dropped
     threaded_config.awareness.num_threads = awareness_threads;
-    MapEngine threaded_engine(threaded_config);
+    std::vector<double> observed_stamps;  // the awareness observer's, on either thread
+    std::mutex observed_mutex;
+    EngineObservers observers;
+    observers.awareness = [&](const AwarenessMap&, double stamp_s, const Transform&) {
+      std::lock_guard<std::mutex> lock(observed_mutex);
+      observed_stamps.push_back(stamp_s);
+    };
+    MapEngine threaded_engine(threaded_config, {}, observers);
     eval::flyScenario(scenario, threaded_engine, options);
     threaded_engine.flush();
+    EXPECT_EQ(sync_engine.awareness().occupiedPoints(),
+              threaded_engine.awareness().occupiedPoints());
+    EXPECT_EQ(sync_engine.awareness().count(Occupancy::kFree),
+              threaded_engine.awareness().count(Occupancy::kFree));
+    EXPECT_GT(sync_engine.awareness().count(Occupancy::kFree), 100u);
+    {
+      std::lock_guard<std::mutex> lock(observed_mutex);
+      ASSERT_EQ(observed_stamps.size(), 60u);
+      EXPECT_TRUE(std::is_sorted(observed_stamps.begin(), observed_stamps.end()));
+      EXPECT_EQ(std::adjacent_find(observed_stamps.begin(), observed_stamps.end()),
+                observed_stamps.end());
+    }
     const MapState b = threaded_engine.exportState();
     EXPECT_EQ(a.window.min_index, b.window.min_index);
     EXPECT_GT(a.window.log_odds.size(), 1000u);

@@ -9,10 +9,13 @@
 #include "mlmap/core/measurement_batch.h"
 #include "mlmap/core/config.h"
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cstdint>
+#include <condition_variable>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <random>
@@ -65,21 +68,37 @@ class AwarenessStage {
 
   /// The first half of process(), for a pipeline that runs the halves on two threads: the
   /// frame's points into end voxels, the hits (batch->hits, batch->far_hits) and the awareness
-  /// map (batch->free is left to carve()); the frame's ends wait for carve(). Each collect()
-  /// must be followed by one carve() of the same batch, in the same order; a collect() may run
-  /// while carve() of an earlier frame runs on another thread (each half on one thread at a
-  /// time). Adds to `counters` all but free_voxels.
+  /// map, unless that is left to carve() (placeAwarenessMap()); the frame's ends wait for
+  /// carve() (batch->free is carve()'s). Each collect() must be followed by one carve() of the
+  /// same batch, in the same order; a collect() may run while carve() of an earlier frame runs
+  /// on another thread (each half on one thread at a time). Adds to `counters` all but
+  /// free_voxels.
   void collect(const PointCloudFrame& frame, MeasurementBatch* batch, PointCounters* counters);
   /// The same for a depth image (returns false, touching nothing, where process() does).
   bool collect(const DepthFrame& frame, MeasurementBatch* batch, PointCounters* counters);
-  /// The second half of process(): the cones of the oldest frame collected and not yet carved,
-  /// carved into its batch's free set (sets batch->free_count and adds free_voxels to
-  /// `counters`), split over the kept threads as process() splits it when no collect() holds
-  /// them (TaskThreads::run()). The batch then holds what process() would have filled it with,
-  /// bit for bit.
-  void carve(MeasurementBatch* batch, PointCounters* counters);
+  /// The second half of process(): the oldest frame collected and not yet carved: its awareness
+  /// map where collect() left it here, then its cones, carved into its batch's free set (sets
+  /// batch->free_count and adds free_voxels to `counters`), split over the kept threads as
+  /// process() splits it when no collect() holds them (TaskThreads::run()). The batch then holds
+  /// what process() would have filled it with, bit for bit. Where it updated the awareness map,
+  /// calls `on_map` with it (if set) before the next collect() may update it, and returns the
+  /// milliseconds the update took; otherwise returns 0.
+  double carve(MeasurementBatch* batch, PointCounters* counters,
+               const std::function<void(const AwarenessMap&)>& on_map = {});
 
-  /// The awareness map after the last frame.
+  /// Which half updates the awareness map of the frames collected from now on (collect()'s
+  /// thread): collect() (false, the default), or carve() (true) beside the carving, for when
+  /// the first half is the longer one. The maps are the same either way: the frames' updates
+  /// stay in order, collect() waiting for the carve() of the earlier frames whose map waits
+  /// there (at most 100 ms, then it leaves its own there too).
+  void placeAwarenessMap(bool in_carve) { map_in_carve_ = in_carve; }
+  /// Whether the last collect() updated the awareness map, and the milliseconds it took (0 when
+  /// it left it to carve()); collect()'s thread.
+  [[nodiscard]] bool lastCollectUpdatedMap() const { return collect_map_ms_ >= 0.0; }
+  [[nodiscard]] double lastCollectMapMs() const { return std::max(collect_map_ms_, 0.0); }
+
+  /// The awareness map after the last frame (after its collect() or carve(), whichever updated
+  /// it).
   [[nodiscard]] const AwarenessMap& map() const { return map_; }
   /// Bytes held by the stage (awareness grid and per-frame scratch). May be called by
   /// collect()'s thread while carve() runs (the second half's part as of its last frame).
@@ -127,9 +146,6 @@ class AwarenessStage {
   /// threads the points are split into consecutive parts, each grouped by a thread of its own
   /// (collectPart()), and the parts merged in order: the same ends in the same order.
   void collectEnds(const Source& source, const FrameGeometry& g, PointCounters* counters);
-  /// The awareness map of this frame: carried obstacles, hits, then the 2D rho-z ray walks, from
-  /// ends_ (which holds outside_ too by then). Reads only the ends' points and `cut`.
-  void updateAwarenessMap(const Eigen::Vector3d& body_W);
   /// A voxel where rays end in this frame: the box of its points and the first point.
   struct End {
     Eigen::Vector3i voxel = Eigen::Vector3i::Zero();  // box-relative
@@ -139,6 +155,10 @@ class AwarenessStage {
     std::uint32_t bin = 0;  // direction: its bin on the finest level (index in bins_[0])
     double near = 0.0;      // distance from the sensor to `points` (voxel units)
   };
+  /// The awareness map of this frame: carried obstacles, hits, then the 2D rho-z ray walks, from
+  /// the frame's ends (those beyond the box included). Reads only the ends' points and `cut`.
+  /// Returns the milliseconds it took.
+  double updateAwarenessMap(const Eigen::Vector3d& body_W, const std::vector<End>& ends);
   /// Rays bundled by direction (a cube-map bin of one level): the shared part of their cones.
   struct Bin {
     std::uint32_t index = 0;   // on its level: (face n + iu) n + iv with n bins per face side
@@ -219,10 +239,12 @@ class AwarenessStage {
   std::vector<double> range_scratch_;  // the cones' work per box x, for splitting it over threads
   std::vector<PointPart> parts_;       // one per thread; ends_ and outside_ merge them
   std::unique_ptr<TaskThreads> threads_;  // with awareness.num_threads > 1
-  /// A frame between collect() and carve(): its ends (ends_ and outside_), its sensor and the
-  /// box of its free set (which carve() clears).
+  /// A frame between collect() and carve(): its ends (ends_ and outside_), its body and sensor
+  /// (for the awareness map and the cones) and the box of its free set (which carve() clears).
   struct CollectedFrame {
     std::vector<End> ends;
+    Eigen::Vector3d body_W = Eigen::Vector3d::Zero();
+    bool map_in_carve = false;  // its awareness map is carve()'s to update
     Eigen::Vector3d origin_vox = Eigen::Vector3d::Zero();
     VoxelIndex box_origin = VoxelIndex::Zero();
     Eigen::Vector3i dims = Eigen::Vector3i::Zero();
@@ -231,6 +253,13 @@ class AwarenessStage {
   std::deque<std::unique_ptr<CollectedFrame>> collected_;  // waiting for carve(), oldest first
   std::vector<std::unique_ptr<CollectedFrame>> spare_;     // their memory, for reuse
   std::atomic<std::size_t> carve_bytes_{0};                // carveBytes() as of the last carving
+  std::atomic<std::size_t> map_bytes_{0};  // map_.memoryBytes() as of the last awareness update
+  // Frames collected whose awareness map waits for carve() (under collected_mutex_): collect()
+  // updates the map only at 0, waiting for it on maps_carved_.
+  int maps_in_carve_ = 0;
+  std::condition_variable maps_carved_;
+  bool map_in_carve_ = false;    // placeAwarenessMap() (collect()'s thread)
+  double collect_map_ms_ = 0.0;  // the last collect()'s map update, -1 when none (its thread)
   // The second half's state from here on (listCones(), carveCones()): with collect() and
   // carve(), on carve()'s thread only.
   std::uint32_t stamp_ = 0;  // this frame's, in slots_

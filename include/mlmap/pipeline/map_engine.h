@@ -20,6 +20,8 @@
 #include "mlmap/pipeline/rate_limited_log.h"
 #include "mlmap/pipeline/stage_threads.h"
 
+#include <array>
+#include <atomic>
 #include <functional>
 #include <memory>
 #include <mutex>
@@ -46,7 +48,8 @@ const char* toString(FrameStatus status);
 /// being written. They run inside the mapping loop: copy what you need and return (e.g. a
 /// publisher's hand-over).
 struct EngineObservers {
-  /// After the awareness update of every frame (awareness thread).
+  /// After the awareness update of every frame (the local-global thread in threaded mode, where
+  /// the awareness map is updated beside the carving).
   std::function<void(const AwarenessMap& map, double stamp_s, const Transform& T_W_B)> awareness;
   /// After the local-global update of every frame (local-global thread). `version` is the
   /// global map's modifications() (submap moves between the local and the global map, hits
@@ -152,7 +155,8 @@ class MapEngine {
   void awarenessStep(Input& input, MeasurementBatch* batch);
   /// Threaded: the awareness stage's second half (AwarenessStage::carve()), on the local-global
   /// thread before localStep(): the two threads then carry about equal shares of a frame.
-  void carveStep(MeasurementBatch* batch);
+  /// Returns the milliseconds of the awareness map's update, where it was done there.
+  double carveStep(MeasurementBatch* batch);
   void localStep(const MeasurementBatch& batch);
   void applyPriors();
   FrameStatus enqueue(Input input);
@@ -187,6 +191,27 @@ class MapEngine {
   EngineStatsRecorder stats_;
 
   MeasurementBatch sync_batch_;  // synchronous mode's one batch
+  // Threaded mode: the free set of every batch, lent to each in turn by the local-global thread
+  // (the only one that writes or reads a free set there): its pages stay mapped and in that
+  // core's cache, where each batch of the pool had a set of its own to fault in and bring over.
+  VoxelBitset carve_free_;
+  std::atomic<std::size_t> carve_free_bytes_{0};  // carve_free_'s memoryBytes(), for the stats
+  /// The shortest of a thread's last four frames [ms]: a frame's window move or fresh pages do
+  /// not decide where the awareness map goes.
+  struct RecentMinimum {
+    std::array<double, 4> ms{};
+    std::size_t count = 0;
+    /// Adds a frame's milliseconds; returns the shortest of the last four.
+    double add(double frame_ms);
+  };
+  // Threaded: each thread's milliseconds per frame without the awareness map (the shortest of
+  // the last few), which decide the half that updates it (AwarenessStage::placeAwarenessMap()).
+  RecentMinimum awareness_recent_;           // the awareness thread's
+  RecentMinimum local_recent_;               // the local-global thread's
+  double awareness_half_ms_ = -1.0;          // the awareness thread's (-1: none yet)
+  std::atomic<double> local_half_ms_{-1.0};  // the local-global thread's (-1: none yet)
+  std::atomic<double> map_half_ms_{-1.0};    // the awareness map's update, on either thread
+  bool map_in_carve_ = true;                 // the place last chosen (the awareness thread's)
   // Threaded mode: the two stage threads and their queues (null in synchronous mode; last, so
   // that the threads stop before anything they use is destroyed).
   std::unique_ptr<StageThreads> stages_;
