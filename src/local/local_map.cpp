@@ -19,7 +19,25 @@ namespace mlmap {
 namespace {
 constexpr int kHalfWindow = LocalMapConfig::kSubmapsPerAxis / 2;  // 2 submaps on each side
 constexpr int kMaxShiftsPerCall = 8;
+constexpr std::size_t kPageBytes = 4096;
 }  // namespace
+
+void LocalMap::writeFirst(std::size_t first, std::size_t count) {
+  const auto base = reinterpret_cast<std::uintptr_t>(cells_.get());
+  const std::size_t first_page = (base % kPageBytes + first * sizeof(LogOddsQ)) / kPageBytes;
+  const std::size_t last_page =
+      (base % kPageBytes + (first + count) * sizeof(LogOddsQ) - 1) / kPageBytes;
+  for (std::size_t page = first_page; page <= last_page; ++page) {
+    std::uint64_t& word = page_written_[page >> 6];
+    const std::uint64_t bit = std::uint64_t{1} << (page & 63);
+    if ((word & bit) != 0) continue;
+    word |= bit;
+    // A cell of the page within [first, first + count): the first one, or the page's first.
+    const std::size_t page_first_cell =
+        page == first_page ? first : (page * kPageBytes - base % kPageBytes) / sizeof(LogOddsQ);
+    __atomic_fetch_add(&cells_[page_first_cell], LogOddsQ{0}, __ATOMIC_RELAXED);
+  }
+}
 
 bool LocalMap::missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint64_t now,
                        std::uint64_t* changed_at, std::uint64_t* state_changed_at) const {
@@ -155,7 +173,8 @@ LocalMap::LocalMap(const LocalMapConfig& config, const LogOddsConfig& log_odds)
       submap_of_torus_x_(static_cast<std::size_t>(size_.x())),
       submap_of_torus_y_(static_cast<std::size_t>(size_.y())),
       submap_of_torus_z_(static_cast<std::size_t>(size_.z())),
-      may_hold_occupied_((column_changed_at_.size() + 63) / 64, 0) {
+      may_hold_occupied_((column_changed_at_.size() + 63) / 64, 0),
+      page_written_((cell_count_ * sizeof(LogOddsQ) / kPageBytes + 1 + 63) / 64, 0) {
   if (cells_ == nullptr) throw std::bad_alloc();
   for (int x = 0; x < size_.x(); ++x) {
     submap_of_torus_x_[static_cast<std::size_t>(x)] = static_cast<std::uint8_t>(x / submap_.x());
@@ -495,6 +514,7 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
         ++counters_.hits_outside_window;
         continue;
       }
+      writeFirst(cell, 1);
       const LogOddsQ old = flipUnknown(cells_[cell]);
       LogOddsQ v = old;
       const Occupancy before = model_.state(v);
@@ -554,6 +574,8 @@ void LocalMap::integrate(const MeasurementBatch& batch) {
       const std::size_t torus_column =
           static_cast<std::size_t>(sx) * static_cast<std::size_t>(size_.y()) +
           static_cast<std::size_t>(sy);
+      writeFirst(torus_column * static_cast<std::size_t>(size_.z()),
+                 static_cast<std::size_t>(size_.z()));
       LogOddsQ* column = cells_.get() + torus_column * static_cast<std::size_t>(size_.z());
       // The column's submaps in the stamp arrays (torus slot x, y; z per voxel).
       const std::size_t column_submaps =

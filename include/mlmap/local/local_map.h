@@ -259,6 +259,12 @@ class LocalMap {
   /// whose values or states changed. Returns whether any value changed.
   bool missRun(LogOddsQ* column, int base, std::uint64_t bits, std::uint64_t now,
                std::uint64_t* changed_at, std::uint64_t* state_changed_at) const;
+  /// Before integrate() reads cells [first, first + count) to update them: writes (an atomic add
+  /// of 0, values unchanged) to each of their pages not written yet, so that a page never
+  /// touched is mapped by that write. Read first, it would be mapped to the zero page and then
+  /// copied on the write, whose change of mapping interrupts the other core (a TLB shootdown)
+  /// when the engine's other thread runs.
+  void writeFirst(std::size_t first, std::size_t count);
   void moveCenter(const SubmapIndex& new_center, GlobalMap* global);
   void retireSubmap(const SubmapIndex& m, GlobalMap* global);
   void restoreSubmap(const SubmapIndex& m, GlobalMap* global);
@@ -288,6 +294,8 @@ class LocalMap {
   std::vector<std::uint8_t> submap_of_torus_z_;  // torus z -> submap slot z (no division per voxel)
   std::vector<std::uint64_t>
       may_hold_occupied_;  // a bit per torus column, see markMayHoldOccupied()
+  // A bit per 4 kB page of cells_: set once integrate() has written to it (see writeFirst()).
+  std::vector<std::uint64_t> page_written_;
 };
 
 }  // namespace mlmap
