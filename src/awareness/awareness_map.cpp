@@ -226,14 +226,30 @@ void AwarenessMap::insertSlopes(double lo, double hi) {
   merged_.swap(out);
 }
 
+void AwarenessMap::sortCones() {
+  // Two stable counting sorts (by rho descending, then by phi): the order of a comparison sort by
+  // (phi, rho descending) up to the order among equal (phi, rho), which the sweep does not see
+  // (it clears each such cone's end range and merges its slopes: a union). A comparison sort took
+  // 2 % of a LiDAR scan, mostly mispredicted comparisons.
+  const auto by = [&](const std::vector<Cone>& in, std::vector<Cone>& out, int buckets,
+                      auto bucketOf) {
+    sort_counts_.assign(static_cast<std::size_t>(buckets) + 1, 0);
+    for (const Cone& c : in) ++sort_counts_[static_cast<std::size_t>(bucketOf(c)) + 1];
+    for (std::size_t b = 1; b < sort_counts_.size(); ++b) sort_counts_[b] += sort_counts_[b - 1];
+    out.resize(in.size());
+    for (const Cone& c : in) out[sort_counts_[static_cast<std::size_t>(bucketOf(c))]++] = c;
+  };
+  const int rho_cells = config_.rho_cells;
+  by(cones_, sort_scratch_, rho_cells, [&](const Cone& c) { return rho_cells - 1 - c.rho; });
+  by(sort_scratch_, cones_, config_.phi_cells, [](const Cone& c) { return c.phi; });
+}
+
 void AwarenessMap::sweepCones() {
   // Per sector, the union of the cones in column k is the union of the slope intervals of the
   // cones that reach past k, scaled to the column, plus the end-column ranges of the cones that
   // end in k: sweep the columns from far to near, merging each cone's slopes once the sweep has
   // passed its end column.
-  std::sort(cones_.begin(), cones_.end(), [](const Cone& a, const Cone& b) {
-    return a.phi != b.phi ? a.phi < b.phi : a.rho > b.rho;
-  });
+  sortCones();
   const double dr = config_.rho_cell_m;
   for (std::size_t first = 0; first < cones_.size();) {
     std::size_t last = first;
@@ -285,6 +301,8 @@ std::size_t AwarenessMap::memoryBytes() const {
   return cells_.capacity() + (carried_.capacity() + hits_.capacity()) * sizeof(Carried) +
          hit_cells_.capacity() * sizeof(AwarenessCell) +
          occupied_points_.capacity() * sizeof(Eigen::Vector3d) +
+         (cones_.capacity() + sort_scratch_.capacity()) * sizeof(Cone) +
+         sort_counts_.capacity() * sizeof(std::size_t) +
          (boundary_cos_.capacity() + boundary_sin_.capacity()) * sizeof(double);
 }
 

@@ -93,6 +93,8 @@ class AwarenessMap {
   void walkCone(const AwarenessCell& end);
   void clearRange(int phi, int rho, double z_lo, double z_hi);
   void insertSlopes(double lo, double hi);
+  /// Orders cones_ by phi, and within a phi by rho descending (as sweepCones() reads them).
+  void sortCones();
   void sweepCones();
 
   AwarenessConfig config_;
@@ -119,6 +121,8 @@ class AwarenessMap {
     double end_hi = 0.0;
   };
   std::vector<Cone> cones_;
+  std::vector<Cone> sort_scratch_;                 // sortCones()' first pass
+  std::vector<std::size_t> sort_counts_;           // sortCones()' bucket starts
   std::vector<std::pair<double, double>> merged_;  // disjoint slope intervals, sorted
   std::vector<std::pair<double, double>> merge_scratch_;
   std::vector<Eigen::Vector3d> occupied_points_;
