@@ -809,24 +809,50 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends)
     return (face << (2 * (lg - 1))) | ((iu >> 1) << (lg - 1)) | (iv >> 1);
   };
   const int level_count = static_cast<int>(bins_.size());
-  // The index of a bin in this frame's bins of its level: added (empty box) when met for the
-  // first time, its nearest member updated otherwise.
-  auto findOrAddBin = [&](int level, std::uint32_t index, double near) {
-    BinSlot& slot = slots_[static_cast<std::size_t>(level)][index];
-    std::vector<Bin>& bins = bins_[static_cast<std::size_t>(level)];
-    if (slot.stamp != stamp_) {
-      slot = {stamp_, static_cast<std::uint32_t>(bins.size())};
-      Bin bin;
-      bin.index = index;
-      bin.near = near;
-      bin.box.min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
-      bin.box.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
-      bins.push_back(bin);
-    } else {
-      Bin& bin = bins[slot.bin];
-      bin.near = std::min(bin.near, near);
+  // Level L's bins cover the distances up to its reach (where they are still about
+  // bin_width_voxels wide); a bin's reach is min(its nearest member, its level's reach).
+  std::array<double, 32> level_reach{};
+  for (int level = 0; level < level_count; ++level) {
+    level_reach[static_cast<std::size_t>(level)] =
+        0.5 * config_.awareness.bin_width_voxels * (n0 >> level);
+  }
+  auto reachOf = [&](int level, const Bin& bin) {
+    return std::min(bin.near, level_reach[static_cast<std::size_t>(level)]);
+  };
+  // Enters a member at distance `near` into the finest bin `index` and returns that bin's place
+  // in this frame's bins_[0]. A bin met for the first time is added (empty box), and so are its
+  // ancestors not met yet; the nearest member is taken into the bin and up its chain as far as it
+  // is nearer. So each bin of the frame has its chain of ancestors, each with the nearest member
+  // of its bins, without a pass over the bins of each level.
+  auto enterBin = [&](std::uint32_t index, double near) {
+    std::uint32_t finest = 0;
+    std::uint32_t child = 0;  // the bin of the level below, in its level's bins_
+    for (int level = 0;; ++level) {
+      BinSlot& slot = slots_[static_cast<std::size_t>(level)][index];
+      std::vector<Bin>& bins = bins_[static_cast<std::size_t>(level)];
+      bool nearer = true;
+      if (slot.stamp != stamp_) {
+        slot = {stamp_, static_cast<std::uint32_t>(bins.size())};
+        Bin bin;
+        bin.index = index;
+        bin.near = near;
+        bin.box.min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+        bin.box.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
+        bins.push_back(bin);
+      } else {
+        Bin& bin = bins[slot.bin];
+        nearer = near < bin.near;
+        bin.near = std::min(bin.near, near);
+      }
+      if (level == 0) {
+        finest = slot.bin;
+      } else {
+        bins_[static_cast<std::size_t>(level) - 1][child].parent = slot.bin;
+      }
+      if (!nearer || level + 1 == level_count) return finest;
+      child = slot.bin;
+      index = parentOf(level, index);
     }
-    return slot.bin;
   };
   for (std::vector<Bin>& bins : bins_) bins.clear();
   // Every end's bin on the finest level and its distance, and the nearest member of every finest
@@ -856,22 +882,7 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends)
   for (std::size_t i = 0; i < end_count; ++i) {
     if (i + kPrefetchAhead < end_count) direction(ends[i + kPrefetchAhead]);
     End& e = ends[i];
-    e.bin = findOrAddBin(0, e.bin, e.near);
-  }
-  // Nearest member of the coarser bins, from their children; then every bin's reach. Reach never
-  // shrinks towards the fine end of a chain because the nearest member and the level reach both
-  // grow.
-  for (int level = 1; level < level_count; ++level) {
-    std::vector<Bin>& children = bins_[static_cast<std::size_t>(level) - 1];
-    for (Bin& child : children) {
-      child.parent = findOrAddBin(level, parentOf(level - 1, child.index), child.near);
-    }
-  }
-  for (int level = 0; level < level_count; ++level) {
-    const double level_reach = 0.5 * config_.awareness.bin_width_voxels * (n0 >> level);
-    for (Bin& bin : bins_[static_cast<std::size_t>(level)]) {
-      bin.reach = std::min(bin.near, level_reach);
-    }
+    e.bin = enterBin(e.bin, e.near);
   }
   // Each bin carves the part of its members' rays between its parent's reach and its own: the
   // members' point boxes scaled so that their nearest point lies at the bin's reach. In the ray
@@ -892,7 +903,7 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends)
       continue;
     }
     Bin& bin = finest[e.bin];
-    const double s_min = bin.reach / e.near;
+    const double s_min = reachOf(0, bin) / e.near;
     const float lambda = static_cast<float>(s_min);
     bin.box.min = bin.box.min.cwiseMin(of + lambda * (e.points.min - of));
     bin.box.max = bin.box.max.cwiseMax(of + lambda * (e.points.max - of));
@@ -900,29 +911,33 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends)
     cones_.push_back({e.points, s_min});
   }
   // Scaling about o commutes with the hull, so a coarser bin's box is the hull of its children's
-  // boxes scaled from their reach to its own (in double, rounded outwards to float).
+  // boxes scaled from their reach to its own (in double, rounded outwards to float). A child's
+  // box is complete when its level is hulled into the next (its own children came before), so
+  // its cone is listed in the same pass; the coarsest level's after it. Reach never shrinks
+  // towards the fine end of a chain, because the nearest member and the level reach both grow.
   for (int level = 1; level < level_count; ++level) {
     std::vector<Bin>& bins = bins_[static_cast<std::size_t>(level)];
     for (const Bin& child : bins_[static_cast<std::size_t>(level) - 1]) {
-      Bin& bin = bins[child.parent];
-      if (!(bin.reach > 0.0) || child.box.min.x() > child.box.max.x()) continue;
-      const double f = bin.reach / child.reach;  // in (0, 1]: child.reach >= bin.reach > 0
+      if (child.box.min.x() > child.box.max.x()) continue;  // no member with a distance
+      Bin& parent = bins[child.parent];
+      const double reach = reachOf(level, parent);
+      const double child_reach = reachOf(level - 1, child);
+      if (child_reach > 0.0 && child_reach > reach)
+        cones_.push_back({child.box, reach / child_reach});
+      if (!(reach > 0.0)) continue;
+      const double f = reach / child_reach;  // in (0, 1]: child_reach >= reach > 0
       for (int k = 0; k < 3; ++k) {
         const double lo = o[k] + f * (child.box.min[k] - o[k]);
         const double hi = o[k] + f * (child.box.max[k] - o[k]);
-        bin.box.min[k] = std::min(bin.box.min[k], floatBelow(lo));
-        bin.box.max[k] = std::max(bin.box.max[k], -floatBelow(-hi));
+        parent.box.min[k] = std::min(parent.box.min[k], floatBelow(lo));
+        parent.box.max[k] = std::max(parent.box.max[k], -floatBelow(-hi));
       }
     }
   }
-  for (int level = level_count - 1; level >= 0; --level) {
-    const std::vector<Bin>* parents =
-        level + 1 < level_count ? &bins_[static_cast<std::size_t>(level) + 1] : nullptr;
-    for (const Bin& bin : bins_[static_cast<std::size_t>(level)]) {
-      if (!(bin.reach > 0.0) || bin.box.min.x() > bin.box.max.x()) continue;
-      const double parent_reach = parents != nullptr ? (*parents)[bin.parent].reach : 0.0;
-      if (bin.reach > parent_reach) cones_.push_back({bin.box, parent_reach / bin.reach});
-    }
+  for (const Bin& bin : bins_[static_cast<std::size_t>(level_count) - 1]) {
+    const double reach = reachOf(level_count - 1, bin);
+    if (!(reach > 0.0) || bin.box.min.x() > bin.box.max.x()) continue;
+    cones_.push_back({bin.box, 0.0});  // from the sensor
   }
 }
 

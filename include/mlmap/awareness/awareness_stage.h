@@ -164,8 +164,7 @@ class AwarenessStage {
     std::uint32_t index = 0;   // on its level: (face n + iu) n + iv with n bins per face side
     std::uint32_t parent = 0;  // its parent's index in the next level's bins_
     double near = 0.0;         // nearest member distance (voxel units)
-    double reach = 0.0;        // distance this bin's cone covers: min(near, level reach)
-    VoxelSpaceBox box{};       // hull of the members' boxes scaled to `reach`
+    VoxelSpaceBox box{};       // hull of the members' boxes scaled to its reach (listCones())
   };
   /// Where a bin of a level is in this frame's bins_ of that level (valid when stamped).
   struct BinSlot {
