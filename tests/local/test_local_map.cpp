@@ -59,9 +59,9 @@ struct FlightShape {
 
 /// The small window (columns of 5: every miss takes the one-voxel path), and a tall one whose
 /// columns of 75 take runs of free voxels eight at a time, across two bitset words per row,
-/// submap borders (every 15 voxels) and the torus wrap; and the tall one with the most extreme
+/// submap borders (every 15 voxels) and the torus wrap; the tall one with the most extreme
 /// sensor model the configuration allows (a miss then goes below what 16 bits hold before the
-/// clamp).
+/// clamp); and one of lower submaps.
 std::vector<FlightShape> flightShapes() {
   LocalMapConfig tall;
   tall.resolution_m = 1.0;
@@ -71,9 +71,14 @@ std::vector<FlightShape> flightShapes() {
   extreme.miss = -10.0;
   extreme.clamp_min = -30.0;
   extreme.clamp_max = 30.0;
+  // Submaps 7 voxels high: eight consecutive voxels of a run can span three submaps, whose stamps
+  // the eight-voxel miss step then sets lane by lane (the paper's 0.2 m window, 35 voxels high).
+  LocalMapConfig low = tall;
+  low.size_cells = {10, 10, 35};
   return {{"small", smallMap(), 1, 0.45},
           {"tall", tall, 40, 6.0},
-          {"tall, extreme log-odds", tall, 40, 6.0, extreme}};
+          {"tall, extreme log-odds", tall, 40, 6.0, extreme},
+          {"submaps 7 high", low, 30, 4.0}};
 }
 
 MeasurementBatch makeBatch(const Eigen::Vector3d& body, const std::vector<VoxelIndex>& hits,
