@@ -234,7 +234,7 @@ class AwarenessStage {
   std::vector<End> ends_;                               // inside the scratch box, one per voxel
   std::vector<End> outside_;  // beyond the box (the local map cannot hold them), per point
   // The second half's (listCones(), carveCones()): with collect() and carve(), carve()'s thread's.
-  std::vector<Cone> cones_;            // this frame's cones, ends first, then bins (coarse to fine)
+  std::vector<Cone> cones_;            // this frame's cones, ends first, then bins (fine to coarse)
   std::vector<double> range_scratch_;  // the cones' work per box x, for splitting it over threads
   std::vector<PointPart> parts_;       // one per thread; ends_ and outside_ merge them
   std::unique_ptr<TaskThreads> threads_;  // with awareness.num_threads > 1
