@@ -78,8 +78,9 @@ struct PointRuns {
 
 /// Splits points 0 .. n - 1 (n >= 1, at most the size `runs` was made for) into runs of equal
 /// keys[i], with each run's box of coords[4 i .. 4 i + 3]. keys and coords must be readable
-/// PointRuns::kPadding points past n. The minima and maxima are exact (the same floats in any
-/// order, for finite values). `isa` must be supported (kAvx2 only when
+/// PointRuns::kPadding points past n. The minima and maxima are exact, so both forms give the
+/// same floats for finite coordinates (a zero of either sign may come out as the other where a
+/// run holds both). `isa` must be supported (kAvx2 only when
 /// pointKernelAvx2Supported()): the AVX2 form finds run starts eight keys at a time and takes
 /// a run's box over eight points a step, without a branch per point.
 void groupPointRuns(const std::uint32_t* keys, const float* coords, std::size_t n, PointRuns* runs,
