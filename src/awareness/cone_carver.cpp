@@ -294,9 +294,9 @@ std::size_t carveAlong(const Eigen::Vector3d& origin, const Eigen::Vector3d& lo,
                        const Eigen::Vector3d& hi, double s_min, const Eigen::Vector3i& first_marked,
                        const Eigen::Vector3i& end_marked, std::uint64_t* words,
                        std::size_t stride_x, std::size_t stride_y, bool avx2) {
-  constexpr int a = A;
-  constexpr int b = (A + 1) % 3;
-  constexpr int c = (A + 2) % 3;
+  const int a = A;  // constant expressions, indexing the coordinates
+  const int b = (A + 1) % 3;
+  const int c = (A + 2) % 3;
   const bool forward = lo[a] > 0.0;
   // Along a the extent is monotonic in s: near face `na`, far face `fa` (both same sign).
   const double na = forward ? lo[a] : hi[a];

@@ -246,9 +246,8 @@ __attribute__((target("avx2"))) void classifyPointsAvx2(const PointKernel& k, co
     const __m256 y0 = _mm256_zextps128_ps256(_mm256_cvtpd_ps(b1));
     const __m256d p01 = _mm256_castps_pd(_mm256_unpacklo_ps(xz, y0));
     const __m256d p23 = _mm256_castps_pd(_mm256_unpackhi_ps(xz, y0));
-    _mm256_storeu_pd(reinterpret_cast<double*>(coords + 4 * i), _mm256_permute4x64_pd(p01, 0xD8));
-    _mm256_storeu_pd(reinterpret_cast<double*>(coords + 4 * i + 8),
-                     _mm256_permute4x64_pd(p23, 0xD8));
+    _mm256_storeu_ps(coords + 4 * i, _mm256_castpd_ps(_mm256_permute4x64_pd(p01, 0xD8)));
+    _mm256_storeu_ps(coords + 4 * i + 8, _mm256_castpd_ps(_mm256_permute4x64_pd(p23, 0xD8)));
   }
   classifyPointsImpl<true>(k, xs + i, ys + i, zs + i, n - i, keys + i, coords + 4 * i);
 }

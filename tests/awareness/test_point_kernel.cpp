@@ -303,13 +303,13 @@ TEST(PointKernel, RunGroupingMatchesTheReferenceBitForBit) {
     // Padding with values a run must never take in.
     std::vector<std::uint32_t> keys(n + PointRuns::kPadding, 0xDEADBEEFu);
     std::vector<float> coords(4 * (n + PointRuns::kPadding), -1e30f);
-    std::uint32_t key = 0;
     for (std::size_t i = 0; i < n;) {
       const int pick = std::uniform_int_distribution<int>(0, 9)(rng);
       // A new key, one of a few (so a key comes back after others), or outside the box.
-      key = pick < 6   ? std::uniform_int_distribution<std::uint32_t>(0, 1u << 30)(rng)
-            : pick < 9 ? static_cast<std::uint32_t>(pick)
-                       : specials[std::uniform_int_distribution<int>(0, 3)(rng)];
+      const std::uint32_t key =
+          pick < 6   ? std::uniform_int_distribution<std::uint32_t>(0, 1u << 30)(rng)
+          : pick < 9 ? static_cast<std::uint32_t>(pick)
+                     : specials[std::uniform_int_distribution<int>(0, 3)(rng)];
       const std::size_t len = std::min<std::size_t>(
           n - i, static_cast<std::size_t>(std::uniform_int_distribution<int>(1, max_run)(rng)));
       for (std::size_t j = 0; j < len; ++j, ++i) {
@@ -322,21 +322,21 @@ TEST(PointKernel, RunGroupingMatchesTheReferenceBitForBit) {
     }
     // The reference: runs as maximal stretches of one key, boxes by comparison.
     std::vector<std::uint32_t> want_first;
-    std::vector<float> want_box;
     for (std::size_t i = 0; i < n; ++i) {
-      if (i == 0 || keys[i] != keys[i - 1]) {
-        want_first.push_back(static_cast<std::uint32_t>(i));
-        for (int h = 0; h < 2; ++h) {
-          for (int a = 0; a < 4; ++a) want_box.push_back(coords[4 * i + a]);
-        }
-      }
-      float* box = &want_box[want_box.size() - 8];
-      for (int a = 0; a < 4; ++a) {
-        if (coords[4 * i + a] < box[a]) box[a] = coords[4 * i + a];
-        if (coords[4 * i + a] > box[4 + a]) box[4 + a] = coords[4 * i + a];
-      }
+      if (i == 0 || keys[i] != keys[i - 1]) want_first.push_back(static_cast<std::uint32_t>(i));
     }
     want_first.push_back(static_cast<std::uint32_t>(n));
+    std::vector<float> want_box(8 * (want_first.size() - 1));
+    for (std::size_t r = 0; r + 1 < want_first.size(); ++r) {
+      float* box = &want_box[8 * r];
+      for (int a = 0; a < 4; ++a) box[a] = box[4 + a] = coords[4 * want_first[r] + a];
+      for (std::size_t i = want_first[r] + 1; i < want_first[r + 1]; ++i) {
+        for (int a = 0; a < 4; ++a) {
+          if (coords[4 * i + a] < box[a]) box[a] = coords[4 * i + a];
+          if (coords[4 * i + a] > box[4 + a]) box[4 + a] = coords[4 * i + a];
+        }
+      }
+    }
     for (std::size_t r = 0; r + 1 < want_first.size(); ++r) {
       const std::uint32_t len = want_first[r + 1] - want_first[r];
       long_runs += len > 8 ? 1 : 0;
