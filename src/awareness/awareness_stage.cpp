@@ -351,18 +351,9 @@ double AwarenessStage::carve(MeasurementBatch* batch, PointCounters* counters,
   // The awareness map, where collect() left it here: beside the listing of the cones on a kept
   // thread, as in process(), when the other half does not hold them.
   double map_ms = 0.0;
-  if (!frame->map_in_carve) {
-    listCones(frame->origin_vox, frame->ends);
-  } else if (threads_ != nullptr) {
-    threads_->run(2, [&](int job) {
-      if (job == 0) {
-        listCones(frame->origin_vox, frame->ends);
-      } else {
-        map_ms = updateAwarenessMap(frame->body_W, frame->ends);
-      }
-    });
+  if (frame->map_in_carve) {
+    map_ms = mapAndListCones(frame->body_W, frame->origin_vox, frame->ends);
   } else {
-    map_ms = updateAwarenessMap(frame->body_W, frame->ends);
     listCones(frame->origin_vox, frame->ends);
   }
   // With kept threads, the carving is split over them as in process(): a kept thread that the
@@ -498,21 +489,7 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
     collected_.push_back(std::move(frame));
     return;
   }
-  if (threads_ != nullptr) {
-    // The awareness map and the cones share no state (listCones() writes only the direction
-    // fields of ends_, the map reads their points): the map is updated on a kept thread
-    // meanwhile, the same map either way.
-    threads_->run(2, [&](int job) {
-      if (job == 0) {
-        listCones(g.origin_vox, ends_);
-      } else {
-        updateAwarenessMap(T_W_B.translation(), ends_);
-      }
-    });
-  } else {
-    updateAwarenessMap(T_W_B.translation(), ends_);
-    listCones(g.origin_vox, ends_);
-  }
+  mapAndListCones(T_W_B.translation(), g.origin_vox, ends_);
   carveCones(g.origin_vox, batch);
   counters->free_voxels = batch->free_count;
 }
@@ -788,6 +765,27 @@ double AwarenessStage::updateAwarenessMap(const Eigen::Vector3d& body_W,
   map_bytes_.store(map_.memoryBytes(), std::memory_order_relaxed);
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
       .count();
+}
+
+double AwarenessStage::mapAndListCones(const Eigen::Vector3d& body_W,
+                                       const Eigen::Vector3d& origin_vox, std::vector<End>& ends) {
+  if (threads_ == nullptr) {
+    const double map_ms = updateAwarenessMap(body_W, ends);
+    listCones(origin_vox, ends);
+    return map_ms;
+  }
+  // The awareness map and the cones share no state (listCones() writes only the direction
+  // fields of the ends, the map reads their points): the map is updated on a kept thread
+  // meanwhile, the same map either way.
+  double map_ms = 0.0;
+  threads_->run(2, [&](int job) {
+    if (job == 0) {
+      listCones(origin_vox, ends);
+    } else {
+      map_ms = updateAwarenessMap(body_W, ends);
+    }
+  });
+  return map_ms;
 }
 
 void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends) {

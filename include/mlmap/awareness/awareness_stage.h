@@ -211,6 +211,10 @@ class AwarenessStage {
   /// Lists the frame's cones: those of the direction bins and of the ends (`ends`: ends_ with
   /// outside_ appended), into cones_. Writes only the direction fields (bin, near) of `ends`.
   void listCones(const Eigen::Vector3d& origin_vox, std::vector<End>& ends);
+  /// updateAwarenessMap() and listCones() of one frame, side by side on the kept threads when
+  /// there are any. Returns the map's milliseconds.
+  double mapAndListCones(const Eigen::Vector3d& body_W, const Eigen::Vector3d& origin_vox,
+                         std::vector<End>& ends);
   /// A cone to carve: the part s in [s_min, 1] of the cone from the sensor to `box`.
   struct Cone {
     VoxelSpaceBox box{};
