@@ -713,7 +713,6 @@ void AwarenessStage::collectPart(const Source& source, const FrameGeometry& g, s
     groupPointRuns(keys, part->box_coords[0].data(), n, &runs);
     const std::uint32_t* run_first = runs.first.data();
     const float* run_box = runs.box.data();
-    const std::uint32_t mask = static_cast<std::uint32_t>(table.size() - 1);
     for (std::size_t r = 0; r < runs.count; ++r) {
       const std::size_t at = run_first[r];
       const std::uint32_t key = keys[at];
@@ -725,7 +724,8 @@ void AwarenessStage::collectPart(const Source& source, const FrameGeometry& g, s
       if (key != last_key) {
         // A new end voxel or one met before: first the recent ends (L1-resident), then the
         // table. The slot of the run a few ahead is fetched meanwhile when it will be needed
-        // (a new voxel's slot is anywhere).
+        // (a new voxel's slot is anywhere). The table's size as of now: findOrAddEnd() grows it.
+        const std::uint32_t mask = static_cast<std::uint32_t>(table.size() - 1);
         if (r + kRunsAhead < runs.count) {
           const std::uint32_t ahead = keys[run_first[r + kRunsAhead]];
           if (recent[recentIndex(ahead)].key != ahead)
