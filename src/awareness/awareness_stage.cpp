@@ -1,5 +1,6 @@
 #include "mlmap/awareness/awareness_stage.h"
 
+#include "direction_bins.h"
 #include "mlmap/awareness/point_kernel.h"
 #include "task_threads.h"
 
@@ -33,7 +34,7 @@ constexpr std::uint32_t kNoRunKey = kPointOutsideCutKey - 1;
 // the surfaces OctoMap keeps) makes every free voxel about four times, two voxels wide about
 // twice, for 1.09-1.11x over-carving instead of 1.08x (three voxels wide exceed the 1.15x bound).
 // The finest level has AwarenessConfig::binsPerFaceSide() bins per cube face side (at most
-// 6 x 256^2 bins; slots 4 MB with all levels).
+// 6 x 256^2 bins, of which a frame holds only those its ends fall in).
 constexpr std::size_t kProbeAhead = 16;  // ends between a table slot's prefetch and its probe
 constexpr std::size_t kRunsAhead = 4;    // runs between a table slot's prefetch and its probe
 // Longest that collect() waits for carve() to finish the awareness maps left to it before it
@@ -203,10 +204,7 @@ AwarenessStage::AwarenessStage(const MapConfig& config)
   map_bytes_.store(map_.memoryBytes(), std::memory_order_relaxed);
   int n = config.awareness.binsPerFaceSide(config.local_map.resolution_m);
   bins_per_face_side_ = n;
-  for (; n >= 1; n /= 2) {
-    slots_.emplace_back(6u * static_cast<std::size_t>(n) * static_cast<std::size_t>(n));
-    bins_.emplace_back();
-  }
+  for (; n >= 1; n /= 2) bins_.emplace_back();
 }
 
 AwarenessStage::~AwarenessStage() = default;
@@ -789,23 +787,9 @@ double AwarenessStage::mapAndListCones(const Eigen::Vector3d& body_W,
 }
 
 void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends) {
-  // cppcheck-suppress knownConditionTrueFalse ; it does wrap after 2^32 frames
-  if (++stamp_ == 0) {  // wrapped: forget every slot
-    for (std::vector<BinSlot>& slots : slots_) std::fill(slots.begin(), slots.end(), BinSlot{});
-    stamp_ = 1;
-  }
-  // Bin index on level L with n = 2^lg bins per face side: (face n + iu) n + iv.
   const int n0 = bins_per_face_side_;
   int lg0 = 0;
   while ((1 << lg0) < n0) ++lg0;
-  auto parentOf = [&](int level, std::uint32_t i) {
-    const int lg = lg0 - level;
-    const std::uint32_t mask = (1u << lg) - 1u;
-    const std::uint32_t face = i >> (2 * lg);
-    const std::uint32_t iu = (i >> lg) & mask;
-    const std::uint32_t iv = i & mask;
-    return (face << (2 * (lg - 1))) | ((iu >> 1) << (lg - 1)) | (iv >> 1);
-  };
   const int level_count = static_cast<int>(bins_.size());
   // Level L's bins cover the distances up to its reach (where they are still about
   // bin_width_voxels wide); a bin's reach is min(its nearest member, its level's reach).
@@ -817,48 +801,12 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends)
   auto reachOf = [&](int level, const Bin& bin) {
     return std::min(bin.near, level_reach[static_cast<std::size_t>(level)]);
   };
-  // Enters a member at distance `near` into the finest bin `index` and returns that bin's place
-  // in this frame's bins_[0]. A bin met for the first time is added (empty box), and so are its
-  // ancestors not met yet; the nearest member is taken into the bin and up its chain as far as it
-  // is nearer. So each bin of the frame has its chain of ancestors, each with the nearest member
-  // of its bins, without a pass over the bins of each level.
-  auto enterBin = [&](std::uint32_t index, double near) {
-    std::uint32_t finest = 0;
-    std::uint32_t child = 0;  // the bin of the level below, in its level's bins_
-    for (int level = 0;; ++level) {
-      BinSlot& slot = slots_[static_cast<std::size_t>(level)][index];
-      std::vector<Bin>& bins = bins_[static_cast<std::size_t>(level)];
-      bool nearer = true;
-      if (slot.stamp != stamp_) {
-        slot = {stamp_, static_cast<std::uint32_t>(bins.size())};
-        Bin bin;
-        bin.index = index;
-        bin.near = near;
-        bin.box.min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
-        bin.box.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
-        bins.push_back(bin);
-      } else {
-        Bin& bin = bins[slot.bin];
-        nearer = near < bin.near;
-        bin.near = std::min(bin.near, near);
-      }
-      if (level == 0) {
-        finest = slot.bin;
-      } else {
-        bins_[static_cast<std::size_t>(level) - 1][child].parent = slot.bin;
-      }
-      if (!nearer || level + 1 == level_count) return finest;
-      child = slot.bin;
-      index = parentOf(level, index);
-    }
-  };
-  for (std::vector<Bin>& bins : bins_) bins.clear();
-  // Every end's bin on the finest level and its distance, and the nearest member of every finest
-  // bin, in one pass over the ends (5.8 MB for a LiDAR scan: each pass waits on memory): the
-  // direction of the end a few ahead is computed (into its bin field) and its slot fetched
-  // while the end at hand is entered (a LiDAR's rays mostly have a finest bin of their own, all
-  // over the 3 MB of slots).
-  auto direction = [&](End& e) {
+  // Every end's finest bin and its distance, in one pass over the ends; then the ends sorted by
+  // bin, so that each level's bins come out in index order, a bin's children next to each other
+  // (binKey()), and every level is built by one pass over the level below.
+  end_order_.resize(ends.size());
+  for (std::size_t i = 0; i < ends.size(); ++i) {
+    End& e = ends[i];
     const Eigen::Vector3d d = 0.5 * (e.points.min + e.points.max).cast<double>() - o;
     const Eigen::Vector3d m = d.cwiseAbs();
     int axis = 0;
@@ -871,16 +819,43 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends)
     const int iv =
         std::clamp(static_cast<int>((d[(axis + 2) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
     e.near = distanceToBox(o, e.points);
-    e.bin = static_cast<std::uint32_t>((face * n0 + iu) * n0 + iv);
-    __builtin_prefetch(&slots_[0][e.bin]);
+    end_order_[i] = (std::uint64_t{binKey(face, iu, iv, lg0)} << 32) | i;
+  }
+  sortByKey(3 + 2 * lg0, &end_order_, &end_order_scratch_);
+  // Level 0: a bin per run of equal keys, with its members' nearest distance; each level above:
+  // a bin per run of equal parent keys (index >> 2) of the level below, with their nearest.
+  // A bin's box starts empty; listing the cones hulls its members' into it.
+  auto newBin = [](std::uint32_t key, double near) {
+    Bin bin;
+    bin.index = key;
+    bin.near = near;
+    bin.box.min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+    bin.box.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
+    return bin;
   };
-  constexpr std::size_t kPrefetchAhead = 16;
-  const std::size_t end_count = ends.size();
-  for (std::size_t i = 0; i < std::min(kPrefetchAhead, end_count); ++i) direction(ends[i]);
-  for (std::size_t i = 0; i < end_count; ++i) {
-    if (i + kPrefetchAhead < end_count) direction(ends[i + kPrefetchAhead]);
-    End& e = ends[i];
-    e.bin = enterBin(e.bin, e.near);
+  for (std::vector<Bin>& bins : bins_) bins.clear();
+  std::vector<Bin>& finest = bins_[0];
+  for (const std::uint64_t entry : end_order_) {
+    const auto key = static_cast<std::uint32_t>(entry >> 32);
+    End& e = ends[static_cast<std::uint32_t>(entry)];
+    if (finest.empty() || finest.back().index != key) {
+      finest.push_back(newBin(key, e.near));
+    } else {
+      finest.back().near = std::min(finest.back().near, e.near);
+    }
+    e.bin = static_cast<std::uint32_t>(finest.size() - 1);
+  }
+  for (int level = 1; level < level_count; ++level) {
+    std::vector<Bin>& bins = bins_[static_cast<std::size_t>(level)];
+    for (Bin& child : bins_[static_cast<std::size_t>(level) - 1]) {
+      const std::uint32_t key = child.index >> 2;
+      if (bins.empty() || bins.back().index != key) {
+        bins.push_back(newBin(key, child.near));
+      } else {
+        bins.back().near = std::min(bins.back().near, child.near);
+      }
+      child.parent = static_cast<std::uint32_t>(bins.size() - 1);
+    }
   }
   // Each bin carves the part of its members' rays between its parent's reach and its own: the
   // members' point boxes scaled so that their nearest point lies at the bin's reach. In the ray
@@ -892,7 +867,6 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends)
   // lies in its own voxel, so a hit there needs no carving (it wins anyway). Only the float
   // rounding of the box can put a face of it on the next voxel's boundary, and the walk then
   // marked that voxel, which the ray does not reach.
-  std::vector<Bin>& finest = bins_[0];
   const Eigen::Vector3f of = o.cast<float>();
   cones_.clear();
   for (const End& e : ends) {
@@ -993,9 +967,8 @@ void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batc
 
 std::size_t AwarenessStage::carveBytes() const {
   std::size_t bins = 0;
-  for (std::size_t l = 0; l < slots_.size(); ++l) {
-    bins += slots_[l].capacity() * sizeof(BinSlot) + bins_[l].capacity() * sizeof(Bin);
-  }
+  for (const std::vector<Bin>& level : bins_) bins += level.capacity() * sizeof(Bin);
+  bins += (end_order_.capacity() + end_order_scratch_.capacity()) * sizeof(std::uint64_t);
   return bins + cones_.capacity() * sizeof(Cone) + range_scratch_.capacity() * sizeof(double);
 }
 

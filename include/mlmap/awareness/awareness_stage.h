@@ -152,7 +152,7 @@ class AwarenessStage {
     VoxelSpaceBox points{};  // bounding box of the frame's points in it (voxel units)
     Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  // first point
     bool cut = false;       // rays cut at max_range_m (free end) rather than hits
-    std::uint32_t bin = 0;  // direction: its bin on the finest level (index in bins_[0])
+    std::uint32_t bin = 0;  // direction: its bin on the finest level (place in bins_[0])
     double near = 0.0;      // distance from the sensor to `points` (voxel units)
   };
   /// The awareness map of this frame: carried obstacles, hits, then the 2D rho-z ray walks, from
@@ -161,15 +161,10 @@ class AwarenessStage {
   double updateAwarenessMap(const Eigen::Vector3d& body_W, const std::vector<End>& ends);
   /// Rays bundled by direction (a cube-map bin of one level): the shared part of their cones.
   struct Bin {
-    std::uint32_t index = 0;   // on its level: (face n + iu) n + iv with n bins per face side
+    std::uint32_t index = 0;   // on its level: binKey() of its direction (its parent's: index >> 2)
     std::uint32_t parent = 0;  // its parent's index in the next level's bins_
     double near = 0.0;         // nearest member distance (voxel units)
     VoxelSpaceBox box{};       // hull of the members' boxes scaled to its reach (listCones())
-  };
-  /// Where a bin of a level is in this frame's bins_ of that level (valid when stamped).
-  struct BinSlot {
-    std::uint32_t stamp = 0;
-    std::uint32_t bin = 0;
   };
   /// Open-addressing table: linear box index (+ cut flag) -> index in ends, valid when stamped.
   struct Slot {
@@ -265,14 +260,14 @@ class AwarenessStage {
   double collect_map_ms_ = 0.0;  // the last collect()'s map update, -1 when none (its thread)
   // The second half's state from here on (listCones(), carveCones()): with collect() and
   // carve(), on carve()'s thread only.
-  std::uint32_t stamp_ = 0;  // this frame's, in slots_
-  // Level 0: bins about two voxels wide at the maximum range; level L: 2^L times wider, covering
-  // the distances where they are still about two voxels wide. Per level, a slot for every bin
-  // and this frame's bins with members, densely in the order they were met: the passes over the
-  // bins then read memory in order rather than all over the levels (19 MB of bins for a 30 m
-  // LiDAR at 0.1 m, where almost every ray has a finest bin of its own).
-  std::vector<std::vector<BinSlot>> slots_;
+  // Level 0: bins about bin_width_voxels wide at the maximum range; level L: 2^L times wider,
+  // covering the distances where they are still about that wide. Per level, this frame's bins
+  // with members, in the order of their index (a bin's children are consecutive there), so the
+  // levels are built and read in order, with no table over all the bins of a level.
   std::vector<std::vector<Bin>> bins_;
+  // The ends by finest bin: (bin index << 32 | end), radix-sorted, and the sort's scratch.
+  std::vector<std::uint64_t> end_order_;
+  std::vector<std::uint64_t> end_order_scratch_;
   int bins_per_face_side_ = 0;  // at level 0, a power of two
   std::vector<std::uint32_t> sample_indices_;
   std::vector<float> ray_x_;                   // depth images: (u - cx) / fx per column
