@@ -150,12 +150,12 @@ MLMAP_AVX2 __m128i lastOf4(__m256d vi, __m256d at0, __m256d slope, __m256d limit
   return _mm_sub_epi32(_mm256_cvttpd_epi32(up), _mm_set1_epi32(1));
 }
 
-// Unclamped slabs i_begin.. of a cone along x (A = 0) or y (A = 1), four at a time in AVX2;
-// returns the first slab it left (fewer than four remain). Each lane computes a bound as the
-// scalar loop does (the same product and sum: no fused multiply-add, "avx2" only; the same
-// truncation), so the slabs are the same rectangles. Their z masks are made four at a time too,
-// and a rectangle of one or two rows within one word of z (nearly all) is marked by two ORs
-// with no branch; any other goes to markSlab().
+// Unclamped slabs i_begin..i_end of a cone along x (A = 0) or y (A = 1), four at a time in
+// AVX2; returns the first slab it left (i_begin for a box too big for it, else past i_end).
+// Each lane computes a bound as the scalar loop does (the same product and sum: no fused
+// multiply-add, "avx2" only; the same truncation), so the slabs are the same rectangles. Their z
+// masks are made four at a time too, and a rectangle of one or two rows within one word of z
+// (nearly all) is marked by two ORs with no branch; any other goes to markSlab().
 template <int A>
 __attribute__((target("avx2"))) int walkRunAvx2(const Walk& w, V2 first_floor, int i_begin,
                                                 int i_end, std::uint64_t* words,
@@ -182,12 +182,17 @@ __attribute__((target("avx2"))) int walkRunAvx2(const Walk& w, V2 first_floor, i
   alignas(32) std::uint64_t last_words[4];
   const double d0 = static_cast<double>(i_begin);
   __m256d vi = _mm256_setr_pd(d0, d0 + 1.0, d0 + 2.0, d0 + 3.0);
+  // The last group's lanes past i_end repeat slab i_end (marking a slab twice changes nothing),
+  // so the whole run goes four slabs at a time.
+  const __m256d last_slab = _mm256_set1_pd(static_cast<double>(i_end));
+  const __m128i last_slab_i = _mm_set1_epi32(i_end);
   int i = i_begin;
-  for (; i + 3 <= i_end; i += 4, vi = _mm256_add_pd(vi, four)) {
-    const __m128i j0 = firstOf4(vi, first_at0_b, first_slope_b, first_floor_b);
-    const __m128i k0 = firstOf4(vi, first_at0_c, first_slope_c, first_floor_c);
-    const __m128i j1 = lastOf4(vi, last_at0_b, last_slope_b, last_limit_b);
-    const __m128i k1 = lastOf4(vi, last_at0_c, last_slope_c, last_limit_c);
+  for (; i <= i_end; i += 4, vi = _mm256_add_pd(vi, four)) {
+    const __m256d vs = _mm256_min_pd(vi, last_slab);
+    const __m128i j0 = firstOf4(vs, first_at0_b, first_slope_b, first_floor_b);
+    const __m128i k0 = firstOf4(vs, first_at0_c, first_slope_c, first_floor_c);
+    const __m128i j1 = lastOf4(vs, last_at0_b, last_slope_b, last_limit_b);
+    const __m128i k1 = lastOf4(vs, last_at0_c, last_slope_c, last_limit_c);
     const __m128i r0 = A == 0 ? j0 : k0;  // rows
     const __m128i r1 = A == 0 ? j1 : k1;
     const __m128i z0 = A == 0 ? k0 : j0;  // bits
@@ -207,7 +212,8 @@ __attribute__((target("avx2"))) int walkRunAvx2(const Walk& w, V2 first_floor, i
       // Each slab's word in its first row, slab * plane + r0 * row_stride + z0 / 64, and in its
       // last, r1 - r0 (0 or 1) rows on: all four in 64 bits (the factors are non-negative and
       // below 2^32 here, as mul_epu32 takes them).
-      const __m128i slab = _mm_add_epi32(_mm_set1_epi32(i), _mm_setr_epi32(0, 1, 2, 3));
+      const __m128i slab =
+          _mm_min_epi32(_mm_add_epi32(_mm_set1_epi32(i), _mm_setr_epi32(0, 1, 2, 3)), last_slab_i);
       const __m256i first_word = _mm256_add_epi64(
           _mm256_add_epi64(_mm256_mul_epu32(_mm256_cvtepi32_epi64(slab), plane4),
                            _mm256_mul_epu32(_mm256_cvtepi32_epi64(r0), row_stride4)),
@@ -227,7 +233,7 @@ __attribute__((target("avx2"))) int walkRunAvx2(const Walk& w, V2 first_floor, i
     _mm_store_si128(reinterpret_cast<__m128i*>(c0), k0);
     _mm_store_si128(reinterpret_cast<__m128i*>(b1), j1);
     _mm_store_si128(reinterpret_cast<__m128i*>(c1), k1);
-    for (int l = 0; l < 4; ++l) {
+    for (int l = 0; l < std::min(4, i_end - i + 1); ++l) {
       if ((empty_bits >> l) & 1) continue;
       markSlab<A>(i + l, I2{b0[l], c0[l]}, I2{b1[l], c1[l]}, words, stride_x, stride_y);
     }
