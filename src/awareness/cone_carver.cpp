@@ -367,17 +367,17 @@ std::size_t carveConeIn(const Eigen::Vector3d& origin, const VoxelSpaceBox& box,
   // Per axis, the section at s spans [o + s * lo, o + s * hi].
   const Eigen::Vector3d lo = box.min.cast<double>() - origin;
   const Eigen::Vector3d hi = box.max.cast<double>() - origin;
-  // Dominant axis: the one along which the box lies entirely on one side of the origin, farthest.
-  int a = -1;
-  double best = 0.0;
+  // Dominant axis: the one along which the box lies entirely on one side of the origin, farthest
+  // (the first of equals); none when the box holds the origin on every axis. Selects, not
+  // branches: the axis changes from cone to cone.
+  double reach[3];
   for (int k = 0; k < 3; ++k) {
-    const double gap = lo[k] > 0.0 ? lo[k] : (hi[k] < 0.0 ? -hi[k] : 0.0);
-    const double reach = std::max(std::abs(lo[k]), std::abs(hi[k]));
-    if (gap > 0.0 && reach > best) {
-      best = reach;
-      a = k;
-    }
+    const bool one_side = lo[k] > 0.0 || hi[k] < 0.0;
+    reach[k] = one_side ? std::max(std::abs(lo[k]), std::abs(hi[k])) : 0.0;
   }
+  int a = reach[1] > reach[0] ? 1 : 0;
+  a = reach[2] > reach[a] ? 2 : a;
+  if (!(reach[a] > 0.0)) a = -1;
   std::uint64_t* words = free->data();
   const std::size_t stride_y = free->wordsPerRow();
   const std::size_t stride_x = stride_y * static_cast<std::size_t>(dims.y());
