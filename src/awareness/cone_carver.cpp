@@ -121,14 +121,14 @@ inline void markSlab(int i, I2 first, I2 last, std::uint64_t* words, std::size_t
   }
 }
 
-// Slab i's overlap [s_lo_free, s_hi_free] with the cone's parameter before clamping to
-// [s0, 1]; each end is monotonic in i (a sum and a product by a constant, both rounded
-// monotonically), so the slabs where neither clamps are one run.
-inline bool unclampedSlab(const Walk& w, int i) {
-  const double s_lo_free = (static_cast<double>(i) + w.off_lo - w.oa) * w.inv_fa;
-  const double s_hi_free = (static_cast<double>(i) + w.off_hi - w.oa) * w.inv_na;
-  return s_lo_free >= w.s0 && s_hi_free <= 1.0;
+// Slab i's overlap [s_lo, s_hi] with the cone's parameter before clamping to [s0, 1]; each end
+// is monotonic in i (a sum and a product by a constant, both rounded monotonically), so the
+// slabs where neither clamps are one run.
+inline V2 freeOverlap(const Walk& w, int i) {
+  return V2{(static_cast<double>(i) + w.off_lo - w.oa) * w.inv_fa,
+            (static_cast<double>(i) + w.off_hi - w.oa) * w.inv_na};
 }
+inline bool unclamped(const Walk& w, V2 s) { return s[0] >= w.s0 && s[1] <= 1.0; }
 
 #ifdef MLMAP_HAVE_AVX2_SLABS
 #define MLMAP_AVX2 __attribute__((target("avx2"), always_inline)) inline
@@ -253,10 +253,10 @@ void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std:
   const V2 eps = {kEdgeEpsilon, kEdgeEpsilon};
   const V2 one = {1.0, 1.0};
   const V2 first_floor = kClipX ? w.limit_lo : V2{0.0, 0.0};  // the first voxels marked
-  // A clamped slab: the general formula.
-  const auto clampedSlab = [&](int i) {
-    const double s_lo = std::max((static_cast<double>(i) + w.off_lo - w.oa) * w.inv_fa, w.s0);
-    const double s_hi = std::min((static_cast<double>(i) + w.off_hi - w.oa) * w.inv_na, 1.0);
+  // A clamped slab (its overlap `s` before clamping): the general formula.
+  const auto clampedSlab = [&](int i, V2 s) {
+    const double s_lo = std::max(s[0], w.s0);
+    const double s_hi = std::min(s[1], 1.0);
     if (!(s_lo <= s_hi)) return;
     const V2 lo_s = {s_lo, s_lo};
     const V2 hi_s = {s_hi, s_hi};
@@ -267,10 +267,19 @@ void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std:
     markSlab<A>(i, __builtin_convertvector(low, I2), -__builtin_convertvector(high, I2) - 1, words,
                 stride_x, stride_y);
   };
+  // The clamped slabs before the run and after it, each marked where the search meets it.
   int run_begin = i_begin;
-  while (run_begin <= i_end && !unclampedSlab(w, run_begin)) clampedSlab(run_begin++);
+  for (; run_begin <= i_end; ++run_begin) {
+    const V2 s = freeOverlap(w, run_begin);
+    if (unclamped(w, s)) break;
+    clampedSlab(run_begin, s);
+  }
   int run_end = i_end;
-  while (run_end >= run_begin && !unclampedSlab(w, run_end)) --run_end;
+  for (; run_end >= run_begin; --run_end) {
+    const V2 s = freeOverlap(w, run_end);
+    if (unclamped(w, s)) break;
+    clampedSlab(run_end, s);
+  }
   int i_scalar = run_begin;
 #ifdef MLMAP_HAVE_AVX2_SLABS
   if constexpr (A != 2) {
@@ -288,7 +297,6 @@ void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std:
     const V2 x_last = vmax(vmin(w.last_at0 + vi * w.last_slope, w.last_limit), -one) + one;
     markSlab<A>(i, first, __builtin_convertvector(x_last, I2) - 1, words, stride_x, stride_y);
   }
-  for (int i = std::max(run_end + 1, run_begin); i <= i_end; ++i) clampedSlab(i);
 }
 
 // The cone along its dominant axis A (the box lies on one side of the origin along A): its
