@@ -59,14 +59,25 @@ inline std::uint32_t recentIndex(std::uint32_t key) {
 
 // VoxelBitset::count() with the popcnt instruction where the CPU has it: the portable build
 // calls libgcc's __popcountdi2 for every word (2 M instructions per frame at 0.1 m).
-// Counts the set bits of the rows with box x in [x_begin, x_end) within `rows`.
-MLMAP_POPCNT_CLONES std::size_t countBits(const VoxelBitset& bits, int x_begin, int x_end,
+// Counts the set bits of the rows with box x in [x_begin, x_end) within `rows`, and writes the
+// bitset's rowsInUse() words of those x (every word: rows outside `rows` hold no bit).
+MLMAP_POPCNT_CLONES std::size_t countBits(VoxelBitset& bits, int x_begin, int x_end,
                                           const VoxelBitset::Rows& rows) {
-  const std::size_t run = static_cast<std::size_t>(rows.y_end - rows.y_begin) * bits.wordsPerRow();
+  const std::size_t per_row = bits.wordsPerRow();
   std::size_t n = 0;
-  for (int x = std::max(x_begin, rows.x_begin); x < std::min(x_end, rows.x_end); ++x) {
+  for (int x = std::max(x_begin, 0); x < std::min(x_end, bits.dims().x()); ++x) {
+    std::uint64_t* in_use = bits.rowsInUse(x);
+    std::fill(in_use, in_use + bits.rowsInUseWordsPerX(), std::uint64_t{0});
+    if (x < rows.x_begin || x >= rows.x_end) continue;
     const std::uint64_t* w = bits.data() + bits.rowWord(x, rows.y_begin);
-    for (std::size_t i = 0; i < run; ++i) n += static_cast<std::size_t>(__builtin_popcountll(w[i]));
+    for (int y = rows.y_begin; y < rows.y_end; ++y, w += per_row) {
+      std::uint64_t any = 0;
+      for (std::size_t i = 0; i < per_row; ++i) {
+        n += static_cast<std::size_t>(__builtin_popcountll(w[i]));
+        any |= w[i];
+      }
+      in_use[y >> 6] |= static_cast<std::uint64_t>(any != 0) << (y & 63);
+    }
   }
   return n;
 }
@@ -951,6 +962,7 @@ void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batc
   batch->free.setMarkedRows(conesRows(o, cones_));
   if (threads == 1 || cones_.size() < 2 * static_cast<std::size_t>(threads)) {
     carveRange(o, 0, dim_x, batch, &batch->free_count);
+    batch->free.setRowsInUseValid();
     return;
   }
   // Each thread owns a range of box x: it marks only there, so no two write the same word and
@@ -963,6 +975,7 @@ void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batc
     carveRange(o, borders[ut], borders[ut + 1], batch, &counts[ut]);
   });
   batch->free_count = std::accumulate(counts.begin(), counts.end(), std::size_t{0});
+  batch->free.setRowsInUseValid();  // the ranges cover every box x
 }
 
 std::size_t AwarenessStage::carveBytes() const {

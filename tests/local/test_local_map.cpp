@@ -81,17 +81,33 @@ std::vector<FlightShape> flightShapes() {
           {"submaps 7 high", low, 30, 4.0}};
 }
 
+/// A batch of these hits and misses. The free set's box has rows of three words and three words
+/// of rows in use per x (the window's y straddles the first boundary); with `list_rows_in_use`
+/// its rows in use are listed (VoxelBitset::rowsInUse(), as the awareness stage lists them), so
+/// that the local map reads only those rows, else it reads every row.
 MeasurementBatch makeBatch(const Eigen::Vector3d& body, const std::vector<VoxelIndex>& hits,
-                           const std::vector<VoxelIndex>& frees) {
+                           const std::vector<VoxelIndex>& frees, bool list_rows_in_use = false) {
   MeasurementBatch b;
   b.T_W_B.translation() = body;
-  const VoxelIndex origin = voxelIndexOf(body, 1.0) - VoxelIndex(20, 20, 80);
-  b.free.reset(origin, Eigen::Vector3i(41, 41, 161));  // rows of three words
+  const VoxelIndex origin = voxelIndexOf(body, 1.0) - VoxelIndex(20, 66, 80);
+  b.free.reset(origin, Eigen::Vector3i(41, 133, 161));
   for (const VoxelIndex& h : hits) b.hits.push_back({h, h.cast<double>()});
   for (const VoxelIndex& f : frees) {
     const VoxelIndex r = f - origin;
     if (b.free.contains(r.x(), r.y(), r.z()) && !b.free.testAndSet(r.x(), r.y(), r.z()))
       ++b.free_count;
+  }
+  if (list_rows_in_use) {
+    for (int i = 0; i < b.free.dims().x(); ++i) {
+      std::uint64_t* in_use = b.free.rowsInUse(i);
+      std::fill(in_use, in_use + b.free.rowsInUseWordsPerX(), std::uint64_t{0});
+      for (int j = 0; j < b.free.dims().y(); ++j) {
+        const std::uint64_t* row = b.free.data() + b.free.rowWord(i, j);
+        if (std::any_of(row, row + b.free.wordsPerRow(), [](std::uint64_t w) { return w != 0; }))
+          in_use[j / 64] |= std::uint64_t{1} << (j % 64);
+      }
+    }
+    b.free.setRowsInUseValid();
   }
   return b;
 }
@@ -183,7 +199,7 @@ void flyAgainstAWholeWorldReference(const FlightShape& shape) {
         if (seen.insert(test::key(f)).second) frees.push_back(f);
       }
     }
-    map.integrate(makeBatch(body, hits, frees));
+    map.integrate(makeBatch(body, hits, frees, /*list_rows_in_use=*/frame % 2 == 1));
     for (const auto& v : hits) hits_outside += map.contains(v) ? 0 : 1;
     for (const auto& v : frees) outside += map.contains(v) ? 0 : 1;
     for (const auto& h : hits) {

@@ -223,7 +223,7 @@ class AwarenessStage {
   [[nodiscard]] std::size_t carveBytes() const;
   /// The part of carveCones() with box x in [x_begin, x_end): marks the cones' voxels there,
   /// clears the hits there and counts the free voxels there into `free_count`. Writes only the
-  /// bitset's rows of that range.
+  /// bitset's rows of that range and their rowsInUse() words.
   void carveRange(const Eigen::Vector3d& origin_vox, int x_begin, int x_end,
                   MeasurementBatch* batch, std::size_t* free_count) const;
 

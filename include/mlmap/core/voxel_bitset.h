@@ -16,18 +16,23 @@ namespace mlmap {
 class VoxelBitset {
  public:
   /// Resizes to the box and clears every bit; memory is reused between frames. When the size
-  /// stays, only the rows of the marked rectangle (markedRows()) are cleared: the others hold
-  /// no set bit. Afterwards the marked rectangle is the whole box again.
+  /// stays, only the rows in use (rowsInUse(), when valid) or else the rows of the marked
+  /// rectangle (markedRows()) are cleared: the others hold no set bit. Afterwards the marked
+  /// rectangle is the whole box again and the rows in use are not known.
   void reset(const VoxelIndex& origin, const Eigen::Vector3i& dims) {
     const std::size_t words_per_row = static_cast<std::size_t>((dims.z() + 63) / 64);
     const std::size_t words =
         static_cast<std::size_t>(dims.x()) * static_cast<std::size_t>(dims.y()) * words_per_row;
     if (dims == dims_ && bits_.size() == words && rows_.valid(dims)) {
-      for (int i = rows_.x_begin; i < rows_.x_end; ++i) {
-        std::uint64_t* first = bits_.data() + rowWord(i, rows_.y_begin);
-        std::fill(first,
-                  first + static_cast<std::size_t>(rows_.y_end - rows_.y_begin) * words_per_row_,
-                  std::uint64_t{0});
+      if (rows_in_use_valid_) {
+        clearRowsInUse();
+      } else {
+        for (int i = rows_.x_begin; i < rows_.x_end; ++i) {
+          std::uint64_t* first = bits_.data() + rowWord(i, rows_.y_begin);
+          std::fill(first,
+                    first + static_cast<std::size_t>(rows_.y_end - rows_.y_begin) * words_per_row_,
+                    std::uint64_t{0});
+        }
       }
     } else {
       bits_.assign(words, 0);
@@ -36,6 +41,9 @@ class VoxelBitset {
     dims_ = dims;
     words_per_row_ = words_per_row;
     rows_ = {0, dims.x(), 0, dims.y()};
+    in_use_words_per_x_ = static_cast<std::size_t>((dims.y() + 63) / 64);
+    rows_in_use_.resize(static_cast<std::size_t>(dims.x()) * in_use_words_per_x_);
+    rows_in_use_valid_ = false;
   }
 
   /// A rectangle of (i, j) rows, [x_begin, x_end) x [y_begin, y_end), box-relative.
@@ -56,11 +64,30 @@ class VoxelBitset {
   /// Declares that no bit outside `rows` is set (clamped to the box); the caller's promise,
   /// which reset() relies on to clear only those rows.
   void setMarkedRows(const Rows& rows) {
+    rows_in_use_valid_ = false;
     rows_.x_begin = std::clamp(rows.x_begin, 0, dims_.x());
     rows_.x_end = std::clamp(rows.x_end, rows_.x_begin, dims_.x());
     rows_.y_begin = std::clamp(rows.y_begin, 0, dims_.y());
     rows_.y_end = std::clamp(rows.y_end, rows_.y_begin, dims_.y());
   }
+
+  /// Which (i, j) rows hold a set bit, one bit a row: bit j & 63 of word j / 64 of row i's
+  /// rowsInUseWordsPerX() words. Written by whoever counts the bits (the awareness stage, every
+  /// word of every i), who then declares it with setRowsInUseValid(); setMarkedRows(),
+  /// testAndSet() and reset() make it unknown again. Readers use it only while valid: a row
+  /// whose bit is clear holds no set bit, so they skip it; reset() then clears only those rows.
+  [[nodiscard]] std::uint64_t* rowsInUse(int i) {
+    return rows_in_use_.data() + static_cast<std::size_t>(i) * in_use_words_per_x_;
+  }
+  [[nodiscard]] const std::uint64_t* rowsInUse(int i) const {
+    return rows_in_use_.data() + static_cast<std::size_t>(i) * in_use_words_per_x_;
+  }
+  /// Words of rowsInUse() per i: (dims.y + 63) / 64.
+  [[nodiscard]] std::size_t rowsInUseWordsPerX() const { return in_use_words_per_x_; }
+  /// Declares rowsInUse() written for every i: each set bit of the box lies in a row marked there.
+  void setRowsInUseValid() { rows_in_use_valid_ = true; }
+  /// True between setRowsInUseValid() and the next setMarkedRows(), testAndSet() or reset().
+  [[nodiscard]] bool rowsInUseValid() const { return rows_in_use_valid_; }
 
   /// First voxel of the box (world index).
   [[nodiscard]] const VoxelIndex& origin() const { return origin_; }
@@ -78,6 +105,7 @@ class VoxelBitset {
   }
   /// Sets a bit (must be inside); returns its previous value.
   bool testAndSet(int i, int j, int k) {
+    rows_in_use_valid_ = false;
     std::uint64_t& w = bits_[word(i, j, k)];
     const std::uint64_t mask = std::uint64_t{1} << (k & 63);
     const bool was = (w & mask) != 0;
@@ -121,9 +149,25 @@ class VoxelBitset {
     return n;
   }
   /// Bytes held.
-  [[nodiscard]] std::size_t memoryBytes() const { return bits_.capacity() * sizeof(std::uint64_t); }
+  [[nodiscard]] std::size_t memoryBytes() const {
+    return (bits_.capacity() + rows_in_use_.capacity()) * sizeof(std::uint64_t);
+  }
 
  private:
+  // Clears the rows marked in rowsInUse() (of the marked rectangle's i, where they all lie).
+  void clearRowsInUse() {
+    for (int i = rows_.x_begin; i < rows_.x_end; ++i) {
+      const std::uint64_t* in_use = rowsInUse(i);
+      for (std::size_t w = 0; w < in_use_words_per_x_; ++w) {
+        for (std::uint64_t rows = in_use[w]; rows != 0; rows &= rows - 1) {
+          const int j = static_cast<int>(w * 64) + __builtin_ctzll(rows);
+          std::uint64_t* row = bits_.data() + rowWord(i, j);
+          std::fill(row, row + words_per_row_, std::uint64_t{0});
+        }
+      }
+    }
+  }
+
   [[nodiscard]] std::size_t word(int i, int j, int k) const {
     return rowWord(i, j) + static_cast<std::size_t>(k >> 6);
   }
@@ -132,7 +176,10 @@ class VoxelBitset {
   Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
   std::size_t words_per_row_ = 0;
   std::vector<std::uint64_t> bits_;
-  Rows rows_;  ///< no bit set outside (markedRows())
+  Rows rows_;                               ///< no bit set outside (markedRows())
+  std::vector<std::uint64_t> rows_in_use_;  ///< rowsInUse()
+  std::size_t in_use_words_per_x_ = 0;
+  bool rows_in_use_valid_ = false;
 };
 
 }  // namespace mlmap
