@@ -283,7 +283,8 @@ void walkSlabs(const Walk& w, int i_begin, int i_end, std::uint64_t* words, std:
   int i_scalar = run_begin;
 #ifdef MLMAP_HAVE_AVX2_SLABS
   if constexpr (A != 2) {
-    if (avx2)
+    // Runs of four slabs or more: a shorter one costs less than the walk's set-up in scalar.
+    if (avx2 && run_end - run_begin >= 3)
       i_scalar = walkRunAvx2<A>(w, first_floor, run_begin, run_end, words, stride_x, stride_y);
   }
 #endif
