@@ -61,9 +61,11 @@ inline std::uint32_t recentIndex(std::uint32_t key) {
 // calls libgcc's __popcountdi2 for every word (2 M instructions per frame at 0.1 m).
 // Counts the set bits of the rows with box x in [x_begin, x_end) within `rows`, and writes the
 // bitset's rowsInUse() words of those x (every word: rows outside `rows` hold no bit).
-MLMAP_POPCNT_CLONES std::size_t countBits(VoxelBitset& bits, int x_begin, int x_end,
-                                          const VoxelBitset::Rows& rows) {
-  const std::size_t per_row = bits.wordsPerRow();
+// Rows of `per_row` words (a constant for the common widths, so the row loop unrolls).
+template <std::size_t kPerRow>
+MLMAP_POPCNT_CLONES std::size_t countBitsOf(VoxelBitset& bits, int x_begin, int x_end,
+                                            const VoxelBitset::Rows& rows, std::size_t per_row) {
+  if constexpr (kPerRow != 0) per_row = kPerRow;
   std::size_t n = 0;
   for (int x = std::max(x_begin, 0); x < std::min(x_end, bits.dims().x()); ++x) {
     std::uint64_t* in_use = bits.rowsInUse(x);
@@ -80,6 +82,20 @@ MLMAP_POPCNT_CLONES std::size_t countBits(VoxelBitset& bits, int x_begin, int x_
     }
   }
   return n;
+}
+
+std::size_t countBits(VoxelBitset& bits, int x_begin, int x_end, const VoxelBitset::Rows& rows) {
+  const std::size_t per_row = bits.wordsPerRow();
+  switch (per_row) {
+    case 1:
+      return countBitsOf<1>(bits, x_begin, x_end, rows, per_row);
+    case 2:
+      return countBitsOf<2>(bits, x_begin, x_end, rows, per_row);
+    case 4:
+      return countBitsOf<4>(bits, x_begin, x_end, rows, per_row);
+    default:
+      return countBitsOf<0>(bits, x_begin, x_end, rows, per_row);
+  }
 }
 
 // The rows that the cones can mark: each cone's part s in [s_min, 1] lies between its sections
