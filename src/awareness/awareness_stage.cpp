@@ -2,6 +2,7 @@
 
 #include "direction_bins.h"
 #include "mlmap/awareness/point_kernel.h"
+#include "mlmap/core/stopwatch.h"
 #include "task_threads.h"
 
 #include <algorithm>
@@ -373,13 +374,16 @@ double AwarenessStage::carve(MeasurementBatch* batch, PointCounters* counters,
     collected_.pop_front();
   }
   batch->free.reset(frame->box_origin, frame->dims);
+  // The frame's direction bins, where collect() entered its ends into them: into bins_, whose
+  // memory goes back with the frame for a later collect() to fill.
+  if (frame->bins_entered) bins_.swap(frame->bins);
   // The awareness map, where collect() left it here: beside the listing of the cones on a kept
   // thread, as in process(), when the other half does not hold them.
   double map_ms = 0.0;
   if (frame->map_in_carve) {
-    map_ms = mapAndListCones(frame->body_W, frame->origin_vox, frame->ends);
+    map_ms = mapAndListCones(frame->body_W, frame->origin_vox, frame->ends, frame->bins_entered);
   } else {
-    listCones(frame->origin_vox, frame->ends);
+    listCones(frame->origin_vox, frame->ends, frame->bins_entered);
   }
   // With kept threads, the carving is split over them as in process(): a kept thread that the
   // other half's point loop does not hold (it waits for a core meanwhile, or finds the carving's
@@ -495,6 +499,15 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
     }
     collect_map_ms_ = -1.0;
     if (!map_in_carve) collect_map_ms_ = updateAwarenessMap(T_W_B.translation(), ends_);
+    // The first pass of the cone listing here when placeBinEntry() asks for it, into this
+    // half's own bin slots (carve() may be entering an earlier frame's ends into its own).
+    collect_bins_ms_ = 0.0;
+    const bool bins_entered = bins_in_collect_;
+    if (bins_entered) {
+      const SteadyClock::time_point start = SteadyClock::now();
+      enterBins(g.origin_vox, ends_, &collect_order_, &collect_order_scratch_, &collect_bins_);
+      collect_bins_ms_ = msSince(start);
+    }
     // The second half waits for carve() (maybe on another thread) with the frame's ends; ends_
     // takes a spare one's memory.
     std::lock_guard<std::mutex> lock(collected_mutex_);
@@ -508,13 +521,15 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
     frame->ends.swap(ends_);
     frame->body_W = T_W_B.translation();
     frame->map_in_carve = map_in_carve;
+    frame->bins_entered = bins_entered;
+    if (bins_entered) frame->bins.swap(collect_bins_);
     frame->origin_vox = g.origin_vox;
     frame->box_origin = g.box_origin;
     frame->dims = g.dims;
     collected_.push_back(std::move(frame));
     return;
   }
-  mapAndListCones(T_W_B.translation(), g.origin_vox, ends_);
+  mapAndListCones(T_W_B.translation(), g.origin_vox, ends_, /*bins_entered=*/false);
   carveCones(g.origin_vox, batch);
   counters->free_voxels = batch->free_count;
 }
@@ -793,10 +808,11 @@ double AwarenessStage::updateAwarenessMap(const Eigen::Vector3d& body_W,
 }
 
 double AwarenessStage::mapAndListCones(const Eigen::Vector3d& body_W,
-                                       const Eigen::Vector3d& origin_vox, std::vector<End>& ends) {
+                                       const Eigen::Vector3d& origin_vox, std::vector<End>& ends,
+                                       bool bins_entered) {
   if (threads_ == nullptr) {
     const double map_ms = updateAwarenessMap(body_W, ends);
-    listCones(origin_vox, ends);
+    listCones(origin_vox, ends, bins_entered);
     return map_ms;
   }
   // The awareness map and the cones share no state (listCones() writes only the direction
@@ -805,7 +821,7 @@ double AwarenessStage::mapAndListCones(const Eigen::Vector3d& body_W,
   double map_ms = 0.0;
   threads_->run(2, [&](int job) {
     if (job == 0) {
-      listCones(origin_vox, ends);
+      listCones(origin_vox, ends, bins_entered);
     } else {
       map_ms = updateAwarenessMap(body_W, ends);
     }
@@ -813,25 +829,17 @@ double AwarenessStage::mapAndListCones(const Eigen::Vector3d& body_W,
   return map_ms;
 }
 
-void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends) {
+void AwarenessStage::enterBins(const Eigen::Vector3d& o, std::vector<End>& ends,
+                               std::vector<std::uint64_t>* order,
+                               std::vector<std::uint64_t>* order_scratch,
+                               std::vector<std::vector<Bin>>* bin_levels) const {
   const int n0 = bins_per_face_side_;
   int lg0 = 0;
   while ((1 << lg0) < n0) ++lg0;
-  const int level_count = static_cast<int>(bins_.size());
-  // Level L's bins cover the distances up to its reach (where they are still about
-  // bin_width_voxels wide); a bin's reach is min(its nearest member, its level's reach).
-  std::array<double, 32> level_reach{};
-  for (int level = 0; level < level_count; ++level) {
-    level_reach[static_cast<std::size_t>(level)] =
-        0.5 * config_.awareness.bin_width_voxels * (n0 >> level);
-  }
-  auto reachOf = [&](int level, const Bin& bin) {
-    return std::min(bin.near, level_reach[static_cast<std::size_t>(level)]);
-  };
   // Every end's finest bin and its distance, in one pass over the ends; then the ends sorted by
   // bin, so that each level's bins come out in index order, a bin's children next to each other
   // (binKey()), and every level is built by one pass over the level below.
-  end_order_.resize(ends.size());
+  order->resize(ends.size());
   for (std::size_t i = 0; i < ends.size(); ++i) {
     End& e = ends[i];
     const Eigen::Vector3d d = 0.5 * (e.points.min + e.points.max).cast<double>() - o;
@@ -846,9 +854,9 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends)
     const int iv =
         std::clamp(static_cast<int>((d[(axis + 2) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
     e.near = distanceToBox(o, e.points);
-    end_order_[i] = (std::uint64_t{binKey(face, iu, iv, lg0)} << 32) | i;
+    (*order)[i] = (std::uint64_t{binKey(face, iu, iv, lg0)} << 32) | i;
   }
-  sortByKey(3 + 2 * lg0, &end_order_, &end_order_scratch_);
+  sortByKey(3 + 2 * lg0, order, order_scratch);
   // Level 0: a bin per run of equal keys, with its members' nearest distance; each level above:
   // a bin per run of equal parent keys (index >> 2) of the level below, with their nearest.
   // A bin's box starts empty; listing the cones hulls its members' into it.
@@ -860,9 +868,11 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends)
     bin.box.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
     return bin;
   };
-  for (std::vector<Bin>& bins : bins_) bins.clear();
-  std::vector<Bin>& finest = bins_[0];
-  for (const std::uint64_t entry : end_order_) {
+  std::vector<std::vector<Bin>>& levels = *bin_levels;
+  levels.resize(static_cast<std::size_t>(lg0) + 1);  // n0, n0 / 2, .., 1 bins a face side
+  for (std::vector<Bin>& bins : levels) bins.clear();
+  std::vector<Bin>& finest = levels[0];
+  for (const std::uint64_t entry : *order) {
     const auto key = static_cast<std::uint32_t>(entry >> 32);
     End& e = ends[static_cast<std::uint32_t>(entry)];
     if (finest.empty() || finest.back().index != key) {
@@ -872,9 +882,9 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends)
     }
     e.bin = static_cast<std::uint32_t>(finest.size() - 1);
   }
-  for (int level = 1; level < level_count; ++level) {
-    std::vector<Bin>& bins = bins_[static_cast<std::size_t>(level)];
-    for (Bin& child : bins_[static_cast<std::size_t>(level) - 1]) {
+  for (std::size_t level = 1; level < levels.size(); ++level) {
+    std::vector<Bin>& bins = levels[level];
+    for (Bin& child : levels[level - 1]) {
       const std::uint32_t key = child.index >> 2;
       if (bins.empty() || bins.back().index != key) {
         bins.push_back(newBin(key, child.near));
@@ -884,6 +894,28 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends)
       child.parent = static_cast<std::uint32_t>(bins.size() - 1);
     }
   }
+}
+
+void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends,
+                               bool bins_entered) {
+  carve_bins_ms_ = 0.0;
+  if (!bins_entered) {
+    const SteadyClock::time_point start = SteadyClock::now();
+    enterBins(o, ends, &end_order_, &end_order_scratch_, &bins_);
+    carve_bins_ms_ = msSince(start);
+  }
+  const int n0 = bins_per_face_side_;
+  const int level_count = static_cast<int>(bins_.size());
+  // Level L's bins cover the distances up to its reach (where they are still about
+  // bin_width_voxels wide); a bin's reach is min(its nearest member, its level's reach).
+  std::array<double, 32> level_reach{};
+  for (int level = 0; level < level_count; ++level) {
+    level_reach[static_cast<std::size_t>(level)] =
+        0.5 * config_.awareness.bin_width_voxels * (n0 >> level);
+  }
+  auto reachOf = [&](int level, const Bin& bin) {
+    return std::min(bin.near, level_reach[static_cast<std::size_t>(level)]);
+  };
   // Each bin carves the part of its members' rays between its parent's reach and its own: the
   // members' point boxes scaled so that their nearest point lies at the bin's reach. In the ray
   // parameter u of a member (point = o + u (p - o)), the parent covers u <= parent_reach / near
@@ -894,6 +926,7 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends)
   // lies in its own voxel, so a hit there needs no carving (it wins anyway). Only the float
   // rounding of the box can put a face of it on the next voxel's boundary, and the walk then
   // marked that voxel, which the ray does not reach.
+  std::vector<Bin>& finest = bins_[0];
   const Eigen::Vector3f of = o.cast<float>();
   cones_.clear();
   for (const End& e : ends) {
@@ -1005,10 +1038,13 @@ std::size_t AwarenessStage::memoryBytes() const {
   std::size_t bins = carve_bytes_.load(std::memory_order_relaxed);
   {
     std::lock_guard<std::mutex> lock(collected_mutex_);
-    for (const std::unique_ptr<CollectedFrame>& f : collected_)
-      bins += f->ends.capacity() * sizeof(End);
-    for (const std::unique_ptr<CollectedFrame>& f : spare_)
-      bins += f->ends.capacity() * sizeof(End);
+    const auto frameBytes = [](const CollectedFrame& f) {
+      std::size_t n = f.ends.capacity() * sizeof(End);
+      for (const std::vector<Bin>& level : f.bins) n += level.capacity() * sizeof(Bin);
+      return n;
+    };
+    for (const std::unique_ptr<CollectedFrame>& f : collected_) bins += frameBytes(*f);
+    for (const std::unique_ptr<CollectedFrame>& f : spare_) bins += frameBytes(*f);
   }
   for (const PointPart& p : parts_) {
     bins += sizeof(p.recent) + p.table.capacity() * sizeof(Slot) +
@@ -1018,6 +1054,8 @@ std::size_t AwarenessStage::memoryBytes() const {
             p.block_xyz.capacity() * sizeof(float) +
             p.runs.first.capacity() * sizeof(std::uint32_t) + p.runs.box.capacity() * sizeof(float);
   }
+  bins += (collect_order_.capacity() + collect_order_scratch_.capacity()) * sizeof(std::uint64_t);
+  for (const std::vector<Bin>& level : collect_bins_) bins += level.capacity() * sizeof(Bin);
   return bins + map_bytes_.load(std::memory_order_relaxed) + ends_.capacity() * sizeof(End) +
          outside_.capacity() * sizeof(End) + sample_indices_.capacity() * sizeof(std::uint32_t);
 }

@@ -133,17 +133,30 @@ TEST(TaskThreads, RethrowsAJobsExceptionAfterAllReturned) {
 // while frame k + 1 is collected on another, in a ring of batches (with two threads both halves
 // ask the one kept thread for help), the awareness map updated by collect(), by carve(), or by
 // either in turn (a frame whose map goes back to collect() waits for the carving of the one
-// before, or, past the wait's bound, leaves it to carve() too). Each batch is then what process()
-// makes of its frame, bit for bit, and so is the awareness map; carve() hands the map to its
-// observer exactly for the frames whose map collect() left to it.
+// before, or, past the wait's bound, leaves it to carve() too), and the ends entered into their
+// direction bins by carve(), by collect() or by either in turn (collect() entering frame k + 1's
+// while carve() enters frame k's). Each batch is then what process() makes of its frame, bit for
+// bit, and so is the awareness map; carve() hands the map to its observer exactly for the frames
+// whose map collect() left to it.
 TEST(AwarenessStage, HalvesOnTwoThreadsCarveWhatProcessCarves) {
   enum class Place { kCollect, kCarve, kAlternate };
-  for (const auto& [threads, place] :
-       {std::pair{1, Place::kCollect}, std::pair{2, Place::kCollect}, std::pair{1, Place::kCarve},
-        std::pair{2, Place::kCarve}, std::pair{1, Place::kAlternate},
-        std::pair{2, Place::kAlternate}}) {
+  struct Case {
+    int threads;
+    Place map;   // the awareness map's half
+    Place bins;  // the half that enters the ends into their direction bins
+  };
+  for (const auto& [threads, place, bins_place] :
+       {Case{1, Place::kCollect, Place::kCarve}, Case{2, Place::kCollect, Place::kCarve},
+        Case{1, Place::kCarve, Place::kCarve}, Case{2, Place::kCarve, Place::kCarve},
+        Case{1, Place::kAlternate, Place::kCarve}, Case{2, Place::kAlternate, Place::kCarve},
+        Case{1, Place::kCollect, Place::kCollect}, Case{2, Place::kCarve, Place::kCollect},
+        Case{1, Place::kAlternate, Place::kAlternate},
+        Case{2, Place::kAlternate, Place::kAlternate}}) {
     const auto inCarve = [place = place](std::size_t k) {
       return place == Place::kCarve || (place == Place::kAlternate && k % 3 != 0);
+    };
+    const auto binsInCollect = [bins_place = bins_place](std::size_t k) {
+      return bins_place == Place::kCollect || (bins_place == Place::kAlternate && k % 2 == 1);
     };
     MapConfig config = testConfig(0.1);
     AwarenessStage reference(config);
@@ -160,20 +173,26 @@ TEST(AwarenessStage, HalvesOnTwoThreadsCarveWhatProcessCarves) {
     std::array<PointCounters, 3> counters;
     std::vector<bool> map_in_carve(frames.size(), false);  // what collect() did
     split.placeAwarenessMap(inCarve(0));
+    split.placeBinEntry(binsInCollect(0));
     split.collect(frames[0], &ring[0], &counters[0]);
+    EXPECT_EQ(split.lastCollectBinsMs() > 0.0, binsInCollect(0));
     map_in_carve[0] = !split.lastCollectUpdatedMap();
     EXPECT_EQ(map_in_carve[0], inCarve(0));  // nothing to wait for
     for (std::size_t k = 0; k < frames.size(); ++k) {
       MeasurementBatch& b = ring[k % 3];
       int maps_observed = 0;
       double map_ms = -1.0;
+      double carve_bins_ms = -1.0;
       std::thread carver([&] {
         map_ms = split.carve(&b, &counters[k % 3], [&](const AwarenessMap&) { ++maps_observed; });
+        carve_bins_ms = split.lastCarveBinsMs();
       });
       if (k + 1 < frames.size()) {
         counters[(k + 1) % 3] = PointCounters{};
         split.placeAwarenessMap(inCarve(k + 1));
+        split.placeBinEntry(binsInCollect(k + 1));
         split.collect(frames[k + 1], &ring[(k + 1) % 3], &counters[(k + 1) % 3]);
+        EXPECT_EQ(split.lastCollectBinsMs() > 0.0, binsInCollect(k + 1)) << "frame " << k + 1;
         map_in_carve[k + 1] = !split.lastCollectUpdatedMap();
         // Left to carve() when asked; the other way, only while an earlier frame's map waited.
         if (inCarve(k + 1) || !map_in_carve[k]) {
@@ -181,6 +200,7 @@ TEST(AwarenessStage, HalvesOnTwoThreadsCarveWhatProcessCarves) {
         }
       }
       carver.join();
+      EXPECT_EQ(carve_bins_ms > 0.0, !binsInCollect(k)) << "frame " << k;
       EXPECT_EQ(maps_observed, map_in_carve[k] ? 1 : 0) << "frame " << k;
       EXPECT_EQ(map_ms > 0.0, map_in_carve[k]) << "frame " << k;
       MeasurementBatch a;
@@ -194,7 +214,8 @@ TEST(AwarenessStage, HalvesOnTwoThreadsCarveWhatProcessCarves) {
       std::size_t differing = 0;
       for (std::size_t w = 0; w < words; ++w)
         differing += a.free.data()[w] != b.free.data()[w] ? 1 : 0;
-      EXPECT_EQ(differing, 0u) << threads << " threads, frame " << k;
+      EXPECT_EQ(differing, 0u) << threads << " threads, frame " << k << ", bins entered by "
+                               << (binsInCollect(k) ? "collect()" : "carve()");
       EXPECT_EQ(a.free_count, b.free_count);
       EXPECT_GT(a.free_count, 10000u);
       EXPECT_EQ(a.stamp_s, b.stamp_s);

@@ -68,8 +68,9 @@ class AwarenessStage {
 
   /// The first half of process(), for a pipeline that runs the halves on two threads: the
   /// frame's points into end voxels, the hits (batch->hits, batch->far_hits) and the awareness
-  /// map, unless that is left to carve() (placeAwarenessMap()); the frame's ends wait for
-  /// carve() (batch->free is carve()'s). Each collect() must be followed by one carve() of the
+  /// map, unless that is left to carve() (placeAwarenessMap()), and the ends' entry into their
+  /// direction bins where placeBinEntry() asks for it; the frame's ends wait for carve()
+  /// (batch->free is carve()'s). Each collect() must be followed by one carve() of the
   /// same batch, in the same order; a collect() may run while carve() of an earlier frame runs
   /// on another thread (each half on one thread at a time). Adds to `counters` all but
   /// free_voxels.
@@ -96,6 +97,19 @@ class AwarenessStage {
   /// it left it to carve()); collect()'s thread.
   [[nodiscard]] bool lastCollectUpdatedMap() const { return collect_map_ms_ >= 0.0; }
   [[nodiscard]] double lastCollectMapMs() const { return std::max(collect_map_ms_, 0.0); }
+
+  /// Which half enters the ends of the frames collected from now on into their direction bins
+  /// (the cone listing's first pass: each end's finest bin and distance, each bin's nearest
+  /// member and parent): carve() (false, the default), or collect() (true) after the awareness
+  /// map, for when the second half is the longer one. The cones are the same either way: each
+  /// half sorts into scratch of its own, and the frame's bins go to carve() with its ends.
+  void placeBinEntry(bool in_collect) { bins_in_collect_ = in_collect; }
+  /// The milliseconds the last collect() took to enter its frame's ends into their bins (0 when
+  /// it left that to carve()); collect()'s thread.
+  [[nodiscard]] double lastCollectBinsMs() const { return collect_bins_ms_; }
+  /// The milliseconds the last carve() took to enter its frame's ends into their bins (0 when
+  /// collect() had entered them); carve()'s thread.
+  [[nodiscard]] double lastCarveBinsMs() const { return carve_bins_ms_; }
 
   /// The awareness map after the last frame (after its collect() or carve(), whichever updated
   /// it).
@@ -203,13 +217,23 @@ class AwarenessStage {
                    PointPart* part) const;
   /// The entry in part->ends of a box key (voxel index | kCutFlag), added when new.
   std::uint32_t findOrAddEnd(PointPart* part, std::uint32_t key) const;
+  /// The cone listing's first pass: enters every end of `ends` into its finest direction bin
+  /// (sets the end's bin, its place in (*bin_levels)[0], and near) and the bins' ancestors into
+  /// `bin_levels` (one vector per level, finest first, rebuilt), each bin with its nearest
+  /// member and its parent; `order` and `order_scratch` hold the ends' sort by bin (the calling
+  /// half's own, so that the two halves can enter frames at once).
+  void enterBins(const Eigen::Vector3d& origin_vox, std::vector<End>& ends,
+                 std::vector<std::uint64_t>* order, std::vector<std::uint64_t>* order_scratch,
+                 std::vector<std::vector<Bin>>* bin_levels) const;
   /// Lists the frame's cones: those of the direction bins and of the ends (`ends`: ends_ with
   /// outside_ appended), into cones_. Writes only the direction fields (bin, near) of `ends`.
-  void listCones(const Eigen::Vector3d& origin_vox, std::vector<End>& ends);
+  /// With `bins_entered` the ends are in bins_ already (enterBins() by collect()); otherwise
+  /// they are entered here first (into bins_), timed into carve_bins_ms_.
+  void listCones(const Eigen::Vector3d& origin_vox, std::vector<End>& ends, bool bins_entered);
   /// updateAwarenessMap() and listCones() of one frame, side by side on the kept threads when
   /// there are any. Returns the map's milliseconds.
   double mapAndListCones(const Eigen::Vector3d& body_W, const Eigen::Vector3d& origin_vox,
-                         std::vector<End>& ends);
+                         std::vector<End>& ends, bool bins_entered);
   /// A cone to carve: the part s in [s_min, 1] of the cone from the sensor to `box`.
   struct Cone {
     VoxelSpaceBox box{};
@@ -237,10 +261,13 @@ class AwarenessStage {
   std::vector<double> range_scratch_;  // the cones' work per box x, for splitting it over threads
   std::vector<PointPart> parts_;       // one per thread; ends_ and outside_ merge them
   std::unique_ptr<TaskThreads> threads_;  // with awareness.num_threads > 1
-  /// A frame between collect() and carve(): its ends (ends_ and outside_), its body and sensor
-  /// (for the awareness map and the cones) and the box of its free set (which carve() clears).
+  /// A frame between collect() and carve(): its ends (ends_ and outside_), its direction bins
+  /// where collect() entered them, its body and sensor (for the awareness map and the cones)
+  /// and the box of its free set (which carve() clears).
   struct CollectedFrame {
     std::vector<End> ends;
+    std::vector<std::vector<Bin>> bins;  // per level, with bins_entered (else spare memory)
+    bool bins_entered = false;           // collect() entered the ends into `bins`
     Eigen::Vector3d body_W = Eigen::Vector3d::Zero();
     bool map_in_carve = false;  // its awareness map is carve()'s to update
     Eigen::Vector3d origin_vox = Eigen::Vector3d::Zero();
@@ -256,10 +283,18 @@ class AwarenessStage {
   // updates the map only at 0, waiting for it on maps_carved_.
   int maps_in_carve_ = 0;
   std::condition_variable maps_carved_;
-  bool map_in_carve_ = false;    // placeAwarenessMap() (collect()'s thread)
-  double collect_map_ms_ = 0.0;  // the last collect()'s map update, -1 when none (its thread)
+  bool map_in_carve_ = false;     // placeAwarenessMap() (collect()'s thread)
+  double collect_map_ms_ = 0.0;   // the last collect()'s map update, -1 when none (its thread)
+  bool bins_in_collect_ = false;  // placeBinEntry() (collect()'s thread)
+  double collect_bins_ms_ = 0.0;  // the last collect()'s enterBins() (its thread)
+  // collect()'s sort of the ends by bin (enterBins()'s order and scratch) and the bins it fills,
+  // swapped into its frame (collect()'s thread).
+  std::vector<std::uint64_t> collect_order_;
+  std::vector<std::uint64_t> collect_order_scratch_;
+  std::vector<std::vector<Bin>> collect_bins_;
   // The second half's state from here on (listCones(), carveCones()): with collect() and
   // carve(), on carve()'s thread only.
+  double carve_bins_ms_ = 0.0;  // listCones()'s enterBins(), 0 when collect() entered them
   // Level 0: bins about bin_width_voxels wide at the maximum range; level L: 2^L times wider,
   // covering the distances where they are still about that wide. Per level, this frame's bins
   // with members, in the order of their index (a bin's children are consecutive there), so the
