@@ -13,8 +13,8 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// A running average of the awareness map's milliseconds per frame (the last 4 frames or so), -1
-// before the first.
+// A running average of the milliseconds per frame of a part that either thread may run (the
+// awareness map, the bin entry; the last 4 frames or so), -1 before the first.
 double mapAverage(double average_ms, double frame_ms) {
   return average_ms < 0.0 ? frame_ms : average_ms + (frame_ms - average_ms) / 4.0;
 }
@@ -72,11 +72,17 @@ MapEngine::MapEngine(const MapConfig& config, LogSink log, EngineObservers obser
           const double map_ms = carveStep(&batch);
           localStep(batch);
           std::swap(batch.free, carve_free_);
-          const double ms = msSince(start) - map_ms;
+          const double bins_ms = awareness_.lastCarveBinsMs();
+          const double ms = msSince(start) - map_ms - bins_ms;
           local_half_ms_.store(local_recent_.add(ms), std::memory_order_relaxed);
+          if (local_recent_.full()) local_recent_full_.store(true, std::memory_order_relaxed);
           if (map_ms > 0.0) {
             map_half_ms_.store(mapAverage(map_half_ms_.load(std::memory_order_relaxed), map_ms),
                                std::memory_order_relaxed);
+          }
+          if (bins_ms > 0.0) {
+            bins_half_ms_.store(mapAverage(bins_half_ms_.load(std::memory_order_relaxed), bins_ms),
+                                std::memory_order_relaxed);
           }
         });
   }
@@ -191,13 +197,32 @@ void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
     // With a margin of a quarter of the map's time, so that the place does not flip with every
     // frame (moving the map back to this half waits for the other to finish the maps it holds).
     const double local_ms = local_half_ms_.load(std::memory_order_relaxed);
-    const double margin_ms = 0.25 * std::max(map_half_ms_.load(std::memory_order_relaxed), 0.0);
+    const double map_ms = std::max(map_half_ms_.load(std::memory_order_relaxed), 0.0);
+    const double margin_ms = 0.25 * map_ms;
     if (!map_in_carve_ && local_ms >= 0.0 && local_ms < awareness_half_ms_ - margin_ms) {
       map_in_carve_ = true;
     } else if (map_in_carve_ && local_ms > awareness_half_ms_ + margin_ms) {
       map_in_carve_ = false;
     }
     awareness_.placeAwarenessMap(map_in_carve_);
+    // Then the entry of the ends into their direction bins (the cone listing's first pass), the
+    // map counted where it now is: to this half only while this half stays the shorter with it
+    // (the streamed flight's carving half is the longer one even without the map), back when
+    // this half is the longer without it. Where the halves are about even (the tabletop frames)
+    // it stays with the carving: each move finds the other half's bin scratch out of its cache.
+    // Only once both halves have a full window of frames: a fresh engine's first frames (its
+    // window's fresh pages) would move it for nothing.
+    const bool settled =
+        awareness_recent_.full() && local_recent_full_.load(std::memory_order_relaxed);
+    const double collect_ms = awareness_half_ms_ + (map_in_carve_ ? 0.0 : map_ms);
+    const double carve_ms = local_ms + (map_in_carve_ ? map_ms : 0.0);
+    const double bins_ms = std::max(bins_half_ms_.load(std::memory_order_relaxed), 0.0);
+    if (!bins_in_collect_ && settled && collect_ms + bins_ms < carve_ms) {
+      bins_in_collect_ = true;
+    } else if (bins_in_collect_ && collect_ms > carve_ms) {
+      bins_in_collect_ = false;
+    }
+    awareness_.placeBinEntry(bins_in_collect_);
   }
   if (auto* points = std::get_if<PointCloudFrame>(&input)) {
     if (split) {
@@ -213,10 +238,15 @@ void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
   batch->awareness_ms = msSince(start);
   if (split) {
     const double map_ms = awareness_.lastCollectMapMs();
-    awareness_half_ms_ = awareness_recent_.add(batch->awareness_ms - map_ms);
+    const double bins_ms = awareness_.lastCollectBinsMs();
+    awareness_half_ms_ = awareness_recent_.add(batch->awareness_ms - map_ms - bins_ms);
     if (awareness_.lastCollectUpdatedMap()) {
       map_half_ms_.store(mapAverage(map_half_ms_.load(std::memory_order_relaxed), map_ms),
                          std::memory_order_relaxed);
+    }
+    if (bins_ms > 0.0) {
+      bins_half_ms_.store(mapAverage(bins_half_ms_.load(std::memory_order_relaxed), bins_ms),
+                          std::memory_order_relaxed);
     }
   }
   // Threaded, where carve() updates the awareness map, it calls the observer.
