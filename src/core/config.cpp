@@ -264,7 +264,6 @@ MemoryEstimate estimateMemory(const MapConfig& c) {
   constexpr double kEsdfPerBoxVoxel = 20.6;    // field, passes 1-2 (8 + 16 bits with the
                                                // windowed passes), kept states; 2 copies
   constexpr double kAwarenessCellBytes = 9.0;  // per cylindrical cell: state, bins, scratch
-  constexpr double kBinSlotBytes = 8.0;        // per direction bin of every level: stamp, index
   MemoryEstimate e;
   const Eigen::Vector3i& n = c.local_map.size_cells;
   const double window = static_cast<double>(n.x()) * n.y() * n.z();
@@ -281,12 +280,9 @@ MemoryEstimate estimateMemory(const MapConfig& c) {
   }
   const double cells =
       static_cast<double>(c.awareness.rho_cells) * c.awareness.phi_cells * c.awareness.z_cells;
-  double bin_slots = 0.0;
-  for (int side = c.awareness.binsPerFaceSide(c.local_map.resolution_m); side >= 1; side /= 2) {
-    bin_slots += 6.0 * side * side;
-  }
-  e.awareness_bytes = static_cast<std::size_t>(
-      cells * kAwarenessCellBytes + scratchBoxVoxels(c) / 8.0 + bin_slots * kBinSlotBytes);
+  // The frame's ends, direction bins and cones grow with what it sees, not with the settings.
+  e.awareness_bytes =
+      static_cast<std::size_t>(cells * kAwarenessCellBytes + scratchBoxVoxels(c) / 8.0);
   return e;
 }
 
