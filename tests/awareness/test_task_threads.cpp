@@ -14,6 +14,7 @@
 #include <random>
 #include <stdexcept>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 namespace mlmap {
@@ -140,11 +141,8 @@ TEST(TaskThreads, RethrowsAJobsExceptionAfterAllReturned) {
 // whose map collect() left to it.
 TEST(AwarenessStage, HalvesOnTwoThreadsCarveWhatProcessCarves) {
   enum class Place { kCollect, kCarve, kAlternate };
-  struct Case {
-    int threads;
-    Place map;   // the awareness map's half
-    Place bins;  // the half that enters the ends into their direction bins
-  };
+  // Threads, the awareness map's half, the half that enters the ends into their direction bins.
+  using Case = std::tuple<int, Place, Place>;
   for (const auto& [threads, place, bins_place] :
        {Case{1, Place::kCollect, Place::kCarve}, Case{2, Place::kCollect, Place::kCarve},
         Case{1, Place::kCarve, Place::kCarve}, Case{2, Place::kCarve, Place::kCarve},
