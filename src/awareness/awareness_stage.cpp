@@ -857,43 +857,15 @@ void AwarenessStage::enterBins(const Eigen::Vector3d& o, std::vector<End>& ends,
     (*order)[i] = (std::uint64_t{binKey(face, iu, iv, lg0)} << 32) | i;
   }
   sortByKey(3 + 2 * lg0, order, order_scratch);
-  // Level 0: a bin per run of equal keys, with its members' nearest distance; each level above:
-  // a bin per run of equal parent keys (index >> 2) of the level below, with their nearest.
+  // The bins of levels n0, n0 / 2, .., 1 a face side, each with its members' nearest distance.
   // A bin's box starts empty; listing the cones hulls its members' into it.
-  auto newBin = [](std::uint32_t key, double near) {
-    Bin bin;
-    bin.index = key;
-    bin.near = near;
-    bin.box.min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
-    bin.box.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
-    return bin;
-  };
-  std::vector<std::vector<Bin>>& levels = *bin_levels;
-  levels.resize(static_cast<std::size_t>(lg0) + 1);  // n0, n0 / 2, .., 1 bins a face side
-  for (std::vector<Bin>& bins : levels) bins.clear();
-  std::vector<Bin>& finest = levels[0];
-  for (const std::uint64_t entry : *order) {
-    const auto key = static_cast<std::uint32_t>(entry >> 32);
-    End& e = ends[static_cast<std::uint32_t>(entry)];
-    if (finest.empty() || finest.back().index != key) {
-      finest.push_back(newBin(key, e.near));
-    } else {
-      finest.back().near = std::min(finest.back().near, e.near);
-    }
-    e.bin = static_cast<std::uint32_t>(finest.size() - 1);
-  }
-  for (std::size_t level = 1; level < levels.size(); ++level) {
-    std::vector<Bin>& bins = levels[level];
-    for (Bin& child : levels[level - 1]) {
-      const std::uint32_t key = child.index >> 2;
-      if (bins.empty() || bins.back().index != key) {
-        bins.push_back(newBin(key, child.near));
-      } else {
-        bins.back().near = std::min(bins.back().near, child.near);
-      }
-      child.parent = static_cast<std::uint32_t>(bins.size() - 1);
-    }
-  }
+  Bin empty;
+  empty.box.min = Eigen::Vector3f::Constant(std::numeric_limits<float>::max());
+  empty.box.max = Eigen::Vector3f::Constant(std::numeric_limits<float>::lowest());
+  buildBinLevels(
+      *order, static_cast<std::size_t>(lg0) + 1, empty,
+      [&ends](std::uint32_t i) { return ends[i].near; },
+      [&ends](std::uint32_t i, std::uint32_t place) { ends[i].bin = place; }, bin_levels);
 }
 
 void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends,

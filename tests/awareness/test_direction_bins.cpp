@@ -1,14 +1,18 @@
 // The carving's direction bins: their indices nest level by level (a bin's parent is its index
-// shifted by two bits, its children consecutive), and the radix sort that brings a frame's ends
-// into bin order is a stable sort by bin.
+// shifted by two bits, its children consecutive), the radix sort that brings a frame's ends
+// into bin order is a stable sort by bin, and the levels built from the sorted ends are the
+// hierarchy a map of maps gives.
 #include "../../src/awareness/direction_bins.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
+#include <map>
 #include <random>
 #include <set>
+#include <string>
 #include <vector>
 
 namespace mlmap {
@@ -57,6 +61,80 @@ TEST(DirectionBins, SortByKeyIsAStableSortByTheUpperBits) {
                        [](std::uint64_t a, std::uint64_t b) { return (a >> 32) < (b >> 32); });
       sortByKey(key_bits, &entries, &scratch);
       EXPECT_EQ(entries, expected) << key_bits << " key bits, " << count << " entries";
+    }
+  }
+}
+
+struct TestBin {
+  std::uint32_t index = 0;
+  std::uint32_t parent = 0;
+  double near = 0.0;
+  int tag = 0;  // a field of the caller's: copied from the empty bin
+};
+
+// Every level equals the slow hierarchy: level 0 a bin per distinct finest key, level L + 1 a
+// bin per distinct index >> 2 of level L's, in index order, each with its members' nearest
+// distance; every bin's parent and every item's place point at the bin of its key.
+TEST(DirectionBins, LevelsBuiltFromSortedEndsAreTheHierarchyOfTheirKeys) {
+  std::mt19937 rng(4401);
+  std::vector<std::uint64_t> scratch;
+  std::vector<std::vector<TestBin>> levels(7, std::vector<TestBin>(3));  // stale: dropped
+  for (int lg = 0; lg <= 5; ++lg) {
+    for (const std::size_t count : {0, 1, 2, 9, 300, 5000}) {
+      const std::uint32_t bins = 6u << (2 * lg);
+      // Few distinct keys in one corner too, so that bins share parents on every level.
+      std::uniform_int_distribution<std::uint32_t> wide_key(0, bins - 1);
+      std::uniform_int_distribution<std::uint32_t> corner_key(0, std::min(bins - 1, 37u));
+      std::uniform_real_distribution<double> draw_near(0.0, 100.0);
+      std::vector<std::uint32_t> keys(count);
+      std::vector<double> near(count);
+      std::vector<std::uint64_t> sorted(count);
+      for (std::size_t i = 0; i < count; ++i) {
+        keys[i] = (i % 3 == 0) ? wide_key(rng) : corner_key(rng);
+        near[i] = draw_near(rng);
+        sorted[i] = (std::uint64_t{keys[i]} << 32) | i;
+      }
+      sortByKey(3 + 2 * lg, &sorted, &scratch);
+      TestBin empty;
+      empty.tag = 7;
+      std::vector<std::uint32_t> place(count, std::numeric_limits<std::uint32_t>::max());
+      buildBinLevels(
+          sorted, static_cast<std::size_t>(lg) + 1, empty,
+          [&near](std::uint32_t i) { return near[i]; },
+          [&place](std::uint32_t i, std::uint32_t p) { place[i] = p; }, &levels);
+      const std::string what = "lg " + std::to_string(lg) + ", " + std::to_string(count) + " ends";
+      ASSERT_EQ(levels.size(), static_cast<std::size_t>(lg) + 1) << what;
+
+      // The slow hierarchy: key -> nearest distance, level by level.
+      std::vector<std::map<std::uint32_t, double>> expected(static_cast<std::size_t>(lg) + 1);
+      for (std::size_t i = 0; i < count; ++i) {
+        std::uint32_t key = keys[i];
+        for (auto& level : expected) {
+          const auto [it, added] = level.emplace(key, near[i]);
+          if (!added) it->second = std::min(it->second, near[i]);
+          key >>= 2;
+        }
+      }
+      for (std::size_t level = 0; level < expected.size(); ++level) {
+        const std::vector<TestBin>& got = levels[level];
+        ASSERT_EQ(got.size(), expected[level].size()) << what << ", level " << level;
+        std::size_t at = 0;
+        for (const auto& [key, nearest] : expected[level]) {
+          const TestBin& bin = got[at++];
+          EXPECT_EQ(bin.index, key) << what << ", level " << level;
+          EXPECT_EQ(bin.near, nearest) << what << ", level " << level << ", key " << key;
+          EXPECT_EQ(bin.tag, 7) << "the empty bin's other fields";
+          if (level + 1 < expected.size()) {
+            ASSERT_LT(bin.parent, levels[level + 1].size()) << what;
+            EXPECT_EQ(levels[level + 1][bin.parent].index, key >> 2)
+                << what << ", level " << level << ", key " << key;
+          }
+        }
+      }
+      for (std::size_t i = 0; i < count; ++i) {
+        ASSERT_LT(place[i], levels[0].size()) << what << ", item " << i;
+        EXPECT_EQ(levels[0][place[i]].index, keys[i]) << what << ", item " << i;
+      }
     }
   }
 }

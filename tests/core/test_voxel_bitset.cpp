@@ -3,6 +3,8 @@
 // write that could set a bit elsewhere makes the listed rows unknown again.
 #include "mlmap/core/voxel_bitset.h"
 
+#include "../support/rows_in_use.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -27,20 +29,6 @@ void markRandomBits(VoxelBitset* bits, int n, std::mt19937& rng) {
   }
 }
 
-// Lists the rows in use the slow way and declares them.
-void listRowsInUse(VoxelBitset* bits) {
-  for (int i = 0; i < kDims.x(); ++i) {
-    std::uint64_t* in_use = bits->rowsInUse(i);
-    std::fill(in_use, in_use + bits->rowsInUseWordsPerX(), std::uint64_t{0});
-    for (int j = 0; j < kDims.y(); ++j) {
-      for (int k = 0; k < kDims.z(); ++k) {
-        if (bits->test(i, j, k)) in_use[j / 64] |= std::uint64_t{1} << (j % 64);
-      }
-    }
-  }
-  bits->setRowsInUseValid();
-}
-
 bool allClear(const VoxelBitset& bits) {
   const std::size_t words = static_cast<std::size_t>(kDims.x() * kDims.y()) * bits.wordsPerRow();
   return std::all_of(bits.data(), bits.data() + words, [](std::uint64_t w) { return w == 0; });
@@ -55,7 +43,7 @@ TEST(VoxelBitset, ResetClearsEveryBitByTheRowsInUseOrTheMarkedRows) {
     markRandomBits(&bits, 1 + frame * 37, rng);
     ASSERT_FALSE(bits.rowsInUseValid()) << "marking rows makes the rows in use unknown";
     if (frame % 2 == 0) {
-      listRowsInUse(&bits);
+      test::listRowsInUseSlowly(&bits);
       ASSERT_TRUE(bits.rowsInUseValid());
     }
     bits.reset(VoxelIndex(-3, 5, 2), kDims);
@@ -67,7 +55,7 @@ TEST(VoxelBitset, ResetClearsEveryBitByTheRowsInUseOrTheMarkedRows) {
 TEST(VoxelBitset, TestAndSetMakesTheRowsInUseUnknown) {
   VoxelBitset bits;
   bits.reset(VoxelIndex::Zero(), kDims);
-  listRowsInUse(&bits);  // none in use
+  test::listRowsInUseSlowly(&bits);  // none in use
   ASSERT_TRUE(bits.rowsInUseValid());
   EXPECT_FALSE(bits.testAndSet(4, 100, 65));
   EXPECT_FALSE(bits.rowsInUseValid());

@@ -1,6 +1,7 @@
 #include "mlmap/local/local_map.h"
 
 #include "../support/reference.h"
+#include "../support/rows_in_use.h"
 
 #include <gtest/gtest.h>
 
@@ -97,18 +98,7 @@ MeasurementBatch makeBatch(const Eigen::Vector3d& body, const std::vector<VoxelI
     if (b.free.contains(r.x(), r.y(), r.z()) && !b.free.testAndSet(r.x(), r.y(), r.z()))
       ++b.free_count;
   }
-  if (list_rows_in_use) {
-    for (int i = 0; i < b.free.dims().x(); ++i) {
-      std::uint64_t* in_use = b.free.rowsInUse(i);
-      std::fill(in_use, in_use + b.free.rowsInUseWordsPerX(), std::uint64_t{0});
-      for (int j = 0; j < b.free.dims().y(); ++j) {
-        const std::uint64_t* row = b.free.data() + b.free.rowWord(i, j);
-        if (std::any_of(row, row + b.free.wordsPerRow(), [](std::uint64_t w) { return w != 0; }))
-          in_use[j / 64] |= std::uint64_t{1} << (j % 64);
-      }
-    }
-    b.free.setRowsInUseValid();
-  }
+  if (list_rows_in_use) test::listRowsInUseSlowly(&b.free);
   return b;
 }
 
