@@ -36,11 +36,13 @@ void sortByKey(int key_bits, std::vector<std::uint64_t>* entries,
 /// The bins of every level from entries sorted by their finest bin (sortByKey(); an entry is
 /// the finest bin's binKey() in the upper 32 bits, the caller's item in the lower). Level 0 has a
 /// bin per run of equal keys, level L + 1 a bin per run of level L's bins with equal index >> 2,
-/// each a copy of `empty` with its `index` and the nearest of its members' `near`; so every level
-/// is in index order. A bin's `parent` becomes its parent's place in the next level, and
+/// each a copy of `empty` with its `index`, the nearest of its members' `near` and the count of
+/// its `children` (items on level 0, bins of the level below above it); so every level is in
+/// index order. A bin's `parent` becomes its parent's place in the next level, and
 /// `enter(item, place)` is called with every item's place in level 0. `levels` is resized to
 /// `level_count` (>= 1) levels; their previous bins are dropped. Bin has the members
-/// `std::uint32_t index, parent` and `double near`; `near_of(item)` is an item's distance.
+/// `std::uint32_t index, parent, children` and `double near`; `near_of(item)` is an item's
+/// distance.
 template <typename Bin, typename NearOf, typename Enter>
 void buildBinLevels(const std::vector<std::uint64_t>& sorted, std::size_t level_count,
                     const Bin& empty, NearOf near_of, Enter enter,
@@ -49,6 +51,7 @@ void buildBinLevels(const std::vector<std::uint64_t>& sorted, std::size_t level_
     Bin bin = empty;
     bin.index = key;
     bin.near = near;
+    bin.children = 1;
     return bin;
   };
   levels->resize(level_count);
@@ -62,6 +65,7 @@ void buildBinLevels(const std::vector<std::uint64_t>& sorted, std::size_t level_
       finest.push_back(newBin(key, near));
     } else {
       finest.back().near = std::min(finest.back().near, near);
+      ++finest.back().children;
     }
     enter(item, static_cast<std::uint32_t>(finest.size() - 1));
   }
@@ -73,6 +77,7 @@ void buildBinLevels(const std::vector<std::uint64_t>& sorted, std::size_t level_
         bins.push_back(newBin(key, child.near));
       } else {
         bins.back().near = std::min(bins.back().near, child.near);
+        ++bins.back().children;
       }
       child.parent = static_cast<std::uint32_t>(bins.size() - 1);
     }

@@ -68,13 +68,15 @@ TEST(DirectionBins, SortByKeyIsAStableSortByTheUpperBits) {
 struct TestBin {
   std::uint32_t index = 0;
   std::uint32_t parent = 0;
+  std::uint32_t children = 0;
   double near = 0.0;
   int tag = 0;  // a field of the caller's: copied from the empty bin
 };
 
 // Every level equals the slow hierarchy: level 0 a bin per distinct finest key, level L + 1 a
 // bin per distinct index >> 2 of level L's, in index order, each with its members' nearest
-// distance; every bin's parent and every item's place point at the bin of its key.
+// distance and its count of children; every bin's parent and every item's place point at the
+// bin of its key.
 TEST(DirectionBins, LevelsBuiltFromSortedEndsAreTheHierarchyOfTheirKeys) {
   std::mt19937 rng(4401);
   std::vector<std::uint64_t> scratch;
@@ -105,13 +107,17 @@ TEST(DirectionBins, LevelsBuiltFromSortedEndsAreTheHierarchyOfTheirKeys) {
       const std::string what = "lg " + std::to_string(lg) + ", " + std::to_string(count) + " ends";
       ASSERT_EQ(levels.size(), static_cast<std::size_t>(lg) + 1) << what;
 
-      // The slow hierarchy: key -> nearest distance, level by level.
+      // The slow hierarchy: key -> nearest distance and children, level by level.
       std::vector<std::map<std::uint32_t, double>> expected(static_cast<std::size_t>(lg) + 1);
+      std::vector<std::map<std::uint32_t, std::set<std::uint64_t>>> children(expected.size());
       for (std::size_t i = 0; i < count; ++i) {
+        std::uint64_t child = i;  // the item on level 0, the key of the level below above it
         std::uint32_t key = keys[i];
-        for (auto& level : expected) {
-          const auto [it, added] = level.emplace(key, near[i]);
+        for (std::size_t level = 0; level < expected.size(); ++level) {
+          const auto [it, added] = expected[level].emplace(key, near[i]);
           if (!added) it->second = std::min(it->second, near[i]);
+          children[level][key].insert(child);
+          child = key;
           key >>= 2;
         }
       }
@@ -123,6 +129,8 @@ TEST(DirectionBins, LevelsBuiltFromSortedEndsAreTheHierarchyOfTheirKeys) {
           const TestBin& bin = got[at++];
           EXPECT_EQ(bin.index, key) << what << ", level " << level;
           EXPECT_EQ(bin.near, nearest) << what << ", level " << level << ", key " << key;
+          EXPECT_EQ(bin.children, children[level][key].size())
+              << what << ", level " << level << ", key " << key;
           EXPECT_EQ(bin.tag, 7) << "the empty bin's other fields";
           if (level + 1 < expected.size()) {
             ASSERT_LT(bin.parent, levels[level + 1].size()) << what;

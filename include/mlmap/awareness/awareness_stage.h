@@ -175,10 +175,16 @@ class AwarenessStage {
   double updateAwarenessMap(const Eigen::Vector3d& body_W, const std::vector<End>& ends);
   /// Rays bundled by direction (a cube-map bin of one level): the shared part of their cones.
   struct Bin {
-    std::uint32_t index = 0;   // on its level: binKey() of its direction (its parent's: index >> 2)
-    std::uint32_t parent = 0;  // its parent's index in the next level's bins_
-    double near = 0.0;         // nearest member distance (voxel units)
-    VoxelSpaceBox box{};       // hull of the members' boxes scaled to its reach (listCones())
+    std::uint32_t index = 0;     // on its level: binKey() of its direction (its parent's: >> 2)
+    std::uint32_t parent = 0;    // its parent's index in the next level's bins_
+    std::uint32_t children = 0;  // bins of the level below in it (ends on the finest level)
+    double near = 0.0;           // nearest member distance (voxel units)
+    double start = 0.0;          // where its members' cones start (listCones(); voxel units)
+    // Hull of its members' point boxes less the sensor, each divided by its distance
+    // (listCones()): its box at distance r is sensor + r [dir_lo, dir_hi]; a parent's directions
+    // are the hull of its children's.
+    Eigen::Vector3d dir_lo = Eigen::Vector3d::Zero();
+    Eigen::Vector3d dir_hi = Eigen::Vector3d::Zero();
   };
   /// Open-addressing table: linear box index (+ cut flag) -> index in ends, valid when stamped.
   struct Slot {
