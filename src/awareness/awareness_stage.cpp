@@ -916,6 +916,9 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends,
   // lies in its own voxel, so a hit there needs no carving (it wins anyway). Only the float
   // rounding of the box can put a face of it on the next voxel's boundary, and the walk then
   // marked that voxel, which the ray does not reach.
+  //
+  // The directions stay finite: a distance above 0 is above 1e-162 (distanceToBox() squares it),
+  // and an end's points lie within a voxel, so |p - o| / near < 1 + 2 / near.
   std::vector<Bin>& finest = bins_[0];
   cones_.clear();
   for (const End& e : ends) {
