@@ -1,8 +1,8 @@
 #pragma once
 /// @file
 /// The cube-map direction bins of the awareness stage's carving (private to the stage): a bin's
-/// index, in which a bin's parent is index >> 2, and the sort that brings a frame's ends into
-/// bin order, so that every level of bins is built by one pass over the level below.
+/// index, in which a bin's parent is index >> 2, the sort that brings a frame's ends into bin
+/// order, and the levels built from the sorted ends, each by one pass over the level below.
 
 #include <algorithm>
 #include <cstddef>
