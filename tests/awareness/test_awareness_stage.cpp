@@ -117,6 +117,35 @@ TEST(AwarenessStage, CarvingIsCompleteAgainstA3DReferenceWalk) {
   expectCompleteCarving(0.1, 300, 2, /*bin_width_voxels=*/1.0);  // awareness.bin_width_voxels
 }
 
+// A chain of direction bins with one child each carves one cone: a lone ray is one cone from
+// the sensor (not one per level of its eight), and two rays into one finest bin are the far
+// one's own cone and the bin's, from the sensor. Both rays are carved whole.
+TEST(AwarenessStage, AChainOfOneChildBinsCarvesOneCone) {
+  MapConfig config = testConfig(0.1);  // 6 m: 128 finest bins a face side, 8 levels
+  AwarenessStage stage(config);
+  const Eigen::Vector3f near_point(5.03f, 0.013f, 0.017f);  // 50.3 voxels out
+  for (const int rays : {1, 2}) {
+    PointCloudFrame frame;  // sensor at the world origin
+    frame.points_S.push_back(near_point);
+    if (rays == 2) frame.points_S.push_back(1.1f * near_point);  // same direction, next voxels
+    MeasurementBatch batch;
+    PointCounters counters;
+    stage.process(frame, &batch, &counters);
+    EXPECT_EQ(stage.lastConeCount(), static_cast<std::size_t>(rays)) << rays << " rays";
+    for (const Eigen::Vector3f& p : frame.points_S) {
+      for (const test::Key& k :
+           test::referenceRayVoxels(Eigen::Vector3d::Zero(), p.cast<double>(), 0.1)) {
+        const VoxelIndex r = test::index(k) - batch.free.origin();
+        const bool hit =
+            std::any_of(batch.hits.begin(), batch.hits.end(),
+                        [&](const HitMeasurement& h) { return test::key(h.index) == k; });
+        EXPECT_TRUE(hit || batch.free.test(r.x(), r.y(), r.z()))
+            << "voxel " << test::index(k).transpose() << " of the ray to " << p.transpose();
+      }
+    }
+  }
+}
+
 // awareness.num_threads splits the carving by box x and updates the awareness map on a
 // thread of its own meanwhile: the batch (free bits, free count, hits), the counters and the
 // awareness map are those of one thread, bit for bit, over several frames (the stage's tables

@@ -110,6 +110,9 @@ class AwarenessStage {
   /// The milliseconds the last carve() took to enter its frame's ends into their bins (0 when
   /// collect() had entered them); carve()'s thread.
   [[nodiscard]] double lastCarveBinsMs() const { return carve_bins_ms_; }
+  /// The cones the last process() or carve() carved (its direction bins' and its ends');
+  /// carve()'s thread.
+  [[nodiscard]] std::size_t lastConeCount() const { return cones_.size(); }
 
   /// The awareness map after the last frame (after its collect() or carve(), whichever updated
   /// it).
