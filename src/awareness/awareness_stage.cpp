@@ -230,9 +230,7 @@ AwarenessStage::AwarenessStage(const MapConfig& config)
     threads_ = std::make_unique<TaskThreads>(config.awareness.num_threads);
   }
   map_bytes_.store(map_.memoryBytes(), std::memory_order_relaxed);
-  int n = config.awareness.binsPerFaceSide(config.local_map.resolution_m);
-  bins_per_face_side_ = n;
-  for (; n >= 1; n /= 2) bins_.emplace_back();
+  bins_per_face_side_ = config.awareness.binsPerFaceSide(config.local_map.resolution_m);
 }
 
 AwarenessStage::~AwarenessStage() = default;
@@ -374,16 +372,17 @@ double AwarenessStage::carve(MeasurementBatch* batch, PointCounters* counters,
     collected_.pop_front();
   }
   batch->free.reset(frame->box_origin, frame->dims);
-  // The frame's direction bins, where collect() entered its ends into them: into bins_, whose
-  // memory goes back with the frame for a later collect() to fill.
-  if (frame->bins_entered) bins_.swap(frame->bins);
-  // The awareness map, where collect() left it here: beside the listing of the cones on a kept
+  // The frame's cone listing as far as collect() took it: into carve_listing_, whose memory
+  // goes back with the frame for a later collect() to fill.
+  if (frame->listed != ConeListingStep::kNothing) std::swap(carve_listing_, frame->listing);
+  // The awareness map, where collect() left it here: beside the rest of the listing on a kept
   // thread, as in process(), when the other half does not hold them.
   double map_ms = 0.0;
   if (frame->map_in_carve) {
-    map_ms = mapAndListCones(frame->body_W, frame->origin_vox, frame->ends, frame->bins_entered);
+    map_ms = mapAndListCones(frame->body_W, frame->origin_vox, frame->ends, frame->listed);
   } else {
-    listCones(frame->origin_vox, frame->ends, frame->bins_entered);
+    advanceListing(frame->origin_vox, frame->ends, frame->listed, ConeListingStep::kConesListed,
+                   &carve_listing_, &carve_listing_ms_);
   }
   // With kept threads, the carving is split over them as in process(): a kept thread that the
   // other half's point loop does not hold (it waits for a core meanwhile, or finds the carving's
@@ -499,15 +498,11 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
     }
     collect_map_ms_ = -1.0;
     if (!map_in_carve) collect_map_ms_ = updateAwarenessMap(T_W_B.translation(), ends_);
-    // The first pass of the cone listing here when placeBinEntry() asks for it, into this
-    // half's own bin slots (carve() may be entering an earlier frame's ends into its own).
-    collect_bins_ms_ = 0.0;
-    const bool bins_entered = bins_in_collect_;
-    if (bins_entered) {
-      const SteadyClock::time_point start = SteadyClock::now();
-      enterBins(g.origin_vox, ends_, &collect_order_, &collect_order_scratch_, &collect_bins_);
-      collect_bins_ms_ = msSince(start);
-    }
+    // The cone listing here as far as placeConeListing() asks, into this half's own listing
+    // (carve() may be listing an earlier frame's cones into its own).
+    const ConeListingStep listed = listing_in_collect_;
+    advanceListing(g.origin_vox, ends_, ConeListingStep::kNothing, listed, &collect_listing_,
+                   &collect_listing_ms_);
     // The second half waits for carve() (maybe on another thread) with the frame's ends; ends_
     // takes a spare one's memory.
     std::lock_guard<std::mutex> lock(collected_mutex_);
@@ -521,15 +516,15 @@ void AwarenessStage::processSource(const Source& source, double stamp_s, const T
     frame->ends.swap(ends_);
     frame->body_W = T_W_B.translation();
     frame->map_in_carve = map_in_carve;
-    frame->bins_entered = bins_entered;
-    if (bins_entered) frame->bins.swap(collect_bins_);
+    frame->listed = listed;
+    if (listed != ConeListingStep::kNothing) std::swap(frame->listing, collect_listing_);
     frame->origin_vox = g.origin_vox;
     frame->box_origin = g.box_origin;
     frame->dims = g.dims;
     collected_.push_back(std::move(frame));
     return;
   }
-  mapAndListCones(T_W_B.translation(), g.origin_vox, ends_, /*bins_entered=*/false);
+  mapAndListCones(T_W_B.translation(), g.origin_vox, ends_, ConeListingStep::kNothing);
   carveCones(g.origin_vox, batch);
   counters->free_voxels = batch->free_count;
 }
@@ -809,19 +804,23 @@ double AwarenessStage::updateAwarenessMap(const Eigen::Vector3d& body_W,
 
 double AwarenessStage::mapAndListCones(const Eigen::Vector3d& body_W,
                                        const Eigen::Vector3d& origin_vox, std::vector<End>& ends,
-                                       bool bins_entered) {
-  if (threads_ == nullptr) {
+                                       ConeListingStep from) {
+  auto listRest = [&] {
+    advanceListing(origin_vox, ends, from, ConeListingStep::kConesListed, &carve_listing_,
+                   &carve_listing_ms_);
+  };
+  if (threads_ == nullptr || from == ConeListingStep::kConesListed) {
     const double map_ms = updateAwarenessMap(body_W, ends);
-    listCones(origin_vox, ends, bins_entered);
+    listRest();
     return map_ms;
   }
-  // The awareness map and the cones share no state (listCones() writes only the direction
+  // The awareness map and the cones share no state (the listing writes only the direction
   // fields of the ends, the map reads their points): the map is updated on a kept thread
   // meanwhile, the same map either way.
   double map_ms = 0.0;
   threads_->run(2, [&](int job) {
     if (job == 0) {
-      listCones(origin_vox, ends, bins_entered);
+      listRest();
     } else {
       map_ms = updateAwarenessMap(body_W, ends);
     }
@@ -829,16 +828,31 @@ double AwarenessStage::mapAndListCones(const Eigen::Vector3d& body_W,
   return map_ms;
 }
 
+void AwarenessStage::advanceListing(const Eigen::Vector3d& o, std::vector<End>& ends,
+                                    ConeListingStep from, ConeListingStep to, ConeListing* listing,
+                                    ListingMs* ms) const {
+  *ms = ListingMs{};
+  if (from < ConeListingStep::kBinsEntered && to >= ConeListingStep::kBinsEntered) {
+    const SteadyClock::time_point start = SteadyClock::now();
+    enterBins(o, ends, listing);
+    ms->bins = msSince(start);
+  }
+  if (from < ConeListingStep::kConesListed && to >= ConeListingStep::kConesListed) {
+    const SteadyClock::time_point start = SteadyClock::now();
+    listCones(o, ends, listing);
+    ms->cones = msSince(start);
+  }
+}
+
 void AwarenessStage::enterBins(const Eigen::Vector3d& o, std::vector<End>& ends,
-                               std::vector<std::uint64_t>* order,
-                               std::vector<std::uint64_t>* order_scratch,
-                               std::vector<std::vector<Bin>>* bin_levels) const {
+                               ConeListing* listing) const {
   const int n0 = bins_per_face_side_;
   int lg0 = 0;
   while ((1 << lg0) < n0) ++lg0;
   // Every end's finest bin and its distance, in one pass over the ends; then the ends sorted by
   // bin, so that each level's bins come out in index order, a bin's children next to each other
   // (binKey()), and every level is built by one pass over the level below.
+  std::vector<std::uint64_t>* order = &listing->order;
   order->resize(ends.size());
   for (std::size_t i = 0; i < ends.size(); ++i) {
     End& e = ends[i];
@@ -856,7 +870,7 @@ void AwarenessStage::enterBins(const Eigen::Vector3d& o, std::vector<End>& ends,
     e.near = distanceToBox(o, e.points);
     (*order)[i] = (std::uint64_t{binKey(face, iu, iv, lg0)} << 32) | i;
   }
-  sortByKey(3 + 2 * lg0, order, order_scratch);
+  sortByKey(3 + 2 * lg0, order, &listing->order_scratch);
   // The bins of levels n0, n0 / 2, .., 1 a face side, each with its members' nearest distance.
   // A bin's directions start empty; listing the cones hulls its members' into them.
   Bin empty;
@@ -865,19 +879,15 @@ void AwarenessStage::enterBins(const Eigen::Vector3d& o, std::vector<End>& ends,
   buildBinLevels(
       *order, static_cast<std::size_t>(lg0) + 1, empty,
       [&ends](std::uint32_t i) { return ends[i].near; },
-      [&ends](std::uint32_t i, std::uint32_t place) { ends[i].bin = place; }, bin_levels);
+      [&ends](std::uint32_t i, std::uint32_t place) { ends[i].bin = place; }, &listing->bins);
 }
 
-void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends,
-                               bool bins_entered) {
-  carve_bins_ms_ = 0.0;
-  if (!bins_entered) {
-    const SteadyClock::time_point start = SteadyClock::now();
-    enterBins(o, ends, &end_order_, &end_order_scratch_, &bins_);
-    carve_bins_ms_ = msSince(start);
-  }
+void AwarenessStage::listCones(const Eigen::Vector3d& o, const std::vector<End>& ends,
+                               ConeListing* listing) const {
+  std::vector<std::vector<Bin>>& levels = listing->bins;
+  std::vector<Cone>& cones = listing->cones;
   const int n0 = bins_per_face_side_;
-  const int level_count = static_cast<int>(bins_.size());
+  const int level_count = static_cast<int>(levels.size());
   // Level L's bins cover the distances up to its reach (where they are still about
   // bin_width_voxels wide); a bin's reach is min(its nearest member, its level's reach).
   std::array<double, 32> level_reach{};
@@ -902,11 +912,11 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends,
   // bins have one child (95 % of the finest, 70 % of the next), so most chains are one cone,
   // not one per level. A bin's start is its parent's reach, or its parent's start when the
   // parent is a chain link; the coarsest bins start at the sensor.
-  std::vector<Bin>& coarsest = bins_[static_cast<std::size_t>(level_count) - 1];
+  std::vector<Bin>& coarsest = levels[static_cast<std::size_t>(level_count) - 1];
   for (Bin& bin : coarsest) bin.start = 0.0;
   for (int level = level_count - 2; level >= 0; --level) {
-    const std::vector<Bin>& parents = bins_[static_cast<std::size_t>(level) + 1];
-    for (Bin& bin : bins_[static_cast<std::size_t>(level)]) {
+    const std::vector<Bin>& parents = levels[static_cast<std::size_t>(level) + 1];
+    for (Bin& bin : levels[static_cast<std::size_t>(level)]) {
       const Bin& parent = parents[bin.parent];
       bin.start = parent.children > 1 ? reachOf(level + 1, parent) : parent.start;
     }
@@ -919,11 +929,11 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends,
   //
   // The directions stay finite: a distance above 0 is above 1e-162 (distanceToBox() squares it),
   // and an end's points lie within a voxel, so |p - o| / near < 1 + 2 / near.
-  std::vector<Bin>& finest = bins_[0];
-  cones_.clear();
+  std::vector<Bin>& finest = levels[0];
+  cones.clear();
   for (const End& e : ends) {
     if (!(e.near > 0.0)) {
-      cones_.push_back({e.points, 0.0});
+      cones.push_back({e.points, 0.0});
       continue;
     }
     Bin& bin = finest[e.bin];
@@ -932,7 +942,7 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends,
     bin.dir_hi = bin.dir_hi.cwiseMax((e.points.max.cast<double>() - o) * inv_near);
     const double s_min = (bin.children > 1 ? reachOf(0, bin) : bin.start) * inv_near;
     if (s_min >= 1.0 && !e.cut) continue;
-    cones_.push_back({e.points, s_min});
+    cones.push_back({e.points, s_min});
   }
   // A bin's box at its reach, rounded outwards to float.
   auto boxAt = [&o](const Bin& bin, double reach) {
@@ -948,12 +958,12 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends,
   // never shrinks towards the fine end of a chain, because the nearest member and the level
   // reach both grow.
   for (int level = 1; level < level_count; ++level) {
-    std::vector<Bin>& bins = bins_[static_cast<std::size_t>(level)];
-    for (const Bin& child : bins_[static_cast<std::size_t>(level) - 1]) {
+    std::vector<Bin>& bins = levels[static_cast<std::size_t>(level)];
+    for (const Bin& child : levels[static_cast<std::size_t>(level) - 1]) {
       if (child.dir_lo.x() > child.dir_hi.x()) continue;  // no member with a distance
       const double child_reach = reachOf(level - 1, child);
       if (child.children > 1 && child_reach > 0.0 && child_reach > child.start)
-        cones_.push_back({boxAt(child, child_reach), child.start / child_reach});
+        cones.push_back({boxAt(child, child_reach), child.start / child_reach});
       Bin& parent = bins[child.parent];
       if (!(reachOf(level, parent) > 0.0)) continue;
       parent.dir_lo = parent.dir_lo.cwiseMin(child.dir_lo);
@@ -963,7 +973,7 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, std::vector<End>& ends,
   for (const Bin& bin : coarsest) {
     const double reach = reachOf(level_count - 1, bin);
     if (bin.children < 2 || !(reach > 0.0) || bin.dir_lo.x() > bin.dir_hi.x()) continue;
-    cones_.push_back({boxAt(bin, reach), 0.0});  // from the sensor
+    cones.push_back({boxAt(bin, reach), 0.0});  // from the sensor
   }
 }
 
@@ -971,7 +981,7 @@ void AwarenessStage::carveRange(const Eigen::Vector3d& o, int x_begin, int x_end
                                 MeasurementBatch* batch, std::size_t* free_count) const {
   VoxelBitset& free = batch->free;
   const bool whole = x_begin <= 0 && x_end >= free.dims().x();
-  for (const Cone& cone : cones_) {
+  for (const Cone& cone : carve_listing_.cones) {
     if (whole) {
       carveCone(o, cone.box, cone.s_min, &free);
       continue;
@@ -1002,8 +1012,9 @@ void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batc
   const int dim_x = batch->free.dims().x();
   // Only these rows get bits: the count here, the local map's reading and the next frame's
   // clearing look only there (a 360-degree scan in a room marks a small part of its box).
-  batch->free.setMarkedRows(conesRows(o, cones_));
-  if (threads == 1 || cones_.size() < 2 * static_cast<std::size_t>(threads)) {
+  const std::vector<Cone>& cones = carve_listing_.cones;
+  batch->free.setMarkedRows(conesRows(o, cones));
+  if (threads == 1 || cones.size() < 2 * static_cast<std::size_t>(threads)) {
     carveRange(o, 0, dim_x, batch, &batch->free_count);
     batch->free.setRowsInUseValid();
     return;
@@ -1011,7 +1022,7 @@ void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batc
   // Each thread owns a range of box x: it marks only there, so no two write the same word and
   // the union is what one thread marks (cones straddling a border are walked by both sides,
   // each marking its part).
-  const std::vector<int> borders = xRangesOfEqualWork(o, cones_, dim_x, threads, &range_scratch_);
+  const std::vector<int> borders = xRangesOfEqualWork(o, cones, dim_x, threads, &range_scratch_);
   std::vector<std::size_t> counts(static_cast<std::size_t>(threads), 0);
   threads_->run(threads, [&](int t) {
     const auto ut = static_cast<std::size_t>(t);
@@ -1021,11 +1032,15 @@ void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batc
   batch->free.setRowsInUseValid();  // the ranges cover every box x
 }
 
+std::size_t AwarenessStage::ConeListing::bytes() const {
+  std::size_t n = (order.capacity() + order_scratch.capacity()) * sizeof(std::uint64_t) +
+                  cones.capacity() * sizeof(Cone);
+  for (const std::vector<Bin>& level : bins) n += level.capacity() * sizeof(Bin);
+  return n;
+}
+
 std::size_t AwarenessStage::carveBytes() const {
-  std::size_t bins = 0;
-  for (const std::vector<Bin>& level : bins_) bins += level.capacity() * sizeof(Bin);
-  bins += (end_order_.capacity() + end_order_scratch_.capacity()) * sizeof(std::uint64_t);
-  return bins + cones_.capacity() * sizeof(Cone) + range_scratch_.capacity() * sizeof(double);
+  return carve_listing_.bytes() + range_scratch_.capacity() * sizeof(double);
 }
 
 std::size_t AwarenessStage::memoryBytes() const {
@@ -1033,9 +1048,7 @@ std::size_t AwarenessStage::memoryBytes() const {
   {
     std::lock_guard<std::mutex> lock(collected_mutex_);
     const auto frameBytes = [](const CollectedFrame& f) {
-      std::size_t n = f.ends.capacity() * sizeof(End);
-      for (const std::vector<Bin>& level : f.bins) n += level.capacity() * sizeof(Bin);
-      return n;
+      return f.ends.capacity() * sizeof(End) + f.listing.bytes();
     };
     for (const std::unique_ptr<CollectedFrame>& f : collected_) bins += frameBytes(*f);
     for (const std::unique_ptr<CollectedFrame>& f : spare_) bins += frameBytes(*f);
@@ -1048,8 +1061,7 @@ std::size_t AwarenessStage::memoryBytes() const {
             p.block_xyz.capacity() * sizeof(float) +
             p.runs.first.capacity() * sizeof(std::uint32_t) + p.runs.box.capacity() * sizeof(float);
   }
-  bins += (collect_order_.capacity() + collect_order_scratch_.capacity()) * sizeof(std::uint64_t);
-  for (const std::vector<Bin>& level : collect_bins_) bins += level.capacity() * sizeof(Bin);
+  bins += collect_listing_.bytes();
   return bins + map_bytes_.load(std::memory_order_relaxed) + ends_.capacity() * sizeof(End) +
          outside_.capacity() * sizeof(End) + sample_indices_.capacity() * sizeof(std::uint32_t);
 }

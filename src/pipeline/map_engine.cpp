@@ -1,6 +1,7 @@
 #include "mlmap/pipeline/map_engine.h"
 
 #include "mlmap/core/stopwatch.h"
+#include "listing_place.h"
 
 #include <algorithm>
 #include <chrono>
@@ -14,9 +15,22 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 // A running average of the milliseconds per frame of a part that either thread may run (the
-// awareness map, the bin entry; the last 4 frames or so), -1 before the first.
+// awareness map, the steps of the cone listing; the last 4 frames or so), -1 before the first.
 double mapAverage(double average_ms, double frame_ms) {
   return average_ms < 0.0 ? frame_ms : average_ms + (frame_ms - average_ms) / 4.0;
+}
+
+// Adds a frame's listing steps on one thread to their running averages (those it did).
+void addListingMs(const AwarenessStage::ListingMs& ms, std::atomic<double>* bins_ms,
+                  std::atomic<double>* cones_ms) {
+  if (ms.bins > 0.0) {
+    bins_ms->store(mapAverage(bins_ms->load(std::memory_order_relaxed), ms.bins),
+                   std::memory_order_relaxed);
+  }
+  if (ms.cones > 0.0) {
+    cones_ms->store(mapAverage(cones_ms->load(std::memory_order_relaxed), ms.cones),
+                    std::memory_order_relaxed);
+  }
 }
 
 const MapConfig& validated(const MapConfig& config) {
@@ -72,18 +86,15 @@ MapEngine::MapEngine(const MapConfig& config, LogSink log, EngineObservers obser
           const double map_ms = carveStep(&batch);
           localStep(batch);
           std::swap(batch.free, carve_free_);
-          const double bins_ms = awareness_.lastCarveBinsMs();
-          const double ms = msSince(start) - map_ms - bins_ms;
+          const AwarenessStage::ListingMs listing_ms = awareness_.lastCarveListingMs();
+          const double ms = msSince(start) - map_ms - listing_ms.bins - listing_ms.cones;
           local_half_ms_.store(local_recent_.add(ms), std::memory_order_relaxed);
           if (local_recent_.full()) local_recent_full_.store(true, std::memory_order_relaxed);
           if (map_ms > 0.0) {
             map_half_ms_.store(mapAverage(map_half_ms_.load(std::memory_order_relaxed), map_ms),
                                std::memory_order_relaxed);
           }
-          if (bins_ms > 0.0) {
-            bins_half_ms_.store(mapAverage(bins_half_ms_.load(std::memory_order_relaxed), bins_ms),
-                                std::memory_order_relaxed);
-          }
+          addListingMs(listing_ms, &bins_half_ms_, &cones_half_ms_);
         });
   }
 }
@@ -205,24 +216,20 @@ void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
       map_in_carve_ = false;
     }
     awareness_.placeAwarenessMap(map_in_carve_);
-    // Then the entry of the ends into their direction bins (the cone listing's first pass), the
-    // map counted where it now is: to this half only while this half stays the shorter with it
-    // (the streamed flight's carving half is the longer one even without the map), back when
-    // this half is the longer without it. Where the halves are about even (the tabletop frames)
-    // it stays with the carving: each move finds the other half's bin scratch out of its cache.
-    // Only once both halves have a full window of frames: a fresh engine's first frames (its
+    // Then the cone listing's steps, the map counted where it now is: to this half as far as
+    // that shortens the longer half (the streamed flight's carving half is the longer one even
+    // without the map; the point loop is the longer half of a tabletop frame). Further only
+    // once both halves have a full window of frames: a fresh engine's first frames (its
     // window's fresh pages) would move it for nothing.
     const bool settled =
         awareness_recent_.full() && local_recent_full_.load(std::memory_order_relaxed);
-    const double collect_ms = awareness_half_ms_ + (map_in_carve_ ? 0.0 : map_ms);
-    const double carve_ms = local_ms + (map_in_carve_ ? map_ms : 0.0);
-    const double bins_ms = std::max(bins_half_ms_.load(std::memory_order_relaxed), 0.0);
-    if (!bins_in_collect_ && settled && collect_ms + bins_ms < carve_ms) {
-      bins_in_collect_ = true;
-    } else if (bins_in_collect_ && collect_ms > carve_ms) {
-      bins_in_collect_ = false;
-    }
-    awareness_.placeBinEntry(bins_in_collect_);
+    HalvesMs halves;
+    halves.awareness_ms = awareness_half_ms_ + (map_in_carve_ ? 0.0 : map_ms);
+    halves.local_ms = local_ms + (map_in_carve_ ? map_ms : 0.0);
+    halves.bins_ms = std::max(bins_half_ms_.load(std::memory_order_relaxed), 0.0);
+    halves.cones_ms = std::max(cones_half_ms_.load(std::memory_order_relaxed), 0.0);
+    listing_in_awareness_ = placeConeListing(listing_in_awareness_, halves, settled);
+    awareness_.placeConeListing(listing_in_awareness_);
   }
   if (auto* points = std::get_if<PointCloudFrame>(&input)) {
     if (split) {
@@ -238,16 +245,14 @@ void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
   batch->awareness_ms = msSince(start);
   if (split) {
     const double map_ms = awareness_.lastCollectMapMs();
-    const double bins_ms = awareness_.lastCollectBinsMs();
-    awareness_half_ms_ = awareness_recent_.add(batch->awareness_ms - map_ms - bins_ms);
+    const AwarenessStage::ListingMs listing_ms = awareness_.lastCollectListingMs();
+    awareness_half_ms_ =
+        awareness_recent_.add(batch->awareness_ms - map_ms - listing_ms.bins - listing_ms.cones);
     if (awareness_.lastCollectUpdatedMap()) {
       map_half_ms_.store(mapAverage(map_half_ms_.load(std::memory_order_relaxed), map_ms),
                          std::memory_order_relaxed);
     }
-    if (bins_ms > 0.0) {
-      bins_half_ms_.store(mapAverage(bins_half_ms_.load(std::memory_order_relaxed), bins_ms),
-                          std::memory_order_relaxed);
-    }
+    addListingMs(listing_ms, &bins_half_ms_, &cones_half_ms_);
   }
   // Threaded, where carve() updates the awareness map, it calls the observer.
   if ((!split || awareness_.lastCollectUpdatedMap()) && observers_.awareness) {

@@ -13,6 +13,7 @@
 #include <atomic>
 #include <random>
 #include <stdexcept>
+#include <string>
 #include <thread>
 #include <tuple>
 #include <vector>
@@ -134,27 +135,29 @@ TEST(TaskThreads, RethrowsAJobsExceptionAfterAllReturned) {
 // while frame k + 1 is collected on another, in a ring of batches (with two threads both halves
 // ask the one kept thread for help), the awareness map updated by collect(), by carve(), or by
 // either in turn (a frame whose map goes back to collect() waits for the carving of the one
-// before, or, past the wait's bound, leaves it to carve() too), and the ends entered into their
-// direction bins by carve(), by collect() or by either in turn (collect() entering frame k + 1's
-// while carve() enters frame k's). Each batch is then what process() makes of its frame, bit for
-// bit, and so is the awareness map; carve() hands the map to its observer exactly for the frames
-// whose map collect() left to it.
+// before, or, past the wait's bound, leaves it to carve() too), and the cone listing done by
+// carve(), its bin entry or all of it by collect(), or each in turn (collect() listing frame
+// k + 1's while carve() lists frame k's). Each batch is then what process() makes of its frame, bit
+// for bit, and so is the awareness map; carve() hands the map to its observer exactly for the
+// frames whose map collect() left to it.
 TEST(AwarenessStage, HalvesOnTwoThreadsCarveWhatProcessCarves) {
   enum class Place { kCollect, kCarve, kAlternate };
-  // Threads, the awareness map's half, the half that enters the ends into their direction bins.
-  using Case = std::tuple<int, Place, Place>;
-  for (const auto& [threads, place, bins_place] :
-       {Case{1, Place::kCollect, Place::kCarve}, Case{2, Place::kCollect, Place::kCarve},
-        Case{1, Place::kCarve, Place::kCarve}, Case{2, Place::kCarve, Place::kCarve},
-        Case{1, Place::kAlternate, Place::kCarve}, Case{2, Place::kAlternate, Place::kCarve},
-        Case{1, Place::kCollect, Place::kCollect}, Case{2, Place::kCarve, Place::kCollect},
-        Case{1, Place::kAlternate, Place::kAlternate},
-        Case{2, Place::kAlternate, Place::kAlternate}}) {
+  using Step = AwarenessStage::ConeListingStep;
+  // Threads, the awareness map's half, how far collect() takes the cone listing (0: nowhere,
+  // 1: the bin entry, 2: all of it; -1: frame by frame 0, 1, 2, 0, 2, 1, 0, every change).
+  using Case = std::tuple<int, Place, int>;
+  for (const auto& [threads, place, listing] :
+       {Case{1, Place::kCollect, 0}, Case{2, Place::kCollect, 0}, Case{1, Place::kCarve, 0},
+        Case{2, Place::kCarve, 0}, Case{1, Place::kAlternate, 0}, Case{2, Place::kAlternate, 0},
+        Case{1, Place::kCollect, 1}, Case{2, Place::kCarve, 1}, Case{1, Place::kCarve, 2},
+        Case{2, Place::kCollect, 2}, Case{1, Place::kAlternate, -1},
+        Case{2, Place::kAlternate, -1}}) {
     const auto inCarve = [place = place](std::size_t k) {
       return place == Place::kCarve || (place == Place::kAlternate && k % 3 != 0);
     };
-    const auto binsInCollect = [bins_place = bins_place](std::size_t k) {
-      return bins_place == Place::kCollect || (bins_place == Place::kAlternate && k % 2 == 1);
+    const auto listedInCollect = [listing = listing](std::size_t k) {
+      constexpr std::array<int, 7> kTurns{0, 1, 2, 0, 2, 1, 0};
+      return static_cast<Step>(listing >= 0 ? listing : kTurns[k % kTurns.size()]);
     };
     MapConfig config = testConfig(0.1);
     AwarenessStage reference(config);
@@ -162,7 +165,7 @@ TEST(AwarenessStage, HalvesOnTwoThreadsCarveWhatProcessCarves) {
     AwarenessStage split(config);
     std::mt19937 rng(90 + static_cast<std::uint32_t>(threads));
     std::vector<PointCloudFrame> frames;
-    for (int k = 0; k < 6; ++k) {
+    for (int k = 0; k < 7; ++k) {
       frames.push_back(randomCloud(rng, 4000 + 1000 * k, 8.0));  // each frame its own ends
       frames.back().T_W_B.translation() = Eigen::Vector3d(0.37 * k, -0.21 * k, 0.05 * k);
       frames.back().stamp_s = 0.1 * (k + 1);
@@ -171,26 +174,32 @@ TEST(AwarenessStage, HalvesOnTwoThreadsCarveWhatProcessCarves) {
     std::array<PointCounters, 3> counters;
     std::vector<bool> map_in_carve(frames.size(), false);  // what collect() did
     split.placeAwarenessMap(inCarve(0));
-    split.placeBinEntry(binsInCollect(0));
+    // Each step timed on the half that did it, and only there.
+    const auto expectSteps = [](AwarenessStage::ListingMs ms, Step from, Step to) {
+      EXPECT_EQ(ms.bins > 0.0, from < Step::kBinsEntered && to >= Step::kBinsEntered);
+      EXPECT_EQ(ms.cones > 0.0, from < Step::kConesListed && to >= Step::kConesListed);
+    };
+    split.placeConeListing(listedInCollect(0));
     split.collect(frames[0], &ring[0], &counters[0]);
-    EXPECT_EQ(split.lastCollectBinsMs() > 0.0, binsInCollect(0));
+    expectSteps(split.lastCollectListingMs(), Step::kNothing, listedInCollect(0));
     map_in_carve[0] = !split.lastCollectUpdatedMap();
     EXPECT_EQ(map_in_carve[0], inCarve(0));  // nothing to wait for
     for (std::size_t k = 0; k < frames.size(); ++k) {
       MeasurementBatch& b = ring[k % 3];
       int maps_observed = 0;
       double map_ms = -1.0;
-      double carve_bins_ms = -1.0;
+      AwarenessStage::ListingMs carve_listing_ms;
       std::thread carver([&] {
         map_ms = split.carve(&b, &counters[k % 3], [&](const AwarenessMap&) { ++maps_observed; });
-        carve_bins_ms = split.lastCarveBinsMs();
+        carve_listing_ms = split.lastCarveListingMs();
       });
       if (k + 1 < frames.size()) {
         counters[(k + 1) % 3] = PointCounters{};
         split.placeAwarenessMap(inCarve(k + 1));
-        split.placeBinEntry(binsInCollect(k + 1));
+        split.placeConeListing(listedInCollect(k + 1));
         split.collect(frames[k + 1], &ring[(k + 1) % 3], &counters[(k + 1) % 3]);
-        EXPECT_EQ(split.lastCollectBinsMs() > 0.0, binsInCollect(k + 1)) << "frame " << k + 1;
+        SCOPED_TRACE("frame " + std::to_string(k + 1));
+        expectSteps(split.lastCollectListingMs(), Step::kNothing, listedInCollect(k + 1));
         map_in_carve[k + 1] = !split.lastCollectUpdatedMap();
         // Left to carve() when asked; the other way, only while an earlier frame's map waited.
         if (inCarve(k + 1) || !map_in_carve[k]) {
@@ -198,7 +207,7 @@ TEST(AwarenessStage, HalvesOnTwoThreadsCarveWhatProcessCarves) {
         }
       }
       carver.join();
-      EXPECT_EQ(carve_bins_ms > 0.0, !binsInCollect(k)) << "frame " << k;
+      expectSteps(carve_listing_ms, listedInCollect(k), Step::kConesListed);
       EXPECT_EQ(maps_observed, map_in_carve[k] ? 1 : 0) << "frame " << k;
       EXPECT_EQ(map_ms > 0.0, map_in_carve[k]) << "frame " << k;
       MeasurementBatch a;
@@ -212,8 +221,9 @@ TEST(AwarenessStage, HalvesOnTwoThreadsCarveWhatProcessCarves) {
       std::size_t differing = 0;
       for (std::size_t w = 0; w < words; ++w)
         differing += a.free.data()[w] != b.free.data()[w] ? 1 : 0;
-      EXPECT_EQ(differing, 0u) << threads << " threads, frame " << k << ", bins entered by "
-                               << (binsInCollect(k) ? "collect()" : "carve()");
+      EXPECT_EQ(differing, 0u) << threads << " threads, frame " << k
+                               << ", listed by collect() to step "
+                               << static_cast<int>(listedInCollect(k));
       EXPECT_EQ(a.free_count, b.free_count);
       EXPECT_GT(a.free_count, 10000u);
       EXPECT_EQ(a.stamp_s, b.stamp_s);

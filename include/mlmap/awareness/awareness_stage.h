@@ -68,8 +68,8 @@ class AwarenessStage {
 
   /// The first half of process(), for a pipeline that runs the halves on two threads: the
   /// frame's points into end voxels, the hits (batch->hits, batch->far_hits) and the awareness
-  /// map, unless that is left to carve() (placeAwarenessMap()), and the ends' entry into their
-  /// direction bins where placeBinEntry() asks for it; the frame's ends wait for carve()
+  /// map, unless that is left to carve() (placeAwarenessMap()), and as much of the cone listing
+  /// as placeConeListing() asks for; the frame's ends wait for carve()
   /// (batch->free is carve()'s). Each collect() must be followed by one carve() of the
   /// same batch, in the same order; a collect() may run while carve() of an earlier frame runs
   /// on another thread (each half on one thread at a time). Adds to `counters` all but
@@ -78,12 +78,12 @@ class AwarenessStage {
   /// The same for a depth image (returns false, touching nothing, where process() does).
   bool collect(const DepthFrame& frame, MeasurementBatch* batch, PointCounters* counters);
   /// The second half of process(): the oldest frame collected and not yet carved: its awareness
-  /// map where collect() left it here, then its cones, carved into its batch's free set (sets
-  /// batch->free_count and adds free_voxels to `counters`), split over the kept threads as
-  /// process() splits it when no collect() holds them (TaskThreads::run()). The batch then holds
-  /// what process() would have filled it with, bit for bit. Where it updated the awareness map,
-  /// calls `on_map` with it (if set) before the next collect() may update it, and returns the
-  /// milliseconds the update took; otherwise returns 0.
+  /// map where collect() left it here, then the rest of its cone listing and its cones, carved into
+  /// its batch's free set (sets batch->free_count and adds free_voxels to `counters`), split over
+  /// the kept threads as process() splits it when no collect() holds them (TaskThreads::run()). The
+  /// batch then holds what process() would have filled it with, bit for bit. Where it updated the
+  /// awareness map, calls `on_map` with it (if set) before the next collect() may update it, and
+  /// returns the milliseconds the update took; otherwise returns 0.
   double carve(MeasurementBatch* batch, PointCounters* counters,
                const std::function<void(const AwarenessMap&)>& on_map = {});
 
@@ -98,21 +98,31 @@ class AwarenessStage {
   [[nodiscard]] bool lastCollectUpdatedMap() const { return collect_map_ms_ >= 0.0; }
   [[nodiscard]] double lastCollectMapMs() const { return std::max(collect_map_ms_, 0.0); }
 
-  /// Which half enters the ends of the frames collected from now on into their direction bins
-  /// (the cone listing's first pass: each end's finest bin and distance, each bin's nearest
-  /// member and parent): carve() (false, the default), or collect() (true) after the awareness
-  /// map, for when the second half is the longer one. The cones are the same either way: each
-  /// half sorts into scratch of its own, and the frame's bins go to carve() with its ends.
-  void placeBinEntry(bool in_collect) { bins_in_collect_ = in_collect; }
-  /// The milliseconds the last collect() took to enter its frame's ends into their bins (0 when
-  /// it left that to carve()); collect()'s thread.
-  [[nodiscard]] double lastCollectBinsMs() const { return collect_bins_ms_; }
-  /// The milliseconds the last carve() took to enter its frame's ends into their bins (0 when
-  /// collect() had entered them); carve()'s thread.
-  [[nodiscard]] double lastCarveBinsMs() const { return carve_bins_ms_; }
+  /// How far a frame's cone listing has come, in its two steps.
+  enum class ConeListingStep : std::uint8_t {
+    kNothing,      ///< not begun
+    kBinsEntered,  ///< the ends entered into their direction bins (each end's finest bin and
+                   ///< distance, each bin's nearest member and parent)
+    kConesListed,  ///< the cones listed from the bins and the ends: only the carving is left
+  };
+  /// How far collect() takes the cone listing of the frames collected from now on, after the
+  /// awareness map (collect()'s thread): nowhere (kNothing, the default: carve() lists the
+  /// cones), the bin entry, or the whole listing, for when the second half is the longer one.
+  /// The cones are the same either way: each half lists into scratch of its own, and the
+  /// frame's listing goes to carve() with its ends.
+  void placeConeListing(ConeListingStep in_collect) { listing_in_collect_ = in_collect; }
+  /// The milliseconds of the cone listing's two steps on one half (0 for a step not done there).
+  struct ListingMs {
+    double bins = 0.0;   ///< the bin entry
+    double cones = 0.0;  ///< the cones listed from the bins
+  };
+  /// The last collect()'s listing steps; collect()'s thread.
+  [[nodiscard]] ListingMs lastCollectListingMs() const { return collect_listing_ms_; }
+  /// The last carve()'s listing steps (those collect() left); carve()'s thread.
+  [[nodiscard]] ListingMs lastCarveListingMs() const { return carve_listing_ms_; }
   /// The cones the last process() or carve() carved (its direction bins' and its ends');
   /// carve()'s thread.
-  [[nodiscard]] std::size_t lastConeCount() const { return cones_.size(); }
+  [[nodiscard]] std::size_t lastConeCount() const { return carve_listing_.cones.size(); }
 
   /// The awareness map after the last frame (after its collect() or carve(), whichever updated
   /// it).
@@ -169,7 +179,7 @@ class AwarenessStage {
     VoxelSpaceBox points{};  // bounding box of the frame's points in it (voxel units)
     Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  // first point
     bool cut = false;       // rays cut at max_range_m (free end) rather than hits
-    std::uint32_t bin = 0;  // direction: its bin on the finest level (place in bins_[0])
+    std::uint32_t bin = 0;  // direction: its bin on the finest level (its place there)
     double near = 0.0;      // distance from the sensor to `points` (voxel units)
   };
   /// The awareness map of this frame: carried obstacles, hits, then the 2D rho-z ray walks, from
@@ -179,7 +189,7 @@ class AwarenessStage {
   /// Rays bundled by direction (a cube-map bin of one level): the shared part of their cones.
   struct Bin {
     std::uint32_t index = 0;     // on its level: binKey() of its direction (its parent's: >> 2)
-    std::uint32_t parent = 0;    // its parent's index in the next level's bins_
+    std::uint32_t parent = 0;    // its parent's place in the next level
     std::uint32_t children = 0;  // bins of the level below in it (ends on the finest level)
     double near = 0.0;           // nearest member distance (voxel units)
     double start = 0.0;          // where its members' cones start (listCones(); voxel units)
@@ -226,30 +236,49 @@ class AwarenessStage {
                    PointPart* part) const;
   /// The entry in part->ends of a box key (voxel index | kCutFlag), added when new.
   std::uint32_t findOrAddEnd(PointPart* part, std::uint32_t key) const;
-  /// The cone listing's first pass: enters every end of `ends` into its finest direction bin
-  /// (sets the end's bin, its place in (*bin_levels)[0], and near) and the bins' ancestors into
-  /// `bin_levels` (one vector per level, finest first, rebuilt), each bin with its nearest
-  /// member and its parent; `order` and `order_scratch` hold the ends' sort by bin (the calling
-  /// half's own, so that the two halves can enter frames at once).
-  void enterBins(const Eigen::Vector3d& origin_vox, std::vector<End>& ends,
-                 std::vector<std::uint64_t>* order, std::vector<std::uint64_t>* order_scratch,
-                 std::vector<std::vector<Bin>>* bin_levels) const;
-  /// Lists the frame's cones: those of the direction bins and of the ends (`ends`: ends_ with
-  /// outside_ appended), into cones_. Writes only the direction fields (bin, near) of `ends`.
-  /// With `bins_entered` the ends are in bins_ already (enterBins() by collect()); otherwise
-  /// they are entered here first (into bins_), timed into carve_bins_ms_.
-  void listCones(const Eigen::Vector3d& origin_vox, std::vector<End>& ends, bool bins_entered);
-  /// updateAwarenessMap() and listCones() of one frame, side by side on the kept threads when
-  /// there are any. Returns the map's milliseconds.
-  double mapAndListCones(const Eigen::Vector3d& body_W, const Eigen::Vector3d& origin_vox,
-                         std::vector<End>& ends, bool bins_entered);
   /// A cone to carve: the part s in [s_min, 1] of the cone from the sensor to `box`.
   struct Cone {
     VoxelSpaceBox box{};
     double s_min = 0.0;
   };
-  /// Carves cones_ into batch->free, clears the hits and counts the free voxels (sets
-  /// batch->free_count): on the calling thread, or split by box x over awareness.num_threads
+  /// A frame's cone listing and its scratch. Each half lists into its own (so that the two
+  /// halves can list frames at once); a frame that collect() listed carries its listing to
+  /// carve(), swapped, so that the memory goes round.
+  struct ConeListing {
+    // Level 0: bins about bin_width_voxels wide at the maximum range; level L: 2^L times wider,
+    // covering the distances where they are still about that wide. Per level, the frame's bins
+    // with members, in the order of their index (a bin's children are consecutive there), so
+    // the levels are built and read in order, with no table over all the bins of a level.
+    std::vector<std::vector<Bin>> bins;
+    // The ends by finest bin: (bin index << 32 | end), radix-sorted, and the sort's scratch.
+    std::vector<std::uint64_t> order;
+    std::vector<std::uint64_t> order_scratch;
+    std::vector<Cone> cones;  // the frame's cones, ends first, then bins (fine to coarse)
+    /// The bytes it holds.
+    [[nodiscard]] std::size_t bytes() const;
+  };
+  /// The cone listing's first step: enters every end of `ends` (ends_ with outside_ appended)
+  /// into its finest direction bin (sets the end's bin, its place in listing->bins[0], and near)
+  /// and the bins' ancestors into listing->bins (one vector per level, finest first, rebuilt),
+  /// each bin with its nearest member and its parent.
+  void enterBins(const Eigen::Vector3d& origin_vox, std::vector<End>& ends,
+                 ConeListing* listing) const;
+  /// The second step: lists the cones of the direction bins and of the ends into
+  /// listing->cones, from the bins enterBins() entered `ends` into.
+  void listCones(const Eigen::Vector3d& origin_vox, const std::vector<End>& ends,
+                 ConeListing* listing) const;
+  /// The steps of the cone listing after `from` up to `to`, into `listing`, each timed into `ms`
+  /// (the steps not done here 0). Writes only the direction fields (bin, near) of `ends`.
+  void advanceListing(const Eigen::Vector3d& origin_vox, std::vector<End>& ends,
+                      ConeListingStep from, ConeListingStep to, ConeListing* listing,
+                      ListingMs* ms) const;
+  /// updateAwarenessMap() and the rest of the cone listing after `from` (into carve_listing_),
+  /// of one frame, side by side on the kept threads when there are any and the listing is not
+  /// done. Returns the map's milliseconds.
+  double mapAndListCones(const Eigen::Vector3d& body_W, const Eigen::Vector3d& origin_vox,
+                         std::vector<End>& ends, ConeListingStep from);
+  /// Carves carve_listing_'s cones into batch->free, clears the hits and counts the free voxels
+  /// (sets batch->free_count): on the calling thread, or split by box x over awareness.num_threads
   /// threads (the same bits either way).
   void carveCones(const Eigen::Vector3d& origin_vox, MeasurementBatch* batch);
   /// The bytes of the second half's scratch (bins, cones), for memoryBytes().
@@ -265,18 +294,17 @@ class AwarenessStage {
   Eigen::Vector3i box_dims_ = Eigen::Vector3i::Zero();  // scratch box of the current frame
   std::vector<End> ends_;                               // inside the scratch box, one per voxel
   std::vector<End> outside_;  // beyond the box (the local map cannot hold them), per point
-  // The second half's (listCones(), carveCones()): with collect() and carve(), carve()'s thread's.
-  std::vector<Cone> cones_;            // this frame's cones, ends first, then bins (fine to coarse)
+  // The second half's (carveCones()): with collect() and carve(), carve()'s thread's.
   std::vector<double> range_scratch_;  // the cones' work per box x, for splitting it over threads
   std::vector<PointPart> parts_;       // one per thread; ends_ and outside_ merge them
   std::unique_ptr<TaskThreads> threads_;  // with awareness.num_threads > 1
-  /// A frame between collect() and carve(): its ends (ends_ and outside_), its direction bins
-  /// where collect() entered them, its body and sensor (for the awareness map and the cones)
+  /// A frame between collect() and carve(): its ends (ends_ and outside_), its cone listing as
+  /// far as collect() took it, its body and sensor (for the awareness map and the cones)
   /// and the box of its free set (which carve() clears).
   struct CollectedFrame {
     std::vector<End> ends;
-    std::vector<std::vector<Bin>> bins;  // per level, with bins_entered (else spare memory)
-    bool bins_entered = false;           // collect() entered the ends into `bins`
+    ConeListing listing;  // as far as `listed` (spare memory at kNothing)
+    ConeListingStep listed = ConeListingStep::kNothing;
     Eigen::Vector3d body_W = Eigen::Vector3d::Zero();
     bool map_in_carve = false;  // its awareness map is carve()'s to update
     Eigen::Vector3d origin_vox = Eigen::Vector3d::Zero();
@@ -292,26 +320,17 @@ class AwarenessStage {
   // updates the map only at 0, waiting for it on maps_carved_.
   int maps_in_carve_ = 0;
   std::condition_variable maps_carved_;
-  bool map_in_carve_ = false;     // placeAwarenessMap() (collect()'s thread)
-  double collect_map_ms_ = 0.0;   // the last collect()'s map update, -1 when none (its thread)
-  bool bins_in_collect_ = false;  // placeBinEntry() (collect()'s thread)
-  double collect_bins_ms_ = 0.0;  // the last collect()'s enterBins() (its thread)
-  // collect()'s sort of the ends by bin (enterBins()'s order and scratch) and the bins it fills,
-  // swapped into its frame (collect()'s thread).
-  std::vector<std::uint64_t> collect_order_;
-  std::vector<std::uint64_t> collect_order_scratch_;
-  std::vector<std::vector<Bin>> collect_bins_;
-  // The second half's state from here on (listCones(), carveCones()): with collect() and
-  // carve(), on carve()'s thread only.
-  double carve_bins_ms_ = 0.0;  // listCones()'s enterBins(), 0 when collect() entered them
-  // Level 0: bins about bin_width_voxels wide at the maximum range; level L: 2^L times wider,
-  // covering the distances where they are still about that wide. Per level, this frame's bins
-  // with members, in the order of their index (a bin's children are consecutive there), so the
-  // levels are built and read in order, with no table over all the bins of a level.
-  std::vector<std::vector<Bin>> bins_;
-  // The ends by finest bin: (bin index << 32 | end), radix-sorted, and the sort's scratch.
-  std::vector<std::uint64_t> end_order_;
-  std::vector<std::uint64_t> end_order_scratch_;
+  bool map_in_carve_ = false;    // placeAwarenessMap() (collect()'s thread)
+  double collect_map_ms_ = 0.0;  // the last collect()'s map update, -1 when none (its thread)
+  // placeConeListing(), the last collect()'s listing steps and its listing, swapped into its
+  // frame (collect()'s thread).
+  ConeListingStep listing_in_collect_ = ConeListingStep::kNothing;
+  ListingMs collect_listing_ms_;
+  ConeListing collect_listing_;
+  // The second half's listing, and its steps of the last frame (process(); with collect() and
+  // carve(), carve()'s thread's).
+  ConeListing carve_listing_;
+  ListingMs carve_listing_ms_;
   int bins_per_face_side_ = 0;  // at level 0, a power of two
   std::vector<std::uint32_t> sample_indices_;
   std::vector<float> ray_x_;                   // depth images: (u - cx) / fx per column

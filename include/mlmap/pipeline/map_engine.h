@@ -206,19 +206,21 @@ class MapEngine {
     /// Whether four frames were added (the shortest is of a full window).
     [[nodiscard]] bool full() const { return count >= ms.size(); }
   };
-  // Threaded: each thread's milliseconds per frame without the awareness map and the bin entry
-  // (the shortest of the last few), which decide the half that updates the map
-  // (AwarenessStage::placeAwarenessMap()) and the half that enters the ends into their
-  // direction bins (AwarenessStage::placeBinEntry()).
+  // Threaded: each thread's milliseconds per frame without the awareness map and the cone
+  // listing (the shortest of the last few), which decide the half that updates the map
+  // (AwarenessStage::placeAwarenessMap()) and how far the first half takes the cone listing
+  // (AwarenessStage::placeConeListing()).
   RecentMinimum awareness_recent_;              // the awareness thread's
   RecentMinimum local_recent_;                  // the local-global thread's
   double awareness_half_ms_ = -1.0;             // the awareness thread's (-1: none yet)
   std::atomic<double> local_half_ms_{-1.0};     // the local-global thread's (-1: none yet)
   std::atomic<double> map_half_ms_{-1.0};       // the awareness map's update, on either thread
   bool map_in_carve_ = true;                    // the place last chosen (the awareness thread's)
-  std::atomic<double> bins_half_ms_{-1.0};      // the bin entry, on either thread
+  std::atomic<double> bins_half_ms_{-1.0};      // the listing's bin entry, on either thread
+  std::atomic<double> cones_half_ms_{-1.0};     // the rest of the listing, on either thread
   std::atomic<bool> local_recent_full_{false};  // local_recent_.full(), for the awareness thread
-  bool bins_in_collect_ = false;                // its place last chosen (the awareness thread's)
+  // How far the awareness thread takes the cone listing, last chosen (the awareness thread's).
+  AwarenessStage::ConeListingStep listing_in_awareness_ = AwarenessStage::ConeListingStep::kNothing;
   // Threaded mode: the two stage threads and their queues (null in synchronous mode; last, so
   // that the threads stop before anything they use is destroyed).
   std::unique_ptr<StageThreads> stages_;
