@@ -803,8 +803,8 @@ double AwarenessStage::updateAwarenessMap(const Eigen::Vector3d& body_W,
 }
 
 double AwarenessStage::mapAndListCones(const Eigen::Vector3d& body_W,
-                                       const Eigen::Vector3d& origin_vox, std::vector<End>& ends,
-                                       ConeListingStep from) {
+                                       const Eigen::Vector3d& origin_vox,
+                                       const std::vector<End>& ends, ConeListingStep from) {
   auto listRest = [&] {
     advanceListing(origin_vox, ends, from, ConeListingStep::kConesListed, &carve_listing_,
                    &carve_listing_ms_);
@@ -814,9 +814,8 @@ double AwarenessStage::mapAndListCones(const Eigen::Vector3d& body_W,
     listRest();
     return map_ms;
   }
-  // The awareness map and the cones share no state (the listing writes only the direction
-  // fields of the ends, the map reads their points): the map is updated on a kept thread
-  // meanwhile, the same map either way.
+  // The awareness map and the cones share no state (both only read the ends): the map is
+  // updated on a kept thread meanwhile, the same map either way.
   double map_ms = 0.0;
   threads_->run(2, [&](int job) {
     if (job == 0) {
@@ -828,7 +827,7 @@ double AwarenessStage::mapAndListCones(const Eigen::Vector3d& body_W,
   return map_ms;
 }
 
-void AwarenessStage::advanceListing(const Eigen::Vector3d& o, std::vector<End>& ends,
+void AwarenessStage::advanceListing(const Eigen::Vector3d& o, const std::vector<End>& ends,
                                     ConeListingStep from, ConeListingStep to, ConeListing* listing,
                                     ListingMs* ms) const {
   *ms = ListingMs{};
@@ -844,7 +843,7 @@ void AwarenessStage::advanceListing(const Eigen::Vector3d& o, std::vector<End>& 
   }
 }
 
-void AwarenessStage::enterBins(const Eigen::Vector3d& o, std::vector<End>& ends,
+void AwarenessStage::enterBins(const Eigen::Vector3d& o, const std::vector<End>& ends,
                                ConeListing* listing) const {
   const int n0 = bins_per_face_side_;
   int lg0 = 0;
@@ -853,9 +852,12 @@ void AwarenessStage::enterBins(const Eigen::Vector3d& o, std::vector<End>& ends,
   // bin, so that each level's bins come out in index order, a bin's children next to each other
   // (binKey()), and every level is built by one pass over the level below.
   std::vector<std::uint64_t>* order = &listing->order;
+  std::vector<double>& near = listing->end_near;
   order->resize(ends.size());
+  near.resize(ends.size());
+  listing->end_bin.resize(ends.size());
   for (std::size_t i = 0; i < ends.size(); ++i) {
-    End& e = ends[i];
+    const End& e = ends[i];
     const Eigen::Vector3d d = 0.5 * (e.points.min + e.points.max).cast<double>() - o;
     const Eigen::Vector3d m = d.cwiseAbs();
     int axis = 0;
@@ -867,7 +869,7 @@ void AwarenessStage::enterBins(const Eigen::Vector3d& o, std::vector<End>& ends,
         std::clamp(static_cast<int>((d[(axis + 1) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
     const int iv =
         std::clamp(static_cast<int>((d[(axis + 2) % 3] * inv + 1.0) * 0.5 * n0), 0, n0 - 1);
-    e.near = distanceToBox(o, e.points);
+    near[i] = distanceToBox(o, e.points);
     (*order)[i] = (std::uint64_t{binKey(face, iu, iv, lg0)} << 32) | i;
   }
   sortByKey(3 + 2 * lg0, order, &listing->order_scratch);
@@ -878,8 +880,9 @@ void AwarenessStage::enterBins(const Eigen::Vector3d& o, std::vector<End>& ends,
   empty.dir_hi = Eigen::Vector3d::Constant(std::numeric_limits<double>::lowest());
   buildBinLevels(
       *order, static_cast<std::size_t>(lg0) + 1, empty,
-      [&ends](std::uint32_t i) { return ends[i].near; },
-      [&ends](std::uint32_t i, std::uint32_t place) { ends[i].bin = place; }, &listing->bins);
+      [&near](std::uint32_t i) { return near[i]; },
+      [listing](std::uint32_t i, std::uint32_t place) { listing->end_bin[i] = place; },
+      &listing->bins);
 }
 
 void AwarenessStage::listCones(const Eigen::Vector3d& o, const std::vector<End>& ends,
@@ -931,13 +934,15 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, const std::vector<End>&
   // and an end's points lie within a voxel, so |p - o| / near < 1 + 2 / near.
   std::vector<Bin>& finest = levels[0];
   cones.clear();
-  for (const End& e : ends) {
-    if (!(e.near > 0.0)) {
+  for (std::size_t i = 0; i < ends.size(); ++i) {
+    const End& e = ends[i];
+    const double near = listing->end_near[i];
+    if (!(near > 0.0)) {
       cones.push_back({e.points, 0.0});
       continue;
     }
-    Bin& bin = finest[e.bin];
-    const double inv_near = 1.0 / e.near;
+    Bin& bin = finest[listing->end_bin[i]];
+    const double inv_near = 1.0 / near;
     bin.dir_lo = bin.dir_lo.cwiseMin((e.points.min.cast<double>() - o) * inv_near);
     bin.dir_hi = bin.dir_hi.cwiseMax((e.points.max.cast<double>() - o) * inv_near);
     const double s_min = (bin.children > 1 ? reachOf(0, bin) : bin.start) * inv_near;
@@ -1034,7 +1039,8 @@ void AwarenessStage::carveCones(const Eigen::Vector3d& o, MeasurementBatch* batc
 
 std::size_t AwarenessStage::ConeListing::bytes() const {
   std::size_t n = (order.capacity() + order_scratch.capacity()) * sizeof(std::uint64_t) +
-                  cones.capacity() * sizeof(Cone);
+                  end_near.capacity() * sizeof(double) +
+                  end_bin.capacity() * sizeof(std::uint32_t) + cones.capacity() * sizeof(Cone);
   for (const std::vector<Bin>& level : bins) n += level.capacity() * sizeof(Bin);
   return n;
 }

@@ -175,13 +175,12 @@ class AwarenessStage {
   void collectEnds(const Source& source, const FrameGeometry& g, PointCounters* counters);
   /// A voxel where rays end in this frame: the box of its points and the first point.
   struct End {
+    Eigen::Vector3d p_W = Eigen::Vector3d::Zero();    // first point
     Eigen::Vector3i voxel = Eigen::Vector3i::Zero();  // box-relative
     VoxelSpaceBox points{};  // bounding box of the frame's points in it (voxel units)
-    Eigen::Vector3d p_W = Eigen::Vector3d::Zero();  // first point
-    bool cut = false;       // rays cut at max_range_m (free end) rather than hits
-    std::uint32_t bin = 0;  // direction: its bin on the finest level (its place there)
-    double near = 0.0;      // distance from the sensor to `points` (voxel units)
+    bool cut = false;        // rays cut at max_range_m (free end) rather than hits
   };
+  static_assert(sizeof(End) <= 64, "an end is 64 bytes at most (the listing reads them all)");
   /// The awareness map of this frame: carried obstacles, hits, then the 2D rho-z ray walks, from
   /// the frame's ends (those beyond the box included). Reads only the ends' points and `cut`.
   /// Returns the milliseconds it took.
@@ -253,30 +252,36 @@ class AwarenessStage {
     // The ends by finest bin: (bin index << 32 | end), radix-sorted, and the sort's scratch.
     std::vector<std::uint64_t> order;
     std::vector<std::uint64_t> order_scratch;
+    // Per end (in the frame's order): its distance from the sensor to its points (voxel units)
+    // and its finest bin (its place in bins[0]); beside the ends, not in them, so that the
+    // bins' building reads its members' distances from a small array (the ends are 64 bytes
+    // each) and the listing writes nothing the awareness map reads.
+    std::vector<double> end_near;
+    std::vector<std::uint32_t> end_bin;
     std::vector<Cone> cones;  // the frame's cones, ends first, then bins (fine to coarse)
     /// The bytes it holds.
     [[nodiscard]] std::size_t bytes() const;
   };
   /// The cone listing's first step: enters every end of `ends` (ends_ with outside_ appended)
-  /// into its finest direction bin (sets the end's bin, its place in listing->bins[0], and near)
-  /// and the bins' ancestors into listing->bins (one vector per level, finest first, rebuilt),
-  /// each bin with its nearest member and its parent.
-  void enterBins(const Eigen::Vector3d& origin_vox, std::vector<End>& ends,
+  /// into its finest direction bin (sets listing->end_near and end_bin) and the bins' ancestors
+  /// into listing->bins (one vector per level, finest first, rebuilt), each bin with its nearest
+  /// member and its parent.
+  void enterBins(const Eigen::Vector3d& origin_vox, const std::vector<End>& ends,
                  ConeListing* listing) const;
   /// The second step: lists the cones of the direction bins and of the ends into
   /// listing->cones, from the bins enterBins() entered `ends` into.
   void listCones(const Eigen::Vector3d& origin_vox, const std::vector<End>& ends,
                  ConeListing* listing) const;
   /// The steps of the cone listing after `from` up to `to`, into `listing`, each timed into `ms`
-  /// (the steps not done here 0). Writes only the direction fields (bin, near) of `ends`.
-  void advanceListing(const Eigen::Vector3d& origin_vox, std::vector<End>& ends,
+  /// (the steps not done here 0).
+  void advanceListing(const Eigen::Vector3d& origin_vox, const std::vector<End>& ends,
                       ConeListingStep from, ConeListingStep to, ConeListing* listing,
                       ListingMs* ms) const;
   /// updateAwarenessMap() and the rest of the cone listing after `from` (into carve_listing_),
   /// of one frame, side by side on the kept threads when there are any and the listing is not
   /// done. Returns the map's milliseconds.
   double mapAndListCones(const Eigen::Vector3d& body_W, const Eigen::Vector3d& origin_vox,
-                         std::vector<End>& ends, ConeListingStep from);
+                         const std::vector<End>& ends, ConeListingStep from);
   /// Carves carve_listing_'s cones into batch->free, clears the hits and counts the free voxels
   /// (sets batch->free_count): on the calling thread, or split by box x over awareness.num_threads
   /// threads (the same bits either way).
