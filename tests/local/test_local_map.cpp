@@ -444,11 +444,11 @@ TEST(LocalMap, AWindowMoveUnmarksTheColumnsItEmptied) {
   };
   check("filled", 150);
   map.recenter({2.5, 0.5, 0.5}, &global);  // one submap (2 voxels) along +x: a new empty slab
-  check("moved along x", 8 * 15);
+  check("moved along x", std::size_t{8} * 15);
   map.recenter({2.5, 0.5, 1.5}, &global);  // one submap along z: every column keeps 4 layers
-  check("moved along z", 8 * 15);
+  check("moved along z", std::size_t{8} * 15);
   map.recenter({2.5, 0.5, 0.5}, &global);  // back along z: the layer comes back from the global map
-  check("back along z", 8 * 15);
+  check("back along z", std::size_t{8} * 15);
   map.recenter({0.5, 0.5, 0.5}, &global);  // back along x: the slab comes back, marked again
   check("back along x", 150);
 }
@@ -615,6 +615,7 @@ TEST(LocalGlobal, GlobalMemoryGrowsWithOccupiedVoxelsNotWithTheAreaFlown) {
     map.recenter(body, &global);
     const VoxelIndex b = voxelIndexOf(body, 0.2);
     std::vector<VoxelIndex> f;
+    f.reserve(frees.size());
     for (const auto& v : frees) f.push_back(b + v);
     map.integrate(makeBatch(body, {}, f));
   }
@@ -628,6 +629,7 @@ TEST(LocalGlobal, GlobalMemoryGrowsWithOccupiedVoxelsNotWithTheAreaFlown) {
     map.recenter(body, &global);
     const VoxelIndex b = voxelIndexOf(body, 0.2);
     std::vector<VoxelIndex> hits;
+    hits.reserve(4);
     for (int z = 0; z < 4; ++z) hits.push_back(b + VoxelIndex(0, 5, z));
     obstacles += hits.size();
     map.integrate(makeBatch(body, hits, {}));
