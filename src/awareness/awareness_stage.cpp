@@ -951,12 +951,7 @@ void AwarenessStage::listCones(const Eigen::Vector3d& o, const std::vector<End>&
   }
   // A bin's box at its reach, rounded outwards to float.
   auto boxAt = [&o](const Bin& bin, double reach) {
-    VoxelSpaceBox box;
-    for (int k = 0; k < 3; ++k) {
-      box.min[k] = floatBelow(o[k] + reach * bin.dir_lo[k]);
-      box.max[k] = -floatBelow(-(o[k] + reach * bin.dir_hi[k]));
-    }
-    return box;
+    return roundOutwards(o + reach * bin.dir_lo, o + reach * bin.dir_hi);
   };
   // A child's directions are complete when its level is hulled into the next (its own children
   // came before), so its cone is listed in the same pass; the coarsest level's after it. Reach

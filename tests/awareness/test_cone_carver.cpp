@@ -7,7 +7,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <vector>
@@ -264,6 +266,60 @@ TEST(ConeCarver, FloatBelowIsTheLargestFloatNotAboveItsArgument) {
   EXPECT_GT(stepped, 5000);
   EXPECT_LT(stepped, static_cast<int>(xs.size()) - 5000);
   EXPECT_EQ(floatBelow(-1e-50), -std::numeric_limits<float>::denorm_min());
+}
+
+// roundOutwards() (two coordinates at a time where there is SSE2) gives the floats that
+// floatBelow() gives per coordinate, bit for bit: both rounding ways, both signs, zeros of both
+// signs, denormals, exact floats and the ends of the float range, in every slot of the box.
+TEST(ConeCarver, RoundOutwardsIsFloatBelowPerCoordinate) {
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<double> coord(-300.0, 300.0);
+  std::uniform_real_distribution<double> tiny(-1e-40, 1e-40);
+  const std::vector<double> special = {0.0,
+                                       -0.0,
+                                       1.0,
+                                       -1.0,
+                                       1e-50,
+                                       -1e-50,
+                                       3.0000001,
+                                       -3.0000001,
+                                       0.5,
+                                       -0.5,
+                                       std::numeric_limits<float>::max(),
+                                       -std::numeric_limits<float>::max()};
+  std::uniform_int_distribution<std::size_t> pick(0, special.size() - 1);
+  std::uniform_int_distribution<int> kind(0, 3);
+  auto draw = [&] {
+    switch (kind(rng)) {
+      case 0:
+        return special[pick(rng)];
+      case 1:
+        return tiny(rng);
+      case 2:
+        return static_cast<double>(static_cast<float>(coord(rng)));  // exact float
+      default:
+        return coord(rng);
+    }
+  };
+  auto sameBits = [](float a, float b) {
+    std::uint32_t x = 0;
+    std::uint32_t y = 0;
+    std::memcpy(&x, &a, sizeof x);
+    std::memcpy(&y, &b, sizeof y);
+    return x == y;
+  };
+  int stepped = 0;
+  for (int i = 0; i < 20000; ++i) {
+    const Eigen::Vector3d lo(draw(), draw(), draw());
+    const Eigen::Vector3d hi(draw(), draw(), draw());
+    const VoxelSpaceBox box = roundOutwards(lo, hi);
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_TRUE(sameBits(box.min[k], floatBelow(lo[k]))) << "lo = " << lo[k];
+      ASSERT_TRUE(sameBits(box.max[k], -floatBelow(-hi[k]))) << "hi = " << hi[k];
+      stepped += static_cast<double>(static_cast<float>(lo[k])) > lo[k] ? 1 : 0;
+    }
+  }
+  EXPECT_GT(stepped, 5000);  // rounding up was corrected often, in every slot over the draws
 }
 
 }  // namespace

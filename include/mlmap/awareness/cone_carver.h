@@ -13,8 +13,13 @@
 
 #include "mlmap/core/voxel_bitset.h"
 
+#include <Eigen/Core>
+
 #include <cstdint>
 #include <cstring>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 namespace mlmap {
 
@@ -39,6 +44,44 @@ inline float floatBelow(double x) {
   bits += up * (2u * (bits >> 31) - 1u);  // + 0, or -1 / +1 (unsigned wrap-around)
   std::memcpy(&f, &bits, sizeof bits);
   return f;
+}
+
+/// The box [lo, hi] computed in double, rounded outwards to float: floatBelow() of each of lo's
+/// coordinates and -floatBelow(-x) of hi's, the same floats. Two coordinates at a time in SSE2
+/// where there is SSE2, so that the bits stay in vector registers (the scalar floatBelow() moves
+/// each float to an integer register and back, a listing's cone boxes' main cost).
+inline VoxelSpaceBox roundOutwards(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  VoxelSpaceBox box;
+#ifdef __SSE2__
+  // floatBelow() on two doubles: to float (to nearest, as static_cast), back, and one step
+  // towards -infinity where that went up: bits - 1 for a positive float, bits + 1 for a negative
+  // one, that is bits - (sign | 1) with sign 0 or -1.
+  auto below2 = [](__m128d x, float* out) {
+    const __m128 f = _mm_cvtpd_ps(x);
+    const __m128d up = _mm_cmpgt_pd(_mm_cvtps_pd(f), x);  // 64-bit lanes
+    const __m128i up32 = _mm_castps_si128(
+        _mm_shuffle_ps(_mm_castpd_ps(up), _mm_castpd_ps(up), _MM_SHUFFLE(2, 0, 2, 0)));
+    const __m128i bits = _mm_castps_si128(f);
+    const __m128i step = _mm_or_si128(_mm_srai_epi32(bits, 31), _mm_set1_epi32(1));
+    const __m128 r = _mm_castsi128_ps(_mm_sub_epi32(bits, _mm_and_si128(step, up32)));
+    alignas(16) float lanes[4];
+    _mm_store_ps(lanes, r);
+    out[0] = lanes[0];
+    out[1] = lanes[1];
+  };
+  float v[6];
+  below2(_mm_setr_pd(lo.x(), lo.y()), v);
+  below2(_mm_setr_pd(lo.z(), -hi.x()), v + 2);
+  below2(_mm_setr_pd(-hi.y(), -hi.z()), v + 4);
+  box.min = Eigen::Vector3f(v[0], v[1], v[2]);
+  box.max = Eigen::Vector3f(-v[3], -v[4], -v[5]);
+#else
+  for (int k = 0; k < 3; ++k) {
+    box.min[k] = floatBelow(lo[k]);
+    box.max[k] = -floatBelow(-hi[k]);
+  }
+#endif
+  return box;
 }
 
 /// Marks in `free` every voxel that the part s in [s_min, 1] of the cone from `origin` to `box`
