@@ -16,9 +16,11 @@ struct HalvesMs {
 };
 
 /// How far the awareness thread takes the cone listing from now on (the rest is the
-/// local-global thread's), from `now`: a step further or back where that shortens the longer
-/// half by more than half the step, so that the place does not flip with every frame (each move
-/// finds the other half's listing scratch out of its cache); further only when `settled`.
+/// local-global thread's), from `now`: a step further while the awareness thread's half stays
+/// the shorter one with it, and only when `settled`; a step back where that half is the longer
+/// one even without its last step. Between the two the place stays, so that it does not follow
+/// the halves' noise (each is the shortest of a few frames, and they swap now and then where
+/// they are about even): each move finds the other half's listing scratch out of its cache.
 AwarenessStage::ConeListingStep placeConeListing(AwarenessStage::ConeListingStep now,
                                                  const HalvesMs& ms, bool settled);
 

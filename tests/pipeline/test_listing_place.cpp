@@ -3,7 +3,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <array>
 #include <cstdlib>
 #include <random>
@@ -12,14 +11,6 @@ namespace mlmap {
 namespace {
 
 using Step = AwarenessStage::ConeListingStep;
-
-// The longer half with the listing taken to `step` by the awareness thread.
-double longerHalf(const HalvesMs& ms, Step step) {
-  const double moved = step == Step::kNothing       ? 0.0
-                       : step == Step::kBinsEntered ? ms.bins_ms
-                                                    : ms.bins_ms + ms.cones_ms;
-  return std::max(ms.awareness_ms + moved, ms.local_ms + ms.bins_ms + ms.cones_ms - moved);
-}
 
 HalvesMs halves(double awareness_ms, double local_ms, double bins_ms, double cones_ms) {
   HalvesMs ms;
@@ -32,7 +23,8 @@ HalvesMs halves(double awareness_ms, double local_ms, double bins_ms, double con
 
 // The streamed flight's halves (as measured): the bin entry to the point loop, not the cones,
 // which would make the point loop the longer half; the tabletop frames' (the point loop the
-// longer half): nothing moves; a carving half much the longer (a LiDAR scan's): all of it.
+// longer half): nothing moves, and what moved comes back; a carving half much the longer (a
+// LiDAR scan with one awareness thread): all of it. Halves about even keep their place.
 TEST(ListingPlace, MovesTheStepsThatShortenTheLongerHalf) {
   const HalvesMs flight = halves(1.89, 2.16, 0.45, 0.47);
   EXPECT_EQ(placeConeListing(Step::kNothing, flight, true), Step::kBinsEntered);
@@ -45,15 +37,19 @@ TEST(ListingPlace, MovesTheStepsThatShortenTheLongerHalf) {
   EXPECT_EQ(placeConeListing(Step::kNothing, carving, true), Step::kBinsEntered);
   EXPECT_EQ(placeConeListing(Step::kBinsEntered, carving, true), Step::kConesListed);
   EXPECT_EQ(placeConeListing(Step::kConesListed, carving, true), Step::kConesListed);
+  // About even: the bin entry neither moves nor comes back.
+  const HalvesMs even = halves(1.05, 1.0, 0.2, 0.2);
+  EXPECT_EQ(placeConeListing(Step::kNothing, even, true), Step::kNothing);
+  EXPECT_EQ(placeConeListing(Step::kBinsEntered, even, true), Step::kBinsEntered);
   // Nothing moves towards the awareness thread before the halves have settled; back, it does.
   EXPECT_EQ(placeConeListing(Step::kNothing, carving, false), Step::kNothing);
   EXPECT_EQ(placeConeListing(Step::kBinsEntered, tabletop, false), Step::kNothing);
 }
 
-// Against a slow reference of the rule, on random halves: a step moves only where it shortens
-// the longer half by more than half the step, one step at a time, never further without
-// `settled`; and within the band no step shortens by that much, so the place stays.
-TEST(ListingPlace, MovesAStepOnlyWhereThatShortensTheLongerHalfByHalfTheStep) {
+// Against the rule written out, on random halves: a step forth only while the awareness half
+// stays the shorter with it (and only when `settled`), a step back only where that half is the
+// longer even without its last step, one step at a time; otherwise the place stays.
+TEST(ListingPlace, MovesAStepOnlyWhereTheRuleSays) {
   std::mt19937 rng(44);
   std::uniform_real_distribution<double> half(0.0, 10.0);
   std::uniform_real_distribution<double> part(0.0, 3.0);
@@ -63,25 +59,27 @@ TEST(ListingPlace, MovesAStepOnlyWhereThatShortensTheLongerHalfByHalfTheStep) {
   int stayed = 0;
   for (int trial = 0; trial < 20000; ++trial) {
     const HalvesMs ms = halves(half(rng), half(rng), part(rng), part(rng));
-    const std::array<double, 3> step_ms{0.0, ms.bins_ms, ms.cones_ms};
+    // The listing's milliseconds on the awareness thread at each step, and in all.
+    const std::array<double, 3> here{0.0, ms.bins_ms, ms.bins_ms + ms.cones_ms};
+    const double all = here[2];
     for (int k = 0; k < 3; ++k) {
+      const auto uk = static_cast<std::size_t>(k);
       const bool settled = trial % 4 != 0;
-      const Step next = placeConeListing(steps[k], ms, settled);
+      const Step next = placeConeListing(steps[uk], ms, settled);
       const int n = static_cast<int>(next);
       ASSERT_LE(std::abs(n - k), 1);
-      const bool up_pays =
-          k < 2 && longerHalf(ms, steps[k + 1]) < longerHalf(ms, steps[k]) - 0.5 * step_ms[k + 1];
-      const bool down_pays =
-          k > 0 && longerHalf(ms, steps[k - 1]) < longerHalf(ms, steps[k]) - 0.5 * step_ms[k];
+      const bool forth = k < 2 && ms.awareness_ms + here[uk + 1] < ms.local_ms + all - here[uk + 1];
+      const bool back = k > 0 && ms.awareness_ms + here[uk - 1] > ms.local_ms + all - here[uk];
+      ASSERT_FALSE(forth && back);  // the two never meet
       if (n == k + 1) {
-        EXPECT_TRUE(settled && up_pays);
+        EXPECT_TRUE(settled && forth);
         ++moved_up;
       } else if (n == k - 1) {
-        EXPECT_TRUE(down_pays && !(settled && up_pays));
+        EXPECT_TRUE(back);
         ++moved_down;
       } else {
-        EXPECT_FALSE(settled && up_pays);
-        EXPECT_FALSE(down_pays);
+        EXPECT_FALSE(settled && forth);
+        EXPECT_FALSE(back);
         ++stayed;
       }
     }
