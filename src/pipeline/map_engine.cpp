@@ -216,11 +216,11 @@ void MapEngine::awarenessStep(Input& input, MeasurementBatch* batch) {
       map_in_carve_ = false;
     }
     awareness_.placeAwarenessMap(map_in_carve_);
-    // Then the cone listing's steps, the map counted where it now is: to this half as far as
-    // that shortens the longer half (the streamed flight's carving half is the longer one even
-    // without the map; the point loop is the longer half of a tabletop frame). Further only
-    // once both halves have a full window of frames: a fresh engine's first frames (its
-    // window's fresh pages) would move it for nothing.
+    // Then the cone listing's steps, the map counted where it now is (placeConeListing()): to
+    // this half while it stays the shorter with them (the streamed flight's carving half is the
+    // longer one even without the map; the point loop is the longer half of a tabletop frame).
+    // Further only once both halves have a full window of frames: a fresh engine's first frames
+    // (its window's fresh pages) would move it for nothing.
     const bool settled =
         awareness_recent_.full() && local_recent_full_.load(std::memory_order_relaxed);
     HalvesMs halves;

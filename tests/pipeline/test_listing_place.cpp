@@ -25,7 +25,7 @@ HalvesMs halves(double awareness_ms, double local_ms, double bins_ms, double con
 // which would make the point loop the longer half; the tabletop frames' (the point loop the
 // longer half): nothing moves, and what moved comes back; a carving half much the longer (a
 // LiDAR scan with one awareness thread): all of it. Halves about even keep their place.
-TEST(ListingPlace, MovesTheStepsThatShortenTheLongerHalf) {
+TEST(ListingPlace, MovesTheStepsThatKeepTheMovingHalfTheShorter) {
   const HalvesMs flight = halves(1.89, 2.16, 0.45, 0.47);
   EXPECT_EQ(placeConeListing(Step::kNothing, flight, true), Step::kBinsEntered);
   EXPECT_EQ(placeConeListing(Step::kBinsEntered, flight, true), Step::kBinsEntered);
